@@ -1,0 +1,64 @@
+//! The datapath precision of the functional model.
+//!
+//! Every stage of the extreme method is written once, generic over [`Real`], and
+//! instantiated for `f32` (the default, as a hardware unit would be built) and `f64`
+//! (to separate the method's own error from rounding). The reference renderer does not use
+//! this trait: it is always `f64`.
+
+use num_traits::Float;
+use std::fmt::Debug;
+
+/// A floating-point datapath word: `f32` or `f64`.
+pub trait Real: Float + Debug + Default + Send + Sync + 'static {
+    /// Name used in reports and on the command line.
+    const NAME: &'static str;
+    /// Converts from `f64`, rounding to nearest.
+    fn of(x: f64) -> Self;
+    /// Widens to `f64` exactly.
+    fn f64(self) -> f64;
+}
+
+impl Real for f32 {
+    const NAME: &'static str = "f32";
+    #[inline(always)]
+    fn of(x: f64) -> Self {
+        x as f32
+    }
+    #[inline(always)]
+    fn f64(self) -> f64 {
+        self as f64
+    }
+}
+
+impl Real for f64 {
+    const NAME: &'static str = "f64";
+    #[inline(always)]
+    fn of(x: f64) -> Self {
+        x
+    }
+    #[inline(always)]
+    fn f64(self) -> f64 {
+        self
+    }
+}
+
+/// The datapath selected on the command line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Datapath {
+    /// IEEE binary32 throughout the extreme method (the default, as hardware).
+    #[default]
+    F32,
+    /// IEEE binary64 throughout the extreme method.
+    F64,
+}
+
+impl Datapath {
+    /// The name used in reports: `f32` or `f64`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Datapath::F32 => f32::NAME,
+            Datapath::F64 => f64::NAME,
+        }
+    }
+}

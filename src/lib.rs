@@ -1,0 +1,4 @@
+//! lembo-sim (crate doc written below in full once the pipeline exists).
+pub mod camera;
+pub mod datapath;
+pub mod lembo;
