@@ -2,3 +2,5 @@
 pub mod camera;
 pub mod datapath;
 pub mod lembo;
+pub mod rop;
+pub mod error;

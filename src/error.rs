@@ -1,0 +1,80 @@
+//! The crate's error type. Every input error names the file (or flag), the field path and
+//! the offending value; `main` maps input errors to exit status 2 (DESIGN §8).
+
+use std::fmt;
+use std::path::PathBuf;
+
+/// Everything that can go wrong in a run.
+#[derive(Debug)]
+pub enum Error {
+    /// A file could not be read. Fatal; input error.
+    Read { path: PathBuf, source: std::io::Error },
+    /// A scene or configuration file is not valid JSON, has an unknown field or a value of
+    /// the wrong type. `field` is the path to the value (`objects[2].mesh`), or empty when
+    /// the JSON does not parse at all. Input error.
+    Parse { file: String, field: String, message: String },
+    /// A value parsed but is outside what the simulator accepts. Input error.
+    Invalid { file: String, field: String, value: String, reason: String },
+    /// A mesh file named by a scene could not be loaded or holds bad data. Input error.
+    Mesh { file: String, field: String, path: PathBuf, message: String },
+    /// A patch needs more segments than the stated cap on one scanline interval (DESIGN §8):
+    /// refused instead of running out of memory or time. Input error.
+    SegmentCap { lembo: usize, scanline: u32, cap: usize },
+    /// An output file could not be written. Not an input error (exit status 1).
+    Write { path: PathBuf, source: std::io::Error },
+}
+
+impl Error {
+    /// Process exit status for this error: 2 for bad input, 1 otherwise.
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            Error::Write { .. } => 1,
+            _ => 2,
+        }
+    }
+
+    /// Shorthand for an [`Error::Invalid`].
+    pub fn invalid(
+        file: impl Into<String>,
+        field: impl Into<String>,
+        value: impl fmt::Display,
+        reason: impl Into<String>,
+    ) -> Error {
+        Error::Invalid { file: file.into(), field: field.into(), value: value.to_string(), reason: reason.into() }
+    }
+}
+
+impl fmt::Display for Error {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Error::Read { path, source } => write!(f, "cannot read {}: {source}", path.display()),
+            Error::Parse { file, field, message } if field.is_empty() || field == "." => {
+                write!(f, "{file}: {message}")
+            }
+            Error::Parse { file, field, message } => write!(f, "{file}: field `{field}`: {message}"),
+            Error::Invalid { file, field, value, reason } => {
+                write!(f, "{file}: field `{field}` = {value}: {reason}")
+            }
+            Error::Mesh { file, field, path, message } => {
+                write!(f, "{file}: field `{field}`: mesh {}: {message}", path.display())
+            }
+            Error::SegmentCap { lembo, scanline, cap } => write!(
+                f,
+                "lembo {lembo} needs more than {cap} segments on scanline {scanline}; \
+                 refusing it (raise k or fix the patch)"
+            ),
+            Error::Write { path, source } => write!(f, "cannot write {}: {source}", path.display()),
+        }
+    }
+}
+
+impl std::error::Error for Error {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            Error::Read { source, .. } | Error::Write { source, .. } => Some(source),
+            _ => None,
+        }
+    }
+}
+
+pub type Result<T> = std::result::Result<T, Error>;

@@ -1,0 +1,98 @@
+//! The frame buffer: colour, depth and the id of the primitive that won each pixel.
+//!
+//! The depth test orders fragments by (depth, primitive id) so that the winner of a pixel
+//! does not depend on the order fragments arrive in: parallel ROPs and any interleaving
+//! give the same image. Depth is stored as `f32` whatever the datapath, as a depth buffer
+//! would hold it. The normal buffer exists only when accuracy is measured.
+
+/// No primitive has written this pixel.
+pub const NO_PRIMITIVE: u32 = u32::MAX;
+
+/// Colour, depth and winner id per pixel, row 0 at the top.
+#[derive(Clone, Debug)]
+pub struct FrameBuffer {
+    pub width: u32,
+    pub height: u32,
+    /// RGB8 per pixel.
+    pub color: Vec<[u8; 3]>,
+    /// Depth in [0, 1] per pixel; 1 where nothing was drawn.
+    pub depth: Vec<f32>,
+    /// Id of the primitive whose fragment won, or [`NO_PRIMITIVE`].
+    pub primitive: Vec<u32>,
+    /// Unit normal of the winning fragment, kept only when accuracy is measured.
+    pub normal: Option<Vec<[f32; 3]>>,
+}
+
+impl FrameBuffer {
+    pub fn new(width: u32, height: u32, background: [u8; 3], keep_normals: bool) -> Self {
+        let n = width as usize * height as usize;
+        FrameBuffer {
+            width,
+            height,
+            color: vec![background; n],
+            depth: vec![1.0; n],
+            primitive: vec![NO_PRIMITIVE; n],
+            normal: keep_normals.then(|| vec![[0.0; 3]; n]),
+        }
+    }
+
+    #[inline(always)]
+    pub fn index(&self, i: u32, j: u32) -> usize {
+        j as usize * self.width as usize + i as usize
+    }
+
+    /// The depth test: whether a fragment (z, id) beats what pixel `idx` holds.
+    /// Fragments outside the depth range [0, 1] are clipped.
+    #[inline(always)]
+    pub fn passes(&self, idx: usize, z: f32, id: u32) -> bool {
+        let d = self.depth[idx];
+        (0.0..=1.0).contains(&z) && (z < d || (z == d && id < self.primitive[idx]))
+    }
+
+    /// Writes a fragment that passed [`FrameBuffer::passes`].
+    #[inline(always)]
+    pub fn write(&mut self, idx: usize, z: f32, id: u32, rgb: [u8; 3]) {
+        self.depth[idx] = z;
+        self.primitive[idx] = id;
+        self.color[idx] = rgb;
+    }
+
+    /// Pixels some primitive wrote.
+    pub fn covered(&self) -> usize {
+        self.primitive.iter().filter(|&&p| p != NO_PRIMITIVE).count()
+    }
+
+    /// The colour buffer as an `image` RGB8 image.
+    pub fn to_image(&self) -> image::RgbImage {
+        let raw: Vec<u8> = self.color.iter().flatten().copied().collect();
+        image::RgbImage::from_raw(self.width, self.height, raw).expect("buffer matches its size")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn depth_ties_resolve_by_primitive_id_whatever_the_order() {
+        let mut a = FrameBuffer::new(1, 1, [0; 3], false);
+        let mut b = a.clone();
+        for (fb, order) in [(&mut a, [(5u32, [1u8; 3]), (3, [2; 3])]), (&mut b, [(3, [2; 3]), (5, [1; 3])])] {
+            for (id, rgb) in order {
+                if fb.passes(0, 0.5, id) {
+                    fb.write(0, 0.5, id, rgb);
+                }
+            }
+        }
+        assert_eq!(a.color, b.color);
+        assert_eq!(a.primitive[0], 3);
+    }
+
+    #[test]
+    fn fragments_outside_the_depth_range_are_clipped() {
+        let fb = FrameBuffer::new(1, 1, [0; 3], false);
+        assert!(!fb.passes(0, -0.01, 0));
+        assert!(!fb.passes(0, 1.01, 0));
+        assert!(fb.passes(0, 0.99, 0));
+    }
+}

@@ -1,0 +1,107 @@
+//! Per-fragment Phong shading, paper 000 equation (6): `L = Ka + Kd cos(alpha) + Ks cos^N(gamma)`.
+//!
+//! `alpha` is the angle between the unit normal and the direction to the light, `gamma` the
+//! angle between the light reflected about the normal and the direction to the eye. The
+//! material colour scales the ambient and diffuse terms; the specular term is white. Lighting
+//! is two-sided: a normal facing away from the eye is flipped, so open surfaces seen from
+//! behind are lit like their front.
+
+use crate::datapath::Real;
+use serde::{Deserialize, Serialize};
+
+/// One directional light with the Phong terms of paper 000 equation (6).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Light {
+    /// Direction from the surface towards the light (any length but zero).
+    pub direction_to_light: [f64; 3],
+    /// Ambient term Ka, >= 0.
+    pub ka: f64,
+    /// Lambertian diffuse term Kd, >= 0.
+    pub kd: f64,
+    /// Specular term Ks, >= 0.
+    pub ks: f64,
+    /// Shininess exponent N, >= 0.
+    pub shininess: f64,
+}
+
+impl Default for Light {
+    fn default() -> Self {
+        Light { direction_to_light: [0.4, 0.6, 1.0], ka: 0.1, kd: 0.75, ks: 0.35, shininess: 24.0 }
+    }
+}
+
+/// The light and material terms in a datapath's precision, ready for the fragment loop.
+#[derive(Clone, Copy, Debug)]
+pub struct Shader<R> {
+    /// Unit direction towards the light.
+    pub l: [R; 3],
+    pub ka: R,
+    pub kd: R,
+    pub ks: R,
+    pub shininess: R,
+}
+
+impl<R: Real> Shader<R> {
+    pub fn new(light: &Light) -> Self {
+        let d = glam::DVec3::from_array(light.direction_to_light).normalize_or_zero();
+        Shader {
+            l: [R::of(d.x), R::of(d.y), R::of(d.z)],
+            ka: R::of(light.ka),
+            kd: R::of(light.kd),
+            ks: R::of(light.ks),
+            shininess: R::of(light.shininess),
+        }
+    }
+
+    /// Linear RGB in [0, 1] for a unit normal `n`, unit direction to the eye `v` and a
+    /// material colour.
+    #[inline]
+    pub fn shade(&self, n: [R; 3], v: [R; 3], color: [R; 3]) -> [R; 3] {
+        let zero = R::zero();
+        let dot = |a: [R; 3], b: [R; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+        let n = if dot(n, v) < zero { [-n[0], -n[1], -n[2]] } else { n };
+        let nl = dot(n, self.l);
+        let cos_a = nl.max(zero);
+        let two = R::of(2.0);
+        let r = [two * nl * n[0] - self.l[0], two * nl * n[1] - self.l[1], two * nl * n[2] - self.l[2]];
+        let cos_g = dot(r, v).max(zero);
+        let spec = if self.ks > zero && cos_g > zero && nl > zero { self.ks * cos_g.powf(self.shininess) } else { zero };
+        let diffuse = self.ka + self.kd * cos_a;
+        [color[0] * diffuse + spec, color[1] * diffuse + spec, color[2] * diffuse + spec]
+    }
+}
+
+/// Quantises a linear [0, 1] channel to 8 bits (clamped, rounded to nearest).
+#[inline]
+pub fn to_u8<R: Real>(c: R) -> u8 {
+    let x = c.f64().clamp(0.0, 1.0) * 255.0;
+    (x + 0.5) as u8
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn equation_6_terms_at_known_angles() {
+        let light = Light { direction_to_light: [0.0, 0.0, 1.0], ka: 0.1, kd: 0.5, ks: 0.4, shininess: 2.0 };
+        let s = Shader::<f64>::new(&light);
+        // Normal, light and eye aligned: cos(alpha) = cos(gamma) = 1.
+        let c = s.shade([0.0, 0.0, 1.0], [0.0, 0.0, 1.0], [1.0, 0.5, 0.0]);
+        assert!((c[0] - (0.1 + 0.5 + 0.4)).abs() < 1e-12);
+        assert!((c[1] - (0.5 * 0.6 + 0.4)).abs() < 1e-12);
+        // Normal at 60 degrees to the light, eye along the reflection: cos(alpha) = 1/2.
+        let n = [3f64.sqrt() / 2.0, 0.0, 0.5];
+        let r = [2.0 * 0.5 * n[0], 0.0, 2.0 * 0.5 * n[2] - 1.0];
+        let c = s.shade(n, r, [1.0, 1.0, 1.0]);
+        assert!((c[0] - (0.1 + 0.25 + 0.4)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn back_facing_normals_are_lit_as_front_facing() {
+        let s = Shader::<f32>::new(&Light::default());
+        let v = [0.0, 0.0, 1.0];
+        assert_eq!(s.shade([0.0, 0.6, 0.8], v, [1.0; 3]), s.shade([0.0, -0.6, -0.8], v, [1.0; 3]));
+    }
+}
