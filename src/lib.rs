@@ -4,3 +4,6 @@ pub mod datapath;
 pub mod lembo;
 pub mod rop;
 pub mod error;
+pub mod scene;
+pub mod reference;
+pub mod raster;

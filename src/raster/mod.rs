@@ -1,0 +1,160 @@
+//! The functional extreme method (paper 001 section 5): what is drawn, with no notion of
+//! time. One file per stage of Figure 5, in dataflow order:
+//!
+//! ```text
+//! setup ─► minmax ─► interval ─► segmenter ─► subsegmenter ─► fragment ─► FragmentSink (ROP)
+//! ```
+//!
+//! Every stage is generic over the datapath [`Real`] (`f32` or `f64`) and works on one item
+//! at a time into reused buffers, so the timed pipeline can call the same functions per
+//! message. [`render_lembos`] runs the stages in order for a whole scene.
+
+pub mod fragment;
+pub mod interval;
+pub mod minmax;
+pub mod probe;
+pub mod segmenter;
+pub mod setup;
+pub mod subsegmenter;
+pub mod v2;
+
+use crate::camera::View;
+use crate::datapath::{Datapath, Real};
+use crate::error::{Error, Result};
+use crate::rop::{FrameBuffer, Rop};
+use crate::scene::Scene;
+use fragment::FragmentSink;
+use serde::Serialize;
+
+/// Default cap on segments per interval (DESIGN §8): far above what a visible patch needs
+/// at k >= 1e-4 px on a 16384-pixel viewport, low enough to refuse runaway walks quickly.
+pub const DEFAULT_SEGMENT_CAP: usize = 1 << 16;
+
+/// What the functional model produced, stage by stage.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct Counts {
+    /// Lembos in the scene.
+    pub lembos: u64,
+    /// Lembos dropped because part of their hull is behind the eye (near clipping is not
+    /// modelled).
+    pub lembos_culled_behind_eye: u64,
+    /// Lembos whose hull lies outside the viewport or depth range (one cull test each).
+    pub lembos_culled_outside: u64,
+    /// (lembo, scanline) pairs handed to the interval manager.
+    pub scanlines: u64,
+    /// Roots of Y = y_j found on domain edges.
+    pub edge_roots: u64,
+    /// Roots on the partition line (ellipse tips around an interior extremum).
+    pub virtual_roots: u64,
+    /// Intervals (curve pieces) produced.
+    pub intervals: u64,
+    /// Roots that could not be paired (0 unless rounding broke the walk order).
+    pub unpaired_roots: u64,
+    /// Intervals split at a saddle crossing.
+    pub saddle_splits: u64,
+    pub segments: u64,
+    /// Segments clamped to their interval end (the last of each walk, flat curves).
+    pub segments_clamped: u64,
+    pub subsegments: u64,
+    /// Segments split at a fold of x(t).
+    pub folds: u64,
+    /// Fragments generated (pixel centres covered by subsegments, inside the viewport).
+    pub fragments: u64,
+    /// Fragments that passed the depth test when they arrived.
+    pub fragments_passed_depth: u64,
+    /// Pixels covered in the final image.
+    pub pixels_covered: u64,
+}
+
+/// Runs the extreme method over every lembo of `scene`, in scene order, into `sink`.
+pub fn render_lembos<R: Real, S: FragmentSink<R>>(
+    scene: &Scene,
+    view: &View,
+    k: f64,
+    segment_cap: usize,
+    sink: &mut S,
+    counts: &mut Counts,
+) -> Result<()> {
+    let k = R::of(k);
+    let mut scratch = interval::IntervalScratch::default();
+    let (mut ivs, mut segs, mut subs) = (Vec::new(), Vec::new(), Vec::new());
+    let (width, height) = (view.viewport.width, view.viewport.height);
+    for (id, (lembo, color)) in scene.lembos().enumerate() {
+        counts.lembos += 1;
+        let l = match setup::setup::<R>(id as u32, lembo, color, view) {
+            Ok(l) => l,
+            Err(setup::Cull::BehindEye) => {
+                counts.lembos_culled_behind_eye += 1;
+                continue;
+            }
+            Err(setup::Cull::Outside) => {
+                counts.lembos_culled_outside += 1;
+                continue;
+            }
+        };
+        let Some((j0, j1)) = minmax::scanlines(&l, height) else {
+            counts.lembos_culled_outside += 1;
+            continue;
+        };
+        for j in j0..=j1 {
+            counts.scanlines += 1;
+            ivs.clear();
+            interval::intervals(&l, j, k, &mut scratch, &mut ivs, counts);
+            for iv in &ivs {
+                segs.clear();
+                segmenter::segments(&l, j, k, iv, segment_cap, &mut segs, counts)
+                    .map_err(|_| Error::SegmentCap { lembo: id, scanline: j, cap: segment_cap })?;
+                for seg in &segs {
+                    subs.clear();
+                    subsegmenter::subsegments(&l, seg, k, &mut subs, counts);
+                    for sub in &subs {
+                        fragment::rasterize(&l, j, sub, width, sink, counts);
+                    }
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A rendered frame and what it took.
+pub struct Frame {
+    pub framebuffer: FrameBuffer,
+    pub counts: Counts,
+    /// Fragment-level measurements, when requested.
+    pub probe: Option<probe::ProbeReport>,
+}
+
+/// Renders `scene` with the functional model in the given datapath. With `analyse`, the
+/// frame buffer keeps normals and every fragment is measured by a [`probe::Probe`] (slower).
+pub fn render_functional(
+    scene: &Scene,
+    view: &View,
+    k: f64,
+    datapath: Datapath,
+    analyse: bool,
+) -> Result<Frame> {
+    match datapath {
+        Datapath::F32 => render_in::<f32>(scene, view, k, analyse),
+        Datapath::F64 => render_in::<f64>(scene, view, k, analyse),
+    }
+}
+
+fn render_in<R: Real>(scene: &Scene, view: &View, k: f64, analyse: bool) -> Result<Frame> {
+    let vp = view.viewport;
+    let bg = scene.background.map(crate::rop::shade::to_u8::<f64>);
+    let mut fb = FrameBuffer::new(vp.width, vp.height, bg, analyse);
+    let mut counts = Counts::default();
+    let mut rop = Rop::<R>::new(&mut fb, &scene.light, view);
+    let probe = if analyse {
+        let mut p = probe::Probe::new(scene, vp, &mut rop);
+        render_lembos::<R, _>(scene, view, k, DEFAULT_SEGMENT_CAP, &mut p, &mut counts)?;
+        Some(p.report())
+    } else {
+        render_lembos::<R, _>(scene, view, k, DEFAULT_SEGMENT_CAP, &mut rop, &mut counts)?;
+        None
+    };
+    counts.fragments_passed_depth = rop.passed;
+    counts.pixels_covered = fb.covered() as u64;
+    Ok(Frame { framebuffer: fb, counts, probe })
+}

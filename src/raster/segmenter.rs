@@ -1,0 +1,169 @@
+//! Segmenter: walks the curve Y(u, v) = y_j over one interval in chords whose midpoint error
+//! is exactly k (paper 001 section 5, "The segmentation problem").
+//!
+//! Input: a [`ScreenLembo`], the scanline and an [`Interval`]. Output: [`Segment`]s from the
+//! interval's start to its end.
+//!
+//! From a point P on the curve the step s = (du, dv) solves the paper's second-degree system
+//! `∇Y·s = ±4k`, `sᵀHs = ∓8k` (Y on the chord is a parabola, so its extreme error is at the
+//! midpoint). We write s = α τ + β g in the unit walk direction τ = rot_cw(∇Y)/|∇Y| and the
+//! unit gradient g: the first equation fixes β, the second is a quadratic in α solved with
+//! the stable formula, taking the forward (positive) root; the other root is the step back.
+//! The sign of k is chosen once per interval from the curvature τᵀHτ, which keeps its sign
+//! along a level curve of a quadratic. One deviation from the paper, documented in
+//! ARCHITECTURE.md: the residual Y(P) of the previous step's rounding is folded into the
+//! system (`∇Y·s = ±4k - 3Y(P)`, `sᵀHs = ∓8k + 4Y(P)`), which makes Y(P + s) = 0 and the
+//! midpoint error exactly ±k from the true curve, so rounding does not accumulate along the
+//! walk; with Y(P) = 0 it is the paper's system.
+//!
+//! The walk ends when a step would pass the interval end (measured by the interval's walk
+//! key) or leave the domain: the last segment is clamped to the end. A flat curve (τᵀHτ
+//! about 0, no finite step), a vanishing gradient or a system without a forward root also
+//! clamp to the end. More than `cap` segments in one interval is refused.
+
+use super::interval::{CurvePoint, Interval, INTERIOR};
+use super::setup::ScreenLembo;
+use super::v2::{dot, norm, rot_cw, V2};
+use super::Counts;
+use crate::datapath::Real;
+
+/// One chord of the curve, from `p0` to `p1` in walking order.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Segment<R> {
+    pub p0: CurvePoint<R>,
+    pub p1: CurvePoint<R>,
+}
+
+/// The walk of one interval ran past the segment cap.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CapExceeded;
+
+#[inline(always)]
+fn quad_form<R: Real>(h: (R, R, R), s: V2<R>, t: V2<R>) -> R {
+    h.0 * s[0] * t[0] + h.1 * (s[0] * t[1] + s[1] * t[0]) + h.2 * s[1] * t[1]
+}
+
+/// Appends the segments of `iv` to `out`.
+pub fn segments<R: Real>(
+    l: &ScreenLembo<R>,
+    j: u32,
+    k: R,
+    iv: &Interval<R>,
+    cap: usize,
+    out: &mut Vec<Segment<R>>,
+    counts: &mut Counts,
+) -> Result<(), CapExceeded> {
+    let first = out.len();
+    if iv.straight {
+        out.push(Segment { p0: iv.start, p1: iv.end });
+        counts.segments += 1;
+        return Ok(());
+    }
+    let yj = R::of(j as f64 + 0.5);
+    let h = l.hessian;
+    let h_scale = h.0.abs().max(h.1.abs()).max(h.2.abs());
+    let eps = R::epsilon() * R::of(64.0);
+    let (zero, one) = (R::zero(), R::one());
+
+    let grad = |p: V2<R>| {
+        let (gu, gv) = l.y.grad(p[0], p[1]);
+        [gu, gv]
+    };
+    // Sign of k from the curvature at the start.
+    let g0 = grad(iv.start.uv);
+    let t0 = rot_cw(g0);
+    let sigma = if quad_form(h, t0, t0) > zero { -one } else { one };
+
+    let mut p = iv.start;
+    let mut key = dot(iv.tau, p.uv);
+    loop {
+        if out.len() - first >= cap {
+            return Err(CapExceeded);
+        }
+        let g = grad(p.uv);
+        let gn = norm(g);
+        let next = step(l, h, h_scale, eps, sigma, k, yj, p.uv, g, gn);
+        let stop = match next {
+            Some(q) => {
+                let qk = dot(iv.tau, q);
+                let inside = q[0] >= -eps && q[1] >= -eps && q[0] + q[1] <= one + eps;
+                if qk >= iv.end_key || qk <= key || !inside {
+                    None
+                } else {
+                    key = qk;
+                    Some(q)
+                }
+            }
+            None => None,
+        };
+        match stop {
+            Some(q) => {
+                let p1 = CurvePoint { uv: q, x: l.x.eval(q[0], q[1]), edge: INTERIOR };
+                out.push(Segment { p0: p, p1 });
+                counts.segments += 1;
+                p = p1;
+            }
+            None => {
+                out.push(Segment { p0: p, p1: iv.end });
+                counts.segments += 1;
+                counts.segments_clamped += 1;
+                return Ok(());
+            }
+        }
+    }
+}
+
+/// One step of the extreme method from `p`, or `None` when it has no finite forward solution.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn step<R: Real>(
+    l: &ScreenLembo<R>,
+    h: (R, R, R),
+    h_scale: R,
+    eps: R,
+    sigma: R,
+    k: R,
+    yj: R,
+    p: V2<R>,
+    g: V2<R>,
+    gn: R,
+) -> Option<V2<R>> {
+    let zero = R::zero();
+    if !(gn > zero) {
+        return None;
+    }
+    let gh = [g[0] / gn, g[1] / gn];
+    let th = rot_cw(gh);
+    let htt = quad_form(h, th, th);
+    if htt.abs() <= eps * h_scale || h_scale == zero {
+        return None;
+    }
+    let htg = quad_form(h, th, gh);
+    let hgg = quad_form(h, gh, gh);
+    let y0 = l.y.eval(p[0], p[1]) - yj;
+    let four = R::of(4.0);
+    let lin = four * sigma * k - R::of(3.0) * y0; // ∇Y·s
+    let quad = -R::of(8.0) * sigma * k + four * y0; // sᵀHs
+    let beta = lin / gn;
+    // htt α² + 2 β htg α + (β² hgg - quad) = 0
+    let bq = R::of(2.0) * beta * htg;
+    let cq = beta * beta * hgg - quad;
+    let disc = bq * bq - four * htt * cq;
+    if disc < zero {
+        return None;
+    }
+    let q = -R::of(0.5) * (bq + bq.signum() * disc.sqrt());
+    if q == zero {
+        return None;
+    }
+    let (r1, r2) = (q / htt, cq / q);
+    let alpha = match (r1 > zero, r2 > zero) {
+        (true, true) => r1.min(r2),
+        (true, false) => r1,
+        (false, true) => r2,
+        (false, false) => return None,
+    };
+    let s = [alpha * th[0] + beta * gh[0], alpha * th[1] + beta * gh[1]];
+    let q = [p[0] + s[0], p[1] + s[1]];
+    (q[0].is_finite() && q[1].is_finite()).then_some(q)
+}

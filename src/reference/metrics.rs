@@ -1,0 +1,504 @@
+//! Accuracy of a rendered frame against the reference (DESIGN §6), under the names the
+//! report carries.
+//!
+//! Coverage is per pixel centre: the render covers a pixel when some primitive won it, the
+//! reference when its centre sample hit a surface. Where the two disagree, the silhouette
+//! error is the Euclidean distance from the pixel to the nearest pixel centre whose
+//! reference coverage equals the render's value there, i.e. how far the reference's
+//! silhouette would have to move to agree, from an exact distance transform of the
+//! reference mask (Felzenszwalb and Huttenlocher, "Distance Transforms of Sampled
+//! Functions", 2012). Crack pixels (holes inside the reference coverage) are counted apart
+//! and left out of the silhouette error.
+
+use super::oracle::ReferenceImage;
+use crate::rop::framebuffer::{FrameBuffer, NO_PRIMITIVE};
+use serde::Serialize;
+
+/// The PSNR reported for identical images [dB] (the true value is infinite, which JSON
+/// cannot carry).
+pub const PSNR_CAP_DB: f64 = 100.0;
+
+/// The accuracy section of the report.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Accuracy {
+    /// Pixels the render covers and the reference does not [pixels].
+    pub coverage_false_positive: u64,
+    /// Pixels the reference covers and the render does not, cracks included [pixels].
+    pub coverage_false_negative: u64,
+    /// Largest distance from a coverage disagreement (cracks excluded) to the reference
+    /// silhouette [pixels]; 0 when coverage agrees. When the reference has no pixel of the
+    /// needed kind at all (it covers nothing, or everything), the distance is the image
+    /// diagonal.
+    pub silhouette_max_px: f64,
+    /// Mean of the same distances over the disagreeing pixels [pixels]; 0 when none.
+    pub silhouette_mean_px: f64,
+    /// Largest |render depth - reference depth| over pixels both cover, in depth-buffer
+    /// units [0, 1]; includes the error of the perspective approximation.
+    pub depth_max_abs: f64,
+    /// Largest angle between the render's and the reference's normals, up to sign (shading
+    /// is two-sided), over pixels both cover [degrees].
+    pub normal_max_deg: f64,
+    /// Mean of the same angles [degrees].
+    pub normal_mean_deg: f64,
+    /// PSNR of the RGB8 image against the reference's centre-sample colours over the whole
+    /// image [dB], capped at [`PSNR_CAP_DB`] (identical images).
+    pub psnr_db: f64,
+    /// Largest channel difference [0-255].
+    pub max_abs_error: u64,
+    /// Pixels the reference covers together with their 4 neighbours that the render does
+    /// not cover: holes in the surface, not silhouette misses [pixels].
+    pub crack_pixels: u64,
+    /// Pixels written by more than one primitive on a shared edge, as the renderer counted
+    /// them [pixels].
+    pub double_hit_pixels: u64,
+    /// The paper's guarantee: largest |y(u, v) - (j + 0.5)| over all fragments, as the
+    /// renderer measured it [pixels].
+    pub max_scanline_deviation_px: f64,
+    /// Sub-samples per pixel side of the reference.
+    pub supersample: u64,
+    /// Pixels both cover, over which depth and normals are compared [pixels].
+    pub pixels_compared: u64,
+}
+
+impl Accuracy {
+    /// Name and value with its unit, one per field, for the text report.
+    pub fn lines(&self) -> Vec<(String, String)> {
+        let px = |n: u64| format!("{n} px");
+        [
+            ("coverage_false_positive", px(self.coverage_false_positive)),
+            ("coverage_false_negative", px(self.coverage_false_negative)),
+            (
+                "silhouette_max_px",
+                format!("{:.3} px", self.silhouette_max_px),
+            ),
+            (
+                "silhouette_mean_px",
+                format!("{:.3} px", self.silhouette_mean_px),
+            ),
+            ("depth_max_abs", format!("{:.3e}", self.depth_max_abs)),
+            ("normal_max_deg", format!("{:.3} deg", self.normal_max_deg)),
+            (
+                "normal_mean_deg",
+                format!("{:.3} deg", self.normal_mean_deg),
+            ),
+            (
+                "psnr_db",
+                if self.psnr_db >= PSNR_CAP_DB {
+                    format!("{PSNR_CAP_DB:.2} dB (identical)")
+                } else {
+                    format!("{:.2} dB", self.psnr_db)
+                },
+            ),
+            ("max_abs_error", format!("{} / 255", self.max_abs_error)),
+            ("crack_pixels", px(self.crack_pixels)),
+            ("double_hit_pixels", px(self.double_hit_pixels)),
+            (
+                "max_scanline_deviation_px",
+                format!("{:.4} px", self.max_scanline_deviation_px),
+            ),
+            ("supersample", format!("{0}x{0}", self.supersample)),
+            ("pixels_compared", px(self.pixels_compared)),
+        ]
+        .into_iter()
+        .map(|(name, value)| (name.to_string(), value))
+        .collect()
+    }
+}
+
+/// Measures `render` against `reference`; the two renderer-side counts are passed through.
+///
+/// # Panics
+/// If the two images differ in size, or the render kept no normal buffer
+/// (`FrameBuffer::new(.., keep_normals: true)`): both are bugs of the caller.
+pub fn measure(
+    render: &FrameBuffer,
+    reference: &ReferenceImage,
+    double_hit_pixels: u64,
+    max_scanline_deviation_px: f64,
+) -> Accuracy {
+    assert_eq!(
+        (render.width, render.height),
+        (reference.width, reference.height),
+        "render and reference differ in size"
+    );
+    let normals = render
+        .normal
+        .as_ref()
+        .expect("accuracy needs the render's normal buffer (keep_normals)");
+    let (w, h) = (render.width as usize, render.height as usize);
+    let ours: Vec<bool> = render
+        .primitive
+        .iter()
+        .map(|&p| p != NO_PRIMITIVE)
+        .collect();
+    let theirs: Vec<bool> = reference.hits.iter().map(|h| h.is_some()).collect();
+
+    let cracks = crack_mask(&ours, &theirs, w, h);
+    let to_covered = distance_to(&theirs, w, h, true);
+    let to_uncovered = distance_to(&theirs, w, h, false);
+    let diagonal = ((w * w + h * h) as f64).sqrt();
+
+    let (mut fp, mut fn_, mut n_crack) = (0u64, 0u64, 0u64);
+    let (mut sil_max, mut sil_sum, mut sil_n) = (0.0f64, 0.0f64, 0u64);
+    let (mut depth_max, mut normal_max, mut normal_sum, mut compared) =
+        (0.0f64, 0.0f64, 0.0f64, 0u64);
+    let (mut squared_error, mut max_abs) = (0u64, 0u64);
+    for k in 0..w * h {
+        for (a, b) in render.color[k].iter().zip(reference.color[k]) {
+            let d = (*a as i64 - b as i64).unsigned_abs();
+            squared_error += d * d;
+            max_abs = max_abs.max(d);
+        }
+        match (ours[k], reference.hits[k]) {
+            (true, Some(hit)) => {
+                compared += 1;
+                depth_max = depth_max.max((render.depth[k] as f64 - hit.depth).abs());
+                let n = normals[k].map(|c| c as f64);
+                let angle = angle_up_to_sign(glam::DVec3::from_array(n), hit.normal);
+                normal_max = normal_max.max(angle);
+                normal_sum += angle;
+            }
+            (false, None) => {}
+            (covered, _) => {
+                if covered {
+                    fp += 1;
+                } else {
+                    fn_ += 1;
+                }
+                if cracks[k] {
+                    n_crack += 1;
+                    continue;
+                }
+                let d = if covered {
+                    to_covered[k]
+                } else {
+                    to_uncovered[k]
+                }
+                .unwrap_or(diagonal);
+                sil_max = sil_max.max(d);
+                sil_sum += d;
+                sil_n += 1;
+            }
+        }
+    }
+    let mse = squared_error as f64 / (3 * w * h).max(1) as f64;
+    let psnr_db = if mse == 0.0 {
+        PSNR_CAP_DB
+    } else {
+        (10.0 * (255.0 * 255.0 / mse).log10()).min(PSNR_CAP_DB)
+    };
+    Accuracy {
+        coverage_false_positive: fp,
+        coverage_false_negative: fn_,
+        silhouette_max_px: sil_max,
+        silhouette_mean_px: if sil_n > 0 {
+            sil_sum / sil_n as f64
+        } else {
+            0.0
+        },
+        depth_max_abs: depth_max,
+        normal_max_deg: normal_max,
+        normal_mean_deg: if compared > 0 {
+            normal_sum / compared as f64
+        } else {
+            0.0
+        },
+        psnr_db,
+        max_abs_error: max_abs,
+        crack_pixels: n_crack,
+        double_hit_pixels,
+        max_scanline_deviation_px,
+        supersample: reference.supersample as u64,
+        pixels_compared: compared,
+    }
+}
+
+/// The angle between two directions up to sign [degrees], in [0, 90]; 90 when either is
+/// zero. `atan2` keeps small angles accurate where `acos` of a dot product would not.
+fn angle_up_to_sign(a: glam::DVec3, b: glam::DVec3) -> f64 {
+    if a == glam::DVec3::ZERO || b == glam::DVec3::ZERO {
+        return 90.0;
+    }
+    a.cross(b).length().atan2(a.dot(b).abs()).to_degrees()
+}
+
+/// Pixels the reference covers together with their 4 neighbours (inside the image) and the
+/// render does not.
+fn crack_mask(ours: &[bool], theirs: &[bool], w: usize, h: usize) -> Vec<bool> {
+    let mut out = vec![false; w * h];
+    for j in 1..h.saturating_sub(1) {
+        for i in 1..w.saturating_sub(1) {
+            let k = j * w + i;
+            out[k] = !ours[k]
+                && theirs[k]
+                && theirs[k - 1]
+                && theirs[k + 1]
+                && theirs[k - w]
+                && theirs[k + w];
+        }
+    }
+    out
+}
+
+/// Per pixel, the Euclidean distance [pixels] to the nearest pixel whose mask value is
+/// `value`; `None` everywhere when there is no such pixel.
+fn distance_to(mask: &[bool], w: usize, h: usize, value: bool) -> Vec<Option<f64>> {
+    if !mask.contains(&value) {
+        return vec![None; w * h];
+    }
+    // Squared distances: 0 at the features, "infinity" elsewhere. A finite stand-in keeps
+    // the parabola intersections free of inf - inf.
+    const FAR: f64 = 1e20;
+    let mut grid: Vec<f64> = mask
+        .iter()
+        .map(|&m| if m == value { 0.0 } else { FAR })
+        .collect();
+    let mut buf = Transform1d::new(w.max(h));
+    let mut column = vec![0.0; h];
+    for i in 0..w {
+        for j in 0..h {
+            column[j] = grid[j * w + i];
+        }
+        buf.run(&mut column);
+        for j in 0..h {
+            grid[j * w + i] = column[j];
+        }
+    }
+    for row in grid.chunks_mut(w) {
+        buf.run(row);
+    }
+    grid.into_iter().map(|d2| Some(d2.sqrt())).collect()
+}
+
+/// Buffers of the 1D squared distance transform (the lower envelope of parabolas).
+struct Transform1d {
+    f: Vec<f64>,
+    v: Vec<usize>,
+    z: Vec<f64>,
+}
+
+impl Transform1d {
+    fn new(n: usize) -> Self {
+        Transform1d {
+            f: vec![0.0; n],
+            v: vec![0; n],
+            z: vec![0.0; n + 1],
+        }
+    }
+
+    /// Replaces `d[q]` by `min_p (q - p)² + d[p]`.
+    fn run(&mut self, d: &mut [f64]) {
+        let n = d.len();
+        if n == 0 {
+            return;
+        }
+        let (f, v, z) = (&mut self.f, &mut self.v, &mut self.z);
+        f[..n].copy_from_slice(d);
+        let cross = |f: &[f64], q: usize, p: usize| {
+            let (qf, pf) = (q as f64, p as f64);
+            ((f[q] + qf * qf) - (f[p] + pf * pf)) / (2.0 * (qf - pf))
+        };
+        let mut k = 0;
+        v[0] = 0;
+        z[0] = f64::NEG_INFINITY;
+        z[1] = f64::INFINITY;
+        for q in 1..n {
+            let mut s = cross(f, q, v[k]);
+            while s <= z[k] {
+                k -= 1;
+                s = cross(f, q, v[k]);
+            }
+            k += 1;
+            v[k] = q;
+            z[k] = s;
+            z[k + 1] = f64::INFINITY;
+        }
+        k = 0;
+        for (q, out) in d.iter_mut().enumerate() {
+            while z[k + 1] < q as f64 {
+                k += 1;
+            }
+            let dq = q as f64 - v[k] as f64;
+            *out = dq * dq + f[v[k]];
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::reference::oracle::ReferenceHit;
+    use glam::DVec3;
+
+    const SIZE: u32 = 32;
+    const COLOR: [u8; 3] = [200, 150, 100];
+    const BACKGROUND: [u8; 3] = [0, 0, 20];
+
+    fn in_disc(i: u32, j: u32, cx: f64) -> bool {
+        let (x, y) = (i as f64 + 0.5 - cx, j as f64 + 0.5 - 16.0);
+        x * x + y * y <= 10.0 * 10.0
+    }
+
+    fn reference_disc() -> ReferenceImage {
+        let n = (SIZE * SIZE) as usize;
+        let mut image = ReferenceImage {
+            width: SIZE,
+            height: SIZE,
+            supersample: 1,
+            hits: vec![None; n],
+            color: vec![BACKGROUND; n],
+            color_supersampled: None,
+            coverage: None,
+        };
+        for j in 0..SIZE {
+            for i in 0..SIZE {
+                if in_disc(i, j, 16.0) {
+                    let k = (j * SIZE + i) as usize;
+                    image.hits[k] = Some(ReferenceHit {
+                        depth: 0.5,
+                        normal: DVec3::Z,
+                        lembo: 0,
+                        u: 0.2,
+                        v: 0.2,
+                    });
+                    image.color[k] = COLOR;
+                }
+            }
+        }
+        image
+    }
+
+    /// A render of the disc centred at `cx`, depth 0.5, normal +z.
+    fn render_disc(cx: f64) -> FrameBuffer {
+        let mut fb = FrameBuffer::new(SIZE, SIZE, BACKGROUND, true);
+        for j in 0..SIZE {
+            for i in 0..SIZE {
+                if in_disc(i, j, cx) {
+                    let k = fb.index(i, j);
+                    fb.write(k, 0.5, 0, COLOR);
+                    fb.normal.as_mut().unwrap()[k] = [0.0, 0.0, 1.0];
+                }
+            }
+        }
+        fb
+    }
+
+    fn count(f: impl Fn(u32, u32) -> bool) -> u64 {
+        (0..SIZE)
+            .flat_map(|j| (0..SIZE).map(move |i| (i, j)))
+            .filter(|&(i, j)| f(i, j))
+            .count() as u64
+    }
+
+    #[test]
+    fn measure_identical_images_have_no_error_and_capped_psnr() {
+        let a = measure(&render_disc(16.0), &reference_disc(), 0, 0.0);
+        assert_eq!(
+            a.coverage_false_positive
+                + a.coverage_false_negative
+                + a.crack_pixels
+                + a.max_abs_error,
+            0
+        );
+        assert_eq!(
+            (a.silhouette_max_px, a.silhouette_mean_px, a.depth_max_abs),
+            (0.0, 0.0, 0.0)
+        );
+        assert_eq!((a.normal_max_deg, a.normal_mean_deg), (0.0, 0.0));
+        assert_eq!(a.psnr_db, PSNR_CAP_DB);
+        assert_eq!(a.pixels_compared, count(|i, j| in_disc(i, j, 16.0)));
+        assert!(serde_json::to_string(&a)
+            .unwrap()
+            .contains("\"psnr_db\":100.0"));
+    }
+
+    #[test]
+    fn measure_one_pixel_shifted_disc_is_a_one_pixel_silhouette_error() {
+        let a = measure(&render_disc(17.0), &reference_disc(), 3, 0.25);
+        let fp = count(|i, j| in_disc(i, j, 17.0) && !in_disc(i, j, 16.0));
+        let fn_ = count(|i, j| !in_disc(i, j, 17.0) && in_disc(i, j, 16.0));
+        assert!(fp > 0);
+        assert_eq!(
+            (a.coverage_false_positive, a.coverage_false_negative),
+            (fp, fn_)
+        );
+        assert_eq!((a.silhouette_max_px, a.silhouette_mean_px), (1.0, 1.0));
+        assert_eq!(a.crack_pixels, 0);
+        assert_eq!(
+            (a.double_hit_pixels, a.max_scanline_deviation_px),
+            (3, 0.25)
+        );
+        assert_eq!(a.max_abs_error, 200);
+        assert!(a.psnr_db < 30.0);
+    }
+
+    #[test]
+    fn measure_hole_inside_the_disc_is_a_crack_not_a_silhouette_error() {
+        let mut fb = render_disc(16.0);
+        let k = fb.index(16, 16);
+        fb.primitive[k] = NO_PRIMITIVE;
+        fb.color[k] = BACKGROUND;
+        let a = measure(&fb, &reference_disc(), 0, 0.0);
+        assert_eq!(
+            (
+                a.crack_pixels,
+                a.coverage_false_negative,
+                a.coverage_false_positive
+            ),
+            (1, 1, 0)
+        );
+        assert_eq!((a.silhouette_max_px, a.silhouette_mean_px), (0.0, 0.0));
+    }
+
+    #[test]
+    fn measure_normal_and_depth_errors_compare_up_to_sign() {
+        let mut fb = render_disc(16.0);
+        let k = fb.index(16, 16);
+        let tilt = 10f64.to_radians();
+        fb.normal.as_mut().unwrap()[k] = [0.0, -tilt.sin() as f32, -tilt.cos() as f32];
+        fb.depth[k] = 0.25;
+        let a = measure(&fb, &reference_disc(), 0, 0.0);
+        assert!(
+            (a.normal_max_deg - 10.0).abs() < 1e-4,
+            "{}",
+            a.normal_max_deg
+        );
+        assert_eq!(a.depth_max_abs, 0.25);
+    }
+
+    #[test]
+    fn distance_transform_matches_brute_force() {
+        let (w, h) = (13, 9);
+        let mask: Vec<bool> = (0..w * h).map(|k| (k * 7919) % 11 == 0).collect();
+        let fast = distance_to(&mask, w, h, true);
+        for (k, d) in fast.iter().enumerate() {
+            let (x, y) = ((k % w) as f64, (k / w) as f64);
+            let brute = (0..w * h)
+                .filter(|&p| mask[p])
+                .map(|p| ((x - (p % w) as f64).powi(2) + (y - (p / w) as f64).powi(2)).sqrt())
+                .fold(f64::INFINITY, f64::min);
+            assert!(
+                (d.unwrap() - brute).abs() < 1e-12,
+                "pixel {k}: {d:?} vs {brute}"
+            );
+        }
+        assert!(distance_to(&mask, w, h, true).iter().all(|d| d.is_some()));
+        assert!(distance_to(&[false; 4], 2, 2, true)
+            .iter()
+            .all(|d| d.is_none()));
+    }
+
+    #[test]
+    fn lines_name_every_field_with_its_unit() {
+        let a = measure(&render_disc(16.0), &reference_disc(), 0, 0.0);
+        let lines = a.lines();
+        assert_eq!(lines.len(), 14);
+        let json = serde_json::to_value(&a).unwrap();
+        for (name, _) in &lines {
+            assert!(json.get(name).is_some(), "{name}");
+        }
+        assert!(lines
+            .iter()
+            .any(|(n, v)| n == "psnr_db" && v.ends_with("dB (identical)")));
+    }
+}

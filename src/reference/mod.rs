@@ -1,0 +1,19 @@
+//! The reference: an exact, untimed `f64` renderer of the true surfaces, and the accuracy
+//! metrics that hold a rendered frame against it (DESIGN §6).
+//!
+//! [`oracle`] intersects the ray through every sample with the world-space lembos
+//! themselves (no projection approximation, no datapath rounding) and shades the nearest
+//! hit with the exact normal function; [`metrics`] compares a frame buffer with that image
+//! under the names the report carries; [`heatmap`] draws the difference for a person to read.
+//!
+//! Architecture Invariant: this module knows nothing of cycles, units, the extreme method
+//! or the datapath precision. It depends only on the lembo model, the camera, the shading
+//! equation and the frame buffer's layout, so it can judge any renderer.
+
+pub mod heatmap;
+pub mod metrics;
+pub mod oracle;
+
+pub use heatmap::{error_heatmap, legend_height};
+pub use metrics::{measure, Accuracy};
+pub use oracle::{intersect_ray, render_reference, ReferenceHit, ReferenceImage, ReferenceInput};

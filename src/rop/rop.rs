@@ -1,0 +1,64 @@
+//! The ROP as a fragment sink: depth test, then shading of the fragments that pass (early
+//! depth test: shading a fragment that loses cannot change the image), then the write.
+
+use super::framebuffer::FrameBuffer;
+use super::shade::{to_u8, Light, Shader};
+use crate::camera::View;
+use crate::datapath::Real;
+use crate::lembo::eval3;
+use crate::raster::fragment::FragmentSink;
+use crate::raster::setup::ScreenLembo;
+use crate::raster::subsegmenter::Subsegment;
+
+pub struct Rop<'a, R> {
+    fb: &'a mut FrameBuffer,
+    shader: Shader<R>,
+    /// Eye position (perspective) [world units].
+    eye: [R; 3],
+    /// Constant direction to the eye (orthographic).
+    to_eye: Option<[R; 3]>,
+    /// Fragments that passed the depth test.
+    pub passed: u64,
+}
+
+impl<'a, R: Real> Rop<'a, R> {
+    pub fn new(fb: &'a mut FrameBuffer, light: &Light, view: &View) -> Self {
+        let to_eye = view.orthographic.then(|| view.to_eye(glam::DVec3::ZERO).to_array().map(R::of));
+        Rop { fb, shader: Shader::new(light), eye: view.eye.to_array().map(R::of), to_eye, passed: 0 }
+    }
+}
+
+#[inline(always)]
+fn normalize<R: Real>(v: [R; 3]) -> [R; 3] {
+    let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    if n > R::zero() {
+        [v[0] / n, v[1] / n, v[2] / n]
+    } else {
+        [R::zero(); 3]
+    }
+}
+
+impl<R: Real> FragmentSink<R> for Rop<'_, R> {
+    #[inline]
+    fn fragment(&mut self, l: &ScreenLembo<R>, _sub: &Subsegment<R>, i: u32, j: u32, u: R, v: R, z: R) {
+        let idx = self.fb.index(i, j);
+        let zf = z.f64() as f32;
+        if !self.fb.passes(idx, zf, l.id) {
+            return;
+        }
+        self.passed += 1;
+        let n = normalize(eval3(&l.normal, u, v));
+        let to_eye = match self.to_eye {
+            Some(d) => d,
+            None => {
+                let p = eval3(&l.position, u, v);
+                normalize([self.eye[0] - p[0], self.eye[1] - p[1], self.eye[2] - p[2]])
+            }
+        };
+        let c = self.shader.shade(n, to_eye, l.color);
+        self.fb.write(idx, zf, l.id, [to_u8(c[0]), to_u8(c[1]), to_u8(c[2])]);
+        if let Some(normals) = self.fb.normal.as_mut() {
+            normals[idx] = n.map(|c| c.f64() as f32);
+        }
+    }
+}
