@@ -1,9 +1,36 @@
-//! lembo-sim (crate doc written below in full once the pipeline exists).
+//! # lembo-sim
+//!
+//! A simulator of the parallel rasterization unit that Martinelli proposes for *lembos*
+//! (quadratic triangular patches with a separate quadratic normal function, WSCG 2006), built
+//! so that an architect can measure what such a unit costs and what it buys.
+//!
+//! ```text
+//!  scene ─► Setup ─► MinMax ─► IntervalManager ─► Segmenter ─► Subsegmenter ─► FragmentRasterizer ─► ROP ─► FrameBuffer
+//!           project   y range,  per scanline y_j:   walk Y(u,v)=y_j  split so x(t) is   pixel centres, u,v by    depth test,
+//!           6 points  cull,     domain-edge roots   with midpoint    linear within k    increments, z and n      Phong shading
+//!           + normals clip to   -> intervals        error exactly k                     from the quadratics
+//!                     viewport
+//! ```
+//!
+//! - [`lembo`]: the model (paper 001 section 2): six-point construction, evaluation, edges
+//!   from vertex normals, meshes, the builtin shapes of Figures 6-8.
+//! - [`raster`]: the functional extreme method (section 5), one module per stage, generic
+//!   over the datapath ([`datapath::Real`]: `f32` or `f64`).
+//! - [`rop`]: depth test, per-fragment Phong (paper 000 equation 6), frame buffer.
+//! - [`reference`]: the exact f64 ray-patch reference and the accuracy metrics.
+//! - [`scene`], [`camera`]: the JSON trace format and OpenGL-convention cameras.
+//! - [`job`], [`report`]: the `render` command's work and its `report.json` / `report.txt`.
+//!
+//! The functional model knows nothing of cycles; the timed pipeline (Figure 5 as actors on
+//! bounded channels) will call the same stage functions and add only time.
+
 pub mod camera;
 pub mod datapath;
-pub mod lembo;
-pub mod rop;
 pub mod error;
-pub mod scene;
-pub mod reference;
+pub mod job;
+pub mod lembo;
 pub mod raster;
+pub mod reference;
+pub mod report;
+pub mod rop;
+pub mod scene;

@@ -1,0 +1,162 @@
+//! The run report (DESIGN §7): `report.json` for tools, `report.txt` for people, and the
+//! atomic writing of a run's output files.
+
+use crate::error::{Error, Result};
+use crate::raster::Counts;
+use crate::reference::metrics::Accuracy;
+use serde::Serialize;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// Version of the `report.json` layout; bumped when a field changes meaning or moves.
+pub const SCHEMA_VERSION: u32 = 1;
+
+/// Everything a run reports.
+#[derive(Clone, Debug, Serialize)]
+pub struct Report {
+    pub schema_version: u32,
+    pub scene: SceneInfo,
+    pub settings: Settings,
+    pub counts: Counts,
+    /// Cycle accounting of the timed pipeline; null in functional mode.
+    pub cycles: Option<serde_json::Value>,
+    /// Accuracy against the exact reference; null without `--reference`.
+    pub accuracy: Option<Accuracy>,
+    pub host: Host,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct SceneInfo {
+    pub name: String,
+    /// The scene file, or "(embedded default)".
+    pub source: String,
+    pub width: u32,
+    pub height: u32,
+    pub lembos: u64,
+    pub objects: Vec<String>,
+}
+
+/// The effective settings of the run, defaults included.
+#[derive(Clone, Debug, Serialize)]
+pub struct Settings {
+    /// `functional` (untimed).
+    pub mode: String,
+    /// `lembo`.
+    pub path: String,
+    /// Tolerance k of the extreme method [pixels].
+    pub k_px: f64,
+    /// `f32` or `f64`.
+    pub datapath: String,
+    /// Whether the exact reference was rendered and compared.
+    pub reference: bool,
+    /// Reference sub-samples per pixel side (1 = pixel centres only).
+    pub supersample: u32,
+}
+
+/// Measurements of the simulator itself on this host (not deterministic).
+#[derive(Clone, Debug, Serialize)]
+pub struct Host {
+    /// Wall time of the render, without the reference [s].
+    pub wall_seconds: f64,
+    /// Fragments generated per wall second of the render.
+    pub fragments_per_second: f64,
+    /// Wall time of the reference and metrics [s]; null without `--reference`.
+    pub reference_wall_seconds: Option<f64>,
+}
+
+impl Report {
+    /// The human-readable `report.txt`.
+    pub fn to_text(&self) -> String {
+        let mut t = String::new();
+        let s = &self.scene;
+        let _ = writeln!(t, "lembo-sim report (schema {})", self.schema_version);
+        let _ = writeln!(t, "scene     {} ({}), {}x{} px, {} lembos", s.name, s.source, s.width, s.height, s.lembos);
+        for o in &s.objects {
+            let _ = writeln!(t, "          - {o}");
+        }
+        let st = &self.settings;
+        let _ = writeln!(
+            t,
+            "settings  mode {}, path {}, k = {} px, datapath {}, reference {}{}",
+            st.mode,
+            st.path,
+            st.k_px,
+            st.datapath,
+            if st.reference { "yes" } else { "no" },
+            if st.reference && st.supersample > 1 { format!(" ({0}x{0} samples)", st.supersample) } else { String::new() }
+        );
+        let _ = writeln!(t, "\ncounts (functional model)");
+        if let Ok(serde_json::Value::Object(map)) = serde_json::to_value(self.counts) {
+            for (k, v) in map {
+                let _ = writeln!(t, "  {k:<26} {v}");
+            }
+        }
+        let _ = writeln!(t, "\ncycles    {}", if self.cycles.is_some() { "see report.json" } else { "n/a (functional mode)" });
+        match &self.accuracy {
+            Some(a) => {
+                let _ = writeln!(t, "\naccuracy against the exact reference");
+                for (k, v) in a.lines() {
+                    let _ = writeln!(t, "  {k:<26} {v}");
+                }
+            }
+            None => {
+                let _ = writeln!(t, "\naccuracy  n/a (run with --reference)");
+            }
+        }
+        let h = &self.host;
+        let _ = writeln!(
+            t,
+            "\nhost      render {:.3} s, {:.1} M fragments/s{}",
+            h.wall_seconds,
+            h.fragments_per_second / 1e6,
+            h.reference_wall_seconds.map(|r| format!(", reference {r:.3} s")).unwrap_or_default()
+        );
+        t
+    }
+}
+
+/// Writes every file into `dir` atomically: each is written to a hidden temporary name and
+/// renamed into place only after all were written, so a failed run leaves no partial output.
+pub fn write_files(dir: &Path, files: &[(&str, Vec<u8>)]) -> Result<()> {
+    let werr = |path: PathBuf| move |source| Error::Write { path, source };
+    std::fs::create_dir_all(dir).map_err(werr(dir.to_path_buf()))?;
+    let mut temps = Vec::new();
+    for (name, bytes) in files {
+        let tmp = dir.join(format!(".{name}.tmp"));
+        if let Err(e) = std::fs::write(&tmp, bytes) {
+            for t in &temps {
+                let _ = std::fs::remove_file(t);
+            }
+            let _ = std::fs::remove_file(&tmp);
+            return Err(werr(tmp)(e));
+        }
+        temps.push(tmp);
+    }
+    for ((name, _), tmp) in files.iter().zip(&temps) {
+        let path = dir.join(name);
+        std::fs::rename(tmp, &path).map_err(werr(path))?;
+    }
+    Ok(())
+}
+
+/// PNG bytes of an RGB image.
+pub fn png_bytes(img: &image::RgbImage) -> Vec<u8> {
+    let mut out = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut out, image::ImageFormat::Png).expect("encoding a PNG into memory cannot fail");
+    out.into_inner()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn files_appear_together_and_no_temporaries_remain() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("run");
+        write_files(&out, &[("a.txt", b"one".to_vec()), ("b.txt", b"two".to_vec())]).unwrap();
+        assert_eq!(std::fs::read(out.join("a.txt")).unwrap(), b"one");
+        let names: Vec<_> = std::fs::read_dir(&out).unwrap().map(|e| e.unwrap().file_name()).collect();
+        assert_eq!(names.len(), 2, "{names:?}");
+    }
+}
