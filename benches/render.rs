@@ -1,1 +1,115 @@
-fn main(){}
+//! Criterion benchmarks of the functional model: whole scenes by viewport size, and the
+//! per-scanline stages on their own. Setup (scene loading, projection) stays outside the
+//! timed closures.
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use lembo_sim::camera::View;
+use lembo_sim::datapath::Datapath;
+use lembo_sim::raster::{self, interval, minmax, segmenter, setup, subsegmenter, Counts};
+use lembo_sim::scene::Scene;
+use std::path::Path;
+
+fn scene(name: &str) -> Scene {
+    Scene::load(
+        &Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("traces")
+            .join(name),
+    )
+    .unwrap()
+}
+
+fn scenes(c: &mut Criterion) {
+    let mut g = c.benchmark_group("functional_render");
+    g.sample_size(10);
+    for name in ["sphere24.json", "bunny.json"] {
+        for side in [512u32, 1024] {
+            let mut s = scene(name);
+            s.set_viewport(side, side).unwrap();
+            let view = View::new(&s.camera, s.viewport);
+            let frags = raster::render_functional(&s, &view, 0.5, Datapath::F32, false)
+                .unwrap()
+                .counts
+                .fragments;
+            g.throughput(Throughput::Elements(frags));
+            g.bench_with_input(
+                BenchmarkId::new(name.trim_end_matches(".json"), side),
+                &side,
+                |b, _| {
+                    b.iter(|| {
+                        raster::render_functional(&s, &view, 0.5, Datapath::F32, false).unwrap()
+                    })
+                },
+            );
+        }
+    }
+    g.finish();
+}
+
+fn stages(c: &mut Criterion) {
+    let s = scene("sphere24.json");
+    let view = View::new(&s.camera, s.viewport);
+    let lembos: Vec<_> = s
+        .lembos()
+        .enumerate()
+        .filter_map(|(i, (l, col))| setup::setup::<f32>(i as u32, l, col, &view).ok())
+        .collect();
+    let work: Vec<(usize, u32)> = lembos
+        .iter()
+        .enumerate()
+        .flat_map(|(i, l)| {
+            let (j0, j1) = minmax::scanlines(l, view.viewport.height).unwrap();
+            (j0..=j1).map(move |j| (i, j))
+        })
+        .collect();
+    let mut g = c.benchmark_group("stages_sphere24_512");
+    g.throughput(Throughput::Elements(work.len() as u64));
+    g.bench_function("interval_manager_per_scanline", |b| {
+        let mut scratch = interval::IntervalScratch::default();
+        let mut out = Vec::new();
+        let mut counts = Counts::default();
+        b.iter(|| {
+            for &(i, j) in &work {
+                out.clear();
+                interval::intervals(&lembos[i], j, 0.5, &mut scratch, &mut out, &mut counts);
+            }
+        })
+    });
+    let mut ivs = Vec::new();
+    let mut counts = Counts::default();
+    let mut scratch = interval::IntervalScratch::default();
+    let mut items = Vec::new();
+    for &(i, j) in &work {
+        ivs.clear();
+        interval::intervals(&lembos[i], j, 0.5, &mut scratch, &mut ivs, &mut counts);
+        items.extend(ivs.iter().map(|iv| (i, j, *iv)));
+    }
+    g.bench_function("segmenter_per_scanline", |b| {
+        let mut out = Vec::new();
+        b.iter(|| {
+            for (i, j, iv) in &items {
+                out.clear();
+                segmenter::segments(&lembos[*i], *j, 0.5, iv, 1 << 16, &mut out, &mut counts)
+                    .unwrap();
+            }
+        })
+    });
+    let mut segs = Vec::new();
+    for (i, j, iv) in &items {
+        let mut out = Vec::new();
+        segmenter::segments(&lembos[*i], *j, 0.5, iv, 1 << 16, &mut out, &mut counts).unwrap();
+        segs.extend(out.into_iter().map(|s| (*i, s)));
+    }
+    g.bench_function("subsegmenter_per_scanline", |b| {
+        let mut out = Vec::new();
+        b.iter(|| {
+            for (i, s) in &segs {
+                out.clear();
+                subsegmenter::subsegments(&lembos[*i], s, 0.5, &mut out, &mut counts);
+            }
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, scenes, stages);
+criterion_main!(benches);

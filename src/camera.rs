@@ -91,19 +91,34 @@ pub struct ScreenPoint {
 impl View {
     pub fn new(camera: &Camera, viewport: Viewport) -> View {
         let eye = DVec3::from_array(camera.eye);
-        let view = DMat4::look_at_rh(eye, DVec3::from_array(camera.target), DVec3::from_array(camera.up));
+        let view = DMat4::look_at_rh(
+            eye,
+            DVec3::from_array(camera.target),
+            DVec3::from_array(camera.up),
+        );
         let aspect = viewport.width as f64 / viewport.height as f64;
         let (proj, orthographic) = match camera.projection {
-            Projection::Perspective { fovy_deg, near, far } => {
-                (DMat4::perspective_rh_gl(fovy_deg.to_radians(), aspect, near, far), false)
-            }
+            Projection::Perspective {
+                fovy_deg,
+                near,
+                far,
+            } => (
+                DMat4::perspective_rh_gl(fovy_deg.to_radians(), aspect, near, far),
+                false,
+            ),
             Projection::Orthographic { height, near, far } => {
                 let (h, w) = (0.5 * height, 0.5 * height * aspect);
                 (DMat4::orthographic_rh_gl(-w, w, -h, h, near, far), true)
             }
         };
         let view_proj = proj * view;
-        View { viewport, eye, view_proj, inv_view_proj: view_proj.inverse(), orthographic }
+        View {
+            viewport,
+            eye,
+            view_proj,
+            inv_view_proj: view_proj.inverse(),
+            orthographic,
+        }
     }
 
     /// Projects a world point to the viewport (no clipping; check `w` for points behind).
@@ -159,28 +174,51 @@ mod tests {
 
     fn cam(projection: Projection) -> View {
         View::new(
-            &Camera { eye: [0.0, 0.0, 5.0], target: [0.0; 3], up: [0.0, 1.0, 0.0], projection },
-            Viewport { width: 200, height: 100 },
+            &Camera {
+                eye: [0.0, 0.0, 5.0],
+                target: [0.0; 3],
+                up: [0.0, 1.0, 0.0],
+                projection,
+            },
+            Viewport {
+                width: 200,
+                height: 100,
+            },
         )
     }
 
     #[test]
     fn target_projects_to_the_viewport_centre_and_up_is_row_zero() {
-        let v = cam(Projection::Perspective { fovy_deg: 60.0, near: 1.0, far: 10.0 });
+        let v = cam(Projection::Perspective {
+            fovy_deg: 60.0,
+            near: 1.0,
+            far: 10.0,
+        });
         let c = v.project(DVec3::ZERO);
         assert!((c.x - 100.0).abs() < 1e-9 && (c.y - 50.0).abs() < 1e-9);
         assert!(v.project(DVec3::new(0.0, 1.0, 0.0)).y < 50.0);
         assert!(v.project(DVec3::new(1.0, 0.0, 0.0)).x > 100.0);
         // Nearer points have smaller depth, in [0, 1].
-        let (near, far) = (v.depth_of(DVec3::new(0.0, 0.0, 2.0)), v.depth_of(DVec3::new(0.0, 0.0, -2.0)));
+        let (near, far) = (
+            v.depth_of(DVec3::new(0.0, 0.0, 2.0)),
+            v.depth_of(DVec3::new(0.0, 0.0, -2.0)),
+        );
         assert!(0.0 < near && near < far && far < 1.0);
     }
 
     #[test]
     fn rays_pass_through_the_points_that_project_to_their_sample() {
         for projection in [
-            Projection::Perspective { fovy_deg: 45.0, near: 0.5, far: 20.0 },
-            Projection::Orthographic { height: 3.0, near: 0.5, far: 20.0 },
+            Projection::Perspective {
+                fovy_deg: 45.0,
+                near: 0.5,
+                far: 20.0,
+            },
+            Projection::Orthographic {
+                height: 3.0,
+                near: 0.5,
+                far: 20.0,
+            },
         ] {
             let v = cam(projection);
             let p = DVec3::new(0.3, -0.4, 0.7);

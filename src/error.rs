@@ -8,20 +8,44 @@ use std::path::PathBuf;
 #[derive(Debug)]
 pub enum Error {
     /// A file could not be read. Fatal; input error.
-    Read { path: PathBuf, source: std::io::Error },
+    Read {
+        path: PathBuf,
+        source: std::io::Error,
+    },
     /// A scene or configuration file is not valid JSON, has an unknown field or a value of
     /// the wrong type. `field` is the path to the value (`objects[2].mesh`), or empty when
     /// the JSON does not parse at all. Input error.
-    Parse { file: String, field: String, message: String },
+    Parse {
+        file: String,
+        field: String,
+        message: String,
+    },
     /// A value parsed but is outside what the simulator accepts. Input error.
-    Invalid { file: String, field: String, value: String, reason: String },
+    Invalid {
+        file: String,
+        field: String,
+        value: String,
+        reason: String,
+    },
     /// A mesh file named by a scene could not be loaded or holds bad data. Input error.
-    Mesh { file: String, field: String, path: PathBuf, message: String },
+    Mesh {
+        file: String,
+        field: String,
+        path: PathBuf,
+        message: String,
+    },
     /// A patch needs more segments than the stated cap on one scanline interval (DESIGN §8):
     /// refused instead of running out of memory or time. Input error.
-    SegmentCap { lembo: usize, scanline: u32, cap: usize },
+    SegmentCap {
+        lembo: usize,
+        scanline: u32,
+        cap: usize,
+    },
     /// An output file could not be written. Not an input error (exit status 1).
-    Write { path: PathBuf, source: std::io::Error },
+    Write {
+        path: PathBuf,
+        source: std::io::Error,
+    },
 }
 
 impl Error {
@@ -40,7 +64,12 @@ impl Error {
         value: impl fmt::Display,
         reason: impl Into<String>,
     ) -> Error {
-        Error::Invalid { file: file.into(), field: field.into(), value: value.to_string(), reason: reason.into() }
+        Error::Invalid {
+            file: file.into(),
+            field: field.into(),
+            value: value.to_string(),
+            reason: reason.into(),
+        }
     }
 }
 
@@ -48,17 +77,43 @@ impl fmt::Display for Error {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Error::Read { path, source } => write!(f, "cannot read {}: {source}", path.display()),
-            Error::Parse { file, field, message } if field.is_empty() || field == "." => {
+            Error::Parse {
+                file,
+                field,
+                message,
+            } if field.is_empty() || field == "." => {
                 write!(f, "{file}: {message}")
             }
-            Error::Parse { file, field, message } => write!(f, "{file}: field `{field}`: {message}"),
-            Error::Invalid { file, field, value, reason } => {
+            Error::Parse {
+                file,
+                field,
+                message,
+            } => write!(f, "{file}: field `{field}`: {message}"),
+            Error::Invalid {
+                file,
+                field,
+                value,
+                reason,
+            } => {
                 write!(f, "{file}: field `{field}` = {value}: {reason}")
             }
-            Error::Mesh { file, field, path, message } => {
-                write!(f, "{file}: field `{field}`: mesh {}: {message}", path.display())
+            Error::Mesh {
+                file,
+                field,
+                path,
+                message,
+            } => {
+                write!(
+                    f,
+                    "{file}: field `{field}`: mesh {}: {message}",
+                    path.display()
+                )
             }
-            Error::SegmentCap { lembo, scanline, cap } => write!(
+            Error::SegmentCap {
+                lembo,
+                scanline,
+                cap,
+            } => write!(
                 f,
                 "lembo {lembo} needs more than {cap} segments on scanline {scanline}; \
                  refusing it (raise k or fix the patch)"

@@ -41,7 +41,12 @@ impl RenderJob {
     pub fn validate(&self) -> Result<()> {
         let (lo, hi) = K_RANGE;
         if !(self.k.is_finite() && self.k >= lo && self.k <= hi) {
-            return Err(Error::invalid(COMMAND_LINE, "--k", self.k, format!("k must be a number in [{lo}, {hi}] pixels")));
+            return Err(Error::invalid(
+                COMMAND_LINE,
+                "--k",
+                self.k,
+                format!("k must be a number in [{lo}, {hi}] pixels"),
+            ));
         }
         if !(1..=MAX_SUPERSAMPLE).contains(&self.supersample) {
             return Err(Error::invalid(
@@ -54,7 +59,12 @@ impl RenderJob {
         if let Some((w, h)) = self.viewport {
             for (name, v) in [("--viewport width", w), ("--viewport height", h)] {
                 if !(1..=MAX_VIEWPORT_SIDE).contains(&v) {
-                    return Err(Error::invalid(COMMAND_LINE, name, v, format!("must be in 1..={MAX_VIEWPORT_SIDE} pixels")));
+                    return Err(Error::invalid(
+                        COMMAND_LINE,
+                        name,
+                        v,
+                        format!("must be in 1..={MAX_VIEWPORT_SIDE} pixels"),
+                    ));
                 }
             }
         }
@@ -91,7 +101,8 @@ pub fn run_render(job: &RenderJob) -> Result<RenderOutput> {
     let frame = raster::render_functional(&scene, &view, job.k, job.datapath, job.reference)?;
     let wall = t0.elapsed().as_secs_f64();
 
-    let mut files: Vec<(&str, Vec<u8>)> = vec![("image.png", png_bytes(&frame.framebuffer.to_image()))];
+    let mut files: Vec<(&str, Vec<u8>)> =
+        vec![("image.png", png_bytes(&frame.framebuffer.to_image()))];
     let mut accuracy = None;
     let mut reference_wall = None;
     if job.reference {
@@ -111,9 +122,14 @@ pub fn run_render(job: &RenderJob) -> Result<RenderOutput> {
             probe.double_hit_pixels,
             probe.max_scanline_deviation_px,
         ));
-        let shown = reference.to_image_supersampled().unwrap_or_else(|| reference.to_image());
+        let shown = reference
+            .to_image_supersampled()
+            .unwrap_or_else(|| reference.to_image());
         files.push(("reference.png", png_bytes(&shown)));
-        files.push(("error.png", png_bytes(&heatmap::error_heatmap(&frame.framebuffer, &reference))));
+        files.push((
+            "error.png",
+            png_bytes(&heatmap::error_heatmap(&frame.framebuffer, &reference)),
+        ));
         reference_wall = Some(t1.elapsed().as_secs_f64());
     }
 
@@ -121,11 +137,19 @@ pub fn run_render(job: &RenderJob) -> Result<RenderOutput> {
         schema_version: SCHEMA_VERSION,
         scene: SceneInfo {
             name: scene.name.clone(),
-            source: scene.source.as_ref().map(|p| p.display().to_string()).unwrap_or_else(|| "(embedded default)".into()),
+            source: scene
+                .source
+                .as_ref()
+                .map(|p| p.display().to_string())
+                .unwrap_or_else(|| "(embedded default)".into()),
             width: scene.viewport.width,
             height: scene.viewport.height,
             lembos: scene.lembo_count() as u64,
-            objects: scene.objects.iter().map(|o| format!("{} ({} lembos)", o.label, o.lembos.len())).collect(),
+            objects: scene
+                .objects
+                .iter()
+                .map(|o| format!("{} ({} lembos)", o.label, o.lembos.len()))
+                .collect(),
         },
         settings: Settings {
             mode: "functional".into(),
@@ -140,7 +164,11 @@ pub fn run_render(job: &RenderJob) -> Result<RenderOutput> {
         accuracy,
         host: Host {
             wall_seconds: wall,
-            fragments_per_second: if wall > 0.0 { frame.counts.fragments as f64 / wall } else { 0.0 },
+            fragments_per_second: if wall > 0.0 {
+                frame.counts.fragments as f64 / wall
+            } else {
+                0.0
+            },
             reference_wall_seconds: reference_wall,
         },
     };
@@ -148,7 +176,14 @@ pub fn run_render(job: &RenderJob) -> Result<RenderOutput> {
     files.push(("report.json", json));
     files.push(("report.txt", report.to_text().into_bytes()));
 
-    let dir = job.out.clone().unwrap_or_else(|| Path::new("out").join(&scene.name));
+    let dir = job
+        .out
+        .clone()
+        .unwrap_or_else(|| Path::new("out").join(&scene.name));
     write_files(&dir, &files)?;
-    Ok(RenderOutput { report, dir, files: files.iter().map(|(n, _)| n.to_string()).collect() })
+    Ok(RenderOutput {
+        report,
+        dir,
+        files: files.iter().map(|(n, _)| n.to_string()).collect(),
+    })
 }

@@ -47,7 +47,12 @@ struct RenderArgs {
     out: Option<PathBuf>,
     /// Tolerance k of the extreme method: the largest |y(u,v) - y_j| along a scanline's
     /// curve and the largest x error of a subsegment, in pixels, in [0.0001, 64].
-    #[arg(long, value_name = "PX", default_value_t = 0.5)]
+    #[arg(
+        long,
+        value_name = "PX",
+        default_value_t = 0.5,
+        allow_negative_numbers = true
+    )]
     k: f64,
     /// Datapath precision of the extreme method.
     #[arg(long, value_enum, default_value = "f32")]
@@ -67,8 +72,14 @@ struct RenderArgs {
 }
 
 fn parse_viewport(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("expected WIDTHxHEIGHT, got `{s}`"))?;
-    let num = |v: &str| v.trim().parse::<u32>().map_err(|e| format!("`{v}` is not a pixel count: {e}"));
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("expected WIDTHxHEIGHT, got `{s}`"))?;
+    let num = |v: &str| {
+        v.trim()
+            .parse::<u32>()
+            .map_err(|e| format!("`{v}` is not a pixel count: {e}"))
+    };
     Ok((num(w)?, num(h)?))
 }
 

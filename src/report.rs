@@ -70,7 +70,11 @@ impl Report {
         let mut t = String::new();
         let s = &self.scene;
         let _ = writeln!(t, "lembo-sim report (schema {})", self.schema_version);
-        let _ = writeln!(t, "scene     {} ({}), {}x{} px, {} lembos", s.name, s.source, s.width, s.height, s.lembos);
+        let _ = writeln!(
+            t,
+            "scene     {} ({}), {}x{} px, {} lembos",
+            s.name, s.source, s.width, s.height, s.lembos
+        );
         for o in &s.objects {
             let _ = writeln!(t, "          - {o}");
         }
@@ -83,7 +87,11 @@ impl Report {
             st.k_px,
             st.datapath,
             if st.reference { "yes" } else { "no" },
-            if st.reference && st.supersample > 1 { format!(" ({0}x{0} samples)", st.supersample) } else { String::new() }
+            if st.reference && st.supersample > 1 {
+                format!(" ({0}x{0} samples)", st.supersample)
+            } else {
+                String::new()
+            }
         );
         let _ = writeln!(t, "\ncounts (functional model)");
         if let Ok(serde_json::Value::Object(map)) = serde_json::to_value(self.counts) {
@@ -91,7 +99,15 @@ impl Report {
                 let _ = writeln!(t, "  {k:<26} {v}");
             }
         }
-        let _ = writeln!(t, "\ncycles    {}", if self.cycles.is_some() { "see report.json" } else { "n/a (functional mode)" });
+        let _ = writeln!(
+            t,
+            "\ncycles    {}",
+            if self.cycles.is_some() {
+                "see report.json"
+            } else {
+                "n/a (functional mode)"
+            }
+        );
         match &self.accuracy {
             Some(a) => {
                 let _ = writeln!(t, "\naccuracy against the exact reference");
@@ -109,7 +125,9 @@ impl Report {
             "\nhost      render {:.3} s, {:.1} M fragments/s{}",
             h.wall_seconds,
             h.fragments_per_second / 1e6,
-            h.reference_wall_seconds.map(|r| format!(", reference {r:.3} s")).unwrap_or_default()
+            h.reference_wall_seconds
+                .map(|r| format!(", reference {r:.3} s"))
+                .unwrap_or_default()
         );
         t
     }
@@ -142,7 +160,8 @@ pub fn write_files(dir: &Path, files: &[(&str, Vec<u8>)]) -> Result<()> {
 /// PNG bytes of an RGB image.
 pub fn png_bytes(img: &image::RgbImage) -> Vec<u8> {
     let mut out = std::io::Cursor::new(Vec::new());
-    img.write_to(&mut out, image::ImageFormat::Png).expect("encoding a PNG into memory cannot fail");
+    img.write_to(&mut out, image::ImageFormat::Png)
+        .expect("encoding a PNG into memory cannot fail");
     out.into_inner()
 }
 
@@ -154,9 +173,16 @@ mod tests {
     fn files_appear_together_and_no_temporaries_remain() {
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join("run");
-        write_files(&out, &[("a.txt", b"one".to_vec()), ("b.txt", b"two".to_vec())]).unwrap();
+        write_files(
+            &out,
+            &[("a.txt", b"one".to_vec()), ("b.txt", b"two".to_vec())],
+        )
+        .unwrap();
         assert_eq!(std::fs::read(out.join("a.txt")).unwrap(), b"one");
-        let names: Vec<_> = std::fs::read_dir(&out).unwrap().map(|e| e.unwrap().file_name()).collect();
+        let names: Vec<_> = std::fs::read_dir(&out)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
         assert_eq!(names.len(), 2, "{names:?}");
     }
 }

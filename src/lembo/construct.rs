@@ -60,7 +60,11 @@ fn edge_midpoint_ordered(p1: DVec3, n1: DVec3, p2: DVec3, n2: DVec3) -> (DVec3, 
 
     let nsum = n1 + n2;
     let pp = p.dot(p);
-    let v = if pp > 0.0 { 2.0 * p.dot(nsum) / pp } else { 0.0 };
+    let v = if pp > 0.0 {
+        2.0 * p.dot(nsum) / pp
+    } else {
+        0.0
+    };
     let nmid = (nsum - v * p).normalize_or_zero();
     // Opposite end normals have no defined mid-normal; fall back to the first end's.
     let nmid = if nmid == DVec3::ZERO { n1 } else { nmid };
@@ -160,7 +164,11 @@ mod tests {
         let p2 = DVec3::new(0.6, 0.8, 0.0);
         let (m, nm) = edge_midpoint(p1, p1, p2, p2);
         let chord = (0.5 * (p1 + p2)).length();
-        assert!(m.length() > chord + 0.05 && m.length() <= 1.0, "{}", m.length());
+        assert!(
+            m.length() > chord + 0.05 && m.length() <= 1.0,
+            "{}",
+            m.length()
+        );
         assert!(m.normalize().cross((p1 + p2).normalize()).length() < 1e-12);
         assert!((nm - (p1 + p2).normalize()).length() < 1e-12);
     }

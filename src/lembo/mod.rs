@@ -194,7 +194,10 @@ impl Lembo {
 
     /// Whether every number in the lembo is finite.
     pub fn is_finite(&self) -> bool {
-        self.points.iter().chain(self.normals.iter()).all(|p| p.is_finite())
+        self.points
+            .iter()
+            .chain(self.normals.iter())
+            .all(|p| p.is_finite())
     }
 }
 
@@ -232,16 +235,36 @@ mod tests {
     fn six_point_construction_round_trips_points_and_normals() {
         let l = sample_lembo();
         for (k, &(u, v)) in REFERENCE_UV.iter().enumerate() {
-            assert!((l.position_at(u, v) - l.points[k]).length() < 1e-14, "point {k}");
-            assert!((l.normal_at(u, v) - l.normals[k]).length() < 1e-14, "normal {k}");
+            assert!(
+                (l.position_at(u, v) - l.points[k]).length() < 1e-14,
+                "point {k}"
+            );
+            assert!(
+                (l.normal_at(u, v) - l.normals[k]).length() < 1e-14,
+                "normal {k}"
+            );
         }
     }
 
     #[test]
     fn forward_and_inverse_transform_are_inverse() {
-        let q = Quadratic::<f64> { a: 1.5, b: -2.0, c: 0.25, d: 3.0, e: -0.5, f: 7.0 };
+        let q = Quadratic::<f64> {
+            a: 1.5,
+            b: -2.0,
+            c: 0.25,
+            d: 3.0,
+            e: -0.5,
+            f: 7.0,
+        };
         let back = Quadratic::from_reference_values(q.reference_values());
-        for (x, y) in [(q.a, back.a), (q.b, back.b), (q.c, back.c), (q.d, back.d), (q.e, back.e), (q.f, back.f)] {
+        for (x, y) in [
+            (q.a, back.a),
+            (q.b, back.b),
+            (q.c, back.c),
+            (q.d, back.d),
+            (q.e, back.e),
+            (q.f, back.f),
+        ] {
             assert!((x - y).abs() < 1e-12);
         }
     }
@@ -264,7 +287,12 @@ mod tests {
         let n = l.bezier_control_points();
         let (u, v) = (0.3, 0.45);
         let w = 1.0 - u - v;
-        let p = n[0] * w * w + n[1] * u * u + n[2] * v * v + n[3] * 2.0 * w * u + n[4] * 2.0 * w * v + n[5] * 2.0 * u * v;
+        let p = n[0] * w * w
+            + n[1] * u * u
+            + n[2] * v * v
+            + n[3] * 2.0 * w * u
+            + n[4] * 2.0 * w * v
+            + n[5] * 2.0 * u * v;
         assert!((p - l.position_at(u, v)).length() < 1e-13);
     }
 }

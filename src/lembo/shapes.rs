@@ -62,7 +62,8 @@ pub fn sphere_mesh(slices: u32, stacks: u32) -> TriangleMesh {
         }
     }
     for s in 0..slices {
-        m.triangles.push([south, ring(stacks - 1, s + 1), ring(stacks - 1, s)]);
+        m.triangles
+            .push([south, ring(stacks - 1, s + 1), ring(stacks - 1, s)]);
     }
     m.normals = m.positions.clone();
     m

@@ -17,7 +17,16 @@ use crate::datapath::Real;
 pub trait FragmentSink<R: Real> {
     /// A fragment of lembo `l` at pixel (i, j) with domain point (u, v) and depth z, from
     /// subsegment `sub`.
-    fn fragment(&mut self, l: &ScreenLembo<R>, sub: &Subsegment<R>, i: u32, j: u32, u: R, v: R, z: R);
+    fn fragment(
+        &mut self,
+        l: &ScreenLembo<R>,
+        sub: &Subsegment<R>,
+        i: u32,
+        j: u32,
+        u: R,
+        v: R,
+        z: R,
+    );
 }
 
 /// Rasterizes one subsegment on scanline `j` of a viewport `width` pixels wide.
@@ -30,7 +39,11 @@ pub fn rasterize<R: Real, S: FragmentSink<R>>(
     sink: &mut S,
     counts: &mut Counts,
 ) {
-    let (a, b) = if sub.a.x <= sub.b.x { (sub.a, sub.b) } else { (sub.b, sub.a) };
+    let (a, b) = if sub.a.x <= sub.b.x {
+        (sub.a, sub.b)
+    } else {
+        (sub.b, sub.a)
+    };
     let dx = b.x - a.x;
     if !(dx > R::zero()) {
         return;

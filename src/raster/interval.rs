@@ -87,7 +87,15 @@ pub fn intervals<R: Real>(
     let xs = &mut scratch.crossings;
     xs.clear();
     for e in 0..3 {
-        edge_crossings(l, e, yj, |p, entry| xs.push(Crossing { p, entry, part: 1, is_virtual: false, key: R::zero() }));
+        edge_crossings(l, e, yj, |p, entry| {
+            xs.push(Crossing {
+                p,
+                entry,
+                part: 1,
+                is_virtual: false,
+                key: R::zero(),
+            })
+        });
     }
     counts.edge_roots += xs.len() as u64;
 
@@ -95,7 +103,12 @@ pub fn intervals<R: Real>(
     let (a, split, saddle) = match l.partition {
         Partition::Monotone { a } => (a, false, None),
         Partition::Valley { a } => (a, true, None),
-        Partition::Central { centre, y_centre, det, eig } => {
+        Partition::Central {
+            centre,
+            y_centre,
+            det,
+            eig,
+        } => {
             let level = yj - y_centre;
             if det > R::zero() {
                 // Interior extremum: split along the major axis; the curve crosses it at the
@@ -111,10 +124,26 @@ pub fn intervals<R: Real>(
                             let (gu, gv) = l.y.grad(uv[0], uv[1]);
                             // Walking from part -1 into part +1 when the walk climbs a·∇Y.
                             let up = dot(rot_cw([gu, gv]), [la * a[0], la * a[1]]) > R::zero();
-                            let p = CurvePoint { uv, x: l.x.eval(uv[0], uv[1]), edge: INTERIOR };
+                            let p = CurvePoint {
+                                uv,
+                                x: l.x.eval(uv[0], uv[1]),
+                                edge: INTERIOR,
+                            };
                             let (from, to) = if up { (-1, 1) } else { (1, -1) };
-                            xs.push(Crossing { p, entry: false, part: from, is_virtual: true, key: R::zero() });
-                            xs.push(Crossing { p, entry: true, part: to, is_virtual: true, key: R::zero() });
+                            xs.push(Crossing {
+                                p,
+                                entry: false,
+                                part: from,
+                                is_virtual: true,
+                                key: R::zero(),
+                            });
+                            xs.push(Crossing {
+                                p,
+                                entry: true,
+                                part: to,
+                                is_virtual: true,
+                                key: R::zero(),
+                            });
                             counts.virtual_roots += 1;
                         }
                     }
@@ -123,7 +152,11 @@ pub fn intervals<R: Real>(
             } else {
                 // Saddle: the transverse axis is the eigenvector whose eigenvalue has the
                 // sign of the level.
-                let a = if (eig[0].1 >= R::zero()) == (level >= R::zero()) { eig[0].0 } else { eig[1].0 };
+                let a = if (eig[0].1 >= R::zero()) == (level >= R::zero()) {
+                    eig[0].0
+                } else {
+                    eig[1].0
+                };
                 let v_mode = level.abs() <= k * R::of(0.5) && in_domain(centre);
                 (a, true, v_mode.then_some(centre))
             }
@@ -142,7 +175,11 @@ pub fn intervals<R: Real>(
     xs.sort_by(|p, q| {
         p.part
             .cmp(&q.part)
-            .then(p.key.partial_cmp(&q.key).unwrap_or(std::cmp::Ordering::Equal))
+            .then(
+                p.key
+                    .partial_cmp(&q.key)
+                    .unwrap_or(std::cmp::Ordering::Equal),
+            )
             .then(p.entry.cmp(&q.entry))
     });
 
@@ -159,13 +196,29 @@ pub fn intervals<R: Real>(
                     let tau = part_tau(a, part);
                     match saddle {
                         Some(centre) => {
-                            let mid = CurvePoint { uv: centre, x: l.x.eval(centre[0], centre[1]), edge: INTERIOR };
+                            let mid = CurvePoint {
+                                uv: centre,
+                                x: l.x.eval(centre[0], centre[1]),
+                                edge: INTERIOR,
+                            };
                             for (s, e) in [(start, mid), (mid, c.p)] {
-                                out.push(Interval { start: s, end: e, tau, end_key: dot(tau, e.uv), straight: true });
+                                out.push(Interval {
+                                    start: s,
+                                    end: e,
+                                    tau,
+                                    end_key: dot(tau, e.uv),
+                                    straight: true,
+                                });
                             }
                             counts.saddle_splits += 1;
                         }
-                        None => out.push(Interval { start, end: c.p, tau, end_key: c.key, straight: false }),
+                        None => out.push(Interval {
+                            start,
+                            end: c.p,
+                            tau,
+                            end_key: c.key,
+                            straight: false,
+                        }),
                     }
                     counts.intervals += 1;
                 }
@@ -192,7 +245,12 @@ fn in_domain<R: Real>(p: V2<R>) -> bool {
 
 /// The roots of Y = y_j on domain edge `e`, in lembo order along the edge, with whether each
 /// is an entry (Y decreasing along the counter-clockwise boundary).
-pub fn edge_crossings<R: Real>(l: &ScreenLembo<R>, e: usize, yj: R, mut push: impl FnMut(CurvePoint<R>, bool)) {
+pub fn edge_crossings<R: Real>(
+    l: &ScreenLembo<R>,
+    e: usize,
+    yj: R,
+    mut push: impl FnMut(CurvePoint<R>, bool),
+) {
     let c = &l.edges[e];
     let (two, three, four) = (R::of(2.0), R::of(3.0), R::of(4.0));
     let f0 = c.y[0] - yj;
@@ -219,17 +277,34 @@ pub fn edge_crossings<R: Real>(l: &ScreenLembo<R>, e: usize, yj: R, mut push: im
             return;
         }
         let (r1, r2) = stable_roots(a, b, cc);
-        roots = [r1.min(r2).max(R::zero()).min(R::one()), r1.max(r2).max(R::zero()).min(R::one())];
+        roots = [
+            r1.min(r2).max(R::zero()).min(R::one()),
+            r1.max(r2).max(R::zero()).min(R::one()),
+        ];
         2
     };
     let bx = four * c.x[1] - three * c.x[0] - c.x[2];
     let ax = two * c.x[0] + two * c.x[2] - four * c.x[1];
     // Lembo-order sign at the edge start decides the type of the first crossing.
     let start_above = if c.reversed { s1 } else { s0 };
-    let mut pts = [(R::zero(), CurvePoint { uv: [R::zero(); 2], x: R::zero(), edge: e as u8 }); 2];
+    let mut pts = [(
+        R::zero(),
+        CurvePoint {
+            uv: [R::zero(); 2],
+            x: R::zero(),
+            edge: e as u8,
+        },
+    ); 2];
     for (i, &t) in roots[..n].iter().enumerate() {
         let tl = if c.reversed { R::one() - t } else { t };
-        pts[i] = (tl, CurvePoint { uv: edge_uv(e, tl), x: c.x[0] + t * (bx + t * ax), edge: e as u8 });
+        pts[i] = (
+            tl,
+            CurvePoint {
+                uv: edge_uv(e, tl),
+                x: c.x[0] + t * (bx + t * ax),
+                edge: e as u8,
+            },
+        );
     }
     if n == 2 && pts[1].0 < pts[0].0 {
         pts.swap(0, 1);

@@ -102,8 +102,13 @@ pub fn render_lembos<R: Real, S: FragmentSink<R>>(
             interval::intervals(&l, j, k, &mut scratch, &mut ivs, counts);
             for iv in &ivs {
                 segs.clear();
-                segmenter::segments(&l, j, k, iv, segment_cap, &mut segs, counts)
-                    .map_err(|_| Error::SegmentCap { lembo: id, scanline: j, cap: segment_cap })?;
+                segmenter::segments(&l, j, k, iv, segment_cap, &mut segs, counts).map_err(
+                    |_| Error::SegmentCap {
+                        lembo: id,
+                        scanline: j,
+                        cap: segment_cap,
+                    },
+                )?;
                 for seg in &segs {
                     subs.clear();
                     subsegmenter::subsegments(&l, seg, k, &mut subs, counts);
@@ -156,5 +161,9 @@ fn render_in<R: Real>(scene: &Scene, view: &View, k: f64, analyse: bool) -> Resu
     };
     counts.fragments_passed_depth = rop.passed;
     counts.pixels_covered = fb.covered() as u64;
-    Ok(Frame { framebuffer: fb, counts, probe })
+    Ok(Frame {
+        framebuffer: fb,
+        counts,
+        probe,
+    })
 }

@@ -42,7 +42,11 @@ struct Slot {
     right_of: u8,
 }
 
-const EMPTY: Slot = Slot { id: u32::MAX, touches: 0, right_of: 0 };
+const EMPTY: Slot = Slot {
+    id: u32::MAX,
+    touches: 0,
+    right_of: 0,
+};
 
 pub struct Probe<'a, S> {
     inner: &'a mut S,
@@ -67,7 +71,10 @@ impl<'a, S> Probe<'a, S> {
     }
 
     pub fn report(&self) -> ProbeReport {
-        ProbeReport { double_hit_pixels: self.double.iter().filter(|&&d| d).count() as u64, ..self.report }
+        ProbeReport {
+            double_hit_pixels: self.double.iter().filter(|&&d| d).count() as u64,
+            ..self.report
+        }
     }
 }
 
@@ -82,7 +89,10 @@ pub fn shared_edges(scene: &Scene) -> HashMap<(u32, u32), (u8, u8)> {
                 std::mem::swap(&mut p, &mut q);
             }
             let key = [p.x, p.y, p.z, q.x, q.y, q.z].map(f64::to_bits);
-            by_edge.entry(key).or_default().push((id as u32, edge as u8));
+            by_edge
+                .entry(key)
+                .or_default()
+                .push((id as u32, edge as u8));
         }
     }
     let mut pairs = HashMap::new();
@@ -101,12 +111,23 @@ pub fn shared_edges(scene: &Scene) -> HashMap<(u32, u32), (u8, u8)> {
 }
 
 impl<R: Real, S: FragmentSink<R>> FragmentSink<R> for Probe<'_, S> {
-    fn fragment(&mut self, l: &ScreenLembo<R>, sub: &Subsegment<R>, i: u32, j: u32, u: R, v: R, z: R) {
+    fn fragment(
+        &mut self,
+        l: &ScreenLembo<R>,
+        sub: &Subsegment<R>,
+        i: u32,
+        j: u32,
+        u: R,
+        v: R,
+        z: R,
+    ) {
         let (uf, vf) = (u.f64(), v.f64());
         let y = l.y.cast::<f64>().eval(uf, vf);
         let r = &mut self.report;
         r.fragments += 1;
-        r.max_scanline_deviation_px = r.max_scanline_deviation_px.max((y - (j as f64 + 0.5)).abs());
+        r.max_scanline_deviation_px = r
+            .max_scanline_deviation_px
+            .max((y - (j as f64 + 0.5)).abs());
         r.max_domain_excess = r.max_domain_excess.max((-uf).max(-vf).max(uf + vf - 1.0));
 
         let idx = j as usize * self.width as usize + i as usize;
@@ -119,7 +140,11 @@ impl<R: Real, S: FragmentSink<R>> FragmentSink<R> for Probe<'_, S> {
                 }
             }
         }
-        let me = Slot { id: l.id, touches, right_of };
+        let me = Slot {
+            id: l.id,
+            touches,
+            right_of,
+        };
         let slots = &mut self.slots[idx];
         for o in slots.iter() {
             if o.id == u32::MAX || o.id == me.id {

@@ -55,7 +55,10 @@ pub fn segments<R: Real>(
 ) -> Result<(), CapExceeded> {
     let first = out.len();
     if iv.straight {
-        out.push(Segment { p0: iv.start, p1: iv.end });
+        out.push(Segment {
+            p0: iv.start,
+            p1: iv.end,
+        });
         counts.segments += 1;
         return Ok(());
     }
@@ -72,7 +75,11 @@ pub fn segments<R: Real>(
     // Sign of k from the curvature at the start.
     let g0 = grad(iv.start.uv);
     let t0 = rot_cw(g0);
-    let sigma = if quad_form(h, t0, t0) > zero { -one } else { one };
+    let sigma = if quad_form(h, t0, t0) > zero {
+        -one
+    } else {
+        one
+    };
 
     let mut p = iv.start;
     let mut key = dot(iv.tau, p.uv);
@@ -98,7 +105,11 @@ pub fn segments<R: Real>(
         };
         match stop {
             Some(q) => {
-                let p1 = CurvePoint { uv: q, x: l.x.eval(q[0], q[1]), edge: INTERIOR };
+                let p1 = CurvePoint {
+                    uv: q,
+                    x: l.x.eval(q[0], q[1]),
+                    edge: INTERIOR,
+                };
                 out.push(Segment { p0: p, p1 });
                 counts.segments += 1;
                 p = p1;

@@ -109,17 +109,26 @@ pub enum Cull {
 }
 
 /// Projects and prepares one lembo.
-pub fn setup<R: Real>(id: u32, lembo: &Lembo, color: [f64; 3], view: &View) -> Result<ScreenLembo<R>, Cull> {
+pub fn setup<R: Real>(
+    id: u32,
+    lembo: &Lembo,
+    color: [f64; 3],
+    view: &View,
+) -> Result<ScreenLembo<R>, Cull> {
     let screen = lembo.points.map(|p| view.project(p));
-    if screen.iter().any(|s| s.w <= 0.0 || !s.x.is_finite() || !s.y.is_finite()) {
+    if screen
+        .iter()
+        .any(|s| s.w <= 0.0 || !s.x.is_finite() || !s.y.is_finite())
+    {
         return Err(Cull::BehindEye);
     }
     // The screen-space quadratic through the six projected points lies in the convex hull of
     // its own Bézier net.
     let net = bezier_controls(&screen.map(|s| DVec3::new(s.x, s.y, s.depth)));
-    let (lo, hi) = net.iter().fold((DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)), |(lo, hi), p| {
-        (lo.min(*p), hi.max(*p))
-    });
+    let (lo, hi) = net.iter().fold(
+        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+    );
     let (w, h) = (view.viewport.width as f64, view.viewport.height as f64);
     if hi.x < 0.0 || hi.y < 0.0 || lo.x > w || lo.y > h || hi.z < 0.0 || lo.z > 1.0 {
         return Err(Cull::Outside);
@@ -134,7 +143,11 @@ pub fn setup<R: Real>(id: u32, lembo: &Lembo, color: [f64; 3], view: &View) -> R
         // Canonical order: the end with the smaller (y, x) first.
         let reversed = (sy[e], sx[e]) < (sy[s], sx[s]);
         let (s, e) = if reversed { (e, s) } else { (s, e) };
-        EdgeCurve { y: [sy[s], sy[m], sy[e]], x: [sx[s], sx[m], sx[e]], reversed }
+        EdgeCurve {
+            y: [sy[s], sy[m], sy[e]],
+            x: [sx[s], sx[m], sx[e]],
+            reversed,
+        }
     });
     let hessian = y.hessian();
     Ok(ScreenLembo {
@@ -154,7 +167,11 @@ pub fn setup<R: Real>(id: u32, lembo: &Lembo, color: [f64; 3], view: &View) -> R
 
 /// Chooses the walk partition of the domain for the level curves of `y`.
 pub fn partition<R: Real>(y: &Quadratic<R>) -> Partition<R> {
-    let corners = [[R::zero(), R::zero()], [R::one(), R::zero()], [R::zero(), R::one()]];
+    let corners = [
+        [R::zero(), R::zero()],
+        [R::one(), R::zero()],
+        [R::zero(), R::one()],
+    ];
     let g = corners.map(|[u, v]| {
         let (gu, gv) = y.grad(u, v);
         [gu, gv]
@@ -164,7 +181,9 @@ pub fn partition<R: Real>(y: &Quadratic<R>) -> Partition<R> {
     if let Some(c) = closest_to_origin(g) {
         let d = norm(c);
         if d > eps * scale {
-            return Partition::Monotone { a: [c[0] / d, c[1] / d] };
+            return Partition::Monotone {
+                a: [c[0] / d, c[1] / d],
+            };
         }
     }
     let (huu, huv, hvv) = y.hessian();
@@ -175,7 +194,12 @@ pub fn partition<R: Real>(y: &Quadratic<R>) -> Partition<R> {
         // Cramer's rule for ∇y = 0.
         let uc = (huv * y.e - hvv * y.d) / det;
         let vc = (huv * y.d - huu * y.e) / det;
-        return Partition::Central { centre: [uc, vc], y_centre: y.eval(uc, vc), det, eig };
+        return Partition::Central {
+            centre: [uc, vc],
+            y_centre: y.eval(uc, vc),
+            det,
+            eig,
+        };
     }
     Partition::Valley { a: eig[0].0 }
 }
@@ -191,7 +215,8 @@ fn closest_to_origin<R: Real>(t: [V2<R>; 3]) -> Option<V2<R>> {
         cross(sub(t[0], t[2]), sub(o, t[2])),
     ];
     let zero = R::zero();
-    let inside = (s[0] >= zero && s[1] >= zero && s[2] >= zero) || (s[0] <= zero && s[1] <= zero && s[2] <= zero);
+    let inside = (s[0] >= zero && s[1] >= zero && s[2] >= zero)
+        || (s[0] <= zero && s[1] <= zero && s[2] <= zero);
     let area = cross(sub(t[1], t[0]), sub(t[2], t[0]));
     if inside && area != zero {
         return None;
@@ -199,11 +224,17 @@ fn closest_to_origin<R: Real>(t: [V2<R>; 3]) -> Option<V2<R>> {
     let seg = |a: V2<R>, b: V2<R>| {
         let ab = sub(b, a);
         let l = dot(ab, ab);
-        let t = if l > zero { (-dot(a, ab) / l).max(zero).min(R::one()) } else { zero };
+        let t = if l > zero {
+            (-dot(a, ab) / l).max(zero).min(R::one())
+        } else {
+            zero
+        };
         [a[0] + t * ab[0], a[1] + t * ab[1]]
     };
     let c = [seg(t[0], t[1]), seg(t[1], t[2]), seg(t[2], t[0])];
-    let best = c.into_iter().fold(c[0], |b, p| if dot(p, p) < dot(b, b) { p } else { b });
+    let best = c
+        .into_iter()
+        .fold(c[0], |b, p| if dot(p, p) < dot(b, b) { p } else { b });
     // A degenerate gradient triangle through the origin has no separating direction.
     if dot(best, best) == zero {
         None
@@ -233,7 +264,11 @@ pub fn eigen_sym<R: Real>(p: R, q: R, r: R) -> [(V2<R>, R); 2] {
     };
     let (v1, v2) = (vec(l1), vec(l2));
     // Keep the pair orthogonal even when the eigenvalues coincide.
-    let v2 = if dot(v1, v2).abs() > R::of(0.5) { [-v1[1], v1[0]] } else { v2 };
+    let v2 = if dot(v1, v2).abs() > R::of(0.5) {
+        [-v1[1], v1[0]]
+    } else {
+        v2
+    };
     if l1.abs() >= l2.abs() {
         [(v1, l1), (v2, l2)]
     } else {
@@ -269,13 +304,17 @@ mod tests {
         let bowl = quad(1.0, 1.0, 0.0, -0.6, -0.6, 0.18);
         match partition(&bowl) {
             Partition::Central { centre, det, .. } => {
-                assert!((centre[0] - 0.3).abs() < 1e-12 && (centre[1] - 0.3).abs() < 1e-12 && det > 0.0)
+                assert!(
+                    (centre[0] - 0.3).abs() < 1e-12 && (centre[1] - 0.3).abs() < 1e-12 && det > 0.0
+                )
             }
             p => panic!("{p:?}"),
         }
         // Saddle (u - .3)² - (v - .3)².
         match partition(&quad(1.0, -1.0, 0.0, -0.6, 0.6, 0.0)) {
-            Partition::Central { det, y_centre, .. } => assert!(det < 0.0 && y_centre.abs() < 1e-12),
+            Partition::Central { det, y_centre, .. } => {
+                assert!(det < 0.0 && y_centre.abs() < 1e-12)
+            }
             p => panic!("{p:?}"),
         }
     }
@@ -291,7 +330,12 @@ mod tests {
 
     #[test]
     fn eigen_decomposition_is_orthonormal() {
-        for (p, q, r) in [(2.0, 0.5, -1.0), (1.0, 0.0, 1.0), (0.0, 3.0, 0.0), (5.0, 0.0, 0.0)] {
+        for (p, q, r) in [
+            (2.0, 0.5, -1.0),
+            (1.0, 0.0, 1.0),
+            (0.0, 3.0, 0.0),
+            (5.0, 0.0, 0.0),
+        ] {
             let e = eigen_sym::<f64>(p, q, r);
             for (v, l) in e {
                 let hv = [p * v[0] + q * v[1], q * v[0] + r * v[1]];

@@ -48,10 +48,18 @@ pub fn subsegments<R: Real>(
         } else if t == one {
             p1
         } else {
-            CurvePoint { uv: [p0.uv[0] + t * du, p0.uv[1] + t * dv], x: p0.x + t * (bt + t * at), edge: INTERIOR }
+            CurvePoint {
+                uv: [p0.uv[0] + t * du, p0.uv[1] + t * dv],
+                x: p0.x + t * (bt + t * at),
+                edge: INTERIOR,
+            }
         }
     };
-    let fold = if at != zero { -bt / (R::of(2.0) * at) } else { -one };
+    let fold = if at != zero {
+        -bt / (R::of(2.0) * at)
+    } else {
+        -one
+    };
     let mut cuts = [zero, one, one];
     let pieces = if fold > zero && fold < one {
         counts.folds += 1;
@@ -60,13 +68,25 @@ pub fn subsegments<R: Real>(
     } else {
         1
     };
-    let dt = if at != zero { (R::of(4.0) * k / at.abs()).sqrt() } else { R::infinity() };
+    let dt = if at != zero {
+        (R::of(4.0) * k / at.abs()).sqrt()
+    } else {
+        R::infinity()
+    };
     for w in 0..pieces {
         let (ta, tb) = (cuts[w], cuts[w + 1]);
-        let n = ((tb - ta) / dt).ceil().to_u32().unwrap_or(1).clamp(1, MAX_SUBSEGMENTS_PER_SEGMENT);
+        let n = ((tb - ta) / dt)
+            .ceil()
+            .to_u32()
+            .unwrap_or(1)
+            .clamp(1, MAX_SUBSEGMENTS_PER_SEGMENT);
         let mut a = point(ta);
         for i in 1..=n {
-            let t = if i == n { tb } else { ta + (tb - ta) * R::of(i as f64) / R::of(n as f64) };
+            let t = if i == n {
+                tb
+            } else {
+                ta + (tb - ta) * R::of(i as f64) / R::of(n as f64)
+            };
             let b = point(t);
             out.push(Subsegment { a, b });
             a = b;

@@ -59,7 +59,10 @@ impl FrameBuffer {
 
     /// Pixels some primitive wrote.
     pub fn covered(&self) -> usize {
-        self.primitive.iter().filter(|&&p| p != NO_PRIMITIVE).count()
+        self.primitive
+            .iter()
+            .filter(|&&p| p != NO_PRIMITIVE)
+            .count()
     }
 
     /// The colour buffer as an `image` RGB8 image.
@@ -77,7 +80,10 @@ mod tests {
     fn depth_ties_resolve_by_primitive_id_whatever_the_order() {
         let mut a = FrameBuffer::new(1, 1, [0; 3], false);
         let mut b = a.clone();
-        for (fb, order) in [(&mut a, [(5u32, [1u8; 3]), (3, [2; 3])]), (&mut b, [(3, [2; 3]), (5, [1; 3])])] {
+        for (fb, order) in [
+            (&mut a, [(5u32, [1u8; 3]), (3, [2; 3])]),
+            (&mut b, [(3, [2; 3]), (5, [1; 3])]),
+        ] {
             for (id, rgb) in order {
                 if fb.passes(0, 0.5, id) {
                     fb.write(0, 0.5, id, rgb);

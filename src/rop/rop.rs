@@ -23,8 +23,16 @@ pub struct Rop<'a, R> {
 
 impl<'a, R: Real> Rop<'a, R> {
     pub fn new(fb: &'a mut FrameBuffer, light: &Light, view: &View) -> Self {
-        let to_eye = view.orthographic.then(|| view.to_eye(glam::DVec3::ZERO).to_array().map(R::of));
-        Rop { fb, shader: Shader::new(light), eye: view.eye.to_array().map(R::of), to_eye, passed: 0 }
+        let to_eye = view
+            .orthographic
+            .then(|| view.to_eye(glam::DVec3::ZERO).to_array().map(R::of));
+        Rop {
+            fb,
+            shader: Shader::new(light),
+            eye: view.eye.to_array().map(R::of),
+            to_eye,
+            passed: 0,
+        }
     }
 }
 
@@ -40,7 +48,16 @@ fn normalize<R: Real>(v: [R; 3]) -> [R; 3] {
 
 impl<R: Real> FragmentSink<R> for Rop<'_, R> {
     #[inline]
-    fn fragment(&mut self, l: &ScreenLembo<R>, _sub: &Subsegment<R>, i: u32, j: u32, u: R, v: R, z: R) {
+    fn fragment(
+        &mut self,
+        l: &ScreenLembo<R>,
+        _sub: &Subsegment<R>,
+        i: u32,
+        j: u32,
+        u: R,
+        v: R,
+        z: R,
+    ) {
         let idx = self.fb.index(i, j);
         let zf = z.f64() as f32;
         if !self.fb.passes(idx, zf, l.id) {
@@ -56,7 +73,8 @@ impl<R: Real> FragmentSink<R> for Rop<'_, R> {
             }
         };
         let c = self.shader.shade(n, to_eye, l.color);
-        self.fb.write(idx, zf, l.id, [to_u8(c[0]), to_u8(c[1]), to_u8(c[2])]);
+        self.fb
+            .write(idx, zf, l.id, [to_u8(c[0]), to_u8(c[1]), to_u8(c[2])]);
         if let Some(normals) = self.fb.normal.as_mut() {
             normals[idx] = n.map(|c| c.f64() as f32);
         }

@@ -27,7 +27,13 @@ pub struct Light {
 
 impl Default for Light {
     fn default() -> Self {
-        Light { direction_to_light: [0.4, 0.6, 1.0], ka: 0.1, kd: 0.75, ks: 0.35, shininess: 24.0 }
+        Light {
+            direction_to_light: [0.4, 0.6, 1.0],
+            ka: 0.1,
+            kd: 0.75,
+            ks: 0.35,
+            shininess: 24.0,
+        }
     }
 }
 
@@ -40,6 +46,9 @@ pub struct Shader<R> {
     pub kd: R,
     pub ks: R,
     pub shininess: R,
+    /// The shininess as an integer when it is one (repeated multiplication, as a hardware
+    /// exponent unit would do, instead of exp/log).
+    shininess_int: Option<i32>,
 }
 
 impl<R: Real> Shader<R> {
@@ -51,6 +60,8 @@ impl<R: Real> Shader<R> {
             kd: R::of(light.kd),
             ks: R::of(light.ks),
             shininess: R::of(light.shininess),
+            shininess_int: (light.shininess.fract() == 0.0 && light.shininess.abs() <= 1024.0)
+                .then_some(light.shininess as i32),
         }
     }
 
@@ -60,15 +71,35 @@ impl<R: Real> Shader<R> {
     pub fn shade(&self, n: [R; 3], v: [R; 3], color: [R; 3]) -> [R; 3] {
         let zero = R::zero();
         let dot = |a: [R; 3], b: [R; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-        let n = if dot(n, v) < zero { [-n[0], -n[1], -n[2]] } else { n };
+        let n = if dot(n, v) < zero {
+            [-n[0], -n[1], -n[2]]
+        } else {
+            n
+        };
         let nl = dot(n, self.l);
         let cos_a = nl.max(zero);
         let two = R::of(2.0);
-        let r = [two * nl * n[0] - self.l[0], two * nl * n[1] - self.l[1], two * nl * n[2] - self.l[2]];
+        let r = [
+            two * nl * n[0] - self.l[0],
+            two * nl * n[1] - self.l[1],
+            two * nl * n[2] - self.l[2],
+        ];
         let cos_g = dot(r, v).max(zero);
-        let spec = if self.ks > zero && cos_g > zero && nl > zero { self.ks * cos_g.powf(self.shininess) } else { zero };
+        let spec = if self.ks > zero && cos_g > zero && nl > zero {
+            self.ks
+                * match self.shininess_int {
+                    Some(n) => cos_g.powi(n),
+                    None => cos_g.powf(self.shininess),
+                }
+        } else {
+            zero
+        };
         let diffuse = self.ka + self.kd * cos_a;
-        [color[0] * diffuse + spec, color[1] * diffuse + spec, color[2] * diffuse + spec]
+        [
+            color[0] * diffuse + spec,
+            color[1] * diffuse + spec,
+            color[2] * diffuse + spec,
+        ]
     }
 }
 
@@ -85,7 +116,13 @@ mod tests {
 
     #[test]
     fn equation_6_terms_at_known_angles() {
-        let light = Light { direction_to_light: [0.0, 0.0, 1.0], ka: 0.1, kd: 0.5, ks: 0.4, shininess: 2.0 };
+        let light = Light {
+            direction_to_light: [0.0, 0.0, 1.0],
+            ka: 0.1,
+            kd: 0.5,
+            ks: 0.4,
+            shininess: 2.0,
+        };
         let s = Shader::<f64>::new(&light);
         // Normal, light and eye aligned: cos(alpha) = cos(gamma) = 1.
         let c = s.shade([0.0, 0.0, 1.0], [0.0, 0.0, 1.0], [1.0, 0.5, 0.0]);
@@ -102,6 +139,9 @@ mod tests {
     fn back_facing_normals_are_lit_as_front_facing() {
         let s = Shader::<f32>::new(&Light::default());
         let v = [0.0, 0.0, 1.0];
-        assert_eq!(s.shade([0.0, 0.6, 0.8], v, [1.0; 3]), s.shade([0.0, -0.6, -0.8], v, [1.0; 3]));
+        assert_eq!(
+            s.shade([0.0, 0.6, 0.8], v, [1.0; 3]),
+            s.shade([0.0, -0.6, -0.8], v, [1.0; 3])
+        );
     }
 }

@@ -1,0 +1,297 @@
+//! The `lembo-sim` binary as a user meets it: the default run, the golden default scene,
+//! and bad input (exit status 2, an error naming the field, no file written).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_lembo-sim"))
+}
+
+fn run(args: &[&str], cwd: &Path) -> Output {
+    bin()
+        .args(args)
+        .current_dir(cwd)
+        .output()
+        .expect("the binary runs")
+}
+
+fn manifest() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn files_in(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = match std::fs::read_dir(dir) {
+        Ok(rd) => rd
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect(),
+        Err(_) => vec![],
+    };
+    v.sort();
+    v
+}
+
+/// Runs a failing command in a fresh directory and checks the contract of DESIGN §8.
+fn assert_refused(args: &[&str], needle: &str) {
+    let dir = tempfile::tempdir().unwrap();
+    let out = run(args, dir.path());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+    assert!(
+        stderr.contains(needle),
+        "{args:?}: expected `{needle}` in: {stderr}"
+    );
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(
+        files_in(dir.path()).is_empty(),
+        "{args:?} wrote {:?}",
+        files_in(dir.path())
+    );
+}
+
+fn scene_file(dir: &Path, name: &str, text: &str) -> String {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p.to_string_lossy().into_owned()
+}
+
+const GOOD: &str = r#"{"name": "t", "viewport": {"width": 32, "height": 32},
+  "camera": {"eye": [0, 0, 4], "target": [0, 0, 0], "up": [0, 1, 0],
+             "projection": {"kind": "perspective", "fovy_deg": 40, "near": 0.1, "far": 100}},
+  "objects": [{"builtin": "sphere24"}]}"#;
+
+#[test]
+fn bare_command_renders_the_default_scene_into_out_default() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = run(&[], dir.path());
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(
+        files_in(&dir.path().join("out/default")),
+        ["image.png", "report.json", "report.txt"]
+    );
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("out/default/report.json")).unwrap())
+            .unwrap();
+    for key in [
+        "schema_version",
+        "scene",
+        "settings",
+        "counts",
+        "cycles",
+        "accuracy",
+        "host",
+    ] {
+        assert!(report.get(key).is_some(), "report.json lacks {key}");
+    }
+    assert!(report["cycles"].is_null() && report["accuracy"].is_null());
+    for key in [
+        "scanlines",
+        "intervals",
+        "segments",
+        "subsegments",
+        "fragments",
+        "fragments_passed_depth",
+        "pixels_covered",
+    ] {
+        assert!(report["counts"][key].as_u64().unwrap() > 0, "counts.{key}");
+    }
+    for key in ["wall_seconds", "fragments_per_second"] {
+        assert!(report["host"][key].is_number(), "host.{key}");
+    }
+}
+
+#[test]
+fn reference_run_writes_the_accuracy_names_and_images() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = scene_file(dir.path(), "s.json", GOOD);
+    let out = run(&["render", &scene, "--reference", "--out", "o"], dir.path());
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(
+        files_in(&dir.path().join("o")),
+        [
+            "error.png",
+            "image.png",
+            "reference.png",
+            "report.json",
+            "report.txt"
+        ]
+    );
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("o/report.json")).unwrap()).unwrap();
+    for key in [
+        "coverage_false_positive",
+        "coverage_false_negative",
+        "silhouette_max_px",
+        "silhouette_mean_px",
+        "depth_max_abs",
+        "normal_max_deg",
+        "normal_mean_deg",
+        "psnr_db",
+        "max_abs_error",
+        "crack_pixels",
+        "double_hit_pixels",
+        "max_scanline_deviation_px",
+    ] {
+        assert!(
+            report["accuracy"][key].is_number(),
+            "accuracy.{key} missing"
+        );
+    }
+    assert!(
+        report["accuracy"]["max_scanline_deviation_px"]
+            .as_f64()
+            .unwrap()
+            <= 0.5 + 1e-3
+    );
+}
+
+/// The default scene's image and counts, compared exactly with tests/golden/default/.
+/// Regenerate with `LEMBO_BLESS=1 cargo test --test cli` after an intended change.
+#[test]
+fn golden_default_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = run(&["render", "--out", "o"], dir.path());
+    assert!(out.status.success());
+    let golden = manifest().join("tests/golden/default");
+    let image = std::fs::read(dir.path().join("o/image.png")).unwrap();
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("o/report.json")).unwrap()).unwrap();
+    let counts = serde_json::to_string_pretty(&report["counts"]).unwrap() + "\n";
+    if std::env::var_os("LEMBO_BLESS").is_some() {
+        std::fs::create_dir_all(&golden).unwrap();
+        std::fs::write(golden.join("image.png"), &image).unwrap();
+        std::fs::write(golden.join("counts.json"), &counts).unwrap();
+    }
+    let want = image::load_from_memory(&std::fs::read(golden.join("image.png")).unwrap())
+        .unwrap()
+        .to_rgb8();
+    let got = image::load_from_memory(&image).unwrap().to_rgb8();
+    assert_eq!(want.dimensions(), got.dimensions());
+    let differing = want
+        .pixels()
+        .zip(got.pixels())
+        .filter(|(a, b)| a != b)
+        .count();
+    assert_eq!(differing, 0, "pixels differing from the golden image");
+    assert_eq!(
+        std::fs::read_to_string(golden.join("counts.json")).unwrap(),
+        counts
+    );
+}
+
+#[test]
+fn malformed_json_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = scene_file(dir.path(), "bad.json", "{\"name\": \"t\", ");
+    assert_refused(&["render", &s], "bad.json");
+}
+
+#[test]
+fn unknown_field_is_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = scene_file(dir.path(), "u.json", &GOOD.replace("\"up\"", "\"upp\""));
+    assert_refused(&["render", &s], "upp");
+}
+
+#[test]
+fn infinite_coordinate_is_refused_by_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = scene_file(
+        dir.path(),
+        "inf.json",
+        &GOOD.replace("\"eye\": [0, 0, 4]", "\"eye\": [0, 1e999, 4]"),
+    );
+    assert_refused(&["render", &s], "camera.eye");
+}
+
+#[test]
+fn nan_in_a_mesh_is_refused_by_field() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("m.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n",
+    )
+    .unwrap();
+    let s = scene_file(
+        dir.path(),
+        "nan.json",
+        &GOOD.replace("{\"builtin\": \"sphere24\"}", "{\"mesh\": \"m.obj\"}"),
+    );
+    assert_refused(&["render", &s], "objects[0].mesh");
+}
+
+#[test]
+fn k_out_of_range_is_refused() {
+    for k in ["0", "-1", "64.5", "NaN", "inf"] {
+        assert_refused(&["render", "--k", k], "--k");
+    }
+}
+
+#[test]
+fn viewport_out_of_range_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    for (w, field) in [("0", "viewport.width"), ("16385", "viewport.width")] {
+        let s = scene_file(
+            dir.path(),
+            "v.json",
+            &GOOD.replace("\"width\": 32", &format!("\"width\": {w}")),
+        );
+        assert_refused(&["render", &s], field);
+    }
+    assert_refused(&["render", "--viewport", "0x10"], "--viewport width");
+    assert_refused(&["render", "--viewport", "16385x10"], "--viewport width");
+}
+
+#[test]
+fn missing_obj_file_is_refused_by_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = scene_file(
+        dir.path(),
+        "m.json",
+        &GOOD.replace("{\"builtin\": \"sphere24\"}", "{\"mesh\": \"nowhere.obj\"}"),
+    );
+    assert_refused(&["render", &s], "objects[0].mesh");
+}
+
+#[test]
+fn missing_scene_file_is_refused() {
+    assert_refused(&["render", "no-such-scene.json"], "no-such-scene.json");
+}
+
+#[test]
+fn a_failed_run_keeps_an_earlier_output() {
+    let dir = tempfile::tempdir().unwrap();
+    assert!(run(&["render", "--out", "o"], dir.path()).status.success());
+    let before = std::fs::read(dir.path().join("o/report.json")).unwrap();
+    let out = run(&["render", "--out", "o", "--k", "100"], dir.path());
+    assert_eq!(out.status.code(), Some(2));
+    assert_eq!(
+        std::fs::read(dir.path().join("o/report.json")).unwrap(),
+        before
+    );
+}
+
+#[test]
+fn help_explains_the_render_flags() {
+    let out = bin().args(["render", "--help"]).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    for flag in [
+        "--out",
+        "--k",
+        "--datapath",
+        "--reference",
+        "--mode",
+        "--supersample",
+        "--viewport",
+    ] {
+        assert!(text.contains(flag), "--help lacks {flag}");
+    }
+}
