@@ -720,7 +720,7 @@ fn load_obj(file: &str, field: &str, path: &Path) -> Result<TriangleMesh> {
         mesh.positions.extend(
             m.positions
                 .chunks_exact(3)
-                .map(|c| DVec3::new(c[0].into(), c[1].into(), c[2].into())),
+                .map(|c| DVec3::new(c[0], c[1], c[2])),
         );
         // Normals are used only when every vertex of every model has one.
         all_normals &= m.normals.len() == m.positions.len();
@@ -728,7 +728,7 @@ fn load_obj(file: &str, field: &str, path: &Path) -> Result<TriangleMesh> {
             mesh.normals.extend(
                 m.normals
                     .chunks_exact(3)
-                    .map(|c| DVec3::new(c[0].into(), c[1].into(), c[2].into())),
+                    .map(|c| DVec3::new(c[0], c[1], c[2])),
             );
         }
         for (t, tri) in m.indices.chunks_exact(3).enumerate() {

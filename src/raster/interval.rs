@@ -184,7 +184,21 @@ pub fn intervals<R: Real>(
     });
 
     let mut pending: Option<(i8, CurvePoint<R>)> = None;
-    for c in xs.iter() {
+    for n in 0..xs.len() {
+        // An exit and an entry at the same place: exit first when an interval is open (the
+        // curve touches an edge from inside: it leaves and re-enters there), entry first
+        // when none is (the curve touches the domain at one point, e.g. a top vertex on the
+        // scanline: an empty interval).
+        if let [c, d, ..] = &xs[n..] {
+            if c.entry == pending.is_some()
+                && d.entry != c.entry
+                && d.part == c.part
+                && d.key == c.key
+            {
+                xs.swap(n, n + 1);
+            }
+        }
+        let c = &xs[n];
         if c.entry {
             if pending.is_some() {
                 counts.unpaired_roots += 1;
@@ -342,4 +356,255 @@ fn one_root_in_unit<R: Real>(a: R, b: R, c: R) -> R {
     };
     let t = if dist(r1) <= dist(r2) { r1 } else { r2 };
     t.max(R::zero()).min(R::one())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::lembo::Quadratic;
+    use crate::raster::setup::tests::{
+        quad, screen_lembo, x_linear, y_bowl, y_error, y_plane, y_saddle,
+    };
+
+    /// The intervals of scanline `j` and the counts.
+    fn run<R: Real>(l: &ScreenLembo<R>, j: u32, k: f64) -> (Vec<Interval<R>>, Counts) {
+        let (mut out, mut counts) = (Vec::new(), Counts::default());
+        intervals(
+            l,
+            j,
+            R::of(k),
+            &mut IntervalScratch::default(),
+            &mut out,
+            &mut counts,
+        );
+        (out, counts)
+    }
+
+    /// The roots of scanline `j` on each domain edge.
+    fn roots_per_edge<R: Real>(l: &ScreenLembo<R>, j: u32) -> [Vec<(CurvePoint<R>, bool)>; 3] {
+        let yj = R::of(j as f64 + 0.5);
+        [0, 1, 2].map(|e| {
+            let mut v = Vec::new();
+            edge_crossings(l, e, yj, |p, entry| v.push((p, entry)));
+            v
+        })
+    }
+
+    /// A tolerance on |y - y_j| for curve points computed in `R` [pixels].
+    fn tol<R: Real>() -> f64 {
+        if R::epsilon().f64() > 1e-10 {
+            1e-3
+        } else {
+            1e-9
+        }
+    }
+
+    fn closed_loop<R: Real>() {
+        let l = screen_lembo::<R>(x_linear(), y_bowl());
+        let (ivs, c) = run(&l, 40, 0.5);
+        assert_eq!(
+            (c.edge_roots, c.virtual_roots, c.intervals, c.unpaired_roots),
+            (0, 2, 2, 0),
+            "{c:?}"
+        );
+        assert_eq!(ivs.len(), 2);
+        // The two halves meet at the virtual roots, so the loop closes.
+        assert_eq!(ivs[0].end.uv, ivs[1].start.uv);
+        assert_eq!(ivs[1].end.uv, ivs[0].start.uv);
+        for iv in &ivs {
+            assert!(!iv.straight);
+            assert_ne!(iv.start.uv, iv.end.uv);
+            for p in [iv.start, iv.end] {
+                assert_eq!(p.edge, INTERIOR);
+                assert!(y_error(&l, 40, p.uv) < tol::<R>(), "{p:?}");
+            }
+            // The walk key increases from start to end.
+            assert!(dot(iv.tau, iv.start.uv) < iv.end_key);
+        }
+        // Just below the minimum: nothing at all.
+        let (ivs, c) = run(&l, 39, 0.5);
+        assert!(
+            ivs.is_empty() && c.edge_roots + c.virtual_roots + c.unpaired_roots == 0,
+            "{c:?}"
+        );
+    }
+
+    #[test]
+    fn interval_closed_loop_without_edge_roots() {
+        closed_loop::<f32>();
+        closed_loop::<f64>();
+    }
+
+    fn saddle<R: Real>() {
+        let l = screen_lembo::<R>(x_linear(), y_saddle());
+        // |y_j - y_saddle| = 0.2 <= k/2: the curve is taken as the two crossing lines.
+        let (ivs, c) = run(&l, 50, 0.5);
+        assert!(c.saddle_splits > 0 && c.unpaired_roots == 0, "{c:?}");
+        assert_eq!(ivs.len() as u64, 2 * c.saddle_splits);
+        for pair in ivs.chunks(2) {
+            assert!(pair.iter().all(|iv| iv.straight));
+            // Split at the centre: the first half ends there and the second starts there.
+            assert_eq!(pair[0].end.uv, pair[1].start.uv);
+            let centre = pair[0].end.uv;
+            assert!((centre[0].f64() - 0.3).abs() < 1e-6 && (centre[1].f64() - 0.3).abs() < 1e-6);
+            for p in [pair[0].start, pair[1].end] {
+                assert_ne!(p.edge, INTERIOR);
+                assert!(y_error(&l, 50, p.uv) < tol::<R>());
+            }
+        }
+        // With k/2 = 0.15 < 0.2 the hyperbola is walked: no split, still fully paired.
+        let (ivs, c) = run(&l, 50, 0.3);
+        assert_eq!((c.saddle_splits, c.unpaired_roots), (0, 0), "{c:?}");
+        assert!(!ivs.is_empty() && ivs.iter().all(|iv| !iv.straight));
+    }
+
+    #[test]
+    fn interval_saddle_crossing_splits_at_the_centre() {
+        saddle::<f32>();
+        saddle::<f64>();
+    }
+
+    /// y = 40u² - 40u + 30v + f: on edge AB (v = 0) a parabola with its minimum f - 10 at
+    /// u = 1/2; everything else is higher.
+    fn y_edge_dip(f: f64) -> Quadratic<f64> {
+        quad(40.0, 0.0, 0.0, -40.0, 30.0, f)
+    }
+
+    fn tangent<R: Real>() {
+        // The edge minimum exactly on scanline 20 (y = 20.5): a touching point, no roots.
+        let l = screen_lembo::<R>(x_linear(), y_edge_dip(30.5));
+        assert!(roots_per_edge(&l, 20).iter().all(|r| r.is_empty()));
+        let (ivs, c) = run(&l, 20, 0.5);
+        assert!(ivs.is_empty() && c.edge_roots == 0 && c.unpaired_roots == 0);
+        // Within a few ulps around it: 0 or 2 roots on the edge, never 1, always paired.
+        for n in -40..=40 {
+            let l = screen_lembo::<R>(x_linear(), y_edge_dip(30.5 + n as f64 * 1e-7));
+            let roots = roots_per_edge(&l, 20);
+            assert!(
+                roots[0].is_empty() || roots[0].len() == 2,
+                "offset {n}e-7: {:?}",
+                roots[0]
+            );
+            assert!(roots[1].is_empty() && roots[2].is_empty());
+            if let [(p, p_entry), (q, q_entry)] = roots[0][..] {
+                assert!(p.uv[0] <= q.uv[0] && p_entry != q_entry);
+            }
+            let (ivs, c) = run(&l, 20, 0.5);
+            assert_eq!((c.edge_roots, c.unpaired_roots), (roots[0].len() as u64, 0));
+            assert_eq!(2 * ivs.len(), roots[0].len());
+        }
+        // 1e-6 px below: two roots close to u = 1/2 in f64 (f32 may round the dip away).
+        let l = screen_lembo::<R>(x_linear(), y_edge_dip(30.5 - 1e-6));
+        let roots = roots_per_edge(&l, 20);
+        if R::epsilon().f64() < 1e-10 {
+            assert_eq!(roots[0].len(), 2);
+        }
+        for (p, _) in &roots[0] {
+            assert!((p.uv[0].f64() - 0.5).abs() < 1e-3 && y_error(&l, 20, p.uv) < tol::<R>());
+        }
+    }
+
+    #[test]
+    fn interval_tangent_scanline_at_an_edge_extremum_has_zero_or_two_roots() {
+        tangent::<f32>();
+        tangent::<f64>();
+    }
+
+    fn through_vertex<R: Real>() {
+        // y = 10 + 40u + 20.5v: A = 10, B = 50, C = 30.5 exactly on scanline 30.
+        let l = screen_lembo::<R>(x_linear(), quad(0.0, 0.0, 0.0, 40.0, 20.5, 10.0));
+        let roots = roots_per_edge(&l, 30);
+        // The crossing at C belongs to exactly one of its two edges (BC, CA).
+        assert_eq!(roots.each_ref().map(|r| r.len()), [1, 0, 1]);
+        assert_eq!(roots[2][0].0.uv, [R::zero(), R::one()]);
+        let (ivs, c) = run(&l, 30, 0.5);
+        assert_eq!((ivs.len(), c.edge_roots, c.unpaired_roots), (1, 2, 0));
+
+        // C = 30.5 is the top vertex (A = 10, B = 30): the scanline touches only C; both of
+        // its edges cross there, which pairs into one empty interval.
+        let l = screen_lembo::<R>(x_linear(), quad(0.0, 0.0, 0.0, 20.0, 20.5, 10.0));
+        let roots = roots_per_edge(&l, 30);
+        assert_eq!(roots.each_ref().map(|r| r.len()), [0, 1, 1]);
+        let (ivs, c) = run(&l, 30, 0.5);
+        assert_eq!((ivs.len(), c.unpaired_roots), (1, 0));
+        assert_eq!(ivs[0].start.uv, ivs[0].end.uv);
+
+        // A = 30.5 is the bottom vertex: a vertex on the scanline counts as above it, so
+        // nothing crosses.
+        let l = screen_lembo::<R>(x_linear(), quad(0.0, 0.0, 0.0, 20.0, 10.0, 30.5));
+        let (ivs, c) = run(&l, 30, 0.5);
+        assert!(ivs.is_empty() && c.edge_roots == 0 && c.unpaired_roots == 0);
+    }
+
+    #[test]
+    fn interval_vertex_on_the_scanline_is_not_doubled() {
+        through_vertex::<f32>();
+        through_vertex::<f64>();
+    }
+
+    #[test]
+    fn interval_stable_roots_keep_the_linear_root_when_the_leading_coefficient_vanishes() {
+        let (r1, r2) = stable_roots::<f32>(1e-12, 3.0, -1.5);
+        let small = if r1.abs() < r2.abs() { r1 } else { r2 };
+        assert!((small - 0.5).abs() <= f32::EPSILON, "{r1} {r2}");
+        let (r1, r2) = stable_roots::<f64>(1e-12, 3.0, -1.5);
+        let small = if r1.abs() < r2.abs() { r1 } else { r2 };
+        // The exact root is 0.5 - 0.25e-12 / 3 + O(1e-25).
+        assert!(
+            (small - (0.5 - 0.25e-12 / 3.0)).abs() <= f64::EPSILON,
+            "{r1} {r2}"
+        );
+        // The textbook formula loses the root to cancellation (the reason for the stable one).
+        let naive = (-3.0f32 + (9.0f32 - 4.0 * 1e-12 * -1.5).sqrt()) / (2.0 * 1e-12);
+        assert!((naive - 0.5).abs() > 0.4, "{naive}");
+        // A = 0 exactly: the linear root in both places; nothing at all: t = 0, no NaN.
+        assert_eq!(stable_roots::<f32>(0.0, 3.0, -1.5), (0.5, 0.5));
+        assert_eq!(stable_roots::<f64>(0.0, 0.0, 2.0), (0.0, 0.0));
+    }
+
+    fn almost_linear_edge<R: Real>(lead: f64) {
+        // On AB: y = lead u² + 40u + 10, crossing scanline 25 (y = 25.5) near u = 0.3875.
+        let l = screen_lembo::<R>(x_linear(), quad(lead, 0.0, 0.0, 40.0, 30.0, 10.0));
+        let roots = roots_per_edge(&l, 25);
+        assert_eq!(roots[0].len(), 1);
+        let p = roots[0][0].0;
+        // The stable form of the smaller root (the textbook one cancels here too).
+        let exact = 2.0 * 15.5 / (40.0 + (1600.0f64 + 4.0 * lead * 15.5).sqrt());
+        let scale = if R::epsilon().f64() > 1e-10 {
+            1e-6
+        } else {
+            1e-13
+        };
+        assert!(
+            (p.uv[0].f64() - exact).abs() < scale,
+            "{} vs {exact}",
+            p.uv[0].f64()
+        );
+        assert!(
+            (p.x.f64() - x_linear().eval(exact, 0.0)).abs() < 1e3 * scale,
+            "{p:?}"
+        );
+    }
+
+    #[test]
+    fn interval_almost_linear_edge_yields_the_right_crossing() {
+        for lead in [0.0, 1e-12, 1e-9, 1e-5, -1e-5] {
+            almost_linear_edge::<f32>(lead);
+            almost_linear_edge::<f64>(lead);
+        }
+    }
+
+    #[test]
+    fn interval_plane_pairs_its_two_edge_roots() {
+        let l = screen_lembo::<f32>(x_linear(), y_plane());
+        for j in 10..70 {
+            let (ivs, c) = run(&l, j, 0.5);
+            assert_eq!(
+                (ivs.len(), c.edge_roots, c.unpaired_roots),
+                (1, 2, 0),
+                "scanline {j}"
+            );
+            assert!(ivs[0].start.edge != INTERIOR && ivs[0].end.edge != INTERIOR);
+        }
+    }
 }

@@ -48,3 +48,58 @@ pub fn scanlines<R: Real>(l: &ScreenLembo<R>, height: u32) -> Option<(u32, u32)>
     let j1 = (hi - 0.5).floor().min(height as f64 - 1.0);
     (j0 <= j1).then_some((j0 as u32, j1 as u32))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::raster::setup::tests::{
+        quad, screen_lembo, x_linear, y_bowl, y_plane, y_saddle, SIDE,
+    };
+
+    #[test]
+    fn minmax_vertices_bound_a_plane() {
+        // A = 10, B = 70, C = 40.
+        let l = screen_lembo::<f32>(x_linear(), y_plane());
+        assert_eq!(y_range(&l), (10.0, 70.0));
+        assert_eq!(scanlines(&l, SIDE), Some((10, 69)));
+    }
+
+    #[test]
+    fn minmax_interior_extremum_is_a_candidate() {
+        let l = screen_lembo::<f64>(x_linear(), y_bowl());
+        let (lo, _) = y_range(&l);
+        assert!((lo - 40.3).abs() < 1e-12, "{lo}");
+        assert_eq!(scanlines(&l, SIDE).map(|(j0, _)| j0), Some(40));
+        // A saddle's critical value is no extremum: the range is set by the boundary.
+        let l = screen_lembo::<f64>(x_linear(), y_saddle());
+        let (lo, hi) = y_range(&l);
+        assert!(lo < 50.3 - 1.0 && hi > 50.3 + 1.0);
+    }
+
+    #[test]
+    fn minmax_edge_extrema_are_candidates() {
+        // Each y has its minimum 20.5 on one edge, (a) v = 0, (b) u = 0, (c) u + v = 1, and
+        // 30.5 at all three vertices, so only the edge candidate finds scanline 20 (which
+        // grazes the minimum: kept by the pad for the interval manager to decide).
+        for y in [
+            quad(40.0, 0.0, 40.0, -40.0, 0.0, 30.5),
+            quad(0.0, 40.0, 40.0, 0.0, -40.0, 30.5),
+            quad(10.0, 10.0, -20.0, -10.0, -10.0, 30.5),
+        ] {
+            let l = screen_lembo::<f32>(x_linear(), y);
+            assert_eq!(l.vertex_y, [30.5; 3]);
+            assert_eq!(y_range(&l).0, 20.5, "{y:?}");
+            assert_eq!(scanlines(&l, SIDE).map(|(j0, _)| j0), Some(20));
+        }
+    }
+
+    #[test]
+    fn minmax_clips_to_the_viewport() {
+        // y from -30 to 170.
+        let l = screen_lembo::<f32>(x_linear(), quad(0.0, 0.0, 0.0, 200.0, 100.0, -30.0));
+        assert_eq!(scanlines(&l, SIDE), Some((0, SIDE - 1)));
+        // y within [0.1, 0.4]: no sample line y = j + 0.5 in range.
+        let l = screen_lembo::<f32>(x_linear(), quad(0.0, 0.0, 0.0, 0.3, 0.0, 0.1));
+        assert_eq!(scanlines(&l, SIDE), None);
+    }
+}

@@ -4,16 +4,20 @@
 //!   quadratic (paper 001: the curve is followed within k);
 //! - the largest distance of a fragment's (u, v) outside the domain;
 //! - double hits on shared edges: a pixel claimed by two lembos that share an edge, each
-//!   through a subsegment that ends on that edge, from opposite sides of the crossing along
-//!   the scanline. Neighbours on opposite sides must split the scanline at the crossing, so
-//!   any pixel both claim is a pixel-rule fault (the crossing's x computed differently on
-//!   the two sides). Neighbours on the same side overlap because the surface folds over
-//!   itself in projection (at a contour): that is geometry, measured against the reference,
-//!   not a rasterization fault. The probe keeps the first two fragments per pixel, so with
-//!   more than two layers later ones are compared only against those two.
+//!   through a subsegment that ends on the *same crossing* of that edge, from opposite sides
+//!   of it along the scanline. Neighbours on opposite sides must split the scanline at the
+//!   crossing, so any pixel both claim is a pixel-rule fault (the crossing's x computed
+//!   differently on the two sides). Neighbours on the same side overlap because the surface
+//!   folds over itself in projection (at a contour): that is geometry, measured against the
+//!   reference, not a rasterization fault. A curved edge can cross a scanline twice, so a
+//!   crossing is told apart from the other by the side of the edge parabola's extremum it
+//!   lies on, which both neighbours compute from the same canonical edge; ends on the two
+//!   different crossings of one edge say nothing about each other. The probe keeps the
+//!   first two fragments per pixel, so with more than two layers later ones are compared
+//!   only against those two.
 
 use super::fragment::FragmentSink;
-use super::interval::INTERIOR;
+use super::interval::{CurvePoint, INTERIOR};
 use super::setup::ScreenLembo;
 use super::subsegmenter::Subsegment;
 use crate::camera::Viewport;
@@ -32,20 +36,34 @@ pub struct ProbeReport {
     pub fragments: u64,
 }
 
+/// One end of a fragment's subsegment that lies on a domain edge.
+#[derive(Clone, Copy)]
+struct EdgeEnd {
+    /// The domain edge (0: AB, 1: BC, 2: CA), or [`INTERIOR`] for no end.
+    edge: u8,
+    /// Which crossing of that edge on the scanline (see [`crossing_index`]).
+    crossing: u8,
+    /// The subsegment extends towards +x from this end.
+    right: bool,
+}
+
+const NO_END: EdgeEnd = EdgeEnd {
+    edge: INTERIOR,
+    crossing: 0,
+    right: false,
+};
+
 /// What the probe keeps of a fragment.
 #[derive(Clone, Copy)]
 struct Slot {
     id: u32,
-    /// Bit e set when the fragment's subsegment ends on domain edge e.
-    touches: u8,
-    /// Bit e set when that subsegment extends towards +x from its end on edge e.
-    right_of: u8,
+    /// The ends of the fragment's subsegment that lie on domain edges.
+    ends: [EdgeEnd; 2],
 }
 
 const EMPTY: Slot = Slot {
     id: u32::MAX,
-    touches: 0,
-    right_of: 0,
+    ends: [NO_END; 2],
 };
 
 pub struct Probe<'a, S> {
@@ -131,20 +149,17 @@ impl<R: Real, S: FragmentSink<R>> FragmentSink<R> for Probe<'_, S> {
         r.max_domain_excess = r.max_domain_excess.max((-uf).max(-vf).max(uf + vf - 1.0));
 
         let idx = j as usize * self.width as usize + i as usize;
-        let (mut touches, mut right_of) = (0u8, 0u8);
-        for (end, other) in [(&sub.a, &sub.b), (&sub.b, &sub.a)] {
+        let mut ends = [NO_END; 2];
+        for (n, (end, other)) in [(&sub.a, &sub.b), (&sub.b, &sub.a)].into_iter().enumerate() {
             if end.edge != INTERIOR {
-                touches |= 1 << end.edge;
-                if other.x > end.x {
-                    right_of |= 1 << end.edge;
-                }
+                ends[n] = EdgeEnd {
+                    edge: end.edge,
+                    crossing: crossing_index(l, end),
+                    right: other.x > end.x,
+                };
             }
         }
-        let me = Slot {
-            id: l.id,
-            touches,
-            right_of,
-        };
+        let me = Slot { id: l.id, ends };
         let slots = &mut self.slots[idx];
         for o in slots.iter() {
             if o.id == u32::MAX || o.id == me.id {
@@ -152,9 +167,14 @@ impl<R: Real, S: FragmentSink<R>> FragmentSink<R> for Probe<'_, S> {
             }
             let (lo, hi) = if o.id < me.id { (o, &me) } else { (&me, o) };
             if let Some(&(elo, ehi)) = self.adjacent.get(&(lo.id, hi.id)) {
-                let touch = lo.touches & (1 << elo) != 0 && hi.touches & (1 << ehi) != 0;
-                let opposite = (lo.right_of >> elo & 1) != (hi.right_of >> ehi & 1);
-                if touch && opposite {
+                // Both end on the same crossing of the shared edge, from opposite sides.
+                let split = lo.ends.iter().filter(|a| a.edge == elo).any(|a| {
+                    hi.ends
+                        .iter()
+                        .filter(|b| b.edge == ehi)
+                        .any(|b| b.crossing == a.crossing && b.right != a.right)
+                });
+                if split {
                     self.double[idx] = true;
                 }
             }
@@ -163,5 +183,132 @@ impl<R: Real, S: FragmentSink<R>> FragmentSink<R> for Probe<'_, S> {
             *slot = me;
         }
         self.inner.fragment(l, sub, i, j, u, v, z);
+    }
+}
+
+/// Which crossing of its domain edge the point `p` (on that edge) is: 0 or 1 by the side of
+/// the extremum of the canonical edge parabola y(t) it lies on (a scanline meets the edge
+/// at most once on each side). Two lembos sharing the edge have bit-identical canonical
+/// edges, so they agree on the index of every crossing.
+fn crossing_index<R: Real>(l: &ScreenLembo<R>, p: &CurvePoint<R>) -> u8 {
+    let c = &l.edges[p.edge as usize];
+    // Lembo-order parameter along the edge (the inverse of `setup::edge_uv`), then canonical.
+    let tl = match p.edge {
+        0 => p.uv[0].f64(),
+        1 => p.uv[1].f64(),
+        _ => 1.0 - p.uv[1].f64(),
+    };
+    let t = if c.reversed { 1.0 - tl } else { tl };
+    let [y0, y1, y2] = c.y.map(R::f64);
+    let a = 2.0 * y0 + 2.0 * y2 - 4.0 * y1;
+    let b = 4.0 * y1 - 3.0 * y0 - y2;
+    if a == 0.0 {
+        return 0;
+    }
+    u8::from(t > -b / (2.0 * a))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::View;
+    use crate::lembo::Lembo;
+    use crate::raster::setup::{setup, tests::Collect};
+    use glam::DVec3;
+    use std::path::Path;
+
+    /// A scene of `lembos` seen by the orthographic 128 x 128 view of the raster fixtures
+    /// (world (X, Y) on screen (X + 64, 64 - Y)).
+    fn scene_of(lembos: Vec<Lembo>) -> Scene {
+        let text = r#"{"name": "probe", "viewport": {"width": 128, "height": 128},
+            "camera": {"eye": [0, 0, 10], "target": [0, 0, 0], "up": [0, 1, 0],
+                       "projection": {"kind": "orthographic", "height": 128, "near": 0.1, "far": 100}},
+            "objects": [{"lembos": [{"points": [[0,0,0],[1,0,0],[0,1,0],[0.5,0,0],[0,0.5,0],[0.5,0.5,0]],
+                                     "normals": [[0,0,1],[0,0,1],[0,0,1],[0,0,1],[0,0,1],[0,0,1]]}]}]}"#;
+        let mut scene = Scene::from_json(text, "probe", Path::new(".")).unwrap();
+        scene.objects[0].lembos = lembos;
+        scene
+    }
+
+    /// A lembo with corners `a`, `b`, `c` and the middle of edge AB at `d` (straight other
+    /// edges), given in screen pixels.
+    fn lembo(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> Lembo {
+        let w = |p: [f64; 2]| DVec3::new(p[0] - 64.0, 64.0 - p[1], 0.0);
+        let mid = |p: [f64; 2], q: [f64; 2]| [0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1])];
+        Lembo::new(
+            [w(a), w(b), w(c), w(d), w(mid(a, c)), w(mid(b, c))],
+            [DVec3::Z; 6],
+        )
+    }
+
+    #[test]
+    fn probe_double_hit_needs_the_same_crossing_from_opposite_sides() {
+        // Two lembos share the edge P = (30, 40) -> Q = (60, 40) bulging up to (45, 35), both
+        // below it: the surface folds over at the edge. Scanline 38 (y = 38.5) crosses that
+        // edge twice, at t = 0.0813 (x = 32.44) and t = 0.9187 (x = 57.56).
+        let (p, q, m) = ([30.0, 40.0], [60.0, 40.0], [45.0, 35.0]);
+        let scene = scene_of(vec![
+            lembo(p, q, [45.0, 80.0], m),
+            lembo(q, p, [45.0, 70.0], m),
+        ]);
+        let view = View::new(&scene.camera, scene.viewport);
+        let ls: Vec<ScreenLembo<f64>> = scene
+            .lembos()
+            .enumerate()
+            .map(|(id, (l, c))| setup(id as u32, l, c, &view).unwrap())
+            .collect();
+        let t = (1.0 - (1.0f64 - 4.0 * 0.075).sqrt()) / 2.0;
+        // A point on edge AB of lembo n at canonical t (from P), or in the interior.
+        let on_edge = |n: usize, t: f64, x: f64| {
+            let u = if n == 0 { t } else { 1.0 - t };
+            CurvePoint {
+                uv: [u, 0.0],
+                x,
+                edge: 0,
+            }
+        };
+        let inner = |x: f64| CurvePoint {
+            uv: [0.3, 0.3],
+            x,
+            edge: INTERIOR,
+        };
+        let (x1, x2) = (30.0 + 30.0 * t, 30.0 + 30.0 * (1.0 - t));
+
+        let run = |subs: [(Subsegment<f64>, u32); 2]| {
+            let mut sink = Collect::default();
+            let mut probe = Probe::new(&scene, scene.viewport, &mut sink);
+            for (n, (sub, i)) in subs.into_iter().enumerate() {
+                probe.fragment(&ls[n], &sub, i, 38, 0.3, 0.3, 0.5);
+            }
+            probe.report().double_hit_pixels
+        };
+        // Lembo 0 spans from one crossing to the other, lembo 1 from the second crossing
+        // leftwards: both left of that crossing (the fold), not a fault.
+        let span = Subsegment {
+            a: on_edge(0, t, x1),
+            b: on_edge(0, 1.0 - t, x2),
+        };
+        let left_of_x2 = Subsegment {
+            a: on_edge(1, 1.0 - t, x2),
+            b: inner(50.0),
+        };
+        assert_eq!(run([(span, 56), (left_of_x2, 56)]), 0);
+        // Lembo 0 right of the first crossing, lembo 1 left of the second: different crossings.
+        let right_of_x1 = Subsegment {
+            a: inner(50.0),
+            b: on_edge(0, t, x1),
+        };
+        assert_eq!(run([(right_of_x1, 45), (left_of_x2, 45)]), 0);
+        // The same crossing from opposite sides, lembo 1 computing its x 1.1 px too far right:
+        // the pixel both claim is a double hit.
+        let right_of_x2 = Subsegment {
+            a: on_edge(0, 1.0 - t, x2),
+            b: inner(70.0),
+        };
+        let left_of_wrong_x2 = Subsegment {
+            a: on_edge(1, 1.0 - t, x2 + 1.1),
+            b: inner(50.0),
+        };
+        assert_eq!(run([(right_of_x2, 58), (left_of_wrong_x2, 58)]), 1);
     }
 }

@@ -125,7 +125,8 @@ pub fn segments<R: Real>(
 }
 
 /// One step of the extreme method from `p`, or `None` when it has no finite forward solution.
-#[allow(clippy::too_many_arguments)]
+// `!(gn > 0)` is deliberate: it also rejects NaN.
+#[allow(clippy::too_many_arguments, clippy::neg_cmp_op_on_partial_ord)]
 #[inline]
 fn step<R: Real>(
     l: &ScreenLembo<R>,
@@ -177,4 +178,194 @@ fn step<R: Real>(
     let s = [alpha * th[0] + beta * gh[0], alpha * th[1] + beta * gh[1]];
     let q = [p[0] + s[0], p[1] + s[1]];
     (q[0].is_finite() && q[1].is_finite()).then_some(q)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::raster::interval::{intervals, IntervalScratch};
+    use crate::raster::setup::tests::{
+        quad, screen_lembo, x_linear, y_bowl, y_error, y_plane, y_saddle,
+    };
+    use crate::raster::DEFAULT_SEGMENT_CAP;
+
+    /// Each interval of a scanline with its segments.
+    type Walks<R> = Vec<(Interval<R>, Vec<Segment<R>>)>;
+
+    /// The intervals of scanline `j` and the segments of each.
+    fn run<R: Real>(l: &ScreenLembo<R>, j: u32, k: f64) -> (Walks<R>, Counts) {
+        let (mut ivs, mut counts) = (Vec::new(), Counts::default());
+        intervals(
+            l,
+            j,
+            R::of(k),
+            &mut IntervalScratch::default(),
+            &mut ivs,
+            &mut counts,
+        );
+        let out = ivs
+            .into_iter()
+            .map(|iv| {
+                let mut segs = Vec::new();
+                segments(
+                    l,
+                    j,
+                    R::of(k),
+                    &iv,
+                    DEFAULT_SEGMENT_CAP,
+                    &mut segs,
+                    &mut counts,
+                )
+                .expect("under the cap");
+                (iv, segs)
+            })
+            .collect();
+        (out, counts)
+    }
+
+    fn finite<R: Real>(p: &CurvePoint<R>) -> bool {
+        p.uv[0].is_finite() && p.uv[1].is_finite() && p.x.is_finite()
+    }
+
+    fn closed_chain<R: Real>(tol: f64) {
+        let l = screen_lembo::<R>(x_linear(), y_bowl());
+        let (walks, _) = run(&l, 40, 0.1);
+        let chain: Vec<Segment<R>> = walks.iter().flat_map(|(_, s)| s.iter().copied()).collect();
+        assert!(chain.len() > 2, "{}", chain.len());
+        for (n, s) in chain.iter().enumerate() {
+            let next = &chain[(n + 1) % chain.len()];
+            assert_eq!(s.p1.uv, next.p0.uv, "segment {n} does not meet the next");
+            assert!(y_error(&l, 40, s.p0.uv) < tol, "{s:?}");
+        }
+        assert_eq!(chain.last().unwrap().p1.uv, chain[0].p0.uv);
+    }
+
+    #[test]
+    fn segmenter_closed_loop_forms_a_closed_chain() {
+        closed_chain::<f32>(1e-3);
+        closed_chain::<f64>(1e-9);
+    }
+
+    /// y = 10 + 80u² + 60v: parabolic level curves from edge to edge.
+    fn y_parabolic() -> crate::lembo::Quadratic<f64> {
+        quad(80.0, 0.0, 0.0, 0.0, 60.0, 10.0)
+    }
+
+    #[test]
+    fn segmenter_midpoint_error_is_exactly_k() {
+        for (y, j) in [(y_parabolic(), 40), (y_parabolic(), 25), (y_bowl(), 45)] {
+            for k in [0.05, 0.1, 0.5] {
+                let l = screen_lembo::<f64>(x_linear(), y);
+                let (walks, c) = run(&l, j, k);
+                let mut walked = 0;
+                for (iv, segs) in &walks {
+                    // Every segment but the last (clamped to the interval end) is a full step.
+                    for s in &segs[..segs.len() - 1] {
+                        let mid = [
+                            0.5 * (s.p0.uv[0] + s.p1.uv[0]),
+                            0.5 * (s.p0.uv[1] + s.p1.uv[1]),
+                        ];
+                        let err = y_error(&l, j, mid);
+                        assert!((err - k).abs() <= 1e-9 * k, "k {k}: midpoint error {err}");
+                        assert!(y_error(&l, j, s.p1.uv) < 1e-9);
+                        walked += 1;
+                    }
+                    let last = segs.last().unwrap();
+                    assert_eq!(last.p1, iv.end);
+                    let mid = [
+                        0.5 * (last.p0.uv[0] + last.p1.uv[0]),
+                        0.5 * (last.p0.uv[1] + last.p1.uv[1]),
+                    ];
+                    assert!(y_error(&l, j, mid) <= k * (1.0 + 1e-9));
+                }
+                assert!(
+                    walked > 0 && c.segments_clamped == walks.len() as u64,
+                    "{c:?}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn segmenter_midpoint_error_stays_within_k_in_f32() {
+        for (y, j) in [(y_parabolic(), 40), (y_bowl(), 45)] {
+            let l = screen_lembo::<f32>(x_linear(), y);
+            let (walks, _) = run(&l, j, 0.1);
+            for s in walks.iter().flat_map(|(_, s)| s) {
+                let mid = [
+                    0.5 * (s.p0.uv[0] + s.p1.uv[0]),
+                    0.5 * (s.p0.uv[1] + s.p1.uv[1]),
+                ];
+                assert!(y_error(&l, j, mid) <= 0.1 + 1e-3);
+            }
+        }
+    }
+
+    fn flat<R: Real>() {
+        // A plane, and a curve so slightly bent that the step has no useful solution.
+        for y in [y_plane(), quad(1e-9, 0.0, 0.0, 60.0, 30.0, 10.0)] {
+            let l = screen_lembo::<R>(x_linear(), y);
+            for j in [10, 25, 40, 69] {
+                let (walks, c) = run(&l, j, 0.5);
+                assert_eq!(walks.len(), 1);
+                for (iv, segs) in &walks {
+                    assert_eq!(segs.len(), 1, "scanline {j}");
+                    assert_eq!((segs[0].p0, segs[0].p1), (iv.start, iv.end));
+                    assert!(finite(&segs[0].p0) && finite(&segs[0].p1));
+                }
+                assert_eq!((c.segments, c.segments_clamped), (1, 1));
+            }
+        }
+    }
+
+    #[test]
+    fn segmenter_flat_curve_emits_one_clamped_segment_per_interval() {
+        flat::<f32>();
+        flat::<f64>();
+    }
+
+    #[test]
+    fn segmenter_saddle_intervals_are_single_straight_segments() {
+        let l = screen_lembo::<f32>(x_linear(), y_saddle());
+        let (walks, c) = run(&l, 50, 0.5);
+        assert!(c.saddle_splits > 0);
+        for (iv, segs) in &walks {
+            assert_eq!(segs.len(), 1);
+            assert_eq!((segs[0].p0, segs[0].p1), (iv.start, iv.end));
+        }
+    }
+
+    #[test]
+    fn segmenter_cap_is_an_error() {
+        let l = screen_lembo::<f64>(x_linear(), y_bowl());
+        let (mut ivs, mut counts) = (Vec::new(), Counts::default());
+        intervals(
+            &l,
+            45,
+            0.01,
+            &mut IntervalScratch::default(),
+            &mut ivs,
+            &mut counts,
+        );
+        let mut segs = Vec::new();
+        assert_eq!(
+            segments(&l, 45, 0.01, &ivs[0], 3, &mut segs, &mut counts),
+            Err(CapExceeded)
+        );
+        assert_eq!(segs.len(), 3);
+        segs.clear();
+        assert_eq!(
+            segments(
+                &l,
+                45,
+                0.01,
+                &ivs[0],
+                DEFAULT_SEGMENT_CAP,
+                &mut segs,
+                &mut counts
+            ),
+            Ok(())
+        );
+        assert!(segs.len() > 3);
+    }
 }

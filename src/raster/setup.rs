@@ -276,12 +276,173 @@ pub fn eigen_sym<R: Real>(p: R, q: R, r: R) -> [(V2<R>, R); 2] {
     }
 }
 
+/// Fixtures shared by the unit tests of the raster stages: lembos whose screen projection is
+/// chosen exactly, so each test can put a scanline where the case it checks happens.
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
+    use crate::camera::{Camera, Projection, Viewport};
+    use crate::lembo::REFERENCE_UV;
+    use crate::raster::Counts;
 
-    fn quad(a: f64, b: f64, c: f64, d: f64, e: f64, f: f64) -> Quadratic<f64> {
+    pub(crate) fn quad(a: f64, b: f64, c: f64, d: f64, e: f64, f: f64) -> Quadratic<f64> {
         Quadratic { a, b, c, d, e, f }
+    }
+
+    /// Side of the test viewport [pixels].
+    pub(crate) const SIDE: u32 = 128;
+
+    /// A 128 x 128 orthographic view down -z, 128 world units high: world (X, Y, Z) lands on
+    /// screen (X + 64, 64 - Y), exactly for values with few binary digits.
+    pub(crate) fn view() -> View {
+        let camera = Camera {
+            eye: [0.0, 0.0, 10.0],
+            target: [0.0; 3],
+            up: [0.0, 1.0, 0.0],
+            projection: Projection::Orthographic {
+                height: SIDE as f64,
+                near: 0.1,
+                far: 100.0,
+            },
+        };
+        View::new(
+            &camera,
+            Viewport {
+                width: SIDE,
+                height: SIDE,
+            },
+        )
+    }
+
+    /// A lembo whose screen x and y [pixels] are the quadratics `x` and `y` in the test view,
+    /// with depth growing along u + v and normals towards the eye.
+    pub(crate) fn lembo_on_screen(x: Quadratic<f64>, y: Quadratic<f64>) -> Lembo {
+        let points = REFERENCE_UV
+            .map(|(u, v)| DVec3::new(x.eval(u, v) - 64.0, 64.0 - y.eval(u, v), -(u + v)));
+        Lembo::new(points, [DVec3::Z; 6])
+    }
+
+    /// The [`ScreenLembo`] of [`lembo_on_screen`].
+    pub(crate) fn screen_lembo<R: Real>(x: Quadratic<f64>, y: Quadratic<f64>) -> ScreenLembo<R> {
+        setup::<R>(0, &lembo_on_screen(x, y), [0.8; 3], &view())
+            .expect("the fixture is inside the view")
+    }
+
+    /// Screen x of the fixtures: linear, so x never folds by itself.
+    pub(crate) fn x_linear() -> Quadratic<f64> {
+        quad(0.0, 0.0, 0.0, 80.0, 30.0, 20.0)
+    }
+
+    /// y = 40.3 + 100 ((u - .3)² + (v - .3)²): a bowl with its minimum 40.3 at (.3, .3), so
+    /// scanline 40 (y = 40.5) is a small closed loop touching no domain edge.
+    pub(crate) fn y_bowl() -> Quadratic<f64> {
+        quad(100.0, 100.0, 0.0, -60.0, -60.0, 58.3)
+    }
+
+    /// y = 50.3 + 100 ((u - .3)² - (v - .3)²): a saddle at (.3, .3) with value 50.3, so
+    /// scanline 50 (y = 50.5) is within k/2 of it for k = 0.5.
+    pub(crate) fn y_saddle() -> Quadratic<f64> {
+        quad(100.0, -100.0, 0.0, -60.0, 60.0, 50.3)
+    }
+
+    /// y = 10 + 60u + 30v: a plane (straight level lines, no curvature).
+    pub(crate) fn y_plane() -> Quadratic<f64> {
+        quad(0.0, 0.0, 0.0, 60.0, 30.0, 10.0)
+    }
+
+    /// A fragment sink that keeps (pixel i, u, v) of every fragment.
+    #[derive(Default)]
+    pub(crate) struct Collect<R>(pub(crate) Vec<(u32, R, R)>);
+
+    impl<R: Real> crate::raster::fragment::FragmentSink<R> for Collect<R> {
+        fn fragment(
+            &mut self,
+            _: &ScreenLembo<R>,
+            _: &crate::raster::subsegmenter::Subsegment<R>,
+            i: u32,
+            _: u32,
+            u: R,
+            v: R,
+            _: R,
+        ) {
+            self.0.push((i, u, v));
+        }
+    }
+
+    /// Every fragment (i, u, v) of scanline `j` of `l`, through all the stages at tolerance
+    /// `k` [pixels], with the stages' counts.
+    pub(crate) fn scanline_fragments<R: Real>(
+        l: &ScreenLembo<R>,
+        j: u32,
+        k: f64,
+    ) -> (Vec<(u32, R, R)>, Counts) {
+        use crate::raster::{fragment, interval, segmenter, subsegmenter, DEFAULT_SEGMENT_CAP};
+        let (k, mut counts, mut sink) = (R::of(k), Counts::default(), Collect::default());
+        let (mut ivs, mut segs, mut subs) = (Vec::new(), Vec::new(), Vec::new());
+        interval::intervals(
+            l,
+            j,
+            k,
+            &mut interval::IntervalScratch::default(),
+            &mut ivs,
+            &mut counts,
+        );
+        for iv in &ivs {
+            segs.clear();
+            segmenter::segments(l, j, k, iv, DEFAULT_SEGMENT_CAP, &mut segs, &mut counts)
+                .expect("under the cap");
+            for seg in &segs {
+                subs.clear();
+                subsegmenter::subsegments(l, seg, k, &mut subs, &mut counts);
+                for sub in &subs {
+                    fragment::rasterize(l, j, sub, SIDE, &mut sink, &mut counts);
+                }
+            }
+        }
+        (sink.0, counts)
+    }
+
+    /// |y(u, v) - (j + 0.5)| in f64 [pixels].
+    pub(crate) fn y_error<R: Real>(l: &ScreenLembo<R>, j: u32, uv: [R; 2]) -> f64 {
+        (l.y.cast::<f64>().eval(uv[0].f64(), uv[1].f64()) - (j as f64 + 0.5)).abs()
+    }
+
+    #[test]
+    fn fixtures_project_exactly() {
+        let l = screen_lembo::<f64>(x_linear(), y_bowl());
+        for (got, want) in [(l.y, y_bowl()), (l.x, x_linear())] {
+            for (u, v) in [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (0.3, 0.3), (0.2, 0.7)] {
+                assert!((got.eval(u, v) - want.eval(u, v)).abs() < 1e-12, "{u} {v}");
+            }
+        }
+        match l.partition {
+            Partition::Central {
+                centre,
+                y_centre,
+                det,
+                ..
+            } => {
+                assert!((centre[0] - 0.3).abs() < 1e-12 && (centre[1] - 0.3).abs() < 1e-12);
+                assert!((y_centre - 40.3).abs() < 1e-12 && det > 0.0);
+            }
+            p => panic!("{p:?}"),
+        }
+    }
+
+    #[test]
+    fn canonical_edges_start_at_the_smaller_end() {
+        // y = 10 + 60u + 30v: A = 10, B = 70, C = 40; x = 20 + 80u + 30v.
+        let l = screen_lembo::<f32>(x_linear(), y_plane());
+        assert_eq!(l.vertex_y, [10.0, 70.0, 40.0]);
+        assert_eq!(l.edges.map(|c| c.reversed), [false, true, true]);
+        assert_eq!(
+            l.edges.map(|c| c.y),
+            [[10.0, 40.0, 70.0], [40.0, 55.0, 70.0], [10.0, 25.0, 40.0]]
+        );
+        assert_eq!(
+            l.edges.map(|c| c.x),
+            [[20.0, 60.0, 100.0], [50.0, 75.0, 100.0], [20.0, 35.0, 50.0]]
+        );
     }
 
     #[test]

@@ -94,3 +94,134 @@ pub fn subsegments<R: Real>(
         counts.subsegments += n as u64;
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::raster::setup::tests::{quad, screen_lembo, x_linear, y_plane};
+
+    /// A segment of `l` between two domain points, with x from the lembo.
+    fn segment<R: Real>(l: &ScreenLembo<R>, p0: [f64; 2], p1: [f64; 2]) -> Segment<R> {
+        let point = |p: [f64; 2], edge| {
+            let uv = p.map(R::of);
+            CurvePoint {
+                uv,
+                x: l.x.eval(uv[0], uv[1]),
+                edge,
+            }
+        };
+        Segment {
+            p0: point(p0, 2),
+            p1: point(p1, 1),
+        }
+    }
+
+    /// Checks that every subsegment is monotone in x and its chord within `k` (+ rounding)
+    /// of the true x(u, v) along it; returns the subsegments' x ends.
+    fn check<R: Real>(
+        l: &ScreenLembo<R>,
+        seg: &Segment<R>,
+        k: f64,
+    ) -> (Vec<Subsegment<R>>, Counts) {
+        let (mut out, mut counts) = (Vec::new(), Counts::default());
+        subsegments(l, seg, R::of(k), &mut out, &mut counts);
+        let x = l.x.cast::<f64>();
+        let round = if R::epsilon().f64() > 1e-10 {
+            1e-3
+        } else {
+            1e-9
+        };
+        assert_eq!(out[0].a, seg.p0);
+        assert_eq!(out.last().unwrap().b, seg.p1);
+        for (n, s) in out.iter().enumerate() {
+            if n > 0 {
+                assert_eq!(
+                    out[n - 1].b,
+                    s.a,
+                    "subsegments {n} and {} do not meet",
+                    n - 1
+                );
+            }
+            let (a, b) = (s.a.uv.map(R::f64), s.b.uv.map(R::f64));
+            let at = |t: f64| x.eval(a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]));
+            let dir = (at(1.0) - at(0.0)).signum();
+            for m in 1..=32 {
+                let (t0, t1) = ((m - 1) as f64 / 32.0, m as f64 / 32.0);
+                assert!(
+                    dir * (at(t1) - at(t0)) >= -round,
+                    "subsegment {n} turns back"
+                );
+                let chord = s.a.x.f64() + t1 * (s.b.x.f64() - s.a.x.f64());
+                assert!(
+                    (chord - at(t1)).abs() <= k + round,
+                    "subsegment {n}: chord off by {}",
+                    chord - at(t1)
+                );
+            }
+        }
+        (out, counts)
+    }
+
+    /// x = 100u² - 100u + 45 + 20v, turning back at u = 1/2; y = 10 + 50v (level lines v = c).
+    fn folding<R: Real>() -> ScreenLembo<R> {
+        screen_lembo(
+            quad(100.0, 0.0, 0.0, -100.0, 20.0, 45.0),
+            quad(0.0, 0.0, 0.0, 0.0, 50.0, 10.0),
+        )
+    }
+
+    fn fold<R: Real>() {
+        let l = folding::<R>();
+        let seg = segment(&l, [0.0, 0.2], [0.8, 0.2]);
+        for k in [0.5, 0.05, 0.01] {
+            let (subs, c) = check(&l, &seg, k);
+            assert_eq!(c.folds, 1);
+            assert_eq!(c.subsegments, subs.len() as u64);
+            // The fold x = 24 (at u = 1/2) is where one subsegment ends and the next starts.
+            let at_fold = subs
+                .iter()
+                .filter(|s| (s.b.uv[0].f64() - 0.5).abs() < 1e-6)
+                .count();
+            assert_eq!(at_fold, 1, "k {k}");
+            let fold = subs
+                .iter()
+                .find(|s| (s.b.uv[0].f64() - 0.5).abs() < 1e-6)
+                .unwrap();
+            assert!((fold.b.x.f64() - 24.0).abs() < 1e-4, "{fold:?}");
+            assert!(subs.iter().all(|s| s.a.x.min(s.b.x).f64() >= 24.0 - 1e-4));
+        }
+    }
+
+    #[test]
+    fn subsegmenter_splits_at_a_fold() {
+        fold::<f32>();
+        fold::<f64>();
+    }
+
+    #[test]
+    fn subsegmenter_keeps_a_monotone_segment_whole_and_within_k() {
+        let l = folding::<f64>();
+        // u from 0.55 to 0.9: x increasing, no fold.
+        let seg = segment(&l, [0.55, 0.1], [0.9, 0.1]);
+        for k in [1.0, 0.1] {
+            let (subs, c) = check(&l, &seg, k);
+            assert_eq!(c.folds, 0);
+            // The fewest equal steps with chord error within k: x'' = 2 a_t, error a_t dt²/4.
+            let du: f64 = 0.35;
+            let a_t = 100.0 * du * du;
+            assert_eq!(
+                subs.len() as f64,
+                (1.0 / (4.0 * k / a_t).sqrt()).ceil(),
+                "k {k}"
+            );
+        }
+    }
+
+    #[test]
+    fn subsegmenter_linear_x_is_one_subsegment() {
+        let l = screen_lembo::<f32>(x_linear(), y_plane());
+        let seg = segment(&l, [0.0, 0.3], [0.6, 0.1]);
+        let (subs, c) = check(&l, &seg, 0.5);
+        assert_eq!((subs.len(), c.folds), (1, 0));
+    }
+}
