@@ -2,7 +2,9 @@
 //! end through `render_functional`:
 //! - random lembos: every fragment within k of its scanline and inside the domain, every
 //!   edge root paired, and coverage equal to the exact reference outside a band of k + 1.5
-//!   pixels around the reference silhouette (seeded property tests);
+//!   pixels around the reference silhouette (seeded property tests; a fragment of a sliver
+//!   thinner than a pixel, which the reference's pixel centres miss, must be within k + 1
+//!   of the true image instead);
 //! - shared edges: neighbours compute bit-identical crossings, and render without cracks or
 //!   double hits;
 //! - closed meshes (the sphere of 24 lembos, the bunny): no cracks, no double hits.
@@ -11,7 +13,7 @@ use glam::DVec3;
 use lembo_sim::camera::View;
 use lembo_sim::datapath::{Datapath, Real};
 use lembo_sim::lembo::construct::lembo_from_triangle;
-use lembo_sim::lembo::{Lembo, REFERENCE_UV};
+use lembo_sim::lembo::Lembo;
 use lembo_sim::raster::fragment::FragmentSink;
 use lembo_sim::raster::interval::{edge_crossings, CurvePoint};
 use lembo_sim::raster::probe::shared_edges;
@@ -502,9 +504,8 @@ fn check_closed_mesh(scene: &Scene, datapath: Datapath) -> Accuracy {
 
 /// Cracks as a seam fault makes them: runs of at most two pixels in a row that the render
 /// leaves uncovered between two covered pixels while the reference covers them (as (i, j)
-/// of the run's first pixel). Unlike the crack metric this ignores where the render's
-/// silhouette falls short of the reference's, and unlike it, it sees a crack next to a
-/// silhouette.
+/// of the run's first pixel). The crack metric counts one-pixel gaps away from the
+/// silhouette; this also sees two-pixel gaps and gaps next to the silhouette.
 fn narrow_gaps(ours: &[bool], theirs: &[bool], w: usize) -> Vec<(usize, usize)> {
     let mut gaps = Vec::new();
     for (j, (row, want)) in ours.chunks(w).zip(theirs.chunks(w)).enumerate() {
@@ -522,70 +523,30 @@ fn narrow_gaps(ours: &[bool], theirs: &[bool], w: usize) -> Vec<(usize, usize)> 
 
 #[test]
 fn closed_meshes_have_no_cracks_and_no_double_hits() {
-    let bunny = trace("bunny.json");
-    assert_eq!(bunny.viewport.width, 512);
-    for datapath in [Datapath::F32, Datapath::F64] {
-        assert_eq!(
-            check_closed_mesh(&bunny, datapath).crack_pixels,
-            0,
-            "bunny {datapath:?}"
-        );
-        // The sphere in an orthographic view, where setup's screen quadratics are exact.
-        let text = std::fs::read_to_string(
-            Path::new(env!("CARGO_MANIFEST_DIR")).join("traces/sphere24.json"),
-        )
-        .unwrap();
-        let perspective = r#""kind": "perspective", "fovy_deg": 40, "near": 0.1, "far": 100"#;
-        assert!(text.contains(perspective));
-        let ortho = text.replace(
-            perspective,
-            r#""kind": "orthographic", "height": 2.9, "near": 0.1, "far": 100"#,
-        );
-        let sphere = Scene::from_json(&ortho, "sphere24 orthographic", Path::new(".")).unwrap();
-        assert_eq!(
-            check_closed_mesh(&sphere, datapath).crack_pixels,
-            0,
-            "orthographic sphere24 {datapath:?}"
-        );
-    }
-}
-
-#[test]
-fn sphere24_in_perspective_has_no_double_hits_and_no_holes() {
-    for scene in [Scene::default_scene(), trace("sphere24.json")] {
+    // The sphere of 24 lembos (embedded default and trace) and the bunny at their own
+    // 512 x 512 perspective views, and the sphere in an orthographic view, where setup's
+    // screen quadratics are exact.
+    let text =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("traces/sphere24.json"))
+            .unwrap();
+    let perspective = r#""kind": "perspective", "fovy_deg": 40, "near": 0.1, "far": 100"#;
+    assert!(text.contains(perspective));
+    let ortho = text.replace(
+        perspective,
+        r#""kind": "orthographic", "height": 2.9, "near": 0.1, "far": 100"#,
+    );
+    let scenes = [
+        Scene::default_scene(),
+        trace("sphere24.json"),
+        trace("bunny.json"),
+        Scene::from_json(&ortho, "sphere24 orthographic", Path::new(".")).unwrap(),
+    ];
+    for scene in &scenes {
         assert_eq!((scene.viewport.width, scene.viewport.height), (512, 512));
         for datapath in [Datapath::F32, Datapath::F64] {
-            let acc = check_closed_mesh(&scene, datapath);
-            // Setup rebuilds the quadratics from six projected points, which under
-            // perspective puts the lembo silhouette up to about 1.2 px inside the true one
-            // (DESIGN §2: measured, not hidden); the crack metric counts a silhouette pixel
-            // whose four neighbours the reference covers as a crack, so it reports some
-            // here. They are all on the silhouette: `check_closed_mesh` found no gap inside
-            // our own coverage.
-            assert!(
-                acc.crack_pixels <= 16,
-                "{} {datapath:?}: {}",
-                scene.name,
-                acc.crack_pixels
-            );
-            assert!(
-                acc.silhouette_max_px <= 1.5,
-                "{} {datapath:?}: {}",
-                scene.name,
-                acc.silhouette_max_px
-            );
-        }
-    }
-}
-
-/// Every reference point of a lembo from the builders above is where its position function
-/// says (guards the fixtures themselves).
-#[test]
-fn fixtures_build_lembos_through_their_points() {
-    let scene = fixed_pair();
-    for l in &scene.objects[0].lembos {
-        for (n, &(u, v)) in REFERENCE_UV.iter().enumerate() {
-            assert!((l.position_at(u, v) - l.points[n]).length() < 1e-12);
+            let acc = check_closed_mesh(scene, datapath);
+            assert_eq!(acc.crack_pixels, 0, "{} {datapath:?}", scene.name);
+            assert_eq!(acc.double_hit_pixels, 0, "{} {datapath:?}", scene.name);
         }
     }
 }
