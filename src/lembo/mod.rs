@@ -99,6 +99,17 @@ impl<R: Real> Quadratic<R> {
             f: S::of(self.f.f64()),
         }
     }
+
+    /// The largest absolute coefficient, a scale for relative tolerances.
+    pub fn magnitude(&self) -> R {
+        self.a
+            .abs()
+            .max(self.b.abs())
+            .max(self.c.abs())
+            .max(self.d.abs())
+            .max(self.e.abs())
+            .max(self.f.abs())
+    }
 }
 
 /// Three quadratics, one per coordinate of a vector function.
