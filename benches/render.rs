@@ -1,10 +1,13 @@
-//! Criterion benchmarks of the functional model: whole scenes by viewport size, and the
-//! per-scanline stages on their own. Setup (scene loading, projection) stays outside the
-//! timed closures.
+//! Criterion benchmarks: the functional model on whole scenes by viewport size, the
+//! per-scanline stages on their own, and the timed pipeline against the functional model
+//! on the same frame (the issue 3 figure: timed wall / functional wall). Setup (scene
+//! loading, projection) stays outside the timed closures.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use lembo_sim::camera::View;
+use lembo_sim::config::ArchConfig;
 use lembo_sim::datapath::Datapath;
+use lembo_sim::pipeline::{actor::SimOptions, run_timed};
 use lembo_sim::raster::{self, interval, minmax, segmenter, setup, subsegmenter, Counts};
 use lembo_sim::scene::Scene;
 use std::path::Path;
@@ -111,5 +114,24 @@ fn stages(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, scenes, stages);
+/// Timed (baseline architecture) and functional on the bunny at 1024x1024, one group so
+/// criterion reports both medians from one run.
+fn timed_vs_functional(c: &mut Criterion) {
+    let mut g = c.benchmark_group("timed_vs_functional");
+    g.sample_size(10);
+    let mut s = scene("bunny.json");
+    s.set_viewport(1024, 1024).unwrap();
+    let view = View::new(&s.camera, s.viewport);
+    let arch = ArchConfig::baseline();
+    let options = SimOptions::default();
+    g.bench_function("functional/bunny/1024", |b| {
+        b.iter(|| raster::render_functional(&s, &view, 0.5, Datapath::F32, false).unwrap())
+    });
+    g.bench_function("timed_baseline/bunny/1024", |b| {
+        b.iter(|| run_timed(&s, &view, 0.5, Datapath::F32, &arch, &options).unwrap())
+    });
+    g.finish();
+}
+
+criterion_group!(benches, scenes, stages, timed_vs_functional);
 criterion_main!(benches);

@@ -46,13 +46,19 @@ pub enum Error {
         path: PathBuf,
         source: std::io::Error,
     },
+    /// The timed pipeline stopped moving: every unit waited and no message moved for the
+    /// watchdog's period. `waiting` names each unit and what it waits for. A simulator bug
+    /// or a mis-wired graph, not bad input (exit status 1).
+    Deadlock { waiting: Vec<String> },
+    /// A simulator fault (a unit thread panicked or could not start). Exit status 1.
+    Internal(String),
 }
 
 impl Error {
     /// Process exit status for this error: 2 for bad input, 1 otherwise.
     pub fn exit_code(&self) -> u8 {
         match self {
-            Error::Write { .. } => 1,
+            Error::Write { .. } | Error::Deadlock { .. } | Error::Internal(_) => 1,
             _ => 2,
         }
     }
@@ -119,6 +125,10 @@ impl fmt::Display for Error {
                  refusing it (raise k or fix the patch)"
             ),
             Error::Write { path, source } => write!(f, "cannot write {}: {source}", path.display()),
+            Error::Deadlock { waiting } => {
+                write!(f, "the timed pipeline deadlocked: {}", waiting.join("; "))
+            }
+            Error::Internal(what) => write!(f, "internal simulator error: {what}"),
         }
     }
 }

@@ -1,10 +1,13 @@
-//! The `render` job: load the scene, run the functional model, optionally the exact
-//! reference and its metrics, and write the outputs. Flags arrive here already parsed; this
+//! The `render` job: load the scene and the architecture, run the timed pipeline (or the
+//! functional model alone), optionally the exact reference and its metrics, and write the
+//! outputs. Flags arrive here already parsed; this
 //! module validates them once into a [`RenderJob`] and nothing downstream re-checks them.
 
 use crate::camera::{View, MAX_VIEWPORT_SIDE};
+use crate::config::ArchConfig;
 use crate::datapath::Datapath;
 use crate::error::{Error, Result};
+use crate::pipeline::{self, actor::SimOptions};
 use crate::raster;
 use crate::reference::{heatmap, metrics, oracle};
 use crate::report::{png_bytes, write_files, Host, Report, SceneInfo, Settings, SCHEMA_VERSION};
@@ -18,6 +21,16 @@ pub const COMMAND_LINE: &str = "command line";
 pub const K_RANGE: (f64, f64) = (1e-4, 64.0);
 /// Largest accepted reference supersampling factor (samples per pixel side).
 pub const MAX_SUPERSAMPLE: u32 = 8;
+
+/// How a render is simulated.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Mode {
+    /// The Figure 5 pipeline with cycle accounting (the default).
+    #[default]
+    Timed,
+    /// The functional model alone: the same image, no cycles.
+    Functional,
+}
 
 /// A validated render request.
 #[derive(Clone, Debug)]
@@ -34,6 +47,11 @@ pub struct RenderJob {
     pub supersample: u32,
     /// Viewport override (width, height) [pixels].
     pub viewport: Option<(u32, u32)>,
+    pub mode: Mode,
+    /// Architecture file; None for the embedded baseline. Timed mode only.
+    pub arch: Option<PathBuf>,
+    /// Where to write the Chrome trace-event timeline. Timed mode only.
+    pub trace_out: Option<PathBuf>,
 }
 
 impl RenderJob {
@@ -68,6 +86,31 @@ impl RenderJob {
                 }
             }
         }
+        if let Some(path) = &self.trace_out {
+            if path.file_name().is_none() {
+                return Err(Error::invalid(
+                    COMMAND_LINE,
+                    "--trace-out",
+                    path.display(),
+                    "must name a file",
+                ));
+            }
+        }
+        if self.mode == Mode::Functional {
+            for (flag, set) in [
+                ("--arch", self.arch.is_some()),
+                ("--trace-out", self.trace_out.is_some()),
+            ] {
+                if set {
+                    return Err(Error::invalid(
+                        COMMAND_LINE,
+                        flag,
+                        "given",
+                        "only meaningful with --mode timed",
+                    ));
+                }
+            }
+        }
         Ok(())
     }
 }
@@ -97,15 +140,69 @@ pub fn run_render(job: &RenderJob) -> Result<RenderOutput> {
     let scene = load_scene(job)?;
     let view = View::new(&scene.camera, scene.viewport);
 
-    let t0 = Instant::now();
-    let frame = raster::render_functional(&scene, &view, job.k, job.datapath, job.reference)?;
-    let wall = t0.elapsed().as_secs_f64();
+    let arch = match (&job.arch, job.mode) {
+        (_, Mode::Functional) => None,
+        (Some(path), Mode::Timed) => Some(ArchConfig::load(path)?),
+        (None, Mode::Timed) => Some(ArchConfig::baseline()),
+    };
 
-    let mut files: Vec<(&str, Vec<u8>)> =
-        vec![("image.png", png_bytes(&frame.framebuffer.to_image()))];
+    let t0 = Instant::now();
+    let mut timed = None;
+    let mut frame = None;
+    match &arch {
+        Some(arch) => {
+            let options = SimOptions {
+                trace: job.trace_out.is_some(),
+                ..SimOptions::default()
+            };
+            timed = Some(pipeline::run_timed(
+                &scene,
+                &view,
+                job.k,
+                job.datapath,
+                arch,
+                &options,
+            )?);
+        }
+        None => {
+            frame = Some(raster::render_functional(
+                &scene,
+                &view,
+                job.k,
+                job.datapath,
+                job.reference,
+            )?)
+        }
+    }
+    let wall = t0.elapsed().as_secs_f64();
+    // Accuracy needs the fragment probe and the normal buffer of the functional model. The
+    // timed image must equal it bit for bit (DESIGN §3); checked here on every such run.
+    if job.reference && frame.is_none() {
+        frame = Some(raster::render_functional(
+            &scene,
+            &view,
+            job.k,
+            job.datapath,
+            true,
+        )?);
+    }
+    let (image_fb, counts) = match (&timed, &frame) {
+        (Some(t), _) => (&t.framebuffer, t.counts),
+        (None, Some(f)) => (&f.framebuffer, f.counts),
+        (None, None) => unreachable!("one model ran"),
+    };
+    if let (Some(t), Some(f)) = (&timed, &frame) {
+        if t.framebuffer.color != f.framebuffer.color {
+            return Err(Error::Internal(
+                "the timed image differs from the functional one".into(),
+            ));
+        }
+    }
+
+    let mut files: Vec<(&str, Vec<u8>)> = vec![("image.png", png_bytes(&image_fb.to_image()))];
     let mut accuracy = None;
     let mut reference_wall = None;
-    if job.reference {
+    if let (true, Some(frame)) = (job.reference, frame.as_ref()) {
         let t1 = Instant::now();
         let lembos: Vec<_> = scene.lembos().collect();
         let reference = oracle::render_reference(&oracle::ReferenceInput {
@@ -152,23 +249,38 @@ pub fn run_render(job: &RenderJob) -> Result<RenderOutput> {
                 .collect(),
         },
         settings: Settings {
-            mode: "functional".into(),
+            mode: match job.mode {
+                Mode::Timed => "timed",
+                Mode::Functional => "functional",
+            }
+            .into(),
+            arch_file: arch.as_ref().map(|_| {
+                job.arch
+                    .as_ref()
+                    .map(|p| p.display().to_string())
+                    .unwrap_or_else(|| "(embedded baseline)".into())
+            }),
             path: "lembo".into(),
             k_px: job.k,
             datapath: job.datapath.name().into(),
             reference: job.reference,
             supersample: job.supersample,
         },
-        counts: frame.counts,
-        cycles: None,
+        units: timed.as_ref().map(|t| t.units.clone()).unwrap_or_default(),
+        counts,
+        cycles: timed.as_ref().map(|t| t.cycles.clone()),
+        arch,
         accuracy,
         host: Host {
             wall_seconds: wall,
             fragments_per_second: if wall > 0.0 {
-                frame.counts.fragments as f64 / wall
+                counts.fragments as f64 / wall
             } else {
                 0.0
             },
+            simulated_cycles_per_second: timed
+                .as_ref()
+                .map(|t| t.cycles.total as f64 / wall.max(1e-9)),
             reference_wall_seconds: reference_wall,
         },
     };
@@ -180,7 +292,20 @@ pub fn run_render(job: &RenderJob) -> Result<RenderOutput> {
         .out
         .clone()
         .unwrap_or_else(|| Path::new("out").join(&scene.name));
+    // The timeline is written last, beside the other outputs or where --trace-out says,
+    // with the same write-then-rename rule.
     write_files(&dir, &files)?;
+    if let (Some(path), Some(trace)) = (&job.trace_out, timed.and_then(|t| t.trace)) {
+        let name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let parent = match path.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        write_files(parent, &[(name.as_str(), trace.into_bytes())])?;
+    }
     Ok(RenderOutput {
         report,
         dir,

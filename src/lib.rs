@@ -25,10 +25,12 @@
 //! bounded channels) will call the same stage functions and add only time.
 
 pub mod camera;
+pub mod config;
 pub mod datapath;
 pub mod error;
 pub mod job;
 pub mod lembo;
+pub mod pipeline;
 pub mod raster;
 pub mod reference;
 pub mod report;

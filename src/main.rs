@@ -2,14 +2,14 @@
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use lembo_sim::datapath::Datapath;
-use lembo_sim::job::{run_render, RenderJob};
+use lembo_sim::job::{self, run_render, RenderJob};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 /// Simulator of Martinelli's lembo rasterization unit (extreme method, WSCG 2006).
 ///
 /// With no command, renders the embedded default scene (the paper's Figure 6 sphere of 24
-/// lembos) into out/default/.
+/// lembos) on the timed pipeline of the baseline architecture into out/default/.
 #[derive(Parser)]
 #[command(name = "lembo-sim", version, about, long_about)]
 struct Cli {
@@ -19,14 +19,16 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Render a scene with the extreme method and write image.png, report.json, report.txt
-    /// (and reference.png, error.png with --reference).
+    /// Render a scene with the extreme method on the simulated unit and write image.png,
+    /// report.json, report.txt (and reference.png, error.png with --reference).
     Render(RenderArgs),
 }
 
 #[derive(Clone, Copy, ValueEnum)]
 enum Mode {
-    /// The untimed functional model (what is drawn).
+    /// The Figure 5 pipeline, one thread per unit, with cycle accounting.
+    Timed,
+    /// The untimed functional model (what is drawn; the same image, no cycles).
     Functional,
 }
 
@@ -63,9 +65,17 @@ struct RenderArgs {
     /// Reference samples per pixel side for reference.png (metrics use pixel centres).
     #[arg(long, value_name = "N", default_value_t = 1)]
     supersample: u32,
-    /// Simulation mode (the timed pipeline is not built yet).
-    #[arg(long, value_enum, default_value = "functional")]
+    /// Simulation mode.
+    #[arg(long, value_enum, default_value = "timed")]
     mode: Mode,
+    /// Architecture configuration (JSON, see sim/arch/README.md): unit counts, costs,
+    /// FIFO depths and latencies, clock [default: the embedded sim/arch/baseline.json].
+    #[arg(long, value_name = "FILE")]
+    arch: Option<PathBuf>,
+    /// Write a Chrome trace-event timeline of unit activity (open in ui.perfetto.dev or
+    /// chrome://tracing); coarsened beyond a fixed number of events.
+    #[arg(long, value_name = "FILE")]
+    trace_out: Option<PathBuf>,
     /// Override the scene's viewport, e.g. 1024x1024.
     #[arg(long, value_name = "WxH", value_parser = parse_viewport)]
     viewport: Option<(u32, u32)>,
@@ -91,7 +101,9 @@ fn default_render() -> RenderArgs {
         datapath: DatapathArg::F32,
         reference: false,
         supersample: 1,
-        mode: Mode::Functional,
+        mode: Mode::Timed,
+        arch: None,
+        trace_out: None,
         viewport: None,
     }
 }
@@ -99,7 +111,6 @@ fn default_render() -> RenderArgs {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let Command::Render(args) = cli.command.unwrap_or(Command::Render(default_render()));
-    let Mode::Functional = args.mode;
     let job = RenderJob {
         scene: args.scene,
         out: args.out,
@@ -111,6 +122,12 @@ fn main() -> ExitCode {
         reference: args.reference,
         supersample: args.supersample,
         viewport: args.viewport,
+        mode: match args.mode {
+            Mode::Timed => job::Mode::Timed,
+            Mode::Functional => job::Mode::Functional,
+        },
+        arch: args.arch,
+        trace_out: args.trace_out,
     };
     match run_render(&job) {
         Ok(out) => {
@@ -131,11 +148,25 @@ fn main() -> ExitCode {
                 c.fragments,
                 c.fragments_passed_depth
             );
-            println!(
-                "render {:.3} s ({:.1} M fragments/s, functional model, single thread)",
-                r.host.wall_seconds,
-                r.host.fragments_per_second / 1e6
-            );
+            match &r.cycles {
+                Some(cy) => println!(
+                    "timed ({}): {} cycles = {} at {} MHz, bottleneck {}; host {:.3} s, {:.1} M simulated cycles/s",
+                    r.arch.as_ref().map(|a| a.name.as_str()).unwrap_or("?"),
+                    cy.total,
+                    cy.fps
+                        .map(|f| format!("{f:.1} frames/s"))
+                        .unwrap_or_else(|| "empty frame".into()),
+                    cy.clock_mhz,
+                    cy.bottleneck.as_deref().unwrap_or("none"),
+                    r.host.wall_seconds,
+                    r.host.simulated_cycles_per_second.unwrap_or(0.0) / 1e6
+                ),
+                None => println!(
+                    "render {:.3} s ({:.1} M fragments/s, functional model, single thread)",
+                    r.host.wall_seconds,
+                    r.host.fragments_per_second / 1e6
+                ),
+            }
             if let Some(a) = &r.accuracy {
                 println!(
                     "accuracy: PSNR {:.2} dB, coverage +{} / -{} px, silhouette max {:.2} px, cracks {}, double hits {}, max |y - y_j| {:.4} px",

@@ -1,7 +1,9 @@
 //! The run report (DESIGN §7): `report.json` for tools, `report.txt` for people, and the
 //! atomic writing of a run's output files.
 
+use crate::config::ArchConfig;
 use crate::error::{Error, Result};
+use crate::pipeline::{CycleReport, UnitInstance};
 use crate::raster::Counts;
 use crate::reference::metrics::Accuracy;
 use serde::Serialize;
@@ -9,7 +11,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 /// Version of the `report.json` layout; bumped when a field changes meaning or moves.
-pub const SCHEMA_VERSION: u32 = 1;
+pub const SCHEMA_VERSION: u32 = 2;
 
 /// Everything a run reports.
 #[derive(Clone, Debug, Serialize)]
@@ -17,9 +19,13 @@ pub struct Report {
     pub schema_version: u32,
     pub scene: SceneInfo,
     pub settings: Settings,
+    /// Every effective architecture parameter, defaults included; null in functional mode.
+    pub arch: Option<ArchConfig>,
+    /// The unit instances this scene required; empty in functional mode.
+    pub units: Vec<UnitInstance>,
     pub counts: Counts,
     /// Cycle accounting of the timed pipeline; null in functional mode.
-    pub cycles: Option<serde_json::Value>,
+    pub cycles: Option<CycleReport>,
     /// Accuracy against the exact reference; null without `--reference`.
     pub accuracy: Option<Accuracy>,
     pub host: Host,
@@ -39,8 +45,10 @@ pub struct SceneInfo {
 /// The effective settings of the run, defaults included.
 #[derive(Clone, Debug, Serialize)]
 pub struct Settings {
-    /// `functional` (untimed).
+    /// `timed` (the Figure 5 pipeline) or `functional` (untimed).
     pub mode: String,
+    /// The architecture file, `(embedded baseline)`, or null in functional mode.
+    pub arch_file: Option<String>,
     /// `lembo`.
     pub path: String,
     /// Tolerance k of the extreme method [pixels].
@@ -60,6 +68,8 @@ pub struct Host {
     pub wall_seconds: f64,
     /// Fragments generated per wall second of the render.
     pub fragments_per_second: f64,
+    /// Simulated cycles per wall second of the timed render; null in functional mode.
+    pub simulated_cycles_per_second: Option<f64>,
     /// Wall time of the reference and metrics [s]; null without `--reference`.
     pub reference_wall_seconds: Option<f64>,
 }
@@ -99,15 +109,51 @@ impl Report {
                 let _ = writeln!(t, "  {k:<26} {v}");
             }
         }
-        let _ = writeln!(
-            t,
-            "\ncycles    {}",
-            if self.cycles.is_some() {
-                "see report.json"
-            } else {
-                "n/a (functional mode)"
+        match &self.cycles {
+            Some(c) => {
+                let _ = writeln!(
+                    t,
+                    "\ncycles    {} total at {} MHz = {} ({})",
+                    c.total,
+                    c.clock_mhz,
+                    c.fps
+                        .map(|f| format!("{f:.1} frames/s"))
+                        .unwrap_or_else(|| "empty frame".into()),
+                    self.arch
+                        .as_ref()
+                        .map(|a| format!("architecture {}", a.name))
+                        .unwrap_or_default()
+                );
+                if let Some(b) = &c.bottleneck {
+                    let _ = writeln!(t, "bottleneck {b} (most busy cycles)");
+                }
+                let _ = writeln!(
+                    t,
+                    "  {:<22} {:>10} {:>6} {:>10} {:>6} {:>10} {:>6} {:>9} {:>9} {:>5}",
+                    "unit", "busy", "%", "starved", "%", "blocked", "%", "in", "out", "fifo"
+                );
+                let pct = |x: u64| 100.0 * x as f64 / c.total.max(1) as f64;
+                for u in &c.units {
+                    let _ = writeln!(
+                        t,
+                        "  {:<22} {:>10} {:>6.1} {:>10} {:>6.1} {:>10} {:>6.1} {:>9} {:>9} {:>5}",
+                        u.name,
+                        u.busy,
+                        pct(u.busy),
+                        u.starved,
+                        pct(u.starved),
+                        u.blocked,
+                        pct(u.blocked),
+                        u.items_in,
+                        u.items_out,
+                        u.max_fifo_occupancy
+                    );
+                }
             }
-        );
+            None => {
+                let _ = writeln!(t, "\ncycles    n/a (functional mode)");
+            }
+        }
         match &self.accuracy {
             Some(a) => {
                 let _ = writeln!(t, "\naccuracy against the exact reference");
@@ -122,9 +168,12 @@ impl Report {
         let h = &self.host;
         let _ = writeln!(
             t,
-            "\nhost      render {:.3} s, {:.1} M fragments/s{}",
+            "\nhost      render {:.3} s, {:.1} M fragments/s{}{}",
             h.wall_seconds,
             h.fragments_per_second / 1e6,
+            h.simulated_cycles_per_second
+                .map(|c| format!(", {:.1} M simulated cycles/s", c / 1e6))
+                .unwrap_or_default(),
             h.reference_wall_seconds
                 .map(|r| format!(", reference {r:.3} s"))
                 .unwrap_or_default()

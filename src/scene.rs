@@ -145,7 +145,7 @@ impl Scene {
     }
 }
 
-fn parse_error(file: &str, e: serde_path_to_error::Error<serde_json::Error>) -> Error {
+pub(crate) fn parse_error(file: &str, e: serde_path_to_error::Error<serde_json::Error>) -> Error {
     // A syntax error leaves an unknown (`?`) last segment, and one before any field an
     // empty path (printed "."): drop both, serde's message gives the line and column.
     let mut field = e.path().to_string();

@@ -80,6 +80,8 @@ fn bare_command_renders_the_default_scene_into_out_default() {
         "schema_version",
         "scene",
         "settings",
+        "arch",
+        "units",
         "counts",
         "cycles",
         "accuracy",
@@ -87,7 +89,11 @@ fn bare_command_renders_the_default_scene_into_out_default() {
     ] {
         assert!(report.get(key).is_some(), "report.json lacks {key}");
     }
-    assert!(report["cycles"].is_null() && report["accuracy"].is_null());
+    // The default run is timed on the baseline architecture; accuracy needs --reference.
+    assert_eq!(report["settings"]["mode"], "timed");
+    assert_eq!(report["arch"]["name"], "baseline");
+    assert!(report["cycles"]["total"].as_u64().unwrap() > 0);
+    assert!(report["accuracy"].is_null());
     for key in [
         "scanlines",
         "intervals",
@@ -153,7 +159,8 @@ fn reference_run_writes_the_accuracy_names_and_images() {
     );
 }
 
-/// The default scene's image and counts, compared exactly with tests/golden/default/.
+/// The default scene's image, counts and cycle report (timed, baseline architecture),
+/// compared exactly with tests/golden/default/.
 /// Regenerate with `LEMBO_BLESS=1 cargo test --test cli` after an intended change.
 #[test]
 fn golden_default_scene() {
@@ -165,10 +172,12 @@ fn golden_default_scene() {
     let report: serde_json::Value =
         serde_json::from_slice(&std::fs::read(dir.path().join("o/report.json")).unwrap()).unwrap();
     let counts = serde_json::to_string_pretty(&report["counts"]).unwrap() + "\n";
+    let cycles = serde_json::to_string_pretty(&report["cycles"]).unwrap() + "\n";
     if std::env::var_os("LEMBO_BLESS").is_some() {
         std::fs::create_dir_all(&golden).unwrap();
         std::fs::write(golden.join("image.png"), &image).unwrap();
         std::fs::write(golden.join("counts.json"), &counts).unwrap();
+        std::fs::write(golden.join("cycles.json"), &cycles).unwrap();
     }
     let want = image::load_from_memory(&std::fs::read(golden.join("image.png")).unwrap())
         .unwrap()
@@ -184,6 +193,87 @@ fn golden_default_scene() {
     assert_eq!(
         std::fs::read_to_string(golden.join("counts.json")).unwrap(),
         counts
+    );
+    assert_eq!(
+        std::fs::read_to_string(golden.join("cycles.json")).unwrap(),
+        cycles
+    );
+}
+
+#[test]
+fn bad_architecture_field_is_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("a.json"),
+        r#"{"links": {"rop_to_framebuffer": {"fifo_depth": 0}}}"#,
+    )
+    .unwrap();
+    let out = run(&["render", "--arch", "a.json", "--out", "o"], dir.path());
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("links.rop_to_framebuffer.fifo_depth"),
+        "stderr: {err}"
+    );
+    assert!(!dir.path().join("o").exists(), "nothing written");
+}
+
+#[test]
+fn timed_run_reports_units_and_writes_a_timeline() {
+    let dir = tempfile::tempdir().unwrap();
+    let arch = manifest().join("sim/arch/wide.json");
+    let out = run(
+        &[
+            "render",
+            "--arch",
+            arch.to_str().unwrap(),
+            "--viewport",
+            "128x128",
+            "--trace-out",
+            "t/trace.json",
+            "--out",
+            "o",
+        ],
+        dir.path(),
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("o/report.json")).unwrap()).unwrap();
+    assert_eq!(report["settings"]["mode"], "timed");
+    assert_eq!(report["arch"]["name"], "wide");
+    assert_eq!(
+        report["units"].as_array().unwrap().len(),
+        3 + 4 + 4 + 8 + 4 + 1
+    );
+    let units = report["cycles"]["units"].as_array().unwrap();
+    let total = report["cycles"]["total"].as_u64().unwrap();
+    assert!(total > 0);
+    for u in units {
+        let sum = ["busy", "starved", "blocked"].map(|k| u[k].as_u64().unwrap());
+        assert_eq!(sum.iter().sum::<u64>(), total, "{}", u["name"]);
+    }
+    assert!(
+        report["host"]["simulated_cycles_per_second"]
+            .as_f64()
+            .unwrap()
+            > 0.0
+    );
+    let text = std::fs::read_to_string(dir.path().join("o/report.txt")).unwrap();
+    assert!(text.contains("bottleneck") && text.contains("Rasterizer[7]"));
+    let trace: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("t/trace.json")).unwrap()).unwrap();
+    assert!(trace["traceEvents"].as_array().unwrap().len() > 10);
+}
+
+#[test]
+fn functional_mode_refuses_timed_only_flags() {
+    assert_refused(
+        &["render", "--mode", "functional", "--arch", "x.json"],
+        "--arch",
     );
 }
 
@@ -289,6 +379,8 @@ fn help_explains_the_render_flags() {
         "--datapath",
         "--reference",
         "--mode",
+        "--arch",
+        "--trace-out",
         "--supersample",
         "--viewport",
     ] {

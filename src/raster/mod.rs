@@ -66,6 +66,28 @@ pub struct Counts {
     pub pixels_covered: u64,
 }
 
+impl std::ops::AddAssign for Counts {
+    /// Sums the shares of parallel units.
+    fn add_assign(&mut self, o: Counts) {
+        self.lembos += o.lembos;
+        self.lembos_culled_behind_eye += o.lembos_culled_behind_eye;
+        self.lembos_culled_outside += o.lembos_culled_outside;
+        self.scanlines += o.scanlines;
+        self.edge_roots += o.edge_roots;
+        self.virtual_roots += o.virtual_roots;
+        self.intervals += o.intervals;
+        self.unpaired_roots += o.unpaired_roots;
+        self.saddle_splits += o.saddle_splits;
+        self.segments += o.segments;
+        self.segments_clamped += o.segments_clamped;
+        self.subsegments += o.subsegments;
+        self.folds += o.folds;
+        self.fragments += o.fragments;
+        self.fragments_passed_depth += o.fragments_passed_depth;
+        self.pixels_covered += o.pixels_covered;
+    }
+}
+
 /// Runs the extreme method over every lembo of `scene`, in scene order, into `sink`.
 pub fn render_lembos<R: Real, S: FragmentSink<R>>(
     scene: &Scene,

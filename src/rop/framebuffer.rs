@@ -8,6 +8,14 @@
 /// No primitive has written this pixel.
 pub const NO_PRIMITIVE: u32 = u32::MAX;
 
+/// The depth test of every ROP: whether fragment (z, id) beats a pixel holding depth
+/// `depth` from primitive `primitive`. Nearer wins; equal depths go to the smaller id, so
+/// the result does not depend on arrival order. Fragments outside [0, 1] are clipped.
+#[inline(always)]
+pub fn depth_test(z: f32, id: u32, depth: f32, primitive: u32) -> bool {
+    (0.0..=1.0).contains(&z) && (z < depth || (z == depth && id < primitive))
+}
+
 /// Colour, depth and winner id per pixel, row 0 at the top.
 #[derive(Clone, Debug)]
 pub struct FrameBuffer {
@@ -45,8 +53,7 @@ impl FrameBuffer {
     /// Fragments outside the depth range [0, 1] are clipped.
     #[inline(always)]
     pub fn passes(&self, idx: usize, z: f32, id: u32) -> bool {
-        let d = self.depth[idx];
-        (0.0..=1.0).contains(&z) && (z < d || (z == d && id < self.primitive[idx]))
+        depth_test(z, id, self.depth[idx], self.primitive[idx])
     }
 
     /// Writes a fragment that passed [`FrameBuffer::passes`].

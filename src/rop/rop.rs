@@ -10,27 +10,57 @@ use crate::raster::fragment::FragmentSink;
 use crate::raster::setup::ScreenLembo;
 use crate::raster::subsegmenter::Subsegment;
 
-pub struct Rop<'a, R> {
-    fb: &'a mut FrameBuffer,
+/// Per-fragment shading (paper 000 equation 6) from the lembo's normal and position
+/// functions; shared by the functional ROP and the timed ROP units so both give the same
+/// colour bit for bit.
+pub struct FragmentShader<R> {
     shader: Shader<R>,
     /// Eye position (perspective) [world units].
     eye: [R; 3],
     /// Constant direction to the eye (orthographic).
     to_eye: Option<[R; 3]>,
+}
+
+impl<R: Real> FragmentShader<R> {
+    pub fn new(light: &Light, view: &View) -> Self {
+        let to_eye = view
+            .orthographic
+            .then(|| view.to_eye(glam::DVec3::ZERO).to_array().map(R::of));
+        FragmentShader {
+            shader: Shader::new(light),
+            eye: view.eye.to_array().map(R::of),
+            to_eye,
+        }
+    }
+
+    /// The colour of lembo `l` at (u, v) and the unit normal it was shaded with.
+    #[inline]
+    pub fn shade(&self, l: &ScreenLembo<R>, u: R, v: R) -> ([u8; 3], [R; 3]) {
+        let n = normalize(eval3(&l.normal, u, v));
+        let to_eye = match self.to_eye {
+            Some(d) => d,
+            None => {
+                let p = eval3(&l.position, u, v);
+                normalize([self.eye[0] - p[0], self.eye[1] - p[1], self.eye[2] - p[2]])
+            }
+        };
+        let c = self.shader.shade(n, to_eye, l.color);
+        ([to_u8(c[0]), to_u8(c[1]), to_u8(c[2])], n)
+    }
+}
+
+pub struct Rop<'a, R> {
+    fb: &'a mut FrameBuffer,
+    shader: FragmentShader<R>,
     /// Fragments that passed the depth test.
     pub passed: u64,
 }
 
 impl<'a, R: Real> Rop<'a, R> {
     pub fn new(fb: &'a mut FrameBuffer, light: &Light, view: &View) -> Self {
-        let to_eye = view
-            .orthographic
-            .then(|| view.to_eye(glam::DVec3::ZERO).to_array().map(R::of));
         Rop {
             fb,
-            shader: Shader::new(light),
-            eye: view.eye.to_array().map(R::of),
-            to_eye,
+            shader: FragmentShader::new(light, view),
             passed: 0,
         }
     }
@@ -64,17 +94,8 @@ impl<R: Real> FragmentSink<R> for Rop<'_, R> {
             return;
         }
         self.passed += 1;
-        let n = normalize(eval3(&l.normal, u, v));
-        let to_eye = match self.to_eye {
-            Some(d) => d,
-            None => {
-                let p = eval3(&l.position, u, v);
-                normalize([self.eye[0] - p[0], self.eye[1] - p[1], self.eye[2] - p[2]])
-            }
-        };
-        let c = self.shader.shade(n, to_eye, l.color);
-        self.fb
-            .write(idx, zf, l.id, [to_u8(c[0]), to_u8(c[1]), to_u8(c[2])]);
+        let (rgb, n) = self.shader.shade(l, u, v);
+        self.fb.write(idx, zf, l.id, rgb);
         if let Some(normals) = self.fb.normal.as_mut() {
             normals[idx] = n.map(|c| c.f64() as f32);
         }

@@ -1,0 +1,999 @@
+//! The architecture configuration of the timed pipeline (DESIGN §3): how many instances of
+//! each unit of paper 001 Figure 5 there are, what each costs per item, and the depth and
+//! latency of the FIFOs between them. Files live in `sim/arch/*.json`; `sim/arch/README.md`
+//! states each unit's cost model in words.
+//!
+//! ```text
+//!  Setup ─► MinMax ─► IntervalManager ─► Segmenter ×n ─► Subsegmenter ×n
+//!        ─► FragmentRasterizer ×n ─► ROP ×n ─► FrameBuffer port        (─► = one link)
+//! ```
+//!
+//! Every unit has a `latency_cycles` (an output is ready that long after the operation that
+//! produces it issues) and one or more `cycles_per_*` initiation intervals (how long the
+//! unit is busy per item before it can take the next). Every stage boundary has one
+//! [`LinkConfig`], shared by every link of the crossbar between the two stages.
+//!
+//! A file is parsed with `#[serde(default, deny_unknown_fields)]`, so a file may state only
+//! what it changes; unknown fields are refused with [`Error::Parse`] naming their path
+//! (`segmenter.cnt`), and values outside what the simulator accepts with [`Error::Invalid`]
+//! naming the dotted field path (`links.rasterizer_to_rop.fifo_depth`). A validated
+//! configuration is not re-checked downstream.
+//!
+//! Not modelled here: clock domains (one clock for every unit), per-link overrides within a
+//! crossbar, and DRAM timing beyond a bandwidth-limited port.
+
+use crate::error::{Error, Result};
+use crate::scene::parse_error;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// The embedded `sim/arch/baseline.json`.
+const BASELINE_JSON: &str = include_str!("../sim/arch/baseline.json");
+
+/// The largest accepted instance count of a replicated unit. Beyond it the host would run
+/// hundreds of actor threads for no architectural insight.
+pub const MAX_UNIT_COUNT: u32 = 64;
+/// The largest accepted latency or initiation interval \[cycles\]. Far above any plausible
+/// hardware figure; it keeps cycle arithmetic far from overflow.
+pub const MAX_CYCLES: u64 = 1_000_000;
+/// The largest accepted `fragments_per_cycle` of a rasterizer or ROP.
+pub const MAX_FRAGMENTS_PER_CYCLE: u64 = 64;
+/// The largest accepted ROP interleave tile side \[pixels\].
+pub const MAX_TILE_PX: u32 = 256;
+/// The largest accepted `bytes_*` figure of the frame buffer \[bytes\].
+pub const MAX_BYTES: u64 = 4096;
+/// The largest accepted FIFO depth \[items\]. Deeper FIFOs would only cost host memory.
+pub const MAX_FIFO_DEPTH: u32 = 4096;
+/// The largest accepted clock \[MHz\].
+pub const MAX_CLOCK_MHZ: f64 = 100_000.0;
+/// The longest accepted configuration name \[characters\].
+pub const MAX_NAME_CHARS: usize = 64;
+
+/// The whole architecture: units in dataflow order, then the links between them.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+#[serde(default, deny_unknown_fields)]
+pub struct ArchConfig {
+    /// Name of the configuration, shown in reports. Default `"baseline"`.
+    pub name: String,
+    /// Clock of every unit \[MHz\], used only to turn cycles into frames per second. Default
+    /// 500: the class of a mid-2000s GPU core (the GeForce 6800 GT of the papers' figures
+    /// runs at about 400 MHz), rounded so that one cycle is 2 ns.
+    pub clock_mhz: f64,
+    /// The projection unit (one instance); defaults in [`SetupConfig`].
+    pub setup: SetupConfig,
+    /// The y-range, cull and clip unit (one instance); defaults in [`MinMaxConfig`].
+    pub minmax: MinMaxConfig,
+    /// The scanline root finder (one instance); defaults in [`IntervalManagerConfig`].
+    pub interval_manager: IntervalManagerConfig,
+    /// The curve walkers (replicated); defaults in [`SegmenterConfig`].
+    pub segmenter: SegmenterConfig,
+    /// The linearity splitters (replicated); defaults in [`SubsegmenterConfig`].
+    pub subsegmenter: SubsegmenterConfig,
+    /// The fragment generators (replicated); defaults in [`RasterizerConfig`].
+    pub rasterizer: RasterizerConfig,
+    /// The depth-test and shading units (replicated, screen-interleaved); defaults in
+    /// [`RopConfig`].
+    pub rop: RopConfig,
+    /// The frame-buffer memory port (one instance); defaults in [`FrameBufferConfig`].
+    pub framebuffer: FrameBufferConfig,
+    /// The FIFOs between stages, one setting per boundary; defaults in [`LinksConfig`].
+    pub links: LinksConfig,
+}
+
+/// Setup: projects a lembo's six control points and six normals to screen space. One
+/// instance. Item: one lembo.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+#[serde(default, deny_unknown_fields)]
+pub struct SetupConfig {
+    /// Cycles from accepting a lembo to its projected form being ready \[cycles\]. Default
+    /// 20: a pipelined 4x4 matrix-vector multiply (about 6 stages of multiply-add), a
+    /// reciprocal for the perspective divide (about 10 stages) and the viewport transform
+    /// and format conversion (about 4).
+    pub latency_cycles: u64,
+    /// Initiation interval per lembo \[cycles\]. Default 6: twelve vectors (six points and
+    /// six normals) through a transform unit that takes two vectors per cycle.
+    pub cycles_per_lembo: u64,
+}
+
+/// MinMax: the lembo's screen-space y range, the cull test and the clip of the scanline
+/// range to the viewport. One instance. Item: one lembo.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+#[serde(default, deny_unknown_fields)]
+pub struct MinMaxConfig {
+    /// Cycles from accepting a lembo to its scanline range being ready \[cycles\]. Default 8:
+    /// the stationary point of each quadratic domain edge needs a divide (about 5 stages),
+    /// then a compare tree over the candidates and the clip (about 3).
+    pub latency_cycles: u64,
+    /// Initiation interval per lembo \[cycles\]. Default 2: three edge extremum candidates
+    /// through a divider that starts two per cycle; the six control points' comparisons
+    /// overlap with them.
+    pub cycles_per_lembo: u64,
+}
+
+/// IntervalManager: for each scanline y_j of a lembo, the roots of the three domain edges
+/// with Y = y_j, paired into intervals of the parameter domain. One instance. Items: one
+/// scanline, and one interval emitted.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+#[serde(default, deny_unknown_fields)]
+pub struct IntervalManagerConfig {
+    /// Cycles from issuing a scanline to its intervals being ready \[cycles\]. Default 12: a
+    /// pipelined quadratic solver, a square root (about 8 stages) and a divide overlapped
+    /// with it, then the sort and pairing of the roots (about 4).
+    pub latency_cycles: u64,
+    /// Initiation interval per scanline \[cycles\]. Default 3: a pipelined quadratic solver
+    /// delivers one root pair per cycle after a fixed latency; three domain edges => 3
+    /// cycles per scanline.
+    pub cycles_per_scanline: u64,
+    /// Extra cycles per interval emitted \[cycles\]. Default 1: an interval is one output word
+    /// and the output port writes one word per cycle.
+    pub cycles_per_interval: u64,
+}
+
+/// Segmenter: walks the curve Y(u,v) = y_j across an interval in steps whose midpoint
+/// error is exactly k. Replicated; intervals are dispatched among instances. Item: one
+/// segment emitted.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+#[serde(default, deny_unknown_fields)]
+pub struct SegmenterConfig {
+    /// Number of instances. Default 2: the segmenter iterates (one step per segment) where
+    /// the interval manager does fixed work per scanline, so it is the first stage that
+    /// needs replication to keep up.
+    pub count: u32,
+    /// Cycles from accepting an interval to its first segment being ready \[cycles\]. Default
+    /// 16: the step solves a quadratic for the next endpoint (square root and divide, about
+    /// 12 stages) and evaluates the midpoint error (about 4).
+    pub latency_cycles: u64,
+    /// Initiation interval per segment \[cycles\]. Default 2: each step issues an endpoint
+    /// solve and a midpoint error evaluation on one shared pipelined evaluator, two issue
+    /// slots per segment.
+    pub cycles_per_segment: u64,
+}
+
+/// Subsegmenter: splits a segment so that x(t) is linear within k on each piece.
+/// Replicated. Item: one subsegment emitted.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+#[serde(default, deny_unknown_fields)]
+pub struct SubsegmenterConfig {
+    /// Number of instances. Default 2: one per segmenter, so that each segmenter's output
+    /// has a subsegmenter to go to without waiting.
+    pub count: u32,
+    /// Cycles from accepting a segment to its first subsegment being ready \[cycles\].
+    /// Default 8: a quadratic evaluation of x(t) (about 5 stages of multiply-add) and the
+    /// comparison of its deviation with k (about 3).
+    pub latency_cycles: u64,
+    /// Initiation interval per subsegment \[cycles\]. Default 1: the split points come from a
+    /// fully pipelined evaluator, one per cycle.
+    pub cycles_per_subsegment: u64,
+}
+
+/// FragmentRasterizer: walks a subsegment's pixel centres, computing u, v, z and the normal
+/// by increments. Replicated. Items: one subsegment, and one fragment span (the fragments
+/// of one subsegment inside one ROP tile).
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+#[serde(default, deny_unknown_fields)]
+pub struct RasterizerConfig {
+    /// Number of instances. Default 4: one per ROP, so that fragment generation and
+    /// fragment testing have the same peak rate.
+    pub count: u32,
+    /// Cycles from accepting a subsegment to its first span being ready \[cycles\]. Default
+    /// 4: the first fragment's values from the increment setup, through an adder pipeline.
+    pub latency_cycles: u64,
+    /// Initiation interval per subsegment for the increment setup \[cycles\]. Default 1: the
+    /// start values and forward differences of u, v, z and the normal come from one
+    /// pipelined evaluation per subsegment.
+    pub cycles_per_subsegment: u64,
+    /// Fragments produced per cycle; a span of n fragments costs ceil(n / this) cycles.
+    /// Default 1: each fragment is one add per interpolated quantity, one fragment per
+    /// cycle as in a classic scan converter.
+    pub fragments_per_cycle: u64,
+}
+
+/// ROP: depth test and per-fragment Phong shading for the pixels of its screen tiles.
+/// Replicated; screen-interleaved. Item: one fragment span.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+#[serde(default, deny_unknown_fields)]
+pub struct RopConfig {
+    /// Number of instances. Default 4: the ROP count of a mid-range part of the papers'
+    /// era, and enough that the (tx + ty) interleave spreads a lembo over several ROPs.
+    pub count: u32,
+    /// Cycles from accepting a span to its write burst being ready \[cycles\]. Default 4: the
+    /// depth compare and the shading arithmetic of one fragment, pipelined.
+    pub latency_cycles: u64,
+    /// Fragments tested and shaded per cycle; a span of n fragments costs ceil(n / this)
+    /// cycles. Default 1: one depth test and one Phong evaluation per cycle per ROP.
+    pub fragments_per_cycle: u64,
+    /// Side of a screen interleave tile \[pixels\]: tile (tx, ty) of tile_px x tile_px pixels
+    /// goes to ROP (tx + ty) % count. Default 8: 64 pixels, the size of a frame-buffer
+    /// memory burst tile; small enough that one lembo covers several tiles and thus several
+    /// ROPs, large enough that a span is not cut at every few pixels.
+    pub tile_px: u32,
+}
+
+/// The frame-buffer port: one memory port shared by every ROP. One instance. Item: one
+/// write burst.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+#[serde(default, deny_unknown_fields)]
+pub struct FrameBufferConfig {
+    /// Bytes the port transfers per cycle \[bytes/cycle\]; a burst of b bytes costs
+    /// ceil(b / this) cycles. Default 64: the GeForce 6800 GT the discoid paper measured on
+    /// moves about 32 GB/s, 64 bytes per cycle at the default 500 MHz. Four ROPs at full
+    /// rate ask for up to 48 bytes per cycle, so the port limits only wider units.
+    pub bytes_per_cycle: u64,
+    /// Bytes moved per fragment tested \[bytes\]. Default 4: one 32-bit depth read (24-bit
+    /// depth and 8-bit stencil, the usual packed format).
+    pub bytes_per_fragment_tested: u64,
+    /// Bytes moved per fragment that passes the depth test \[bytes\]. Default 8: a 32-bit
+    /// RGBA8 colour write and a 32-bit depth write.
+    pub bytes_per_fragment_written: u64,
+}
+
+/// One FIFO between two units: a bounded queue with a transit latency (DESIGN §3).
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+#[serde(default, deny_unknown_fields)]
+pub struct LinkConfig {
+    /// Capacity \[items\]: a producer that has pushed `fifo_depth` items the consumer has not
+    /// yet popped waits for a credit. At least 1.
+    pub fifo_depth: u32,
+    /// Transit time \[cycles\]: an item pushed at cycle p can be popped at p + latency_cycles
+    /// at the earliest. At least 1 (a register between two units).
+    pub latency_cycles: u64,
+}
+
+impl LinkConfig {
+    const fn new(fifo_depth: u32, latency_cycles: u64) -> LinkConfig {
+        LinkConfig {
+            fifo_depth,
+            latency_cycles,
+        }
+    }
+}
+
+impl Default for LinkConfig {
+    /// A shallow FIFO behind one register stage, for a link read on its own. Within an
+    /// [`ArchConfig`] each boundary has its own defaults, in [`LinksConfig`].
+    fn default() -> LinkConfig {
+        LinkConfig::new(4, 1)
+    }
+}
+
+/// The file's shape of [`LinksConfig`]: every link and every field of it optional.
+#[derive(Deserialize, Default)]
+#[serde(default, deny_unknown_fields)]
+struct LinksSpec {
+    setup_to_minmax: LinkSpec,
+    minmax_to_interval_manager: LinkSpec,
+    interval_manager_to_segmenter: LinkSpec,
+    segmenter_to_subsegmenter: LinkSpec,
+    subsegmenter_to_rasterizer: LinkSpec,
+    rasterizer_to_rop: LinkSpec,
+    rop_to_framebuffer: LinkSpec,
+}
+
+/// The file's shape of one [`LinkConfig`]: a field left out keeps its boundary's default;
+/// `null` is refused like any other value of the wrong type.
+#[derive(Deserialize, Default)]
+#[serde(default, deny_unknown_fields)]
+struct LinkSpec {
+    #[serde(deserialize_with = "present")]
+    fifo_depth: Option<u32>,
+    #[serde(deserialize_with = "present")]
+    latency_cycles: Option<u64>,
+}
+
+/// Deserializes a field that is present in the file (an absent one is `None` through
+/// `#[serde(default)]`) without accepting `null` for it.
+fn present<'de, D, T>(deserializer: D) -> std::result::Result<Option<T>, D::Error>
+where
+    D: serde::Deserializer<'de>,
+    T: Deserialize<'de>,
+{
+    T::deserialize(deserializer).map(Some)
+}
+
+impl LinkSpec {
+    /// This link with the fields the file left out taken from `default`.
+    fn over(self, default: LinkConfig) -> LinkConfig {
+        LinkConfig {
+            fifo_depth: self.fifo_depth.unwrap_or(default.fifo_depth),
+            latency_cycles: self.latency_cycles.unwrap_or(default.latency_cycles),
+        }
+    }
+}
+
+impl From<LinksSpec> for LinksConfig {
+    fn from(spec: LinksSpec) -> LinksConfig {
+        let d = LinksConfig::default();
+        LinksConfig {
+            setup_to_minmax: spec.setup_to_minmax.over(d.setup_to_minmax),
+            minmax_to_interval_manager: spec
+                .minmax_to_interval_manager
+                .over(d.minmax_to_interval_manager),
+            interval_manager_to_segmenter: spec
+                .interval_manager_to_segmenter
+                .over(d.interval_manager_to_segmenter),
+            segmenter_to_subsegmenter: spec
+                .segmenter_to_subsegmenter
+                .over(d.segmenter_to_subsegmenter),
+            subsegmenter_to_rasterizer: spec
+                .subsegmenter_to_rasterizer
+                .over(d.subsegmenter_to_rasterizer),
+            rasterizer_to_rop: spec.rasterizer_to_rop.over(d.rasterizer_to_rop),
+            rop_to_framebuffer: spec.rop_to_framebuffer.over(d.rop_to_framebuffer),
+        }
+    }
+}
+
+/// One [`LinkConfig`] per stage boundary, in dataflow order; every link of the crossbar at
+/// that boundary shares it.
+///
+/// Read through `LinksSpec` so that a link given in part keeps its own boundary's defaults
+/// for the rest (`{"rasterizer_to_rop": {"fifo_depth": 32}}` keeps latency 2), not the
+/// generic [`LinkConfig::default`].
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+#[serde(from = "LinksSpec")]
+pub struct LinksConfig {
+    /// Default depth 8, latency 1: an item is a whole projected lembo (twelve vectors), a
+    /// wide entry, so few are buffered; adjacent units on one die, one register stage.
+    pub setup_to_minmax: LinkConfig,
+    /// Default depth 8, latency 1: as `setup_to_minmax`, a lembo with its scanline range.
+    pub minmax_to_interval_manager: LinkConfig,
+    /// Default depth 32, latency 1: intervals are narrow (two roots and a scanline), and 32
+    /// absorb a lembo's burst of intervals against the segmenters' variable rate.
+    pub interval_manager_to_segmenter: LinkConfig,
+    /// Default depth 32, latency 1: narrow segments; the subsegmenter's work per segment
+    /// varies with curvature, so the FIFO smooths it.
+    pub segmenter_to_subsegmenter: LinkConfig,
+    /// Default depth 32, latency 1: narrow subsegments, one per rasterizer start.
+    pub subsegmenter_to_rasterizer: LinkConfig,
+    /// Default depth 64, latency 2: a full crossbar from every rasterizer to every ROP costs
+    /// one cycle of arbitration on top of the register stage; an item is a span of at most
+    /// one tile row, and GPU ROP input queues hold tens of such quads or spans.
+    pub rasterizer_to_rop: LinkConfig,
+    /// Default depth 32, latency 4: the request queue of the memory controller, and the
+    /// wires and arbitration to reach it from the ROPs. DRAM access latency itself is not
+    /// modelled.
+    pub rop_to_framebuffer: LinkConfig,
+}
+
+impl LinksConfig {
+    /// Every boundary's link with its field name, in dataflow order.
+    pub fn all(&self) -> [(&'static str, &LinkConfig); 7] {
+        [
+            ("setup_to_minmax", &self.setup_to_minmax),
+            (
+                "minmax_to_interval_manager",
+                &self.minmax_to_interval_manager,
+            ),
+            (
+                "interval_manager_to_segmenter",
+                &self.interval_manager_to_segmenter,
+            ),
+            ("segmenter_to_subsegmenter", &self.segmenter_to_subsegmenter),
+            (
+                "subsegmenter_to_rasterizer",
+                &self.subsegmenter_to_rasterizer,
+            ),
+            ("rasterizer_to_rop", &self.rasterizer_to_rop),
+            ("rop_to_framebuffer", &self.rop_to_framebuffer),
+        ]
+    }
+}
+
+impl Default for ArchConfig {
+    fn default() -> ArchConfig {
+        ArchConfig {
+            name: "baseline".to_string(),
+            clock_mhz: 500.0,
+            setup: SetupConfig::default(),
+            minmax: MinMaxConfig::default(),
+            interval_manager: IntervalManagerConfig::default(),
+            segmenter: SegmenterConfig::default(),
+            subsegmenter: SubsegmenterConfig::default(),
+            rasterizer: RasterizerConfig::default(),
+            rop: RopConfig::default(),
+            framebuffer: FrameBufferConfig::default(),
+            links: LinksConfig::default(),
+        }
+    }
+}
+
+impl Default for SetupConfig {
+    fn default() -> SetupConfig {
+        SetupConfig {
+            latency_cycles: 20,
+            cycles_per_lembo: 6,
+        }
+    }
+}
+
+impl Default for MinMaxConfig {
+    fn default() -> MinMaxConfig {
+        MinMaxConfig {
+            latency_cycles: 8,
+            cycles_per_lembo: 2,
+        }
+    }
+}
+
+impl Default for IntervalManagerConfig {
+    fn default() -> IntervalManagerConfig {
+        IntervalManagerConfig {
+            latency_cycles: 12,
+            cycles_per_scanline: 3,
+            cycles_per_interval: 1,
+        }
+    }
+}
+
+impl Default for SegmenterConfig {
+    fn default() -> SegmenterConfig {
+        SegmenterConfig {
+            count: 2,
+            latency_cycles: 16,
+            cycles_per_segment: 2,
+        }
+    }
+}
+
+impl Default for SubsegmenterConfig {
+    fn default() -> SubsegmenterConfig {
+        SubsegmenterConfig {
+            count: 2,
+            latency_cycles: 8,
+            cycles_per_subsegment: 1,
+        }
+    }
+}
+
+impl Default for RasterizerConfig {
+    fn default() -> RasterizerConfig {
+        RasterizerConfig {
+            count: 4,
+            latency_cycles: 4,
+            cycles_per_subsegment: 1,
+            fragments_per_cycle: 1,
+        }
+    }
+}
+
+impl Default for RopConfig {
+    fn default() -> RopConfig {
+        RopConfig {
+            count: 4,
+            latency_cycles: 4,
+            fragments_per_cycle: 1,
+            tile_px: 8,
+        }
+    }
+}
+
+impl Default for FrameBufferConfig {
+    fn default() -> FrameBufferConfig {
+        FrameBufferConfig {
+            bytes_per_cycle: 64,
+            bytes_per_fragment_tested: 4,
+            bytes_per_fragment_written: 8,
+        }
+    }
+}
+
+impl Default for LinksConfig {
+    fn default() -> LinksConfig {
+        LinksConfig {
+            setup_to_minmax: LinkConfig::new(8, 1),
+            minmax_to_interval_manager: LinkConfig::new(8, 1),
+            interval_manager_to_segmenter: LinkConfig::new(32, 1),
+            segmenter_to_subsegmenter: LinkConfig::new(32, 1),
+            subsegmenter_to_rasterizer: LinkConfig::new(32, 1),
+            rasterizer_to_rop: LinkConfig::new(64, 2),
+            rop_to_framebuffer: LinkConfig::new(32, 4),
+        }
+    }
+}
+
+impl ArchConfig {
+    /// Reads, parses and validates an architecture file.
+    pub fn load(path: &Path) -> Result<ArchConfig> {
+        let text = std::fs::read_to_string(path).map_err(|source| Error::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        ArchConfig::from_json(&text, &path.display().to_string())
+    }
+
+    /// Parses and validates an architecture from JSON text; `file` is the name used in
+    /// error messages. Fields the text leaves out keep their defaults.
+    pub fn from_json(text: &str, file: &str) -> Result<ArchConfig> {
+        let de = &mut serde_json::Deserializer::from_str(text);
+        let config: ArchConfig =
+            serde_path_to_error::deserialize(&mut *de).map_err(|e| parse_error(file, e))?;
+        // Text after the configuration object is an error, not ignored.
+        de.end().map_err(|e| Error::Parse {
+            file: file.to_string(),
+            field: String::new(),
+            message: e.to_string(),
+        })?;
+        config.validate(file)?;
+        Ok(config)
+    }
+
+    /// The embedded `sim/arch/baseline.json`, equal to [`ArchConfig::default`].
+    pub fn baseline() -> ArchConfig {
+        // The text is part of the binary and checked by a unit test, so failing here is a
+        // build defect, not bad input.
+        ArchConfig::from_json(BASELINE_JSON, "sim/arch/baseline.json (embedded)")
+            .expect("the embedded baseline architecture is valid")
+    }
+
+    /// Total unit instances: Setup, MinMax and IntervalManager, the replicated stages, and
+    /// the frame-buffer port.
+    pub fn units(&self) -> u32 {
+        // Saturating so that an unvalidated configuration cannot overflow; a validated one
+        // is at most 4 + 4 * MAX_UNIT_COUNT.
+        [
+            self.segmenter.count,
+            self.subsegmenter.count,
+            self.rasterizer.count,
+            self.rop.count,
+        ]
+        .into_iter()
+        .fold(3 + 1, u32::saturating_add)
+    }
+
+    /// Checks every value against what the simulator accepts; the first refused value is
+    /// returned as [`Error::Invalid`] naming its dotted field path.
+    pub fn validate(&self, file: &str) -> Result<()> {
+        let check = Check { file };
+        let chars = self.name.chars().count();
+        if chars == 0 || chars > MAX_NAME_CHARS {
+            return Err(Error::invalid(
+                file,
+                "name",
+                format!("{:?}", self.name),
+                format!("must be 1 to {MAX_NAME_CHARS} characters long"),
+            ));
+        }
+        if !(self.clock_mhz.is_finite() && self.clock_mhz > 0.0 && self.clock_mhz <= MAX_CLOCK_MHZ)
+        {
+            return Err(Error::invalid(
+                file,
+                "clock_mhz",
+                self.clock_mhz,
+                format!("must be a finite clock above 0 and at most {MAX_CLOCK_MHZ} MHz"),
+            ));
+        }
+
+        let setup = &self.setup;
+        check.cycles("setup.latency_cycles", setup.latency_cycles)?;
+        check.cycles("setup.cycles_per_lembo", setup.cycles_per_lembo)?;
+
+        let minmax = &self.minmax;
+        check.cycles("minmax.latency_cycles", minmax.latency_cycles)?;
+        check.cycles("minmax.cycles_per_lembo", minmax.cycles_per_lembo)?;
+
+        let im = &self.interval_manager;
+        check.cycles("interval_manager.latency_cycles", im.latency_cycles)?;
+        check.cycles(
+            "interval_manager.cycles_per_scanline",
+            im.cycles_per_scanline,
+        )?;
+        check.cycles(
+            "interval_manager.cycles_per_interval",
+            im.cycles_per_interval,
+        )?;
+
+        let seg = &self.segmenter;
+        check.count("segmenter.count", seg.count)?;
+        check.cycles("segmenter.latency_cycles", seg.latency_cycles)?;
+        check.cycles("segmenter.cycles_per_segment", seg.cycles_per_segment)?;
+
+        let sub = &self.subsegmenter;
+        check.count("subsegmenter.count", sub.count)?;
+        check.cycles("subsegmenter.latency_cycles", sub.latency_cycles)?;
+        check.cycles(
+            "subsegmenter.cycles_per_subsegment",
+            sub.cycles_per_subsegment,
+        )?;
+
+        let ras = &self.rasterizer;
+        check.count("rasterizer.count", ras.count)?;
+        check.cycles("rasterizer.latency_cycles", ras.latency_cycles)?;
+        check.cycles(
+            "rasterizer.cycles_per_subsegment",
+            ras.cycles_per_subsegment,
+        )?;
+        check.fragments_per_cycle("rasterizer.fragments_per_cycle", ras.fragments_per_cycle)?;
+
+        let rop = &self.rop;
+        check.count("rop.count", rop.count)?;
+        check.cycles("rop.latency_cycles", rop.latency_cycles)?;
+        check.fragments_per_cycle("rop.fragments_per_cycle", rop.fragments_per_cycle)?;
+        check.range(
+            "rop.tile_px",
+            rop.tile_px.into(),
+            MAX_TILE_PX.into(),
+            "pixels (the side of a ROP interleave tile)",
+        )?;
+
+        let fb = &self.framebuffer;
+        check.bytes("framebuffer.bytes_per_cycle", fb.bytes_per_cycle)?;
+        check.bytes(
+            "framebuffer.bytes_per_fragment_tested",
+            fb.bytes_per_fragment_tested,
+        )?;
+        check.bytes(
+            "framebuffer.bytes_per_fragment_written",
+            fb.bytes_per_fragment_written,
+        )?;
+
+        for (name, link) in self.links.all() {
+            check.range(
+                &format!("links.{name}.fifo_depth"),
+                link.fifo_depth.into(),
+                MAX_FIFO_DEPTH.into(),
+                "items (a FIFO must hold at least one item)",
+            )?;
+            check.cycles(&format!("links.{name}.latency_cycles"), link.latency_cycles)?;
+        }
+        Ok(())
+    }
+}
+
+/// Range checks that all share the file name and the lower bound of 1.
+struct Check<'a> {
+    file: &'a str,
+}
+
+impl Check<'_> {
+    /// `value` must be in 1..=max; `unit` completes the reason ("must be 1 to 64 `unit`").
+    fn range(&self, field: &str, value: u64, max: u64, unit: &str) -> Result<()> {
+        if (1..=max).contains(&value) {
+            Ok(())
+        } else {
+            Err(Error::invalid(
+                self.file,
+                field,
+                value,
+                format!("must be 1 to {max} {unit}"),
+            ))
+        }
+    }
+
+    fn count(&self, field: &str, value: u32) -> Result<()> {
+        self.range(
+            field,
+            value.into(),
+            MAX_UNIT_COUNT.into(),
+            "instances (every stage needs at least one unit)",
+        )
+    }
+
+    fn cycles(&self, field: &str, value: u64) -> Result<()> {
+        self.range(field, value, MAX_CYCLES, "cycles")
+    }
+
+    fn fragments_per_cycle(&self, field: &str, value: u64) -> Result<()> {
+        self.range(field, value, MAX_FRAGMENTS_PER_CYCLE, "fragments per cycle")
+    }
+
+    fn bytes(&self, field: &str, value: u64) -> Result<()> {
+        self.range(field, value, MAX_BYTES, "bytes")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::PathBuf;
+
+    fn arch_dir() -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("sim/arch")
+    }
+
+    fn load(name: &str) -> ArchConfig {
+        ArchConfig::load(&arch_dir().join(name)).unwrap_or_else(|e| panic!("{name}: {e}"))
+    }
+
+    /// Asserts a parse error naming `field` and returns its message.
+    fn assert_parse_err(text: &str, expected_field: &str) -> String {
+        match ArchConfig::from_json(text, "t.json") {
+            Err(Error::Parse {
+                file,
+                field,
+                message,
+            }) => {
+                assert_eq!(file, "t.json");
+                assert_eq!(field, expected_field, "{message}");
+                message
+            }
+            other => panic!("{text}: expected a parse error, got {other:?}"),
+        }
+    }
+
+    /// Asserts an invalid-value error naming `field` with `value`.
+    fn assert_invalid(text: &str, expected_field: &str, expected_value: &str) {
+        match ArchConfig::from_json(text, "t.json") {
+            Err(Error::Invalid {
+                file, field, value, ..
+            }) => {
+                assert_eq!(file, "t.json");
+                assert_eq!(field, expected_field);
+                assert_eq!(value, expected_value);
+            }
+            other => panic!("{text}: expected an invalid-value error, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn config_files_load_and_validate() {
+        for name in ["baseline.json", "minimal.json", "wide.json"] {
+            let config = load(name);
+            config.validate(name).unwrap();
+            assert_eq!(format!("{}.json", config.name), name);
+        }
+    }
+
+    #[test]
+    fn config_baseline_file_equals_defaults() {
+        assert_eq!(load("baseline.json"), ArchConfig::default());
+        assert_eq!(ArchConfig::baseline(), ArchConfig::default());
+        ArchConfig::default().validate("default").unwrap();
+        assert_eq!(ArchConfig::default().units(), 3 + 2 + 2 + 4 + 4 + 1);
+    }
+
+    #[test]
+    fn config_minimal_has_one_of_each_unit_and_depth_one_fifos() {
+        let config = load("minimal.json");
+        let defaults = ArchConfig::default();
+        assert_eq!(config.segmenter.count, 1);
+        assert_eq!(config.subsegmenter.count, 1);
+        assert_eq!(config.rasterizer.count, 1);
+        assert_eq!(config.rop.count, 1);
+        assert_eq!(config.units(), 8);
+        for ((name, link), (_, default)) in config.links.all().into_iter().zip(defaults.links.all())
+        {
+            assert_eq!(link.fifo_depth, 1, "{name}");
+            assert_eq!(link.latency_cycles, default.latency_cycles, "{name}");
+        }
+        // Everything else is the baseline.
+        let expected = ArchConfig {
+            name: "minimal".to_string(),
+            segmenter: SegmenterConfig {
+                count: 1,
+                ..defaults.segmenter.clone()
+            },
+            subsegmenter: SubsegmenterConfig {
+                count: 1,
+                ..defaults.subsegmenter.clone()
+            },
+            rasterizer: RasterizerConfig {
+                count: 1,
+                ..defaults.rasterizer.clone()
+            },
+            rop: RopConfig {
+                count: 1,
+                ..defaults.rop.clone()
+            },
+            links: config.links.clone(),
+            ..defaults
+        };
+        assert_eq!(config, expected);
+    }
+
+    #[test]
+    fn config_wide_has_its_counts_and_depths() {
+        let config = load("wide.json");
+        let defaults = ArchConfig::default();
+        assert_eq!(config.segmenter.count, 4);
+        assert_eq!(config.subsegmenter.count, 4);
+        assert_eq!(config.rasterizer.count, 8);
+        assert_eq!(config.rop.count, 4);
+        assert_eq!(config.units(), 3 + 4 + 4 + 8 + 4 + 1);
+        for ((name, link), (_, default)) in config.links.all().into_iter().zip(defaults.links.all())
+        {
+            let depth = if name == "rop_to_framebuffer" { 32 } else { 64 };
+            assert_eq!(link.fifo_depth, depth, "{name}");
+            assert_eq!(link.latency_cycles, default.latency_cycles, "{name}");
+        }
+        let expected = ArchConfig {
+            name: "wide".to_string(),
+            segmenter: SegmenterConfig {
+                count: 4,
+                ..defaults.segmenter.clone()
+            },
+            subsegmenter: SubsegmenterConfig {
+                count: 4,
+                ..defaults.subsegmenter.clone()
+            },
+            rasterizer: RasterizerConfig {
+                count: 8,
+                ..defaults.rasterizer.clone()
+            },
+            rop: RopConfig {
+                count: 4,
+                ..defaults.rop.clone()
+            },
+            links: config.links.clone(),
+            ..defaults
+        };
+        assert_eq!(config, expected);
+    }
+
+    #[test]
+    fn config_partial_file_keeps_defaults() {
+        let config = ArchConfig::from_json(r#"{"segmenter": {"count": 3}}"#, "t.json").unwrap();
+        let defaults = ArchConfig::default();
+        assert_eq!(
+            config,
+            ArchConfig {
+                segmenter: SegmenterConfig {
+                    count: 3,
+                    ..defaults.segmenter.clone()
+                },
+                ..defaults
+            }
+        );
+        assert_eq!(
+            ArchConfig::from_json("{}", "t.json").unwrap(),
+            ArchConfig::default()
+        );
+    }
+
+    #[test]
+    fn config_partial_link_keeps_its_boundary_defaults() {
+        let text = r#"{"links": {"rasterizer_to_rop": {"fifo_depth": 32},
+                                 "rop_to_framebuffer": {"latency_cycles": 9}}}"#;
+        let config = ArchConfig::from_json(text, "t.json").unwrap();
+        assert_eq!(
+            config.links,
+            LinksConfig {
+                rasterizer_to_rop: LinkConfig::new(32, 2),
+                rop_to_framebuffer: LinkConfig::new(32, 9),
+                ..LinksConfig::default()
+            }
+        );
+        assert_parse_err(
+            r#"{"links": {"setup_to_minmax": {"fifo_depth": null}}}"#,
+            "links.setup_to_minmax.fifo_depth",
+        );
+        assert_parse_err(
+            r#"{"links": {"setup_to_minmax": {"fifo_depth": -1}}}"#,
+            "links.setup_to_minmax.fifo_depth",
+        );
+    }
+
+    #[test]
+    fn config_unknown_field_names_its_path() {
+        let message = assert_parse_err(r#"{"segmenter": {"cnt": 3}}"#, "segmenter.cnt");
+        assert!(message.contains("unknown field `cnt`"), "{message}");
+        assert_parse_err(
+            r#"{"links": {"rasterizer_to_rop": {"depth": 3}}}"#,
+            "links.rasterizer_to_rop.depth",
+        );
+        assert_parse_err(r#"{"clock": 400}"#, "clock");
+    }
+
+    #[test]
+    fn config_wrong_type_and_malformed_json_are_parse_errors() {
+        assert_parse_err(r#"{"segmenter": {"count": -1}}"#, "segmenter.count");
+        assert_parse_err(r#"{"rop": {"tile_px": 8.5}}"#, "rop.tile_px");
+        assert_parse_err(r#"{"clock_mhz": "fast"}"#, "clock_mhz");
+        let message = assert_parse_err("{} {}", "");
+        assert!(message.contains("trailing characters"), "{message}");
+        let message = assert_parse_err("not json", "");
+        assert!(message.contains("line 1 column"), "{message}");
+    }
+
+    #[test]
+    fn config_zero_fifo_depth_is_refused_naming_the_link() {
+        for (name, _) in ArchConfig::default().links.all() {
+            let text = format!(r#"{{"links": {{"{name}": {{"fifo_depth": 0}}}}}}"#);
+            assert_invalid(&text, &format!("links.{name}.fifo_depth"), "0");
+        }
+        assert_invalid(
+            r#"{"links": {"rop_to_framebuffer": {"fifo_depth": 4097}}}"#,
+            "links.rop_to_framebuffer.fifo_depth",
+            "4097",
+        );
+        assert_invalid(
+            r#"{"links": {"setup_to_minmax": {"latency_cycles": 0}}}"#,
+            "links.setup_to_minmax.latency_cycles",
+            "0",
+        );
+    }
+
+    #[test]
+    fn config_zero_unit_count_is_refused_naming_the_unit() {
+        assert_invalid(r#"{"segmenter": {"count": 0}}"#, "segmenter.count", "0");
+        assert_invalid(
+            r#"{"subsegmenter": {"count": 0}}"#,
+            "subsegmenter.count",
+            "0",
+        );
+        assert_invalid(r#"{"rasterizer": {"count": 65}}"#, "rasterizer.count", "65");
+        assert_invalid(r#"{"rop": {"count": 0}}"#, "rop.count", "0");
+    }
+
+    #[test]
+    fn config_out_of_range_costs_are_refused() {
+        assert_invalid(
+            r#"{"setup": {"latency_cycles": 0}}"#,
+            "setup.latency_cycles",
+            "0",
+        );
+        assert_invalid(
+            r#"{"interval_manager": {"cycles_per_interval": 1000001}}"#,
+            "interval_manager.cycles_per_interval",
+            "1000001",
+        );
+        assert_invalid(
+            r#"{"rasterizer": {"fragments_per_cycle": 65}}"#,
+            "rasterizer.fragments_per_cycle",
+            "65",
+        );
+        assert_invalid(r#"{"rop": {"tile_px": 0}}"#, "rop.tile_px", "0");
+        assert_invalid(r#"{"rop": {"tile_px": 257}}"#, "rop.tile_px", "257");
+        assert_invalid(
+            r#"{"framebuffer": {"bytes_per_cycle": 0}}"#,
+            "framebuffer.bytes_per_cycle",
+            "0",
+        );
+        assert_invalid(
+            r#"{"framebuffer": {"bytes_per_fragment_written": 4097}}"#,
+            "framebuffer.bytes_per_fragment_written",
+            "4097",
+        );
+    }
+
+    #[test]
+    fn config_clock_must_be_positive_and_finite() {
+        assert_invalid(r#"{"clock_mhz": 0}"#, "clock_mhz", "0");
+        assert_invalid(r#"{"clock_mhz": -500}"#, "clock_mhz", "-500");
+        assert_invalid(r#"{"clock_mhz": 100001}"#, "clock_mhz", "100001");
+        // JSON has no NaN or infinity; too large a literal is a parse error, and a value
+        // built in code is refused by validate.
+        assert_parse_err(r#"{"clock_mhz": 1e400}"#, "clock_mhz");
+        for clock_mhz in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            let config = ArchConfig {
+                clock_mhz,
+                ..ArchConfig::default()
+            };
+            assert!(matches!(
+                config.validate("code"),
+                Err(Error::Invalid { field, .. }) if field == "clock_mhz"
+            ));
+        }
+        let config = ArchConfig::from_json(r#"{"clock_mhz": 100000}"#, "t.json").unwrap();
+        assert_eq!(config.clock_mhz, 100_000.0);
+    }
+
+    #[test]
+    fn config_name_must_be_short_and_non_empty() {
+        assert_invalid(r#"{"name": ""}"#, "name", r#""""#);
+        let long = "x".repeat(MAX_NAME_CHARS + 1);
+        assert_invalid(
+            &format!(r#"{{"name": "{long}"}}"#),
+            "name",
+            &format!("{long:?}"),
+        );
+        let longest = "é".repeat(MAX_NAME_CHARS);
+        let text = format!(r#"{{"name": "{longest}"}}"#);
+        assert_eq!(
+            ArchConfig::from_json(&text, "t.json").unwrap().name,
+            longest
+        );
+    }
+
+    #[test]
+    fn config_missing_file_is_a_read_error() {
+        let path = arch_dir().join("no_such_arch.json");
+        assert!(matches!(ArchConfig::load(&path), Err(Error::Read { path: p, .. }) if p == path));
+    }
+
+    #[test]
+    fn config_serializes_back_to_itself() {
+        let config = load("wide.json");
+        let text = serde_json::to_string_pretty(&config).unwrap();
+        assert_eq!(ArchConfig::from_json(&text, "round trip").unwrap(), config);
+    }
+}

@@ -1,0 +1,20 @@
+//! The frame-buffer memory port (DESIGN §3): the ROPs' depth reads and colour and depth
+//! writes share one port of `framebuffer.bytes_per_cycle`. The frame ends when the last
+//! write has gone through it.
+//!
+//! Input: [`WriteBurst`]s from every ROP, merged by (arrival, port). Output: none.
+//! Cost: ceil(bytes / bytes_per_cycle) per burst (at least one cycle). Not modelled:
+//! DRAM pages, refresh, compression, caches.
+
+use super::actor::{ActorError, Ctx};
+use super::rop::WriteBurst;
+use super::Finished;
+use crate::config::FrameBufferConfig;
+use crate::raster::Counts;
+
+pub fn run(mut ctx: Ctx<WriteBurst, ()>, cfg: &FrameBufferConfig) -> Result<Finished, ActorError> {
+    while let Some(WriteBurst { bytes }) = ctx.next_input()? {
+        ctx.work(bytes.div_ceil(cfg.bytes_per_cycle).max(1));
+    }
+    Finished::new(ctx, Counts::default())
+}

@@ -1,0 +1,41 @@
+//! MinMax finder (paper 001 section 5, "the first step ... is to find the minimum and the
+//! maximum of y"): the y range of a lembo over its domain (corners, edge extrema, interior
+//! critical point) and the scanlines it covers, clipped to the viewport.
+//!
+//! Input: [`LemboReady`] from Setup. Output: [`ScanlineRange`] to the IntervalManager, or
+//! nothing when the range holds no scanline centre (counted as culled outside).
+//!
+//! Cost: `minmax.cycles_per_lembo` per lembo, ready `minmax.latency_cycles` later.
+
+use super::actor::{ActorError, Ctx};
+use super::setup::LemboReady;
+use super::{Finished, Shared};
+use crate::datapath::Real;
+use crate::raster::{minmax, Counts};
+
+/// The scanlines j0..=j1 of lembo `id`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ScanlineRange {
+    pub id: u32,
+    pub j0: u32,
+    pub j1: u32,
+}
+
+pub fn run<R: Real>(
+    mut ctx: Ctx<LemboReady, ScanlineRange>,
+    sh: &Shared<R>,
+) -> Result<Finished, ActorError> {
+    let cost = sh.arch.minmax.cycles_per_lembo;
+    let mut counts = Counts::default();
+    while let Some(LemboReady { id }) = ctx.next_input()? {
+        let l = sh.lembo(id);
+        match minmax::scanlines(l, sh.view.viewport.height) {
+            Some((j0, j1)) => ctx.emit(cost, 0, ScanlineRange { id, j0, j1 })?,
+            None => {
+                counts.lembos_culled_outside += 1;
+                ctx.work(cost);
+            }
+        }
+    }
+    Finished::new(ctx, counts)
+}

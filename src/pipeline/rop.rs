@@ -1,0 +1,155 @@
+//! Rop (DESIGN §2 and §3; paper 000 section 4 for the ROP's place): the depth test and the
+//! frame-buffer write, Np units screen-interleaved by tiles.
+//!
+//! Input: [`FragmentSpan`]s from every rasterizer, merged by (arrival, port). For each
+//! fragment: depth from the lembo's depth quadratic, the depth test on (z, id) (the
+//! winner does not depend on arrival order), and for a fragment that passes, Phong shading
+//! (paper 000 equation 6) and the write. Output: one [`WriteBurst`] per span to the
+//! frame-buffer memory port: depth reads for every fragment tested, colour and depth
+//! writes for every fragment that passed.
+//!
+//! Storage: each ROP owns the pixels of its tiles ([`RopTiles`]), held tile by tile, so the
+//! ROPs never share a pixel and together hold one frame buffer.
+//!
+//! Cost: ceil(n / `rop.fragments_per_cycle`) per span of n fragments, ready
+//! `latency_cycles` later. Not modelled: caches; the frame-buffer port's bandwidth is the
+//! memory model.
+
+use super::actor::{ActorError, Ctx};
+use super::rasterizer::FragmentSpan;
+use super::{Finished, Shared};
+use crate::datapath::Real;
+use crate::raster::Counts;
+use crate::rop::framebuffer::{depth_test, NO_PRIMITIVE};
+use crate::rop::rop::FragmentShader;
+use crate::rop::FrameBuffer;
+
+/// Screen interleaving: tile (tx, ty) of `tile_px` x `tile_px` pixels belongs to ROP
+/// (tx + ty) mod Np, so neighbouring tiles, along rows and columns, go to different ROPs.
+#[derive(Clone, Debug)]
+pub struct RopTiles {
+    pub tile_px: u32,
+    pub tiles_x: u32,
+    pub tiles_y: u32,
+    pub rops: u32,
+    /// Per tile (row-major): its slot among the tiles of its ROP.
+    slot: Vec<u32>,
+    /// Tiles per ROP.
+    owned: Vec<u32>,
+}
+
+impl RopTiles {
+    pub fn new(width: u32, height: u32, tile_px: u32, rops: u32) -> Self {
+        let tiles_x = width.div_ceil(tile_px);
+        let tiles_y = height.div_ceil(tile_px);
+        let mut owned = vec![0u32; rops as usize];
+        let mut slot = Vec::with_capacity((tiles_x * tiles_y) as usize);
+        for ty in 0..tiles_y {
+            for tx in 0..tiles_x {
+                let r = ((tx + ty) % rops) as usize;
+                slot.push(owned[r]);
+                owned[r] += 1;
+            }
+        }
+        RopTiles {
+            tile_px,
+            tiles_x,
+            tiles_y,
+            rops,
+            slot,
+            owned,
+        }
+    }
+
+    /// The ROP owning pixel (i, j) and the first pixel column past its tile.
+    #[inline]
+    pub fn owner(&self, i: u32, j: u32) -> (usize, u32) {
+        let (tx, ty) = (i / self.tile_px, j / self.tile_px);
+        (((tx + ty) % self.rops) as usize, (tx + 1) * self.tile_px)
+    }
+
+    /// Index of pixel (i, j) in its owner's storage.
+    #[inline]
+    fn local(&self, i: u32, j: u32) -> usize {
+        let (tx, ty) = (i / self.tile_px, j / self.tile_px);
+        let slot = self.slot[(ty * self.tiles_x + tx) as usize] as usize;
+        let t = self.tile_px as usize;
+        slot * t * t + (j % self.tile_px) as usize * t + (i % self.tile_px) as usize
+    }
+}
+
+/// The pixels one ROP owns: depth, winner id and colour, tile by tile.
+pub struct TileStore {
+    rop: usize,
+    depth: Vec<f32>,
+    primitive: Vec<u32>,
+    color: Vec<[u8; 3]>,
+}
+
+impl TileStore {
+    fn new(tiles: &RopTiles, rop: usize, background: [u8; 3]) -> Self {
+        let n = tiles.owned[rop] as usize * (tiles.tile_px as usize).pow(2);
+        TileStore {
+            rop,
+            depth: vec![1.0; n],
+            primitive: vec![NO_PRIMITIVE; n],
+            color: vec![background; n],
+        }
+    }
+
+    /// Copies this ROP's pixels into the frame buffer.
+    pub fn write_into(&self, tiles: &RopTiles, fb: &mut FrameBuffer) {
+        for j in 0..fb.height {
+            let ty = j / tiles.tile_px;
+            for tx in 0..tiles.tiles_x {
+                if ((tx + ty) % tiles.rops) as usize != self.rop {
+                    continue;
+                }
+                let i0 = tx * tiles.tile_px;
+                for i in i0..(i0 + tiles.tile_px).min(fb.width) {
+                    let (src, dst) = (tiles.local(i, j), fb.index(i, j));
+                    fb.depth[dst] = self.depth[src];
+                    fb.primitive[dst] = self.primitive[src];
+                    fb.color[dst] = self.color[src];
+                }
+            }
+        }
+    }
+}
+
+/// Frame-buffer traffic of one span [bytes].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct WriteBurst {
+    pub bytes: u64,
+}
+
+pub fn run<R: Real>(
+    mut ctx: Ctx<FragmentSpan<R>, WriteBurst>,
+    sh: &Shared<R>,
+    rop: usize,
+) -> Result<(Finished, TileStore), ActorError> {
+    let cfg = &sh.arch.rop;
+    let fbc = &sh.arch.framebuffer;
+    let mut counts = Counts::default();
+    let mut store = TileStore::new(&sh.tiles, rop, sh.background);
+    let shader = FragmentShader::<R>::new(&sh.scene.light, sh.view);
+    while let Some(FragmentSpan { id, j, span }) = ctx.next_input()? {
+        let l = sh.lembo(id);
+        let mut passed = 0u64;
+        span.walk(|i, u, v| {
+            let z = l.z.eval(u, v).f64() as f32;
+            let idx = sh.tiles.local(i, j);
+            if depth_test(z, l.id, store.depth[idx], store.primitive[idx]) {
+                passed += 1;
+                store.depth[idx] = z;
+                store.primitive[idx] = l.id;
+                store.color[idx] = shader.shade(l, u, v).0;
+            }
+        });
+        counts.fragments_passed_depth += passed;
+        let n = span.len() as u64;
+        let bytes = n * fbc.bytes_per_fragment_tested + passed * fbc.bytes_per_fragment_written;
+        ctx.emit(n.div_ceil(cfg.fragments_per_cycle), 0, WriteBurst { bytes })?;
+    }
+    Ok((Finished::new(ctx, counts)?, store))
+}

@@ -1,0 +1,67 @@
+//! Segmenter (paper 001 section 5.2): walks one interval of the curve Y(u, v) = y_j in
+//! chords whose midpoint error is exactly k, solving the paper's 2x2 system per step.
+//!
+//! Input: [`ScanInterval`] from the IntervalManager. Output: one [`ScanSegment`] per chord,
+//! dispatched round-robin over the subsegmenters (the n-th segment this unit emits goes to
+//! subsegmenter n mod Nb).
+//!
+//! Cost: `segmenter.cycles_per_segment` per segment (one step of the system), ready
+//! `latency_cycles` later. A walk that needs more segments than the cap is recorded as an
+//! error and the interval dropped, so the run still ends and reports the first such
+//! interval in scene order, whatever the schedule.
+
+use super::actor::{ActorError, Ctx};
+use super::interval_manager::ScanInterval;
+use super::{Finished, Shared};
+use crate::datapath::Real;
+use crate::error::Error;
+use crate::raster::segmenter::{segments, Segment};
+use crate::raster::{Counts, DEFAULT_SEGMENT_CAP};
+
+/// One chord of scanline `j` of lembo `id`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScanSegment<R> {
+    pub id: u32,
+    pub j: u32,
+    pub segment: Segment<R>,
+}
+
+pub fn run<R: Real>(
+    mut ctx: Ctx<ScanInterval<R>, ScanSegment<R>>,
+    sh: &Shared<R>,
+) -> Result<Finished, ActorError> {
+    let cost = sh.arch.segmenter.cycles_per_segment;
+    let mut counts = Counts::default();
+    let mut segs = Vec::new();
+    let mut next_port = 0;
+    let mut cap_error: Option<(u32, u32)> = None;
+    while let Some(ScanInterval { id, j, interval }) = ctx.next_input()? {
+        let l = sh.lembo(id);
+        segs.clear();
+        if segments(
+            l,
+            j,
+            sh.k,
+            &interval,
+            DEFAULT_SEGMENT_CAP,
+            &mut segs,
+            &mut counts,
+        )
+        .is_err()
+        {
+            cap_error = Some(cap_error.map_or((id, j), |e| e.min((id, j))));
+            continue;
+        }
+        for &segment in &segs {
+            ctx.emit(cost, next_port, ScanSegment { id, j, segment })?;
+            next_port = (next_port + 1) % ctx.outputs();
+        }
+    }
+    let mut done = Finished::new(ctx, counts)?;
+    done.error = cap_error.map(|(lembo, scanline)| Error::SegmentCap {
+        lembo: lembo as usize,
+        scanline,
+        cap: DEFAULT_SEGMENT_CAP,
+    });
+    Ok(done)
+}

@@ -1,0 +1,43 @@
+//! Subsegmenter (paper 001 section 5.3): splits a segment where x(t) folds and into equal
+//! steps no longer than dt, so that x is linear within k along each subsegment.
+//!
+//! Input: [`ScanSegment`] from the segmenters, merged by (arrival, port). Output: one
+//! [`ScanSubsegment`] per subsegment, round-robin over the fragment rasterizers (the n-th
+//! subsegment this unit emits goes to rasterizer n mod Nr).
+//!
+//! Cost: `subsegmenter.cycles_per_subsegment` per subsegment, ready `latency_cycles` later.
+
+use super::actor::{ActorError, Ctx};
+use super::segmenter::ScanSegment;
+use super::{Finished, Shared};
+use crate::datapath::Real;
+use crate::raster::subsegmenter::{subsegments, Subsegment};
+use crate::raster::Counts;
+
+/// One subsegment of scanline `j` of lembo `id`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScanSubsegment<R> {
+    pub id: u32,
+    pub j: u32,
+    pub subsegment: Subsegment<R>,
+}
+
+pub fn run<R: Real>(
+    mut ctx: Ctx<ScanSegment<R>, ScanSubsegment<R>>,
+    sh: &Shared<R>,
+) -> Result<Finished, ActorError> {
+    let cost = sh.arch.subsegmenter.cycles_per_subsegment;
+    let mut counts = Counts::default();
+    let mut subs = Vec::new();
+    let mut next_port = 0;
+    while let Some(ScanSegment { id, j, segment }) = ctx.next_input()? {
+        let l = sh.lembo(id);
+        subs.clear();
+        subsegments(l, &segment, sh.k, &mut subs, &mut counts);
+        for &subsegment in &subs {
+            ctx.emit(cost, next_port, ScanSubsegment { id, j, subsegment })?;
+            next_port = (next_port + 1) % ctx.outputs();
+        }
+    }
+    Finished::new(ctx, counts)
+}

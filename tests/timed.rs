@@ -1,0 +1,260 @@
+//! The timed pipeline against its contract (DESIGN §3, issue 3): timing never changes
+//! pixels, results do not depend on the host schedule, every cycle is accounted once, and
+//! deeper FIFOs and more units never make a frame slower where they should help.
+
+use lembo_sim::camera::View;
+use lembo_sim::config::ArchConfig;
+use lembo_sim::datapath::Datapath;
+use lembo_sim::pipeline::actor::SimOptions;
+use lembo_sim::pipeline::{run_timed, TimedFrame};
+use lembo_sim::raster::render_functional;
+use lembo_sim::scene::Scene;
+use proptest::prelude::*;
+use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
+use std::path::Path;
+
+fn scene(name: &str, side: Option<u32>) -> Scene {
+    let mut s = Scene::load(
+        &Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("traces")
+            .join(name),
+    )
+    .expect("trace loads");
+    if let Some(n) = side {
+        s.set_viewport(n, n).unwrap();
+    }
+    s
+}
+
+fn timed(scene: &Scene, arch: &ArchConfig, options: &SimOptions) -> TimedFrame {
+    let view = View::new(&scene.camera, scene.viewport);
+    run_timed(scene, &view, 0.5, Datapath::F32, arch, options).expect("timed run")
+}
+
+fn arch(name: &str) -> ArchConfig {
+    ArchConfig::load(
+        &Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("sim/arch")
+            .join(name),
+    )
+    .unwrap()
+}
+
+/// Every link of `a` set to `depth`.
+fn with_depth(mut a: ArchConfig, depth: u32) -> ArchConfig {
+    let l = &mut a.links;
+    for c in [
+        &mut l.setup_to_minmax,
+        &mut l.minmax_to_interval_manager,
+        &mut l.interval_manager_to_segmenter,
+        &mut l.segmenter_to_subsegmenter,
+        &mut l.subsegmenter_to_rasterizer,
+        &mut l.rasterizer_to_rop,
+        &mut l.rop_to_framebuffer,
+    ] {
+        c.fifo_depth = depth;
+    }
+    a
+}
+
+fn counts(a: &mut ArchConfig, ns: u32, nb: u32, nr: u32, np: u32) {
+    a.segmenter.count = ns;
+    a.subsegmenter.count = nb;
+    a.rasterizer.count = nr;
+    a.rop.count = np;
+}
+
+/// The configurations of the equivalence matrix: unit counts 1..8, FIFO depths 1..64.
+fn matrix() -> Vec<ArchConfig> {
+    let mut odd = with_depth(ArchConfig::default(), 7);
+    counts(&mut odd, 3, 5, 2, 3);
+    odd.links.rasterizer_to_rop.fifo_depth = 2;
+    let mut narrow_wide = with_depth(ArchConfig::default(), 1);
+    counts(&mut narrow_wide, 1, 8, 1, 8);
+    let mut wide_narrow = with_depth(ArchConfig::default(), 64);
+    counts(&mut wide_narrow, 8, 1, 8, 1);
+    wide_narrow.rop.tile_px = 3;
+    vec![
+        arch("baseline.json"),
+        arch("minimal.json"),
+        arch("wide.json"),
+        odd,
+        narrow_wide,
+        wide_narrow,
+    ]
+}
+
+fn assert_accounting(t: &TimedFrame) {
+    for u in &t.cycles.units {
+        assert_eq!(
+            u.busy + u.starved + u.blocked,
+            t.cycles.total,
+            "busy + starved + blocked of {}",
+            u.name
+        );
+    }
+}
+
+#[test]
+fn timed_image_equals_functional_across_architectures() {
+    for name in ["sphere24.json", "bunny.json"] {
+        let s = scene(name, None);
+        let view = View::new(&s.camera, s.viewport);
+        let f = render_functional(&s, &view, 0.5, Datapath::F32, false).unwrap();
+        for a in matrix() {
+            let t = timed(&s, &a, &SimOptions::default());
+            assert!(
+                t.framebuffer.color == f.framebuffer.color,
+                "{name} on {}: image differs",
+                a.name
+            );
+            assert_eq!(t.framebuffer.depth, f.framebuffer.depth, "{name} depth");
+            assert_eq!(t.counts.fragments, f.counts.fragments);
+            assert_eq!(t.counts.subsegments, f.counts.subsegments);
+            assert_eq!(t.counts.intervals, f.counts.intervals);
+            assert_accounting(&t);
+            let units = a.units() as usize;
+            assert_eq!(t.units.len(), units);
+            for u in &t.cycles.units {
+                let depth_max = 64;
+                assert!(u.max_fifo_occupancy <= depth_max);
+            }
+        }
+    }
+}
+
+#[test]
+fn timed_results_do_not_depend_on_the_host_schedule() {
+    let s = scene("sphere24.json", Some(256));
+    let a = arch("wide.json");
+    let first = timed(&s, &a, &SimOptions::default());
+    let runs = (0..10)
+        .map(|_| SimOptions::default())
+        .chain((1..=5).map(|seed| SimOptions {
+            perturb: Some(seed),
+            ..SimOptions::default()
+        }));
+    for options in runs {
+        let t = timed(&s, &a, &options);
+        assert_eq!(t.cycles, first.cycles, "cycles with {options:?}");
+        assert_eq!(t.counts, first.counts);
+        assert!(t.framebuffer.color == first.framebuffer.color);
+    }
+}
+
+#[test]
+fn deeper_fifos_are_never_slower() {
+    let s = scene("sphere24.json", Some(256));
+    let shallow = timed(
+        &s,
+        &with_depth(ArchConfig::default(), 1),
+        &SimOptions::default(),
+    );
+    let deep = timed(
+        &s,
+        &with_depth(ArchConfig::default(), 64),
+        &SimOptions::default(),
+    );
+    assert!(
+        shallow.cycles.total >= deep.cycles.total,
+        "depth 1: {} cycles, depth 64: {}",
+        shallow.cycles.total,
+        deep.cycles.total
+    );
+}
+
+#[test]
+fn more_segmenters_help_when_the_segmenter_is_the_bottleneck() {
+    let s = scene("sphere24.json", Some(256));
+    let mut slow = ArchConfig::default();
+    slow.segmenter.cycles_per_segment = 60;
+    slow.segmenter.count = 1;
+    let one = timed(&s, &slow, &SimOptions::default());
+    assert_eq!(one.cycles.bottleneck.as_deref(), Some("Segmenter[0]"));
+    slow.segmenter.count = 4;
+    let four = timed(&s, &slow, &SimOptions::default());
+    assert!(
+        four.cycles.total < one.cycles.total,
+        "4 segmenters: {}, 1: {}",
+        four.cycles.total,
+        one.cycles.total
+    );
+}
+
+#[test]
+fn a_timeline_is_written_on_request_and_bounded() {
+    let s = scene("sphere24.json", Some(128));
+    let options = SimOptions {
+        trace: true,
+        trace_event_cap: 2000,
+        ..SimOptions::default()
+    };
+    let t = timed(&s, &ArchConfig::default(), &options);
+    let v: serde_json::Value = serde_json::from_str(t.trace.as_deref().unwrap()).unwrap();
+    let events = v["traceEvents"].as_array().unwrap();
+    let x = events.iter().filter(|e| e["ph"] == "X").count();
+    assert!(x > 0 && x <= 2000, "{x} events");
+    assert_eq!(v["otherData"]["total_cycles"], t.cycles.total);
+}
+
+/// 200 random valid configurations (seeded) all finish, with the functional image.
+#[test]
+fn random_architectures_all_terminate_with_the_same_image() {
+    let s = scene("sphere24.json", Some(40));
+    let view = View::new(&s.camera, s.viewport);
+    let f = render_functional(&s, &view, 0.5, Datapath::F32, false).unwrap();
+    let mut runner = TestRunner::new_with_rng(
+        Config {
+            cases: 200,
+            failure_persistence: None,
+            ..Config::default()
+        },
+        TestRng::from_seed(RngAlgorithm::ChaCha, &[3; 32]),
+    );
+    let unit = 1u32..=8;
+    let cost = 1u64..=20;
+    let depth = prop_oneof![Just(1u32), 2u32..=8, Just(64)];
+    let strategy = (
+        (unit.clone(), unit.clone(), unit.clone(), unit),
+        (cost.clone(), cost.clone(), cost.clone(), cost),
+        proptest::collection::vec((depth, 1u64..=6), 7),
+        1u32..=16,
+    );
+    runner
+        .run(
+            &strategy,
+            |((ns, nb, nr, np), (c1, c2, c3, lat), links, tile)| {
+                let mut a = ArchConfig::default();
+                counts(&mut a, ns, nb, nr, np);
+                a.segmenter.cycles_per_segment = c1;
+                a.subsegmenter.cycles_per_subsegment = c2;
+                a.interval_manager.cycles_per_scanline = c3;
+                a.rasterizer.latency_cycles = lat;
+                a.rop.tile_px = tile;
+                let l = &mut a.links;
+                for (c, (d, latency)) in [
+                    &mut l.setup_to_minmax,
+                    &mut l.minmax_to_interval_manager,
+                    &mut l.interval_manager_to_segmenter,
+                    &mut l.segmenter_to_subsegmenter,
+                    &mut l.subsegmenter_to_rasterizer,
+                    &mut l.rasterizer_to_rop,
+                    &mut l.rop_to_framebuffer,
+                ]
+                .into_iter()
+                .zip(links)
+                {
+                    c.fifo_depth = d;
+                    c.latency_cycles = latency;
+                }
+                a.validate("random").unwrap();
+                let t = timed(&s, &a, &SimOptions::default());
+                prop_assert!(t.framebuffer.color == f.framebuffer.color);
+                for u in &t.cycles.units {
+                    prop_assert_eq!(u.busy + u.starved + u.blocked, t.cycles.total);
+                }
+                Ok(())
+            },
+        )
+        .unwrap();
+}
