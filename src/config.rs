@@ -357,6 +357,19 @@ pub struct LinksConfig {
 
 impl LinksConfig {
     /// Every boundary's link with its field name, in dataflow order.
+    /// Every link, mutable, in dataflow order (for tools and tests that set them all).
+    pub fn all_mut(&mut self) -> [&mut LinkConfig; 7] {
+        [
+            &mut self.setup_to_minmax,
+            &mut self.minmax_to_interval_manager,
+            &mut self.interval_manager_to_segmenter,
+            &mut self.segmenter_to_subsegmenter,
+            &mut self.subsegmenter_to_rasterizer,
+            &mut self.rasterizer_to_rop,
+            &mut self.rop_to_framebuffer,
+        ]
+    }
+
     pub fn all(&self) -> [(&'static str, &LinkConfig); 7] {
         [
             ("setup_to_minmax", &self.setup_to_minmax),

@@ -310,11 +310,6 @@ impl<'m, I: Send + 'static, O: Send + 'static> Ctx<'m, I, O> {
         }
     }
 
-    /// The unit's clock: everything before it is accounted.
-    pub fn now(&self) -> Cycle {
-        self.now
-    }
-
     pub fn outputs(&self) -> usize {
         self.outputs.len()
     }

@@ -363,10 +363,6 @@ impl<T> Rx<T> {
         self.ended
     }
 
-    pub fn popped(&self) -> u64 {
-        self.popped
-    }
-
     /// Earliest arrival of the next item: the head's if one is queued, else the bound
     /// plus the latency; [`Cycle::NEVER`] once the producer ended and the queue is empty.
     pub fn next_arrival(&self) -> Cycle {

@@ -136,9 +136,16 @@ pub fn run<R: Real>(
     while let Some(FragmentSpan { id, j, span }) = ctx.next_input()? {
         let l = sh.lembo(id);
         let mut passed = 0u64;
+        // The rasterizer cut the span at tile borders: its pixels are consecutive in the
+        // tile's storage row, so the index is found once per span, not per fragment.
+        let first = sh.tiles.local(span.i0, j) as isize - span.i0 as isize;
+        debug_assert!(
+            sh.tiles.owner(span.i0, j).1 >= span.i1,
+            "span crosses a tile"
+        );
         span.walk(|i, u, v| {
             let z = l.z.eval(u, v).f64() as f32;
-            let idx = sh.tiles.local(i, j);
+            let idx = (first + i as isize) as usize;
             if depth_test(z, l.id, store.depth[idx], store.primitive[idx]) {
                 passed += 1;
                 store.depth[idx] = z;
