@@ -6,6 +6,7 @@
 //! ```text
 //!  Setup ─► MinMax ─► IntervalManager ─► Segmenter ×n ─► Subsegmenter ×n
 //!        ─► FragmentRasterizer ×n ─► ROP ×n ─► FrameBuffer port        (─► = one link)
+//!  TriangleSetup ─► TriangleRasterizer ×n ─► (the same) ROP ×n       (the triangle path)
 //! ```
 //!
 //! Every unit has a `latency_cycles` (an output is ready that long after the operation that
@@ -71,6 +72,11 @@ pub struct ArchConfig {
     pub subsegmenter: SubsegmenterConfig,
     /// The fragment generators (replicated); defaults in [`RasterizerConfig`].
     pub rasterizer: RasterizerConfig,
+    /// The triangle path's setup unit (one instance); defaults in [`TriangleSetupConfig`].
+    pub triangle_setup: TriangleSetupConfig,
+    /// The triangle path's edge-function rasterizers (replicated); defaults in
+    /// [`TriangleRasterizerConfig`].
+    pub triangle_rasterizer: TriangleRasterizerConfig,
     /// The depth-test and shading units (replicated, screen-interleaved); defaults in
     /// [`RopConfig`].
     pub rop: RopConfig,
@@ -188,6 +194,40 @@ pub struct RasterizerConfig {
     pub fragments_per_cycle: u64,
 }
 
+/// TriangleSetup (the triangle path, DESIGN §5): projects a triangle's three vertices,
+/// snaps them to 16.8 fixed point and sets up the integer edge functions and the
+/// perspective-correct attribute planes. One instance. Item: one triangle.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+#[serde(default, deny_unknown_fields)]
+pub struct TriangleSetupConfig {
+    /// Cycles from accepting a triangle to its setup being ready \[cycles\]. Default 20, as
+    /// the lembo Setup: a transform and perspective divide per vertex (about 16 stages) and
+    /// the edge-function and plane setup (about 4).
+    pub latency_cycles: u64,
+    /// Initiation interval per triangle \[cycles\]. Default 1: DESIGN §5's "setup 1 triangle
+    /// per cycle", the rate of GPUs of the papers' era and since.
+    pub cycles_per_triangle: u64,
+}
+
+/// TriangleRasterizer (the triangle path, DESIGN §5): tests 2x2 pixel quads against the
+/// integer edge functions with the top-left fill rule. Replicated; triangles are dispatched
+/// round-robin. Items: one triangle, and one quad-row piece (a triangle's quads in one
+/// pair of pixel rows inside one ROP tile).
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+#[serde(default, deny_unknown_fields)]
+pub struct TriangleRasterizerConfig {
+    /// Number of instances. Default 1: one rasterizer at 8 pixels per cycle has twice the
+    /// peak rate of the default four ROPs.
+    pub count: u32,
+    /// Cycles from accepting a triangle to its first quads being ready \[cycles\]. Default 4,
+    /// as the lembo FragmentRasterizer.
+    pub latency_cycles: u64,
+    /// Pixels tested per cycle; a piece of q quads costs ceil(4 q / this) cycles, at least
+    /// one, and a triangle that covers no pixel costs one cycle. Default 8: DESIGN §5, two
+    /// quads per cycle.
+    pub pixels_per_cycle: u64,
+}
+
 /// ROP: depth test and per-fragment Phong shading for the pixels of its screen tiles.
 /// Replicated; screen-interleaved. Item: one fragment span.
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
@@ -267,6 +307,8 @@ struct LinksSpec {
     subsegmenter_to_rasterizer: LinkSpec,
     rasterizer_to_rop: LinkSpec,
     rop_to_framebuffer: LinkSpec,
+    triangle_setup_to_rasterizer: LinkSpec,
+    triangle_rasterizer_to_rop: LinkSpec,
 }
 
 /// The file's shape of one [`LinkConfig`]: a field left out keeps its boundary's default;
@@ -319,6 +361,12 @@ impl From<LinksSpec> for LinksConfig {
                 .over(d.subsegmenter_to_rasterizer),
             rasterizer_to_rop: spec.rasterizer_to_rop.over(d.rasterizer_to_rop),
             rop_to_framebuffer: spec.rop_to_framebuffer.over(d.rop_to_framebuffer),
+            triangle_setup_to_rasterizer: spec
+                .triangle_setup_to_rasterizer
+                .over(d.triangle_setup_to_rasterizer),
+            triangle_rasterizer_to_rop: spec
+                .triangle_rasterizer_to_rop
+                .over(d.triangle_rasterizer_to_rop),
         }
     }
 }
@@ -353,12 +401,16 @@ pub struct LinksConfig {
     /// wires and arbitration to reach it from the ROPs. DRAM access latency itself is not
     /// modelled.
     pub rop_to_framebuffer: LinkConfig,
+    /// Default depth 32, latency 1: set-up triangles to the triangle rasterizers, as
+    /// `subsegmenter_to_rasterizer` in the lembo path.
+    pub triangle_setup_to_rasterizer: LinkConfig,
+    /// Default depth 64, latency 2: as `rasterizer_to_rop`; an item is a quad-row piece.
+    pub triangle_rasterizer_to_rop: LinkConfig,
 }
 
 impl LinksConfig {
-    /// Every boundary's link with its field name, in dataflow order.
     /// Every link, mutable, in dataflow order (for tools and tests that set them all).
-    pub fn all_mut(&mut self) -> [&mut LinkConfig; 7] {
+    pub fn all_mut(&mut self) -> [&mut LinkConfig; 9] {
         [
             &mut self.setup_to_minmax,
             &mut self.minmax_to_interval_manager,
@@ -367,10 +419,14 @@ impl LinksConfig {
             &mut self.subsegmenter_to_rasterizer,
             &mut self.rasterizer_to_rop,
             &mut self.rop_to_framebuffer,
+            &mut self.triangle_setup_to_rasterizer,
+            &mut self.triangle_rasterizer_to_rop,
         ]
     }
 
-    pub fn all(&self) -> [(&'static str, &LinkConfig); 7] {
+    /// Every boundary's link with its field name, in dataflow order (the lembo path's, then
+    /// the triangle path's).
+    pub fn all(&self) -> [(&'static str, &LinkConfig); 9] {
         [
             ("setup_to_minmax", &self.setup_to_minmax),
             (
@@ -388,6 +444,14 @@ impl LinksConfig {
             ),
             ("rasterizer_to_rop", &self.rasterizer_to_rop),
             ("rop_to_framebuffer", &self.rop_to_framebuffer),
+            (
+                "triangle_setup_to_rasterizer",
+                &self.triangle_setup_to_rasterizer,
+            ),
+            (
+                "triangle_rasterizer_to_rop",
+                &self.triangle_rasterizer_to_rop,
+            ),
         ]
     }
 }
@@ -403,6 +467,8 @@ impl Default for ArchConfig {
             segmenter: SegmenterConfig::default(),
             subsegmenter: SubsegmenterConfig::default(),
             rasterizer: RasterizerConfig::default(),
+            triangle_setup: TriangleSetupConfig::default(),
+            triangle_rasterizer: TriangleRasterizerConfig::default(),
             rop: RopConfig::default(),
             framebuffer: FrameBufferConfig::default(),
             links: LinksConfig::default(),
@@ -469,6 +535,25 @@ impl Default for RasterizerConfig {
     }
 }
 
+impl Default for TriangleSetupConfig {
+    fn default() -> TriangleSetupConfig {
+        TriangleSetupConfig {
+            latency_cycles: 20,
+            cycles_per_triangle: 1,
+        }
+    }
+}
+
+impl Default for TriangleRasterizerConfig {
+    fn default() -> TriangleRasterizerConfig {
+        TriangleRasterizerConfig {
+            count: 1,
+            latency_cycles: 4,
+            pixels_per_cycle: 8,
+        }
+    }
+}
+
 impl Default for RopConfig {
     fn default() -> RopConfig {
         RopConfig {
@@ -500,6 +585,8 @@ impl Default for LinksConfig {
             subsegmenter_to_rasterizer: LinkConfig::new(32, 1),
             rasterizer_to_rop: LinkConfig::new(64, 2),
             rop_to_framebuffer: LinkConfig::new(32, 4),
+            triangle_setup_to_rasterizer: LinkConfig::new(32, 1),
+            triangle_rasterizer_to_rop: LinkConfig::new(64, 2),
         }
     }
 }
@@ -538,8 +625,8 @@ impl ArchConfig {
             .expect("the embedded baseline architecture is valid")
     }
 
-    /// Total unit instances: Setup, MinMax and IntervalManager, the replicated stages, and
-    /// the frame-buffer port.
+    /// Unit instances of the lembo path: Setup, MinMax and IntervalManager, the replicated
+    /// stages, and the frame-buffer port.
     pub fn units(&self) -> u32 {
         // Saturating so that an unvalidated configuration cannot overflow; a validated one
         // is at most 4 + 4 * MAX_UNIT_COUNT.
@@ -616,6 +703,20 @@ impl ArchConfig {
             ras.cycles_per_subsegment,
         )?;
         check.fragments_per_cycle("rasterizer.fragments_per_cycle", ras.fragments_per_cycle)?;
+
+        let ts = &self.triangle_setup;
+        check.cycles("triangle_setup.latency_cycles", ts.latency_cycles)?;
+        check.cycles("triangle_setup.cycles_per_triangle", ts.cycles_per_triangle)?;
+
+        let tr = &self.triangle_rasterizer;
+        check.count("triangle_rasterizer.count", tr.count)?;
+        check.cycles("triangle_rasterizer.latency_cycles", tr.latency_cycles)?;
+        check.range(
+            "triangle_rasterizer.pixels_per_cycle",
+            tr.pixels_per_cycle,
+            MAX_FRAGMENTS_PER_CYCLE,
+            "pixels per cycle",
+        )?;
 
         let rop = &self.rop;
         check.count("rop.count", rop.count)?;
@@ -821,6 +922,10 @@ mod tests {
             rasterizer: RasterizerConfig {
                 count: 8,
                 ..defaults.rasterizer.clone()
+            },
+            triangle_rasterizer: TriangleRasterizerConfig {
+                count: 2,
+                ..defaults.triangle_rasterizer.clone()
             },
             rop: RopConfig {
                 count: 4,

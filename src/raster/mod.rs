@@ -16,6 +16,7 @@ pub mod probe;
 pub mod segmenter;
 pub mod setup;
 pub mod subsegmenter;
+pub mod triangle;
 pub mod v2;
 
 use crate::camera::View;
@@ -58,7 +59,20 @@ pub struct Counts {
     pub subsegments: u64,
     /// Segments split at a fold of x(t).
     pub folds: u64,
-    /// Fragments generated (pixel centres covered by subsegments, inside the viewport).
+    /// Triangles of the triangle path (tessellated lembos).
+    pub triangles: u64,
+    /// Triangles dropped because a vertex is at or behind the eye plane.
+    pub triangles_culled_behind_eye: u64,
+    /// Triangles dropped because a vertex is beyond the 16.8 guard band (±32767 px).
+    pub triangles_culled_guard_band: u64,
+    /// Triangles outside the viewport or the depth range (one cull test each).
+    pub triangles_culled_outside: u64,
+    /// Triangles of zero area after snapping, or covering no pixel centre of their box.
+    pub triangles_degenerate: u64,
+    /// 2x2 quads with at least one covered pixel (triangle path).
+    pub quads: u64,
+    /// Fragments generated (pixel centres covered by subsegments or triangles, inside the
+    /// viewport).
     pub fragments: u64,
     /// Fragments that passed the depth test when they arrived.
     pub fragments_passed_depth: u64,
@@ -82,6 +96,12 @@ impl std::ops::AddAssign for Counts {
         self.segments_clamped += o.segments_clamped;
         self.subsegments += o.subsegments;
         self.folds += o.folds;
+        self.triangles += o.triangles;
+        self.triangles_culled_behind_eye += o.triangles_culled_behind_eye;
+        self.triangles_culled_guard_band += o.triangles_culled_guard_band;
+        self.triangles_culled_outside += o.triangles_culled_outside;
+        self.triangles_degenerate += o.triangles_degenerate;
+        self.quads += o.quads;
         self.fragments += o.fragments;
         self.fragments_passed_depth += o.fragments_passed_depth;
         self.pixels_covered += o.pixels_covered;

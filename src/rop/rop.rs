@@ -9,6 +9,7 @@ use crate::lembo::eval3;
 use crate::raster::fragment::FragmentSink;
 use crate::raster::setup::ScreenLembo;
 use crate::raster::subsegmenter::Subsegment;
+use crate::raster::triangle::{ScreenTriangle, TriangleFragment, TriangleSink};
 
 /// Per-fragment shading (paper 000 equation 6) from the lembo's normal and position
 /// functions; shared by the functional ROP and the timed ROP units so both give the same
@@ -36,15 +37,26 @@ impl<R: Real> FragmentShader<R> {
     /// The colour of lembo `l` at (u, v) and the unit normal it was shaded with.
     #[inline]
     pub fn shade(&self, l: &ScreenLembo<R>, u: R, v: R) -> ([u8; 3], [R; 3]) {
-        let n = normalize(eval3(&l.normal, u, v));
+        let position = match self.to_eye {
+            Some(_) => [R::zero(); 3],
+            None => eval3(&l.position, u, v),
+        };
+        self.shade_at(eval3(&l.normal, u, v), position, l.color)
+    }
+
+    /// The colour of a surface point with (not necessarily unit) normal `normal` at world
+    /// `position` (unused for orthographic views), and the unit normal it was shaded with.
+    #[inline]
+    pub fn shade_at(&self, normal: [R; 3], position: [R; 3], color: [R; 3]) -> ([u8; 3], [R; 3]) {
+        let n = normalize(normal);
         let to_eye = match self.to_eye {
             Some(d) => d,
             None => {
-                let p = eval3(&l.position, u, v);
+                let p = position;
                 normalize([self.eye[0] - p[0], self.eye[1] - p[1], self.eye[2] - p[2]])
             }
         };
-        let c = self.shader.shade(n, to_eye, l.color);
+        let c = self.shader.shade(n, to_eye, color);
         ([to_u8(c[0]), to_u8(c[1]), to_u8(c[2])], n)
     }
 }
@@ -76,6 +88,40 @@ fn normalize<R: Real>(v: [R; 3]) -> [R; 3] {
     }
 }
 
+impl<R: Real> Rop<'_, R> {
+    /// Depth test, shading and write of one fragment of primitive `id`.
+    #[inline(always)]
+    fn write(
+        &mut self,
+        id: u32,
+        i: u32,
+        j: u32,
+        z: R,
+        shade: impl FnOnce(&FragmentShader<R>) -> ([u8; 3], [R; 3]),
+    ) {
+        let idx = self.fb.index(i, j);
+        let zf = z.f64() as f32;
+        if !self.fb.passes(idx, zf, id) {
+            return;
+        }
+        self.passed += 1;
+        let (rgb, n) = shade(&self.shader);
+        self.fb.write(idx, zf, id, rgb);
+        if let Some(normals) = self.fb.normal.as_mut() {
+            normals[idx] = n.map(|c| c.f64() as f32);
+        }
+    }
+}
+
+impl<R: Real> TriangleSink<R> for Rop<'_, R> {
+    #[inline]
+    fn fragment(&mut self, t: &ScreenTriangle<R>, i: u32, j: u32, f: &TriangleFragment<R>) {
+        self.write(t.id, i, j, f.z, |s| {
+            s.shade_at(f.normal, f.position, t.color)
+        });
+    }
+}
+
 impl<R: Real> FragmentSink<R> for Rop<'_, R> {
     #[inline]
     fn fragment(
@@ -88,16 +134,6 @@ impl<R: Real> FragmentSink<R> for Rop<'_, R> {
         v: R,
         z: R,
     ) {
-        let idx = self.fb.index(i, j);
-        let zf = z.f64() as f32;
-        if !self.fb.passes(idx, zf, l.id) {
-            return;
-        }
-        self.passed += 1;
-        let (rgb, n) = self.shader.shade(l, u, v);
-        self.fb.write(idx, zf, l.id, rgb);
-        if let Some(normals) = self.fb.normal.as_mut() {
-            normals[idx] = n.map(|c| c.f64() as f32);
-        }
+        self.write(l.id, i, j, z, |s| s.shade(l, u, v));
     }
 }
