@@ -4,7 +4,8 @@
 //! [`oracle`] intersects the ray through every sample with the world-space lembos
 //! themselves (no projection approximation, no datapath rounding) and shades the nearest
 //! hit with the exact normal function; [`metrics`] compares a frame buffer with that image
-//! under the names the report carries; [`heatmap`] draws the difference for a person to read.
+//! under the names the report carries; [`heatmap`] draws the difference for a person to read;
+//! [`montage`] puts images side by side under their labels.
 //!
 //! Architecture Invariant: this module knows nothing of cycles, units, the extreme method
 //! or the datapath precision. It depends only on the lembo model, the camera, the shading
@@ -12,6 +13,7 @@
 
 pub mod heatmap;
 pub mod metrics;
+pub mod montage;
 pub mod oracle;
 
 pub use heatmap::{error_heatmap, legend_height};
