@@ -20,6 +20,7 @@
 
 pub mod construct;
 pub mod shapes;
+pub mod tessellate;
 
 use crate::datapath::Real;
 use glam::DVec3;
