@@ -128,7 +128,7 @@ fn timed_vs_functional(c: &mut Criterion) {
         b.iter(|| raster::render_functional(&s, &view, 0.5, Datapath::F32, false).unwrap())
     });
     g.bench_function("timed_baseline/bunny/1024", |b| {
-        b.iter(|| run_timed(&s, &view, 0.5, Datapath::F32, &arch, &options).unwrap())
+        b.iter(|| run_timed(&s, &view, 0.5, Datapath::F32, &arch, None, &options).unwrap())
     });
     g.finish();
 }

@@ -1,16 +1,22 @@
-//! The `render` job: load the scene and the architecture, run the timed pipeline (or the
-//! functional model alone), optionally the exact reference and its metrics, and write the
-//! outputs. Flags arrive here already parsed; this
-//! module validates them once into a [`RenderJob`] and nothing downstream re-checks them.
+//! The `render` job: load the scene and the architecture, run one path (lembo or triangle)
+//! on the timed pipeline (or the functional model alone), optionally the exact reference
+//! and its metrics, and write the outputs. Flags arrive here already parsed; this module
+//! validates them once into a [`RenderJob`] and nothing downstream re-checks them.
+//! [`run_path`] is the part `compare` reuses for each path.
 
 use crate::camera::{View, MAX_VIEWPORT_SIDE};
 use crate::config::ArchConfig;
 use crate::datapath::Datapath;
 use crate::error::{Error, Result};
+use crate::lembo::tessellate::Tessellation;
 use crate::pipeline::{self, actor::SimOptions};
 use crate::raster;
+use crate::reference::oracle::ReferenceImage;
 use crate::reference::{heatmap, metrics, oracle};
-use crate::report::{png_bytes, write_files, Host, Report, SceneInfo, Settings, SCHEMA_VERSION};
+use crate::report::{
+    png_bytes, write_files, Host, Primitives, Report, SceneInfo, Settings, SCHEMA_VERSION,
+};
+use crate::rop::FrameBuffer;
 use crate::scene::Scene;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -21,6 +27,31 @@ pub const COMMAND_LINE: &str = "command line";
 pub const K_RANGE: (f64, f64) = (1e-4, 64.0);
 /// Largest accepted reference supersampling factor (samples per pixel side).
 pub const MAX_SUPERSAMPLE: u32 = 8;
+
+/// The largest accepted tessellation level (triangles per lembo edge).
+pub const MAX_TESS: u32 = 1024;
+/// The most triangles a tessellated scene may have: beyond it a run takes hours, and
+/// triangle ids must fit 32 bits.
+pub const MAX_TRIANGLES: u64 = 1 << 26;
+
+/// Which primitives the scene's surfaces are drawn as.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum PrimitivePath {
+    /// Lembos, by the extreme method (the default).
+    #[default]
+    Lembo,
+    /// Each lembo tessellated into n² triangles, rasterized as a GPU does.
+    Triangle,
+}
+
+impl PrimitivePath {
+    pub fn name(self) -> &'static str {
+        match self {
+            PrimitivePath::Lembo => "lembo",
+            PrimitivePath::Triangle => "triangle",
+        }
+    }
+}
 
 /// How a render is simulated.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -52,6 +83,10 @@ pub struct RenderJob {
     pub arch: Option<PathBuf>,
     /// Where to write the Chrome trace-event timeline. Timed mode only.
     pub trace_out: Option<PathBuf>,
+    pub path: PrimitivePath,
+    /// Tessellation level n (n² triangles per lembo); None for the default, 1. Triangle
+    /// path only.
+    pub tess: Option<u32>,
 }
 
 impl RenderJob {
@@ -96,6 +131,17 @@ impl RenderJob {
                 ));
             }
         }
+        if let Some(n) = self.tess {
+            if self.path != PrimitivePath::Triangle {
+                return Err(Error::invalid(
+                    COMMAND_LINE,
+                    "--tess",
+                    n,
+                    "only meaningful with --path triangle",
+                ));
+            }
+            check_tess_range(n)?;
+        }
         if self.mode == Mode::Functional {
             for (flag, set) in [
                 ("--arch", self.arch.is_some()),
@@ -113,6 +159,37 @@ impl RenderJob {
         }
         Ok(())
     }
+}
+
+/// `--tess` must be in 1..=MAX_TESS.
+pub fn check_tess_range(n: u32) -> Result<()> {
+    if (1..=MAX_TESS).contains(&n) {
+        Ok(())
+    } else {
+        Err(Error::invalid(
+            COMMAND_LINE,
+            "--tess",
+            n,
+            format!("must be 1 to {MAX_TESS} (triangles per lembo edge)"),
+        ))
+    }
+}
+
+/// The scene tessellated at level n must stay within [`MAX_TRIANGLES`].
+pub fn check_triangle_budget(scene: &Scene, n: u32) -> Result<()> {
+    let triangles = scene.lembo_count() as u64 * n as u64 * n as u64;
+    if triangles > MAX_TRIANGLES {
+        return Err(Error::invalid(
+            COMMAND_LINE,
+            "--tess",
+            n,
+            format!(
+                "{} lembos x {n}² = {triangles} triangles, more than the {MAX_TRIANGLES} accepted",
+                scene.lembo_count()
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// What a finished render hands back to the caller for its summary.
@@ -134,63 +211,102 @@ pub fn load_scene(job: &RenderJob) -> Result<Scene> {
     Ok(scene)
 }
 
-/// Runs a render job to completion: nothing is written unless everything succeeded.
-pub fn run_render(job: &RenderJob) -> Result<RenderOutput> {
-    job.validate()?;
-    let scene = load_scene(job)?;
-    let view = View::new(&scene.camera, scene.viewport);
+/// The exact reference of `scene` (its lembo surfaces), with the wall time it took.
+pub fn render_reference(scene: &Scene, view: &View, supersample: u32) -> (ReferenceImage, f64) {
+    let t = Instant::now();
+    let lembos: Vec<_> = scene.lembos().collect();
+    let reference = oracle::render_reference(&oracle::ReferenceInput {
+        lembos: &lembos,
+        view,
+        light: &scene.light,
+        background: scene.background,
+        supersample,
+    });
+    (reference, t.elapsed().as_secs_f64())
+}
 
-    let arch = match (&job.arch, job.mode) {
+/// The architecture a job runs on: None in functional mode.
+pub fn load_arch(job: &RenderJob) -> Result<Option<ArchConfig>> {
+    Ok(match (&job.arch, job.mode) {
         (_, Mode::Functional) => None,
         (Some(path), Mode::Timed) => Some(ArchConfig::load(path)?),
         (None, Mode::Timed) => Some(ArchConfig::baseline()),
+    })
+}
+
+/// Bytes of one lembo as the Setup unit reads it: six points and six normals in f32.
+pub const LEMBO_BYTES: u64 = 6 * 2 * 3 * 4;
+
+/// One path's run on a loaded scene: what `render` writes, and what `compare` puts side by
+/// side.
+pub struct PathRun {
+    pub report: Report,
+    /// The image (the timed pipeline's, or the functional model's).
+    pub framebuffer: FrameBuffer,
+    /// The error heat map against the reference, when one was given.
+    pub error_map: Option<image::RgbImage>,
+    /// Chrome trace-event JSON, when requested.
+    pub trace: Option<String>,
+}
+
+/// Runs `job`'s path on `scene`: the timed pipeline of `arch` (functional model when None),
+/// and with a `reference` (and the wall time it took) the accuracy metrics, from the
+/// functional model's fragment probe; the timed image must equal the functional one bit
+/// for bit, and this is checked on every such run.
+pub fn run_path(
+    job: &RenderJob,
+    scene: &Scene,
+    view: &View,
+    arch: Option<&ArchConfig>,
+    reference: Option<(&ReferenceImage, f64)>,
+) -> Result<PathRun> {
+    let tess_level = job.tess.unwrap_or(1);
+    let tessellation = match job.path {
+        PrimitivePath::Lembo => None,
+        PrimitivePath::Triangle => {
+            check_triangle_budget(scene, tess_level)?;
+            Some(Tessellation::new(scene, tess_level))
+        }
     };
+    let functional = |analyse: bool| -> Result<raster::Frame> {
+        match &tessellation {
+            None => raster::render_functional(scene, view, job.k, job.datapath, analyse),
+            Some(t) => Ok(raster::render_functional_triangles(
+                scene,
+                view,
+                t,
+                job.datapath,
+                analyse,
+            )),
+        }
+    };
+    let analyse = reference.is_some();
 
     let t0 = Instant::now();
     let mut timed = None;
     let mut frame = None;
-    match &arch {
+    match arch {
         Some(arch) => {
             let options = SimOptions {
                 trace: job.trace_out.is_some(),
                 ..SimOptions::default()
             };
             timed = Some(pipeline::run_timed(
-                &scene,
-                &view,
+                scene,
+                view,
                 job.k,
                 job.datapath,
                 arch,
+                tessellation.as_ref(),
                 &options,
             )?);
         }
-        None => {
-            frame = Some(raster::render_functional(
-                &scene,
-                &view,
-                job.k,
-                job.datapath,
-                job.reference,
-            )?)
-        }
+        None => frame = Some(functional(analyse)?),
     }
     let wall = t0.elapsed().as_secs_f64();
-    // Accuracy needs the fragment probe and the normal buffer of the functional model. The
-    // timed image must equal it bit for bit (DESIGN §3); checked here on every such run.
-    if job.reference && frame.is_none() {
-        frame = Some(raster::render_functional(
-            &scene,
-            &view,
-            job.k,
-            job.datapath,
-            true,
-        )?);
+    if analyse && frame.is_none() {
+        frame = Some(functional(true)?);
     }
-    let (image_fb, counts) = match (&timed, &frame) {
-        (Some(t), _) => (&t.framebuffer, t.counts),
-        (None, Some(f)) => (&f.framebuffer, f.counts),
-        (None, None) => unreachable!("one model ran"),
-    };
     if let (Some(t), Some(f)) = (&timed, &frame) {
         if t.framebuffer.color != f.framebuffer.color {
             return Err(Error::Internal(
@@ -198,38 +314,49 @@ pub fn run_render(job: &RenderJob) -> Result<RenderOutput> {
             ));
         }
     }
+    let counts = match (&timed, &frame) {
+        (Some(t), _) => t.counts,
+        (None, Some(f)) => f.counts,
+        (None, None) => unreachable!("one model ran"),
+    };
 
-    let mut files: Vec<(&str, Vec<u8>)> = vec![("image.png", png_bytes(&image_fb.to_image()))];
     let mut accuracy = None;
+    let mut error_map = None;
     let mut reference_wall = None;
-    if let (true, Some(frame)) = (job.reference, frame.as_ref()) {
+    if let (Some((reference, wall)), Some(frame)) = (reference, frame.as_ref()) {
         let t1 = Instant::now();
-        let lembos: Vec<_> = scene.lembos().collect();
-        let reference = oracle::render_reference(&oracle::ReferenceInput {
-            lembos: &lembos,
-            view: &view,
-            light: &scene.light,
-            background: scene.background,
-            supersample: job.supersample,
-        });
         let probe = frame.probe.unwrap_or_default();
         accuracy = Some(metrics::measure(
             &frame.framebuffer,
-            &reference,
+            reference,
             probe.double_hit_pixels,
-            probe.max_scanline_deviation_px,
+            match job.path {
+                PrimitivePath::Lembo => Some(probe.max_scanline_deviation_px),
+                PrimitivePath::Triangle => None,
+            },
         ));
-        let shown = reference
-            .to_image_supersampled()
-            .unwrap_or_else(|| reference.to_image());
-        files.push(("reference.png", png_bytes(&shown)));
-        files.push((
-            "error.png",
-            png_bytes(&heatmap::error_heatmap(&frame.framebuffer, &reference)),
-        ));
-        reference_wall = Some(t1.elapsed().as_secs_f64());
+        error_map = Some(heatmap::error_heatmap(&frame.framebuffer, reference));
+        reference_wall = Some(wall + t1.elapsed().as_secs_f64());
     }
 
+    let lembos = scene.lembo_count() as u64;
+    let primitives = match &tessellation {
+        None => Primitives {
+            kind: "lembo".into(),
+            count: lembos,
+            vertices: 6 * lembos,
+            bytes: LEMBO_BYTES * lembos,
+            quad_efficiency: None,
+        },
+        Some(t) => Primitives {
+            kind: "triangle".into(),
+            count: t.len(),
+            vertices: t.vertex_count(),
+            bytes: t.bytes(),
+            quad_efficiency: (counts.quads > 0)
+                .then(|| counts.fragments as f64 / (4 * counts.quads) as f64),
+        },
+    };
     let report = Report {
         schema_version: SCHEMA_VERSION,
         scene: SceneInfo {
@@ -241,7 +368,7 @@ pub fn run_render(job: &RenderJob) -> Result<RenderOutput> {
                 .unwrap_or_else(|| "(embedded default)".into()),
             width: scene.viewport.width,
             height: scene.viewport.height,
-            lembos: scene.lembo_count() as u64,
+            lembos,
             objects: scene
                 .objects
                 .iter()
@@ -254,22 +381,24 @@ pub fn run_render(job: &RenderJob) -> Result<RenderOutput> {
                 Mode::Functional => "functional",
             }
             .into(),
-            arch_file: arch.as_ref().map(|_| {
+            arch_file: arch.map(|_| {
                 job.arch
                     .as_ref()
                     .map(|p| p.display().to_string())
                     .unwrap_or_else(|| "(embedded baseline)".into())
             }),
-            path: "lembo".into(),
-            k_px: job.k,
+            path: job.path.name().into(),
+            k_px: (job.path == PrimitivePath::Lembo).then_some(job.k),
+            tess: tessellation.as_ref().map(|t| t.level()),
             datapath: job.datapath.name().into(),
-            reference: job.reference,
+            reference: reference.is_some(),
             supersample: job.supersample,
         },
+        primitives,
         units: timed.as_ref().map(|t| t.units.clone()).unwrap_or_default(),
         counts,
         cycles: timed.as_ref().map(|t| t.cycles.clone()),
-        arch,
+        arch: arch.cloned(),
         accuracy,
         host: Host {
             wall_seconds: wall,
@@ -284,6 +413,49 @@ pub fn run_render(job: &RenderJob) -> Result<RenderOutput> {
             reference_wall_seconds: reference_wall,
         },
     };
+    let (framebuffer, trace) = match (timed, frame) {
+        (Some(t), _) => (t.framebuffer, t.trace),
+        (None, Some(f)) => (f.framebuffer, None),
+        (None, None) => unreachable!("one model ran"),
+    };
+    Ok(PathRun {
+        report,
+        framebuffer,
+        error_map,
+        trace,
+    })
+}
+
+/// Runs a render job to completion: nothing is written unless everything succeeded.
+pub fn run_render(job: &RenderJob) -> Result<RenderOutput> {
+    job.validate()?;
+    let scene = load_scene(job)?;
+    let view = View::new(&scene.camera, scene.viewport);
+    let arch = load_arch(job)?;
+    if job.path == PrimitivePath::Triangle {
+        check_triangle_budget(&scene, job.tess.unwrap_or(1))?;
+    }
+    let reference = job
+        .reference
+        .then(|| render_reference(&scene, &view, job.supersample));
+    let run = run_path(
+        job,
+        &scene,
+        &view,
+        arch.as_ref(),
+        reference.as_ref().map(|(r, w)| (r, *w)),
+    )?;
+
+    let mut files: Vec<(&str, Vec<u8>)> =
+        vec![("image.png", png_bytes(&run.framebuffer.to_image()))];
+    if let (Some((reference, _)), Some(error_map)) = (&reference, &run.error_map) {
+        let shown = reference
+            .to_image_supersampled()
+            .unwrap_or_else(|| reference.to_image());
+        files.push(("reference.png", png_bytes(&shown)));
+        files.push(("error.png", png_bytes(error_map)));
+    }
+    let report = run.report;
     let json = serde_json::to_vec_pretty(&report).expect("the report serialises");
     files.push(("report.json", json));
     files.push(("report.txt", report.to_text().into_bytes()));
@@ -295,20 +467,25 @@ pub fn run_render(job: &RenderJob) -> Result<RenderOutput> {
     // The timeline is written last, beside the other outputs or where --trace-out says,
     // with the same write-then-rename rule.
     write_files(&dir, &files)?;
-    if let (Some(path), Some(trace)) = (&job.trace_out, timed.and_then(|t| t.trace)) {
-        let name = path
-            .file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_default();
-        let parent = match path.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p,
-            _ => Path::new("."),
-        };
-        write_files(parent, &[(name.as_str(), trace.into_bytes())])?;
+    if let (Some(path), Some(trace)) = (&job.trace_out, run.trace) {
+        write_file_at(path, trace.into_bytes())?;
     }
     Ok(RenderOutput {
         report,
         dir,
         files: files.iter().map(|(n, _)| n.to_string()).collect(),
     })
+}
+
+/// Writes one file at `path` with the write-then-rename rule.
+pub fn write_file_at(path: &Path, bytes: Vec<u8>) -> Result<()> {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let parent = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    write_files(parent, &[(name.as_str(), bytes)])
 }

@@ -12,19 +12,26 @@
 //!                     viewport
 //! ```
 //!
+//! Triangle path (the baseline): `Tessellator ─► TriangleSetup ─► TriangleRasterizer ─►` the
+//! same ROPs and frame buffer.
+//!
 //! - [`lembo`]: the model (paper 001 section 2): six-point construction, evaluation, edges
-//!   from vertex normals, meshes, the builtin shapes of Figures 6-8.
+//!   from vertex normals, meshes, the builtin shapes of Figures 6-8, the tessellator.
 //! - [`raster`]: the functional extreme method (section 5), one module per stage, generic
-//!   over the datapath ([`datapath::Real`]: `f32` or `f64`).
+//!   over the datapath ([`datapath::Real`]: `f32` or `f64`); the triangle rasterizer.
+//! - [`pipeline`]: the timed pipeline (Figure 5 as actors on bounded channels with cycle
+//!   accounting), and the triangle path's timed units; [`config`] its architecture files.
 //! - [`rop`]: depth test, per-fragment Phong (paper 000 equation 6), frame buffer.
 //! - [`reference`]: the exact f64 ray-patch reference and the accuracy metrics.
 //! - [`scene`], [`camera`]: the JSON trace format and OpenGL-convention cameras.
-//! - [`job`], [`report`]: the `render` command's work and its `report.json` / `report.txt`.
+//! - [`job`], [`report`]: the `render` command's work and its `report.json` / `report.txt`;
+//!   [`compare`]: lembos against triangles against the exact surface.
 //!
-//! The functional model knows nothing of cycles; the timed pipeline (Figure 5 as actors on
-//! bounded channels) will call the same stage functions and add only time.
+//! The functional model knows nothing of cycles; the timed pipeline calls the same stage
+//! functions and adds only time.
 
 pub mod camera;
+pub mod compare;
 pub mod config;
 pub mod datapath;
 pub mod error;

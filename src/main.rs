@@ -1,8 +1,9 @@
 //! The `lembo-sim` command: parse, validate, run, print. Everything else is in the library.
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use lembo_sim::compare::{run_compare, CompareJob, Tess};
 use lembo_sim::datapath::Datapath;
-use lembo_sim::job::{self, run_render, RenderJob};
+use lembo_sim::job::{self, run_render, PrimitivePath, RenderJob};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -19,9 +20,24 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Render a scene with the extreme method on the simulated unit and write image.png,
-    /// report.json, report.txt (and reference.png, error.png with --reference).
+    /// Render a scene with the extreme method on the simulated unit (or as triangles,
+    /// --path triangle) and write image.png, report.json, report.txt (and reference.png,
+    /// error.png with --reference).
     Render(RenderArgs),
+    /// Render a scene as lembos and as tessellated triangles on the same architecture,
+    /// measure both against the exact surface, and write lembo.png, triangle.png,
+    /// reference.png, lembo_error.png, triangle_error.png, montage.png, compare.json and
+    /// compare.txt; print the table (primitives, vertices, bytes, cycles, fragments,
+    /// accuracy per path).
+    Compare(CompareArgs),
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum PathArg {
+    /// Lembos by the extreme method (Martinelli's unit).
+    Lembo,
+    /// Each lembo tessellated into n² triangles (--tess), rasterized with edge functions.
+    Triangle,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -79,6 +95,63 @@ struct RenderArgs {
     /// Override the scene's viewport, e.g. 1024x1024.
     #[arg(long, value_name = "WxH", value_parser = parse_viewport)]
     viewport: Option<(u32, u32)>,
+    /// Which primitives draw the scene's surfaces.
+    #[arg(long, value_enum, default_value = "lembo")]
+    path: PathArg,
+    /// Triangle path: tessellate each lembo into N² triangles, uniform in its domain, with
+    /// vertices on the true patch [default: 1, a mesh's own triangles].
+    #[arg(long, value_name = "N")]
+    tess: Option<u32>,
+}
+
+#[derive(Args)]
+struct CompareArgs {
+    /// Scene file (JSON, see traces/README.md); the embedded default scene when omitted.
+    scene: Option<PathBuf>,
+    /// Output directory [default: out/<scene name>/compare/].
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+    /// Tolerance k of the lembo path [pixels], in [0.0001, 64].
+    #[arg(
+        long,
+        value_name = "PX",
+        default_value_t = 0.5,
+        allow_negative_numbers = true
+    )]
+    k: f64,
+    /// Tessellation level of the triangle path, or `auto`: the smallest N whose silhouette
+    /// error is no larger than the lembo path's at this k.
+    #[arg(long, value_name = "N|auto", default_value = "auto", value_parser = parse_tess)]
+    tess: Tess,
+    /// Datapath precision of both paths.
+    #[arg(long, value_enum, default_value = "f32")]
+    datapath: DatapathArg,
+    /// Architecture configuration shared by both paths [default: the embedded baseline].
+    #[arg(long, value_name = "FILE")]
+    arch: Option<PathBuf>,
+    /// Reference samples per pixel side for reference.png (metrics use pixel centres).
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    supersample: u32,
+    /// Override the scene's viewport, e.g. 1024x1024.
+    #[arg(long, value_name = "WxH", value_parser = parse_viewport)]
+    viewport: Option<(u32, u32)>,
+}
+
+fn parse_tess(s: &str) -> Result<Tess, String> {
+    if s.eq_ignore_ascii_case("auto") {
+        return Ok(Tess::Auto);
+    }
+    s.trim()
+        .parse::<u32>()
+        .map(Tess::Level)
+        .map_err(|e| format!("expected a level N or `auto`, got `{s}`: {e}"))
+}
+
+fn datapath(d: DatapathArg) -> Datapath {
+    match d {
+        DatapathArg::F32 => Datapath::F32,
+        DatapathArg::F64 => Datapath::F64,
+    }
 }
 
 fn parse_viewport(s: &str) -> Result<(u32, u32), String> {
@@ -105,20 +178,49 @@ fn default_render() -> RenderArgs {
         arch: None,
         trace_out: None,
         viewport: None,
+        path: PathArg::Lembo,
+        tess: None,
     }
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let Command::Render(args) = cli.command.unwrap_or(Command::Render(default_render()));
+    match cli.command.unwrap_or(Command::Render(default_render())) {
+        Command::Render(args) => render(args),
+        Command::Compare(args) => compare(args),
+    }
+}
+
+fn compare(args: CompareArgs) -> ExitCode {
+    let job = CompareJob {
+        scene: args.scene,
+        out: args.out,
+        k: args.k,
+        tess: args.tess,
+        datapath: datapath(args.datapath),
+        arch: args.arch,
+        viewport: args.viewport,
+        supersample: args.supersample,
+    };
+    match run_compare(&job) {
+        Ok(out) => {
+            print!("{}", out.table);
+            println!("wrote {} to {}", out.files.join(", "), out.dir.display());
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("lembo-sim: error: {e}");
+            ExitCode::from(e.exit_code())
+        }
+    }
+}
+
+fn render(args: RenderArgs) -> ExitCode {
     let job = RenderJob {
         scene: args.scene,
         out: args.out,
         k: args.k,
-        datapath: match args.datapath {
-            DatapathArg::F32 => Datapath::F32,
-            DatapathArg::F64 => Datapath::F64,
-        },
+        datapath: datapath(args.datapath),
         reference: args.reference,
         supersample: args.supersample,
         viewport: args.viewport,
@@ -128,26 +230,51 @@ fn main() -> ExitCode {
         },
         arch: args.arch,
         trace_out: args.trace_out,
+        path: match args.path {
+            PathArg::Lembo => PrimitivePath::Lembo,
+            PathArg::Triangle => PrimitivePath::Triangle,
+        },
+        tess: args.tess,
     };
     match run_render(&job) {
         Ok(out) => {
             let r = &out.report;
             let c = &r.counts;
-            println!(
-                "{}: {} lembos, {}x{} px, k = {} px, {}: {} scanlines, {} intervals, {} segments, {} subsegments, {} fragments ({} passed depth)",
-                r.scene.name,
-                r.scene.lembos,
-                r.scene.width,
-                r.scene.height,
-                r.settings.k_px,
-                r.settings.datapath,
-                c.scanlines,
-                c.intervals,
-                c.segments,
-                c.subsegments,
-                c.fragments,
-                c.fragments_passed_depth
-            );
+            match (r.settings.k_px, r.settings.tess) {
+                (Some(k), _) => println!(
+                    "{}: {} lembos, {}x{} px, k = {} px, {}: {} scanlines, {} intervals, {} segments, {} subsegments, {} fragments ({} passed depth)",
+                    r.scene.name,
+                    r.scene.lembos,
+                    r.scene.width,
+                    r.scene.height,
+                    k,
+                    r.settings.datapath,
+                    c.scanlines,
+                    c.intervals,
+                    c.segments,
+                    c.subsegments,
+                    c.fragments,
+                    c.fragments_passed_depth
+                ),
+                (None, tess) => println!(
+                    "{}: {} lembos as {} triangles (tessellation {}), {}x{} px, {}: {} culled, {} quads ({:.1} % efficiency), {} fragments ({} passed depth)",
+                    r.scene.name,
+                    r.scene.lembos,
+                    c.triangles,
+                    tess.unwrap_or(1),
+                    r.scene.width,
+                    r.scene.height,
+                    r.settings.datapath,
+                    c.triangles_culled_behind_eye
+                        + c.triangles_culled_guard_band
+                        + c.triangles_culled_outside
+                        + c.triangles_degenerate,
+                    c.quads,
+                    100.0 * r.primitives.quad_efficiency.unwrap_or(0.0),
+                    c.fragments,
+                    c.fragments_passed_depth
+                ),
+            }
             match &r.cycles {
                 Some(cy) => println!(
                     "timed ({}): {} cycles = {} at {} MHz, bottleneck {}; host {:.3} s, {:.1} M simulated cycles/s",
@@ -169,7 +296,7 @@ fn main() -> ExitCode {
             }
             if let Some(a) = &r.accuracy {
                 println!(
-                    "accuracy: PSNR {:.2} dB, coverage +{} / -{} px, silhouette max {:.2} px, cracks {}, double hits {}, max |y - y_j| {:.4} px",
+                    "accuracy: PSNR {:.2} dB, coverage +{} / -{} px, silhouette max {:.2} px, cracks {}, double hits {}{}",
                     a.psnr_db,
                     a.coverage_false_positive,
                     a.coverage_false_negative,
@@ -177,6 +304,8 @@ fn main() -> ExitCode {
                     a.crack_pixels,
                     a.double_hit_pixels,
                     a.max_scanline_deviation_px
+                        .map(|d| format!(", max |y - y_j| {d:.4} px"))
+                        .unwrap_or_default()
                 );
             }
             println!("wrote {} to {}", out.files.join(", "), out.dir.display());

@@ -11,7 +11,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 /// Version of the `report.json` layout; bumped when a field changes meaning or moves.
-pub const SCHEMA_VERSION: u32 = 2;
+pub const SCHEMA_VERSION: u32 = 3;
 
 /// Everything a run reports.
 #[derive(Clone, Debug, Serialize)]
@@ -19,6 +19,8 @@ pub struct Report {
     pub schema_version: u32,
     pub scene: SceneInfo,
     pub settings: Settings,
+    /// What the path drew with, and how much primitive data that is.
+    pub primitives: Primitives,
     /// Every effective architecture parameter, defaults included; null in functional mode.
     pub arch: Option<ArchConfig>,
     /// The unit instances this scene required; empty in functional mode.
@@ -49,16 +51,37 @@ pub struct Settings {
     pub mode: String,
     /// The architecture file, `(embedded baseline)`, or null in functional mode.
     pub arch_file: Option<String>,
-    /// `lembo`.
+    /// `lembo` or `triangle`.
     pub path: String,
-    /// Tolerance k of the extreme method [pixels].
-    pub k_px: f64,
+    /// Tolerance k of the extreme method [pixels]; null for the triangle path.
+    pub k_px: Option<f64>,
+    /// Tessellation level n (n² triangles per lembo); null for the lembo path.
+    pub tess: Option<u32>,
     /// `f32` or `f64`.
     pub datapath: String,
     /// Whether the exact reference was rendered and compared.
     pub reference: bool,
     /// Reference sub-samples per pixel side (1 = pixel centres only).
     pub supersample: u32,
+}
+
+/// The primitives a path draws and their size in memory.
+#[derive(Clone, Debug, Serialize)]
+pub struct Primitives {
+    /// `lembo` or `triangle`.
+    pub kind: String,
+    /// Primitives in the scene [primitives].
+    pub count: u64,
+    /// Vertices the primitive data holds: six control points per lembo (each lembo is read
+    /// whole); the distinct vertices of the tessellated mesh for triangles [vertices].
+    pub vertices: u64,
+    /// Bytes of primitive data in f32: 144 per lembo (six points and six normals); for
+    /// triangles an indexed mesh, 24 per vertex (position and normal) and 12 per triangle
+    /// (three 32-bit indices) [bytes].
+    pub bytes: u64,
+    /// Covered pixels over pixels of the quads shaded, fragments / (4 quads); null for
+    /// lembos, which are not rasterized in quads.
+    pub quad_efficiency: Option<f64>,
 }
 
 /// Measurements of the simulator itself on this host (not deterministic).
@@ -91,10 +114,14 @@ impl Report {
         let st = &self.settings;
         let _ = writeln!(
             t,
-            "settings  mode {}, path {}, k = {} px, datapath {}, reference {}{}",
+            "settings  mode {}, path {}, {}, datapath {}, reference {}{}",
             st.mode,
             st.path,
-            st.k_px,
+            match (st.k_px, st.tess) {
+                (Some(k), _) => format!("k = {k} px"),
+                (None, Some(n)) => format!("tessellation {n} ({} triangles per lembo)", n * n),
+                (None, None) => String::new(),
+            },
             st.datapath,
             if st.reference { "yes" } else { "no" },
             if st.reference && st.supersample > 1 {
@@ -103,10 +130,33 @@ impl Report {
                 String::new()
             }
         );
+        let p = &self.primitives;
+        let _ = writeln!(
+            t,
+            "primitives {} {}s, {} vertices, {} bytes{}",
+            p.count,
+            p.kind,
+            p.vertices,
+            p.bytes,
+            p.quad_efficiency
+                .map(|q| format!(", quad efficiency {:.1} %", 100.0 * q))
+                .unwrap_or_default()
+        );
         let _ = writeln!(t, "\ncounts (functional model)");
         if let Ok(serde_json::Value::Object(map)) = serde_json::to_value(self.counts) {
+            // Only the counters of the path that ran.
+            let triangle = st.path == "triangle";
             for (k, v) in map {
-                let _ = writeln!(t, "  {k:<26} {v}");
+                let of_triangles = k.starts_with("triangles") || k == "quads";
+                let of_lembos = !of_triangles
+                    && !matches!(
+                        k.as_str(),
+                        "fragments" | "fragments_passed_depth" | "pixels_covered"
+                    );
+                if (triangle && of_lembos) || (!triangle && of_triangles) {
+                    continue;
+                }
+                let _ = writeln!(t, "  {k:<28} {v}");
             }
         }
         match &self.cycles {

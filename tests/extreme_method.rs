@@ -94,7 +94,7 @@ fn accuracy(frame: &Frame, reference: &ReferenceImage) -> Accuracy {
         &frame.framebuffer,
         reference,
         probe.double_hit_pixels,
-        probe.max_scanline_deviation_px,
+        Some(probe.max_scanline_deviation_px),
     )
 }
 

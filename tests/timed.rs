@@ -28,7 +28,7 @@ fn scene(name: &str, side: Option<u32>) -> Scene {
 
 fn timed(scene: &Scene, arch: &ArchConfig, options: &SimOptions) -> TimedFrame {
     let view = View::new(&scene.camera, scene.viewport);
-    run_timed(scene, &view, 0.5, Datapath::F32, arch, options).expect("timed run")
+    run_timed(scene, &view, 0.5, Datapath::F32, arch, None, options).expect("timed run")
 }
 
 fn arch(name: &str) -> ArchConfig {

@@ -93,6 +93,11 @@ impl<'a> Tessellation<'a> {
         self.lembos.is_empty()
     }
 
+    /// Lembos tessellated (the scene's, in scene order).
+    pub fn lembos(&self) -> usize {
+        self.lembos.len()
+    }
+
     /// Triangles per lembo: n².
     pub fn triangles_per_lembo(&self) -> u64 {
         let n = u64::from(self.n);

@@ -30,11 +30,14 @@ pub mod segmenter;
 pub mod setup;
 pub mod subsegmenter;
 pub mod trace;
+pub mod triangle_rasterizer;
+pub mod triangle_setup;
 
 use crate::camera::View;
 use crate::config::{ArchConfig, LinkConfig};
 use crate::datapath::{Datapath, Real};
 use crate::error::{Error, Result};
+use crate::lembo::tessellate::Tessellation;
 use crate::raster::setup::ScreenLembo;
 use crate::raster::Counts;
 use crate::rop::FrameBuffer;
@@ -56,6 +59,8 @@ pub enum UnitKind {
     Segmenter,
     Subsegmenter,
     FragmentRasterizer,
+    TriangleSetup,
+    TriangleRasterizer,
     Rop,
     FrameBuffer,
 }
@@ -69,6 +74,8 @@ impl UnitKind {
             UnitKind::Segmenter => "Segmenter",
             UnitKind::Subsegmenter => "Subsegmenter",
             UnitKind::FragmentRasterizer => "FragmentRasterizer",
+            UnitKind::TriangleSetup => "TriangleSetup",
+            UnitKind::TriangleRasterizer => "TriangleRasterizer",
             UnitKind::Rop => "Rop",
             UnitKind::FrameBuffer => "FrameBuffer",
         }
@@ -134,8 +141,11 @@ pub struct Shared<'a, R> {
     pub arch: &'a ArchConfig,
     pub k: R,
     pub background: [u8; 3],
-    /// Screen-space lembos by id, filled by Setup before it sends the id downstream.
+    /// Screen-space lembos by id, filled by Setup before it sends the id downstream
+    /// (empty in the triangle path).
     pub lembos: Vec<OnceLock<ScreenLembo<R>>>,
+    /// The triangles of the triangle path; None in the lembo path.
+    pub tessellation: Option<&'a Tessellation<'a>>,
     pub tiles: RopTiles,
 }
 
@@ -173,42 +183,67 @@ impl Finished {
     }
 }
 
-/// Renders `scene` on the timed pipeline of `arch`.
+/// Renders `scene` on the timed pipeline of `arch`: the lembo path, or with a
+/// `tessellation` the triangle path.
 pub fn run_timed(
     scene: &Scene,
     view: &View,
     k: f64,
     datapath: Datapath,
     arch: &ArchConfig,
+    tessellation: Option<&Tessellation>,
     options: &SimOptions,
 ) -> Result<TimedFrame> {
     match datapath {
-        Datapath::F32 => run_in::<f32>(scene, view, k, arch, options),
-        Datapath::F64 => run_in::<f64>(scene, view, k, arch, options),
+        Datapath::F32 => run_in::<f32>(scene, view, k, arch, tessellation, options),
+        Datapath::F64 => run_in::<f64>(scene, view, k, arch, tessellation, options),
+    }
+}
+
+/// Appends `n` units of `kind`, named `Kind[i]` when `indexed`.
+fn add_units(units: &mut Vec<UnitInstance>, kind: UnitKind, n: u32, indexed: bool) {
+    for i in 0..n {
+        let name = if indexed {
+            format!("{}[{i}]", kind.name())
+        } else {
+            kind.name().to_string()
+        };
+        units.push(UnitInstance { name, kind });
     }
 }
 
 /// The units a lembo scene instantiates, in dataflow order.
 pub fn lembo_units(arch: &ArchConfig) -> Vec<UnitInstance> {
     let mut units = Vec::new();
-    let mut add = |kind: UnitKind, n: u32, indexed: bool| {
-        for i in 0..n {
-            let name = if indexed {
-                format!("{}[{i}]", kind.name())
-            } else {
-                kind.name().to_string()
-            };
-            units.push(UnitInstance { name, kind });
-        }
-    };
-    add(UnitKind::Setup, 1, false);
-    add(UnitKind::MinMax, 1, false);
-    add(UnitKind::IntervalManager, 1, false);
-    add(UnitKind::Segmenter, arch.segmenter.count, true);
-    add(UnitKind::Subsegmenter, arch.subsegmenter.count, true);
-    add(UnitKind::FragmentRasterizer, arch.rasterizer.count, true);
-    add(UnitKind::Rop, arch.rop.count, true);
-    add(UnitKind::FrameBuffer, 1, false);
+    add_units(&mut units, UnitKind::Setup, 1, false);
+    add_units(&mut units, UnitKind::MinMax, 1, false);
+    add_units(&mut units, UnitKind::IntervalManager, 1, false);
+    add_units(&mut units, UnitKind::Segmenter, arch.segmenter.count, true);
+    add_units(
+        &mut units,
+        UnitKind::Subsegmenter,
+        arch.subsegmenter.count,
+        true,
+    );
+    add_units(
+        &mut units,
+        UnitKind::FragmentRasterizer,
+        arch.rasterizer.count,
+        true,
+    );
+    add_units(&mut units, UnitKind::Rop, arch.rop.count, true);
+    add_units(&mut units, UnitKind::FrameBuffer, 1, false);
+    units
+}
+
+/// The units the triangle path instantiates, in dataflow order.
+pub fn triangle_units(arch: &ArchConfig) -> Vec<UnitInstance> {
+    let mut units = Vec::new();
+    add_units(&mut units, UnitKind::TriangleSetup, 1, false);
+    let n = arch.triangle_rasterizer.count;
+    add_units(&mut units, UnitKind::TriangleRasterizer, n, true);
+    add_units(&mut units, UnitKind::Rop, arch.rop.count, true);
+    add_units(&mut units, UnitKind::FrameBuffer, 1, false);
     units
 }
 
@@ -294,15 +329,17 @@ fn run_in<R: Real>(
     view: &View,
     k: f64,
     arch: &ArchConfig,
+    tessellation: Option<&Tessellation>,
     options: &SimOptions,
 ) -> Result<TimedFrame> {
     let vp = view.viewport;
     let background = scene.background.map(crate::rop::shade::to_u8::<f64>);
     let n_lembos = scene.lembo_count();
-    let units = if n_lembos > 0 {
-        lembo_units(arch)
-    } else {
-        Vec::new()
+    // Model only what the scene requires: no primitives, no units.
+    let units = match tessellation {
+        _ if n_lembos == 0 => Vec::new(),
+        None => lembo_units(arch),
+        Some(_) => triangle_units(arch),
     };
     if units.is_empty() {
         let fb = FrameBuffer::new(vp.width, vp.height, background, false);
@@ -326,47 +363,27 @@ fn run_in<R: Real>(
         arch,
         k: R::of(k),
         background,
-        lembos: (0..n_lembos).map(|_| OnceLock::new()).collect(),
+        lembos: match tessellation {
+            None => (0..n_lembos).map(|_| OnceLock::new()).collect(),
+            Some(_) => Vec::new(),
+        },
+        tessellation,
         tiles: RopTiles::new(vp.width, vp.height, arch.rop.tile_px, arch.rop.count),
     };
     let monitor = Monitor::new(units.iter().map(|u| u.name.clone()).collect());
     let trace_cap = options.trace_event_cap / units.len();
 
-    // Unit indices by kind, in the order of `lembo_units`.
+    // Unit indices by kind, in the order of `lembo_units` or `triangle_units`.
     let of = |kind: UnitKind| -> Vec<usize> {
         (0..units.len())
             .filter(|&u| units[u].kind == kind)
             .collect()
     };
-    let (seg_ids, sub_ids, ras_ids, rop_ids) = (
-        of(UnitKind::Segmenter),
-        of(UnitKind::Subsegmenter),
-        of(UnitKind::FragmentRasterizer),
-        of(UnitKind::Rop),
-    );
+    let rop_ids = of(UnitKind::Rop);
     let fb_id = units.len() - 1;
     let pick =
         |ids: &[usize]| -> Vec<UnitInstance> { ids.iter().map(|&u| units[u].clone()).collect() };
     let l = &arch.links;
-    let (mut setup_tx, mut minmax_rx) = crossbar(&l.setup_to_minmax, &units[0..1], &units[1..2]);
-    let (mut minmax_tx, mut im_rx) =
-        crossbar(&l.minmax_to_interval_manager, &units[1..2], &units[2..3]);
-    let (mut im_tx, seg_rx) = crossbar(
-        &l.interval_manager_to_segmenter,
-        &units[2..3],
-        &pick(&seg_ids),
-    );
-    let (seg_tx, sub_rx) = crossbar(
-        &l.segmenter_to_subsegmenter,
-        &pick(&seg_ids),
-        &pick(&sub_ids),
-    );
-    let (sub_tx, ras_rx) = crossbar(
-        &l.subsegmenter_to_rasterizer,
-        &pick(&sub_ids),
-        &pick(&ras_ids),
-    );
-    let (ras_tx, rop_rx) = crossbar(&l.rasterizer_to_rop, &pick(&ras_ids), &pick(&rop_ids));
     let (rop_tx, mut fb_rx) = crossbar(&l.rop_to_framebuffer, &pick(&rop_ids), &units[fb_id..]);
 
     let results: Result<Vec<(usize, Finished, Option<TileStore>)>> = std::thread::scope(|s| {
@@ -380,40 +397,104 @@ fn run_in<R: Real>(
         let mut handles: Vec<(usize, UnitHandle<'_>)> = Vec::new();
         let plain = |r: std::result::Result<Finished, ActorError>| r.map(|f| (f, None));
 
-        let c = ctx!(0, arch.setup.latency_cycles, Vec::new(), setup_tx.remove(0));
-        handles.push((0, spawn(s, mon, 0, move || plain(setup::run(c, sh)))?));
-        let c = ctx!(
-            1,
-            arch.minmax.latency_cycles,
-            minmax_rx.remove(0),
-            minmax_tx.remove(0)
-        );
-        handles.push((1, spawn(s, mon, 1, move || plain(minmax::run(c, sh)))?));
-        let c = ctx!(
-            2,
-            arch.interval_manager.latency_cycles,
-            im_rx.remove(0),
-            im_tx.remove(0)
-        );
-        handles.push((
-            2,
-            spawn(s, mon, 2, move || plain(interval_manager::run(c, sh)))?,
-        ));
-        for ((&u, rx), tx) in seg_ids.iter().zip(seg_rx).zip(seg_tx) {
-            let c = ctx!(u, arch.segmenter.latency_cycles, rx, tx);
-            handles.push((u, spawn(s, mon, u, move || plain(segmenter::run(c, sh)))?));
-        }
-        for ((&u, rx), tx) in sub_ids.iter().zip(sub_rx).zip(sub_tx) {
-            let c = ctx!(u, arch.subsegmenter.latency_cycles, rx, tx);
-            handles.push((
-                u,
-                spawn(s, mon, u, move || plain(subsegmenter::run(c, sh)))?,
-            ));
-        }
-        for ((&u, rx), tx) in ras_ids.iter().zip(ras_rx).zip(ras_tx) {
-            let c = ctx!(u, arch.rasterizer.latency_cycles, rx, tx);
-            handles.push((u, spawn(s, mon, u, move || plain(rasterizer::run(c, sh)))?));
-        }
+        // The front end, up to the links into the ROPs.
+        let rop_rx = match tessellation {
+            None => {
+                let (seg_ids, sub_ids, ras_ids) = (
+                    of(UnitKind::Segmenter),
+                    of(UnitKind::Subsegmenter),
+                    of(UnitKind::FragmentRasterizer),
+                );
+                let (mut setup_tx, mut minmax_rx) =
+                    crossbar(&l.setup_to_minmax, &units[0..1], &units[1..2]);
+                let (mut minmax_tx, mut im_rx) =
+                    crossbar(&l.minmax_to_interval_manager, &units[1..2], &units[2..3]);
+                let (mut im_tx, seg_rx) = crossbar(
+                    &l.interval_manager_to_segmenter,
+                    &units[2..3],
+                    &pick(&seg_ids),
+                );
+                let (seg_tx, sub_rx) = crossbar(
+                    &l.segmenter_to_subsegmenter,
+                    &pick(&seg_ids),
+                    &pick(&sub_ids),
+                );
+                let (sub_tx, ras_rx) = crossbar(
+                    &l.subsegmenter_to_rasterizer,
+                    &pick(&sub_ids),
+                    &pick(&ras_ids),
+                );
+                let (ras_tx, rop_rx) =
+                    crossbar(&l.rasterizer_to_rop, &pick(&ras_ids), &pick(&rop_ids));
+
+                let c = ctx!(0, arch.setup.latency_cycles, Vec::new(), setup_tx.remove(0));
+                handles.push((0, spawn(s, mon, 0, move || plain(setup::run(c, sh)))?));
+                let c = ctx!(
+                    1,
+                    arch.minmax.latency_cycles,
+                    minmax_rx.remove(0),
+                    minmax_tx.remove(0)
+                );
+                handles.push((1, spawn(s, mon, 1, move || plain(minmax::run(c, sh)))?));
+                let c = ctx!(
+                    2,
+                    arch.interval_manager.latency_cycles,
+                    im_rx.remove(0),
+                    im_tx.remove(0)
+                );
+                handles.push((
+                    2,
+                    spawn(s, mon, 2, move || plain(interval_manager::run(c, sh)))?,
+                ));
+                for ((&u, rx), tx) in seg_ids.iter().zip(seg_rx).zip(seg_tx) {
+                    let c = ctx!(u, arch.segmenter.latency_cycles, rx, tx);
+                    handles.push((u, spawn(s, mon, u, move || plain(segmenter::run(c, sh)))?));
+                }
+                for ((&u, rx), tx) in sub_ids.iter().zip(sub_rx).zip(sub_tx) {
+                    let c = ctx!(u, arch.subsegmenter.latency_cycles, rx, tx);
+                    handles.push((
+                        u,
+                        spawn(s, mon, u, move || plain(subsegmenter::run(c, sh)))?,
+                    ));
+                }
+                for ((&u, rx), tx) in ras_ids.iter().zip(ras_rx).zip(ras_tx) {
+                    let c = ctx!(u, arch.rasterizer.latency_cycles, rx, tx);
+                    handles.push((u, spawn(s, mon, u, move || plain(rasterizer::run(c, sh)))?));
+                }
+                rop_rx
+            }
+            Some(_) => {
+                let tr_ids = of(UnitKind::TriangleRasterizer);
+                let (mut setup_tx, tr_rx) = crossbar(
+                    &l.triangle_setup_to_rasterizer,
+                    &units[0..1],
+                    &pick(&tr_ids),
+                );
+                let (tr_tx, rop_rx) = crossbar(
+                    &l.triangle_rasterizer_to_rop,
+                    &pick(&tr_ids),
+                    &pick(&rop_ids),
+                );
+                let c = ctx!(
+                    0,
+                    arch.triangle_setup.latency_cycles,
+                    Vec::new(),
+                    setup_tx.remove(0)
+                );
+                handles.push((
+                    0,
+                    spawn(s, mon, 0, move || plain(triangle_setup::run(c, sh)))?,
+                ));
+                for ((&u, rx), tx) in tr_ids.iter().zip(tr_rx).zip(tr_tx) {
+                    let c = ctx!(u, arch.triangle_rasterizer.latency_cycles, rx, tx);
+                    handles.push((
+                        u,
+                        spawn(s, mon, u, move || plain(triangle_rasterizer::run(c, sh)))?,
+                    ));
+                }
+                rop_rx
+            }
+        };
         for (r, ((&u, rx), tx)) in rop_ids.iter().zip(rop_rx).zip(rop_tx).enumerate() {
             let c = ctx!(u, arch.rop.latency_cycles, rx, tx);
             handles.push((

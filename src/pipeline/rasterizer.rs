@@ -13,6 +13,7 @@
 //! Depth is evaluated from the depth quadratic in the ROP, with the depth test.
 
 use super::actor::{ActorError, Ctx};
+use super::rop::RopItem;
 use super::subsegmenter::ScanSubsegment;
 use super::{Finished, Shared};
 use crate::datapath::Real;
@@ -28,7 +29,7 @@ pub struct FragmentSpan<R> {
 }
 
 pub fn run<R: Real>(
-    mut ctx: Ctx<ScanSubsegment<R>, FragmentSpan<R>>,
+    mut ctx: Ctx<ScanSubsegment<R>, RopItem<R>>,
     sh: &Shared<R>,
 ) -> Result<Finished, ActorError> {
     let cfg = &sh.arch.rasterizer;
@@ -48,7 +49,11 @@ pub fn run<R: Real>(
                 ..run
             };
             let cycles = (n as u64).div_ceil(cfg.fragments_per_cycle);
-            ctx.emit(cycles, rop, FragmentSpan { id, j, span: piece })?;
+            ctx.emit(
+                cycles,
+                rop,
+                RopItem::Lembo(FragmentSpan { id, j, span: piece }),
+            )?;
             run.advance(n);
         }
     }

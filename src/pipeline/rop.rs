@@ -1,11 +1,12 @@
 //! Rop (DESIGN §2 and §3; paper 000 section 4 for the ROP's place): the depth test and the
 //! frame-buffer write, Np units screen-interleaved by tiles.
 //!
-//! Input: [`FragmentSpan`]s from every rasterizer, merged by (arrival, port). For each
-//! fragment: depth from the lembo's depth quadratic, the depth test on (z, id) (the
-//! winner does not depend on arrival order), and for a fragment that passes, Phong shading
-//! (paper 000 equation 6) and the write. Output: one [`WriteBurst`] per span to the
-//! frame-buffer memory port: depth reads for every fragment tested, colour and depth
+//! Input: [`RopItem`]s from every rasterizer, merged by (arrival, port): lembo
+//! [`FragmentSpan`]s, or [`TrianglePiece`]s in the triangle path. For each fragment: its
+//! depth (from the lembo's depth quadratic, or the triangle's plane), the depth test on
+//! (z, id) (the winner does not depend on arrival order), and for a fragment that passes,
+//! Phong shading (paper 000 equation 6) and the write. Output: one [`WriteBurst`] per item
+//! to the frame-buffer memory port: depth reads for every fragment tested, colour and depth
 //! writes for every fragment that passed.
 //!
 //! Storage: each ROP owns the pixels of its tiles ([`RopTiles`]), held tile by tile, so the
@@ -17,6 +18,7 @@
 
 use super::actor::{ActorError, Ctx};
 use super::rasterizer::FragmentSpan;
+use super::triangle_rasterizer::TrianglePiece;
 use super::{Finished, Shared};
 use crate::datapath::Real;
 use crate::raster::Counts;
@@ -117,6 +119,34 @@ impl TileStore {
     }
 }
 
+/// What a ROP takes: fragments of a lembo or of a triangle inside one of its tiles.
+#[derive(Clone, Debug, PartialEq)]
+pub enum RopItem<R> {
+    Lembo(FragmentSpan<R>),
+    Triangle(TrianglePiece<R>),
+}
+
+impl TileStore {
+    /// The depth test and write of fragment (z, id) at storage index `idx`; `shade` gives
+    /// the colour of a fragment that passes.
+    #[inline(always)]
+    fn test_and_write(
+        &mut self,
+        idx: usize,
+        z: f32,
+        id: u32,
+        shade: impl FnOnce() -> [u8; 3],
+    ) -> bool {
+        if !depth_test(z, id, self.depth[idx], self.primitive[idx]) {
+            return false;
+        }
+        self.depth[idx] = z;
+        self.primitive[idx] = id;
+        self.color[idx] = shade();
+        true
+    }
+}
+
 /// Frame-buffer traffic of one span [bytes].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct WriteBurst {
@@ -124,7 +154,7 @@ pub struct WriteBurst {
 }
 
 pub fn run<R: Real>(
-    mut ctx: Ctx<FragmentSpan<R>, WriteBurst>,
+    mut ctx: Ctx<RopItem<R>, WriteBurst>,
     sh: &Shared<R>,
     rop: usize,
 ) -> Result<(Finished, TileStore), ActorError> {
@@ -133,28 +163,48 @@ pub fn run<R: Real>(
     let mut counts = Counts::default();
     let mut store = TileStore::new(&sh.tiles, rop, sh.background);
     let shader = FragmentShader::<R>::new(&sh.scene.light, sh.view);
-    while let Some(FragmentSpan { id, j, span }) = ctx.next_input()? {
-        let l = sh.lembo(id);
+    while let Some(item) = ctx.next_input()? {
         let mut passed = 0u64;
-        // The rasterizer cut the span at tile borders: its pixels are consecutive in the
-        // tile's storage row, so the index is found once per span, not per fragment.
-        let first = sh.tiles.local(span.i0, j) as isize - span.i0 as isize;
-        debug_assert!(
-            sh.tiles.owner(span.i0, j).1 >= span.i1,
-            "span crosses a tile"
-        );
-        span.walk(|i, u, v| {
-            let z = l.z.eval(u, v).f64() as f32;
-            let idx = (first + i as isize) as usize;
-            if depth_test(z, l.id, store.depth[idx], store.primitive[idx]) {
-                passed += 1;
-                store.depth[idx] = z;
-                store.primitive[idx] = l.id;
-                store.color[idx] = shader.shade(l, u, v).0;
+        // The rasterizers cut their output at tile borders: a row's pixels are consecutive
+        // in the tile's storage row, so the index is found once per row, not per fragment.
+        let row_start = |i: u32, j: u32| {
+            debug_assert!(sh.tiles.owner(i, j).0 == rop, "item for another ROP");
+            sh.tiles.local(i, j) as isize - i as isize
+        };
+        let n = match item {
+            RopItem::Lembo(FragmentSpan { id, j, span }) => {
+                let l = sh.lembo(id);
+                let first = row_start(span.i0, j);
+                span.walk(|i, u, v| {
+                    let z = l.z.eval(u, v).f64() as f32;
+                    let idx = (first + i as isize) as usize;
+                    if store.test_and_write(idx, z, l.id, || shader.shade(l, u, v).0) {
+                        passed += 1;
+                    }
+                });
+                span.len() as u64
             }
-        });
+            RopItem::Triangle(piece) => {
+                let t = &*piece.tri;
+                for (r, &(a, b)) in piece.rows.iter().enumerate() {
+                    let j = piece.j + r as u32;
+                    if a >= b {
+                        continue;
+                    }
+                    let first = row_start(a, j);
+                    for i in a..b {
+                        let f = t.fragment(i, j);
+                        let idx = (first + i as isize) as usize;
+                        let shade = || shader.shade_at(f.normal, f.position, t.color).0;
+                        if store.test_and_write(idx, f.z.f64() as f32, t.id, shade) {
+                            passed += 1;
+                        }
+                    }
+                }
+                piece.len()
+            }
+        };
         counts.fragments_passed_depth += passed;
-        let n = span.len() as u64;
         let bytes = n * fbc.bytes_per_fragment_tested + passed * fbc.bytes_per_fragment_written;
         ctx.emit(n.div_ceil(cfg.fragments_per_cycle), 0, WriteBurst { bytes })?;
     }

@@ -22,6 +22,7 @@ pub mod v2;
 use crate::camera::View;
 use crate::datapath::{Datapath, Real};
 use crate::error::{Error, Result};
+use crate::lembo::tessellate::Tessellation;
 use crate::rop::{FrameBuffer, Rop};
 use crate::scene::Scene;
 use fragment::FragmentSink;
@@ -184,6 +185,54 @@ pub fn render_functional(
     match datapath {
         Datapath::F32 => render_in::<f32>(scene, view, k, analyse),
         Datapath::F64 => render_in::<f64>(scene, view, k, analyse),
+    }
+}
+
+/// Renders the triangle path (the scene's lembos tessellated) with the functional model in
+/// the given datapath. With `analyse`, the frame buffer keeps normals and double hits on
+/// shared edges are counted ([`triangle::TriangleProbe`]).
+pub fn render_functional_triangles(
+    scene: &Scene,
+    view: &View,
+    tessellation: &Tessellation,
+    datapath: Datapath,
+    analyse: bool,
+) -> Frame {
+    match datapath {
+        Datapath::F32 => triangles_in::<f32>(scene, view, tessellation, analyse),
+        Datapath::F64 => triangles_in::<f64>(scene, view, tessellation, analyse),
+    }
+}
+
+fn triangles_in<R: Real>(
+    scene: &Scene,
+    view: &View,
+    tessellation: &Tessellation,
+    analyse: bool,
+) -> Frame {
+    let vp = view.viewport;
+    let bg = scene.background.map(crate::rop::shade::to_u8::<f64>);
+    let mut fb = FrameBuffer::new(vp.width, vp.height, bg, analyse);
+    let mut counts = Counts::default();
+    let mut rop = Rop::<R>::new(&mut fb, &scene.light, view);
+    let probe = if analyse {
+        let mut p = triangle::TriangleProbe::new(vp.width, &mut rop);
+        triangle::render_triangles::<R, _>(tessellation, view, &mut p, &mut counts);
+        Some(probe::ProbeReport {
+            double_hit_pixels: p.double_hit_pixels(),
+            fragments: counts.fragments,
+            ..Default::default()
+        })
+    } else {
+        triangle::render_triangles::<R, _>(tessellation, view, &mut rop, &mut counts);
+        None
+    };
+    counts.fragments_passed_depth = rop.passed;
+    counts.pixels_covered = fb.covered() as u64;
+    Frame {
+        framebuffer: fb,
+        counts,
+        probe,
     }
 }
 

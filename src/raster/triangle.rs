@@ -29,6 +29,7 @@
 use super::Counts;
 use crate::camera::{View, Viewport};
 use crate::datapath::Real;
+use crate::lembo::tessellate::Tessellation;
 use glam::DVec3;
 
 /// Fractional bits of the snapped vertex coordinates (16.8 fixed point).
@@ -148,7 +149,9 @@ pub fn setup<R: Real>(
     view: &View,
 ) -> Result<ScreenTriangle<R>, TriangleCull> {
     let s = positions.map(|p| view.project(p));
-    if s.iter().any(|s| !(s.w > 0.0)) {
+    if s.iter()
+        .any(|s| s.w <= 0.0 || !s.x.is_finite() || !s.y.is_finite())
+    {
         return Err(TriangleCull::BehindEye);
     }
     if s.iter()
@@ -376,6 +379,87 @@ pub fn count_cull(cull: TriangleCull, counts: &mut Counts) {
         TriangleCull::GuardBand => counts.triangles_culled_guard_band += 1,
         TriangleCull::Outside => counts.triangles_culled_outside += 1,
         TriangleCull::Degenerate => counts.triangles_degenerate += 1,
+    }
+}
+
+/// A triangle sink that counts double hits on shared edges, then forwards each fragment.
+///
+/// Two triangles on opposite sides of a shared edge can both contain a pixel centre only if
+/// it lies exactly on that edge, where the fill rule must give it to one of them. So a
+/// double hit is a pixel whose centre lies exactly on an edge (edge function 0) of two
+/// triangles with the same snapped end points, on opposite sides of it. Fragments off every
+/// edge need no bookkeeping, so the probe costs little.
+pub struct TriangleProbe<'a, S> {
+    inner: &'a mut S,
+    width: u32,
+    /// Per pixel with an on-edge fragment: (triangle id, canonical edge, side) of each.
+    on_edge: std::collections::HashMap<u32, Vec<(u32, [i64; 4], bool)>>,
+    doubles: std::collections::HashSet<u32>,
+}
+
+impl<'a, S> TriangleProbe<'a, S> {
+    pub fn new(width: u32, inner: &'a mut S) -> Self {
+        TriangleProbe {
+            inner,
+            width,
+            on_edge: Default::default(),
+            doubles: Default::default(),
+        }
+    }
+
+    /// Pixels claimed from both sides of a shared edge.
+    pub fn double_hit_pixels(&self) -> u64 {
+        self.doubles.len() as u64
+    }
+}
+
+impl<R: Real, S: TriangleSink<R>> TriangleSink<R> for TriangleProbe<'_, S> {
+    fn fragment(&mut self, t: &ScreenTriangle<R>, i: u32, j: u32, f: &TriangleFragment<R>) {
+        let e = t.edge_values(i, j);
+        for (k, &ek) in e.iter().enumerate() {
+            if ek != 0 {
+                continue;
+            }
+            // Edge k joins vertices k + 1 and k + 2; order its ends canonically and note on
+            // which side of it the third vertex lies.
+            let (a, b) = ((k + 1) % 3, (k + 2) % 3);
+            let (pa, pb) = ((t.x[a], t.y[a]), (t.x[b], t.y[b]));
+            let (p, q) = if pa <= pb { (pa, pb) } else { (pb, pa) };
+            let side = (q.0 - p.0) * (t.y[k] - p.1) - (q.1 - p.1) * (t.x[k] - p.0) > 0;
+            let key = [p.0, p.1, q.0, q.1];
+            let pixel = j * self.width + i;
+            let seen = self.on_edge.entry(pixel).or_default();
+            if seen
+                .iter()
+                .any(|&(id, other, s)| id != t.id && other == key && s != side)
+            {
+                self.doubles.insert(pixel);
+            }
+            seen.push((t.id, key, side));
+        }
+        self.inner.fragment(t, i, j, f);
+    }
+}
+
+/// Runs the triangle path over every triangle of `tessellation`, in order, into `sink`.
+pub fn render_triangles<R: Real, S: TriangleSink<R>>(
+    tessellation: &Tessellation,
+    view: &View,
+    sink: &mut S,
+    counts: &mut Counts,
+) {
+    let per_lembo = tessellation.triangles_per_lembo();
+    let mut triangles = Vec::new();
+    for lembo in 0..tessellation.lembos() {
+        tessellation.lembo_triangles(lembo, &mut triangles);
+        for (k, t) in triangles.iter().enumerate() {
+            counts.triangles += 1;
+            let id = (lembo as u64 * per_lembo + k as u64) as u32;
+            match setup::<R>(id, &t.positions, &t.normals, t.color, view) {
+                Ok(st) => rasterize(&st, sink, counts),
+                Err(cull) => count_cull(cull, counts),
+            }
+        }
     }
 }
 

@@ -53,9 +53,9 @@ pub struct Accuracy {
     /// Pixels written by more than one primitive on a shared edge, as the renderer counted
     /// them [pixels].
     pub double_hit_pixels: u64,
-    /// The paper's guarantee: largest |y(u, v) - (j + 0.5)| over all fragments, as the
-    /// renderer measured it [pixels].
-    pub max_scanline_deviation_px: f64,
+    /// The paper's guarantee: largest |y(u, v) - (j + 0.5)| over all lembo fragments, as
+    /// the renderer measured it [pixels]; null for the triangle path (no curve to follow).
+    pub max_scanline_deviation_px: Option<f64>,
     /// Sub-samples per pixel side of the reference.
     pub supersample: u64,
     /// Pixels both cover, over which depth and normals are compared [pixels].
@@ -96,7 +96,9 @@ impl Accuracy {
             ("double_hit_pixels", px(self.double_hit_pixels)),
             (
                 "max_scanline_deviation_px",
-                format!("{:.4} px", self.max_scanline_deviation_px),
+                self.max_scanline_deviation_px
+                    .map(|d| format!("{d:.4} px"))
+                    .unwrap_or_else(|| "n/a (triangle path)".into()),
             ),
             ("supersample", format!("{0}x{0}", self.supersample)),
             ("pixels_compared", px(self.pixels_compared)),
@@ -116,7 +118,7 @@ pub fn measure(
     render: &FrameBuffer,
     reference: &ReferenceImage,
     double_hit_pixels: u64,
-    max_scanline_deviation_px: f64,
+    max_scanline_deviation_px: Option<f64>,
 ) -> Accuracy {
     assert_eq!(
         (render.width, render.height),
@@ -392,7 +394,7 @@ mod tests {
 
     #[test]
     fn measure_identical_images_have_no_error_and_capped_psnr() {
-        let a = measure(&render_disc(16.0), &reference_disc(), 0, 0.0);
+        let a = measure(&render_disc(16.0), &reference_disc(), 0, Some(0.0));
         assert_eq!(
             a.coverage_false_positive
                 + a.coverage_false_negative
@@ -414,7 +416,7 @@ mod tests {
 
     #[test]
     fn measure_one_pixel_shifted_disc_is_a_one_pixel_silhouette_error() {
-        let a = measure(&render_disc(17.0), &reference_disc(), 3, 0.25);
+        let a = measure(&render_disc(17.0), &reference_disc(), 3, Some(0.25));
         let fp = count(|i, j| in_disc(i, j, 17.0) && !in_disc(i, j, 16.0));
         let fn_ = count(|i, j| !in_disc(i, j, 17.0) && in_disc(i, j, 16.0));
         assert!(fp > 0);
@@ -426,7 +428,7 @@ mod tests {
         assert_eq!(a.crack_pixels, 0);
         assert_eq!(
             (a.double_hit_pixels, a.max_scanline_deviation_px),
-            (3, 0.25)
+            (3, Some(0.25))
         );
         assert_eq!(a.max_abs_error, 200);
         assert!(a.psnr_db < 30.0);
@@ -446,7 +448,7 @@ mod tests {
                 fb.color[k] = BACKGROUND;
             }
         }
-        let a = measure(&fb, &reference_disc(), 0, 0.0);
+        let a = measure(&fb, &reference_disc(), 0, Some(0.0));
         assert!(a.coverage_false_negative > 10);
         assert_eq!(a.crack_pixels, 0);
     }
@@ -457,7 +459,7 @@ mod tests {
         let k = fb.index(16, 16);
         fb.primitive[k] = NO_PRIMITIVE;
         fb.color[k] = BACKGROUND;
-        let a = measure(&fb, &reference_disc(), 0, 0.0);
+        let a = measure(&fb, &reference_disc(), 0, Some(0.0));
         assert_eq!(
             (
                 a.crack_pixels,
@@ -476,7 +478,7 @@ mod tests {
         let tilt = 10f64.to_radians();
         fb.normal.as_mut().unwrap()[k] = [0.0, -tilt.sin() as f32, -tilt.cos() as f32];
         fb.depth[k] = 0.25;
-        let a = measure(&fb, &reference_disc(), 0, 0.0);
+        let a = measure(&fb, &reference_disc(), 0, Some(0.0));
         assert!(
             (a.normal_max_deg - 10.0).abs() < 1e-4,
             "{}",
@@ -509,7 +511,7 @@ mod tests {
 
     #[test]
     fn lines_name_every_field_with_its_unit() {
-        let a = measure(&render_disc(16.0), &reference_disc(), 0, 0.0);
+        let a = measure(&render_disc(16.0), &reference_disc(), 0, Some(0.0));
         let lines = a.lines();
         assert_eq!(lines.len(), 14);
         let json = serde_json::to_value(&a).unwrap();

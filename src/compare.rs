@@ -1,0 +1,484 @@
+//! `lembo-sim compare`: the lembo path, the triangle path and the exact reference of the
+//! same scene, side by side (DESIGN §5-§7).
+//!
+//! Both paths run on the timed pipeline of the same architecture (same ROPs, same
+//! frame-buffer port) and are measured against one reference of the lembo surfaces. The
+//! tessellation level is given, or `auto`: the smallest n whose silhouette error
+//! (`silhouette_max_px`) is no larger than the lembo path's at the given k, found by
+//! doubling n from 1 and then bisecting between the last level that missed and the first
+//! that met it (so it assumes the error falls with n between those two; every level tried
+//! is listed in compare.json). Levels beyond [`MAX_AUTO_TESS`] or the triangle budget are
+//! not tried; if none meets the target the largest tried is used and `reached` is false.
+//!
+//! Outputs: `lembo.png`, `triangle.png`, `reference.png`, `lembo_error.png`,
+//! `triangle_error.png`, `montage.png` (the three images and the two error maps, labelled),
+//! `compare.json` (both reports, the tessellation search and the cost ratios) and
+//! `compare.txt` (the table printed).
+
+use crate::camera::View;
+use crate::config::ArchConfig;
+use crate::datapath::Datapath;
+use crate::error::Result;
+use crate::job::{
+    self, check_tess_range, check_triangle_budget, load_arch, render_reference, run_path, Mode,
+    PrimitivePath, RenderJob, MAX_TRIANGLES,
+};
+use crate::lembo::tessellate::Tessellation;
+use crate::raster;
+use crate::reference::metrics::{self, Accuracy};
+use crate::reference::montage::{montage, Panel};
+use crate::reference::oracle::ReferenceImage;
+use crate::report::{png_bytes, write_files, Report};
+use crate::scene::Scene;
+use serde::Serialize;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// The largest level `--tess auto` tries.
+pub const MAX_AUTO_TESS: u32 = 64;
+/// Version of the `compare.json` layout.
+pub const COMPARE_SCHEMA_VERSION: u32 = 1;
+
+/// How the tessellation level is chosen.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Tess {
+    Level(u32),
+    /// The smallest level matching the lembo path's silhouette error.
+    Auto,
+}
+
+/// A validated compare request.
+#[derive(Clone, Debug)]
+pub struct CompareJob {
+    /// Scene file, or None for the embedded default scene.
+    pub scene: Option<PathBuf>,
+    /// Output directory; None for `out/<scene name>/compare/`.
+    pub out: Option<PathBuf>,
+    pub k: f64,
+    pub tess: Tess,
+    pub datapath: Datapath,
+    /// Architecture file; None for the embedded baseline.
+    pub arch: Option<PathBuf>,
+    pub viewport: Option<(u32, u32)>,
+    /// Reference samples per pixel side for reference.png.
+    pub supersample: u32,
+}
+
+impl CompareJob {
+    /// The render job of one path (validated like `render`'s flags).
+    fn render_job(&self, path: PrimitivePath, tess: Option<u32>) -> RenderJob {
+        RenderJob {
+            scene: self.scene.clone(),
+            out: None,
+            k: self.k,
+            datapath: self.datapath,
+            reference: true,
+            supersample: self.supersample,
+            viewport: self.viewport,
+            mode: Mode::Timed,
+            arch: self.arch.clone(),
+            trace_out: None,
+            path,
+            tess,
+        }
+    }
+}
+
+/// One level tried by `--tess auto`.
+#[derive(Clone, Debug, Serialize)]
+pub struct AutoStep {
+    pub tess: u32,
+    pub triangles: u64,
+    pub silhouette_max_px: f64,
+    pub silhouette_mean_px: f64,
+}
+
+/// How the tessellation level was chosen.
+#[derive(Clone, Debug, Serialize)]
+pub struct TessChoice {
+    /// The level used.
+    pub level: u32,
+    /// Whether it was chosen by `--tess auto`.
+    pub auto: bool,
+    /// The lembo path's silhouette_max_px, the target of `auto` [pixels].
+    pub target_silhouette_px: Option<f64>,
+    /// Whether the level used meets the target (always true for a given level).
+    pub reached: bool,
+    /// Every level `auto` tried, in the order tried.
+    pub tried: Vec<AutoStep>,
+}
+
+/// Cost ratios of the two paths on this scene and architecture.
+#[derive(Clone, Debug, Serialize)]
+pub struct Ratios {
+    /// The architecture both paths ran on.
+    pub arch: String,
+    /// Frame cycles per lembo [cycles].
+    pub cycles_per_lembo: f64,
+    /// Frame cycles per triangle [cycles].
+    pub cycles_per_triangle: f64,
+    /// cycles_per_lembo / cycles_per_triangle: how many triangles one lembo costs, for the
+    /// same surface, hence the same screen area (the paper claims 2-3).
+    pub lembo_cost_in_triangles: f64,
+    /// Triangle frame cycles over lembo frame cycles.
+    pub triangle_over_lembo_cycles: f64,
+    /// Triangle primitive bytes over lembo primitive bytes.
+    pub triangle_over_lembo_bytes: f64,
+}
+
+/// `compare.json`.
+#[derive(Clone, Debug, Serialize)]
+pub struct CompareReport {
+    pub schema_version: u32,
+    pub tess: TessChoice,
+    pub ratios: Option<Ratios>,
+    pub lembo: Report,
+    pub triangle: Report,
+}
+
+/// What a finished compare hands back for its summary.
+pub struct CompareOutput {
+    pub report: CompareReport,
+    /// The table, as printed and written to compare.txt.
+    pub table: String,
+    pub dir: PathBuf,
+    pub files: Vec<String>,
+}
+
+/// The silhouette error of the triangle path at level `n` against `reference`, from the
+/// functional model (what auto compares).
+fn triangle_accuracy(
+    scene: &Scene,
+    view: &View,
+    reference: &ReferenceImage,
+    n: u32,
+    datapath: Datapath,
+) -> Accuracy {
+    let t = Tessellation::new(scene, n);
+    let frame = raster::render_functional_triangles(scene, view, &t, datapath, true);
+    let probe = frame.probe.unwrap_or_default();
+    metrics::measure(&frame.framebuffer, reference, probe.double_hit_pixels, None)
+}
+
+/// `--tess auto`: doubling, then bisection (module doc).
+fn auto_level(
+    scene: &Scene,
+    view: &View,
+    reference: &ReferenceImage,
+    target: f64,
+    datapath: Datapath,
+) -> TessChoice {
+    let mut tried: Vec<AutoStep> = Vec::new();
+    let mut meets = |n: u32| -> bool {
+        let a = triangle_accuracy(scene, view, reference, n, datapath);
+        tried.push(AutoStep {
+            tess: n,
+            triangles: scene.lembo_count() as u64 * (n as u64).pow(2),
+            silhouette_max_px: a.silhouette_max_px,
+            silhouette_mean_px: a.silhouette_mean_px,
+        });
+        a.silhouette_max_px <= target
+    };
+    let affordable = |n: u32| {
+        n <= MAX_AUTO_TESS && scene.lembo_count() as u64 * (n as u64).pow(2) <= MAX_TRIANGLES
+    };
+    let (mut lo, mut hi) = (0u32, None);
+    let mut n = 1;
+    while affordable(n) {
+        if meets(n) {
+            hi = Some(n);
+            break;
+        }
+        lo = n;
+        n *= 2;
+    }
+    let (level, reached) = match hi {
+        Some(mut hi) => {
+            while hi - lo > 1 {
+                let mid = lo + (hi - lo) / 2;
+                if meets(mid) {
+                    hi = mid;
+                } else {
+                    lo = mid;
+                }
+            }
+            (hi, true)
+        }
+        None => (lo.max(1), false),
+    };
+    TessChoice {
+        level,
+        auto: true,
+        target_silhouette_px: Some(target),
+        reached,
+        tried,
+    }
+}
+
+/// Runs a compare to completion: nothing is written unless everything succeeded.
+pub fn run_compare(job: &CompareJob) -> Result<CompareOutput> {
+    let lembo_job = job.render_job(PrimitivePath::Lembo, None);
+    lembo_job.validate()?;
+    if let Tess::Level(n) = job.tess {
+        check_tess_range(n)?;
+    }
+    let scene = job::load_scene(&lembo_job)?;
+    if let Tess::Level(n) = job.tess {
+        check_triangle_budget(&scene, n)?;
+    }
+    let view = View::new(&scene.camera, scene.viewport);
+    let arch = load_arch(&lembo_job)?;
+    let (reference, reference_wall) = render_reference(&scene, &view, job.supersample);
+
+    let lembo = run_path(
+        &lembo_job,
+        &scene,
+        &view,
+        arch.as_ref(),
+        Some((&reference, reference_wall)),
+    )?;
+    let lembo_accuracy = lembo.report.accuracy.clone().expect("measured");
+    let choice = match job.tess {
+        Tess::Level(n) => TessChoice {
+            level: n,
+            auto: false,
+            target_silhouette_px: None,
+            reached: true,
+            tried: Vec::new(),
+        },
+        Tess::Auto => auto_level(
+            &scene,
+            &view,
+            &reference,
+            lembo_accuracy.silhouette_max_px,
+            job.datapath,
+        ),
+    };
+    let triangle_job = job.render_job(PrimitivePath::Triangle, Some(choice.level));
+    let triangle = run_path(
+        &triangle_job,
+        &scene,
+        &view,
+        arch.as_ref(),
+        Some((&reference, reference_wall)),
+    )?;
+
+    let ratios = ratios(arch.as_ref(), &lembo.report, &triangle.report);
+    let report = CompareReport {
+        schema_version: COMPARE_SCHEMA_VERSION,
+        tess: choice,
+        ratios,
+        lembo: lembo.report,
+        triangle: triangle.report,
+    };
+    let table = table(&report);
+
+    let reference_image = reference
+        .to_image_supersampled()
+        .unwrap_or_else(|| reference.to_image());
+    let (lembo_image, triangle_image) = (
+        lembo.framebuffer.to_image(),
+        triangle.framebuffer.to_image(),
+    );
+    let (lembo_error, triangle_error) = (
+        lembo.error_map.expect("measured"),
+        triangle.error_map.expect("measured"),
+    );
+    let cycles = |r: &Report| {
+        r.cycles
+            .as_ref()
+            .map(|c| format!("{} cycles", c.total))
+            .unwrap_or_default()
+    };
+    let psnr = |r: &Report| {
+        r.accuracy
+            .as_ref()
+            .map(|a| {
+                format!(
+                    "PSNR {:.1} dB\nsilhouette {:.2} px",
+                    a.psnr_db, a.silhouette_max_px
+                )
+            })
+            .unwrap_or_default()
+    };
+    let labels = [
+        format!(
+            "lembo k={} px\n{} lembos\n{}",
+            job.k,
+            report.lembo.primitives.count,
+            cycles(&report.lembo)
+        ),
+        format!(
+            "triangle n={}\n{} triangles\n{}",
+            report.tess.level,
+            report.triangle.primitives.count,
+            cycles(&report.triangle)
+        ),
+        "reference\nexact, f64\n".to_string(),
+        format!("lembo error\n{}", psnr(&report.lembo)),
+        format!("triangle error\n{}", psnr(&report.triangle)),
+    ];
+    let images = [
+        &lembo_image,
+        &triangle_image,
+        &reference_image,
+        &lembo_error,
+        &triangle_error,
+    ];
+    let panels: Vec<Panel> = labels
+        .iter()
+        .zip(images)
+        .map(|(label, image)| Panel { label, image })
+        .collect();
+    let montage_image = montage(&panels);
+
+    let files: Vec<(&str, Vec<u8>)> = vec![
+        ("lembo.png", png_bytes(&lembo_image)),
+        ("triangle.png", png_bytes(&triangle_image)),
+        ("reference.png", png_bytes(&reference_image)),
+        ("lembo_error.png", png_bytes(&lembo_error)),
+        ("triangle_error.png", png_bytes(&triangle_error)),
+        ("montage.png", png_bytes(&montage_image)),
+        (
+            "compare.json",
+            serde_json::to_vec_pretty(&report).expect("the report serialises"),
+        ),
+        ("compare.txt", table.clone().into_bytes()),
+    ];
+    let dir = job
+        .out
+        .clone()
+        .unwrap_or_else(|| Path::new("out").join(&scene.name).join("compare"));
+    write_files(&dir, &files)?;
+    Ok(CompareOutput {
+        report,
+        table,
+        dir,
+        files: files.iter().map(|(n, _)| n.to_string()).collect(),
+    })
+}
+
+fn ratios(arch: Option<&ArchConfig>, lembo: &Report, triangle: &Report) -> Option<Ratios> {
+    let (cl, ct) = (lembo.cycles.as_ref()?, triangle.cycles.as_ref()?);
+    let (nl, nt) = (lembo.primitives.count, triangle.primitives.count);
+    if nl == 0 || nt == 0 || cl.total == 0 || ct.total == 0 {
+        return None;
+    }
+    let per_lembo = cl.total as f64 / nl as f64;
+    let per_triangle = ct.total as f64 / nt as f64;
+    Some(Ratios {
+        arch: arch.map(|a| a.name.clone()).unwrap_or_default(),
+        cycles_per_lembo: per_lembo,
+        cycles_per_triangle: per_triangle,
+        lembo_cost_in_triangles: per_lembo / per_triangle,
+        triangle_over_lembo_cycles: ct.total as f64 / cl.total as f64,
+        triangle_over_lembo_bytes: triangle.primitives.bytes as f64
+            / lembo.primitives.bytes.max(1) as f64,
+    })
+}
+
+/// The side-by-side table: primitives, vertices, bytes, cycles, fragments, then every
+/// accuracy metric, per path.
+pub fn table(r: &CompareReport) -> String {
+    let mut t = String::new();
+    let (l, tr) = (&r.lembo, &r.triangle);
+    let _ = writeln!(
+        t,
+        "compare {} ({}x{} px), architecture {}, k = {} px, tessellation {}{}",
+        l.scene.name,
+        l.scene.width,
+        l.scene.height,
+        l.arch.as_ref().map(|a| a.name.as_str()).unwrap_or("-"),
+        l.settings.k_px.unwrap_or_default(),
+        r.tess.level,
+        match (r.tess.auto, r.tess.reached) {
+            (false, _) => String::new(),
+            (true, true) => format!(
+                " (auto: smallest n with silhouette_max_px <= {:.3})",
+                r.tess.target_silhouette_px.unwrap_or_default()
+            ),
+            (true, false) => format!(
+                " (auto: no n up to {} reached silhouette_max_px <= {:.3}; largest tried)",
+                r.tess.tried.iter().map(|s| s.tess).max().unwrap_or(1),
+                r.tess.target_silhouette_px.unwrap_or_default()
+            ),
+        }
+    );
+    let _ = writeln!(t, "{:<28} {:>18} {:>18}", "", "lembo", "triangle");
+    let row = |t: &mut String, name: &str, a: String, b: String| {
+        let _ = writeln!(t, "{name:<28} {a:>18} {b:>18}");
+    };
+    row(
+        &mut t,
+        "primitives",
+        l.primitives.count.to_string(),
+        tr.primitives.count.to_string(),
+    );
+    row(
+        &mut t,
+        "vertices",
+        l.primitives.vertices.to_string(),
+        tr.primitives.vertices.to_string(),
+    );
+    row(
+        &mut t,
+        "primitive bytes",
+        l.primitives.bytes.to_string(),
+        tr.primitives.bytes.to_string(),
+    );
+    let cycles = |r: &Report| {
+        r.cycles
+            .as_ref()
+            .map(|c| c.total.to_string())
+            .unwrap_or_else(|| "-".into())
+    };
+    row(&mut t, "cycles", cycles(l), cycles(tr));
+    let bottleneck = |r: &Report| {
+        r.cycles
+            .as_ref()
+            .and_then(|c| c.bottleneck.clone())
+            .unwrap_or_else(|| "-".into())
+    };
+    row(&mut t, "bottleneck", bottleneck(l), bottleneck(tr));
+    row(
+        &mut t,
+        "fragments",
+        l.counts.fragments.to_string(),
+        tr.counts.fragments.to_string(),
+    );
+    row(
+        &mut t,
+        "quad efficiency",
+        "-".into(),
+        tr.primitives
+            .quad_efficiency
+            .map(|q| format!("{:.1} %", 100.0 * q))
+            .unwrap_or_else(|| "-".into()),
+    );
+    if let (Some(a), Some(b)) = (&l.accuracy, &tr.accuracy) {
+        for ((name, va), (_, vb)) in a.lines().into_iter().zip(b.lines()) {
+            row(&mut t, &name, va, vb);
+        }
+    }
+    if let Some(x) = &r.ratios {
+        let _ = writeln!(
+            t,
+            "one lembo costs {:.2} triangles ({:.1} cycles per lembo, {:.2} per triangle); triangle/lembo cycles {:.2}, bytes {:.2}",
+            x.lembo_cost_in_triangles,
+            x.cycles_per_lembo,
+            x.cycles_per_triangle,
+            x.triangle_over_lembo_cycles,
+            x.triangle_over_lembo_bytes
+        );
+    }
+    if r.tess.auto {
+        let tried: Vec<String> = r
+            .tess
+            .tried
+            .iter()
+            .map(|s| format!("n={} {:.3} px", s.tess, s.silhouette_max_px))
+            .collect();
+        let _ = writeln!(t, "auto tried: {}", tried.join(", "));
+    }
+    t
+}

@@ -1,0 +1,118 @@
+//! TriangleRasterizer (the triangle path, DESIGN §5): tests 2x2 quads against the integer
+//! edge functions with the top-left fill rule.
+//!
+//! Input: set-up triangles from TriangleSetup (round-robin). Output: [`TrianglePiece`]s,
+//! the covered pixels of one quad row (two pixel rows) inside one ROP tile, each routed to
+//! the ROP that owns the tile. A piece carries the triangle; the ROP evaluates each
+//! fragment from the triangle and the pixel alone
+//! ([`ScreenTriangle::fragment`]), so its fragments are bit-identical to the functional
+//! model's.
+//!
+//! Cost: ceil(4 q / `triangle_rasterizer.pixels_per_cycle`) cycles per piece of q quads, at
+//! least one; a triangle with no covered pixel costs one cycle (its bounding-box test).
+//! Quads with no covered pixel are skipped for free, as a hierarchical rasterizer rejects
+//! them by tile. Ready `latency_cycles` later.
+
+use super::actor::{ActorError, Ctx};
+use super::rop::RopItem;
+use super::{Finished, Shared};
+use crate::datapath::Real;
+use crate::raster::triangle::{quads_in, ScreenTriangle};
+use crate::raster::Counts;
+use std::sync::Arc;
+
+/// The covered pixels of triangle `tri` in rows `j` and `j + 1` inside one ROP tile:
+/// `rows[r]` is the half-open column range of row j + r (empty when start >= end).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TrianglePiece<R> {
+    pub tri: Arc<ScreenTriangle<R>>,
+    pub j: u32,
+    pub rows: [(u32, u32); 2],
+}
+
+impl<R> TrianglePiece<R> {
+    /// Fragments in the piece.
+    pub fn len(&self) -> u64 {
+        self.rows
+            .iter()
+            .map(|&(a, b)| b.saturating_sub(a) as u64)
+            .sum()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// `span` clipped to columns [lo, hi).
+fn clip((a, b): (u32, u32), lo: u32, hi: u32) -> (u32, u32) {
+    let (a, b) = (a.max(lo), b.min(hi));
+    if a < b {
+        (a, b)
+    } else {
+        (0, 0)
+    }
+}
+
+pub fn run<R: Real>(
+    mut ctx: Ctx<Arc<ScreenTriangle<R>>, RopItem<R>>,
+    sh: &Shared<R>,
+) -> Result<Finished, ActorError> {
+    let ppc = sh.arch.triangle_rasterizer.pixels_per_cycle;
+    let tiles = &sh.tiles;
+    let tile = tiles.tile_px;
+    let mut counts = Counts::default();
+    while let Some(tri) = ctx.next_input()? {
+        let [_, _, j0, j1] = tri.bbox;
+        let mut emitted = false;
+        let mut qj = j0 & !1;
+        while qj < j1 {
+            let rows = [tri.row_span(qj), tri.row_span(qj + 1)];
+            counts.quads += quads_in(&rows);
+            let live = || rows.iter().filter(|r| r.0 < r.1);
+            let (Some(lo), Some(hi)) = (live().map(|r| r.0).min(), live().map(|r| r.1).max())
+            else {
+                qj += 2;
+                continue;
+            };
+            counts.fragments += live().map(|r| (r.1 - r.0) as u64).sum::<u64>();
+            // Rows j and j + 1 share a tile row unless a tile border runs between them.
+            let split = qj / tile != (qj + 1) / tile;
+            let mut i = lo;
+            while i < hi {
+                let end = ((i / tile + 1) * tile).min(hi);
+                let both = [clip(rows[0], i, end), clip(rows[1], i, end)];
+                let pieces = if split {
+                    [[both[0], (0, 0)], [(0, 0), both[1]]]
+                } else {
+                    [both, [(0, 0); 2]]
+                };
+                for piece in pieces {
+                    let piece = TrianglePiece {
+                        tri: tri.clone(),
+                        j: qj,
+                        rows: piece,
+                    };
+                    if piece.is_empty() {
+                        continue;
+                    }
+                    let row = if piece.rows[0].0 < piece.rows[0].1 {
+                        qj
+                    } else {
+                        qj + 1
+                    };
+                    let (rop, _) = tiles.owner(i, row);
+                    let cycles = (4 * quads_in(&piece.rows)).div_ceil(ppc).max(1);
+                    ctx.emit(cycles, rop, RopItem::Triangle(piece))?;
+                    emitted = true;
+                }
+                i = end;
+            }
+            qj += 2;
+        }
+        if !emitted {
+            ctx.work(1);
+        }
+    }
+    Finished::new(ctx, counts)
+}
