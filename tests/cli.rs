@@ -383,7 +383,189 @@ fn help_explains_the_render_flags() {
         "--trace-out",
         "--supersample",
         "--viewport",
+        "--path",
+        "--tess",
     ] {
         assert!(text.contains(flag), "--help lacks {flag}");
     }
+    let out = bin().args(["compare", "--help"]).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    for flag in ["--k", "--tess", "auto", "--out", "--arch", "--viewport"] {
+        assert!(text.contains(flag), "compare --help lacks {flag}");
+    }
+}
+
+/// The accuracy names of `render --reference` (DESIGN §6).
+const ACCURACY_NAMES: [&str; 12] = [
+    "coverage_false_positive",
+    "coverage_false_negative",
+    "silhouette_max_px",
+    "silhouette_mean_px",
+    "depth_max_abs",
+    "normal_max_deg",
+    "normal_mean_deg",
+    "psnr_db",
+    "max_abs_error",
+    "crack_pixels",
+    "double_hit_pixels",
+    "max_scanline_deviation_px",
+];
+
+#[test]
+fn compare_writes_every_file_and_both_reports() {
+    let dir = tempfile::tempdir().unwrap();
+    let sphere = manifest().join("traces/sphere24.json");
+    let out = run(
+        &[
+            "compare",
+            sphere.to_str().unwrap(),
+            "--viewport",
+            "160x160",
+            "--out",
+            "c",
+        ],
+        dir.path(),
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(
+        files_in(&dir.path().join("c")),
+        [
+            "compare.json",
+            "compare.txt",
+            "lembo.png",
+            "lembo_error.png",
+            "montage.png",
+            "reference.png",
+            "triangle.png",
+            "triangle_error.png"
+        ]
+    );
+    for row in [
+        "primitives",
+        "vertices",
+        "primitive bytes",
+        "cycles",
+        "fragments",
+    ] {
+        assert!(stdout.contains(row), "table row {row}: {stdout}");
+    }
+    let c: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("c/compare.json")).unwrap()).unwrap();
+    for path in ["lembo", "triangle"] {
+        let r = &c[path];
+        assert_eq!(r["settings"]["path"], path);
+        for key in ACCURACY_NAMES {
+            assert!(r["accuracy"].get(key).is_some(), "{path}: accuracy.{key}");
+        }
+        assert!(r["cycles"]["total"].as_u64().unwrap() > 0, "{path}");
+        assert!(r["primitives"]["bytes"].as_u64().unwrap() > 0, "{path}");
+    }
+    // Auto chose the smallest level it tried that meets the lembo path's silhouette error.
+    let target = c["lembo"]["accuracy"]["silhouette_max_px"]
+        .as_f64()
+        .unwrap();
+    let level = c["tess"]["level"].as_u64().unwrap();
+    let tried = c["tess"]["tried"].as_array().unwrap();
+    assert!(c["tess"]["reached"].as_bool().unwrap());
+    for step in tried {
+        let (n, err) = (
+            step["tess"].as_u64().unwrap(),
+            step["silhouette_max_px"].as_f64().unwrap(),
+        );
+        assert_eq!(
+            err <= target,
+            n >= level,
+            "n={n} error {err} target {target}"
+        );
+    }
+    assert!(
+        c["triangle"]["accuracy"]["silhouette_max_px"]
+            .as_f64()
+            .unwrap()
+            <= target
+    );
+    assert!(c["triangle"]["accuracy"]["max_scanline_deviation_px"].is_null());
+    assert!(c["ratios"]["lembo_cost_in_triangles"].as_f64().unwrap() > 0.0);
+    let montage = image::open(dir.path().join("c/montage.png")).unwrap();
+    assert!(montage.width() >= 5 * 160 && montage.height() > 160);
+}
+
+#[test]
+fn triangle_render_reports_quads_and_triangle_units() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = run(
+        &[
+            "render",
+            "--path",
+            "triangle",
+            "--tess",
+            "3",
+            "--viewport",
+            "96x96",
+            "--out",
+            "o",
+        ],
+        dir.path(),
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("o/report.json")).unwrap()).unwrap();
+    assert_eq!(r["settings"]["tess"], 3);
+    assert!(r["settings"]["k_px"].is_null());
+    assert_eq!(r["primitives"]["count"], 24 * 9);
+    let q = r["primitives"]["quad_efficiency"].as_f64().unwrap();
+    assert!(q > 0.25 && q <= 1.0, "{q}");
+    let names: Vec<&str> = r["units"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|u| u["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        names,
+        [
+            "TriangleSetup",
+            "TriangleRasterizer[0]",
+            "Rop[0]",
+            "Rop[1]",
+            "Rop[2]",
+            "Rop[3]",
+            "FrameBuffer"
+        ]
+    );
+}
+
+#[test]
+fn bad_tessellation_flags_are_refused() {
+    assert_refused(&["render", "--tess", "2", "--out", "o"], "--path triangle");
+    assert_refused(
+        &["render", "--path", "triangle", "--tess", "0", "--out", "o"],
+        "--tess",
+    );
+    assert_refused(&["compare", "--tess", "many", "--out", "o"], "--tess");
+    assert_refused(&["compare", "--tess", "0", "--out", "o"], "--tess");
+    let bunny = manifest().join("traces/bunny.json");
+    // 3674 lembos x 1024² triangles: refused before any work.
+    assert_refused(
+        &[
+            "render",
+            bunny.to_str().unwrap(),
+            "--path",
+            "triangle",
+            "--tess",
+            "1024",
+            "--out",
+            "o",
+        ],
+        "triangles",
+    );
 }
