@@ -1,12 +1,14 @@
 //! Criterion benchmarks: the functional model on whole scenes by viewport size, the
 //! per-scanline stages on their own, and the timed pipeline against the functional model
-//! on the same frame (the issue 3 figure: timed wall / functional wall). Setup (scene
-//! loading, projection) stays outside the timed closures.
+//! on the same frame (the issue 3 figure: timed wall / functional wall), and the triangle
+//! path, functional and timed. Setup (scene loading, projection) stays outside the timed
+//! closures.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use lembo_sim::camera::View;
 use lembo_sim::config::ArchConfig;
 use lembo_sim::datapath::Datapath;
+use lembo_sim::lembo::tessellate::Tessellation;
 use lembo_sim::pipeline::{actor::SimOptions, run_timed};
 use lembo_sim::raster::{self, interval, minmax, segmenter, setup, subsegmenter, Counts};
 use lembo_sim::scene::Scene;
@@ -133,5 +135,29 @@ fn timed_vs_functional(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, scenes, stages, timed_vs_functional);
+/// The triangle path on the bunny at 1024x1024: its own triangles (level 1) and level 4
+/// (59k triangles), functional, and level 1 timed on the baseline.
+fn triangle_path(c: &mut Criterion) {
+    let mut g = c.benchmark_group("triangle_path");
+    g.sample_size(10);
+    let mut s = scene("bunny.json");
+    s.set_viewport(1024, 1024).unwrap();
+    let view = View::new(&s.camera, s.viewport);
+    for n in [1u32, 4] {
+        let t = Tessellation::new(&s, n);
+        g.throughput(Throughput::Elements(t.len()));
+        g.bench_with_input(BenchmarkId::new("functional/bunny/1024", n), &n, |b, _| {
+            b.iter(|| raster::render_functional_triangles(&s, &view, &t, Datapath::F32, false))
+        });
+    }
+    let t = Tessellation::new(&s, 1);
+    let (arch, options) = (ArchConfig::baseline(), SimOptions::default());
+    g.throughput(Throughput::Elements(t.len()));
+    g.bench_function("timed_baseline/bunny/1024/1", |b| {
+        b.iter(|| run_timed(&s, &view, 0.5, Datapath::F32, &arch, Some(&t), &options).unwrap())
+    });
+    g.finish();
+}
+
+criterion_group!(benches, scenes, stages, timed_vs_functional, triangle_path);
 criterion_main!(benches);
