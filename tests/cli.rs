@@ -132,20 +132,7 @@ fn reference_run_writes_the_accuracy_names_and_images() {
     );
     let report: serde_json::Value =
         serde_json::from_slice(&std::fs::read(dir.path().join("o/report.json")).unwrap()).unwrap();
-    for key in [
-        "coverage_false_positive",
-        "coverage_false_negative",
-        "silhouette_max_px",
-        "silhouette_mean_px",
-        "depth_max_abs",
-        "normal_max_deg",
-        "normal_mean_deg",
-        "psnr_db",
-        "max_abs_error",
-        "crack_pixels",
-        "double_hit_pixels",
-        "max_scanline_deviation_px",
-    ] {
+    for key in ACCURACY_NAMES {
         assert!(
             report["accuracy"][key].is_number(),
             "accuracy.{key} missing"
