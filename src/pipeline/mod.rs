@@ -8,6 +8,10 @@
 //!                                      round-robin          round-robin             round-robin                   by screen tile   (memory port)
 //! ```
 //!
+//! The triangle path (`run_timed` with a tessellation) instantiates instead
+//! `TriangleSetup ─► TriangleRasterizer[0..Nt] ─► Rop[0..Np] ─► FrameBuffer`, the same ROPs
+//! and port ([`triangle_setup`], [`triangle_rasterizer`]).
+//!
 //! Every arrow of a crossbar is its own link (FIFO depth and latency from the
 //! architecture's `links`); a unit with several inputs merges them by (arrival, port).
 //!
@@ -17,7 +21,8 @@
 //!   [`segmenter`], [`subsegmenter`], [`rasterizer`], [`rop`], [`framebuffer`].
 //! - [`trace`]: the Chrome trace-event timeline.
 //!
-//! Model only what a scene requires: a scene without lembos instantiates no lembo units.
+//! Model only what a scene requires: a scene without lembos instantiates no units, and each
+//! path only its own.
 
 pub mod actor;
 pub mod framebuffer;
