@@ -34,6 +34,7 @@ pub mod camera;
 pub mod compare;
 pub mod config;
 pub mod datapath;
+pub mod discoid;
 pub mod error;
 pub mod job;
 pub mod lembo;

@@ -1,0 +1,131 @@
+//! Discoids (paper 000): disk-like patches carrying a gray-level beta texture, blended in
+//! the ROP into one smooth surface (DESIGN §4).
+//!
+//! A discoid is *planar* (centre, unit normal, radius: drawn as a square through the
+//! triangle path, the texture coordinates from the world position in its tangent frame)
+//! or *curved* (a lembo whose six reference points carry texture coordinates, drawn
+//! through the lembo path). Surfels (paper 002) are planar discoids tangent to a point
+//! cloud. beta = 0 is outside the discoid.
+//!
+//! These types are what the scene hands the renderers; the textures, the blend modes and the
+//! three passes live in the submodules.
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+/// The gray-level texture a discoid carries (paper 000 Figure 5, and a gaussian).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum BetaShape {
+    /// 1 in the centre falling to 0 at the rim (Figure 5a).
+    Disk,
+    /// A five-pointed star, 1 in the centre falling to 0 at its outline (Figure 5b).
+    Star,
+    /// exp(-r²/2σ²) with σ = 1/3 of the radius, cut to 0 at the rim.
+    Gaussian,
+}
+
+impl BetaShape {
+    pub fn name(self) -> &'static str {
+        match self {
+            BetaShape::Disk => "disk",
+            BetaShape::Star => "star",
+            BetaShape::Gaussian => "gaussian",
+        }
+    }
+}
+
+/// A planar discoid in world space.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Discoid {
+    /// Centre [world units].
+    pub center: DVec3,
+    /// Unit normal.
+    pub normal: DVec3,
+    /// Radius [world units], > 0.
+    pub radius: f64,
+}
+
+impl Discoid {
+    /// An orthonormal tangent frame (e1, e2) with e1 x e2 = normal, a deterministic
+    /// function of the normal alone (Duff et al., "Building an orthonormal basis,
+    /// revisited", 2017).
+    pub fn frame(&self) -> (DVec3, DVec3) {
+        let n = self.normal;
+        let sign = 1f64.copysign(n.z);
+        let a = -1.0 / (sign + n.z);
+        let b = n.x * n.y * a;
+        (
+            DVec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
+            DVec3::new(b, sign + n.y * n.y * a, -n.y),
+        )
+    }
+
+    /// The four corners of the square of side 2 radius that carries the texture, counter-
+    /// clockwise about the normal, at texture coordinates (0,0), (1,0), (1,1), (0,1).
+    pub fn corners(&self) -> [DVec3; 4] {
+        let (e1, e2) = self.frame();
+        let (c, r) = (self.center, self.radius);
+        [
+            c - r * e1 - r * e2,
+            c + r * e1 - r * e2,
+            c + r * e1 + r * e2,
+            c - r * e1 + r * e2,
+        ]
+    }
+
+    /// Texture coordinates (s, t) in [0, 1]² of a point of the discoid's plane.
+    pub fn texcoord(&self, p: DVec3) -> [f64; 2] {
+        let (e1, e2) = self.frame();
+        let d = p - self.center;
+        let k = 0.5 / self.radius;
+        [0.5 + k * d.dot(e1), 0.5 + k * d.dot(e2)]
+    }
+}
+
+/// The discoids of one scene object.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DiscoidSet {
+    pub beta: BetaShape,
+    /// Planar discoids (drawn as squares through the triangle path).
+    pub planar: Vec<Discoid>,
+    /// Curved discoids: texture coordinates (s, t) at the six reference points of each of
+    /// the object's lembos, in the same order as `SceneObject::lembos`.
+    pub lembo_texcoords: Vec<[[f64; 2]; 6]>,
+    /// The planar discoids are surfels of a point cloud (holes are counted).
+    pub surfels: bool,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn discoid_frame_is_orthonormal_and_right_handed() {
+        for n in [
+            DVec3::Z,
+            -DVec3::Z,
+            DVec3::X,
+            DVec3::new(0.3, -0.5, 0.8).normalize(),
+            DVec3::new(-0.2, 0.1, -0.97).normalize(),
+        ] {
+            let d = Discoid {
+                center: DVec3::new(1.0, 2.0, 3.0),
+                normal: n,
+                radius: 0.5,
+            };
+            let (e1, e2) = d.frame();
+            assert!((e1.length() - 1.0).abs() < 1e-12 && (e2.length() - 1.0).abs() < 1e-12);
+            assert!(e1.dot(e2).abs() < 1e-12 && e1.dot(n).abs() < 1e-12);
+            assert!((e1.cross(e2) - n).length() < 1e-12, "{n}");
+            let st = d.corners().map(|p| d.texcoord(p));
+            for (got, want) in st
+                .iter()
+                .zip([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+            {
+                assert!((got[0] - want[0]).abs() < 1e-12 && (got[1] - want[1]).abs() < 1e-12);
+            }
+            assert_eq!(d.texcoord(d.center), [0.5, 0.5]);
+        }
+    }
+}
