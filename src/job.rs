@@ -11,6 +11,7 @@ use crate::error::{Error, Result};
 use crate::lembo::tessellate::Tessellation;
 use crate::pipeline::{self, actor::SimOptions};
 use crate::raster;
+use crate::raster::triangle::TriangleSource;
 use crate::reference::oracle::ReferenceImage;
 use crate::reference::{heatmap, metrics, oracle};
 use crate::report::{
@@ -297,7 +298,7 @@ pub fn run_path(
                 job.k,
                 job.datapath,
                 arch,
-                tessellation.as_ref(),
+                tessellation.as_ref().map(|t| t as &dyn TriangleSource),
                 &options,
             )?);
         }

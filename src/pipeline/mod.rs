@@ -8,7 +8,7 @@
 //!                                      round-robin          round-robin             round-robin                   by screen tile   (memory port)
 //! ```
 //!
-//! The triangle path (`run_timed` with a tessellation) instantiates instead
+//! The triangle path (`run_timed` with a triangle source) instantiates instead
 //! `TriangleSetup ─► TriangleRasterizer[0..Nt] ─► Rop[0..Np] ─► FrameBuffer`, the same ROPs
 //! and port ([`triangle_setup`], [`triangle_rasterizer`]).
 //!
@@ -42,8 +42,8 @@ use crate::camera::View;
 use crate::config::{ArchConfig, LinkConfig};
 use crate::datapath::{Datapath, Real};
 use crate::error::{Error, Result};
-use crate::lembo::tessellate::Tessellation;
 use crate::raster::setup::ScreenLembo;
+use crate::raster::triangle::TriangleSource;
 use crate::raster::Counts;
 use crate::rop::FrameBuffer;
 use crate::scene::Scene;
@@ -150,7 +150,7 @@ pub struct Shared<'a, R> {
     /// (empty in the triangle path).
     pub lembos: Vec<OnceLock<ScreenLembo<R>>>,
     /// The triangles of the triangle path; None in the lembo path.
-    pub tessellation: Option<&'a Tessellation<'a>>,
+    pub triangles: Option<&'a dyn TriangleSource>,
     pub tiles: RopTiles,
 }
 
@@ -189,19 +189,19 @@ impl Finished {
 }
 
 /// Renders `scene` on the timed pipeline of `arch`: the lembo path, or with a
-/// `tessellation` the triangle path.
+/// triangle source (a tessellation) the triangle path.
 pub fn run_timed(
     scene: &Scene,
     view: &View,
     k: f64,
     datapath: Datapath,
     arch: &ArchConfig,
-    tessellation: Option<&Tessellation>,
+    triangles: Option<&dyn TriangleSource>,
     options: &SimOptions,
 ) -> Result<TimedFrame> {
     match datapath {
-        Datapath::F32 => run_in::<f32>(scene, view, k, arch, tessellation, options),
-        Datapath::F64 => run_in::<f64>(scene, view, k, arch, tessellation, options),
+        Datapath::F32 => run_in::<f32>(scene, view, k, arch, triangles, options),
+        Datapath::F64 => run_in::<f64>(scene, view, k, arch, triangles, options),
     }
 }
 
@@ -334,15 +334,16 @@ fn run_in<R: Real>(
     view: &View,
     k: f64,
     arch: &ArchConfig,
-    tessellation: Option<&Tessellation>,
+    triangles: Option<&dyn TriangleSource>,
     options: &SimOptions,
 ) -> Result<TimedFrame> {
     let vp = view.viewport;
     let background = scene.background.map(crate::rop::shade::to_u8::<f64>);
     let n_lembos = scene.lembo_count();
     // Model only what the scene requires: no primitives, no units.
-    let units = match tessellation {
-        _ if n_lembos == 0 => Vec::new(),
+    let units = match triangles {
+        Some(t) if t.chunks() == 0 => Vec::new(),
+        None if n_lembos == 0 => Vec::new(),
         None => lembo_units(arch),
         Some(_) => triangle_units(arch),
     };
@@ -368,11 +369,11 @@ fn run_in<R: Real>(
         arch,
         k: R::of(k),
         background,
-        lembos: match tessellation {
+        lembos: match triangles {
             None => (0..n_lembos).map(|_| OnceLock::new()).collect(),
             Some(_) => Vec::new(),
         },
-        tessellation,
+        triangles,
         tiles: RopTiles::new(vp.width, vp.height, arch.rop.tile_px, arch.rop.count),
     };
     let monitor = Monitor::new(units.iter().map(|u| u.name.clone()).collect());
@@ -403,7 +404,7 @@ fn run_in<R: Real>(
         let plain = |r: std::result::Result<Finished, ActorError>| r.map(|f| (f, None));
 
         // The front end, up to the links into the ROPs.
-        let rop_rx = match tessellation {
+        let rop_rx = match triangles {
             None => {
                 let (seg_ids, sub_ids, ras_ids) = (
                     of(UnitKind::Segmenter),

@@ -2,7 +2,7 @@
 //! snaps them to 16.8 fixed point, sets up the integer edge functions and the
 //! perspective-correct attribute planes, and culls (one test per triangle).
 //!
-//! Input: the tessellated scene, triangle by triangle in tessellation order (the unit is the
+//! Input: the triangles (the tessellated scene), in their source's order (the unit is the
 //! source: the Tessellator's output is read from memory, so the unit is never starved until
 //! it runs out). Output: each set-up triangle, round-robin to the triangle rasterizers.
 //!
@@ -22,18 +22,17 @@ pub fn run<R: Real>(
     sh: &Shared<R>,
 ) -> Result<Finished, ActorError> {
     let cost = sh.arch.triangle_setup.cycles_per_triangle;
-    let tess = sh
-        .tessellation
-        .expect("the triangle path is elaborated with a tessellation");
-    let per_lembo = tess.triangles_per_lembo();
+    let source = sh
+        .triangles
+        .expect("the triangle path is elaborated with a triangle source");
     let mut counts = Counts::default();
     let mut triangles = Vec::new();
     let mut next = 0;
-    for lembo in 0..tess.lembos() {
-        tess.lembo_triangles(lembo, &mut triangles);
+    for c in 0..source.chunks() {
+        source.chunk(c, &mut triangles);
         for (k, t) in triangles.iter().enumerate() {
             counts.triangles += 1;
-            let id = (lembo as u64 * per_lembo + k as u64) as u32;
+            let id = source.id(c, k);
             match setup::<R>(id, &t.positions, &t.normals, t.color, sh.view) {
                 Ok(st) => {
                     ctx.emit(cost, next, Arc::new(st))?;

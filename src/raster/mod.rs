@@ -22,11 +22,11 @@ pub mod v2;
 use crate::camera::View;
 use crate::datapath::{Datapath, Real};
 use crate::error::{Error, Result};
-use crate::lembo::tessellate::Tessellation;
 use crate::rop::{FrameBuffer, Rop};
 use crate::scene::Scene;
 use fragment::FragmentSink;
 use serde::Serialize;
+use triangle::TriangleSource;
 
 /// Default cap on segments per interval (DESIGN §8): far above what a visible patch needs
 /// at k >= 1e-4 px on a 16384-pixel viewport, low enough to refuse runaway walks quickly.
@@ -194,7 +194,7 @@ pub fn render_functional(
 pub fn render_functional_triangles(
     scene: &Scene,
     view: &View,
-    tessellation: &Tessellation,
+    tessellation: &dyn TriangleSource,
     datapath: Datapath,
     analyse: bool,
 ) -> Frame {
@@ -207,7 +207,7 @@ pub fn render_functional_triangles(
 fn triangles_in<R: Real>(
     scene: &Scene,
     view: &View,
-    tessellation: &Tessellation,
+    tessellation: &dyn TriangleSource,
     analyse: bool,
 ) -> Frame {
     let vp = view.viewport;

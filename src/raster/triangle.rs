@@ -29,7 +29,7 @@
 use super::Counts;
 use crate::camera::{View, Viewport};
 use crate::datapath::Real;
-use crate::lembo::tessellate::Tessellation;
+use crate::lembo::tessellate::{Tessellation, Triangle};
 use glam::DVec3;
 
 /// Fractional bits of the snapped vertex coordinates (16.8 fixed point).
@@ -441,20 +441,53 @@ impl<R: Real, S: TriangleSink<R>> TriangleSink<R> for TriangleProbe<'_, S> {
     }
 }
 
-/// Runs the triangle path over every triangle of `tessellation`, in order, into `sink`.
+/// Where the triangle path's triangles come from, chunk by chunk (a lembo's n², a planar
+/// discoid's two). Triangle k of chunk c has id `first_id + c * per_chunk + k`.
+pub trait TriangleSource: Sync {
+    /// Chunks, in drawing order.
+    fn chunks(&self) -> usize;
+    /// Triangles per chunk.
+    fn per_chunk(&self) -> u64;
+    /// The triangles of chunk `c`, in order, into `out` (cleared first).
+    fn chunk(&self, c: usize, out: &mut Vec<Triangle>);
+    /// The id of the first triangle (ids of other primitives drawn in the same frame come
+    /// before it).
+    fn first_id(&self) -> u32 {
+        0
+    }
+    /// The id of triangle `k` of chunk `c`.
+    fn id(&self, c: usize, k: usize) -> u32 {
+        (self.first_id() as u64 + c as u64 * self.per_chunk() + k as u64) as u32
+    }
+}
+
+impl TriangleSource for Tessellation<'_> {
+    fn chunks(&self) -> usize {
+        self.lembos()
+    }
+
+    fn per_chunk(&self) -> u64 {
+        self.triangles_per_lembo()
+    }
+
+    fn chunk(&self, c: usize, out: &mut Vec<Triangle>) {
+        self.lembo_triangles(c, out);
+    }
+}
+
+/// Runs the triangle path over every triangle of `source`, in order, into `sink`.
 pub fn render_triangles<R: Real, S: TriangleSink<R>>(
-    tessellation: &Tessellation,
+    source: &dyn TriangleSource,
     view: &View,
     sink: &mut S,
     counts: &mut Counts,
 ) {
-    let per_lembo = tessellation.triangles_per_lembo();
     let mut triangles = Vec::new();
-    for lembo in 0..tessellation.lembos() {
-        tessellation.lembo_triangles(lembo, &mut triangles);
+    for c in 0..source.chunks() {
+        source.chunk(c, &mut triangles);
         for (k, t) in triangles.iter().enumerate() {
             counts.triangles += 1;
-            let id = (lembo as u64 * per_lembo + k as u64) as u32;
+            let id = source.id(c, k);
             match setup::<R>(id, &t.positions, &t.normals, t.color, view) {
                 Ok(st) => rasterize(&st, sink, counts),
                 Err(cull) => count_cull(cull, counts),
