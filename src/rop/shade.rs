@@ -69,6 +69,15 @@ impl<R: Real> Shader<R> {
     /// material colour.
     #[inline]
     pub fn shade(&self, n: [R; 3], v: [R; 3], color: [R; 3]) -> [R; 3] {
+        let (cos_a, cos_g_n) = self.terms(n, v);
+        self.combine(cos_a, cos_g_n, color)
+    }
+
+    /// The two interest values of equation (6) at a unit normal `n` seen along the unit
+    /// direction to the eye `v`: cos(alpha) and cos^N(gamma), each in [0, 1] (two-sided:
+    /// a normal facing away from the eye is flipped). The discoid blend units average them.
+    #[inline]
+    pub fn terms(&self, n: [R; 3], v: [R; 3]) -> (R, R) {
         let zero = R::zero();
         let dot = |a: [R; 3], b: [R; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
         let n = if dot(n, v) < zero {
@@ -85,12 +94,24 @@ impl<R: Real> Shader<R> {
             two * nl * n[2] - self.l[2],
         ];
         let cos_g = dot(r, v).max(zero);
-        let spec = if self.ks > zero && cos_g > zero && nl > zero {
-            self.ks
-                * match self.shininess_int {
-                    Some(n) => cos_g.powi(n),
-                    None => cos_g.powf(self.shininess),
-                }
+        let cos_g_n = if cos_g > zero && nl > zero {
+            match self.shininess_int {
+                Some(n) => cos_g.powi(n),
+                None => cos_g.powf(self.shininess),
+            }
+        } else {
+            zero
+        };
+        (cos_a, cos_g_n)
+    }
+
+    /// Equation (6) from its two interest values: `color (Ka + Kd cos_a) + Ks cos_g_n`
+    /// (the specular term is white).
+    #[inline]
+    pub fn combine(&self, cos_a: R, cos_g_n: R, color: [R; 3]) -> [R; 3] {
+        let zero = R::zero();
+        let spec = if self.ks > zero {
+            self.ks * cos_g_n
         } else {
             zero
         };
