@@ -73,6 +73,9 @@ pub struct View {
     /// Clip to world.
     pub inv_view_proj: DMat4,
     pub orthographic: bool,
+    /// Near and far plane distances [world units].
+    pub near: f64,
+    pub far: f64,
 }
 
 /// A point projected to the viewport.
@@ -97,6 +100,10 @@ impl View {
             DVec3::from_array(camera.up),
         );
         let aspect = viewport.width as f64 / viewport.height as f64;
+        let (near, far) = match camera.projection {
+            Projection::Perspective { near, far, .. } => (near, far),
+            Projection::Orthographic { near, far, .. } => (near, far),
+        };
         let (proj, orthographic) = match camera.projection {
             Projection::Perspective {
                 fovy_deg,
@@ -118,6 +125,8 @@ impl View {
             view_proj,
             inv_view_proj: view_proj.inverse(),
             orthographic,
+            near,
+            far,
         }
     }
 
@@ -150,6 +159,19 @@ impl View {
     /// Depth in [0, 1] of a world point (as the rasterizer's depth buffer holds it).
     pub fn depth_of(&self, p: DVec3) -> f64 {
         self.project(p).depth
+    }
+
+    /// Distance along the view direction [world units] of a point at window depth `z`
+    /// (the inverse of the projection's depth mapping; linear for orthographic views).
+    pub fn linear_depth(&self, z: f64) -> f64 {
+        let (n, f) = (self.near, self.far);
+        if self.orthographic {
+            n + z * (f - n)
+        } else {
+            // z_ndc = (f + n)/(f - n) - 2 f n / ((f - n) d), z_ndc = 2 z - 1.
+            let ndc = 2.0 * z - 1.0;
+            2.0 * f * n / ((f + n) - ndc * (f - n))
+        }
     }
 
     /// Unit direction from a world point towards the eye (constant for orthographic).
@@ -204,6 +226,28 @@ mod tests {
             v.depth_of(DVec3::new(0.0, 0.0, -2.0)),
         );
         assert!(0.0 < near && near < far && far < 1.0);
+    }
+
+    #[test]
+    fn linear_depth_inverts_the_depth_mapping() {
+        for projection in [
+            Projection::Perspective {
+                fovy_deg: 45.0,
+                near: 0.5,
+                far: 20.0,
+            },
+            Projection::Orthographic {
+                height: 3.0,
+                near: 0.5,
+                far: 20.0,
+            },
+        ] {
+            let v = cam(projection);
+            for d in [0.5, 1.0, 4.0, 19.0] {
+                let z = v.depth_of(DVec3::new(0.2, -0.1, 5.0 - d));
+                assert!((v.linear_depth(z) - d).abs() < 1e-9, "{projection:?} {d}");
+            }
+        }
     }
 
     #[test]

@@ -49,15 +49,34 @@ impl<R: Real> FragmentShader<R> {
     #[inline]
     pub fn shade_at(&self, normal: [R; 3], position: [R; 3], color: [R; 3]) -> ([u8; 3], [R; 3]) {
         let n = normalize(normal);
-        let to_eye = match self.to_eye {
+        let c = self.shader.shade(n, self.to_eye(position), color);
+        ([to_u8(c[0]), to_u8(c[1]), to_u8(c[2])], n)
+    }
+
+    /// The unit direction from world `position` to the eye (constant for orthographic
+    /// views, where `position` is unused).
+    #[inline]
+    pub fn to_eye(&self, position: [R; 3]) -> [R; 3] {
+        match self.to_eye {
             Some(d) => d,
             None => {
                 let p = position;
                 normalize([self.eye[0] - p[0], self.eye[1] - p[1], self.eye[2] - p[2]])
             }
-        };
-        let c = self.shader.shade(n, to_eye, color);
-        ([to_u8(c[0]), to_u8(c[1]), to_u8(c[2])], n)
+        }
+    }
+
+    /// Equation (6)'s interest values (cos alpha, cos^N gamma) at a surface point with
+    /// (not necessarily unit) `normal`, and the unit normal.
+    #[inline]
+    pub fn terms_at(&self, normal: [R; 3], position: [R; 3]) -> (R, R, [R; 3]) {
+        let n = normalize(normal);
+        let (a, g) = self.shader.terms(n, self.to_eye(position));
+        (a, g, n)
+    }
+
+    pub fn shader(&self) -> &Shader<R> {
+        &self.shader
     }
 }
 
