@@ -13,6 +13,8 @@
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
+pub mod shapes;
+
 /// The gray-level texture a discoid carries (paper 000 Figure 5, and a gaussian).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
