@@ -1,29 +1,38 @@
 //! Scenes: the JSON trace files of `traces/` (DESIGN §7), parsed and validated once into a
 //! [`Scene`] that nothing downstream re-checks.
 //!
-//! A scene file holds a name, a viewport, a camera, a light, a background colour and a
-//! list of objects. Each object is a builtin shape (paper 001 Figures 6-8), inline lembos
-//! (six points and six normals each) or a triangle mesh in an OBJ file, with a material
-//! colour and a similarity transform. Every object ends up as world-space lembos; builtins
-//! and meshes also keep their world-space triangle mesh for the triangle path.
+//! A scene file holds a name, a viewport, a camera, a light, a background colour, a
+//! discoid blending threshold and a list of objects. Each object is a builtin shape (paper
+//! 001 Figures 6-8), inline lembos (six points and six normals each), a triangle mesh in an
+//! OBJ file, or discoids (paper 000; DESIGN §4), with a material colour and a similarity
+//! transform. Builtins, inline lembos and meshes end up as world-space lembos; builtins and
+//! meshes also keep their world-space triangle mesh for the triangle path. Discoid objects
+//! end up as a [`DiscoidSet`]: planar discoids given inline, placed at the vertices of an
+//! OBJ mesh, or read as surfels from a PLY point cloud (paper 002); or the curved discoids of
+//! `sphere20` (paper 000 Figure 10), whose lembos also go into the object's lembos so that
+//! the lembo path draws them.
 //!
 //! The file is read into private `*Spec` structs (serde, `deny_unknown_fields`) and then
 //! validated field by field. Every error names the file, the field path in one style
 //! (`viewport.width`, `camera.projection.near`, `objects[1].transform.scale`) and the
 //! value (DESIGN §8): serde errors become [`Error::Parse`] with the path that
 //! `serde_path_to_error` tracked, refused values become [`Error::Invalid`], and mesh files
-//! that cannot be loaded or hold bad numbers become [`Error::Mesh`].
+//! and point-cloud files that cannot be loaded or hold bad numbers become [`Error::Mesh`].
 //!
-//! Not modelled here: triangles, discoids and point clouds as scene objects, and
-//! non-uniform scaling (which would need the inverse transpose for normals).
+//! Not modelled here: triangles as scene objects, point clouds in formats other than PLY,
+//! and non-uniform scaling (which would need the inverse transpose for normals).
 
 use crate::camera::{Camera, Projection, Viewport, MAX_VIEWPORT_SIDE};
+use crate::discoid::shapes::{builtin_discoids, discoids_from_mesh, BUILTIN_DISCOID_NAMES};
+use crate::discoid::{BetaShape, Discoid, DiscoidSet};
 use crate::error::{Error, Result};
 use crate::lembo::construct::TriangleMesh;
 use crate::lembo::shapes::{builtin_mesh, BUILTIN_NAMES};
 use crate::lembo::Lembo;
 use crate::rop::shade::Light;
 use glam::{DMat3, DVec3};
+use ply_rs_bw as ply;
+use ply_rs_bw::ply::{PropertyAccess, PropertyAccessResult, PropertyType, ScalarType};
 use serde::Deserialize;
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -42,6 +51,12 @@ pub const DEFAULT_COLOR: [f64; 3] = [0.8, 0.8, 0.8];
 /// of a few coordinates (projection, the rasterizer's quadratics) inside f64's and f32's
 /// range.
 pub const MAX_WORLD_COORDINATE: f64 = 1e12;
+/// The most discoids a scene may hold, over all its objects: far beyond the paper's scenes
+/// (8,800 and 2 x 7,176 discoids), it bounds the memory and time of a run.
+pub const MAX_DISCOIDS: usize = 1_000_000;
+/// The default blending threshold as a fraction of the scene's median discoid radius (paper
+/// 000: the threshold "must be chosen much smaller than the dimension of the discoids").
+pub const DEFAULT_THRESHOLD_PER_RADIUS: f64 = 0.25;
 
 /// The embedded default scene (`lembo-sim` with no arguments renders it).
 const DEFAULT_SCENE_JSON: &str = include_str!("../traces/default.json");
@@ -60,6 +75,13 @@ pub struct Scene {
     pub light: Light,
     /// Background colour, linear RGB in [0, 1].
     pub background: [f64; 3],
+    /// The discoid blending threshold t [world units] (paper 000 section 3, Figure 9): a
+    /// discoid fragment farther than t behind the depth pass's surface, along the view
+    /// direction, is not blended. From the file's `discoid_threshold` (> 0); without one,
+    /// [`DEFAULT_THRESHOLD_PER_RADIUS`] × the median of the scene's discoid radii (planar
+    /// radii and curved discoids' disk radii, after each object's scale; the mean of the two
+    /// middle values for an even count); 0 for a scene without discoids.
+    pub discoid_threshold: f64,
     pub objects: Vec<SceneObject>,
 }
 
@@ -73,8 +95,11 @@ pub struct SceneObject {
     /// World-space lembos (after the object's transform).
     pub lembos: Vec<Lembo>,
     /// World-space triangle mesh for objects given as meshes or builtins (after transform);
-    /// None for inline lembos.
+    /// None for inline lembos and discoids.
     pub mesh: Option<TriangleMesh>,
+    /// The object's discoids in world space (None for ordinary objects). Curved discoids'
+    /// lembos are `lembos`, in the order of `lembo_texcoords`.
+    pub discoids: Option<DiscoidSet>,
 }
 
 impl Scene {
@@ -120,9 +145,18 @@ impl Scene {
         .expect("the embedded default scene is valid")
     }
 
-    /// The number of lembos over all objects.
+    /// The number of lembos over all objects (curved discoids' lembos included).
     pub fn lembo_count(&self) -> usize {
         self.objects.iter().map(|o| o.lembos.len()).sum()
+    }
+
+    /// The number of discoids over all objects: planar (surfels included) and curved.
+    pub fn discoid_count(&self) -> usize {
+        self.objects
+            .iter()
+            .filter_map(|o| o.discoids.as_ref())
+            .map(|d| d.planar.len() + d.lembo_texcoords.len())
+            .sum()
     }
 
     /// All lembos in scene order with their object's colour; the index in this order is the
@@ -175,6 +209,7 @@ struct SceneSpec {
     camera: CameraSpec,
     light: Option<LightSpec>,
     background: Option<[f64; 3]>,
+    discoid_threshold: Option<f64>,
     objects: Vec<ObjectSpec>,
 }
 
@@ -247,8 +282,40 @@ struct ObjectSpec {
     builtin: Option<String>,
     lembos: Option<Vec<LemboSpec>>,
     mesh: Option<String>,
+    discoids: Option<DiscoidsSpec>,
     color: Option<[f64; 3]>,
     transform: Option<TransformSpec>,
+}
+
+/// An object's discoids: exactly one source, and the beta texture they carry.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DiscoidsSpec {
+    items: Option<Vec<DiscoidItemSpec>>,
+    from_mesh: Option<String>,
+    /// 0 or 1, with `from_mesh` only.
+    subdivide: Option<u32>,
+    /// With `from_mesh` only.
+    radius_scale: Option<f64>,
+    builtin: Option<String>,
+    surfels: Option<String>,
+    beta: Option<BetaShape>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DiscoidItemSpec {
+    center: [f64; 3],
+    normal: [f64; 3],
+    radius: f64,
+}
+
+/// The one source of an object's discoids.
+enum Source<'a> {
+    Items(&'a [DiscoidItemSpec]),
+    FromMesh(&'a str),
+    Builtin(&'a str),
+    Surfels(&'a str),
 }
 
 #[derive(Deserialize)]
@@ -519,15 +586,23 @@ impl Check<'_> {
         })
     }
 
-    fn object(&self, i: usize, o: &ObjectSpec, base_dir: &Path) -> Result<SceneObject> {
+    /// Validates object `i`. `radii` holds the radii of the discoids of the objects before
+    /// it and receives this object's (its length is the scene's discoid count so far).
+    fn object(
+        &self,
+        i: usize,
+        o: &ObjectSpec,
+        base_dir: &Path,
+        radii: &mut Vec<f64>,
+    ) -> Result<SceneObject> {
         let field = format!("objects[{i}]");
         let color = self.color(&format!("{field}.color"), o.color.unwrap_or(DEFAULT_COLOR))?;
         let transform = match &o.transform {
             Some(t) => Some(self.transform(&format!("{field}.transform"), t)?),
             None => None,
         };
-        let (label, lembos, mesh) = match (&o.builtin, &o.lembos, &o.mesh) {
-            (Some(name), None, None) => {
+        let (label, lembos, mesh, discoids) = match (&o.builtin, &o.lembos, &o.mesh, &o.discoids) {
+            (Some(name), None, None, None) => {
                 let Some(mesh) = builtin_mesh(name) else {
                     return Err(self.invalid(
                         format!("{field}.builtin"),
@@ -536,9 +611,14 @@ impl Check<'_> {
                     ));
                 };
                 let mesh = transform_mesh(mesh, transform.as_ref());
-                (format!("builtin {name}"), mesh.to_lembos(), Some(mesh))
+                (
+                    format!("builtin {name}"),
+                    mesh.to_lembos(),
+                    Some(mesh),
+                    None,
+                )
             }
-            (None, Some(specs), None) => {
+            (None, Some(specs), None, None) => {
                 if specs.is_empty() {
                     return Err(self.invalid(
                         format!("{field}.lembos"),
@@ -553,18 +633,24 @@ impl Check<'_> {
                         self.inline_lembo(&format!("{field}.lembos[{j}]"), l, transform.as_ref())
                     })
                     .collect::<Result<Vec<_>>>()?;
-                ("inline lembos".to_string(), lembos, None)
+                ("inline lembos".to_string(), lembos, None, None)
             }
-            (None, None, Some(path)) => {
+            (None, None, Some(path), None) => {
                 let mesh = load_obj(self.file, &format!("{field}.mesh"), &base_dir.join(path))?;
                 let mesh = transform_mesh(mesh, transform.as_ref());
-                (format!("mesh {path}"), mesh.to_lembos(), Some(mesh))
+                (format!("mesh {path}"), mesh.to_lembos(), Some(mesh), None)
+            }
+            (None, None, None, Some(spec)) => {
+                let (label, lembos, set) =
+                    self.discoids(&field, spec, transform.as_ref(), base_dir, radii)?;
+                (label, lembos, None, Some(set))
             }
             _ => {
                 let given: Vec<&str> = [
                     ("builtin", o.builtin.is_some()),
                     ("lembos", o.lembos.is_some()),
                     ("mesh", o.mesh.is_some()),
+                    ("discoids", o.discoids.is_some()),
                 ]
                 .into_iter()
                 .filter_map(|(k, present)| present.then_some(k))
@@ -577,7 +663,7 @@ impl Check<'_> {
                 return Err(self.invalid(
                     field,
                     value,
-                    "an object needs exactly one of `builtin`, `lembos` or `mesh`",
+                    "an object needs exactly one of `builtin`, `lembos`, `mesh` or `discoids`",
                 ));
             }
         };
@@ -600,6 +686,230 @@ impl Check<'_> {
             color,
             lembos,
             mesh,
+            discoids,
+        })
+    }
+
+    /// Validates the `discoids` of the object at `field`: its label, its lembos (curved
+    /// discoids) and its discoid set, in world space. Pushes each discoid's world radius to
+    /// `radii`.
+    fn discoids(
+        &self,
+        object: &str,
+        spec: &DiscoidsSpec,
+        t: Option<&Transform>,
+        base_dir: &Path,
+        radii: &mut Vec<f64>,
+    ) -> Result<(String, Vec<Lembo>, DiscoidSet)> {
+        let field = format!("{object}.discoids");
+        let source = match (&spec.items, &spec.from_mesh, &spec.builtin, &spec.surfels) {
+            (Some(items), None, None, None) => Source::Items(items),
+            (None, Some(path), None, None) => Source::FromMesh(path),
+            (None, None, Some(name), None) => Source::Builtin(name),
+            (None, None, None, Some(path)) => Source::Surfels(path),
+            _ => {
+                let given: Vec<&str> = [
+                    ("items", spec.items.is_some()),
+                    ("from_mesh", spec.from_mesh.is_some()),
+                    ("builtin", spec.builtin.is_some()),
+                    ("surfels", spec.surfels.is_some()),
+                ]
+                .into_iter()
+                .filter_map(|(k, present)| present.then_some(k))
+                .collect();
+                let value = if given.is_empty() {
+                    "none".to_string()
+                } else {
+                    given.join(" and ")
+                };
+                return Err(self.invalid(
+                    field,
+                    value,
+                    "discoids need exactly one source: `items`, `from_mesh`, `builtin` or `surfels`",
+                ));
+            }
+        };
+        if !matches!(source, Source::FromMesh(_)) {
+            if let Some(n) = spec.subdivide {
+                return Err(self.invalid(
+                    format!("{field}.subdivide"),
+                    n,
+                    "applies only to `from_mesh` discoids",
+                ));
+            }
+            if let Some(x) = spec.radius_scale {
+                return Err(self.invalid(
+                    format!("{field}.radius_scale"),
+                    x,
+                    "applies only to `from_mesh` discoids",
+                ));
+            }
+        }
+        let mut set = DiscoidSet {
+            beta: spec.beta.unwrap_or(BetaShape::Disk),
+            planar: Vec::new(),
+            lembo_texcoords: Vec::new(),
+            surfels: false,
+        };
+        let before = radii.len();
+        let (label, lembos, source) = match source {
+            Source::Items(items) => {
+                let source = format!("{field}.items");
+                if items.is_empty() {
+                    return Err(self.invalid(source, "[]", "must hold at least one discoid"));
+                }
+                self.within_limit(&source, items.len(), before)?;
+                set.planar = items
+                    .iter()
+                    .enumerate()
+                    .map(|(j, d)| self.discoid_item(&format!("{source}[{j}]"), d))
+                    .collect::<Result<Vec<_>>>()?;
+                ("inline discoids".to_string(), Vec::new(), source)
+            }
+            Source::FromMesh(path) => {
+                let source = format!("{field}.from_mesh");
+                let subdivide = self.subdivide(&field, spec.subdivide)?;
+                let radius_scale = self.radius_scale(&field, spec.radius_scale)?;
+                let file = base_dir.join(path);
+                let mesh = load_obj(self.file, &source, &file)?;
+                set.planar = discoids_from_mesh(&mesh, subdivide, radius_scale).map_err(|e| {
+                    Error::Mesh {
+                        file: self.file.to_string(),
+                        field: source.clone(),
+                        path: file,
+                        message: e.to_string(),
+                    }
+                })?;
+                self.within_limit(&source, set.planar.len(), before)?;
+                let label = format!(
+                    "discoids from mesh {path} (subdivide {})",
+                    u8::from(subdivide)
+                );
+                (label, Vec::new(), source)
+            }
+            Source::Builtin(name) => {
+                let source = format!("{field}.builtin");
+                let Some(curved) = builtin_discoids(name) else {
+                    return Err(self.invalid(
+                        source,
+                        format!("{name:?}"),
+                        format!(
+                            "unknown builtin discoid shape; known: {}",
+                            BUILTIN_DISCOID_NAMES.join(", ")
+                        ),
+                    ));
+                };
+                self.within_limit(&source, curved.lembos.len(), before)?;
+                let lembos = match t {
+                    Some(t) => curved
+                        .lembos
+                        .iter()
+                        .map(|l| {
+                            Lembo::new(
+                                l.points.map(|p| t.point(p)),
+                                l.normals.map(|n| t.rotate * n),
+                            )
+                        })
+                        .collect(),
+                    None => curved.lembos,
+                };
+                set.lembo_texcoords = curved.texcoords;
+                let scale = t.map_or(1.0, |t| t.scale);
+                radii.extend(curved.radii.iter().map(|r| r * scale));
+                (format!("builtin discoids {name}"), lembos, source)
+            }
+            Source::Surfels(path) => {
+                let source = format!("{field}.surfels");
+                set.planar = load_surfels(self.file, &source, &base_dir.join(path), before)?;
+                set.surfels = true;
+                (format!("surfels {path}"), Vec::new(), source)
+            }
+        };
+        if let Some(t) = t {
+            for d in &mut set.planar {
+                *d = Discoid {
+                    center: t.point(d.center),
+                    normal: (t.rotate * d.normal).normalize(),
+                    radius: d.radius * t.scale,
+                };
+            }
+        }
+        if let Some(j) = set.planar.iter().position(|d| !discoid_in_range(d)) {
+            let where_ = if t.is_some() {
+                format!("{object}.transform")
+            } else {
+                source
+            };
+            let reason = format!(
+                "discoid {j} of this object has a centre coordinate or radius beyond \
+                 {MAX_WORLD_COORDINATE:e} in magnitude, or a radius below {:e} (after the \
+                 transform)",
+                f64::MIN_POSITIVE
+            );
+            return Err(self.invalid(where_, "(world-space geometry)", reason));
+        }
+        radii.extend(set.planar.iter().map(|d| d.radius));
+        Ok((label, lembos, set))
+    }
+
+    /// Refuses `n` more discoids at `field` when the scene, which holds `before`, would hold
+    /// more than [`MAX_DISCOIDS`].
+    fn within_limit(&self, field: &str, n: usize, before: usize) -> Result<()> {
+        let total = before.saturating_add(n);
+        if total <= MAX_DISCOIDS {
+            Ok(())
+        } else {
+            Err(self.invalid(
+                field,
+                format!("{n} discoids"),
+                format!(
+                    "the scene would hold {total} discoids; at most {MAX_DISCOIDS} are accepted"
+                ),
+            ))
+        }
+    }
+
+    fn subdivide(&self, field: &str, n: Option<u32>) -> Result<bool> {
+        match n.unwrap_or(0) {
+            0 => Ok(false),
+            1 => Ok(true),
+            n => Err(self.invalid(
+                format!("{field}.subdivide"),
+                n,
+                "must be 0 (the vertices) or 1 (the vertices and edge midpoints)",
+            )),
+        }
+    }
+
+    fn radius_scale(&self, field: &str, x: Option<f64>) -> Result<f64> {
+        let field = format!("{field}.radius_scale");
+        let x = self.finite(&field, x.unwrap_or(1.0))?;
+        if x > 0.0 {
+            Ok(x)
+        } else {
+            Err(self.invalid(field, x, "must be > 0"))
+        }
+    }
+
+    /// A planar discoid given inline, in object space, its normal normalised.
+    fn discoid_item(&self, field: &str, d: &DiscoidItemSpec) -> Result<Discoid> {
+        let center = self.vec3(&format!("{field}.center"), d.center)?;
+        let normal = self.vec3(&format!("{field}.normal"), d.normal)?;
+        let Some(normal) = unit(normal) else {
+            return Err(self.invalid(
+                format!("{field}.normal"),
+                Vec3Value(d.normal),
+                "must be non-zero",
+            ));
+        };
+        let radius = self.finite(&format!("{field}.radius"), d.radius)?;
+        if radius <= 0.0 {
+            return Err(self.invalid(format!("{field}.radius"), radius, "must be > 0 world units"));
+        }
+        Ok(Discoid {
+            center,
+            normal,
+            radius,
         })
     }
 
@@ -628,12 +938,23 @@ impl SceneSpec {
         let light = check.light(&self.light.unwrap_or_default())?;
         let background =
             check.color("background", self.background.unwrap_or(DEFAULT_BACKGROUND))?;
+        let mut radii = Vec::new();
         let objects = self
             .objects
             .iter()
             .enumerate()
-            .map(|(i, o)| check.object(i, o, base_dir))
+            .map(|(i, o)| check.object(i, o, base_dir, &mut radii))
             .collect::<Result<Vec<_>>>()?;
+        let discoid_threshold = match self.discoid_threshold {
+            Some(t) => {
+                let t = check.finite("discoid_threshold", t)?;
+                if t <= 0.0 {
+                    return Err(check.invalid("discoid_threshold", t, "must be > 0 world units"));
+                }
+                t
+            }
+            None => DEFAULT_THRESHOLD_PER_RADIUS * median(&mut radii),
+        };
         Ok(Scene {
             name: self.name,
             source: None,
@@ -641,6 +962,7 @@ impl SceneSpec {
             camera,
             light,
             background,
+            discoid_threshold,
             objects,
         })
     }
@@ -656,7 +978,39 @@ fn lembo_in_range(l: &Lembo) -> bool {
         && l.normal.iter().all(|q| q.magnitude().is_finite())
 }
 
-// ---- Transforms and meshes -----------------------------------------------------------------
+/// Whether a world-space planar discoid's centre is at most [`MAX_WORLD_COORDINATE`] in
+/// magnitude, its normal finite and its radius in [`f64::MIN_POSITIVE`],
+/// [`MAX_WORLD_COORDINATE`].
+fn discoid_in_range(d: &Discoid) -> bool {
+    d.center.is_finite()
+        && d.center.abs().max_element() <= MAX_WORLD_COORDINATE
+        && d.normal.is_finite()
+        && (f64::MIN_POSITIVE..=MAX_WORLD_COORDINATE).contains(&d.radius)
+}
+
+/// `v` at unit length, or None when it is zero; robust to very small and very large finite
+/// components.
+fn unit(v: DVec3) -> Option<DVec3> {
+    let m = v.abs().max_element();
+    if m > 0.0 {
+        (v / m).try_normalize()
+    } else {
+        None
+    }
+}
+
+/// The median of `x` (the mean of the two middle values for an even count), 0 when empty.
+fn median(x: &mut [f64]) -> f64 {
+    x.sort_unstable_by(f64::total_cmp);
+    let n = x.len();
+    match n {
+        0 => 0.0,
+        _ if n % 2 == 1 => x[n / 2],
+        _ => 0.5 * (x[n / 2 - 1] + x[n / 2]),
+    }
+}
+
+// ---- Transforms, meshes and point clouds ----------------------------------------------------
 
 /// A similarity transform: uniform scale, then rotation, then translation.
 struct Transform {
@@ -768,6 +1122,130 @@ fn load_obj(file: &str, field: &str, path: &Path) -> Result<TriangleMesh> {
     }
 }
 
+/// The vertex properties a surfel point cloud must have, each a `float` or a `double`.
+const SURFEL_PROPERTIES: [&str; 7] = ["x", "y", "z", "nx", "ny", "nz", "radius"];
+
+/// One vertex of a surfel PLY file as it is read (other properties are ignored).
+#[derive(Default)]
+struct SurfelRecord {
+    /// x, y, z, nx, ny, nz, radius, in [`SURFEL_PROPERTIES`] order.
+    values: [f64; 7],
+}
+
+impl SurfelRecord {
+    fn set(&mut self, name: &str, value: f64) -> PropertyAccessResult {
+        match SURFEL_PROPERTIES.iter().position(|&p| p == name) {
+            Some(k) => {
+                self.values[k] = value;
+                PropertyAccessResult::Set
+            }
+            None => PropertyAccessResult::Ignored,
+        }
+    }
+}
+
+impl PropertyAccess for SurfelRecord {
+    fn new() -> Self {
+        SurfelRecord::default()
+    }
+
+    fn set_float(&mut self, name: &str, value: f32) -> PropertyAccessResult {
+        self.set(name, f64::from(value))
+    }
+
+    fn set_double(&mut self, name: &str, value: f64) -> PropertyAccessResult {
+        self.set(name, value)
+    }
+}
+
+/// Loads a surfel point cloud from a PLY file (ascii, binary_little_endian or
+/// binary_big_endian): one planar discoid per vertex, from the `vertex` element (which must
+/// come first) and its properties x y z nx ny nz radius. `field` names the scene field that
+/// gave the path; `before` is how many discoids the scene already holds ([`MAX_DISCOIDS`] is
+/// checked against the header's count before the payload is read).
+fn load_surfels(file: &str, field: &str, path: &Path, before: usize) -> Result<Vec<Discoid>> {
+    let cloud_err = |message: String| Error::Mesh {
+        file: file.to_string(),
+        field: field.to_string(),
+        path: path.to_path_buf(),
+        message,
+    };
+    let bytes = std::fs::read(path).map_err(|e| cloud_err(e.to_string()))?;
+    let mut reader = ply::parser::Reader::new(std::io::Cursor::new(bytes));
+    let parser = ply::parser::Parser::<SurfelRecord>::new();
+    let header = parser
+        .read_header(&mut reader)
+        .map_err(|e| cloud_err(format!("not a valid PLY file: {e}")))?;
+    let vertex = match header.elements.first() {
+        Some((name, element)) if name == "vertex" => element,
+        Some((name, _)) => {
+            return Err(cloud_err(format!(
+                "the first element is `{name}`; a surfel file's first element must be `vertex`"
+            )))
+        }
+        None => return Err(cloud_err("declares no elements".into())),
+    };
+    for name in SURFEL_PROPERTIES {
+        match vertex.properties.get(name).map(|p| &p.data_type) {
+            Some(PropertyType::Scalar(ScalarType::Float | ScalarType::Double)) => {}
+            Some(other) => {
+                return Err(cloud_err(format!(
+                    "vertex property `{name}` is {other:?}; it must be a float or a double"
+                )))
+            }
+            None => {
+                return Err(cloud_err(format!(
+                    "the `vertex` element has no property `{name}` (a surfel needs {})",
+                    SURFEL_PROPERTIES.join(" ")
+                )))
+            }
+        }
+    }
+    if vertex.count == 0 {
+        return Err(cloud_err("holds no vertices".into()));
+    }
+    let total = before.saturating_add(vertex.count);
+    if total > MAX_DISCOIDS {
+        return Err(Error::invalid(
+            file,
+            field,
+            format!("{} surfels", vertex.count),
+            format!("the scene would hold {total} discoids; at most {MAX_DISCOIDS} are accepted"),
+        ));
+    }
+    let records = parser
+        .read_payload_for_element(&mut reader, vertex, &header)
+        .map_err(|e| cloud_err(format!("not a valid PLY file: {e}")))?;
+    records
+        .iter()
+        .enumerate()
+        .map(|(i, r)| {
+            let [x, y, z, nx, ny, nz, radius] = r.values;
+            let center = DVec3::new(x, y, z);
+            let normal = DVec3::new(nx, ny, nz);
+            if !center.is_finite() || !normal.is_finite() || !radius.is_finite() {
+                return Err(cloud_err(format!(
+                    "vertex {i} has a non-finite value in {:?}",
+                    r.values
+                )));
+            }
+            let Some(normal) = unit(normal) else {
+                return Err(cloud_err(format!("vertex {i} has a zero normal")));
+            };
+            if radius <= 0.0 {
+                return Err(cloud_err(format!(
+                    "vertex {i} has radius {radius}; it must be > 0"
+                )));
+            }
+            Ok(Discoid {
+                center,
+                normal,
+                radius,
+            })
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -872,6 +1350,9 @@ mod tests {
             assert_eq!(scene.source.as_deref(), Some(path.as_path()));
             assert_eq!(scene.viewport, DEFAULT_VIEWPORT);
             assert!(scene.objects.iter().all(|o| o.mesh.is_some()));
+            assert!(scene.objects.iter().all(|o| o.discoids.is_none()));
+            assert_eq!(scene.discoid_count(), 0);
+            assert_eq!(scene.discoid_threshold, 0.0);
         }
     }
 
@@ -1267,5 +1748,527 @@ mod tests {
         .unwrap();
         let north = turned.objects[0].mesh.as_ref().unwrap().positions[0];
         assert!((north - DVec3::X).length() < 1e-12, "{north}");
+    }
+
+    // ---- Discoids ------------------------------------------------------------------------
+
+    /// The sphere scene with its object replaced by `object` (JSON).
+    fn with_object(object: &str) -> Result<Scene> {
+        sphere_with(r#"{"builtin": "sphere24"}"#, object)
+    }
+
+    fn discoid_set(scene: &Scene, i: usize) -> &DiscoidSet {
+        scene.objects[i].discoids.as_ref().unwrap()
+    }
+
+    fn bunny_mesh() -> TriangleMesh {
+        load_obj("test", "mesh", &traces().join("meshes/bunny.obj")).unwrap()
+    }
+
+    /// A binary little-endian surfel PLY file: one row x y z nx ny nz radius per vertex.
+    fn surfel_ply(rows: &[[f32; 7]], comment: &str) -> Vec<u8> {
+        let mut out = format!(
+            "ply\nformat binary_little_endian 1.0\ncomment {comment}\nelement vertex {}\n",
+            rows.len()
+        )
+        .into_bytes();
+        for p in SURFEL_PROPERTIES {
+            out.extend(format!("property float {p}\n").bytes());
+        }
+        out.extend(b"end_header\n");
+        for x in rows.iter().flatten() {
+            out.extend(x.to_le_bytes());
+        }
+        out
+    }
+
+    /// The content of `traces/pointclouds/bunny_surfels.ply`: the bunny mesh's vertices with
+    /// their unit normals and radius = the mean length of their edges, as f32.
+    fn bunny_surfels_ply() -> Vec<u8> {
+        let rows: Vec<[f32; 7]> = discoids_from_mesh(&bunny_mesh(), false, 1.0)
+            .unwrap()
+            .iter()
+            .map(|d| {
+                let (c, n) = (d.center, d.normal);
+                [c.x, c.y, c.z, n.x, n.y, n.z, d.radius].map(|x| x as f32)
+            })
+            .collect();
+        surfel_ply(
+            &rows,
+            "lembo-sim surfels of traces/meshes/bunny.obj: its vertices, unit normals and \
+             radius = mean length of the vertex's edges",
+        )
+    }
+
+    /// A scene whose only object reads `ply` (bytes) as surfels.
+    fn scene_with_ply(ply: &[u8]) -> Result<Scene> {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("s.ply"), ply).unwrap();
+        let text = SPHERE.replacen(
+            r#""builtin": "sphere24""#,
+            r#""discoids": {"surfels": "s.ply"}"#,
+            1,
+        );
+        Scene::from_json(&text, "test.json", dir.path())
+    }
+
+    #[test]
+    fn committed_discoid_traces_load_with_their_counts() {
+        // (file, discoids, lembos, threshold or None for the default)
+        for (file, discoids, lembos, threshold) in [
+            ("discoid_sphere20", 20, 20, Some(0.2)),
+            ("discoid_threshold", 17 * 17 + 25 * 25, 0, Some(0.025)),
+            ("bunny_discoids", 1839 + 5511, 0, None),
+            ("surfels_bunny", 1839, 0, None),
+        ] {
+            let path = traces().join(format!("{file}.json"));
+            let scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+            assert_eq!(scene.name, file);
+            assert_eq!(scene.viewport, DEFAULT_VIEWPORT);
+            assert_eq!(scene.discoid_count(), discoids, "{file}");
+            assert_eq!(scene.lembo_count(), lembos, "{file}");
+            assert!(scene.objects.iter().all(|o| o.mesh.is_none()));
+            for o in &scene.objects {
+                let set = o.discoids.as_ref().unwrap();
+                assert_eq!(set.beta, BetaShape::Disk);
+                assert_eq!(set.lembo_texcoords.len(), o.lembos.len());
+                assert_eq!(set.surfels, file == "surfels_bunny");
+            }
+            let mut radii: Vec<f64> = scene
+                .objects
+                .iter()
+                .flat_map(|o| &o.discoids.as_ref().unwrap().planar)
+                .map(|d| d.radius)
+                .collect();
+            let want = threshold.unwrap_or_else(|| 0.25 * median(&mut radii));
+            assert_eq!(scene.discoid_threshold, want, "{file}");
+        }
+    }
+
+    #[test]
+    fn sphere20_scene_threshold_exceeds_the_overlap_gap() {
+        // The lembos of overlapping discoids lie up to 0.17 apart (discoid::shapes): the
+        // scene's threshold must blend them, and stay far below the sphere's diameter.
+        let scene = Scene::load(&traces().join("discoid_sphere20.json")).unwrap();
+        assert!(scene.discoid_threshold > 0.17 && scene.discoid_threshold < 0.5);
+        assert_eq!(discoid_set(&scene, 0).lembo_texcoords.len(), 20);
+    }
+
+    #[test]
+    fn threshold_scene_is_two_sheets_a_radius_apart_with_a_much_smaller_threshold() {
+        let scene = Scene::load(&traces().join("discoid_threshold.json")).unwrap();
+        let (front, back) = (
+            &discoid_set(&scene, 0).planar,
+            &discoid_set(&scene, 1).planar,
+        );
+        let radius = 0.125;
+        assert!(front.iter().chain(back).all(|d| d.radius == radius));
+        assert!(front
+            .iter()
+            .all(|d| d.center.z == 0.0 && d.normal == DVec3::Z));
+        // The back sheet: z = -radius + 0.03 sin(2 pi x), normals of that surface (the file
+        // holds 6 decimals).
+        for d in back {
+            let x = d.center.x;
+            let z = -radius + 0.03 * (std::f64::consts::TAU * x).sin();
+            let slope = 0.03 * std::f64::consts::TAU * (std::f64::consts::TAU * x).cos();
+            assert!((d.center.z - z).abs() < 1e-6, "{d:?}");
+            assert!((d.normal - DVec3::new(-slope, 0.0, 1.0).normalize()).length() < 1e-5);
+        }
+        let gap = back
+            .iter()
+            .map(|d| -d.center.z)
+            .fold(f64::INFINITY, f64::min);
+        assert!(gap > 0.09, "{gap}");
+        assert!(scene.discoid_threshold <= gap / 3.0);
+        // Overlap: neighbours on the 0.125 grid are one radius apart.
+        assert!((front[1].center - front[0].center).length() <= radius);
+    }
+
+    #[test]
+    fn bunny_from_mesh_subdivide_1_gives_v_plus_e_discoids() {
+        let scene = Scene::load(&traces().join("bunny_discoids.json")).unwrap();
+        let set = discoid_set(&scene, 0);
+        assert_eq!(set.planar.len(), 1839 + 5511);
+        assert!(!set.surfels);
+        let mesh = bunny_mesh();
+        for (d, p) in set.planar.iter().zip(&mesh.positions) {
+            assert_eq!(d.center, *p);
+        }
+        // The first midpoint is that of the first triangle's first edge.
+        let [a, b, _] = mesh.triangles[0].map(|i| mesh.positions[i as usize]);
+        assert_eq!(set.planar[1839].center, 0.5 * (a + b));
+        assert!(set
+            .planar
+            .iter()
+            .all(|d| (d.normal.length() - 1.0).abs() < 1e-12));
+    }
+
+    #[test]
+    fn bunny_discoids_overlap_their_neighbours() {
+        // radius_scale 0.85: every point of every subdivided triangle is inside the disk
+        // (in the disk's plane) of one of its corners, and most inside two.
+        let scene = Scene::load(&traces().join("bunny_discoids.json")).unwrap();
+        let discoids = &discoid_set(&scene, 0).planar;
+        let mesh = crate::discoid::shapes::subdivide_mesh(&bunny_mesh()).unwrap();
+        let inside = |d: &Discoid, p: DVec3| {
+            let q = p - d.center;
+            (q - q.dot(d.normal) * d.normal).length() < d.radius
+        };
+        let (mut samples, mut twice) = (0, 0);
+        let n = 8;
+        for t in &mesh.triangles {
+            let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
+            for i in 0..=n {
+                for j in 0..=(n - i) {
+                    let p = a + (i as f64 / n as f64) * (b - a) + (j as f64 / n as f64) * (c - a);
+                    let k = t
+                        .iter()
+                        .filter(|&&v| inside(&discoids[v as usize], p))
+                        .count();
+                    assert!(k >= 1, "{p} is in none of its corners' disks");
+                    samples += 1;
+                    twice += usize::from(k >= 2);
+                }
+            }
+        }
+        assert!(twice as f64 / samples as f64 > 0.9);
+    }
+
+    #[test]
+    fn bunny_surfels_ply_is_generated_from_the_bunny_mesh() {
+        // LEMBO_BLESS=1 rewrites the committed file.
+        let path = traces().join("pointclouds/bunny_surfels.ply");
+        let want = bunny_surfels_ply();
+        if std::env::var_os("LEMBO_BLESS").is_some() {
+            std::fs::write(&path, &want).unwrap();
+        }
+        let got = std::fs::read(&path).unwrap();
+        assert!(got == want, "{} differs from its generator", path.display());
+    }
+
+    #[test]
+    fn surfels_round_trip_the_mesh_vertices_within_f32_rounding() {
+        let scene = Scene::load(&traces().join("surfels_bunny.json")).unwrap();
+        let set = discoid_set(&scene, 0);
+        assert!(set.surfels);
+        let mesh = bunny_mesh();
+        let exact = discoids_from_mesh(&mesh, false, 1.0).unwrap();
+        assert_eq!(set.planar.len(), mesh.positions.len());
+        // Rounding to f32 moves x by at most |x| 2^-24.
+        let f32_close = |a: f64, b: f64| (a - b).abs() <= b.abs() * 2f64.powi(-24) * 1.0001;
+        for ((got, want), p) in set.planar.iter().zip(&exact).zip(&mesh.positions) {
+            for k in 0..3 {
+                assert!(f32_close(got.center[k], p[k]), "{got:?} {p}");
+            }
+            assert!(f32_close(got.radius, want.radius), "{got:?} {want:?}");
+            assert!((got.normal - want.normal).length() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn surfel_ply_ascii_double_and_extra_properties_load() {
+        let ply = "ply\nformat ascii 1.0\nelement vertex 2\nproperty double x\nproperty double y\n\
+                   property double z\nproperty uchar red\nproperty float nx\nproperty float ny\n\
+                   property float nz\nproperty double radius\nelement face 1\n\
+                   property list uchar int vertex_indices\nend_header\n\
+                   1 2 3 255 0 0 2 0.5\n-1 0 0.25 7 0 1 0 0.125\n3 0 1 1\n";
+        let scene = scene_with_ply(ply.as_bytes()).unwrap();
+        let set = discoid_set(&scene, 0);
+        assert_eq!(
+            set.planar,
+            vec![
+                Discoid {
+                    center: DVec3::new(1.0, 2.0, 3.0),
+                    normal: DVec3::Z,
+                    radius: 0.5
+                },
+                Discoid {
+                    center: DVec3::new(-1.0, 0.0, 0.25),
+                    normal: DVec3::Y,
+                    radius: 0.125
+                }
+            ]
+        );
+        assert!(set.surfels);
+        assert_eq!(scene.objects[0].label, "surfels s.ply");
+        // The same surfels in binary.
+        let binary = surfel_ply(
+            &[
+                [1.0, 2.0, 3.0, 0.0, 0.0, 2.0, 0.5],
+                [-1.0, 0.0, 0.25, 0.0, 1.0, 0.0, 0.125],
+            ],
+            "test",
+        );
+        assert_eq!(discoid_set(&scene_with_ply(&binary).unwrap(), 0), set);
+    }
+
+    #[test]
+    fn bad_surfel_files_are_refused_naming_the_field() {
+        let field = "objects[0].discoids.surfels";
+        let header = |props: &str, n: usize| {
+            format!("ply\nformat ascii 1.0\nelement vertex {n}\n{props}end_header\n")
+        };
+        let all: String = SURFEL_PROPERTIES
+            .iter()
+            .map(|p| format!("property float {p}\n"))
+            .collect();
+        for (body, want) in [
+            (header(&all.replace("property float radius\n", ""), 1), "radius"),
+            (header(&all.replace("float radius", "int radius"), 1), "radius"),
+            (format!("{}0 0 0 0 0 1 0\n", header(&all, 1)), "radius 0"),
+            (format!("{}0 0 0 0 0 0 1\n", header(&all, 1)), "zero normal"),
+            (format!("{}0 0 nan 0 0 1 1\n", header(&all, 1)), "PLY"),
+            (format!("{}0 0 0 0 0 1 1\n", header(&all, 2)), "PLY"),
+            (header(&all, 0), "no vertices"),
+            ("{\"not\": \"ply\"}".to_string(), "PLY"),
+            (
+                "ply\nformat ascii 1.0\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n"
+                    .to_string(),
+                "first element",
+            ),
+        ] {
+            let message = assert_mesh_err(scene_with_ply(body.as_bytes()), field);
+            assert!(message.contains(want), "{want:?} not in {message:?}");
+        }
+        // A NaN in a binary file.
+        let nan = surfel_ply(&[[0.0, f32::NAN, 0.0, 0.0, 0.0, 1.0, 1.0]], "t");
+        let message = assert_mesh_err(scene_with_ply(&nan), field);
+        assert!(
+            message.contains("vertex 0 has a non-finite value"),
+            "{message}"
+        );
+        // A truncated binary file.
+        let mut binary = surfel_ply(&[[0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0]], "t");
+        binary.truncate(binary.len() - 3);
+        assert_mesh_err(scene_with_ply(&binary), field);
+        // A missing file names the field and gives the OS reason.
+        let message = assert_mesh_err(
+            with_object(r#"{"discoids": {"surfels": "pointclouds/missing.ply"}}"#),
+            field,
+        );
+        assert!(message.contains("No such file"), "{message}");
+    }
+
+    #[test]
+    fn more_than_a_million_discoids_are_refused_before_reading_them() {
+        // The header alone is read: no payload follows.
+        let ply = "ply\nformat binary_little_endian 1.0\nelement vertex 1000001\n\
+                   property float x\nproperty float y\nproperty float z\nproperty float nx\n\
+                   property float ny\nproperty float nz\nproperty float radius\nend_header\n";
+        let reason = assert_invalid(
+            scene_with_ply(ply.as_bytes()),
+            "objects[0].discoids.surfels",
+        );
+        assert!(
+            reason.contains("1000001") && reason.contains("1000000"),
+            "{reason}"
+        );
+        // The limit is on the scene's total: two inline discoids and 999,999 surfels.
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("s.ply"), ply.replace("1000001", "999999")).unwrap();
+        let two = r#"{"discoids": {"items": [{"center": [0, 0, 0], "normal": [0, 0, 1], "radius": 1},
+                                             {"center": [1, 0, 0], "normal": [0, 0, 1], "radius": 1}]}},
+                     {"discoids": {"surfels": "s.ply"}}"#;
+        let text = SPHERE.replacen(r#"{"builtin": "sphere24"}"#, two, 1);
+        let reason = assert_invalid(
+            Scene::from_json(&text, "test.json", dir.path()),
+            "objects[1].discoids.surfels",
+        );
+        assert!(reason.contains("1000001"), "{reason}");
+    }
+
+    const ITEMS: &str = r#"{"discoids": {"items": [
+        {"center": [0, 0, 0], "normal": [0, 0, 2], "radius": 0.1},
+        {"center": [1, 0, 0], "normal": [0, 1, 0], "radius": 0.2},
+        {"center": [0, 1, 0], "normal": [1, 0, 0], "radius": 0.4}]}}"#;
+
+    #[test]
+    fn inline_discoids_are_normalised_and_default_to_the_disk_beta() {
+        let scene = with_object(ITEMS).unwrap();
+        let o = &scene.objects[0];
+        assert_eq!(o.label, "inline discoids");
+        assert!(o.lembos.is_empty() && o.mesh.is_none());
+        let set = discoid_set(&scene, 0);
+        assert_eq!(set.beta, BetaShape::Disk);
+        assert!(!set.surfels && set.lembo_texcoords.is_empty());
+        assert_eq!(set.planar[0].normal, DVec3::Z);
+        assert_eq!(set.planar[2].radius, 0.4);
+        assert_eq!(scene.discoid_count(), 3);
+        let star = with_object(&ITEMS.replace(r#""items""#, r#""beta": "star", "items""#)).unwrap();
+        assert_eq!(discoid_set(&star, 0).beta, BetaShape::Star);
+    }
+
+    #[test]
+    fn discoid_transform_scales_radii_and_rotates_normals() {
+        let moved = ITEMS.replacen(
+            "]}}",
+            r#"]}, "transform": {"scale": 2, "rotate_deg": [0, 0, 90], "translate": [0, 0, 1]}}"#,
+            1,
+        );
+        let scene = with_object(&moved).unwrap();
+        let d = discoid_set(&scene, 0).planar[1];
+        // (1, 0, 0) scaled to (2, 0, 0), turned 90 degrees about z to (0, 2, 0), raised by 1.
+        assert!((d.center - DVec3::new(0.0, 2.0, 1.0)).length() < 1e-15);
+        assert!((d.normal - DVec3::new(-1.0, 0.0, 0.0)).length() < 1e-15);
+        assert_eq!(d.radius, 0.4);
+        // The default threshold follows the scale.
+        assert!((scene.discoid_threshold - 0.25 * 0.4).abs() < 1e-15);
+        let huge = ITEMS.replacen("]}}", r#"]}, "transform": {"scale": 1e13}}"#, 1);
+        assert_invalid(with_object(&huge), "objects[0].transform");
+    }
+
+    #[test]
+    fn default_threshold_is_a_quarter_of_the_median_discoid_radius() {
+        // Odd count: the middle radius.
+        assert_eq!(with_object(ITEMS).unwrap().discoid_threshold, 0.25 * 0.2);
+        // Even count, over two objects: the mean of the two middle radii.
+        let four = format!(
+            r#"{ITEMS}, {{"discoids": {{"items": [{{"center": [0, 0, 0], "normal": [0, 0, 1], "radius": 0.8}}]}}}}"#
+        );
+        let t = with_object(&four).unwrap().discoid_threshold;
+        assert!((t - 0.25 * 0.3).abs() < 1e-15, "{t}");
+        // Curved discoids count their disk radius, scaled.
+        let sphere20 =
+            with_object(r#"{"discoids": {"builtin": "sphere20"}, "transform": {"scale": 2}}"#)
+                .unwrap();
+        let want = 0.25 * 2.0 * crate::discoid::shapes::SPHERE20_RADIUS;
+        assert!((sphere20.discoid_threshold - want).abs() < 1e-15);
+        // A given threshold wins; a scene without discoids has 0.
+        let given = sphere_with(r#""objects""#, r#""discoid_threshold": 0.01, "objects""#);
+        assert_eq!(given.unwrap().discoid_threshold, 0.01);
+        assert_eq!(parse(SPHERE).unwrap().discoid_threshold, 0.0);
+    }
+
+    #[test]
+    fn bad_threshold_is_refused() {
+        for bad in ["0", "-0.5"] {
+            let r = sphere_with(
+                r#""objects""#,
+                &format!(r#""discoid_threshold": {bad}, "objects""#),
+            );
+            assert_invalid(r, "discoid_threshold");
+        }
+        let r = sphere_with(r#""objects""#, r#""discoid_threshold": 1e999, "objects""#);
+        assert_parse_err(r, "discoid_threshold");
+    }
+
+    #[test]
+    fn bad_inline_discoids_name_the_field() {
+        let zero_radius = ITEMS.replace(r#""radius": 0.2"#, r#""radius": 0"#);
+        let reason = assert_invalid(
+            with_object(&zero_radius),
+            "objects[0].discoids.items[1].radius",
+        );
+        assert!(reason.contains("> 0"), "{reason}");
+        let zero_normal = ITEMS.replace("[0, 0, 2]", "[0, 0, 0]");
+        assert_invalid(
+            with_object(&zero_normal),
+            "objects[0].discoids.items[0].normal",
+        );
+        let huge = ITEMS.replace(r#""center": [0, 1, 0]"#, r#""center": [0, 1e999, 0]"#);
+        assert_parse_err(with_object(&huge), "objects[0].discoids.items[2].center");
+        assert_invalid(
+            with_object(r#"{"discoids": {"items": []}}"#),
+            "objects[0].discoids.items",
+        );
+    }
+
+    #[test]
+    fn discoids_need_exactly_one_source() {
+        let two = r#"{"discoids": {"builtin": "sphere20", "surfels": "x.ply"}}"#;
+        match with_object(two) {
+            Err(Error::Invalid { field, value, .. }) => {
+                assert_eq!(field, "objects[0].discoids");
+                assert_eq!(value, "builtin and surfels");
+            }
+            other => panic!("{}", summary(&other)),
+        }
+        assert_invalid(
+            with_object(r#"{"discoids": {"beta": "disk"}}"#),
+            "objects[0].discoids",
+        );
+        // Discoids are one object kind among the others.
+        assert_invalid(
+            with_object(r#"{"builtin": "sphere24", "discoids": {"builtin": "sphere20"}}"#),
+            "objects[0]",
+        );
+    }
+
+    #[test]
+    fn bad_discoid_options_name_the_field() {
+        let message = assert_parse_err(
+            with_object(r#"{"discoids": {"builtin": "sphere20", "beta": "square"}}"#),
+            "objects[0].discoids.beta",
+        );
+        assert!(message.contains("gaussian"), "{message}");
+        let reason = assert_invalid(
+            with_object(r#"{"discoids": {"builtin": "sphere21"}}"#),
+            "objects[0].discoids.builtin",
+        );
+        assert!(reason.contains("sphere20"), "{reason}");
+        assert_invalid(
+            with_object(r#"{"discoids": {"from_mesh": "meshes/bunny.obj", "subdivide": 2}}"#),
+            "objects[0].discoids.subdivide",
+        );
+        assert_invalid(
+            with_object(r#"{"discoids": {"builtin": "sphere20", "subdivide": 1}}"#),
+            "objects[0].discoids.subdivide",
+        );
+        assert_invalid(
+            with_object(r#"{"discoids": {"from_mesh": "meshes/bunny.obj", "radius_scale": 0}}"#),
+            "objects[0].discoids.radius_scale",
+        );
+        assert_parse_err(
+            with_object(r#"{"discoids": {"builtin": "sphere20", "radius": 1}}"#),
+            "objects[0].discoids",
+        );
+    }
+
+    #[test]
+    fn bad_discoid_meshes_name_the_field() {
+        let message = assert_mesh_err(
+            with_object(r#"{"discoids": {"from_mesh": "meshes/missing.obj"}}"#),
+            "objects[0].discoids.from_mesh",
+        );
+        assert!(message.contains("No such file"), "{message}");
+        // A zero normal in the file leaves its vertex's discoid without one.
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(
+            dir.path().join("m.obj"),
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nvn 0 0 0\nf 1//1 2//1 3//2\n",
+        )
+        .unwrap();
+        let text = SPHERE.replacen(
+            r#""builtin": "sphere24""#,
+            r#""discoids": {"from_mesh": "m.obj"}"#,
+            1,
+        );
+        let r = Scene::from_json(&text, "test.json", dir.path());
+        let message = assert_mesh_err(r, "objects[0].discoids.from_mesh");
+        assert!(message.contains("vertex 2 has a zero normal"), "{message}");
+    }
+
+    #[test]
+    fn sphere20_object_puts_its_lembos_in_the_lembo_path() {
+        let scene = with_object(
+            r#"{"discoids": {"builtin": "sphere20", "beta": "gaussian"}, "color": [0.1, 0.2, 0.3],
+                "transform": {"translate": [1, 0, 0]}}"#,
+        )
+        .unwrap();
+        let o = &scene.objects[0];
+        assert_eq!(o.label, "builtin discoids sphere20");
+        assert_eq!(o.color, [0.1, 0.2, 0.3]);
+        let set = discoid_set(&scene, 0);
+        assert_eq!((o.lembos.len(), set.lembo_texcoords.len()), (20, 20));
+        assert!(set.planar.is_empty() && set.beta == BetaShape::Gaussian);
+        let plain = crate::discoid::shapes::sphere20();
+        assert_eq!(set.lembo_texcoords, plain.texcoords);
+        for (l, p) in o.lembos.iter().zip(&plain.lembos) {
+            assert_eq!(l.points[0], p.points[0] + DVec3::X);
+            assert_eq!(l.normals[0], p.normals[0]);
+        }
+        assert_eq!(scene.lembo_count(), 20);
+        assert_eq!(scene.discoid_count(), 20);
     }
 }

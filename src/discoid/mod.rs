@@ -15,6 +15,7 @@ use serde::{Deserialize, Serialize};
 
 pub mod blend;
 pub mod texture;
+pub mod shapes;
 
 /// The gray-level texture a discoid carries (paper 000 Figure 5, and a gaussian).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
