@@ -18,6 +18,7 @@
 use crate::camera::View;
 use crate::config::ArchConfig;
 use crate::datapath::Datapath;
+use crate::discoid::blend::BlendMode;
 use crate::error::Result;
 use crate::job::{
     self, check_tess_range, check_triangle_budget, load_arch, render_reference, run_path, Mode,
@@ -80,6 +81,8 @@ impl CompareJob {
             trace_out: None,
             path,
             tess,
+            blend: BlendMode::Rgba8,
+            threshold: None,
         }
     }
 }

@@ -80,6 +80,8 @@ pub struct ArchConfig {
     /// The depth-test and shading units (replicated, screen-interleaved); defaults in
     /// [`RopConfig`].
     pub rop: RopConfig,
+    /// The discoid blend units in the ROPs; defaults in [`BlendConfig`].
+    pub blend: BlendConfig,
     /// The frame-buffer memory port (one instance); defaults in [`FrameBufferConfig`].
     pub framebuffer: FrameBufferConfig,
     /// The FIFOs between stages, one setting per boundary; defaults in [`LinksConfig`].
@@ -247,6 +249,34 @@ pub struct RopConfig {
     /// memory burst tile; small enough that one lembo covers several tiles and thus several
     /// ROPs, large enough that a span is not cut at every few pixels.
     pub tile_px: u32,
+}
+
+/// The discoid blend units (paper 000, DESIGN §4): one per ROP, instantiated only for
+/// scenes with discoids. A fragment kept by the accumulation pass costs the ROP
+/// `cycles_per_fragment_<mode>` more than its depth test and moves
+/// `BlendMode::bytes_per_fragment` through the frame-buffer port (8, 16 or 32 bytes).
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+#[serde(default, deny_unknown_fields)]
+pub struct BlendConfig {
+    /// Blend cycles per fragment in rgba8 (Table 1: two 8-bit averages and two nibble
+    /// adds) \[cycles\]. Default 1: 8-bit blenders run at full rate.
+    pub cycles_per_fragment_rgba8: u64,
+    /// Blend cycles per fragment in f16 \[cycles\]. Default 1: the GeForce 6 series blends
+    /// FP16 targets at full rate.
+    pub cycles_per_fragment_f16: u64,
+    /// Blend cycles per fragment in f32 \[cycles\]. Default 2: FP32 blending at half rate,
+    /// as GPUs that support it run it.
+    pub cycles_per_fragment_f32: u64,
+}
+
+impl Default for BlendConfig {
+    fn default() -> BlendConfig {
+        BlendConfig {
+            cycles_per_fragment_rgba8: 1,
+            cycles_per_fragment_f16: 1,
+            cycles_per_fragment_f32: 2,
+        }
+    }
 }
 
 /// The frame-buffer port: one memory port shared by every ROP. One instance. Item: one
@@ -470,6 +500,7 @@ impl Default for ArchConfig {
             triangle_setup: TriangleSetupConfig::default(),
             triangle_rasterizer: TriangleRasterizerConfig::default(),
             rop: RopConfig::default(),
+            blend: BlendConfig::default(),
             framebuffer: FrameBufferConfig::default(),
             links: LinksConfig::default(),
         }
@@ -728,6 +759,14 @@ impl ArchConfig {
             MAX_TILE_PX.into(),
             "pixels (the side of a ROP interleave tile)",
         )?;
+
+        let b = &self.blend;
+        check.cycles(
+            "blend.cycles_per_fragment_rgba8",
+            b.cycles_per_fragment_rgba8,
+        )?;
+        check.cycles("blend.cycles_per_fragment_f16", b.cycles_per_fragment_f16)?;
+        check.cycles("blend.cycles_per_fragment_f32", b.cycles_per_fragment_f32)?;
 
         let fb = &self.framebuffer;
         check.bytes("framebuffer.bytes_per_cycle", fb.bytes_per_cycle)?;

@@ -7,6 +7,7 @@
 use crate::camera::{View, MAX_VIEWPORT_SIDE};
 use crate::config::ArchConfig;
 use crate::datapath::Datapath;
+use crate::discoid::{self, blend::BlendMode};
 use crate::error::{Error, Result};
 use crate::lembo::tessellate::Tessellation;
 use crate::pipeline::{self, actor::SimOptions};
@@ -88,6 +89,10 @@ pub struct RenderJob {
     /// Tessellation level n (n² triangles per lembo); None for the default, 1. Triangle
     /// path only.
     pub tess: Option<u32>,
+    /// Precision of the discoid blend units (scenes with discoids only).
+    pub blend: BlendMode,
+    /// The discoid threshold t [world units]; None for the scene's.
+    pub threshold: Option<f64>,
 }
 
 impl RenderJob {
@@ -129,6 +134,16 @@ impl RenderJob {
                     "--trace-out",
                     path.display(),
                     "must name a file",
+                ));
+            }
+        }
+        if let Some(t) = self.threshold {
+            if !(t.is_finite() && t > 0.0) {
+                return Err(Error::invalid(
+                    COMMAND_LINE,
+                    "--threshold",
+                    t,
+                    "must be a finite distance above 0 world units",
                 ));
             }
         }
@@ -261,6 +276,17 @@ pub fn run_path(
     arch: Option<&ArchConfig>,
     reference: Option<(&ReferenceImage, f64)>,
 ) -> Result<PathRun> {
+    if scene.discoid_count() > 0 {
+        if reference.is_some() {
+            return Err(Error::invalid(
+                COMMAND_LINE,
+                "--reference",
+                "given",
+                "the exact reference renders lembo surfaces; a discoid scene's error is measured against an f64 accumulation of its fragments (report.json blend)",
+            ));
+        }
+        return run_discoids(job, scene, view, arch);
+    }
     let tess_level = job.tess.unwrap_or(1);
     let tessellation = match job.path {
         PrimitivePath::Lembo => None,
@@ -360,59 +386,28 @@ pub fn run_path(
     };
     let report = Report {
         schema_version: SCHEMA_VERSION,
-        scene: SceneInfo {
-            name: scene.name.clone(),
-            source: scene
-                .source
-                .as_ref()
-                .map(|p| p.display().to_string())
-                .unwrap_or_else(|| "(embedded default)".into()),
-            width: scene.viewport.width,
-            height: scene.viewport.height,
-            lembos,
-            objects: scene
-                .objects
-                .iter()
-                .map(|o| format!("{} ({} lembos)", o.label, o.lembos.len()))
-                .collect(),
-        },
-        settings: Settings {
-            mode: match job.mode {
-                Mode::Timed => "timed",
-                Mode::Functional => "functional",
-            }
-            .into(),
-            arch_file: arch.map(|_| {
-                job.arch
-                    .as_ref()
-                    .map(|p| p.display().to_string())
-                    .unwrap_or_else(|| "(embedded baseline)".into())
-            }),
-            path: job.path.name().into(),
-            k_px: (job.path == PrimitivePath::Lembo).then_some(job.k),
-            tess: tessellation.as_ref().map(|t| t.level()),
-            datapath: job.datapath.name().into(),
-            reference: reference.is_some(),
-            supersample: job.supersample,
-        },
+        scene: scene_info(scene),
+        settings: settings(
+            job,
+            arch,
+            job.path.name(),
+            (job.path == PrimitivePath::Lembo).then_some(job.k),
+            tessellation.as_ref().map(|t| t.level()),
+            reference.is_some(),
+        ),
         primitives,
         units: timed.as_ref().map(|t| t.units.clone()).unwrap_or_default(),
         counts,
         cycles: timed.as_ref().map(|t| t.cycles.clone()),
         arch: arch.cloned(),
         accuracy,
-        host: Host {
-            wall_seconds: wall,
-            fragments_per_second: if wall > 0.0 {
-                counts.fragments as f64 / wall
-            } else {
-                0.0
-            },
-            simulated_cycles_per_second: timed
-                .as_ref()
-                .map(|t| t.cycles.total as f64 / wall.max(1e-9)),
-            reference_wall_seconds: reference_wall,
-        },
+        blend: None,
+        host: host(
+            wall,
+            counts.fragments,
+            timed.as_ref().map(|t| t.cycles.total),
+            reference_wall,
+        ),
     };
     let (framebuffer, trace) = match (timed, frame) {
         (Some(t), _) => (t.framebuffer, t.trace),
@@ -424,6 +419,165 @@ pub fn run_path(
         framebuffer,
         error_map,
         trace,
+    })
+}
+
+/// The scene section of a report.
+fn scene_info(scene: &Scene) -> SceneInfo {
+    SceneInfo {
+        name: scene.name.clone(),
+        source: scene
+            .source
+            .as_ref()
+            .map(|p| p.display().to_string())
+            .unwrap_or_else(|| "(embedded default)".into()),
+        width: scene.viewport.width,
+        height: scene.viewport.height,
+        lembos: scene.lembo_count() as u64,
+        objects: scene
+            .objects
+            .iter()
+            .map(|o| match &o.discoids {
+                Some(d) => format!(
+                    "{} ({} discoids, {} beta)",
+                    o.label,
+                    d.planar.len() + d.lembo_texcoords.len(),
+                    d.beta.name()
+                ),
+                None => format!("{} ({} lembos)", o.label, o.lembos.len()),
+            })
+            .collect(),
+    }
+}
+
+/// The settings section of a report.
+fn settings(
+    job: &RenderJob,
+    arch: Option<&ArchConfig>,
+    path: &str,
+    k_px: Option<f64>,
+    tess: Option<u32>,
+    reference: bool,
+) -> Settings {
+    Settings {
+        mode: match job.mode {
+            Mode::Timed => "timed",
+            Mode::Functional => "functional",
+        }
+        .into(),
+        arch_file: arch.map(|_| {
+            job.arch
+                .as_ref()
+                .map(|p| p.display().to_string())
+                .unwrap_or_else(|| "(embedded baseline)".into())
+        }),
+        path: path.into(),
+        k_px,
+        tess,
+        datapath: job.datapath.name().into(),
+        reference,
+        supersample: job.supersample,
+    }
+}
+
+/// The host section of a report.
+fn host(wall: f64, fragments: u64, cycles: Option<u64>, reference_wall: Option<f64>) -> Host {
+    Host {
+        wall_seconds: wall,
+        fragments_per_second: if wall > 0.0 {
+            fragments as f64 / wall
+        } else {
+            0.0
+        },
+        simulated_cycles_per_second: cycles.map(|c| c as f64 / wall.max(1e-9)),
+        reference_wall_seconds: reference_wall,
+    }
+}
+
+/// Bytes of a planar discoid: centre, normal and radius in f32.
+pub const PLANAR_DISCOID_BYTES: u64 = 7 * 4;
+/// Bytes of a curved discoid: a lembo and six texture-coordinate pairs in f32.
+pub const CURVED_DISCOID_BYTES: u64 = LEMBO_BYTES + 6 * 2 * 4;
+
+/// A discoid scene's three passes (paper 000): timed on `arch`, or functional. With both,
+/// the timed image is checked against the functional one.
+fn run_discoids(
+    job: &RenderJob,
+    scene: &Scene,
+    view: &View,
+    arch: Option<&ArchConfig>,
+) -> Result<PathRun> {
+    let threshold = job.threshold.unwrap_or(scene.discoid_threshold);
+    let t0 = Instant::now();
+    let (framebuffer, counts, blend, units, cycles) = match arch {
+        Some(arch) => {
+            let t = pipeline::discoid::run_discoid_timed(
+                scene,
+                view,
+                job.k,
+                job.datapath,
+                arch,
+                job.blend,
+                threshold,
+                &SimOptions::default(),
+            )?;
+            (t.framebuffer, t.counts, t.blend, t.units, Some(t.cycles))
+        }
+        None => {
+            let f = discoid::render::render_discoids_functional(
+                scene,
+                view,
+                job.k,
+                job.datapath,
+                job.blend,
+                threshold,
+            )?;
+            (f.framebuffer, f.counts, f.blend, Vec::new(), None)
+        }
+    };
+    let wall = t0.elapsed().as_secs_f64();
+    let (planar, curved) = scene
+        .objects
+        .iter()
+        .filter_map(|o| o.discoids.as_ref())
+        .fold((0u64, 0u64), |(p, c), d| {
+            (
+                p + d.planar.len() as u64,
+                c + d.lembo_texcoords.len() as u64,
+            )
+        });
+    let report = Report {
+        schema_version: SCHEMA_VERSION,
+        scene: scene_info(scene),
+        settings: settings(
+            job,
+            arch,
+            "discoid",
+            (curved > 0).then_some(job.k),
+            None,
+            false,
+        ),
+        primitives: Primitives {
+            kind: "discoid".into(),
+            count: planar + curved,
+            vertices: 4 * planar + 6 * curved,
+            bytes: PLANAR_DISCOID_BYTES * planar + CURVED_DISCOID_BYTES * curved,
+            quad_efficiency: (counts.quads > 0)
+                .then(|| counts.fragments as f64 / (4 * counts.quads) as f64),
+        },
+        units,
+        counts,
+        cycles: cycles.clone(),
+        arch: arch.cloned(),
+        accuracy: None,
+        blend: Some(blend),
+        host: host(wall, counts.fragments, cycles.map(|c| c.total), None),
+    };
+    Ok(PathRun {
+        report,
+        framebuffer,
+        error_map: None,
+        trace: None,
     })
 }
 

@@ -3,6 +3,7 @@
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use lembo_sim::compare::{run_compare, CompareJob, Tess};
 use lembo_sim::datapath::Datapath;
+use lembo_sim::discoid::blend::BlendMode;
 use lembo_sim::job::{self, run_render, PrimitivePath, RenderJob};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -30,6 +31,17 @@ enum Command {
     /// compare.txt; print the table (primitives, vertices, bytes, cycles, fragments,
     /// accuracy per path).
     Compare(CompareArgs),
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum BlendArg {
+    /// Paper 000 Table 1: averages in R and G, the sum of betas nibble-split in B and A,
+    /// 8-bit saturating adds (8 bytes per fragment).
+    Rgba8,
+    /// Half-float target (16 bytes per fragment).
+    F16,
+    /// Single-float target (32 bytes per fragment).
+    F32,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -98,6 +110,14 @@ struct RenderArgs {
     /// Which primitives draw the scene's surfaces.
     #[arg(long, value_enum, default_value = "lembo")]
     path: PathArg,
+    /// Precision of the discoid blend units in the ROP (scenes with discoids): rgba8 is the
+    /// paper's Table 1 packing in one 8-bit target; f16 and f32 are float targets.
+    #[arg(long, value_enum, default_value = "rgba8")]
+    blend: BlendArg,
+    /// Discoid threshold t [world units]: fragments farther than t behind the depth pass's
+    /// surface are not blended [default: the scene's discoid_threshold].
+    #[arg(long, value_name = "T", allow_negative_numbers = true)]
+    threshold: Option<f64>,
     /// Triangle path: tessellate each lembo into N² triangles, uniform in its domain, with
     /// vertices on the true patch [default: 1, a mesh's own triangles].
     #[arg(long, value_name = "N")]
@@ -180,6 +200,8 @@ fn default_render() -> RenderArgs {
         viewport: None,
         path: PathArg::Lembo,
         tess: None,
+        blend: BlendArg::Rgba8,
+        threshold: None,
     }
 }
 
@@ -235,12 +257,39 @@ fn render(args: RenderArgs) -> ExitCode {
             PathArg::Triangle => PrimitivePath::Triangle,
         },
         tess: args.tess,
+        blend: match args.blend {
+            BlendArg::Rgba8 => BlendMode::Rgba8,
+            BlendArg::F16 => BlendMode::F16,
+            BlendArg::F32 => BlendMode::F32,
+        },
+        threshold: args.threshold,
     };
     match run_render(&job) {
         Ok(out) => {
             let r = &out.report;
             let c = &r.counts;
             match (r.settings.k_px, r.settings.tess) {
+                _ if r.blend.is_some() => {
+                    let b = r.blend.as_ref().expect("checked");
+                    println!(
+                        "{}: {} discoids, {}x{} px, blend {} ({} bytes/fragment), threshold {}: {} fragments accumulated, {} beyond the threshold, {} beta = 0, {} back-facing, {} saturations; error max {:.4}, mean {:.5}{}",
+                        r.scene.name,
+                        r.primitives.count,
+                        r.scene.width,
+                        r.scene.height,
+                        b.mode,
+                        b.bytes_per_fragment,
+                        b.threshold,
+                        b.fragments_accumulated,
+                        b.discarded_threshold,
+                        b.discarded_beta_zero,
+                        b.culled_backface,
+                        b.saturations,
+                        b.error_max,
+                        b.error_mean,
+                        b.holes.map(|h| format!(", {h} holes")).unwrap_or_default()
+                    )
+                }
                 (Some(k), _) => println!(
                     "{}: {} lembos, {}x{} px, k = {} px, {}: {} scanlines, {} intervals, {} segments, {} subsegments, {} fragments ({} passed depth)",
                     r.scene.name,

@@ -2,6 +2,7 @@
 //! atomic writing of a run's output files.
 
 use crate::config::ArchConfig;
+use crate::discoid::render::BlendReport;
 use crate::error::{Error, Result};
 use crate::pipeline::{CycleReport, UnitInstance};
 use crate::raster::Counts;
@@ -30,6 +31,8 @@ pub struct Report {
     pub cycles: Option<CycleReport>,
     /// Accuracy against the exact reference; null without `--reference`.
     pub accuracy: Option<Accuracy>,
+    /// The discoid blend units' counters and error; null for scenes without discoids.
+    pub blend: Option<BlendReport>,
     pub host: Host,
 }
 
@@ -202,6 +205,20 @@ impl Report {
             }
             None => {
                 let _ = writeln!(t, "\ncycles    n/a (functional mode)");
+            }
+        }
+        if let Some(b) = &self.blend {
+            let _ = writeln!(
+                t,
+                "\nblend     {} ({} bytes per fragment), threshold {} world units",
+                b.mode, b.bytes_per_fragment, b.threshold
+            );
+            if let Ok(serde_json::Value::Object(map)) = serde_json::to_value(b) {
+                for (k, v) in map {
+                    if !matches!(k.as_str(), "mode" | "bytes_per_fragment" | "threshold") {
+                        let _ = writeln!(t, "  {k:<28} {v}");
+                    }
+                }
             }
         }
         match &self.accuracy {

@@ -14,8 +14,9 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 pub mod blend;
-pub mod texture;
+pub mod render;
 pub mod shapes;
+pub mod texture;
 
 /// The gray-level texture a discoid carries (paper 000 Figure 5, and a gaussian).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

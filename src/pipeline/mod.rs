@@ -25,6 +25,7 @@
 //! path only its own.
 
 pub mod actor;
+pub mod discoid;
 pub mod framebuffer;
 pub mod interval_manager;
 pub mod link;
@@ -41,6 +42,8 @@ pub mod triangle_setup;
 use crate::camera::View;
 use crate::config::{ArchConfig, LinkConfig};
 use crate::datapath::{Datapath, Real};
+use crate::discoid::blend::BlendMode;
+use crate::discoid::render::{BlendReport, DiscoidTable, Pass, Pending};
 use crate::error::{Error, Result};
 use crate::raster::setup::ScreenLembo;
 use crate::raster::triangle::TriangleSource;
@@ -137,6 +140,8 @@ pub struct TimedFrame {
     pub cycles: CycleReport,
     /// Chrome trace-event JSON, when requested.
     pub trace: Option<String>,
+    /// An accumulation pass's kept fragments and counters, over all ROPs.
+    pub discoid: Option<(Vec<Pending>, BlendReport)>,
 }
 
 /// Read-only state the units share: the scene, the configuration and the lembo table.
@@ -152,6 +157,20 @@ pub struct Shared<'a, R> {
     /// The triangles of the triangle path; None in the lembo path.
     pub triangles: Option<&'a dyn TriangleSource>,
     pub tiles: RopTiles,
+    /// The discoid pass the ROPs run; None for ordinary rendering.
+    pub discoid: Option<DiscoidPass<'a, R>>,
+}
+
+/// What the ROPs need for a discoid pass.
+pub struct DiscoidPass<'a, R> {
+    pub pass: Pass,
+    pub table: &'a DiscoidTable<R>,
+    pub mode: BlendMode,
+    /// [world units]
+    pub threshold: f64,
+    /// The depth pass's result, whole frame: depth and winner per pixel (accumulation pass).
+    pub depth: &'a [f32],
+    pub winner: &'a [u32],
 }
 
 impl<R> Shared<'_, R> {
@@ -171,6 +190,9 @@ pub struct Finished {
     pub counts: Counts,
     /// A functional error the unit recorded (the run still ends normally).
     pub error: Option<Error>,
+    /// A ROP's accumulation-pass output in a discoid pass: the fragments it kept and its
+    /// counters.
+    pub discoid: Option<(Vec<Pending>, BlendReport)>,
 }
 
 impl Finished {
@@ -184,6 +206,7 @@ impl Finished {
             trace,
             counts,
             error: None,
+            discoid: None,
         })
     }
 }
@@ -200,8 +223,8 @@ pub fn run_timed(
     options: &SimOptions,
 ) -> Result<TimedFrame> {
     match datapath {
-        Datapath::F32 => run_in::<f32>(scene, view, k, arch, triangles, options),
-        Datapath::F64 => run_in::<f64>(scene, view, k, arch, triangles, options),
+        Datapath::F32 => run_in::<f32>(scene, view, k, arch, triangles, None, options),
+        Datapath::F64 => run_in::<f64>(scene, view, k, arch, triangles, None, options),
     }
 }
 
@@ -335,6 +358,7 @@ fn run_in<R: Real>(
     k: f64,
     arch: &ArchConfig,
     triangles: Option<&dyn TriangleSource>,
+    discoid: Option<DiscoidPass<R>>,
     options: &SimOptions,
 ) -> Result<TimedFrame> {
     let vp = view.viewport;
@@ -361,6 +385,7 @@ fn run_in<R: Real>(
                 units: Vec::new(),
             },
             trace: None,
+            discoid: None,
         });
     }
     let shared = Shared {
@@ -375,6 +400,7 @@ fn run_in<R: Real>(
         },
         triangles,
         tiles: RopTiles::new(vp.width, vp.height, arch.rop.tile_px, arch.rop.count),
+        discoid,
     };
     let monitor = Monitor::new(units.iter().map(|u| u.name.clone()).collect());
     let trace_cap = options.trace_event_cap / units.len();
@@ -616,11 +642,22 @@ fn run_in<R: Real>(
         bottleneck,
         units: unit_cycles,
     };
+    let mut discoid: Option<(Vec<Pending>, BlendReport)> = None;
+    for (_, f, _) in &mut results {
+        if let Some((pending, report)) = f.discoid.take() {
+            let (all, sum) = discoid.get_or_insert_with(Default::default);
+            all.extend(pending);
+            sum.culled_backface += report.culled_backface;
+            sum.discarded_beta_zero += report.discarded_beta_zero;
+            sum.discarded_threshold += report.discarded_threshold;
+        }
+    }
     Ok(TimedFrame {
         framebuffer: fb,
         counts,
         units,
         cycles,
         trace,
+        discoid,
     })
 }

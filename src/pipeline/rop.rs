@@ -19,8 +19,13 @@
 use super::actor::{ActorError, Ctx};
 use super::rasterizer::FragmentSpan;
 use super::triangle_rasterizer::TrianglePiece;
-use super::{Finished, Shared};
+use super::{DiscoidPass, Finished, Shared};
+use crate::config::BlendConfig;
 use crate::datapath::Real;
+use crate::discoid::blend::BlendMode;
+use crate::discoid::render::{
+    accumulation_keeps, depth_pass_wins, evaluate, BlendReport, DiscoidFragment, Pass, Pending,
+};
 use crate::raster::Counts;
 use crate::rop::framebuffer::{depth_test, NO_PRIMITIVE};
 use crate::rop::rop::FragmentShader;
@@ -153,6 +158,48 @@ pub struct WriteBurst {
     pub bytes: u64,
 }
 
+/// A discoid pass's work on one fragment at storage index `local` (global `idx`):
+/// returns whether it passed (the depth pass) or was kept (the accumulation pass).
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn discoid_fragment<R: Real>(
+    dp: &DiscoidPass<R>,
+    sh: &Shared<R>,
+    shader: &FragmentShader<R>,
+    store: &mut TileStore,
+    kept: &mut (Vec<Pending>, BlendReport),
+    local: usize,
+    idx: usize,
+    f: &DiscoidFragment<R>,
+) -> bool {
+    let e = evaluate(dp.table, shader, f);
+    match dp.pass {
+        Pass::Depth => {
+            let wins = depth_pass_wins(&e, f.id, store.depth[local], store.primitive[local]);
+            if wins {
+                store.depth[local] = e.z;
+                store.primitive[local] = f.id;
+            }
+            wins
+        }
+        Pass::Accumulate => {
+            let (depth, winner) = (dp.depth[idx], dp.winner[idx]);
+            match accumulation_keeps(&mut kept.1, sh.view, dp.threshold, &e, depth, winner) {
+                Some(input) => {
+                    kept.0.push(Pending {
+                        idx: idx as u32,
+                        id: f.id,
+                        st: f.st.map(f64::to_bits),
+                        input,
+                    });
+                    true
+                }
+                None => false,
+            }
+        }
+    }
+}
+
 pub fn run<R: Real>(
     mut ctx: Ctx<RopItem<R>, WriteBurst>,
     sh: &Shared<R>,
@@ -163,6 +210,8 @@ pub fn run<R: Real>(
     let mut counts = Counts::default();
     let mut store = TileStore::new(&sh.tiles, rop, sh.background);
     let shader = FragmentShader::<R>::new(&sh.scene.light, sh.view);
+    let width = sh.view.viewport.width as usize;
+    let mut kept = (Vec::new(), BlendReport::default());
     while let Some(item) = ctx.next_input()? {
         let mut passed = 0u64;
         // The rasterizers cut their output at tile borders: a row's pixels are consecutive
@@ -176,11 +225,18 @@ pub fn run<R: Real>(
                 let l = sh.lembo(id);
                 let first = row_start(span.i0, j);
                 span.walk(|i, u, v| {
-                    let z = l.z.eval(u, v).f64() as f32;
-                    let idx = (first + i as isize) as usize;
-                    if store.test_and_write(idx, z, l.id, || shader.shade(l, u, v).0) {
-                        passed += 1;
-                    }
+                    let local = (first + i as isize) as usize;
+                    let z = l.z.eval(u, v);
+                    let wins = match &sh.discoid {
+                        None => store.test_and_write(local, z.f64() as f32, l.id, || {
+                            shader.shade(l, u, v).0
+                        }),
+                        Some(dp) => dp.table.lembo_fragment(l, u, v, z).is_some_and(|f| {
+                            let idx = j as usize * width + i as usize;
+                            discoid_fragment(dp, sh, &shader, &mut store, &mut kept, local, idx, &f)
+                        }),
+                    };
+                    passed += wins as u64;
                 });
                 span.len() as u64
             }
@@ -194,19 +250,62 @@ pub fn run<R: Real>(
                     let first = row_start(a, j);
                     for i in a..b {
                         let f = t.fragment(i, j);
-                        let idx = (first + i as isize) as usize;
-                        let shade = || shader.shade_at(f.normal, f.position, t.color).0;
-                        if store.test_and_write(idx, f.z.f64() as f32, t.id, shade) {
-                            passed += 1;
-                        }
+                        let local = (first + i as isize) as usize;
+                        let wins = match &sh.discoid {
+                            None => store.test_and_write(local, f.z.f64() as f32, t.id, || {
+                                shader.shade_at(f.normal, f.position, t.color).0
+                            }),
+                            Some(dp) => {
+                                let df = dp.table.planar_fragment(t, &f);
+                                let idx = j as usize * width + i as usize;
+                                discoid_fragment(
+                                    dp, sh, &shader, &mut store, &mut kept, local, idx, &df,
+                                )
+                            }
+                        };
+                        passed += wins as u64;
                     }
                 }
                 piece.len()
             }
         };
         counts.fragments_passed_depth += passed;
-        let bytes = n * fbc.bytes_per_fragment_tested + passed * fbc.bytes_per_fragment_written;
-        ctx.emit(n.div_ceil(cfg.fragments_per_cycle), 0, WriteBurst { bytes })?;
+        let tested = n * fbc.bytes_per_fragment_tested;
+        let (bytes, extra) = match &sh.discoid {
+            None => (tested + passed * fbc.bytes_per_fragment_written, 0),
+            // The depth pass writes depth only.
+            Some(DiscoidPass {
+                pass: Pass::Depth, ..
+            }) => (tested + passed * fbc.bytes_per_fragment_tested, 0),
+            Some(dp) => (
+                tested + passed * dp.mode.bytes_per_fragment(),
+                passed * blend_cycles(&sh.arch.blend, dp.mode),
+            ),
+        };
+        ctx.emit(
+            n.div_ceil(cfg.fragments_per_cycle) + extra,
+            0,
+            WriteBurst { bytes },
+        )?;
     }
-    Ok((Finished::new(ctx, counts)?, store))
+    let mut finished = Finished::new(ctx, counts)?;
+    if matches!(
+        &sh.discoid,
+        Some(DiscoidPass {
+            pass: Pass::Accumulate,
+            ..
+        })
+    ) {
+        finished.discoid = Some(kept);
+    }
+    Ok((finished, store))
+}
+
+/// Blend-unit cycles per kept fragment in `mode`.
+pub fn blend_cycles(cfg: &BlendConfig, mode: BlendMode) -> u64 {
+    match mode {
+        BlendMode::Rgba8 => cfg.cycles_per_fragment_rgba8,
+        BlendMode::F16 => cfg.cycles_per_fragment_f16,
+        BlendMode::F32 => cfg.cycles_per_fragment_f32,
+    }
 }

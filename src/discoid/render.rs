@@ -1,0 +1,637 @@
+//! The three passes of the atlas of discoids (paper 000 section 3, DESIGN §4) in the
+//! functional model.
+//!
+//! 1. **Depth**: every discoid fragment with beta > 0 that faces the eye writes the nearest
+//!    depth (visibility splatting); no colour.
+//! 2. **Accumulation**: fragments that face away from the eye are culled, fragments with
+//!    beta = 0 discarded, and fragments farther than the threshold t behind the depth pass's
+//!    surface (`linear_depth(z) > linear_depth(depth) + t`, t in world units along the view
+//!    direction) discarded; the rest are blended by the ROP blend unit of the chosen
+//!    [`BlendMode`] in equation (5)'s incremental form, with the interest values
+//!    cos(alpha) and cos^N(gamma) of equation (6). Beside it, an f64 accumulation of the
+//!    same fragments ([`ExactAccum`]) is the error reference. Rounded blending depends on
+//!    order, so each pixel blends its fragments in primitive order (then by texture
+//!    coordinates, for a folded lembo's two fragments), as GPU ROPs blend in API order:
+//!    the pass collects the fragments it keeps and [`DiscoidTarget::blend_in_order`] blends
+//!    them, so any unit order (functional or timed) gives the same bits.
+//! 3. **Resolve**: per pixel, equation (6) from the averaged interest values, in the colour
+//!    of the discoid that won the depth pass.
+//!
+//! Planar discoids are squares (two triangles) through the triangle path, their texture
+//! coordinates from the world position in their tangent frame; curved discoids are lembos
+//! through the lembo path, their texture coordinates from quadratics through the six
+//! reference points' coordinates. Both use the datapath of the run.
+//!
+//! Deviations from the paper: the depth pass also culls back faces and discards beta = 0
+//! (a square's corners outside the disk must not hide what is behind them), and the
+//! threshold is in world units rather than depth-buffer units, so that it means the same
+//! at every distance. The counters of fragments culled and discarded are those of the
+//! accumulation pass.
+
+use super::blend::{Accum, BlendInput, BlendMode, ExactAccum};
+use super::texture::{BetaTexture, TEXTURE_SIZE};
+use super::{BetaShape, Discoid};
+use crate::camera::View;
+use crate::datapath::{Datapath, Real};
+use crate::error::{Error, Result};
+use crate::lembo::tessellate::Triangle;
+use crate::lembo::{eval3, Quadratic};
+use crate::raster::fragment::FragmentSink;
+use crate::raster::setup::ScreenLembo;
+use crate::raster::subsegmenter::Subsegment;
+use crate::raster::triangle::{
+    render_triangles, ScreenTriangle, TriangleFragment, TriangleSink, TriangleSource,
+};
+use crate::raster::{render_lembos, Counts, DEFAULT_SEGMENT_CAP};
+use crate::rop::framebuffer::{depth_test, NO_PRIMITIVE};
+use crate::rop::rop::FragmentShader;
+use crate::rop::shade::to_u8;
+use crate::rop::FrameBuffer;
+use crate::scene::Scene;
+use serde::Serialize;
+
+/// `blend` in report.json.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct BlendReport {
+    /// `rgba8`, `f16` or `f32`.
+    pub mode: String,
+    /// Accumulation-target bytes per accumulated fragment (read and write) [bytes].
+    pub bytes_per_fragment: u64,
+    /// Fragments blended in the accumulation pass.
+    pub fragments_accumulated: u64,
+    /// Fragments farther than the threshold behind the depth pass's surface.
+    pub discarded_threshold: u64,
+    /// Fragments outside their discoid (beta = 0).
+    pub discarded_beta_zero: u64,
+    /// Fragments of discoids facing away from the eye.
+    pub culled_backface: u64,
+    /// Fragments whose blend saturated an 8-bit word (rgba8 only; 0 otherwise).
+    pub saturations: u64,
+    /// Largest |L - L_f64| over resolved pixels, L = Ka + Kd cos + Ks cos^N from the
+    /// averaged interest values (colour-free luminance).
+    pub error_max: f64,
+    /// Mean of the same over resolved pixels.
+    pub error_mean: f64,
+    /// The threshold t used [world units].
+    pub threshold: f64,
+    /// Surfel scenes: uncovered pixels with covered pixels within 3 px to their left,
+    /// right, top and bottom (holes inside the silhouette); null otherwise.
+    pub holes: Option<u64>,
+    /// Timed runs: the cycles of each pass (depth, accumulation, resolve); null in
+    /// functional mode.
+    pub cycles_depth_pass: Option<u64>,
+    pub cycles_accumulation_pass: Option<u64>,
+    pub cycles_resolve_pass: Option<u64>,
+}
+
+/// The scene's planar discoids as a triangle source: two triangles per discoid, after the
+/// `first_id` ids of the curved discoids.
+pub struct PlanarDiscoids {
+    /// Discoid, material colour and beta shape, in scene order.
+    pub items: Vec<(Discoid, [f64; 3], BetaShape)>,
+    pub first_id: u32,
+}
+
+impl PlanarDiscoids {
+    pub fn new(scene: &Scene) -> Self {
+        let items = scene
+            .objects
+            .iter()
+            .filter_map(|o| o.discoids.as_ref().map(|d| (o, d)))
+            .flat_map(|(o, d)| d.planar.iter().map(move |p| (*p, o.color, d.beta)))
+            .collect();
+        PlanarDiscoids {
+            items,
+            first_id: scene.lembo_count() as u32,
+        }
+    }
+
+    /// The planar discoid that triangle `id` belongs to.
+    #[inline]
+    pub fn of_triangle(&self, id: u32) -> usize {
+        ((id - self.first_id) / 2) as usize
+    }
+}
+
+impl TriangleSource for PlanarDiscoids {
+    fn chunks(&self) -> usize {
+        self.items.len()
+    }
+
+    fn per_chunk(&self) -> u64 {
+        2
+    }
+
+    fn chunk(&self, c: usize, out: &mut Vec<Triangle>) {
+        let (d, color, _) = &self.items[c];
+        let q = d.corners();
+        out.clear();
+        for [a, b, e] in [[0, 1, 2], [0, 2, 3]] {
+            out.push(Triangle {
+                positions: [q[a], q[b], q[e]],
+                normals: [d.normal; 3],
+                color: *color,
+            });
+        }
+    }
+
+    fn first_id(&self) -> u32 {
+        self.first_id
+    }
+}
+
+/// What the ROP blend units know of every discoid, by primitive id.
+pub struct DiscoidTable<R> {
+    pub planar: PlanarDiscoids,
+    /// Per lembo id: the texture-coordinate quadratics (s, t) and the beta shape of a
+    /// curved discoid; None for a lembo that is not one.
+    curved: Vec<Option<([Quadratic<R>; 2], BetaShape)>>,
+    /// Material colour per lembo id.
+    lembo_color: Vec<[f64; 3]>,
+    /// One texture per shape, indexed by [`shape_index`].
+    textures: [BetaTexture; 3],
+    /// Whether the scene's planar discoids are surfels.
+    pub surfels: bool,
+}
+
+fn shape_index(s: BetaShape) -> usize {
+    match s {
+        BetaShape::Disk => 0,
+        BetaShape::Star => 1,
+        BetaShape::Gaussian => 2,
+    }
+}
+
+impl<R: Real> DiscoidTable<R> {
+    pub fn new(scene: &Scene) -> Self {
+        let mut curved = Vec::with_capacity(scene.lembo_count());
+        let mut lembo_color = Vec::with_capacity(scene.lembo_count());
+        for o in &scene.objects {
+            for (k, _) in o.lembos.iter().enumerate() {
+                lembo_color.push(o.color);
+                curved.push(o.discoids.as_ref().and_then(|d| {
+                    d.lembo_texcoords.get(k).map(|st| {
+                        let q =
+                            |c: usize| Quadratic::from_reference_values(st.map(|p| R::of(p[c])));
+                        ([q(0), q(1)], d.beta)
+                    })
+                }));
+            }
+        }
+        DiscoidTable {
+            planar: PlanarDiscoids::new(scene),
+            curved,
+            lembo_color,
+            textures: [BetaShape::Disk, BetaShape::Star, BetaShape::Gaussian]
+                .map(|s| BetaTexture::new(s, TEXTURE_SIZE)),
+            surfels: scene
+                .objects
+                .iter()
+                .any(|o| o.discoids.as_ref().is_some_and(|d| d.surfels)),
+        }
+    }
+
+    /// The discoid fragment of lembo `l` at (u, v), depth z; None when the lembo is not a
+    /// curved discoid (the run checks the scene, so it does not happen).
+    #[inline]
+    pub fn lembo_fragment(
+        &self,
+        l: &ScreenLembo<R>,
+        u: R,
+        v: R,
+        z: R,
+    ) -> Option<DiscoidFragment<R>> {
+        let (tex, shape) = self.curved[l.id as usize].as_ref()?;
+        Some(DiscoidFragment {
+            id: l.id,
+            z,
+            normal: eval3(&l.normal, u, v),
+            position: eval3(&l.position, u, v),
+            st: [tex[0].eval(u, v).f64(), tex[1].eval(u, v).f64()],
+            shape: *shape,
+        })
+    }
+
+    /// The discoid fragment of a planar discoid's triangle `t`.
+    #[inline]
+    pub fn planar_fragment(
+        &self,
+        t: &ScreenTriangle<R>,
+        f: &TriangleFragment<R>,
+    ) -> DiscoidFragment<R> {
+        let (d, _, shape) = &self.planar.items[self.planar.of_triangle(t.id)];
+        let p = f.position.map(|c| c.f64());
+        DiscoidFragment {
+            id: t.id,
+            z: f.z,
+            normal: f.normal,
+            position: f.position,
+            st: d.texcoord(glam::DVec3::from_array(p)),
+            shape: *shape,
+        }
+    }
+
+    /// The material colour of primitive `id`.
+    pub fn color(&self, id: u32) -> [f64; 3] {
+        match self.lembo_color.get(id as usize) {
+            Some(c) => *c,
+            None => self.planar.items[self.planar.of_triangle(id)].1,
+        }
+    }
+}
+
+/// Which pass the ROPs run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Pass {
+    Depth,
+    Accumulate,
+}
+
+/// The per-pixel state of the discoid passes and their counters; the ROP side of one
+/// frame, whichever unit feeds it.
+pub struct DiscoidTarget {
+    pub width: u32,
+    pub mode: BlendMode,
+    /// World units, along the view direction.
+    pub threshold: f64,
+    /// Nearest depth per pixel (depth pass), 1 where none.
+    pub depth: Vec<f32>,
+    /// The primitive that won the depth pass, for the resolve's colour.
+    pub winner: Vec<u32>,
+    pub accum: Vec<Accum>,
+    pub exact: Vec<ExactAccum>,
+    /// Fragments kept by the accumulation pass, blended in order at its end.
+    pub pending: Vec<Pending>,
+    pub report: BlendReport,
+}
+
+/// A fragment the accumulation pass keeps: pixel, primitive id, texture coordinates (the
+/// order within a primitive) and what it blends.
+#[derive(Clone, Copy, Debug)]
+pub struct Pending {
+    pub idx: u32,
+    pub id: u32,
+    pub st: [u64; 2],
+    pub input: BlendInput,
+}
+
+impl DiscoidTarget {
+    pub fn new(width: u32, height: u32, mode: BlendMode, threshold: f64) -> Self {
+        let n = width as usize * height as usize;
+        DiscoidTarget {
+            width,
+            mode,
+            threshold,
+            depth: vec![1.0; n],
+            winner: vec![NO_PRIMITIVE; n],
+            accum: vec![Accum::default(); n],
+            exact: vec![ExactAccum::default(); n],
+            pending: Vec::new(),
+            report: BlendReport {
+                mode: mode.name().to_string(),
+                bytes_per_fragment: mode.bytes_per_fragment(),
+                threshold,
+                ..BlendReport::default()
+            },
+        }
+    }
+}
+
+impl DiscoidTarget {
+    /// Blends the pending fragments, pixel by pixel in primitive order.
+    pub fn blend_in_order(&mut self) {
+        let mut pending = std::mem::take(&mut self.pending);
+        pending.sort_unstable_by_key(|p| (p.idx, p.id, p.st));
+        for p in &pending {
+            let idx = p.idx as usize;
+            if self.mode.blend(&mut self.accum[idx], p.input).saturated {
+                self.report.saturations += 1;
+            }
+            self.exact[idx].add(p.input);
+        }
+        self.report.fragments_accumulated += pending.len() as u64;
+    }
+}
+
+/// One discoid fragment as the ROP sees it.
+pub struct DiscoidFragment<R> {
+    pub id: u32,
+    pub z: R,
+    /// World-space normal (not necessarily unit) and position.
+    pub normal: [R; 3],
+    pub position: [R; 3],
+    /// Texture coordinates and the discoid's shape.
+    pub st: [f64; 2],
+    pub shape: BetaShape,
+}
+
+/// What the ROP computes of a discoid fragment before any test.
+#[derive(Clone, Copy, Debug)]
+pub struct Evaluated {
+    /// The discoid faces the eye at this fragment.
+    pub facing: bool,
+    /// beta from the discoid's texture (0 outside it).
+    pub beta: f64,
+    /// Equation (6)'s interest values.
+    pub diffuse: f64,
+    pub specular: f64,
+    /// Depth as the depth buffer holds it.
+    pub z: f32,
+}
+
+/// Evaluates a discoid fragment: facing, beta, interest values, depth.
+#[inline]
+pub fn evaluate<R: Real>(
+    table: &DiscoidTable<R>,
+    shader: &FragmentShader<R>,
+    f: &DiscoidFragment<R>,
+) -> Evaluated {
+    let (cos_a, cos_g_n, n) = shader.terms_at(f.normal, f.position);
+    let e = shader.to_eye(f.position);
+    Evaluated {
+        facing: n[0] * e[0] + n[1] * e[1] + n[2] * e[2] >= R::zero(),
+        beta: table.textures[shape_index(f.shape)].sample(f.st[0], f.st[1]),
+        diffuse: cos_a.f64(),
+        specular: cos_g_n.f64(),
+        z: f.z.f64() as f32,
+    }
+}
+
+/// The depth pass: whether fragment `e` of primitive `id` replaces a pixel holding
+/// (`depth`, `winner`). Only fragments facing the eye, inside their discoid and inside the
+/// depth range count; ties go to the smaller id, so the result does not depend on order.
+#[inline]
+pub fn depth_pass_wins(e: &Evaluated, id: u32, depth: f32, winner: u32) -> bool {
+    e.facing && e.beta > 0.0 && depth_test(e.z, id, depth, winner)
+}
+
+/// The accumulation pass's tests on fragment `e` at a pixel whose depth pass left
+/// (`depth`, `winner`): back-face cull, beta = 0 discard, threshold; counted in `report`.
+/// Returns what to blend for a fragment kept.
+#[inline]
+pub fn accumulation_keeps(
+    report: &mut BlendReport,
+    view: &View,
+    threshold: f64,
+    e: &Evaluated,
+    depth: f32,
+    winner: u32,
+) -> Option<BlendInput> {
+    if !e.facing {
+        report.culled_backface += 1;
+    } else if e.beta <= 0.0 {
+        report.discarded_beta_zero += 1;
+    } else if !(0.0..=1.0).contains(&e.z)
+        || winner == NO_PRIMITIVE
+        || view.linear_depth(e.z as f64) > view.linear_depth(depth as f64) + threshold
+    {
+        report.discarded_threshold += 1;
+    } else {
+        return Some(BlendInput {
+            beta: e.beta,
+            diffuse: e.diffuse,
+            specular: e.specular,
+        });
+    }
+    None
+}
+
+/// The ROP's work on one discoid fragment at pixel `idx` in `pass`, on a whole-frame
+/// target (the functional model).
+#[inline]
+pub fn process<R: Real>(
+    pass: Pass,
+    target: &mut DiscoidTarget,
+    table: &DiscoidTable<R>,
+    shader: &FragmentShader<R>,
+    view: &View,
+    idx: usize,
+    f: &DiscoidFragment<R>,
+) {
+    let e = evaluate(table, shader, f);
+    let (depth, winner) = (target.depth[idx], target.winner[idx]);
+    match pass {
+        Pass::Depth => {
+            if depth_pass_wins(&e, f.id, depth, winner) {
+                target.depth[idx] = e.z;
+                target.winner[idx] = f.id;
+            }
+        }
+        Pass::Accumulate => {
+            let threshold = target.threshold;
+            if let Some(input) =
+                accumulation_keeps(&mut target.report, view, threshold, &e, depth, winner)
+            {
+                target.pending.push(Pending {
+                    idx: idx as u32,
+                    id: f.id,
+                    st: f.st.map(f64::to_bits),
+                    input,
+                });
+            }
+        }
+    }
+}
+
+/// A fragment sink for both paths that feeds [`process`] in the functional model.
+struct Sink<'a, R> {
+    pass: Pass,
+    target: &'a mut DiscoidTarget,
+    table: &'a DiscoidTable<R>,
+    shader: &'a FragmentShader<R>,
+    view: &'a View,
+}
+
+impl<R: Real> FragmentSink<R> for Sink<'_, R> {
+    fn fragment(
+        &mut self,
+        l: &ScreenLembo<R>,
+        _sub: &Subsegment<R>,
+        i: u32,
+        j: u32,
+        u: R,
+        v: R,
+        z: R,
+    ) {
+        let Some(f) = self.table.lembo_fragment(l, u, v, z) else {
+            return;
+        };
+        let idx = (j * self.target.width + i) as usize;
+        process(
+            self.pass,
+            self.target,
+            self.table,
+            self.shader,
+            self.view,
+            idx,
+            &f,
+        );
+    }
+}
+
+impl<R: Real> TriangleSink<R> for Sink<'_, R> {
+    fn fragment(&mut self, t: &ScreenTriangle<R>, i: u32, j: u32, tf: &TriangleFragment<R>) {
+        let f = self.table.planar_fragment(t, tf);
+        let idx = (j * self.target.width + i) as usize;
+        process(
+            self.pass,
+            self.target,
+            self.table,
+            self.shader,
+            self.view,
+            idx,
+            &f,
+        );
+    }
+}
+
+/// The resolve pass: the image, and the error and hole counters in the target's report.
+pub fn resolve<R: Real>(
+    target: &mut DiscoidTarget,
+    table: &DiscoidTable<R>,
+    shader: &FragmentShader<R>,
+    background: [u8; 3],
+    height: u32,
+) -> FrameBuffer {
+    let width = target.width;
+    let mut fb = FrameBuffer::new(width, height, background, false);
+    let s = shader.shader();
+    let luminance = |d: f64, g: f64| {
+        s.ka.f64()
+            + s.kd.f64() * d
+            + if s.ks > R::zero() {
+                s.ks.f64() * g
+            } else {
+                0.0
+            }
+    };
+    let (mut max, mut sum, mut n) = (0.0f64, 0.0f64, 0u64);
+    for idx in 0..fb.color.len() {
+        let Some((d, g)) = target.mode.resolve(&target.accum[idx]) else {
+            continue;
+        };
+        let color = table.color(target.winner[idx]).map(R::of);
+        let c = s.combine(R::of(d), R::of(g), color);
+        fb.write(idx, target.depth[idx], target.winner[idx], c.map(to_u8));
+        if let Some((ed, eg)) = target.exact[idx].resolve() {
+            let e = (luminance(d, g) - luminance(ed, eg)).abs();
+            max = max.max(e);
+            sum += e;
+            n += 1;
+        }
+    }
+    let r = &mut target.report;
+    r.error_max = max;
+    r.error_mean = if n > 0 { sum / n as f64 } else { 0.0 };
+    r.holes = table.surfels.then(|| count_holes(&fb, 3));
+    fb
+}
+
+/// Uncovered pixels with a covered pixel within `reach` pixels to their left, right, top
+/// and bottom: holes inside the silhouette (paper 002's hole detection, on the image).
+pub fn count_holes(fb: &FrameBuffer, reach: u32) -> u64 {
+    let (w, h) = (fb.width as i64, fb.height as i64);
+    let covered = |i: i64, j: i64| {
+        (0..w).contains(&i)
+            && (0..h).contains(&j)
+            && fb.primitive[(j * w + i) as usize] != NO_PRIMITIVE
+    };
+    let r = reach as i64;
+    let mut holes = 0;
+    for j in 0..h {
+        for i in 0..w {
+            if covered(i, j) {
+                continue;
+            }
+            let near = |di: i64, dj: i64| (1..=r).any(|k| covered(i + k * di, j + k * dj));
+            if near(1, 0) && near(-1, 0) && near(0, 1) && near(0, -1) {
+                holes += 1;
+            }
+        }
+    }
+    holes
+}
+
+/// A discoid frame: the image, the counts of the paths that drew it, and the blend report.
+pub struct DiscoidFrame {
+    pub framebuffer: FrameBuffer,
+    pub counts: Counts,
+    pub blend: BlendReport,
+}
+
+/// Refuses scenes that mix discoid objects with ordinary ones (not modelled).
+pub fn check_scene(scene: &Scene) -> Result<()> {
+    let has = scene.objects.iter().any(|o| o.discoids.is_some());
+    if let Some((k, o)) = scene
+        .objects
+        .iter()
+        .enumerate()
+        .find(|(_, o)| has && o.discoids.is_none())
+    {
+        return Err(Error::invalid(
+            scene
+                .source
+                .as_ref()
+                .map(|p| p.display().to_string())
+                .unwrap_or_else(|| "scene".into()),
+            format!("objects[{k}]"),
+            &o.label,
+            "a scene with discoids may hold only discoid objects (mixing opaque surfaces with the blend passes is not modelled)",
+        ));
+    }
+    Ok(())
+}
+
+/// Renders a discoid scene's three passes with the functional model.
+pub fn render_discoids_functional(
+    scene: &Scene,
+    view: &View,
+    k: f64,
+    datapath: Datapath,
+    mode: BlendMode,
+    threshold: f64,
+) -> Result<DiscoidFrame> {
+    match datapath {
+        Datapath::F32 => passes::<f32>(scene, view, k, mode, threshold),
+        Datapath::F64 => passes::<f64>(scene, view, k, mode, threshold),
+    }
+}
+
+fn passes<R: Real>(
+    scene: &Scene,
+    view: &View,
+    k: f64,
+    mode: BlendMode,
+    threshold: f64,
+) -> Result<DiscoidFrame> {
+    check_scene(scene)?;
+    let vp = view.viewport;
+    let table = DiscoidTable::<R>::new(scene);
+    let shader = FragmentShader::<R>::new(&scene.light, view);
+    let mut target = DiscoidTarget::new(vp.width, vp.height, mode, threshold);
+    let mut counts = Counts::default();
+    for pass in [Pass::Depth, Pass::Accumulate] {
+        let mut sink = Sink {
+            pass,
+            target: &mut target,
+            table: &table,
+            shader: &shader,
+            view,
+        };
+        // Each pass draws every discoid; the counts are those of one pass.
+        let mut c = Counts::default();
+        render_lembos::<R, _>(scene, view, k, DEFAULT_SEGMENT_CAP, &mut sink, &mut c)?;
+        render_triangles::<R, _>(&table.planar, view, &mut sink, &mut c);
+        counts = c;
+    }
+    target.blend_in_order();
+    let background = scene.background.map(to_u8::<f64>);
+    let framebuffer = resolve(&mut target, &table, &shader, background, vp.height);
+    counts.fragments_passed_depth = target.report.fragments_accumulated;
+    counts.pixels_covered = framebuffer.covered() as u64;
+    Ok(DiscoidFrame {
+        framebuffer,
+        counts,
+        blend: target.report,
+    })
+}

@@ -1,0 +1,197 @@
+//! The timed discoid passes (paper 000, DESIGN §4): the depth pass and the accumulation
+//! pass each run the whole pipeline (the lembo path for curved discoids, the triangle path
+//! for planar ones) with the ROPs in that pass's mode, one after the other as a GPU runs
+//! render passes; the resolve pass reads every pixel's accumulation target and writes its
+//! colour. The frame's cycles are the three passes' sums.
+//!
+//! The accumulation pass's ROPs keep the fragments they accept and the blend is applied in
+//! primitive order at the pass's end ([`DiscoidTarget::blend_in_order`]), as GPU ROPs blend
+//! in API order; so the image is the functional model's, bit for bit. The cost of the
+//! reordering hardware is not modelled.
+//!
+//! Resolve cost: each ROP reads and resolves the pixels of its tiles at
+//! `rop.fragments_per_cycle`, and the frame-buffer port moves half the mode's
+//! bytes per fragment (one read of the accumulation target) and a 4-byte colour write per
+//! pixel; the pass takes the longer of the two.
+
+use super::{run_in, CycleReport, DiscoidPass, UnitCycles, UnitInstance, UnitKind};
+use crate::camera::View;
+use crate::config::ArchConfig;
+use crate::datapath::{Datapath, Real};
+use crate::discoid::blend::BlendMode;
+use crate::discoid::render::{
+    check_scene, resolve, BlendReport, DiscoidTable, DiscoidTarget, Pass,
+};
+use crate::error::{Error, Result};
+use crate::raster::triangle::TriangleSource;
+use crate::raster::Counts;
+use crate::rop::rop::FragmentShader;
+use crate::rop::shade::to_u8;
+use crate::rop::FrameBuffer;
+use crate::scene::Scene;
+
+use super::actor::SimOptions;
+use super::rop::RopTiles;
+
+/// What the timed discoid passes produced.
+pub struct DiscoidTimed {
+    pub framebuffer: FrameBuffer,
+    pub counts: Counts,
+    pub units: Vec<UnitInstance>,
+    pub cycles: CycleReport,
+    pub blend: BlendReport,
+}
+
+/// Runs a discoid scene's three passes on the timed pipeline of `arch`.
+#[allow(clippy::too_many_arguments)]
+pub fn run_discoid_timed(
+    scene: &Scene,
+    view: &View,
+    k: f64,
+    datapath: Datapath,
+    arch: &ArchConfig,
+    mode: BlendMode,
+    threshold: f64,
+    options: &SimOptions,
+) -> Result<DiscoidTimed> {
+    match datapath {
+        Datapath::F32 => passes::<f32>(scene, view, k, arch, mode, threshold, options),
+        Datapath::F64 => passes::<f64>(scene, view, k, arch, mode, threshold, options),
+    }
+}
+
+fn passes<R: Real>(
+    scene: &Scene,
+    view: &View,
+    k: f64,
+    arch: &ArchConfig,
+    mode: BlendMode,
+    threshold: f64,
+    options: &SimOptions,
+) -> Result<DiscoidTimed> {
+    check_scene(scene)?;
+    let table = DiscoidTable::<R>::new(scene);
+    let (curved, planar) = (scene.lembo_count() > 0, !table.planar.items.is_empty());
+    if curved && planar {
+        return Err(Error::invalid(
+            scene
+                .source
+                .as_ref()
+                .map(|p| p.display().to_string())
+                .unwrap_or_else(|| "scene".into()),
+            "objects",
+            "curved and planar discoids",
+            "the timed passes draw either curved or planar discoids in one scene (use --mode functional for both)",
+        ));
+    }
+    let triangles: Option<&dyn TriangleSource> = planar.then_some(&table.planar as _);
+    let pass = |pass: Pass, depth: &[f32], winner: &[u32]| {
+        run_in::<R>(
+            scene,
+            view,
+            k,
+            arch,
+            triangles,
+            Some(DiscoidPass {
+                pass,
+                table: &table,
+                mode,
+                threshold,
+                depth,
+                winner,
+            }),
+            options,
+        )
+    };
+    let first = pass(Pass::Depth, &[], &[])?;
+    let (depth, winner) = (first.framebuffer.depth, first.framebuffer.primitive);
+    let second = pass(Pass::Accumulate, &depth, &winner)?;
+
+    let vp = view.viewport;
+    let mut target = DiscoidTarget::new(vp.width, vp.height, mode, threshold);
+    target.depth = depth;
+    target.winner = winner;
+    if let Some((pending, counters)) = second.discoid {
+        target.pending = pending;
+        let r = &mut target.report;
+        r.culled_backface = counters.culled_backface;
+        r.discarded_beta_zero = counters.discarded_beta_zero;
+        r.discarded_threshold = counters.discarded_threshold;
+    }
+    target.blend_in_order();
+    let shader = FragmentShader::<R>::new(&scene.light, view);
+    let background = scene.background.map(to_u8::<f64>);
+    let framebuffer = resolve(&mut target, &table, &shader, background, vp.height);
+
+    // The resolve pass: per-ROP pixel work against the port's bytes.
+    let tiles = RopTiles::new(vp.width, vp.height, arch.rop.tile_px, arch.rop.count);
+    let mut owned = vec![0u64; arch.rop.count as usize];
+    for j in 0..vp.height {
+        for i in 0..vp.width {
+            owned[tiles.owner(i, j).0] += 1;
+        }
+    }
+    let rop_busy: Vec<u64> = owned
+        .iter()
+        .map(|p| p.div_ceil(arch.rop.fragments_per_cycle))
+        .collect();
+    let bytes = vp.pixels() as u64 * (mode.bytes_per_fragment() / 2 + 4);
+    let port_busy = bytes.div_ceil(arch.framebuffer.bytes_per_cycle);
+    let resolve_total = rop_busy.iter().copied().max().unwrap_or(0).max(port_busy);
+
+    let (c1, c2) = (first.cycles, second.cycles);
+    let mut rop_index = 0;
+    let units: Vec<UnitCycles> = c1
+        .units
+        .iter()
+        .zip(&c2.units)
+        .map(|(a, b)| {
+            let busy = match a.kind {
+                UnitKind::Rop => {
+                    rop_index += 1;
+                    rop_busy[rop_index - 1]
+                }
+                UnitKind::FrameBuffer => port_busy,
+                _ => 0,
+            };
+            UnitCycles {
+                name: a.name.clone(),
+                kind: a.kind,
+                busy: a.busy + b.busy + busy,
+                starved: a.starved + b.starved + (resolve_total - busy),
+                blocked: a.blocked + b.blocked,
+                items_in: a.items_in + b.items_in,
+                items_out: a.items_out + b.items_out,
+                max_fifo_occupancy: a.max_fifo_occupancy.max(b.max_fifo_occupancy),
+            }
+        })
+        .collect();
+    let total = c1.total + c2.total + resolve_total;
+    let bottleneck = units
+        .iter()
+        .fold(None::<&UnitCycles>, |best, u| match best {
+            Some(b) if b.busy >= u.busy => Some(b),
+            _ => Some(u),
+        })
+        .map(|u| u.name.clone());
+    let mut blend = target.report;
+    blend.cycles_depth_pass = Some(c1.total);
+    blend.cycles_accumulation_pass = Some(c2.total);
+    blend.cycles_resolve_pass = Some(resolve_total);
+    let mut counts = second.counts;
+    counts.fragments_passed_depth = blend.fragments_accumulated;
+    counts.pixels_covered = framebuffer.covered() as u64;
+    Ok(DiscoidTimed {
+        framebuffer,
+        counts,
+        units: second.units,
+        cycles: CycleReport {
+            total,
+            clock_mhz: arch.clock_mhz,
+            fps: (total > 0).then(|| arch.clock_mhz * 1e6 / total as f64),
+            bottleneck,
+            units,
+        },
+        blend,
+    })
+}

@@ -1,0 +1,213 @@
+//! The discoid blend units against their contract (DESIGN §4, issue 5): the timed passes
+//! draw the functional image bit for bit, the threshold separates surfaces, the precision
+//! modes trade bytes and cycles for error in the stated order, and surfel scenes count
+//! holes.
+
+use lembo_sim::camera::View;
+use lembo_sim::config::ArchConfig;
+use lembo_sim::datapath::Datapath;
+use lembo_sim::discoid::blend::BlendMode;
+use lembo_sim::discoid::render::{render_discoids_functional, DiscoidFrame};
+use lembo_sim::pipeline::actor::SimOptions;
+use lembo_sim::pipeline::discoid::{run_discoid_timed, DiscoidTimed};
+use lembo_sim::pipeline::UnitKind;
+use lembo_sim::scene::Scene;
+use std::path::Path;
+
+fn scene(name: &str, side: u32) -> Scene {
+    let mut s = Scene::load(
+        &Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("traces")
+            .join(name),
+    )
+    .expect("trace loads");
+    s.set_viewport(side, side).unwrap();
+    s
+}
+
+fn functional(s: &Scene, mode: BlendMode, threshold: f64) -> DiscoidFrame {
+    let view = View::new(&s.camera, s.viewport);
+    render_discoids_functional(s, &view, 0.5, Datapath::F32, mode, threshold).unwrap()
+}
+
+fn timed(s: &Scene, arch: &ArchConfig, mode: BlendMode) -> DiscoidTimed {
+    let view = View::new(&s.camera, s.viewport);
+    let t = s.discoid_threshold;
+    run_discoid_timed(
+        s,
+        &view,
+        0.5,
+        Datapath::F32,
+        arch,
+        mode,
+        t,
+        &SimOptions::default(),
+    )
+    .unwrap()
+}
+
+fn archs() -> Vec<ArchConfig> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("sim/arch");
+    let mut odd = ArchConfig::default();
+    odd.rop.count = 3;
+    odd.rop.tile_px = 5;
+    odd.rasterizer.count = 3;
+    odd.triangle_rasterizer.count = 2;
+    for c in odd.links.all_mut() {
+        c.fifo_depth = 3;
+    }
+    vec![
+        ArchConfig::default(),
+        ArchConfig::load(&dir.join("minimal.json")).unwrap(),
+        ArchConfig::load(&dir.join("wide.json")).unwrap(),
+        odd,
+    ]
+}
+
+#[test]
+fn timed_blend_images_are_bit_identical_to_the_functional_ones() {
+    for (name, side) in [("discoid_sphere20.json", 96), ("bunny_discoids.json", 128)] {
+        let s = scene(name, side);
+        for mode in [BlendMode::Rgba8, BlendMode::F16, BlendMode::F32] {
+            let f = functional(&s, mode, s.discoid_threshold);
+            assert!(
+                f.blend.fragments_accumulated > 1000,
+                "{name}: draws something"
+            );
+            for a in archs() {
+                let t = timed(&s, &a, mode);
+                let what = format!("{name} {mode:?} arch {}", a.name);
+                assert!(t.framebuffer.color == f.framebuffer.color, "{what}: colour");
+                assert_eq!(
+                    t.blend.fragments_accumulated, f.blend.fragments_accumulated,
+                    "{what}"
+                );
+                assert_eq!(
+                    t.blend.discarded_threshold, f.blend.discarded_threshold,
+                    "{what}"
+                );
+                assert_eq!(
+                    t.blend.discarded_beta_zero, f.blend.discarded_beta_zero,
+                    "{what}"
+                );
+                assert_eq!(t.blend.culled_backface, f.blend.culled_backface, "{what}");
+                assert_eq!(t.blend.saturations, f.blend.saturations, "{what}");
+                let c = &t.cycles;
+                for u in &c.units {
+                    assert_eq!(
+                        u.busy + u.starved + u.blocked,
+                        c.total,
+                        "{what}: {}",
+                        u.name
+                    );
+                }
+                let passes = t.blend.cycles_depth_pass.unwrap()
+                    + t.blend.cycles_accumulation_pass.unwrap()
+                    + t.blend.cycles_resolve_pass.unwrap();
+                assert_eq!(passes, c.total, "{what}");
+            }
+        }
+    }
+}
+
+#[test]
+fn precision_modes_order_error_bytes_and_cycles() {
+    let s = scene("bunny_discoids.json", 256);
+    let a = ArchConfig::default();
+    let run: Vec<DiscoidTimed> = [BlendMode::F32, BlendMode::F16, BlendMode::Rgba8]
+        .into_iter()
+        .map(|m| timed(&s, &a, m))
+        .collect();
+    let (f32_, f16_, rgba8) = (&run[0].blend, &run[1].blend, &run[2].blend);
+    assert!(
+        f32_.error_mean < f16_.error_mean && f16_.error_mean < rgba8.error_mean,
+        "mean error f32 {} f16 {} rgba8 {}",
+        f32_.error_mean,
+        f16_.error_mean,
+        rgba8.error_mean
+    );
+    assert!(f32_.error_max <= f16_.error_max && f16_.error_max < rgba8.error_max);
+    // rgba8 moves fewer bytes per fragment, and its ROPs are busy no longer than f32's.
+    assert!(rgba8.bytes_per_fragment < f32_.bytes_per_fragment);
+    let rop_busy = |t: &DiscoidTimed| -> u64 {
+        t.cycles
+            .units
+            .iter()
+            .filter(|u| u.kind == UnitKind::Rop)
+            .map(|u| u.busy)
+            .sum()
+    };
+    assert!(rop_busy(&run[2]) <= rop_busy(&run[0]));
+    assert!(run[2].cycles.total <= run[0].cycles.total);
+    // The same fragments reach the blend units whatever the mode.
+    assert_eq!(rgba8.fragments_accumulated, f32_.fragments_accumulated);
+}
+
+/// Two parallel sheets of planar discoids `gap` apart, the front red and the back blue,
+/// seen head on.
+fn two_sheets(gap: f64) -> Scene {
+    let items = |z: f64| {
+        let mut v = Vec::new();
+        for y in -3..=3 {
+            for x in -3..=3 {
+                v.push(format!(
+                    r#"{{"center": [{}, {}, {z}], "normal": [0, 0, 1], "radius": 0.35}}"#,
+                    x as f64 * 0.25,
+                    y as f64 * 0.25
+                ));
+            }
+        }
+        v.join(", ")
+    };
+    let json = format!(
+        r#"{{"name": "sheets", "viewport": {{"width": 64, "height": 64}},
+            "camera": {{"eye": [0, 0, 4], "target": [0, 0, 0],
+                        "projection": {{"kind": "perspective", "fovy_deg": 30, "near": 0.5, "far": 20}}}},
+            "light": {{"direction_to_light": [0, 0, 1]}},
+            "objects": [
+              {{"discoids": {{"items": [{}]}}, "color": [1, 0, 0]}},
+              {{"discoids": {{"items": [{}]}}, "color": [0, 0, 1]}}
+            ]}}"#,
+        items(0.0),
+        items(-gap)
+    );
+    Scene::from_json(&json, "sheets", Path::new(".")).unwrap()
+}
+
+#[test]
+fn the_threshold_keeps_far_discoids_from_mixing_and_mixes_near_ones() {
+    let s = two_sheets(0.3);
+    // Right: t much smaller than the gap. The back sheet's fragments are discarded and
+    // every covered pixel has the front colour only.
+    let right = functional(&s, BlendMode::F32, 0.05);
+    assert!(right.blend.discarded_threshold > 0);
+    let centre = right.framebuffer.index(32, 32);
+    let [r, g, b] = right.framebuffer.color[centre];
+    // Red diffuse plus a white highlight (light and eye head on): green equals blue.
+    assert!(r > g + 100 && g == b, "front colour only: {:?}", [r, g, b]);
+    // Near discoids (neighbours on one sheet overlap) are mixed: more fragments are blended
+    // than pixels are covered.
+    assert!(right.blend.fragments_accumulated > right.counts.pixels_covered * 3 / 2);
+    // Too large: t beyond the gap. Both sheets blend; the colour is the depth winner's, but
+    // the count of fragments blended doubles where the sheets overlap.
+    let wrong = functional(&s, BlendMode::F32, 0.5);
+    assert_eq!(wrong.blend.discarded_threshold, 0);
+    assert!(
+        wrong.blend.fragments_accumulated > right.blend.fragments_accumulated * 3 / 2,
+        "{} vs {}",
+        wrong.blend.fragments_accumulated,
+        right.blend.fragments_accumulated
+    );
+}
+
+#[test]
+fn surfel_scenes_count_holes() {
+    let s = scene("surfels_bunny.json", 128);
+    let f = functional(&s, BlendMode::F32, s.discoid_threshold);
+    assert!(f.blend.holes.is_some());
+    let d = scene("bunny_discoids.json", 128);
+    assert!(functional(&d, BlendMode::F32, d.discoid_threshold)
+        .blend
+        .holes
+        .is_none());
+}
