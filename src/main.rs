@@ -5,7 +5,16 @@ use lembo_sim::compare::{run_compare, CompareJob, Tess};
 use lembo_sim::datapath::Datapath;
 use lembo_sim::discoid::blend::BlendMode;
 use lembo_sim::job::{self, run_render, PrimitivePath, RenderJob};
+use std::io::Write as _;
 use std::path::PathBuf;
+
+/// Prints a line to standard output; a closed pipe (`| head`) is not an error worth a
+/// panic, so write errors are ignored.
+macro_rules! out {
+    ($($arg:tt)*) => {{
+        let _ = writeln!(std::io::stdout().lock(), $($arg)*);
+    }};
+}
 use std::process::ExitCode;
 
 /// Simulator of Martinelli's lembo rasterization unit (extreme method, WSCG 2006).
@@ -226,8 +235,8 @@ fn compare(args: CompareArgs) -> ExitCode {
     };
     match run_compare(&job) {
         Ok(out) => {
-            print!("{}", out.table);
-            println!("wrote {} to {}", out.files.join(", "), out.dir.display());
+            let _ = write!(std::io::stdout().lock(), "{}", out.table);
+            out!("wrote {} to {}", out.files.join(", "), out.dir.display());
             ExitCode::SUCCESS
         }
         Err(e) => {
@@ -271,7 +280,7 @@ fn render(args: RenderArgs) -> ExitCode {
             match (r.settings.k_px, r.settings.tess) {
                 _ if r.blend.is_some() => {
                     let b = r.blend.as_ref().expect("checked");
-                    println!(
+                    out!(
                         "{}: {} discoids, {}x{} px, blend {} ({} bytes/fragment), threshold {}: {} fragments accumulated, {} beyond the threshold, {} beta = 0, {} back-facing, {} saturations; error max {:.4}, mean {:.5}{}",
                         r.scene.name,
                         r.primitives.count,
@@ -290,7 +299,7 @@ fn render(args: RenderArgs) -> ExitCode {
                         b.holes.map(|h| format!(", {h} holes")).unwrap_or_default()
                     )
                 }
-                (Some(k), _) => println!(
+                (Some(k), _) => out!(
                     "{}: {} lembos, {}x{} px, k = {} px, {}: {} scanlines, {} intervals, {} segments, {} subsegments, {} fragments ({} passed depth)",
                     r.scene.name,
                     r.scene.lembos,
@@ -305,7 +314,7 @@ fn render(args: RenderArgs) -> ExitCode {
                     c.fragments,
                     c.fragments_passed_depth
                 ),
-                (None, tess) => println!(
+                (None, tess) => out!(
                     "{}: {} lembos as {} triangles (tessellation {}), {}x{} px, {}: {} culled, {} quads ({:.1} % efficiency), {} fragments ({} passed depth)",
                     r.scene.name,
                     r.scene.lembos,
@@ -325,7 +334,7 @@ fn render(args: RenderArgs) -> ExitCode {
                 ),
             }
             match &r.cycles {
-                Some(cy) => println!(
+                Some(cy) => out!(
                     "timed ({}): {} cycles = {} at {} MHz, bottleneck {}; host {:.3} s, {:.1} M simulated cycles/s",
                     r.arch.as_ref().map(|a| a.name.as_str()).unwrap_or("?"),
                     cy.total,
@@ -337,14 +346,14 @@ fn render(args: RenderArgs) -> ExitCode {
                     r.host.wall_seconds,
                     r.host.simulated_cycles_per_second.unwrap_or(0.0) / 1e6
                 ),
-                None => println!(
+                None => out!(
                     "render {:.3} s ({:.1} M fragments/s, functional model, single thread)",
                     r.host.wall_seconds,
                     r.host.fragments_per_second / 1e6
                 ),
             }
             if let Some(a) = &r.accuracy {
-                println!(
+                out!(
                     "accuracy: PSNR {:.2} dB, coverage +{} / -{} px, silhouette max {:.2} px, cracks {}, double hits {}{}",
                     a.psnr_db,
                     a.coverage_false_positive,
@@ -357,7 +366,7 @@ fn render(args: RenderArgs) -> ExitCode {
                         .unwrap_or_default()
                 );
             }
-            println!("wrote {} to {}", out.files.join(", "), out.dir.display());
+            out!("wrote {} to {}", out.files.join(", "), out.dir.display());
             ExitCode::SUCCESS
         }
         Err(e) => {

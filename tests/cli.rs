@@ -556,3 +556,71 @@ fn bad_tessellation_flags_are_refused() {
         "triangles",
     );
 }
+
+#[test]
+fn discoid_render_reports_the_blend_section() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = manifest().join("traces/surfels_bunny.json");
+    let out = run(
+        &[
+            "render",
+            scene.to_str().unwrap(),
+            "--blend",
+            "f16",
+            "--viewport",
+            "96x96",
+            "--out",
+            "o",
+        ],
+        dir.path(),
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("o/report.json")).unwrap()).unwrap();
+    let b = &r["blend"];
+    assert_eq!(b["mode"], "f16");
+    assert_eq!(b["bytes_per_fragment"], 16);
+    for key in [
+        "fragments_accumulated",
+        "discarded_threshold",
+        "discarded_beta_zero",
+        "culled_backface",
+        "saturations",
+        "holes",
+    ] {
+        assert!(b[key].is_u64(), "blend.{key}: {b}");
+    }
+    for key in ["error_max", "error_mean"] {
+        assert!(b[key].is_f64(), "blend.{key}: {b}");
+    }
+    assert!(b["fragments_accumulated"].as_u64().unwrap() > 0);
+    assert_eq!(r["settings"]["path"], "discoid");
+    assert_eq!(r["primitives"]["kind"], "discoid");
+    assert!(r["cycles"]["total"].as_u64().unwrap() > 0);
+    // A scene without discoids has no blend section.
+    let out = run(&["render", "--viewport", "32x32", "--out", "p"], dir.path());
+    assert!(out.status.success());
+    let r: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("p/report.json")).unwrap()).unwrap();
+    assert!(r["blend"].is_null());
+}
+
+#[test]
+fn bad_discoid_flags_are_refused() {
+    let scene = manifest().join("traces/discoid_sphere20.json");
+    let s = scene.to_str().unwrap();
+    assert_refused(
+        &["render", s, "--threshold", "0", "--out", "o"],
+        "--threshold",
+    );
+    assert_refused(
+        &["render", s, "--threshold", "nan", "--out", "o"],
+        "--threshold",
+    );
+    assert_refused(&["render", s, "--blend", "f8", "--out", "o"], "--blend");
+    assert_refused(&["render", s, "--reference", "--out", "o"], "--reference");
+}
