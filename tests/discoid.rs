@@ -92,6 +92,12 @@ fn timed_blend_images_are_bit_identical_to_the_functional_ones() {
                 );
                 assert_eq!(t.blend.culled_backface, f.blend.culled_backface, "{what}");
                 assert_eq!(t.blend.saturations, f.blend.saturations, "{what}");
+                let blenders = t.units.iter().filter(|u| u.kind == UnitKind::BlendUnit);
+                assert_eq!(
+                    blenders.count(),
+                    a.rop.count as usize,
+                    "{what}: one per ROP"
+                );
                 let c = &t.cycles;
                 for u in &c.units {
                     assert_eq!(

@@ -57,6 +57,8 @@ pub struct BlendReport {
     pub mode: String,
     /// Accumulation-target bytes per accumulated fragment (read and write) [bytes].
     pub bytes_per_fragment: u64,
+    /// Size of the accumulation target: a pixel holds half the bytes per fragment [bytes].
+    pub accumulation_buffer_bytes: u64,
     /// Fragments blended in the accumulation pass.
     pub fragments_accumulated: u64,
     /// Fragments farther than the threshold behind the depth pass's surface.
@@ -290,6 +292,7 @@ impl DiscoidTarget {
             report: BlendReport {
                 mode: mode.name().to_string(),
                 bytes_per_fragment: mode.bytes_per_fragment(),
+                accumulation_buffer_bytes: n as u64 * mode.bytes_per_fragment() / 2,
                 threshold,
                 ..BlendReport::default()
             },

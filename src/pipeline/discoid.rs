@@ -181,10 +181,22 @@ fn passes<R: Real>(
     let mut counts = second.counts;
     counts.fragments_passed_depth = blend.fragments_accumulated;
     counts.pixels_covered = framebuffer.covered() as u64;
+    // The blend units and their accumulation target exist only here (model only what the
+    // scene requires).
+    let mut instances = second.units;
+    let at = instances
+        .iter()
+        .position(|u| u.kind == UnitKind::FrameBuffer)
+        .unwrap_or(instances.len());
+    let blenders = (0..arch.rop.count).map(|r| UnitInstance {
+        name: format!("BlendUnit[{r}]"),
+        kind: UnitKind::BlendUnit,
+    });
+    instances.splice(at..at, blenders);
     Ok(DiscoidTimed {
         framebuffer,
         counts,
-        units: second.units,
+        units: instances,
         cycles: CycleReport {
             total,
             clock_mhz: arch.clock_mhz,

@@ -70,6 +70,9 @@ pub enum UnitKind {
     TriangleSetup,
     TriangleRasterizer,
     Rop,
+    /// A ROP's discoid blend unit (listed for scenes with discoids; its cycles are its
+    /// ROP's).
+    BlendUnit,
     FrameBuffer,
 }
 
@@ -85,6 +88,7 @@ impl UnitKind {
             UnitKind::TriangleSetup => "TriangleSetup",
             UnitKind::TriangleRasterizer => "TriangleRasterizer",
             UnitKind::Rop => "Rop",
+            UnitKind::BlendUnit => "BlendUnit",
             UnitKind::FrameBuffer => "FrameBuffer",
         }
     }
