@@ -1,14 +1,17 @@
 //! Criterion benchmarks: the functional model on whole scenes by viewport size, the
 //! per-scanline stages on their own, and the timed pipeline against the functional model
 //! on the same frame (the issue 3 figure: timed wall / functional wall), and the triangle
-//! path, functional and timed. Setup (scene loading, projection) stays outside the timed
+//! path, functional and timed, and the discoid passes. Setup (scene loading, projection) stays outside the timed
 //! closures.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use lembo_sim::camera::View;
 use lembo_sim::config::ArchConfig;
 use lembo_sim::datapath::Datapath;
+use lembo_sim::discoid::blend::BlendMode;
+use lembo_sim::discoid::render::render_discoids_functional;
 use lembo_sim::lembo::tessellate::Tessellation;
+use lembo_sim::pipeline::discoid::run_discoid_timed;
 use lembo_sim::pipeline::{actor::SimOptions, run_timed};
 use lembo_sim::raster::{self, interval, minmax, segmenter, setup, subsegmenter, Counts};
 use lembo_sim::scene::Scene;
@@ -159,5 +162,44 @@ fn triangle_path(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, scenes, stages, timed_vs_functional, triangle_path);
+/// The three discoid passes on the bunny's 7350 planar discoids at 512x512, functional in
+/// each blend mode and timed (rgba8, baseline).
+fn discoid_passes(c: &mut Criterion) {
+    let mut g = c.benchmark_group("discoid_passes");
+    g.sample_size(10);
+    let s = scene("bunny_discoids.json");
+    let view = View::new(&s.camera, s.viewport);
+    let t = s.discoid_threshold;
+    for mode in [BlendMode::Rgba8, BlendMode::F16, BlendMode::F32] {
+        g.bench_function(format!("functional/bunny_discoids/{}", mode.name()), |b| {
+            b.iter(|| render_discoids_functional(&s, &view, 0.5, Datapath::F32, mode, t).unwrap())
+        });
+    }
+    let (arch, options) = (ArchConfig::baseline(), SimOptions::default());
+    g.bench_function("timed_baseline/bunny_discoids/rgba8", |b| {
+        b.iter(|| {
+            run_discoid_timed(
+                &s,
+                &view,
+                0.5,
+                Datapath::F32,
+                &arch,
+                BlendMode::Rgba8,
+                t,
+                &options,
+            )
+            .unwrap()
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(
+    benches,
+    scenes,
+    stages,
+    timed_vs_functional,
+    triangle_path,
+    discoid_passes
+);
 criterion_main!(benches);
