@@ -9,11 +9,15 @@ use lembo_sim::camera::View;
 use lembo_sim::config::ArchConfig;
 use lembo_sim::datapath::Datapath;
 use lembo_sim::discoid::blend::BlendMode;
+use lembo_sim::discoid::blend::{Accum, BlendInput};
 use lembo_sim::discoid::render::render_discoids_functional;
+use lembo_sim::job::render_reference;
 use lembo_sim::lembo::tessellate::Tessellation;
 use lembo_sim::pipeline::discoid::run_discoid_timed;
 use lembo_sim::pipeline::{actor::SimOptions, run_timed};
-use lembo_sim::raster::{self, interval, minmax, segmenter, setup, subsegmenter, Counts};
+use lembo_sim::raster::{
+    self, fragment, interval, minmax, segmenter, setup, subsegmenter, triangle, Counts,
+};
 use lembo_sim::scene::Scene;
 use std::path::Path;
 
@@ -105,16 +109,138 @@ fn stages(c: &mut Criterion) {
     for (i, j, iv) in &items {
         let mut out = Vec::new();
         segmenter::segments(&lembos[*i], *j, 0.5, iv, 1 << 16, &mut out, &mut counts).unwrap();
-        segs.extend(out.into_iter().map(|s| (*i, s)));
+        segs.extend(out.into_iter().map(|s| (*i, *j, s)));
     }
     g.bench_function("subsegmenter_per_scanline", |b| {
         let mut out = Vec::new();
         b.iter(|| {
-            for (i, s) in &segs {
+            for (i, _, s) in &segs {
                 out.clear();
                 subsegmenter::subsegments(&lembos[*i], s, 0.5, &mut out, &mut counts);
             }
         })
+    });
+    let mut subs = Vec::new();
+    for (i, j, s) in &segs {
+        let mut out = Vec::new();
+        subsegmenter::subsegments(&lembos[*i], s, 0.5, &mut out, &mut counts);
+        subs.extend(out.into_iter().map(|sub| (*i, *j, sub)));
+    }
+    g.bench_function("fragment_rasterizer_per_scanline", |b| {
+        let mut sink = CountSink(0);
+        b.iter(|| {
+            for (i, j, sub) in &subs {
+                fragment::rasterize(
+                    &lembos[*i],
+                    *j,
+                    sub,
+                    view.viewport.width,
+                    &mut sink,
+                    &mut counts,
+                );
+            }
+            sink.0
+        })
+    });
+    g.bench_function("setup_and_minmax_per_scanline", |b| {
+        b.iter(|| {
+            let mut rows = 0u64;
+            for (i, (l, col)) in s.lembos().enumerate() {
+                if let Ok(sl) = setup::setup::<f32>(i as u32, l, col, &view) {
+                    if let Some((j0, j1)) = minmax::scanlines(&sl, view.viewport.height) {
+                        rows += (j1 - j0 + 1) as u64;
+                    }
+                }
+            }
+            rows
+        })
+    });
+    g.finish();
+}
+
+/// Counts fragments, for stage benchmarks without a ROP.
+struct CountSink(u64);
+
+impl<R: lembo_sim::datapath::Real> fragment::FragmentSink<R> for CountSink {
+    fn fragment(
+        &mut self,
+        _: &setup::ScreenLembo<R>,
+        _: &subsegmenter::Subsegment<R>,
+        _: u32,
+        _: u32,
+        _: R,
+        _: R,
+        _: R,
+    ) {
+        self.0 += 1;
+    }
+}
+
+impl<R: lembo_sim::datapath::Real> triangle::TriangleSink<R> for CountSink {
+    fn fragment(
+        &mut self,
+        _: &triangle::ScreenTriangle<R>,
+        _: u32,
+        _: u32,
+        _: &triangle::TriangleFragment<R>,
+    ) {
+        self.0 += 1;
+    }
+}
+
+/// The triangle rasterizer alone (quads and fragments into a counting sink), the blend units
+/// alone (one fragment per mode), and the exact reference of a whole frame.
+fn more_stages(c: &mut Criterion) {
+    let mut g = c.benchmark_group("stages_more");
+    g.sample_size(10);
+    let s = scene("sphere24.json");
+    let view = View::new(&s.camera, s.viewport);
+    let t = Tessellation::new(&s, 4);
+    let mut tris = Vec::new();
+    let mut buf = Vec::new();
+    for c in 0..triangle::TriangleSource::chunks(&t) {
+        triangle::TriangleSource::chunk(&t, c, &mut buf);
+        for (k, tr) in buf.iter().enumerate() {
+            let id = triangle::TriangleSource::id(&t, c, k);
+            if let Ok(st) = triangle::setup::<f32>(id, &tr.positions, &tr.normals, tr.color, &view)
+            {
+                tris.push(st);
+            }
+        }
+    }
+    g.throughput(Throughput::Elements(tris.len() as u64));
+    g.bench_function("triangle_rasterizer/sphere24_tess4_512", |b| {
+        let mut sink = CountSink(0);
+        let mut counts = Counts::default();
+        b.iter(|| {
+            for st in &tris {
+                triangle::rasterize(st, &mut sink, &mut counts);
+            }
+            sink.0
+        })
+    });
+    let inputs: Vec<BlendInput> = (0..4096)
+        .map(|i| BlendInput {
+            beta: ((i * 37) % 251) as f64 / 251.0,
+            diffuse: ((i * 53) % 241) as f64 / 241.0,
+            specular: ((i * 71) % 239) as f64 / 239.0,
+        })
+        .collect();
+    g.throughput(Throughput::Elements(inputs.len() as u64));
+    for mode in [BlendMode::Rgba8, BlendMode::F16, BlendMode::F32] {
+        g.bench_function(format!("blend/{}", mode.name()), |b| {
+            b.iter(|| {
+                let mut px = [Accum::default(); 8];
+                for (n, f) in inputs.iter().enumerate() {
+                    mode.blend(&mut px[n % 8], *f);
+                }
+                px
+            })
+        });
+    }
+    g.throughput(Throughput::Elements(s.viewport.pixels() as u64));
+    g.bench_function("reference/sphere24_512", |b| {
+        b.iter(|| render_reference(&s, &view, 1))
     });
     g.finish();
 }
@@ -200,6 +326,7 @@ criterion_group!(
     stages,
     timed_vs_functional,
     triangle_path,
-    discoid_passes
+    discoid_passes,
+    more_stages
 );
 criterion_main!(benches);
