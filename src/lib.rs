@@ -25,7 +25,9 @@
 //! - [`reference`]: the exact f64 ray-patch reference and the accuracy metrics.
 //! - [`scene`], [`camera`]: the JSON trace format and OpenGL-convention cameras.
 //! - [`job`], [`report`]: the `render` command's work and its `report.json` / `report.txt`;
-//!   [`compare`]: lembos against triangles against the exact surface.
+//!   [`compare`]: lembos against triangles against the exact surface; [`sweep`]: many
+//!   runs of a spec (`sim/sweeps/`) into `results.jsonl` and `results.csv`, resumable and
+//!   shardable.
 //!
 //! The functional model knows nothing of cycles; the timed pipeline calls the same stage
 //! functions and adds only time.
@@ -44,3 +46,4 @@ pub mod reference;
 pub mod report;
 pub mod rop;
 pub mod scene;
+pub mod sweep;

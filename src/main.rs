@@ -5,6 +5,7 @@ use lembo_sim::compare::{run_compare, CompareJob, Tess};
 use lembo_sim::datapath::Datapath;
 use lembo_sim::discoid::blend::BlendMode;
 use lembo_sim::job::{self, run_render, PrimitivePath, RenderJob};
+use lembo_sim::sweep::{run_merge, run_sweep, MergeJob, Shard, SweepJob, SweepOutcome};
 use std::io::Write as _;
 use std::path::PathBuf;
 
@@ -40,6 +41,61 @@ enum Command {
     /// compare.txt; print the table (primitives, vertices, bytes, cycles, fragments,
     /// accuracy per path).
     Compare(CompareArgs),
+    /// Run every point of a sweep spec (sim/sweeps/README.md) on every scene it names, in
+    /// parallel, appending each run's record to DIR/results.jsonl as it finishes; then write
+    /// results.jsonl in run order, results.csv and spec.json. Started again on the same
+    /// DIR, it skips the runs already recorded.
+    ///
+    /// Test hook: with the environment variable LEMBO_SWEEP_STOP_AFTER=K the sweep stops
+    /// once K records were appended and exits with status 3, as if interrupted.
+    Sweep(SweepArgs),
+    /// Union the results of the shards of one sweep (each run with --shard I/N) into what
+    /// an unsharded sweep writes: results.jsonl, results.csv and spec.json.
+    SweepMerge(MergeArgs),
+}
+
+#[derive(Args)]
+struct SweepArgs {
+    /// Sweep spec (JSON, see sim/sweeps/README.md); scene and architecture paths in it are
+    /// relative to its directory.
+    spec: PathBuf,
+    /// Output directory [default: out/sweeps/<spec name>/].
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+    /// Runs at once, each on its own thread [default: the host's available parallelism].
+    #[arg(long, value_name = "N")]
+    jobs: Option<usize>,
+    /// Run only the runs whose index is I modulo N (0 <= I < N); merge the shards'
+    /// directories with sweep-merge.
+    #[arg(long, value_name = "I/N", value_parser = parse_shard)]
+    shard: Option<(u32, u32)>,
+}
+
+#[derive(Args)]
+struct MergeArgs {
+    /// Output directory.
+    #[arg(long, value_name = "DIR", required = true)]
+    out: PathBuf,
+    /// The shards' output directories.
+    #[arg(value_name = "SHARD_DIR", required = true)]
+    shards: Vec<PathBuf>,
+}
+
+/// The test hook's environment variable: stop after this many records (exit status 3).
+const STOP_AFTER_ENV: &str = "LEMBO_SWEEP_STOP_AFTER";
+/// Exit status of a sweep stopped by the test hook.
+const EXIT_STOPPED: u8 = 3;
+
+fn parse_shard(s: &str) -> Result<(u32, u32), String> {
+    let (i, n) = s
+        .split_once('/')
+        .ok_or_else(|| format!("expected I/N, got `{s}`"))?;
+    let num = |v: &str| {
+        v.trim()
+            .parse::<u32>()
+            .map_err(|e| format!("`{v}` in `{s}` is not a whole number: {e}"))
+    };
+    Ok((num(i)?, num(n)?))
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -219,6 +275,87 @@ fn main() -> ExitCode {
     match cli.command.unwrap_or(Command::Render(default_render())) {
         Command::Render(args) => render(args),
         Command::Compare(args) => compare(args),
+        Command::Sweep(args) => sweep(args),
+        Command::SweepMerge(args) => sweep_merge(args),
+    }
+}
+
+fn sweep(args: SweepArgs) -> ExitCode {
+    let fail = |message: String, code: u8| {
+        eprintln!("lembo-sim: error: {message}");
+        ExitCode::from(code)
+    };
+    let shard = match args.shard {
+        None => Shard::ALL,
+        Some((i, n)) => match Shard::new(i, n) {
+            Ok(s) => s,
+            Err(e) => return fail(e.to_string(), e.exit_code()),
+        },
+    };
+    let stop_after = match std::env::var(STOP_AFTER_ENV) {
+        Err(_) => None,
+        Ok(v) => match v.trim().parse::<usize>() {
+            Ok(k) => Some(k),
+            Err(e) => {
+                return fail(
+                    format!("environment variable {STOP_AFTER_ENV} = {v:?}: {e}"),
+                    2,
+                )
+            }
+        },
+    };
+    let job = SweepJob {
+        spec: args.spec,
+        out: args.out,
+        jobs: args.jobs,
+        shard,
+        stop_after,
+        progress: true,
+    };
+    match run_sweep(&job) {
+        Ok(SweepOutcome::Done(out)) => {
+            out!(
+                "sweep {}: {} runs{} ({} already done), {} threads, {:.1} s",
+                out.name,
+                out.runs,
+                if shard == Shard::ALL {
+                    String::new()
+                } else {
+                    format!(" in shard {}/{}", shard.index, shard.count)
+                },
+                out.skipped,
+                out.jobs,
+                out.wall_seconds
+            );
+            out!("wrote {} to {}", out.files.join(", "), out.dir.display());
+            ExitCode::SUCCESS
+        }
+        Ok(SweepOutcome::Stopped { dir, appended }) => {
+            eprintln!(
+                "lembo-sim: stopped by {STOP_AFTER_ENV} after {appended} runs; results so far in {}",
+                dir.display()
+            );
+            ExitCode::from(EXIT_STOPPED)
+        }
+        Err(e) => fail(e.to_string(), e.exit_code()),
+    }
+}
+
+fn sweep_merge(args: MergeArgs) -> ExitCode {
+    let job = MergeJob {
+        out: args.out,
+        shards: args.shards,
+    };
+    match run_merge(&job) {
+        Ok(out) => {
+            out!("sweep {}: {} runs merged", out.name, out.runs);
+            out!("wrote {} to {}", out.files.join(", "), out.dir.display());
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("lembo-sim: error: {e}");
+            ExitCode::from(e.exit_code())
+        }
     }
 }
 

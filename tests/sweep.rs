@@ -1,0 +1,348 @@
+//! `lembo-sim sweep` and `sweep-merge` as a user meets them: sim/sweeps/smoke.json end to
+//! end, an interrupted sweep finished by a rerun, shards merged, and bad specs refused
+//! before any run. Outputs are compared with host timing masked (`report.host` in the
+//! records, `wall_seconds` in the table); everything else must be equal.
+
+use lembo_sim::sweep::Plan;
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::sync::OnceLock;
+
+fn manifest() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn smoke() -> PathBuf {
+    manifest().join("sim/sweeps/smoke.json")
+}
+
+fn sweep(args: &[&str], envs: &[(&str, &str)], cwd: &Path) -> Output {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_lembo-sim"));
+    cmd.args(args)
+        .current_dir(cwd)
+        .env_remove("LEMBO_SWEEP_STOP_AFTER");
+    for (k, v) in envs {
+        cmd.env(k, v);
+    }
+    cmd.output().expect("the binary runs")
+}
+
+fn ok(out: &Output) {
+    assert!(
+        out.status.success(),
+        "status {:?}: {}",
+        out.status,
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+fn run_smoke(dir: &Path, extra: &[&str], envs: &[(&str, &str)]) -> Output {
+    let spec = smoke();
+    let out = dir.to_string_lossy().into_owned();
+    let mut args = vec![
+        "sweep",
+        spec.to_str().unwrap(),
+        "--out",
+        &out,
+        "--jobs",
+        "2",
+    ];
+    args.extend_from_slice(extra);
+    sweep(&args, envs, dir.parent().unwrap())
+}
+
+/// A sweep directory's results with host timing masked: the records, the table and the
+/// spec copy.
+#[derive(Debug, PartialEq)]
+struct Masked {
+    records: Vec<Value>,
+    csv: Vec<Vec<String>>,
+    spec: Vec<u8>,
+}
+
+fn masked(dir: &Path) -> Masked {
+    let text = std::fs::read_to_string(dir.join("results.jsonl")).unwrap();
+    let records = text
+        .lines()
+        .map(|l| {
+            let mut r: Value = serde_json::from_str(l).unwrap();
+            let host = r["report"]
+                .as_object_mut()
+                .unwrap()
+                .remove("host")
+                .expect("every record has host timing");
+            assert!(host["wall_seconds"].is_number());
+            r
+        })
+        .collect();
+    let mut reader = csv::Reader::from_path(dir.join("results.csv")).unwrap();
+    let header: Vec<String> = reader.headers().unwrap().iter().map(String::from).collect();
+    let wall = header.iter().position(|h| h == "wall_seconds").unwrap();
+    let mut csv = vec![header];
+    for row in reader.records() {
+        let mut row: Vec<String> = row.unwrap().iter().map(String::from).collect();
+        assert!(row[wall].parse::<f64>().is_ok(), "{row:?}");
+        row[wall].clear();
+        csv.push(row);
+    }
+    Masked {
+        records,
+        csv,
+        spec: std::fs::read(dir.join("spec.json")).unwrap(),
+    }
+}
+
+/// One uninterrupted, unsharded run of smoke.json, shared by the tests that compare
+/// against it.
+fn reference_run() -> &'static Masked {
+    static RUN: OnceLock<Masked> = OnceLock::new();
+    RUN.get_or_init(|| {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path().join("full");
+        ok(&run_smoke(&dir, &[], &[]));
+        masked(&dir)
+    })
+}
+
+#[test]
+fn smoke_runs_end_to_end() {
+    let full = reference_run();
+    let plan = Plan::load(&smoke()).unwrap();
+    let runs = plan.spec.runs.len();
+    assert!(runs >= 8, "smoke.json should have a few runs, has {runs}");
+    assert_eq!(full.records.len(), runs);
+    assert_eq!(full.csv.len(), runs + 1);
+    assert_eq!(full.spec, std::fs::read(smoke()).unwrap());
+    for (i, (r, run)) in full.records.iter().zip(&plan.spec.runs).enumerate() {
+        assert_eq!(r["index"], i);
+        assert_eq!(r["key"], run.key.as_str());
+        assert_eq!(
+            r["params"],
+            serde_json::to_value(&plan.spec.points[run.point].params).unwrap()
+        );
+        assert_eq!(r["report"]["schema_version"], 3);
+        // Timed with the reference: cycles and accuracy in every record.
+        assert!(r["report"]["cycles"]["total"].as_u64().unwrap() > 0);
+        assert!(r["report"]["accuracy"]["psnr_db"].as_f64().unwrap() > 10.0);
+        assert_eq!(
+            r["report"]["scene"]["source"],
+            plan.spec.scenes[run.scene].as_str()
+        );
+    }
+    // A parameter takes effect: the f64 point's report says so, the 4-segmenter point has
+    // four segmenters.
+    let report_of = |param: &str| {
+        &full
+            .records
+            .iter()
+            .find(|r| r["params"].get(param).is_some())
+            .unwrap()["report"]
+    };
+    assert_eq!(report_of("datapath")["settings"]["datapath"], "f64");
+    assert_eq!(
+        report_of("arch.segmenter.count")["arch"]["segmenter"]["count"],
+        4
+    );
+    let header = &full.csv[0];
+    for col in [
+        "index",
+        "scene",
+        "k",
+        "tess",
+        "arch.segmenter.count",
+        "cycles_total",
+        "fps",
+        "bottleneck",
+        "util.Segmenter[3]",
+        "acc.psnr_db",
+        "primitives",
+        "primitive_bytes",
+        "fragments",
+        "blend.error_mean",
+        "blend.error_max",
+        "wall_seconds",
+    ] {
+        assert!(
+            header.iter().any(|h| h == col),
+            "no column {col} in {header:?}"
+        );
+    }
+}
+
+#[test]
+fn an_interrupted_sweep_finishes_on_rerun_as_if_uninterrupted() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("interrupted");
+    let out = run_smoke(&dir, &[], &[("LEMBO_SWEEP_STOP_AFTER", "3")]);
+    assert_eq!(
+        out.status.code(),
+        Some(3),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let partial = std::fs::read_to_string(dir.join("results.jsonl")).unwrap();
+    assert_eq!(partial.lines().count(), 3);
+    assert!(!dir.join("results.csv").exists());
+    // A kill in the middle of a write leaves a truncated last line.
+    let first = partial.lines().next().unwrap();
+    let torn = format!("{partial}{}", &first[..first.len() / 2]);
+    std::fs::write(dir.join("results.jsonl"), torn).unwrap();
+
+    let out = run_smoke(&dir, &[], &[]);
+    ok(&out);
+    assert!(
+        String::from_utf8_lossy(&out.stdout).contains("(3 already done)"),
+        "{}",
+        String::from_utf8_lossy(&out.stdout)
+    );
+    assert_eq!(&masked(&dir), reference_run());
+}
+
+#[test]
+fn merged_shards_equal_the_unsharded_sweep() {
+    let tmp = tempfile::tempdir().unwrap();
+    for n in [2, 3] {
+        let mut dirs = Vec::new();
+        for i in 0..n {
+            let dir = tmp.path().join(format!("shard{i}of{n}"));
+            ok(&run_smoke(&dir, &["--shard", &format!("{i}/{n}")], &[]));
+            dirs.push(dir.to_string_lossy().into_owned());
+        }
+        let merged = tmp.path().join(format!("merged{n}"));
+        let merged_s = merged.to_string_lossy().into_owned();
+        let mut args = vec!["sweep-merge", "--out", &merged_s];
+        args.extend(dirs.iter().map(String::as_str));
+        ok(&sweep(&args, &[], tmp.path()));
+        assert_eq!(&masked(&merged), reference_run(), "{n} shards");
+
+        // Without one shard the merge is refused and writes nothing.
+        let partial = tmp.path().join(format!("partial{n}"));
+        let partial_s = partial.to_string_lossy().into_owned();
+        let out = sweep(
+            &["sweep-merge", "--out", &partial_s, &dirs[0]],
+            &[],
+            tmp.path(),
+        );
+        assert_eq!(out.status.code(), Some(2));
+        assert!(String::from_utf8_lossy(&out.stderr).contains("in no shard"));
+        assert!(!partial.exists());
+    }
+}
+
+/// A bad spec (or flag) is refused with status 2, an error naming `needle`, and no
+/// results.jsonl.
+fn assert_refused(spec: &str, extra: &[&str], needle: &str) {
+    let tmp = tempfile::tempdir().unwrap();
+    let spec_path = tmp.path().join("bad.json");
+    std::fs::write(&spec_path, spec).unwrap();
+    let out_dir = tmp.path().join("out");
+    let out_s = out_dir.to_string_lossy().into_owned();
+    let mut args = vec!["sweep", spec_path.to_str().unwrap(), "--out", &out_s];
+    args.extend_from_slice(extra);
+    let out = sweep(&args, &[], tmp.path());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{spec}: {stderr}");
+    assert!(
+        stderr.contains(needle),
+        "{spec}: expected `{needle}` in {stderr}"
+    );
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(!out_dir.join("results.jsonl").exists(), "{spec}");
+}
+
+/// A spec of `rest` on the sphere at 32x32.
+fn small_spec(rest: &str) -> String {
+    let scene = manifest().join("traces/sphere24.json");
+    format!(
+        r#"{{"name": "bad", "scenes": [{:?}], "viewport": [32, 32], {rest}}}"#,
+        scene.to_string_lossy()
+    )
+}
+
+#[test]
+fn bad_specs_are_refused_before_any_run() {
+    for (rest, needle) in [
+        (r#""grid": [{"k": [1]}], "colour": "red""#, "field `colour`"),
+        (r#""grid": [{"k": []}]"#, "field `grid[0].k` = []"),
+        (
+            r#""points": [{"k": 0.5}, {"k": 100}]"#,
+            "field `points[1].k` = 100",
+        ),
+        (r#""grid": [{"k": [0.5, 0]}]"#, "field `grid[0].k[1]` = 0"),
+        (
+            r#""points": [{"arch.segmenter.cnt": 4}]"#,
+            "field `points[0].arch.segmenter.cnt`: unknown architecture field",
+        ),
+        (
+            r#""grid": [{"k": [1]}, {"arch.rop.count": [2, 0]}]"#,
+            "field `grid[1].arch.rop.count[1]` = 0",
+        ),
+        (
+            r#""points": [{"arch.links.rasterizer_to_rop.fifo_depth": 0}]"#,
+            "field `points[0].arch.links.rasterizer_to_rop.fifo_depth` = 0",
+        ),
+        (r#""points": [{"tess": 2}]"#, "field `points[0].tess`"),
+        (r#""points": [{"blend": "f16"}]"#, "has no discoids"),
+    ] {
+        assert_refused(&small_spec(rest), &[], needle);
+    }
+    let good = small_spec(r#""grid": [{"k": [1]}]"#);
+    for (flags, needle) in [
+        (&["--shard", "2/2"][..], "--shard"),
+        (&["--shard", "0/0"][..], "--shard"),
+        (&["--shard", "1"][..], "--shard"),
+        (&["--jobs", "0"][..], "--jobs"),
+    ] {
+        assert_refused(&good, flags, needle);
+    }
+}
+
+#[test]
+fn a_directory_of_another_spec_is_not_resumed() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("out");
+    let first = tmp.path().join("a.json");
+    let spec = |k: &str| small_spec(&format!(r#""reference": false, "grid": [{{"k": [{k}]}}]"#));
+    std::fs::write(&first, spec("1")).unwrap();
+    let args = |d: &Path| {
+        vec![
+            "sweep".to_string(),
+            first.to_string_lossy().into_owned(),
+            "--out".into(),
+            d.to_string_lossy().into_owned(),
+        ]
+    };
+    let run = |a: Vec<String>| {
+        sweep(
+            &a.iter().map(String::as_str).collect::<Vec<_>>(),
+            &[],
+            tmp.path(),
+        )
+    };
+    ok(&run(args(&dir)));
+    std::fs::write(&first, spec("2")).unwrap();
+    let out = run(args(&dir));
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("field `grid`") && stderr.contains("another spec"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn every_committed_spec_is_valid() {
+    let dir = manifest().join("sim/sweeps");
+    let mut names = Vec::new();
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "json") {
+            let plan = Plan::load(&path).unwrap_or_else(|e| panic!("{e}"));
+            assert_eq!(path.file_stem().unwrap().to_string_lossy(), plan.spec.name);
+            names.push(plan.spec.name);
+        }
+    }
+    names.sort();
+    assert_eq!(names, ["precision", "smoke", "tradeoff", "units"]);
+}
