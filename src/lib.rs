@@ -25,7 +25,8 @@
 //! - [`reference`]: the exact f64 ray-patch reference and the accuracy metrics.
 //! - [`scene`], [`camera`]: the JSON trace format and OpenGL-convention cameras.
 //! - [`job`], [`report`]: the `render` command's work and its `report.json` / `report.txt`;
-//!   [`compare`]: lembos against triangles against the exact surface.
+//!   [`compare`]: lembos against triangles against the exact surface; [`plot`]: a sweep's
+//!   SVG plots.
 //!
 //! The functional model knows nothing of cycles; the timed pipeline calls the same stage
 //! functions and adds only time.
@@ -39,6 +40,7 @@ pub mod error;
 pub mod job;
 pub mod lembo;
 pub mod pipeline;
+pub mod plot;
 pub mod raster;
 pub mod reference;
 pub mod report;
