@@ -28,6 +28,8 @@
 //!   [`compare`]: lembos against triangles against the exact surface; [`sweep`]: many
 //!   runs of a spec (`sim/sweeps/`) into `results.jsonl` and `results.csv`, resumable and
 //!   shardable.
+//!   [`compare`]: lembos against triangles against the exact surface; [`plot`]: a sweep's
+//!   SVG plots.
 //!
 //! The functional model knows nothing of cycles; the timed pipeline calls the same stage
 //! functions and adds only time.
@@ -41,6 +43,7 @@ pub mod error;
 pub mod job;
 pub mod lembo;
 pub mod pipeline;
+pub mod plot;
 pub mod raster;
 pub mod reference;
 pub mod report;

@@ -1542,15 +1542,8 @@ fn write_final(
         .iter()
         .map(|s| s.to_string())
         .collect();
-    files.extend(write_plots_if_available(dir, &records)?);
+    files.extend(crate::plot::write_plots(dir, &records)?);
     Ok(files)
-}
-
-/// The plots of a finished sweep.
-// TODO(issue 6): replace with `crate::plot::write_plots(dir, records)` when src/plot.rs
-// lands; until then a sweep writes no plot.
-fn write_plots_if_available(_dir: &Path, _records: &[Value]) -> Result<Vec<String>> {
-    Ok(Vec::new())
 }
 
 // ---- results.csv ---------------------------------------------------------------------
