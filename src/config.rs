@@ -24,7 +24,7 @@
 //! crossbar, and DRAM timing beyond a bandwidth-limited port.
 
 use crate::error::{Error, Result};
-use crate::scene::parse_error;
+use crate::scene::parse_strict;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -635,15 +635,7 @@ impl ArchConfig {
     /// Parses and validates an architecture from JSON text; `file` is the name used in
     /// error messages. Fields the text leaves out keep their defaults.
     pub fn from_json(text: &str, file: &str) -> Result<ArchConfig> {
-        let de = &mut serde_json::Deserializer::from_str(text);
-        let config: ArchConfig =
-            serde_path_to_error::deserialize(&mut *de).map_err(|e| parse_error(file, e))?;
-        // Text after the configuration object is an error, not ignored.
-        de.end().map_err(|e| Error::Parse {
-            file: file.to_string(),
-            field: String::new(),
-            message: e.to_string(),
-        })?;
+        let config: ArchConfig = parse_strict(text, file)?;
         config.validate(file)?;
         Ok(config)
     }

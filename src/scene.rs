@@ -121,15 +121,7 @@ impl Scene {
     /// Parses and validates a scene from JSON text. `file` is the name used in error
     /// messages; mesh paths are relative to `base_dir`.
     pub fn from_json(text: &str, file: &str, base_dir: &Path) -> Result<Scene> {
-        let de = &mut serde_json::Deserializer::from_str(text);
-        let spec: SceneSpec =
-            serde_path_to_error::deserialize(&mut *de).map_err(|e| parse_error(file, e))?;
-        // Text after the scene object is an error, not ignored.
-        de.end().map_err(|e| Error::Parse {
-            file: file.to_string(),
-            field: String::new(),
-            message: e.to_string(),
-        })?;
+        let spec: SceneSpec = parse_strict(text, file)?;
         spec.validate(&Check { file }, base_dir)
     }
 
@@ -177,6 +169,19 @@ impl Scene {
         self.viewport = viewport;
         Ok(())
     }
+}
+
+/// Parses JSON text into `T`: errors name the file and the field path, and text after the
+/// value is an error, not ignored. Shared by scenes, architectures and sweep specs.
+pub(crate) fn parse_strict<T: serde::de::DeserializeOwned>(text: &str, file: &str) -> Result<T> {
+    let de = &mut serde_json::Deserializer::from_str(text);
+    let value: T = serde_path_to_error::deserialize(&mut *de).map_err(|e| parse_error(file, e))?;
+    de.end().map_err(|e| Error::Parse {
+        file: file.to_string(),
+        field: String::new(),
+        message: e.to_string(),
+    })?;
+    Ok(value)
 }
 
 pub(crate) fn parse_error(file: &str, e: serde_path_to_error::Error<serde_json::Error>) -> Error {

@@ -47,7 +47,7 @@ use crate::job::{
 use crate::pipeline::UnitKind;
 use crate::reference::oracle::ReferenceImage;
 use crate::report::{write_files, Report};
-use crate::scene::{parse_error, Scene};
+use crate::scene::{parse_strict, Scene};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde::de::{self, MapAccess, Visitor};
 use serde::{Deserialize, Deserializer, Serialize};
@@ -230,14 +230,7 @@ pub struct Spec {
 impl Spec {
     /// Parses and expands a spec; `file` names it in messages.
     pub fn parse(text: &str, file: &str) -> Result<Spec> {
-        let de = &mut serde_json::Deserializer::from_str(text);
-        let f: SpecFile =
-            serde_path_to_error::deserialize(&mut *de).map_err(|e| parse_error(file, e))?;
-        de.end().map_err(|e| Error::Parse {
-            file: file.to_string(),
-            field: String::new(),
-            message: e.to_string(),
-        })?;
+        let f: SpecFile = parse_strict(text, file)?;
         let value: Value = serde_json::from_str(text).expect("the spec parsed once already");
 
         check_name(file, &f.name)?;
