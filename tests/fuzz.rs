@@ -799,7 +799,7 @@ fn parse_scene(text: &str) -> Result<(), TestCaseError> {
 #[test]
 fn scene_parser_on_arbitrary_bytes() {
     let seeds = scene_seeds();
-    run("scene bytes", 40_000, bytes(seeds.len()), |b| {
+    run("scene bytes", 1_000_000, bytes(seeds.len()), |b| {
         parse_scene(&b.text(&seeds))
     });
 }
@@ -811,7 +811,7 @@ fn scene_parser_on_mutated_scenes() {
         .iter()
         .map(|t| serde_json::from_str(t).unwrap())
         .collect();
-    run("scene grammar", 20_000, mutated(seeds.len()), |m| {
+    run("scene grammar", 40_000, mutated(seeds.len()), |m| {
         parse_scene(&m.text(&seeds))
     });
 }
@@ -850,7 +850,7 @@ fn parse_arch(text: &str) -> Result<(), TestCaseError> {
 #[test]
 fn arch_parser_on_arbitrary_bytes() {
     let seeds = arch_seeds();
-    run("arch bytes", 60_000, bytes(seeds.len()), |b| {
+    run("arch bytes", 1_000_000, bytes(seeds.len()), |b| {
         parse_arch(&b.text(&seeds))
     });
 }
@@ -907,6 +907,9 @@ struct LemboInput {
     normals: Normals,
     normal_scale: f64,
     raw_normals: [[f64; 3]; 6],
+    /// Whether a lembo after the first keeps its own offset; otherwise it shares the
+    /// first's, so that most scenes overlap on screen.
+    detached: bool,
 }
 
 fn unit_cube() -> impl Strategy<Value = [f64; 3]> {
@@ -951,23 +954,28 @@ fn lembo_input() -> impl Strategy<Value = LemboInput> {
             unit_cube(),
             unit_cube(),
         ],
+        prop::bool::weighted(0.25),
     )
         .prop_map(
-            |(scale, offset, shape, raw_points, normals, normal_scale, raw_normals)| LemboInput {
-                scale,
-                offset,
-                shape,
-                raw_points,
-                normals,
-                normal_scale,
-                raw_normals,
+            |(scale, offset, shape, raw_points, normals, normal_scale, raw_normals, detached)| {
+                LemboInput {
+                    scale,
+                    offset,
+                    shape,
+                    raw_points,
+                    normals,
+                    normal_scale,
+                    raw_normals,
+                    detached,
+                }
             },
         )
 }
 
 impl LemboInput {
-    fn points(&self) -> [DVec3; 6] {
-        let o = DVec3::from_array(self.offset);
+    /// The six points, moved by `offset`.
+    fn points(&self, offset: [f64; 3]) -> [DVec3; 6] {
+        let o = DVec3::from_array(offset);
         let raw = self.raw_points.map(DVec3::from_array);
         let local = match self.shape {
             Shape::Free => raw,
@@ -1051,9 +1059,9 @@ struct PipelineInput {
 
 fn pipeline_input() -> impl Strategy<Value = PipelineInput> {
     let projection = prop_oneof![
-        3 => prop_oneof![Just(1e-3), Just(179.0), 1.0..170.0f64]
+        3 => prop_oneof![1 => Just(1e-3), 1 => Just(179.0), 8 => 10.0..120.0f64]
             .prop_map(|fovy_deg| ProjectionInput::Perspective { fovy_deg }),
-        2 => prop_oneof![Just(1e-6), Just(1e6), 0.2..5.0f64]
+        2 => prop_oneof![1 => Just(1e-6), 1 => Just(1e6), 8 => 0.5..4.0f64]
             .prop_map(|height_per_extent| ProjectionInput::Orthographic { height_per_extent }),
     ];
     let k = prop_oneof![
@@ -1064,7 +1072,7 @@ fn pipeline_input() -> impl Strategy<Value = PipelineInput> {
     (
         (
             prop::collection::vec(lembo_input(), 1..4),
-            [-0.5..0.5f64, -0.5..0.5f64, -0.5..0.5f64],
+            [-0.2..0.2f64, -0.2..0.2f64, -0.2..0.2f64],
             unit_cube(),
             prop_oneof![
                 4 => 0.5..10.0f64,
@@ -1075,8 +1083,14 @@ fn pipeline_input() -> impl Strategy<Value = PipelineInput> {
             projection,
         ),
         (
-            prop::sample::select(&[1e-6, 0.01, 0.1, 0.5, 0.9, 0.999][..]),
-            prop::sample::select(&[1.000001, 2.0, 10.0, 100.0, 1e6, 1e12][..]),
+            prop_oneof![
+                4 => prop::sample::select(&[0.01, 0.1][..]),
+                1 => prop::sample::select(&[1e-6, 0.5, 0.9, 0.999][..]),
+            ],
+            prop_oneof![
+                4 => prop::sample::select(&[100.0, 1e6][..]),
+                1 => prop::sample::select(&[1.000001, 2.0, 10.0, 1e12][..]),
+            ],
             prop_oneof![1u32..=64, Just(64u32), Just(1u32)],
             prop_oneof![1u32..=64, Just(64u32), Just(1u32)],
             k,
@@ -1115,7 +1129,14 @@ impl PipelineInput {
         let lembos: Vec<(Vec<DVec3>, Vec<DVec3>)> = self
             .lembos
             .iter()
-            .map(|l| (l.points().to_vec(), l.normals().to_vec()))
+            .map(|l| {
+                let offset = if l.detached {
+                    l.offset
+                } else {
+                    self.lembos[0].offset
+                };
+                (l.points(offset).to_vec(), l.normals().to_vec())
+            })
             .collect();
         let first = &lembos[0].0;
         let centroid = first.iter().copied().sum::<DVec3>() / 6.0;
@@ -1227,8 +1248,20 @@ fn functional_pipeline_on_arbitrary_lembos() {
     let accepted = AtomicU64::new(0);
     let capped = AtomicU64::new(0);
     let covered = AtomicU64::new(0);
-    run("pipeline", 4_000, pipeline_input(), |input| {
+    run("pipeline", 8_000, pipeline_input(), |input| {
         let text = input.scene_json().to_string();
+        // A failure names the scene as a file the CLI renders, with the case's settings.
+        let case = format!(
+            "k = {} px, datapath {:?}, analyse {}, tess {}, scene:\n{text}\n",
+            input.k,
+            input.datapath(),
+            input.analyse,
+            input.tess
+        );
+        let with_case = |e: TestCaseError| match e {
+            TestCaseError::Fail(why) => TestCaseError::fail(format!("{why}; {case}")),
+            reject => reject,
+        };
         let scene = match no_panic("Scene::from_json", || {
             Scene::from_json(&text, "fuzz.json", &traces())
         })? {
@@ -1244,7 +1277,8 @@ fn functional_pipeline_on_arbitrary_lembos() {
         let lembos = within_deadline("render_functional", move || {
             let view = View::new(&lembo_scene.camera, lembo_scene.viewport);
             render_functional(&lembo_scene, &view, k, datapath, analyse)
-        })?;
+        })
+        .map_err(with_case)?;
         match lembos {
             Ok(frame) => {
                 check_frame("render_functional", &frame, width, height)?;
@@ -1266,7 +1300,8 @@ fn functional_pipeline_on_arbitrary_lembos() {
             let view = View::new(&scene.camera, scene.viewport);
             let tessellation = Tessellation::new(&scene, tess);
             render_functional_triangles(&scene, &view, &tessellation, datapath, analyse)
-        })?;
+        })
+        .map_err(with_case)?;
         check_frame("render_functional_triangles", &frame, width, height)
     });
     eprintln!(
