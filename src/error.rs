@@ -143,3 +143,31 @@ impl std::error::Error for Error {
 }
 
 pub type Result<T> = std::result::Result<T, Error>;
+
+/// The largest scene, architecture or sweep-spec file read [bytes].
+pub const MAX_TEXT_INPUT_BYTES: u64 = 256 << 20;
+/// The largest mesh or point-cloud file read [bytes].
+pub const MAX_DATA_INPUT_BYTES: u64 = 1 << 30;
+
+/// Reads an input file of at most `max` bytes. A larger file, or one that never ends (a
+/// device such as `/dev/zero`), is an error, not an out-of-memory.
+pub fn read_input(path: &std::path::Path, max: u64) -> std::io::Result<Vec<u8>> {
+    use std::io::Read;
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)?
+        .take(max + 1)
+        .read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > max {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!("the file is larger than the {max} bytes accepted"),
+        ));
+    }
+    Ok(bytes)
+}
+
+/// [`read_input`] as UTF-8 text.
+pub fn read_input_string(path: &std::path::Path, max: u64) -> std::io::Result<String> {
+    String::from_utf8(read_input(path, max)?)
+        .map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidData, e))
+}

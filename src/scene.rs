@@ -25,7 +25,9 @@
 use crate::camera::{Camera, Projection, Viewport, MAX_VIEWPORT_SIDE};
 use crate::discoid::shapes::{builtin_discoids, discoids_from_mesh, BUILTIN_DISCOID_NAMES};
 use crate::discoid::{BetaShape, Discoid, DiscoidSet};
-use crate::error::{Error, Result};
+use crate::error::{
+    read_input, read_input_string, Error, Result, MAX_DATA_INPUT_BYTES, MAX_TEXT_INPUT_BYTES,
+};
 use crate::lembo::construct::TriangleMesh;
 use crate::lembo::shapes::{builtin_mesh, BUILTIN_NAMES};
 use crate::lembo::Lembo;
@@ -105,7 +107,7 @@ pub struct SceneObject {
 impl Scene {
     /// Reads and validates a scene file; mesh paths in it are relative to its directory.
     pub fn load(path: &Path) -> Result<Scene> {
-        let text = std::fs::read_to_string(path).map_err(|source| Error::Read {
+        let text = read_input_string(path, MAX_TEXT_INPUT_BYTES).map_err(|source| Error::Read {
             path: path.to_path_buf(),
             source,
         })?;
@@ -1053,7 +1055,7 @@ fn load_obj(file: &str, field: &str, path: &Path) -> Result<TriangleMesh> {
     };
     // Read the bytes ourselves: tobj's own open reports "open file failed" without the OS
     // reason.
-    let bytes = std::fs::read(path).map_err(|e| mesh_err(e.to_string()))?;
+    let bytes = read_input(path, MAX_DATA_INPUT_BYTES).map_err(|e| mesh_err(e.to_string()))?;
     // tobj's optional `merging` and `reordering` features add fields to LoadOptions.
     #[allow(clippy::needless_update)]
     let options = tobj::LoadOptions {
@@ -1175,7 +1177,7 @@ fn load_surfels(file: &str, field: &str, path: &Path, before: usize) -> Result<V
         path: path.to_path_buf(),
         message,
     };
-    let bytes = std::fs::read(path).map_err(|e| cloud_err(e.to_string()))?;
+    let bytes = read_input(path, MAX_DATA_INPUT_BYTES).map_err(|e| cloud_err(e.to_string()))?;
     let mut reader = ply::parser::Reader::new(std::io::Cursor::new(bytes));
     let parser = ply::parser::Parser::<SurfelRecord>::new();
     let header = parser

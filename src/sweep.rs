@@ -39,7 +39,7 @@ use crate::config::ArchConfig;
 use crate::datapath::Datapath;
 use crate::discoid::blend::BlendMode;
 use crate::discoid::render::check_scene;
-use crate::error::{Error, Result};
+use crate::error::{read_input_string, Error, Result, MAX_TEXT_INPUT_BYTES};
 use crate::job::{
     check_tess_range, check_triangle_budget, render_reference, run_path, Mode, PrimitivePath,
     RenderJob, COMMAND_LINE, K_RANGE,
@@ -789,7 +789,7 @@ impl Plan {
     /// Reads, parses, expands and validates a spec file; scenes and the base architecture
     /// are relative to its directory.
     pub fn load(path: &Path) -> Result<Plan> {
-        let text = std::fs::read_to_string(path).map_err(|source| Error::Read {
+        let text = read_input_string(path, MAX_TEXT_INPUT_BYTES).map_err(|source| Error::Read {
             path: path.to_path_buf(),
             source,
         })?;
@@ -1688,10 +1688,11 @@ pub fn run_merge(job: &MergeJob) -> Result<MergeOutput> {
     let mut lines: BTreeMap<usize, (String, Value, String)> = BTreeMap::new();
     for shard in &job.shards {
         let spec_path = shard.join(SPEC_JSON);
-        let text = std::fs::read_to_string(&spec_path).map_err(|source| Error::Read {
-            path: spec_path.clone(),
-            source,
-        })?;
+        let text =
+            read_input_string(&spec_path, MAX_TEXT_INPUT_BYTES).map_err(|source| Error::Read {
+                path: spec_path.clone(),
+                source,
+            })?;
         let this = Spec::parse(&text, &spec_path.display().to_string())?;
         match &spec {
             None => spec = Some((this, text.into_bytes())),

@@ -624,3 +624,23 @@ fn bad_discoid_flags_are_refused() {
     assert_refused(&["render", s, "--blend", "f8", "--out", "o"], "--blend");
     assert_refused(&["render", s, "--reference", "--out", "o"], "--reference");
 }
+
+#[cfg(unix)]
+#[test]
+fn endless_input_files_are_refused_not_read_forever() {
+    // /dev/zero never ends: reading it whole would run out of memory.
+    let dir = tempfile::tempdir().unwrap();
+    let scene = scene_file(
+        dir.path(),
+        "z.json",
+        r#"{"name": "z", "camera": {"eye": [0, 0, 4], "target": [0, 0, 0],
+            "projection": {"kind": "perspective", "fovy_deg": 40, "near": 0.1, "far": 10}},
+            "objects": [{"mesh": "/dev/zero"}]}"#,
+    );
+    assert_refused(&["render", &scene, "--out", "o"], "larger than");
+    assert_refused(&["render", "/dev/zero", "--out", "o"], "larger than");
+    assert_refused(
+        &["render", "--arch", "/dev/zero", "--out", "o"],
+        "larger than",
+    );
+}

@@ -65,7 +65,7 @@ use std::time::Duration;
 // ---- Runner ---------------------------------------------------------------------------
 
 /// The longest one pipeline case may take in a release build.
-const DEADLINE: Duration = Duration::from_secs(2);
+const DEADLINE: Duration = Duration::from_secs(10);
 
 /// The fixed seed of every target (overridden by `LEMBO_FUZZ_SEED`).
 const SEED: [u8; 32] = *b"lembo-sim fuzz: hostile inputs!!";
