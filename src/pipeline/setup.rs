@@ -38,6 +38,7 @@ pub fn run<R: Real>(mut ctx: Ctx<(), LemboReady>, sh: &Shared<R>) -> Result<Fini
                 match cull {
                     Cull::BehindEye => counts.lembos_culled_behind_eye += 1,
                     Cull::Outside => counts.lembos_culled_outside += 1,
+                    Cull::Degenerate => counts.lembos_degenerate += 1,
                 }
                 ctx.work(cost);
             }

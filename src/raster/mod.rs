@@ -42,6 +42,9 @@ pub struct Counts {
     pub lembos_culled_behind_eye: u64,
     /// Lembos whose hull lies outside the viewport or depth range (one cull test each).
     pub lembos_culled_outside: u64,
+    /// Lembos whose screen map has zero area everywhere (a point, a line or a curve on
+    /// screen): they cover no pixel centre and are dropped after the cull test.
+    pub lembos_degenerate: u64,
     /// (lembo, scanline) pairs handed to the interval manager.
     pub scanlines: u64,
     /// Roots of Y = y_j found on domain edges.
@@ -87,6 +90,7 @@ impl std::ops::AddAssign for Counts {
         self.lembos += o.lembos;
         self.lembos_culled_behind_eye += o.lembos_culled_behind_eye;
         self.lembos_culled_outside += o.lembos_culled_outside;
+        self.lembos_degenerate += o.lembos_degenerate;
         self.scanlines += o.scanlines;
         self.edge_roots += o.edge_roots;
         self.virtual_roots += o.virtual_roots;
@@ -132,6 +136,10 @@ pub fn render_lembos<R: Real, S: FragmentSink<R>>(
             }
             Err(setup::Cull::Outside) => {
                 counts.lembos_culled_outside += 1;
+                continue;
+            }
+            Err(setup::Cull::Degenerate) => {
+                counts.lembos_degenerate += 1;
                 continue;
             }
         };

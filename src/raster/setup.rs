@@ -20,7 +20,7 @@
 use super::v2::{dot, norm, V2};
 use crate::camera::View;
 use crate::datapath::Real;
-use crate::lembo::{bezier_controls, Lembo, Quadratic, Quadratic3};
+use crate::lembo::{bezier_controls, Lembo, Quadratic, Quadratic3, REFERENCE_UV};
 use glam::DVec3;
 
 /// One domain edge in canonical order: the screen values of its start, middle and end
@@ -106,6 +106,31 @@ pub enum Cull {
     BehindEye,
     /// The Bézier hull lies outside the viewport or outside the depth range.
     Outside,
+    /// The screen map has zero area everywhere: its Jacobian x_u y_v - x_v y_u vanishes
+    /// identically (six coincident points, a patch on a line or a curve, seen edge-on).
+    /// Such a lembo covers no pixel centre; walking its scanlines would draw a trail.
+    Degenerate,
+}
+
+/// Relative size below which a screen Jacobian counts as zero (f64 rounding of the
+/// projection is about 1e-16 of its terms).
+pub const DEGENERATE_JACOBIAN: f64 = 1e-9;
+
+/// Whether the screen map through the six projected points has zero area everywhere. The
+/// Jacobian is a quadratic in (u, v), so it vanishes identically exactly when it vanishes at
+/// the six reference points (they determine a quadratic).
+fn zero_area(sx: [f64; 6], sy: [f64; 6]) -> bool {
+    let (x, y) = (
+        Quadratic::from_reference_values(sx),
+        Quadratic::from_reference_values(sy),
+    );
+    let (mut j_max, mut scale) = (0.0f64, 0.0f64);
+    for (u, v) in REFERENCE_UV {
+        let ((xu, xv), (yu, yv)) = (x.grad(u, v), y.grad(u, v));
+        j_max = j_max.max((xu * yv - xv * yu).abs());
+        scale = scale.max((xu * yv).abs() + (xv * yu).abs());
+    }
+    j_max <= DEGENERATE_JACOBIAN * scale
 }
 
 /// Projects and prepares one lembo.
@@ -132,6 +157,9 @@ pub fn setup<R: Real>(
     let (w, h) = (view.viewport.width as f64, view.viewport.height as f64);
     if hi.x < 0.0 || hi.y < 0.0 || lo.x > w || lo.y > h || hi.z < 0.0 || lo.z > 1.0 {
         return Err(Cull::Outside);
+    }
+    if zero_area(screen.map(|s| s.x), screen.map(|s| s.y)) {
+        return Err(Cull::Degenerate);
     }
 
     let sx = screen.map(|s| R::of(s.x));
@@ -505,5 +533,27 @@ pub(crate) mod tests {
             assert!(dot(e[0].0, e[1].0).abs() < 1e-12);
             assert!(e[0].1.abs() >= e[1].1.abs());
         }
+    }
+
+    #[test]
+    fn setup_culls_lembos_of_zero_area_and_keeps_thin_ones() {
+        // A curved parametrisation of a parabola: x = 20 + 80 t, y = 30 + 40 t² with
+        // t = u + v. Its Jacobian is zero everywhere, so it covers no pixel centre.
+        let t = quad(1.0, 1.0, 2.0, 0.0, 0.0, 0.0); // (u + v)²
+        let x = quad(0.0, 0.0, 0.0, 80.0, 80.0, 20.0);
+        let y = quad(40.0 * t.a, 40.0 * t.b, 40.0 * t.c, 0.0, 0.0, 30.0);
+        let l = lembo_on_screen(x, y);
+        assert_eq!(
+            setup::<f64>(0, &l, [0.8; 3], &view()).err(),
+            Some(Cull::Degenerate)
+        );
+        assert_eq!(
+            setup::<f32>(0, &l, [0.8; 3], &view()).err(),
+            Some(Cull::Degenerate)
+        );
+        // A sliver a hundredth of a pixel wide over 80 pixels is not degenerate.
+        let thin = quad(0.0, 0.0, 0.0, 0.0, 0.01, 30.0);
+        let l = lembo_on_screen(quad(0.0, 0.0, 0.0, 80.0, 0.0, 20.0), thin);
+        assert!(setup::<f64>(0, &l, [0.8; 3], &view()).is_ok());
     }
 }
