@@ -44,7 +44,7 @@ use crate::raster::triangle::{
 };
 use crate::raster::{render_lembos, Counts, DEFAULT_SEGMENT_CAP};
 use crate::rop::framebuffer::{depth_test, NO_PRIMITIVE};
-use crate::rop::rop::FragmentShader;
+use crate::rop::rop::{normalize, FragmentShader};
 use crate::rop::shade::to_u8;
 use crate::rop::FrameBuffer;
 use crate::scene::Scene;
@@ -328,35 +328,35 @@ pub struct DiscoidFragment<R> {
     pub shape: BetaShape,
 }
 
-/// What the ROP computes of a discoid fragment before any test.
+/// What the ROP computes of a discoid fragment before any test; the interest values of
+/// equation (6) are computed only for a fragment the accumulation pass keeps.
 #[derive(Clone, Copy, Debug)]
-pub struct Evaluated {
+pub struct Evaluated<R> {
     /// The discoid faces the eye at this fragment.
     pub facing: bool,
     /// beta from the discoid's texture (0 outside it).
     pub beta: f64,
-    /// Equation (6)'s interest values.
-    pub diffuse: f64,
-    pub specular: f64,
     /// Depth as the depth buffer holds it.
     pub z: f32,
+    /// Unit normal and unit direction to the eye.
+    pub normal: [R; 3],
+    pub to_eye: [R; 3],
 }
 
-/// Evaluates a discoid fragment: facing, beta, interest values, depth.
+/// Evaluates a discoid fragment: facing, beta, depth.
 #[inline]
 pub fn evaluate<R: Real>(
     table: &DiscoidTable<R>,
     shader: &FragmentShader<R>,
     f: &DiscoidFragment<R>,
-) -> Evaluated {
-    let (cos_a, cos_g_n, n) = shader.terms_at(f.normal, f.position);
-    let e = shader.to_eye(f.position);
+) -> Evaluated<R> {
+    let (n, e) = (normalize(f.normal), shader.to_eye(f.position));
     Evaluated {
         facing: n[0] * e[0] + n[1] * e[1] + n[2] * e[2] >= R::zero(),
         beta: table.textures[shape_index(f.shape)].sample(f.st[0], f.st[1]),
-        diffuse: cos_a.f64(),
-        specular: cos_g_n.f64(),
         z: f.z.f64() as f32,
+        normal: n,
+        to_eye: e,
     }
 }
 
@@ -364,7 +364,7 @@ pub fn evaluate<R: Real>(
 /// (`depth`, `winner`). Only fragments facing the eye, inside their discoid and inside the
 /// depth range count; ties go to the smaller id, so the result does not depend on order.
 #[inline]
-pub fn depth_pass_wins(e: &Evaluated, id: u32, depth: f32, winner: u32) -> bool {
+pub fn depth_pass_wins<R>(e: &Evaluated<R>, id: u32, depth: f32, winner: u32) -> bool {
     e.facing && e.beta > 0.0 && depth_test(e.z, id, depth, winner)
 }
 
@@ -372,11 +372,12 @@ pub fn depth_pass_wins(e: &Evaluated, id: u32, depth: f32, winner: u32) -> bool 
 /// (`depth`, `winner`): back-face cull, beta = 0 discard, threshold; counted in `report`.
 /// Returns what to blend for a fragment kept.
 #[inline]
-pub fn accumulation_keeps(
+pub fn accumulation_keeps<R: Real>(
     report: &mut BlendReport,
     view: &View,
+    shader: &FragmentShader<R>,
     threshold: f64,
-    e: &Evaluated,
+    e: &Evaluated<R>,
     depth: f32,
     winner: u32,
 ) -> Option<BlendInput> {
@@ -390,10 +391,11 @@ pub fn accumulation_keeps(
     {
         report.discarded_threshold += 1;
     } else {
+        let (cos_a, cos_g_n) = shader.shader().terms(e.normal, e.to_eye);
         return Some(BlendInput {
             beta: e.beta,
-            diffuse: e.diffuse,
-            specular: e.specular,
+            diffuse: cos_a.f64(),
+            specular: cos_g_n.f64(),
         });
     }
     None
@@ -422,9 +424,15 @@ pub fn process<R: Real>(
         }
         Pass::Accumulate => {
             let threshold = target.threshold;
-            if let Some(input) =
-                accumulation_keeps(&mut target.report, view, threshold, &e, depth, winner)
-            {
+            if let Some(input) = accumulation_keeps(
+                &mut target.report,
+                view,
+                shader,
+                threshold,
+                &e,
+                depth,
+                winner,
+            ) {
                 target.pending.push(Pending {
                     idx: idx as u32,
                     id: f.id,

@@ -184,7 +184,15 @@ fn discoid_fragment<R: Real>(
         }
         Pass::Accumulate => {
             let (depth, winner) = (dp.depth[idx], dp.winner[idx]);
-            match accumulation_keeps(&mut kept.1, sh.view, dp.threshold, &e, depth, winner) {
+            match accumulation_keeps(
+                &mut kept.1,
+                sh.view,
+                shader,
+                dp.threshold,
+                &e,
+                depth,
+                winner,
+            ) {
                 Some(input) => {
                     kept.0.push(Pending {
                         idx: idx as u32,

@@ -66,15 +66,6 @@ impl<R: Real> FragmentShader<R> {
         }
     }
 
-    /// Equation (6)'s interest values (cos alpha, cos^N gamma) at a surface point with
-    /// (not necessarily unit) `normal`, and the unit normal.
-    #[inline]
-    pub fn terms_at(&self, normal: [R; 3], position: [R; 3]) -> (R, R, [R; 3]) {
-        let n = normalize(normal);
-        let (a, g) = self.shader.terms(n, self.to_eye(position));
-        (a, g, n)
-    }
-
     pub fn shader(&self) -> &Shader<R> {
         &self.shader
     }
@@ -97,8 +88,9 @@ impl<'a, R: Real> Rop<'a, R> {
     }
 }
 
+/// `v` scaled to unit length, or zero for a zero vector.
 #[inline(always)]
-fn normalize<R: Real>(v: [R; 3]) -> [R; 3] {
+pub fn normalize<R: Real>(v: [R; 3]) -> [R; 3] {
     let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
     if n > R::zero() {
         [v[0] / n, v[1] / n, v[2] / n]
