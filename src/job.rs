@@ -380,8 +380,7 @@ pub fn run_path(
             count: t.len(),
             vertices: t.vertex_count(),
             bytes: t.bytes(),
-            quad_efficiency: (counts.quads > 0)
-                .then(|| counts.fragments as f64 / (4 * counts.quads) as f64),
+            quad_efficiency: counts.quad_efficiency(),
         },
     };
     let report = Report {
@@ -426,11 +425,7 @@ pub fn run_path(
 fn scene_info(scene: &Scene) -> SceneInfo {
     SceneInfo {
         name: scene.name.clone(),
-        source: scene
-            .source
-            .as_ref()
-            .map(|p| p.display().to_string())
-            .unwrap_or_else(|| "(embedded default)".into()),
+        source: scene.source_name(),
         width: scene.viewport.width,
         height: scene.viewport.height,
         lembos: scene.lembo_count() as u64,
@@ -562,8 +557,7 @@ fn run_discoids(
             count: planar + curved,
             vertices: 4 * planar + 6 * curved,
             bytes: PLANAR_DISCOID_BYTES * planar + CURVED_DISCOID_BYTES * curved,
-            quad_efficiency: (counts.quads > 0)
-                .then(|| counts.fragments as f64 / (4 * counts.quads) as f64),
+            quad_efficiency: counts.quad_efficiency(),
         },
         units,
         counts,

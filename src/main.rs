@@ -352,11 +352,14 @@ fn sweep_merge(args: MergeArgs) -> ExitCode {
             out!("wrote {} to {}", out.files.join(", "), out.dir.display());
             ExitCode::SUCCESS
         }
-        Err(e) => {
-            eprintln!("lembo-sim: error: {e}");
-            ExitCode::from(e.exit_code())
-        }
+        Err(e) => failed(&e),
     }
+}
+
+/// Reports an error on stderr and gives its exit status (2 for bad input).
+fn failed(e: &lembo_sim::error::Error) -> ExitCode {
+    eprintln!("lembo-sim: error: {e}");
+    ExitCode::from(e.exit_code())
 }
 
 fn compare(args: CompareArgs) -> ExitCode {
@@ -376,10 +379,7 @@ fn compare(args: CompareArgs) -> ExitCode {
             out!("wrote {} to {}", out.files.join(", "), out.dir.display());
             ExitCode::SUCCESS
         }
-        Err(e) => {
-            eprintln!("lembo-sim: error: {e}");
-            ExitCode::from(e.exit_code())
-        }
+        Err(e) => failed(&e),
     }
 }
 
@@ -506,9 +506,6 @@ fn render(args: RenderArgs) -> ExitCode {
             out!("wrote {} to {}", out.files.join(", "), out.dir.display());
             ExitCode::SUCCESS
         }
-        Err(e) => {
-            eprintln!("lembo-sim: error: {e}");
-            ExitCode::from(e.exit_code())
-        }
+        Err(e) => failed(&e),
     }
 }

@@ -139,6 +139,14 @@ impl Scene {
         .expect("the embedded default scene is valid")
     }
 
+    /// The scene file as errors and reports name it, or `(embedded default)`.
+    pub fn source_name(&self) -> String {
+        self.source
+            .as_ref()
+            .map(|p| p.display().to_string())
+            .unwrap_or_else(|| "(embedded default)".into())
+    }
+
     /// The number of lembos over all objects (curved discoids' lembos included).
     pub fn lembo_count(&self) -> usize {
         self.objects.iter().map(|o| o.lembos.len()).sum()
@@ -170,6 +178,20 @@ impl Scene {
         .viewport(&viewport)?;
         self.viewport = viewport;
         Ok(())
+    }
+}
+
+/// The names of the alternatives present, joined with "and", or "none": the value an
+/// "exactly one of" error reports.
+fn given(options: &[(&str, bool)]) -> String {
+    let present: Vec<&str> = options
+        .iter()
+        .filter_map(|&(name, present)| present.then_some(name))
+        .collect();
+    if present.is_empty() {
+        "none".to_string()
+    } else {
+        present.join(" and ")
     }
 }
 
@@ -653,20 +675,12 @@ impl Check<'_> {
                 (label, lembos, None, Some(set))
             }
             _ => {
-                let given: Vec<&str> = [
+                let value = given(&[
                     ("builtin", o.builtin.is_some()),
                     ("lembos", o.lembos.is_some()),
                     ("mesh", o.mesh.is_some()),
                     ("discoids", o.discoids.is_some()),
-                ]
-                .into_iter()
-                .filter_map(|(k, present)| present.then_some(k))
-                .collect();
-                let value = if given.is_empty() {
-                    "none".to_string()
-                } else {
-                    given.join(" and ")
-                };
+                ]);
                 return Err(self.invalid(
                     field,
                     value,
@@ -715,20 +729,12 @@ impl Check<'_> {
             (None, None, Some(name), None) => Source::Builtin(name),
             (None, None, None, Some(path)) => Source::Surfels(path),
             _ => {
-                let given: Vec<&str> = [
+                let value = given(&[
                     ("items", spec.items.is_some()),
                     ("from_mesh", spec.from_mesh.is_some()),
                     ("builtin", spec.builtin.is_some()),
                     ("surfels", spec.surfels.is_some()),
-                ]
-                .into_iter()
-                .filter_map(|(k, present)| present.then_some(k))
-                .collect();
-                let value = if given.is_empty() {
-                    "none".to_string()
-                } else {
-                    given.join(" and ")
-                };
+                ]);
                 return Err(self.invalid(
                     field,
                     value,

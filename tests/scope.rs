@@ -115,15 +115,13 @@ fn each_path_instantiates_only_its_own_units_and_buffers() {
         assert!(!tri.contains(&k), "triangle path has no {k:?}");
     }
     // A scene without primitives instantiates nothing.
-    let empty = scene_with_offscreen(0);
-    let mut empty = empty.clone();
+    let mut empty = scene_with_offscreen(0);
     empty.objects.clear();
     assert!(lembo_path(&empty).units.is_empty());
     // Blend units and their accumulation buffer exist with discoids only.
-    let d =
+    let mut d =
         Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("traces/discoid_sphere20.json"))
             .unwrap();
-    let mut d = d;
     d.set_viewport(64, 64).unwrap();
     let view = View::new(&d.camera, d.viewport);
     let a = ArchConfig::default();

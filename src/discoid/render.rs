@@ -580,11 +580,7 @@ pub fn check_scene(scene: &Scene) -> Result<()> {
         .find(|(_, o)| has && o.discoids.is_none())
     {
         return Err(Error::invalid(
-            scene
-                .source
-                .as_ref()
-                .map(|p| p.display().to_string())
-                .unwrap_or_else(|| "scene".into()),
+            scene.source_name(),
             format!("objects[{k}]"),
             &o.label,
             "a scene with discoids may hold only discoid objects (mixing opaque surfaces with the blend passes is not modelled)",

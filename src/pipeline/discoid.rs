@@ -74,11 +74,7 @@ fn passes<R: Real>(
     let (curved, planar) = (scene.lembo_count() > 0, !table.planar.items.is_empty());
     if curved && planar {
         return Err(Error::invalid(
-            scene
-                .source
-                .as_ref()
-                .map(|p| p.display().to_string())
-                .unwrap_or_else(|| "scene".into()),
+            scene.source_name(),
             "objects",
             "curved and planar discoids",
             "the timed passes draw either curved or planar discoids in one scene (use --mode functional for both)",

@@ -84,6 +84,14 @@ pub struct Counts {
     pub pixels_covered: u64,
 }
 
+impl Counts {
+    /// Covered pixels over pixels of the quads rasterized, fragments / (4 quads); None
+    /// when no quad was rasterized (the lembo path).
+    pub fn quad_efficiency(&self) -> Option<f64> {
+        (self.quads > 0).then(|| self.fragments as f64 / (4 * self.quads) as f64)
+    }
+}
+
 impl std::ops::AddAssign for Counts {
     /// Sums the shares of parallel units.
     fn add_assign(&mut self, o: Counts) {
@@ -212,57 +220,62 @@ pub fn render_functional_triangles(
     }
 }
 
-fn triangles_in<R: Real>(
+/// A frame drawn by `draw` into a ROP over a fresh frame buffer (keeping normals when
+/// analysing); `draw` returns the probe's report when it measured one.
+fn frame_with<R: Real>(
     scene: &Scene,
     view: &View,
-    tessellation: &dyn TriangleSource,
     analyse: bool,
-) -> Frame {
+    draw: impl FnOnce(&mut Rop<R>, &mut Counts) -> Result<Option<probe::ProbeReport>>,
+) -> Result<Frame> {
     let vp = view.viewport;
     let bg = scene.background.map(crate::rop::shade::to_u8::<f64>);
     let mut fb = FrameBuffer::new(vp.width, vp.height, bg, analyse);
     let mut counts = Counts::default();
     let mut rop = Rop::<R>::new(&mut fb, &scene.light, view);
-    let probe = if analyse {
-        let mut p = triangle::TriangleProbe::new(vp.width, &mut rop);
-        triangle::render_triangles::<R, _>(tessellation, view, &mut p, &mut counts);
-        Some(probe::ProbeReport {
-            double_hit_pixels: p.double_hit_pixels(),
-            fragments: counts.fragments,
-            ..Default::default()
-        })
-    } else {
-        triangle::render_triangles::<R, _>(tessellation, view, &mut rop, &mut counts);
-        None
-    };
-    counts.fragments_passed_depth = rop.passed;
-    counts.pixels_covered = fb.covered() as u64;
-    Frame {
-        framebuffer: fb,
-        counts,
-        probe,
-    }
-}
-
-fn render_in<R: Real>(scene: &Scene, view: &View, k: f64, analyse: bool) -> Result<Frame> {
-    let vp = view.viewport;
-    let bg = scene.background.map(crate::rop::shade::to_u8::<f64>);
-    let mut fb = FrameBuffer::new(vp.width, vp.height, bg, analyse);
-    let mut counts = Counts::default();
-    let mut rop = Rop::<R>::new(&mut fb, &scene.light, view);
-    let probe = if analyse {
-        let mut p = probe::Probe::new(scene, vp, &mut rop);
-        render_lembos::<R, _>(scene, view, k, DEFAULT_SEGMENT_CAP, &mut p, &mut counts)?;
-        Some(p.report())
-    } else {
-        render_lembos::<R, _>(scene, view, k, DEFAULT_SEGMENT_CAP, &mut rop, &mut counts)?;
-        None
-    };
+    let probe = draw(&mut rop, &mut counts)?;
     counts.fragments_passed_depth = rop.passed;
     counts.pixels_covered = fb.covered() as u64;
     Ok(Frame {
         framebuffer: fb,
         counts,
         probe,
+    })
+}
+
+fn triangles_in<R: Real>(
+    scene: &Scene,
+    view: &View,
+    tessellation: &dyn TriangleSource,
+    analyse: bool,
+) -> Frame {
+    let drawn = frame_with::<R>(scene, view, analyse, |rop, counts| {
+        Ok(if analyse {
+            let mut p = triangle::TriangleProbe::new(view.viewport.width, rop);
+            triangle::render_triangles::<R, _>(tessellation, view, &mut p, counts);
+            Some(probe::ProbeReport {
+                double_hit_pixels: p.double_hit_pixels(),
+                fragments: counts.fragments,
+                ..Default::default()
+            })
+        } else {
+            triangle::render_triangles::<R, _>(tessellation, view, rop, counts);
+            None
+        })
+    });
+    drawn.expect("the triangle path records no error")
+}
+
+fn render_in<R: Real>(scene: &Scene, view: &View, k: f64, analyse: bool) -> Result<Frame> {
+    frame_with::<R>(scene, view, analyse, |rop, counts| {
+        let cap = DEFAULT_SEGMENT_CAP;
+        Ok(if analyse {
+            let mut p = probe::Probe::new(scene, view.viewport, rop);
+            render_lembos::<R, _>(scene, view, k, cap, &mut p, counts)?;
+            Some(p.report())
+        } else {
+            render_lembos::<R, _>(scene, view, k, cap, rop, counts)?;
+            None
+        })
     })
 }
