@@ -97,6 +97,16 @@ fn check_bounds(what: &str, run: &PathRun, reference: &ReferenceImage, k: f64, b
     if let Some(p) = num(bounds, "min_psnr_db") {
         assert!(a.psnr_db >= p, "{what}: PSNR {} < {p} dB", a.psnr_db);
     }
+    if let Some(n) = num(bounds, "max_segments") {
+        assert!(
+            c.segments as f64 <= n,
+            "{what}: {} segments > {n}",
+            c.segments
+        );
+    }
+    if let Some(n) = num(bounds, "lembos_split") {
+        assert_eq!(c.lembos_split as f64, n, "{what}: {c:?}");
+    }
     if let Some(n) = num(bounds, "triangles_culled_guard_band") {
         assert_eq!(c.triangles_culled_guard_band as f64, n, "{what}: {c:?}");
     }
@@ -253,6 +263,7 @@ macro_rules! scene_tests {
 scene_tests! {
     subpixel => "subpixel.json",
     huge => "huge.json",
+    huge_curved => "huge_curved.json",
     edge_on => "edge_on.json",
     degenerate_coincident => "degenerate_coincident.json",
     degenerate_collinear => "degenerate_collinear.json",

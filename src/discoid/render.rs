@@ -204,12 +204,15 @@ impl<R: Real> DiscoidTable<R> {
         z: R,
     ) -> Option<DiscoidFragment<R>> {
         let (tex, shape) = self.curved[l.id as usize].as_ref()?;
+        // The texture coordinates are quadratics over the lembo's domain; a piece of a split
+        // lembo maps its (u, v) there first.
+        let (lu, lv) = l.lembo_uv(u, v);
         Some(DiscoidFragment {
             id: l.id,
             z,
             normal: eval3(&l.normal, u, v),
             position: eval3(&l.position, u, v),
-            st: [tex[0].eval(u, v).f64(), tex[1].eval(u, v).f64()],
+            st: [tex[0].eval(lu, lv).f64(), tex[1].eval(lu, lv).f64()],
             shape: *shape,
         })
     }

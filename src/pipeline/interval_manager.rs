@@ -13,7 +13,7 @@
 
 use super::actor::{ActorError, Ctx};
 use super::minmax::ScanlineRange;
-use super::{Finished, Shared};
+use super::{Finished, PieceId, Shared};
 use crate::datapath::Real;
 use crate::raster::interval::{intervals, Interval, IntervalScratch};
 use crate::raster::Counts;
@@ -21,7 +21,7 @@ use crate::raster::Counts;
 /// One interval of scanline `j` of lembo `id`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ScanInterval<R> {
-    pub id: u32,
+    pub id: PieceId,
     pub j: u32,
     pub interval: Interval<R>,
 }

@@ -9,14 +9,14 @@
 
 use super::actor::{ActorError, Ctx};
 use super::setup::LemboReady;
-use super::{Finished, Shared};
+use super::{Finished, PieceId, Shared};
 use crate::datapath::Real;
 use crate::raster::{minmax, Counts};
 
 /// The scanlines j0..=j1 of lembo `id`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ScanlineRange {
-    pub id: u32,
+    pub id: PieceId,
     pub j0: u32,
     pub j1: u32,
 }

@@ -155,9 +155,9 @@ pub struct Shared<'a, R> {
     pub arch: &'a ArchConfig,
     pub k: R,
     pub background: [u8; 3],
-    /// Screen-space lembos by id, filled by Setup before it sends the id downstream
-    /// (empty in the triangle path).
-    pub lembos: Vec<OnceLock<ScreenLembo<R>>>,
+    /// Screen-space lembos by id, each whole or as the pieces Setup split it into, filled by
+    /// Setup before it sends their ids downstream (empty in the triangle path).
+    pub lembos: Vec<OnceLock<Vec<ScreenLembo<R>>>>,
     /// The triangles of the triangle path; None in the lembo path.
     pub triangles: Option<&'a dyn TriangleSource>,
     pub tiles: RopTiles,
@@ -179,11 +179,19 @@ pub struct DiscoidPass<'a, R> {
 
 impl<R> Shared<'_, R> {
     #[inline]
-    pub fn lembo(&self, id: u32) -> &ScreenLembo<R> {
-        self.lembos[id as usize]
+    pub fn lembo(&self, id: PieceId) -> &ScreenLembo<R> {
+        &self.lembos[id.lembo as usize]
             .get()
-            .expect("Setup fills a lembo's entry before it sends the id")
+            .expect("Setup fills a lembo's entry before it sends the id")[id.piece as usize]
     }
+}
+
+/// An entry of the lembo table: piece `piece` of lembo `lembo` (piece 0 of a lembo Setup
+/// kept whole).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PieceId {
+    pub lembo: u32,
+    pub piece: u32,
 }
 
 /// What a unit hands back when it ends.

@@ -15,7 +15,7 @@
 use super::actor::{ActorError, Ctx};
 use super::rop::RopItem;
 use super::subsegmenter::ScanSubsegment;
-use super::{Finished, Shared};
+use super::{Finished, PieceId, Shared};
 use crate::datapath::Real;
 use crate::raster::fragment::{span, Span};
 use crate::raster::Counts;
@@ -23,7 +23,7 @@ use crate::raster::Counts;
 /// Fragments of lembo `id` on scanline `j` inside one ROP tile.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FragmentSpan<R> {
-    pub id: u32,
+    pub id: PieceId,
     pub j: u32,
     pub span: Span<R>,
 }

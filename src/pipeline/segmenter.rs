@@ -12,7 +12,7 @@
 
 use super::actor::{ActorError, Ctx};
 use super::interval_manager::ScanInterval;
-use super::{Finished, Shared};
+use super::{Finished, PieceId, Shared};
 use crate::datapath::Real;
 use crate::error::Error;
 use crate::raster::segmenter::{segments, Segment};
@@ -21,7 +21,7 @@ use crate::raster::{Counts, DEFAULT_SEGMENT_CAP};
 /// One chord of scanline `j` of lembo `id`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ScanSegment<R> {
-    pub id: u32,
+    pub id: PieceId,
     pub j: u32,
     pub segment: Segment<R>,
 }
@@ -34,7 +34,8 @@ pub fn run<R: Real>(
     let mut counts = Counts::default();
     let mut segs = Vec::new();
     let mut next_port = 0;
-    let mut cap_error: Option<(u32, u32)> = None;
+    // The first (lembo, piece, scanline) over the cap, as the functional model meets them.
+    let mut cap_error: Option<(u32, u32, u32)> = None;
     while let Some(ScanInterval { id, j, interval }) = ctx.next_input()? {
         let l = sh.lembo(id);
         segs.clear();
@@ -49,7 +50,8 @@ pub fn run<R: Real>(
         )
         .is_err()
         {
-            cap_error = Some(cap_error.map_or((id, j), |e| e.min((id, j))));
+            let at = (id.lembo, id.piece, j);
+            cap_error = Some(cap_error.map_or(at, |e| e.min(at)));
             continue;
         }
         for &segment in &segs {
@@ -58,7 +60,7 @@ pub fn run<R: Real>(
         }
     }
     let mut done = Finished::new(ctx, counts)?;
-    done.error = cap_error.map(|(lembo, scanline)| Error::SegmentCap {
+    done.error = cap_error.map(|(lembo, _, scanline)| Error::SegmentCap {
         lembo: lembo as usize,
         scanline,
         cap: DEFAULT_SEGMENT_CAP,

@@ -8,38 +8,56 @@
 //! pipeline's lembo table, as a hardware setup unit writes a primitive's coefficients into
 //! a parameter buffer that later stages index.
 //!
-//! Cost: `setup.cycles_per_lembo` busy cycles per lembo, culled or not; the result is ready
-//! `setup.latency_cycles` later. Not modelled: the memory traffic of fetching the lembos.
+//! A lembo whose hull reaches far beyond the viewport is split into pieces
+//! ([`setup_pieces`]); each piece is a table entry of its own and goes down the pipeline as
+//! a lembo does.
+//!
+//! Cost: `setup.cycles_per_lembo` busy cycles per lembo, culled or not, and as many again
+//! per sub-patch a split examines; a further piece of a split lembo is emitted at 1 cycle
+//! (it was computed with the split). The result is ready `setup.latency_cycles` later. Not
+//! modelled: the memory traffic of fetching the lembos.
 
 use super::actor::{ActorError, Ctx};
-use super::{Finished, Shared};
+use super::{Finished, PieceId, Shared};
 use crate::datapath::Real;
-use crate::raster::setup::{setup, Cull};
+use crate::raster::setup::setup_pieces;
 use crate::raster::Counts;
 
 /// A lembo whose screen-space form is in the lembo table.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct LemboReady {
-    pub id: u32,
+    pub id: PieceId,
 }
 
 pub fn run<R: Real>(mut ctx: Ctx<(), LemboReady>, sh: &Shared<R>) -> Result<Finished, ActorError> {
     let cost = sh.arch.setup.cycles_per_lembo;
     let mut counts = Counts::default();
+    let mut pieces = Vec::new();
     for (id, (lembo, color)) in sh.scene.lembos().enumerate() {
         counts.lembos += 1;
-        match setup::<R>(id as u32, lembo, color, sh.view) {
-            Ok(l) => {
+        match setup_pieces::<R>(id as u32, lembo, color, sh.view, &mut pieces) {
+            Ok(split) => {
+                counts.add_split(split, pieces.len());
+                // Each sub-patch examined is set up as a lembo is (six points evaluated,
+                // hull tested); the lembo's own cost comes with its first emission.
+                let n = pieces.len();
                 // Each id is set once, by this unit only.
-                let _ = sh.lembos[id].set(l);
-                ctx.emit(cost, 0, LemboReady { id: id as u32 })?;
+                let _ = sh.lembos[id].set(std::mem::take(&mut pieces));
+                let mut owed = cost * (1 + split.examined as u64);
+                for piece in 0..n {
+                    let id = PieceId {
+                        lembo: id as u32,
+                        piece: piece as u32,
+                    };
+                    ctx.emit(owed.max(1), 0, LemboReady { id })?;
+                    owed = 0;
+                }
+                if n == 0 {
+                    ctx.work(owed);
+                }
             }
             Err(cull) => {
-                match cull {
-                    Cull::BehindEye => counts.lembos_culled_behind_eye += 1,
-                    Cull::Outside => counts.lembos_culled_outside += 1,
-                    Cull::Degenerate => counts.lembos_degenerate += 1,
-                }
+                counts.add_cull(cull);
                 ctx.work(cost);
             }
         }

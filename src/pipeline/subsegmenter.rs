@@ -9,7 +9,7 @@
 
 use super::actor::{ActorError, Ctx};
 use super::segmenter::ScanSegment;
-use super::{Finished, Shared};
+use super::{Finished, PieceId, Shared};
 use crate::datapath::Real;
 use crate::raster::subsegmenter::{subsegments, Subsegment};
 use crate::raster::Counts;
@@ -17,7 +17,7 @@ use crate::raster::Counts;
 /// One subsegment of scanline `j` of lembo `id`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ScanSubsegment<R> {
-    pub id: u32,
+    pub id: PieceId,
     pub j: u32,
     pub subsegment: Subsegment<R>,
 }

@@ -45,6 +45,13 @@ pub struct Counts {
     /// Lembos whose screen map has zero area everywhere (a point, a line or a curve on
     /// screen): they cover no pixel centre and are dropped after the cull test.
     pub lembos_degenerate: u64,
+    /// Lembos whose hull reaches beyond the split guard band, split by Setup into pieces
+    /// (`setup::setup_pieces`).
+    pub lembos_split: u64,
+    /// Pieces of split lembos that go down the pipeline.
+    pub lembo_pieces: u64,
+    /// Sub-patches of split lembos dropped because their hull misses the viewport.
+    pub lembo_pieces_culled: u64,
     /// (lembo, scanline) pairs handed to the interval manager.
     pub scanlines: u64,
     /// Roots of Y = y_j found on domain edges.
@@ -92,6 +99,26 @@ impl Counts {
     }
 }
 
+impl Counts {
+    /// Counts a lembo Setup dropped.
+    pub fn add_cull(&mut self, cull: setup::Cull) {
+        match cull {
+            setup::Cull::BehindEye => self.lembos_culled_behind_eye += 1,
+            setup::Cull::Outside => self.lembos_culled_outside += 1,
+            setup::Cull::Degenerate => self.lembos_degenerate += 1,
+        }
+    }
+
+    /// Counts what splitting a lembo into `pieces` pieces took (nothing for a whole lembo).
+    pub fn add_split(&mut self, split: setup::Split, pieces: usize) {
+        if split != setup::Split::default() {
+            self.lembos_split += 1;
+            self.lembo_pieces += pieces as u64;
+            self.lembo_pieces_culled += split.culled as u64;
+        }
+    }
+}
+
 impl std::ops::AddAssign for Counts {
     /// Sums the shares of parallel units.
     fn add_assign(&mut self, o: Counts) {
@@ -99,6 +126,9 @@ impl std::ops::AddAssign for Counts {
         self.lembos_culled_behind_eye += o.lembos_culled_behind_eye;
         self.lembos_culled_outside += o.lembos_culled_outside;
         self.lembos_degenerate += o.lembos_degenerate;
+        self.lembos_split += o.lembos_split;
+        self.lembo_pieces += o.lembo_pieces;
+        self.lembo_pieces_culled += o.lembo_pieces_culled;
         self.scanlines += o.scanlines;
         self.edge_roots += o.edge_roots;
         self.virtual_roots += o.virtual_roots;
@@ -131,49 +161,77 @@ pub fn render_lembos<R: Real, S: FragmentSink<R>>(
     counts: &mut Counts,
 ) -> Result<()> {
     let k = R::of(k);
-    let mut scratch = interval::IntervalScratch::default();
-    let (mut ivs, mut segs, mut subs) = (Vec::new(), Vec::new(), Vec::new());
-    let (width, height) = (view.viewport.width, view.viewport.height);
+    let mut buffers = Buffers::default();
+    let mut pieces = Vec::new();
     for (id, (lembo, color)) in scene.lembos().enumerate() {
         counts.lembos += 1;
-        let l = match setup::setup::<R>(id as u32, lembo, color, view) {
-            Ok(l) => l,
-            Err(setup::Cull::BehindEye) => {
-                counts.lembos_culled_behind_eye += 1;
+        pieces.clear();
+        match setup::setup_pieces::<R>(id as u32, lembo, color, view, &mut pieces) {
+            Ok(split) => counts.add_split(split, pieces.len()),
+            Err(cull) => {
+                counts.add_cull(cull);
                 continue;
             }
-            Err(setup::Cull::Outside) => {
-                counts.lembos_culled_outside += 1;
-                continue;
-            }
-            Err(setup::Cull::Degenerate) => {
-                counts.lembos_degenerate += 1;
-                continue;
-            }
-        };
-        let Some((j0, j1)) = minmax::scanlines(&l, height) else {
-            counts.lembos_culled_outside += 1;
-            continue;
-        };
-        for j in j0..=j1 {
-            counts.scanlines += 1;
-            ivs.clear();
-            interval::intervals(&l, j, k, &mut scratch, &mut ivs, counts);
-            for iv in &ivs {
-                segs.clear();
-                segmenter::segments(&l, j, k, iv, segment_cap, &mut segs, counts).map_err(
-                    |_| Error::SegmentCap {
-                        lembo: id,
-                        scanline: j,
-                        cap: segment_cap,
-                    },
-                )?;
-                for seg in &segs {
-                    subs.clear();
-                    subsegmenter::subsegments(&l, seg, k, &mut subs, counts);
-                    for sub in &subs {
-                        fragment::rasterize(&l, j, sub, width, sink, counts);
-                    }
+        }
+        for l in &pieces {
+            render_lembo(l, view, k, segment_cap, sink, counts, &mut buffers)?;
+        }
+    }
+    Ok(())
+}
+
+/// The reused buffers of the scan-line stages.
+struct Buffers<R> {
+    scratch: interval::IntervalScratch<R>,
+    intervals: Vec<interval::Interval<R>>,
+    segments: Vec<segmenter::Segment<R>>,
+    subsegments: Vec<subsegmenter::Subsegment<R>>,
+}
+
+impl<R: Real> Default for Buffers<R> {
+    fn default() -> Self {
+        Buffers {
+            scratch: Default::default(),
+            intervals: Vec::new(),
+            segments: Vec::new(),
+            subsegments: Vec::new(),
+        }
+    }
+}
+
+/// The scan-line stages (minmax to fragment) for one set-up lembo or piece.
+fn render_lembo<R: Real, S: FragmentSink<R>>(
+    l: &setup::ScreenLembo<R>,
+    view: &View,
+    k: R,
+    segment_cap: usize,
+    sink: &mut S,
+    counts: &mut Counts,
+    b: &mut Buffers<R>,
+) -> Result<()> {
+    let (width, height) = (view.viewport.width, view.viewport.height);
+    let Some((j0, j1)) = minmax::scanlines(l, height) else {
+        counts.lembos_culled_outside += 1;
+        return Ok(());
+    };
+    for j in j0..=j1 {
+        counts.scanlines += 1;
+        b.intervals.clear();
+        interval::intervals(l, j, k, &mut b.scratch, &mut b.intervals, counts);
+        for iv in &b.intervals {
+            b.segments.clear();
+            segmenter::segments(l, j, k, iv, segment_cap, &mut b.segments, counts).map_err(
+                |_| Error::SegmentCap {
+                    lembo: l.id as usize,
+                    scanline: j,
+                    cap: segment_cap,
+                },
+            )?;
+            for seg in &b.segments {
+                b.subsegments.clear();
+                subsegmenter::subsegments(l, seg, k, &mut b.subsegments, counts);
+                for sub in &b.subsegments {
+                    fragment::rasterize(l, j, sub, width, sink, counts);
                 }
             }
         }

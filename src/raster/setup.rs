@@ -96,6 +96,24 @@ pub struct ScreenLembo<R> {
     /// Hessian of y: (y_uu, y_uv, y_vv).
     pub hessian: (R, R, R),
     pub partition: Partition<R>,
+    /// For a piece of a lembo Setup split ([`setup_pieces`]): its corners A, B, C in the
+    /// lembo's domain, so that (u, v) on the piece is `A + u (B - A) + v (C - A)` on the
+    /// lembo. `None` for a whole lembo.
+    pub domain: Option<[[f64; 2]; 3]>,
+}
+
+impl<R: Real> ScreenLembo<R> {
+    /// The lembo's own domain point of (u, v) on this lembo or piece.
+    #[inline]
+    pub fn lembo_uv(&self, u: R, v: R) -> (R, R) {
+        match &self.domain {
+            None => (u, v),
+            Some([a, b, c]) => {
+                let at = |k: usize| R::of(a[k]) + u * R::of(b[k] - a[k]) + v * R::of(c[k] - a[k]);
+                (at(0), at(1))
+            }
+        }
+    }
 }
 
 /// Why a lembo produced no [`ScreenLembo`].
@@ -133,13 +151,58 @@ fn zero_area(sx: [f64; 6], sy: [f64; 6]) -> bool {
     j_max <= DEGENERATE_JACOBIAN * scale
 }
 
-/// Projects and prepares one lembo.
-pub fn setup<R: Real>(
-    id: u32,
-    lembo: &Lembo,
-    color: [f64; 3],
-    view: &View,
-) -> Result<ScreenLembo<R>, Cull> {
+/// How far a lembo's Bézier hull may reach beyond the viewport on each side before Setup
+/// splits it [viewport sizes, the larger side]. A lembo within this guard band is set up
+/// whole; a larger one would make the segmenter and subsegmenter walk its level curves far
+/// off screen (a lembo 10⁷ px across needs more than 65536 segments per scanline at
+/// k = 1e-4), so it is split into pieces no larger than about the guard band.
+pub const SPLIT_GUARD_VIEWPORTS: f64 = 4.0;
+
+/// At most this many halvings of the domain: a piece 2^-40 of a lembo 10¹² px across is
+/// still about a pixel. Pieces at this depth are kept whatever their size.
+pub const MAX_SPLIT_DEPTH: u32 = 40;
+
+/// At most this many pieces per lembo (kept or pending); past it, pending pieces are kept
+/// unsplit, so the work per lembo stays bounded whatever the input.
+pub const MAX_PIECES: usize = 1024;
+
+/// What splitting one lembo took (all zero for a lembo within the guard band).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Split {
+    /// Sub-patches examined: each has its six points evaluated and its hull tested.
+    pub examined: u32,
+    /// Sub-patches dropped because their Bézier hull misses the viewport or the depth range.
+    pub culled: u32,
+}
+
+/// A lembo's six reference points on screen: x, y [pixels] and depth, in f64.
+#[derive(Clone, Copy, Debug)]
+struct ScreenPoints {
+    x: [f64; 6],
+    y: [f64; 6],
+    z: [f64; 6],
+}
+
+impl ScreenPoints {
+    /// The bounding box (lo, hi) of the Bézier net of (x, y, z): the patch lies in it.
+    fn hull(&self) -> (DVec3, DVec3) {
+        let p: [DVec3; 6] = std::array::from_fn(|k| DVec3::new(self.x[k], self.y[k], self.z[k]));
+        bezier_controls(&p).iter().fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+        )
+    }
+}
+
+/// Whether a hull (lo, hi) misses the viewport or the depth range.
+fn outside(view: &View, (lo, hi): (DVec3, DVec3)) -> bool {
+    let (w, h) = (view.viewport.width as f64, view.viewport.height as f64);
+    hi.x < 0.0 || hi.y < 0.0 || lo.x > w || lo.y > h || hi.z < 0.0 || lo.z > 1.0
+}
+
+/// Projects the six points and applies the culls every lembo gets: behind the eye, outside,
+/// zero area.
+fn project(lembo: &Lembo, view: &View) -> Result<ScreenPoints, Cull> {
     let screen = lembo.points.map(|p| view.project(p));
     if screen
         .iter()
@@ -147,26 +210,202 @@ pub fn setup<R: Real>(
     {
         return Err(Cull::BehindEye);
     }
+    let points = ScreenPoints {
+        x: screen.map(|s| s.x),
+        y: screen.map(|s| s.y),
+        z: screen.map(|s| s.depth),
+    };
     // The screen-space quadratic through the six projected points lies in the convex hull of
     // its own Bézier net.
-    let net = bezier_controls(&screen.map(|s| DVec3::new(s.x, s.y, s.depth)));
-    let (lo, hi) = net.iter().fold(
-        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
-    );
-    let (w, h) = (view.viewport.width as f64, view.viewport.height as f64);
-    if hi.x < 0.0 || hi.y < 0.0 || lo.x > w || lo.y > h || hi.z < 0.0 || lo.z > 1.0 {
+    if outside(view, points.hull()) {
         return Err(Cull::Outside);
     }
-    if zero_area(screen.map(|s| s.x), screen.map(|s| s.y)) {
+    if zero_area(points.x, points.y) {
         return Err(Cull::Degenerate);
     }
+    Ok(points)
+}
 
-    let sx = screen.map(|s| R::of(s.x));
-    let sy = screen.map(|s| R::of(s.y));
+/// Projects and prepares one lembo, whole (whatever its size; see [`setup_pieces`]).
+pub fn setup<R: Real>(
+    id: u32,
+    lembo: &Lembo,
+    color: [f64; 3],
+    view: &View,
+) -> Result<ScreenLembo<R>, Cull> {
+    let points = project(lembo, view)?;
+    Ok(build(
+        id,
+        &points,
+        lembo.normal,
+        lembo.position,
+        color,
+        None,
+    ))
+}
+
+/// Projects and prepares one lembo into `out`: whole when its Bézier hull stays within
+/// [`SPLIT_GUARD_VIEWPORTS`] of the viewport (bit for bit what [`setup`] gives), otherwise
+/// split.
+///
+/// Splitting halves the domain recursively into four sub-triangles, drops those whose hull
+/// misses the viewport and keeps those within the guard band. A piece is the same screen
+/// quadratics restricted to a sub-triangle (they are evaluated at its six reference points
+/// and rebuilt with the paper's transform), so the pieces draw the lembo's own surface;
+/// points on the lembo's domain edges are evaluated from the edge's three points in
+/// canonical order, as the whole edge is, so a neighbour sharing the edge sees the same
+/// curve. Pieces keep the lembo's id (the depth-test tie breaker) and carry their corners
+/// in the lembo's domain ([`ScreenLembo::domain`]).
+pub fn setup_pieces<R: Real>(
+    id: u32,
+    lembo: &Lembo,
+    color: [f64; 3],
+    view: &View,
+    out: &mut Vec<ScreenLembo<R>>,
+) -> Result<Split, Cull> {
+    let points = project(lembo, view)?;
+    let (w, h) = (view.viewport.width as f64, view.viewport.height as f64);
+    let g = SPLIT_GUARD_VIEWPORTS * w.max(h);
+    let within =
+        |(lo, hi): (DVec3, DVec3)| lo.x >= -g && lo.y >= -g && hi.x <= w + g && hi.y <= h + g;
+    if within(points.hull()) {
+        out.push(build(
+            id,
+            &points,
+            lembo.normal,
+            lembo.position,
+            color,
+            None,
+        ));
+        return Ok(Split::default());
+    }
+    let surface = Restrict::new(&points);
+    let mut split = Split::default();
+    let mut pending = vec![([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], 0u32)];
+    let first = out.len();
+    while let Some((tri, depth)) = pending.pop() {
+        let full = out.len() - first + pending.len() >= MAX_PIECES;
+        if depth > 0 {
+            split.examined += 1;
+        }
+        let uv = reference_uv(tri);
+        let piece = surface.points(&uv);
+        let hull = piece.hull();
+        if depth > 0 && outside(view, hull) {
+            split.culled += 1;
+            continue;
+        }
+        if depth > 0 && (within(hull) || depth >= MAX_SPLIT_DEPTH || full) {
+            let restrict = |q: &Quadratic3<f64>| {
+                [0, 1, 2]
+                    .map(|c| Quadratic::from_reference_values(uv.map(|[u, v]| q[c].eval(u, v))))
+            };
+            out.push(build(
+                id,
+                &piece,
+                restrict(&lembo.normal),
+                restrict(&lembo.position),
+                color,
+                Some(tri),
+            ));
+            continue;
+        }
+        let [a, b, c] = tri;
+        let [_, _, _, ab, ca, bc] = uv;
+        // Pushed in reverse, so pieces come out in the order A, B, C, middle.
+        for child in [[bc, ca, ab], [ca, bc, c], [ab, b, bc], [a, ab, ca]] {
+            pending.push((child, depth + 1));
+        }
+    }
+    Ok(split)
+}
+
+/// The six reference points (u, v) of the domain triangle `tri`, in the paper's order:
+/// its corners A, B, C, then the middles of AB, CA and BC.
+fn reference_uv(tri: [[f64; 2]; 3]) -> [[f64; 2]; 6] {
+    let mid = |p: [f64; 2], q: [f64; 2]| [(p[0] + q[0]) * 0.5, (p[1] + q[1]) * 0.5];
+    let [a, b, c] = tri;
+    [a, b, c, mid(a, b), mid(c, a), mid(b, c)]
+}
+
+/// A lembo's screen quadratics restricted to sub-triangles of its domain.
+struct Restrict {
+    x: Quadratic<f64>,
+    y: Quadratic<f64>,
+    z: Quadratic<f64>,
+    /// Per domain edge in lembo order: (x, y, z) at canonical t = 0, 1/2, 1, and whether
+    /// canonical t runs against the lembo's edge direction.
+    edges: [([[f64; 3]; 3], bool); 3],
+}
+
+impl Restrict {
+    fn new(p: &ScreenPoints) -> Self {
+        let edges = EDGE_POINTS.map(|[s, m, e]| {
+            let reversed = (p.y[e], p.x[e]) < (p.y[s], p.x[s]);
+            let (s, e) = if reversed { (e, s) } else { (s, e) };
+            ([s, m, e].map(|k| [p.x[k], p.y[k], p.z[k]]), reversed)
+        });
+        Restrict {
+            x: Quadratic::from_reference_values(p.x),
+            y: Quadratic::from_reference_values(p.y),
+            z: Quadratic::from_reference_values(p.z),
+            edges,
+        }
+    }
+
+    /// (x, y, z) at domain point (u, v). On a domain edge the value comes from the edge's
+    /// own parabola in canonical order (exact at the edge's three points), so every lembo
+    /// that shares the edge computes the same bits there.
+    fn at(&self, [u, v]: [f64; 2]) -> [f64; 3] {
+        // Domain points are dyadic, so these tests are exact.
+        let on = if v == 0.0 {
+            Some((0, u))
+        } else if u + v == 1.0 {
+            Some((1, v))
+        } else if u == 0.0 {
+            Some((2, 1.0 - v))
+        } else {
+            None
+        };
+        match on {
+            Some((e, t)) => {
+                let (p, reversed) = &self.edges[e];
+                let t = if *reversed { 1.0 - t } else { t };
+                let w = [
+                    (1.0 - t) * (1.0 - 2.0 * t),
+                    4.0 * t * (1.0 - t),
+                    t * (2.0 * t - 1.0),
+                ];
+                [0, 1, 2].map(|c| w[0] * p[0][c] + w[1] * p[1][c] + w[2] * p[2][c])
+            }
+            None => [self.x.eval(u, v), self.y.eval(u, v), self.z.eval(u, v)],
+        }
+    }
+
+    fn points(&self, uv: &[[f64; 2]; 6]) -> ScreenPoints {
+        let p = uv.map(|q| self.at(q));
+        ScreenPoints {
+            x: p.map(|p| p[0]),
+            y: p.map(|p| p[1]),
+            z: p.map(|p| p[2]),
+        }
+    }
+}
+
+/// Builds the datapath form of a lembo (or piece) from its six screen points.
+fn build<R: Real>(
+    id: u32,
+    p: &ScreenPoints,
+    normal: Quadratic3<f64>,
+    position: Quadratic3<f64>,
+    color: [f64; 3],
+    domain: Option<[[f64; 2]; 3]>,
+) -> ScreenLembo<R> {
+    let sx = p.x.map(R::of);
+    let sy = p.y.map(R::of);
     let x = Quadratic::from_reference_values(sx);
     let y = Quadratic::from_reference_values(sy);
-    let z = Quadratic::from_reference_values(screen.map(|s| R::of(s.depth)));
+    let z = Quadratic::from_reference_values(p.z.map(R::of));
     let edges = EDGE_POINTS.map(|[s, m, e]| {
         // Canonical order: the end with the smaller (y, x) first.
         let reversed = (sy[e], sx[e]) < (sy[s], sx[s]);
@@ -178,19 +417,20 @@ pub fn setup<R: Real>(
         }
     });
     let hessian = y.hessian();
-    Ok(ScreenLembo {
+    ScreenLembo {
         id,
         x,
         partition: partition(&y),
         y,
         z,
-        normal: lembo.normal.map(|q| q.cast()),
-        position: lembo.position.map(|q| q.cast()),
+        normal: normal.map(|q| q.cast()),
+        position: position.map(|q| q.cast()),
         color: color.map(R::of),
         edges,
         vertex_y: [sy[0], sy[1], sy[2]],
         hessian,
-    })
+        domain,
+    }
 }
 
 /// Chooses the walk partition of the domain for the level curves of `y`.
@@ -555,5 +795,94 @@ pub(crate) mod tests {
         let thin = quad(0.0, 0.0, 0.0, 0.0, 0.01, 30.0);
         let l = lembo_on_screen(quad(0.0, 0.0, 0.0, 80.0, 0.0, 20.0), thin);
         assert!(setup::<f64>(0, &l, [0.8; 3], &view()).is_ok());
+    }
+
+    /// A curved lembo about 10⁶ px across whose corner region covers the test view.
+    fn huge_lembo() -> Lembo {
+        let x = quad(3e5, 0.0, 2e5, 1e6, 1e5, -3e5);
+        let y = quad(0.0, -2e5, 1e5, 3e5, 1e6, -4e5);
+        lembo_on_screen(x, y)
+    }
+
+    #[test]
+    fn setup_pieces_keeps_a_lembo_within_the_guard_band_whole_and_bit_identical() {
+        let l = lembo_on_screen(x_linear(), y_bowl());
+        let mut out = Vec::new();
+        let split = setup_pieces::<f32>(0, &l, [0.8; 3], &view(), &mut out).unwrap();
+        assert_eq!(split, Split::default());
+        assert_eq!(out.len(), 1);
+        let whole = setup::<f32>(0, &l, [0.8; 3], &view()).unwrap();
+        assert_eq!(format!("{:?}", out[0]), format!("{whole:?}"));
+        assert!(out[0].domain.is_none());
+    }
+
+    #[test]
+    fn pieces_are_the_lembo_restricted_to_their_sub_triangles() {
+        let l = huge_lembo();
+        let whole = setup::<f64>(0, &l, [0.8; 3], &view()).unwrap();
+        let mut pieces = Vec::new();
+        let split = setup_pieces::<f64>(0, &l, [0.8; 3], &view(), &mut pieces).unwrap();
+        assert!(
+            pieces.len() > 1 && split.culled > 0,
+            "{} {split:?}",
+            pieces.len()
+        );
+        let g = SPLIT_GUARD_VIEWPORTS * SIDE as f64;
+        for p in &pieces {
+            let dom = p.domain.expect("a piece knows its sub-triangle");
+            for (u, v) in [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (0.2, 0.3), (0.6, 0.1)] {
+                let (lu, lv) = p.lembo_uv(u, v);
+                assert!(lu >= -1e-15 && lv >= -1e-15 && lu + lv <= 1.0 + 1e-15);
+                let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * (1.0 + b.abs());
+                assert!(close(p.x.eval(u, v), whole.x.eval(lu, lv)), "{dom:?}");
+                assert!(close(p.y.eval(u, v), whole.y.eval(lu, lv)), "{dom:?}");
+                assert!(close(p.z.eval(u, v), whole.z.eval(lu, lv)), "{dom:?}");
+                for c in 0..3 {
+                    assert!(close(p.normal[c].eval(u, v), whole.normal[c].eval(lu, lv)));
+                    assert!(close(
+                        p.position[c].eval(u, v),
+                        whole.position[c].eval(lu, lv)
+                    ));
+                }
+                // Within the guard band (a piece's points lie in its hull).
+                let (x, y) = (p.x.eval(u, v), p.y.eval(u, v));
+                assert!(x >= -g && x <= SIDE as f64 + g && y >= -g && y <= SIDE as f64 + g);
+            }
+        }
+        // Pieces that share a domain edge share its three screen points bit for bit, in the
+        // same canonical order, so the edge roots agree and no pixel is dropped or doubled.
+        let corners = |p: &ScreenLembo<f64>| {
+            let [a, b, c] = p.domain.unwrap();
+            [(a, b), (b, c), (c, a)]
+        };
+        let mut shared = 0;
+        for (n, p) in pieces.iter().enumerate() {
+            for q in &pieces[n + 1..] {
+                for (ep, (a, b)) in corners(p).into_iter().enumerate() {
+                    for (eq, (c, d)) in corners(q).into_iter().enumerate() {
+                        if (a, b) == (d, c) || (a, b) == (c, d) {
+                            shared += 1;
+                            let (e, f) = (&p.edges[ep], &q.edges[eq]);
+                            assert_eq!(e.x.map(f64::to_bits), f.x.map(f64::to_bits));
+                            assert_eq!(e.y.map(f64::to_bits), f.y.map(f64::to_bits));
+                        }
+                    }
+                }
+            }
+        }
+        assert!(shared > 0);
+    }
+
+    #[test]
+    fn splitting_is_bounded_whatever_the_size() {
+        // 10¹⁵ px across: the depth limit and the piece budget bound the work.
+        let x = quad(3e14, 0.0, 2e14, 1e15, 1e14, -3e14);
+        let y = quad(0.0, -2e14, 1e14, 3e14, 1e15, -4e14);
+        let mut pieces = Vec::new();
+        let split =
+            setup_pieces::<f32>(0, &lembo_on_screen(x, y), [0.8; 3], &view(), &mut pieces).unwrap();
+        assert!(!pieces.is_empty());
+        assert!(pieces.len() <= MAX_PIECES + 3, "{}", pieces.len());
+        assert!(split.examined as usize <= 4 * (MAX_SPLIT_DEPTH as usize) * (MAX_PIECES + 3));
     }
 }
