@@ -130,20 +130,28 @@ pub fn intervals<R: Real>(
                                 edge: INTERIOR,
                             };
                             let (from, to) = if up { (-1, 1) } else { (1, -1) };
-                            xs.push(Crossing {
-                                p,
-                                entry: false,
-                                part: from,
-                                is_virtual: true,
-                                key: R::zero(),
-                            });
-                            xs.push(Crossing {
-                                p,
-                                entry: true,
-                                part: to,
-                                is_virtual: true,
-                                key: R::zero(),
-                            });
+                            // A tip on a domain edge is also an edge root there. Merged with
+                            // it: an exit from the domain ends the walk in `from` (no entry
+                            // into `to`, which is outside); an entry starts it in `to`.
+                            let merged = tip_on_edge(xs, uv);
+                            if merged != Some(true) {
+                                xs.push(Crossing {
+                                    p,
+                                    entry: false,
+                                    part: from,
+                                    is_virtual: true,
+                                    key: R::zero(),
+                                });
+                            }
+                            if merged != Some(false) {
+                                xs.push(Crossing {
+                                    p,
+                                    entry: true,
+                                    part: to,
+                                    is_virtual: true,
+                                    key: R::zero(),
+                                });
+                            }
                             counts.virtual_roots += 1;
                         }
                     }
@@ -243,6 +251,22 @@ pub fn intervals<R: Real>(
     }
     if pending.is_some() {
         counts.unpaired_roots += 1;
+    }
+}
+
+/// When exactly one edge root lies at the tip `uv` (within rounding: the ellipse's tip is on
+/// a domain edge), removes it and returns whether it was an entry. Rounding would otherwise
+/// put it on either side of the partition line, with a walk key one ulp from the tip's,
+/// and leave roots unpaired.
+fn tip_on_edge<R: Real>(xs: &mut Vec<Crossing<R>>, uv: V2<R>) -> Option<bool> {
+    let tol = R::epsilon() * R::of(64.0);
+    let near = |c: &Crossing<R>| {
+        !c.is_virtual && (c.p.uv[0] - uv[0]).abs() <= tol && (c.p.uv[1] - uv[1]).abs() <= tol
+    };
+    let mut found = xs.iter().enumerate().filter(|(_, c)| near(c));
+    match (found.next(), found.next()) {
+        (Some((n, _)), None) => Some(xs.remove(n).entry),
+        _ => None,
     }
 }
 
@@ -363,7 +387,7 @@ mod tests {
     use super::*;
     use crate::lembo::Quadratic;
     use crate::raster::setup::tests::{
-        quad, screen_lembo, x_linear, y_bowl, y_error, y_plane, y_saddle,
+        quad, scanline_fragments, screen_lembo, x_linear, y_bowl, y_error, y_plane, y_saddle,
     };
 
     /// The intervals of scanline `j` and the counts.
@@ -433,6 +457,33 @@ mod tests {
     fn interval_closed_loop_without_edge_roots() {
         closed_loop::<f32>();
         closed_loop::<f64>();
+    }
+
+    fn tip_on_an_edge<R: Real>() {
+        // y = 63.5 + 144 ((u - 1/3)² + (v - 1/3)²): on scanline 79 (y = 79.5) the circle of
+        // radius 1/3 around (1/3, 1/3) touches u = 0 and v = 0 and crosses u + v = 1 at
+        // (1/3, 2/3), exactly the tip on the partition line u = 1/3, and at (2/3, 1/3).
+        let y = quad(144.0, 144.0, 0.0, -96.0, -96.0, 95.5);
+        let l = screen_lembo::<R>(x_linear(), y);
+        let (ivs, c) = run(&l, 79, 0.5);
+        assert_eq!((c.unpaired_roots, c.intervals), (0, 2), "{c:?} {ivs:?}");
+        // The left half from the tip on v = 0 to the tip on the hypotenuse, the right one
+        // from the hypotenuse's other root back to the tip on v = 0.
+        let near = |p: V2<R>, q: [f64; 2]| {
+            (p[0].f64() - q[0]).abs() < 1e-4 && (p[1].f64() - q[1]).abs() < 1e-4
+        };
+        assert!(near(ivs[0].start.uv, [1.0 / 3.0, 0.0]), "{ivs:?}");
+        assert!(near(ivs[0].end.uv, [1.0 / 3.0, 2.0 / 3.0]), "{ivs:?}");
+        assert!(near(ivs[1].start.uv, [2.0 / 3.0, 1.0 / 3.0]), "{ivs:?}");
+        assert!(near(ivs[1].end.uv, [1.0 / 3.0, 0.0]), "{ivs:?}");
+        let (_, c) = scanline_fragments(&l, 79, 0.5);
+        assert!(c.fragments > 0 && c.unpaired_roots == 0, "{c:?}");
+    }
+
+    #[test]
+    fn interval_tip_on_a_domain_edge_merges_with_the_edge_root() {
+        tip_on_an_edge::<f32>();
+        tip_on_an_edge::<f64>();
     }
 
     fn saddle<R: Real>() {
