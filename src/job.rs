@@ -10,14 +10,13 @@ use crate::datapath::Datapath;
 use crate::discoid::{self, blend::BlendMode};
 use crate::error::{Error, Result};
 use crate::lembo::tessellate::Tessellation;
+use crate::output::write_paths;
 use crate::pipeline::{self, actor::SimOptions};
 use crate::raster;
 use crate::raster::triangle::TriangleSource;
 use crate::reference::oracle::ReferenceImage;
 use crate::reference::{heatmap, metrics, oracle};
-use crate::report::{
-    png_bytes, write_files, Host, Primitives, Report, SceneInfo, Settings, SCHEMA_VERSION,
-};
+use crate::report::{png_bytes, Host, Primitives, Report, SceneInfo, Settings, SCHEMA_VERSION};
 use crate::rop::FrameBuffer;
 use crate::scene::Scene;
 use std::path::{Path, PathBuf};
@@ -613,28 +612,19 @@ pub fn run_render(job: &RenderJob) -> Result<RenderOutput> {
         .out
         .clone()
         .unwrap_or_else(|| Path::new("out").join(&scene.name));
-    // The timeline is written last, beside the other outputs or where --trace-out says,
-    // with the same write-then-rename rule.
-    write_files(&dir, &files)?;
-    if let (Some(path), Some(trace)) = (&job.trace_out, run.trace) {
-        write_file_at(path, trace.into_bytes())?;
+    // The timeline, beside the other outputs or where --trace-out says, is part of the same
+    // atomic set: a trace that cannot be written leaves no image or report either.
+    let mut paths: Vec<(PathBuf, &[u8])> = files
+        .iter()
+        .map(|(name, bytes)| (dir.join(name), bytes.as_slice()))
+        .collect();
+    if let (Some(path), Some(trace)) = (&job.trace_out, &run.trace) {
+        paths.push((path.clone(), trace.as_bytes()));
     }
+    write_paths(&paths)?;
     Ok(RenderOutput {
         report,
         dir,
         files: files.iter().map(|(n, _)| n.to_string()).collect(),
     })
-}
-
-/// Writes one file at `path` with the write-then-rename rule.
-pub fn write_file_at(path: &Path, bytes: Vec<u8>) -> Result<()> {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let parent = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    write_files(parent, &[(name.as_str(), bytes)])
 }

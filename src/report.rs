@@ -1,15 +1,13 @@
-//! The run report (DESIGN §7): `report.json` for tools, `report.txt` for people, and the
-//! atomic writing of a run's output files.
+//! The run report (DESIGN §7): `report.json` for tools, `report.txt` for people. The files
+//! are written by [`crate::output`].
 
 use crate::config::ArchConfig;
 use crate::discoid::render::BlendReport;
-use crate::error::{Error, Result};
 use crate::pipeline::{CycleReport, UnitInstance};
 use crate::raster::Counts;
 use crate::reference::metrics::Accuracy;
 use serde::Serialize;
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
 
 /// Version of the `report.json` layout; bumped when a field changes meaning or moves.
 pub const SCHEMA_VERSION: u32 = 3;
@@ -249,56 +247,10 @@ impl Report {
     }
 }
 
-/// Writes every file into `dir` atomically: each is written to a hidden temporary name and
-/// renamed into place only after all were written, so a failed run leaves no partial output.
-pub fn write_files(dir: &Path, files: &[(&str, Vec<u8>)]) -> Result<()> {
-    let werr = |path: PathBuf| move |source| Error::Write { path, source };
-    std::fs::create_dir_all(dir).map_err(werr(dir.to_path_buf()))?;
-    let mut temps = Vec::new();
-    for (name, bytes) in files {
-        let tmp = dir.join(format!(".{name}.tmp"));
-        if let Err(e) = std::fs::write(&tmp, bytes) {
-            for t in &temps {
-                let _ = std::fs::remove_file(t);
-            }
-            let _ = std::fs::remove_file(&tmp);
-            return Err(werr(tmp)(e));
-        }
-        temps.push(tmp);
-    }
-    for ((name, _), tmp) in files.iter().zip(&temps) {
-        let path = dir.join(name);
-        std::fs::rename(tmp, &path).map_err(werr(path))?;
-    }
-    Ok(())
-}
-
 /// PNG bytes of an RGB image.
 pub fn png_bytes(img: &image::RgbImage) -> Vec<u8> {
     let mut out = std::io::Cursor::new(Vec::new());
     img.write_to(&mut out, image::ImageFormat::Png)
         .expect("encoding a PNG into memory cannot fail");
     out.into_inner()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn files_appear_together_and_no_temporaries_remain() {
-        let dir = tempfile::tempdir().unwrap();
-        let out = dir.path().join("run");
-        write_files(
-            &out,
-            &[("a.txt", b"one".to_vec()), ("b.txt", b"two".to_vec())],
-        )
-        .unwrap();
-        assert_eq!(std::fs::read(out.join("a.txt")).unwrap(), b"one");
-        let names: Vec<_> = std::fs::read_dir(&out)
-            .unwrap()
-            .map(|e| e.unwrap().file_name())
-            .collect();
-        assert_eq!(names.len(), 2, "{names:?}");
-    }
 }
