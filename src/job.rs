@@ -16,7 +16,10 @@ use crate::raster;
 use crate::raster::triangle::TriangleSource;
 use crate::reference::oracle::ReferenceImage;
 use crate::reference::{heatmap, metrics, oracle};
-use crate::report::{png_bytes, Host, Primitives, Report, SceneInfo, Settings, SCHEMA_VERSION};
+use crate::report::{
+    peak_rss_bytes, png_bytes, Host, Memory, Primitives, Report, SceneInfo, Settings,
+    SCHEMA_VERSION,
+};
 use crate::rop::FrameBuffer;
 use crate::scene::Scene;
 use std::path::{Path, PathBuf};
@@ -382,6 +385,13 @@ pub fn run_path(
             quad_efficiency: counts.quad_efficiency(),
         },
     };
+    let units = timed.as_ref().map(|t| t.units.clone()).unwrap_or_default();
+    let memory = Memory::new(
+        FrameBuffer::stored_bytes(scene.viewport.width, scene.viewport.height),
+        0,
+        primitives.bytes,
+        arch.map(|a| pipeline::fifo_entries(a, &units)),
+    );
     let report = Report {
         schema_version: SCHEMA_VERSION,
         scene: scene_info(scene),
@@ -394,12 +404,13 @@ pub fn run_path(
             reference.is_some(),
         ),
         primitives,
-        units: timed.as_ref().map(|t| t.units.clone()).unwrap_or_default(),
+        units,
         counts,
         cycles: timed.as_ref().map(|t| t.cycles.clone()),
         arch: arch.cloned(),
         accuracy,
         blend: None,
+        memory,
         host: host(
             wall,
             counts.fragments,
@@ -485,6 +496,7 @@ fn host(wall: f64, fragments: u64, cycles: Option<u64>, reference_wall: Option<f
         },
         simulated_cycles_per_second: cycles.map(|c| c as f64 / wall.max(1e-9)),
         reference_wall_seconds: reference_wall,
+        peak_rss_bytes: peak_rss_bytes(),
     }
 }
 
@@ -540,6 +552,13 @@ fn run_discoids(
                 c + d.lembo_texcoords.len() as u64,
             )
         });
+    let primitive_bytes = PLANAR_DISCOID_BYTES * planar + CURVED_DISCOID_BYTES * curved;
+    let memory = Memory::new(
+        FrameBuffer::stored_bytes(scene.viewport.width, scene.viewport.height),
+        blend.accumulation_buffer_bytes,
+        primitive_bytes,
+        arch.map(|a| pipeline::fifo_entries(a, &units)),
+    );
     let report = Report {
         schema_version: SCHEMA_VERSION,
         scene: scene_info(scene),
@@ -555,7 +574,7 @@ fn run_discoids(
             kind: "discoid".into(),
             count: planar + curved,
             vertices: 4 * planar + 6 * curved,
-            bytes: PLANAR_DISCOID_BYTES * planar + CURVED_DISCOID_BYTES * curved,
+            bytes: primitive_bytes,
             quad_efficiency: counts.quad_efficiency(),
         },
         units,
@@ -564,6 +583,7 @@ fn run_discoids(
         arch: arch.cloned(),
         accuracy: None,
         blend: Some(blend),
+        memory,
         host: host(wall, counts.fragments, cycles.map(|c| c.total), None),
     };
     Ok(PathRun {
@@ -603,7 +623,9 @@ pub fn run_render(job: &RenderJob) -> Result<RenderOutput> {
         files.push(("reference.png", png_bytes(&shown)));
         files.push(("error.png", png_bytes(error_map)));
     }
-    let report = run.report;
+    let mut report = run.report;
+    // The images are encoded: what remains to allocate is the report and the writes.
+    report.host.peak_rss_bytes = peak_rss_bytes();
     let json = serde_json::to_vec_pretty(&report).expect("the report serialises");
     files.push(("report.json", json));
     files.push(("report.txt", report.to_text().into_bytes()));

@@ -9,8 +9,11 @@ use crate::reference::metrics::Accuracy;
 use serde::Serialize;
 use std::fmt::Write as _;
 
+/// Bytes in a mebibyte, for report.txt.
+const MIB: f64 = (1u64 << 20) as f64;
+
 /// Version of the `report.json` layout; bumped when a field changes meaning or moves.
-pub const SCHEMA_VERSION: u32 = 3;
+pub const SCHEMA_VERSION: u32 = 4;
 
 /// Everything a run reports.
 #[derive(Clone, Debug, Serialize)]
@@ -31,6 +34,8 @@ pub struct Report {
     pub accuracy: Option<Accuracy>,
     /// The discoid blend units' counters and error; null for scenes without discoids.
     pub blend: Option<BlendReport>,
+    /// The storage the simulated unit instantiates for this run.
+    pub memory: Memory,
     pub host: Host,
 }
 
@@ -85,6 +90,48 @@ pub struct Primitives {
     pub quad_efficiency: Option<f64>,
 }
 
+/// The storage the simulated unit instantiates for this run (issue 7): each path counts
+/// only the buffers it uses, so a lembo-only scene has no accumulation buffer and no
+/// triangle-path FIFOs. Deterministic; the simulator's own memory is `host.peak_rss_bytes`.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Memory {
+    /// The frame buffer as stored: RGB8 colour, f32 depth and u32 winner id per pixel,
+    /// width × height × 11 (the normal buffer kept for the accuracy metrics is the
+    /// simulator's, not the unit's) [bytes].
+    pub framebuffer_bytes: u64,
+    /// The discoid accumulation target, `blend.accumulation_buffer_bytes`: width × height ×
+    /// half the mode's `bytes_per_fragment` (which counts a read and a write), so 4, 8 or 16
+    /// per pixel for rgba8, f16, f32; 0 for scenes without discoids [bytes].
+    pub accumulation_bytes: u64,
+    /// Primitive (parameter) storage, `primitives.bytes` [bytes].
+    pub primitive_bytes: u64,
+    /// FIFO capacity of the instantiated links: over every link (one per producer and
+    /// consumer pair at each boundary), its `fifo_depth`. Item sizes are not modelled, so
+    /// this is entries, not bytes; null in functional mode [entries].
+    pub fifo_entries: Option<u64>,
+    /// framebuffer_bytes + accumulation_bytes + primitive_bytes (the FIFOs are in entries
+    /// and not included) [bytes].
+    pub total_bytes: u64,
+}
+
+impl Memory {
+    /// The memory section from its parts; the total is derived.
+    pub fn new(
+        framebuffer_bytes: u64,
+        accumulation_bytes: u64,
+        primitive_bytes: u64,
+        fifo_entries: Option<u64>,
+    ) -> Memory {
+        Memory {
+            framebuffer_bytes,
+            accumulation_bytes,
+            primitive_bytes,
+            fifo_entries,
+            total_bytes: framebuffer_bytes + accumulation_bytes + primitive_bytes,
+        }
+    }
+}
+
 /// Measurements of the simulator itself on this host (not deterministic).
 #[derive(Clone, Debug, Serialize)]
 pub struct Host {
@@ -96,6 +143,25 @@ pub struct Host {
     pub simulated_cycles_per_second: Option<f64>,
     /// Wall time of the reference and metrics [s]; null without `--reference`.
     pub reference_wall_seconds: Option<f64>,
+    /// Peak resident set of the simulator process so far (Linux `VmHWM`; null elsewhere).
+    /// For `render`, read after the images are encoded, just before the report is written;
+    /// a sweep's runs share one process, so theirs is the process's peak [bytes].
+    pub peak_rss_bytes: Option<u64>,
+}
+
+/// The peak resident set of this process (`VmHWM` of /proc/self/status) [bytes]; None
+/// where there is no such file.
+pub fn peak_rss_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let kib = status
+        .lines()
+        .find_map(|l| l.strip_prefix("VmHWM:"))?
+        .trim()
+        .strip_suffix("kB")?
+        .trim()
+        .parse::<u64>()
+        .ok()?;
+    Some(kib * 1024)
 }
 
 impl Report {
@@ -219,6 +285,18 @@ impl Report {
                 }
             }
         }
+        let m = &self.memory;
+        let _ = writeln!(
+            t,
+            "\nmemory    {} bytes: frame buffer {}, accumulation {}, primitives {}; FIFOs {}",
+            m.total_bytes,
+            m.framebuffer_bytes,
+            m.accumulation_bytes,
+            m.primitive_bytes,
+            m.fifo_entries
+                .map(|e| format!("{e} entries"))
+                .unwrap_or_else(|| "n/a (functional mode)".into())
+        );
         match &self.accuracy {
             Some(a) => {
                 let _ = writeln!(t, "\naccuracy against the exact reference");
@@ -243,6 +321,13 @@ impl Report {
                 .map(|r| format!(", reference {r:.3} s"))
                 .unwrap_or_default()
         );
+        if let Some(rss) = h.peak_rss_bytes {
+            let _ = writeln!(
+                t,
+                "          peak resident memory {:.1} MiB",
+                rss as f64 / MIB
+            );
+        }
         t
     }
 }
@@ -253,4 +338,27 @@ pub fn png_bytes(img: &image::RgbImage) -> Vec<u8> {
     img.write_to(&mut out, image::ImageFormat::Png)
         .expect("encoding a PNG into memory cannot fail");
     out.into_inner()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn peak_rss_is_read_where_proc_exists() {
+        let rss = peak_rss_bytes();
+        if std::path::Path::new("/proc/self/status").exists() {
+            // At least the test binary's own pages, and not absurdly many.
+            let rss = rss.expect("VmHWM is in /proc/self/status");
+            assert!((1 << 20..1 << 40).contains(&rss), "{rss}");
+        } else {
+            assert_eq!(rss, None);
+        }
+    }
+
+    #[test]
+    fn memory_total_is_the_byte_figures_without_the_fifo_entries() {
+        let m = Memory::new(11, 4, 144, Some(1000));
+        assert_eq!(m.total_bytes, 159);
+    }
 }
