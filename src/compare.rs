@@ -25,11 +25,12 @@ use crate::job::{
     PrimitivePath, RenderJob, MAX_TRIANGLES,
 };
 use crate::lembo::tessellate::Tessellation;
+use crate::output::write_files;
 use crate::raster;
 use crate::reference::metrics::{self, Accuracy};
 use crate::reference::montage::{montage, Panel};
 use crate::reference::oracle::ReferenceImage;
-use crate::report::{png_bytes, write_files, Report};
+use crate::report::{png_bytes, Report};
 use crate::scene::Scene;
 use serde::Serialize;
 use std::fmt::Write as _;

@@ -10,13 +10,15 @@ use crate::datapath::Datapath;
 use crate::discoid::{self, blend::BlendMode};
 use crate::error::{Error, Result};
 use crate::lembo::tessellate::Tessellation;
+use crate::output::write_paths;
 use crate::pipeline::{self, actor::SimOptions};
 use crate::raster;
 use crate::raster::triangle::TriangleSource;
 use crate::reference::oracle::ReferenceImage;
 use crate::reference::{heatmap, metrics, oracle};
 use crate::report::{
-    png_bytes, write_files, Host, Primitives, Report, SceneInfo, Settings, SCHEMA_VERSION,
+    peak_rss_bytes, png_bytes, Host, Memory, Primitives, Report, SceneInfo, Settings,
+    SCHEMA_VERSION,
 };
 use crate::rop::FrameBuffer;
 use crate::scene::Scene;
@@ -383,6 +385,13 @@ pub fn run_path(
             quad_efficiency: counts.quad_efficiency(),
         },
     };
+    let units = timed.as_ref().map(|t| t.units.clone()).unwrap_or_default();
+    let memory = Memory::new(
+        FrameBuffer::stored_bytes(scene.viewport.width, scene.viewport.height),
+        0,
+        primitives.bytes,
+        arch.map(|a| pipeline::fifo_entries(a, &units)),
+    );
     let report = Report {
         schema_version: SCHEMA_VERSION,
         scene: scene_info(scene),
@@ -395,12 +404,13 @@ pub fn run_path(
             reference.is_some(),
         ),
         primitives,
-        units: timed.as_ref().map(|t| t.units.clone()).unwrap_or_default(),
+        units,
         counts,
         cycles: timed.as_ref().map(|t| t.cycles.clone()),
         arch: arch.cloned(),
         accuracy,
         blend: None,
+        memory,
         host: host(
             wall,
             counts.fragments,
@@ -486,6 +496,7 @@ fn host(wall: f64, fragments: u64, cycles: Option<u64>, reference_wall: Option<f
         },
         simulated_cycles_per_second: cycles.map(|c| c as f64 / wall.max(1e-9)),
         reference_wall_seconds: reference_wall,
+        peak_rss_bytes: peak_rss_bytes(),
     }
 }
 
@@ -541,6 +552,13 @@ fn run_discoids(
                 c + d.lembo_texcoords.len() as u64,
             )
         });
+    let primitive_bytes = PLANAR_DISCOID_BYTES * planar + CURVED_DISCOID_BYTES * curved;
+    let memory = Memory::new(
+        FrameBuffer::stored_bytes(scene.viewport.width, scene.viewport.height),
+        blend.accumulation_buffer_bytes,
+        primitive_bytes,
+        arch.map(|a| pipeline::fifo_entries(a, &units)),
+    );
     let report = Report {
         schema_version: SCHEMA_VERSION,
         scene: scene_info(scene),
@@ -556,7 +574,7 @@ fn run_discoids(
             kind: "discoid".into(),
             count: planar + curved,
             vertices: 4 * planar + 6 * curved,
-            bytes: PLANAR_DISCOID_BYTES * planar + CURVED_DISCOID_BYTES * curved,
+            bytes: primitive_bytes,
             quad_efficiency: counts.quad_efficiency(),
         },
         units,
@@ -565,6 +583,7 @@ fn run_discoids(
         arch: arch.cloned(),
         accuracy: None,
         blend: Some(blend),
+        memory,
         host: host(wall, counts.fragments, cycles.map(|c| c.total), None),
     };
     Ok(PathRun {
@@ -604,7 +623,9 @@ pub fn run_render(job: &RenderJob) -> Result<RenderOutput> {
         files.push(("reference.png", png_bytes(&shown)));
         files.push(("error.png", png_bytes(error_map)));
     }
-    let report = run.report;
+    let mut report = run.report;
+    // The images are encoded: what remains to allocate is the report and the writes.
+    report.host.peak_rss_bytes = peak_rss_bytes();
     let json = serde_json::to_vec_pretty(&report).expect("the report serialises");
     files.push(("report.json", json));
     files.push(("report.txt", report.to_text().into_bytes()));
@@ -613,28 +634,19 @@ pub fn run_render(job: &RenderJob) -> Result<RenderOutput> {
         .out
         .clone()
         .unwrap_or_else(|| Path::new("out").join(&scene.name));
-    // The timeline is written last, beside the other outputs or where --trace-out says,
-    // with the same write-then-rename rule.
-    write_files(&dir, &files)?;
-    if let (Some(path), Some(trace)) = (&job.trace_out, run.trace) {
-        write_file_at(path, trace.into_bytes())?;
+    // The timeline, beside the other outputs or where --trace-out says, is part of the same
+    // atomic set: a trace that cannot be written leaves no image or report either.
+    let mut paths: Vec<(PathBuf, &[u8])> = files
+        .iter()
+        .map(|(name, bytes)| (dir.join(name), bytes.as_slice()))
+        .collect();
+    if let (Some(path), Some(trace)) = (&job.trace_out, &run.trace) {
+        paths.push((path.clone(), trace.as_bytes()));
     }
+    write_paths(&paths)?;
     Ok(RenderOutput {
         report,
         dir,
         files: files.iter().map(|(n, _)| n.to_string()).collect(),
     })
-}
-
-/// Writes one file at `path` with the write-then-rename rule.
-pub fn write_file_at(path: &Path, bytes: Vec<u8>) -> Result<()> {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let parent = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    write_files(parent, &[(name.as_str(), bytes)])
 }

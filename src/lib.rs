@@ -25,6 +25,7 @@
 //! - [`reference`]: the exact f64 ray-patch reference and the accuracy metrics.
 //! - [`scene`], [`camera`]: the JSON trace format and OpenGL-convention cameras.
 //! - [`job`], [`report`]: the `render` command's work and its `report.json` / `report.txt`;
+//!   [`output`]: every output file written whole or not at all, also under Ctrl-C;
 //!   [`compare`]: lembos against triangles against the exact surface; [`sweep`]: many
 //!   runs of a spec (`sim/sweeps/`) into `results.jsonl` and `results.csv`, resumable and
 //!   shardable.
@@ -42,6 +43,7 @@ pub mod discoid;
 pub mod error;
 pub mod job;
 pub mod lembo;
+pub mod output;
 pub mod pipeline;
 pub mod plot;
 pub mod raster;

@@ -271,6 +271,10 @@ fn default_render() -> RenderArgs {
 }
 
 fn main() -> ExitCode {
+    // First, so that a Ctrl-C at any later point removes the temporary output files.
+    if let Err(e) = lembo_sim::output::remove_temporaries_on_signals() {
+        eprintln!("lembo-sim: warning: cannot handle SIGINT/SIGTERM ({e}); an interrupted run may leave hidden .*.tmp files, removed by the next run into the same directory");
+    }
     let cli = Cli::parse();
     match cli.command.unwrap_or(Command::Render(default_render())) {
         Command::Render(args) => render(args),

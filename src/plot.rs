@@ -32,15 +32,27 @@ use std::path::Path;
 
 /// Writes the sweep's plots into `dir` and returns the file names written (only the plots the
 /// records support), scene by scene in name order. All files appear together or none
-/// ([`crate::report::write_files`]); with nothing to plot, nothing is written and `dir` is not
+/// ([`crate::output::write_files`]); with nothing to plot, nothing is written and `dir` is not
 /// created. Records that are not sweep points (no `report.settings.path`) are skipped.
 pub fn write_plots(dir: &Path, records: &[Value]) -> Result<Vec<String>> {
+    let files = plot_files(records)?;
+    if !files.is_empty() {
+        let named: Vec<(&str, Vec<u8>)> = files
+            .iter()
+            .map(|(name, svg)| (name.as_str(), svg.clone()))
+            .collect();
+        crate::output::write_files(dir, &named)?;
+    }
+    Ok(files.into_iter().map(|(name, _)| name).collect())
+}
+
+/// The plots [`write_plots`] writes, as (file name, SVG bytes), without writing them.
+pub fn plot_files(records: &[Value]) -> Result<Vec<(String, Vec<u8>)>> {
     let mut scenes: BTreeMap<String, Vec<Point>> = BTreeMap::new();
     for p in records.iter().filter_map(Point::from_record) {
         scenes.entry(p.scene.clone()).or_default().push(p);
     }
-    let mut names: Vec<String> = Vec::new();
-    let mut svgs: Vec<Vec<u8>> = Vec::new();
+    let mut files = Vec::new();
     let mut stems = BTreeSet::new();
     for (scene, points) in &scenes {
         let stem = unique_stem(scene, &mut stems);
@@ -54,19 +66,12 @@ pub fn write_plots(dir: &Path, records: &[Value]) -> Result<Vec<String>> {
             let name = format!("{kind}_{stem}.svg");
             match plot {
                 None => {}
-                Some(Ok(svg)) => {
-                    names.push(name);
-                    svgs.push(svg.into_bytes());
-                }
+                Some(Ok(svg)) => files.push((name, svg.into_bytes())),
                 Some(Err(e)) => return Err(Error::Internal(format!("drawing {name}: {e}"))),
             }
         }
     }
-    if !names.is_empty() {
-        let files: Vec<(&str, Vec<u8>)> = names.iter().map(String::as_str).zip(svgs).collect();
-        crate::report::write_files(dir, &files)?;
-    }
-    Ok(names)
+    Ok(files)
 }
 
 /// Indices of the points that no other point dominates, minimising both coordinates (q

@@ -1,18 +1,19 @@
-//! The run report (DESIGN §7): `report.json` for tools, `report.txt` for people, and the
-//! atomic writing of a run's output files.
+//! The run report (DESIGN §7): `report.json` for tools, `report.txt` for people. The files
+//! are written by [`crate::output`].
 
 use crate::config::ArchConfig;
 use crate::discoid::render::BlendReport;
-use crate::error::{Error, Result};
 use crate::pipeline::{CycleReport, UnitInstance};
 use crate::raster::Counts;
 use crate::reference::metrics::Accuracy;
 use serde::Serialize;
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+
+/// Bytes in a mebibyte, for report.txt.
+const MIB: f64 = (1u64 << 20) as f64;
 
 /// Version of the `report.json` layout; bumped when a field changes meaning or moves.
-pub const SCHEMA_VERSION: u32 = 3;
+pub const SCHEMA_VERSION: u32 = 4;
 
 /// Everything a run reports.
 #[derive(Clone, Debug, Serialize)]
@@ -33,6 +34,8 @@ pub struct Report {
     pub accuracy: Option<Accuracy>,
     /// The discoid blend units' counters and error; null for scenes without discoids.
     pub blend: Option<BlendReport>,
+    /// The storage the simulated unit instantiates for this run.
+    pub memory: Memory,
     pub host: Host,
 }
 
@@ -87,6 +90,48 @@ pub struct Primitives {
     pub quad_efficiency: Option<f64>,
 }
 
+/// The storage the simulated unit instantiates for this run (issue 7): each path counts
+/// only the buffers it uses, so a lembo-only scene has no accumulation buffer and no
+/// triangle-path FIFOs. Deterministic; the simulator's own memory is `host.peak_rss_bytes`.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Memory {
+    /// The frame buffer as stored: RGB8 colour, f32 depth and u32 winner id per pixel,
+    /// width × height × 11 (the normal buffer kept for the accuracy metrics is the
+    /// simulator's, not the unit's) [bytes].
+    pub framebuffer_bytes: u64,
+    /// The discoid accumulation target, `blend.accumulation_buffer_bytes`: width × height ×
+    /// half the mode's `bytes_per_fragment` (which counts a read and a write), so 4, 8 or 16
+    /// per pixel for rgba8, f16, f32; 0 for scenes without discoids [bytes].
+    pub accumulation_bytes: u64,
+    /// Primitive (parameter) storage, `primitives.bytes` [bytes].
+    pub primitive_bytes: u64,
+    /// FIFO capacity of the instantiated links: over every link (one per producer and
+    /// consumer pair at each boundary), its `fifo_depth`. Item sizes are not modelled, so
+    /// this is entries, not bytes; null in functional mode [entries].
+    pub fifo_entries: Option<u64>,
+    /// framebuffer_bytes + accumulation_bytes + primitive_bytes (the FIFOs are in entries
+    /// and not included) [bytes].
+    pub total_bytes: u64,
+}
+
+impl Memory {
+    /// The memory section from its parts; the total is derived.
+    pub fn new(
+        framebuffer_bytes: u64,
+        accumulation_bytes: u64,
+        primitive_bytes: u64,
+        fifo_entries: Option<u64>,
+    ) -> Memory {
+        Memory {
+            framebuffer_bytes,
+            accumulation_bytes,
+            primitive_bytes,
+            fifo_entries,
+            total_bytes: framebuffer_bytes + accumulation_bytes + primitive_bytes,
+        }
+    }
+}
+
 /// Measurements of the simulator itself on this host (not deterministic).
 #[derive(Clone, Debug, Serialize)]
 pub struct Host {
@@ -98,6 +143,25 @@ pub struct Host {
     pub simulated_cycles_per_second: Option<f64>,
     /// Wall time of the reference and metrics [s]; null without `--reference`.
     pub reference_wall_seconds: Option<f64>,
+    /// Peak resident set of the simulator process so far (Linux `VmHWM`; null elsewhere).
+    /// For `render`, read after the images are encoded, just before the report is written;
+    /// a sweep's runs share one process, so theirs is the process's peak [bytes].
+    pub peak_rss_bytes: Option<u64>,
+}
+
+/// The peak resident set of this process (`VmHWM` of /proc/self/status) [bytes]; None
+/// where there is no such file.
+pub fn peak_rss_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let kib = status
+        .lines()
+        .find_map(|l| l.strip_prefix("VmHWM:"))?
+        .trim()
+        .strip_suffix("kB")?
+        .trim()
+        .parse::<u64>()
+        .ok()?;
+    Some(kib * 1024)
 }
 
 impl Report {
@@ -221,6 +285,18 @@ impl Report {
                 }
             }
         }
+        let m = &self.memory;
+        let _ = writeln!(
+            t,
+            "\nmemory    {} bytes: frame buffer {}, accumulation {}, primitives {}; FIFOs {}",
+            m.total_bytes,
+            m.framebuffer_bytes,
+            m.accumulation_bytes,
+            m.primitive_bytes,
+            m.fifo_entries
+                .map(|e| format!("{e} entries"))
+                .unwrap_or_else(|| "n/a (functional mode)".into())
+        );
         match &self.accuracy {
             Some(a) => {
                 let _ = writeln!(t, "\naccuracy against the exact reference");
@@ -245,32 +321,15 @@ impl Report {
                 .map(|r| format!(", reference {r:.3} s"))
                 .unwrap_or_default()
         );
+        if let Some(rss) = h.peak_rss_bytes {
+            let _ = writeln!(
+                t,
+                "          peak resident memory {:.1} MiB",
+                rss as f64 / MIB
+            );
+        }
         t
     }
-}
-
-/// Writes every file into `dir` atomically: each is written to a hidden temporary name and
-/// renamed into place only after all were written, so a failed run leaves no partial output.
-pub fn write_files(dir: &Path, files: &[(&str, Vec<u8>)]) -> Result<()> {
-    let werr = |path: PathBuf| move |source| Error::Write { path, source };
-    std::fs::create_dir_all(dir).map_err(werr(dir.to_path_buf()))?;
-    let mut temps = Vec::new();
-    for (name, bytes) in files {
-        let tmp = dir.join(format!(".{name}.tmp"));
-        if let Err(e) = std::fs::write(&tmp, bytes) {
-            for t in &temps {
-                let _ = std::fs::remove_file(t);
-            }
-            let _ = std::fs::remove_file(&tmp);
-            return Err(werr(tmp)(e));
-        }
-        temps.push(tmp);
-    }
-    for ((name, _), tmp) in files.iter().zip(&temps) {
-        let path = dir.join(name);
-        std::fs::rename(tmp, &path).map_err(werr(path))?;
-    }
-    Ok(())
 }
 
 /// PNG bytes of an RGB image.
@@ -286,19 +345,20 @@ mod tests {
     use super::*;
 
     #[test]
-    fn files_appear_together_and_no_temporaries_remain() {
-        let dir = tempfile::tempdir().unwrap();
-        let out = dir.path().join("run");
-        write_files(
-            &out,
-            &[("a.txt", b"one".to_vec()), ("b.txt", b"two".to_vec())],
-        )
-        .unwrap();
-        assert_eq!(std::fs::read(out.join("a.txt")).unwrap(), b"one");
-        let names: Vec<_> = std::fs::read_dir(&out)
-            .unwrap()
-            .map(|e| e.unwrap().file_name())
-            .collect();
-        assert_eq!(names.len(), 2, "{names:?}");
+    fn peak_rss_is_read_where_proc_exists() {
+        let rss = peak_rss_bytes();
+        if std::path::Path::new("/proc/self/status").exists() {
+            // At least the test binary's own pages, and not absurdly many.
+            let rss = rss.expect("VmHWM is in /proc/self/status");
+            assert!((1 << 20..1 << 40).contains(&rss), "{rss}");
+        } else {
+            assert_eq!(rss, None);
+        }
+    }
+
+    #[test]
+    fn memory_total_is_the_byte_figures_without_the_fifo_entries() {
+        let m = Memory::new(11, 4, 144, Some(1000));
+        assert_eq!(m.total_bytes, 159);
     }
 }

@@ -44,9 +44,10 @@ use crate::job::{
     check_tess_range, check_triangle_budget, render_reference, run_path, Mode, PrimitivePath,
     RenderJob, COMMAND_LINE, K_RANGE,
 };
+use crate::output::write_files;
 use crate::pipeline::UnitKind;
 use crate::reference::oracle::ReferenceImage;
-use crate::report::{write_files, Report};
+use crate::report::Report;
 use crate::scene::{parse_strict, Scene};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde::de::{self, MapAccess, Visitor};
@@ -1512,8 +1513,8 @@ fn check_record(
     Err(Error::invalid(file, format!("line {}", n + 1), key, reason))
 }
 
-/// Writes the finished directory: results.jsonl in index order, results.csv, spec.json,
-/// then the plots.
+/// Writes the finished directory as one atomic set: results.jsonl in index order,
+/// results.csv, spec.json and the plots.
 fn write_final(
     dir: &Path,
     spec_text: &[u8],
@@ -1523,20 +1524,17 @@ fn write_final(
         .values()
         .map(|l| serde_json::from_str(l).expect("every line was parsed or written as JSON"))
         .collect();
-    write_files(
-        dir,
-        &[
-            (RESULTS_JSONL, joined(lines)),
-            (RESULTS_CSV, csv_bytes(&records)?),
-            (SPEC_JSON, spec_text.to_vec()),
-        ],
-    )?;
-    let mut files: Vec<String> = [RESULTS_JSONL, RESULTS_CSV, SPEC_JSON]
-        .iter()
-        .map(|s| s.to_string())
-        .collect();
-    files.extend(crate::plot::write_plots(dir, &records)?);
-    Ok(files)
+    // The plots are drawn first so that the records, the table and the plots are one
+    // atomic set.
+    let plots = crate::plot::plot_files(&records)?;
+    let mut files: Vec<(&str, Vec<u8>)> = vec![
+        (RESULTS_JSONL, joined(lines)),
+        (RESULTS_CSV, csv_bytes(&records)?),
+        (SPEC_JSON, spec_text.to_vec()),
+    ];
+    files.extend(plots.iter().map(|(name, svg)| (name.as_str(), svg.clone())));
+    write_files(dir, &files)?;
+    Ok(files.iter().map(|(name, _)| name.to_string()).collect())
 }
 
 // ---- results.csv ---------------------------------------------------------------------

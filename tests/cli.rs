@@ -85,6 +85,7 @@ fn bare_command_renders_the_default_scene_into_out_default() {
         "counts",
         "cycles",
         "accuracy",
+        "memory",
         "host",
     ] {
         assert!(report.get(key).is_some(), "report.json lacks {key}");

@@ -287,6 +287,39 @@ pub fn triangle_units(arch: &ArchConfig) -> Vec<UnitInstance> {
     units
 }
 
+/// The FIFO entries of every link `units` instantiate: each boundary's crossbar has one
+/// link per (producer, consumer) pair, each `fifo_depth` entries deep; a boundary between
+/// kinds absent from `units` has no links. Item sizes are not modelled, so this counts
+/// entries, not bytes [entries].
+pub fn fifo_entries(arch: &ArchConfig, units: &[UnitInstance]) -> u64 {
+    use UnitKind::*;
+    let l = &arch.links;
+    let boundaries = [
+        (&l.setup_to_minmax, Setup, MinMax),
+        (&l.minmax_to_interval_manager, MinMax, IntervalManager),
+        (&l.interval_manager_to_segmenter, IntervalManager, Segmenter),
+        (&l.segmenter_to_subsegmenter, Segmenter, Subsegmenter),
+        (
+            &l.subsegmenter_to_rasterizer,
+            Subsegmenter,
+            FragmentRasterizer,
+        ),
+        (&l.rasterizer_to_rop, FragmentRasterizer, Rop),
+        (&l.rop_to_framebuffer, Rop, FrameBuffer),
+        (
+            &l.triangle_setup_to_rasterizer,
+            TriangleSetup,
+            TriangleRasterizer,
+        ),
+        (&l.triangle_rasterizer_to_rop, TriangleRasterizer, Rop),
+    ];
+    let count = |kind: UnitKind| units.iter().filter(|u| u.kind == kind).count() as u64;
+    boundaries
+        .iter()
+        .map(|(link, from, to)| count(*from) * count(*to) * link.fifo_depth as u64)
+        .sum()
+}
+
 fn spec(c: &LinkConfig) -> LinkSpec {
     LinkSpec {
         fifo_depth: c.fifo_depth,

@@ -32,6 +32,17 @@ pub struct FrameBuffer {
 }
 
 impl FrameBuffer {
+    /// Bytes one pixel takes as stored: RGB8 colour, f32 depth and u32 winner id (the
+    /// normal buffer is the accuracy metrics', not the unit's, and is not counted) [bytes].
+    pub const BYTES_PER_PIXEL: u64 = (std::mem::size_of::<[u8; 3]>()
+        + std::mem::size_of::<f32>()
+        + std::mem::size_of::<u32>()) as u64;
+
+    /// Bytes of a `width` x `height` frame buffer as stored (see [`Self::BYTES_PER_PIXEL`]).
+    pub fn stored_bytes(width: u32, height: u32) -> u64 {
+        width as u64 * height as u64 * Self::BYTES_PER_PIXEL
+    }
+
     pub fn new(width: u32, height: u32, background: [u8; 3], keep_normals: bool) -> Self {
         let n = width as usize * height as usize;
         FrameBuffer {
@@ -99,6 +110,12 @@ mod tests {
         }
         assert_eq!(a.color, b.color);
         assert_eq!(a.primitive[0], 3);
+    }
+
+    #[test]
+    fn stored_bytes_count_colour_depth_and_winner_per_pixel() {
+        assert_eq!(FrameBuffer::BYTES_PER_PIXEL, 3 + 4 + 4);
+        assert_eq!(FrameBuffer::stored_bytes(640, 480), 640 * 480 * 11);
     }
 
     #[test]
