@@ -197,15 +197,13 @@ fn more_stages(c: &mut Criterion) {
     let view = View::new(&s.camera, s.viewport);
     let t = Tessellation::new(&s, 4);
     let mut tris = Vec::new();
-    let mut buf = Vec::new();
+    let (mut buf, mut pieces) = (Vec::new(), Vec::new());
     for c in 0..triangle::TriangleSource::chunks(&t) {
         triangle::TriangleSource::chunk(&t, c, &mut buf);
         for (k, tr) in buf.iter().enumerate() {
             let id = triangle::TriangleSource::id(&t, c, k);
-            if let Ok(st) = triangle::setup::<f32>(id, &tr.positions, &tr.normals, tr.color, &view)
-            {
-                tris.push(st);
-            }
+            triangle::setup::<f32>(id, &tr.positions, &tr.normals, tr.color, &view, &mut pieces);
+            tris.append(&mut pieces);
         }
     }
     g.throughput(Throughput::Elements(tris.len() as u64));

@@ -209,6 +209,15 @@ pub struct TriangleSetupConfig {
     /// Initiation interval per triangle \[cycles\]. Default 1: DESIGN §5's "setup 1 triangle
     /// per cycle", the rate of GPUs of the papers' era and since.
     pub cycles_per_triangle: u64,
+    /// Further busy cycles per piece of a triangle clipped to the guard band \[cycles\]: a
+    /// triangle with a vertex beyond the 16.8 range (±32767 pixels) is clipped against the
+    /// four guard-band planes and its polygon fanned into 1 to 5 triangles, each set up (and
+    /// culled or emitted) as a triangle of its own, so it costs `cycles_per_triangle` plus
+    /// this per fan triangle. Default 1: each piece takes the snap and edge-function stage
+    /// for one cycle, as a triangle does; meanwhile the polygon's new vertices (at most
+    /// fan + 2; a plane distance, a divide and a blend each, then the projection) fit in
+    /// the three vertex slots per cycle of the transform stage, which the pieces leave idle.
+    pub cycles_per_clipped_piece: u64,
 }
 
 /// TriangleRasterizer (the triangle path, DESIGN §5): tests 2x2 pixel quads against the
@@ -571,6 +580,7 @@ impl Default for TriangleSetupConfig {
         TriangleSetupConfig {
             latency_cycles: 20,
             cycles_per_triangle: 1,
+            cycles_per_clipped_piece: 1,
         }
     }
 }
@@ -730,6 +740,10 @@ impl ArchConfig {
         let ts = &self.triangle_setup;
         check.cycles("triangle_setup.latency_cycles", ts.latency_cycles)?;
         check.cycles("triangle_setup.cycles_per_triangle", ts.cycles_per_triangle)?;
+        check.cycles(
+            "triangle_setup.cycles_per_clipped_piece",
+            ts.cycles_per_clipped_piece,
+        )?;
 
         let tr = &self.triangle_rasterizer;
         check.count("triangle_rasterizer.count", tr.count)?;
@@ -1079,6 +1093,11 @@ mod tests {
             r#"{"rasterizer": {"fragments_per_cycle": 65}}"#,
             "rasterizer.fragments_per_cycle",
             "65",
+        );
+        assert_invalid(
+            r#"{"triangle_setup": {"cycles_per_clipped_piece": 0}}"#,
+            "triangle_setup.cycles_per_clipped_piece",
+            "0",
         );
         assert_invalid(r#"{"rop": {"tile_px": 0}}"#, "rop.tile_px", "0");
         assert_invalid(r#"{"rop": {"tile_px": 257}}"#, "rop.tile_px", "257");

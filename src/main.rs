@@ -465,7 +465,6 @@ fn render(args: RenderArgs) -> ExitCode {
                     r.scene.height,
                     r.settings.datapath,
                     c.triangles_culled_behind_eye
-                        + c.triangles_culled_guard_band
                         + c.triangles_culled_outside
                         + c.triangles_degenerate,
                     c.quads,

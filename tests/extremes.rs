@@ -107,8 +107,8 @@ fn check_bounds(what: &str, run: &PathRun, reference: &ReferenceImage, k: f64, b
     if let Some(n) = num(bounds, "lembos_split") {
         assert_eq!(c.lembos_split as f64, n, "{what}: {c:?}");
     }
-    if let Some(n) = num(bounds, "triangles_culled_guard_band") {
-        assert_eq!(c.triangles_culled_guard_band as f64, n, "{what}: {c:?}");
+    if let Some(n) = num(bounds, "triangles_clipped") {
+        assert_eq!(c.triangles_clipped as f64, n, "{what}: {c:?}");
     }
     match a.max_scanline_deviation_px {
         Some(dev) => {

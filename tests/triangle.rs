@@ -5,11 +5,12 @@
 
 use lembo_sim::camera::View;
 use lembo_sim::config::ArchConfig;
-use lembo_sim::datapath::Datapath;
+use lembo_sim::datapath::{Datapath, Real};
 use lembo_sim::job::render_reference;
 use lembo_sim::lembo::tessellate::Tessellation;
 use lembo_sim::pipeline::actor::SimOptions;
 use lembo_sim::pipeline::{run_timed, TimedFrame, UnitKind};
+use lembo_sim::raster::triangle::{setup, TriangleSource};
 use lembo_sim::raster::{render_functional_triangles, Frame};
 use lembo_sim::reference::metrics::measure;
 use lembo_sim::scene::Scene;
@@ -107,6 +108,67 @@ fn timed_triangle_path_is_bit_identical_to_its_functional_model() {
                     for u in &t.cycles.units {
                         assert_eq!(u.busy + u.starved + u.blocked, t.cycles.total, "{what}");
                     }
+                }
+            }
+        }
+    }
+}
+
+/// Triangles in the fans of the scene's clipped triangles at tessellation `n`.
+fn fans<R: Real>(s: &Scene, n: u32, view: &View) -> u64 {
+    let t = Tessellation::new(s, n);
+    let (mut tris, mut pieces, mut fan) = (Vec::new(), Vec::new(), 0);
+    for c in 0..t.chunks() {
+        t.chunk(c, &mut tris);
+        for (k, tr) in tris.iter().enumerate() {
+            let id = t.id(c, k);
+            let o = setup::<R>(id, &tr.positions, &tr.normals, tr.color, view, &mut pieces);
+            fan += o.fan as u64;
+        }
+    }
+    fan
+}
+
+#[test]
+fn clipped_triangles_are_drawn_the_same_timed_and_functional_and_cost_their_pieces() {
+    // traces/extremes/huge.json: every triangle has a vertex up to 10^6 pixels away.
+    let s = scene("extremes/huge.json", None);
+    let view = View::new(&s.camera, s.viewport);
+    for n in [1, 2] {
+        for datapath in [Datapath::F32, Datapath::F64] {
+            let fan = match datapath {
+                Datapath::F32 => fans::<f32>(&s, n, &view),
+                Datapath::F64 => fans::<f64>(&s, n, &view),
+            };
+            let f = functional(&s, n, datapath, true);
+            // Every triangle has a vertex beyond the guard band: it is clipped, or culled
+            // beside the viewport.
+            let c = &f.counts;
+            assert!(c.triangles_clipped >= 1, "n={n}: {c:?}");
+            assert_eq!(
+                c.triangles_clipped + c.triangles_culled_outside,
+                c.triangles
+            );
+            assert_eq!(f.counts.pixels_covered, s.viewport.pixels() as u64, "n={n}");
+            assert_eq!(f.probe.unwrap().double_hit_pixels, 0);
+            for mut a in matrix() {
+                for per_piece in [1, 3] {
+                    a.triangle_setup.cycles_per_clipped_piece = per_piece;
+                    let t = timed(&s, n, &a, datapath);
+                    let what = format!("n={n} {datapath:?} arch {} per piece {per_piece}", a.name);
+                    assert!(t.framebuffer.color == f.framebuffer.color, "{what}: colour");
+                    assert!(t.framebuffer.depth == f.framebuffer.depth, "{what}: depth");
+                    assert_eq!(t.counts.triangles_clipped, f.counts.triangles_clipped);
+                    assert_eq!(t.counts.quads, f.counts.quads, "{what}");
+                    assert_eq!(t.counts.fragments, f.counts.fragments, "{what}");
+                    let setup = &t.cycles.units[0];
+                    assert_eq!(setup.kind, UnitKind::TriangleSetup);
+                    let per_triangle = a.triangle_setup.cycles_per_triangle;
+                    assert_eq!(
+                        setup.busy,
+                        f.counts.triangles * per_triangle + fan * per_piece,
+                        "{what}"
+                    );
                 }
             }
         }

@@ -1,19 +1,24 @@
 //! TriangleSetup (the triangle path, DESIGN §5): projects a triangle's three vertices,
-//! snaps them to 16.8 fixed point, sets up the integer edge functions and the
-//! perspective-correct attribute planes, and culls (one test per triangle).
+//! clips it to the guard band when a vertex is beyond the 16.8 range, snaps the vertices to
+//! 16.8 fixed point, sets up the integer edge functions and the perspective-correct
+//! attribute planes, and culls (one test per triangle, or per piece of a clipped one).
 //!
 //! Input: the triangles (the tessellated scene), in their source's order (the unit is the
 //! source: the Tessellator's output is read from memory, so the unit is never starved until
-//! it runs out). Output: each set-up triangle, round-robin to the triangle rasterizers.
+//! it runs out). Output: each set-up triangle, or each piece of a clipped one (with its
+//! parent's id), round-robin to the triangle rasterizers.
 //!
-//! Cost: `triangle_setup.cycles_per_triangle` busy cycles per triangle, culled or not; the
-//! result is ready `triangle_setup.latency_cycles` later. Not modelled: vertex fetch and
-//! the post-transform vertex cache (each triangle's three vertices are transformed here).
+//! Cost: `triangle_setup.cycles_per_triangle` busy cycles per triangle, culled or not, plus
+//! `triangle_setup.cycles_per_clipped_piece` per triangle of a clipped triangle's fan,
+//! culled or not (the fan's culled triangles are spent before its first piece is emitted);
+//! a result is ready `triangle_setup.latency_cycles` after the operation that produces it.
+//! Not modelled: vertex fetch and the post-transform vertex cache (each triangle's three
+//! vertices are transformed here).
 
 use super::actor::{ActorError, Ctx};
 use super::{Finished, Shared};
 use crate::datapath::Real;
-use crate::raster::triangle::{count_cull, setup, ScreenTriangle};
+use crate::raster::triangle::{setup, ScreenTriangle};
 use crate::raster::Counts;
 use std::sync::Arc;
 
@@ -21,27 +26,32 @@ pub fn run<R: Real>(
     mut ctx: Ctx<(), Arc<ScreenTriangle<R>>>,
     sh: &Shared<R>,
 ) -> Result<Finished, ActorError> {
-    let cost = sh.arch.triangle_setup.cycles_per_triangle;
+    let per_triangle = sh.arch.triangle_setup.cycles_per_triangle;
+    let per_piece = sh.arch.triangle_setup.cycles_per_clipped_piece;
     let source = sh
         .triangles
         .expect("the triangle path is elaborated with a triangle source");
     let mut counts = Counts::default();
-    let mut triangles = Vec::new();
+    let (mut triangles, mut pieces) = (Vec::new(), Vec::new());
     let mut next = 0;
     for c in 0..source.chunks() {
         source.chunk(c, &mut triangles);
         for (k, t) in triangles.iter().enumerate() {
-            counts.triangles += 1;
             let id = source.id(c, k);
-            match setup::<R>(id, &t.positions, &t.normals, t.color, sh.view) {
-                Ok(st) => {
-                    ctx.emit(cost, next, Arc::new(st))?;
-                    next = (next + 1) % ctx.outputs();
+            let outcome = setup::<R>(id, &t.positions, &t.normals, t.color, sh.view, &mut pieces);
+            outcome.count(&mut counts);
+            let culled_in_fan = outcome.fan.saturating_sub(pieces.len()) as u64;
+            let mut cost = per_triangle + per_piece * culled_in_fan;
+            if pieces.is_empty() {
+                ctx.work(cost);
+            }
+            for st in pieces.drain(..) {
+                if outcome.fan > 0 {
+                    cost += per_piece;
                 }
-                Err(cull) => {
-                    count_cull(cull, &mut counts);
-                    ctx.work(cost);
-                }
+                ctx.emit(cost, next, Arc::new(st))?;
+                next = (next + 1) % ctx.outputs();
+                cost = 0;
             }
         }
     }

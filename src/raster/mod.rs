@@ -74,8 +74,9 @@ pub struct Counts {
     pub triangles: u64,
     /// Triangles dropped because a vertex is at or behind the eye plane.
     pub triangles_culled_behind_eye: u64,
-    /// Triangles dropped because a vertex is beyond the 16.8 guard band (±32767 px).
-    pub triangles_culled_guard_band: u64,
+    /// Triangles with a vertex beyond the 16.8 guard band (±32767 px), clipped to it and
+    /// fanned into pieces that are set up and rasterized as triangles with their parent's id.
+    pub triangles_clipped: u64,
     /// Triangles outside the viewport or the depth range (one cull test each).
     pub triangles_culled_outside: u64,
     /// Triangles of zero area after snapping, or covering no pixel centre of their box.
@@ -141,7 +142,7 @@ impl std::ops::AddAssign for Counts {
         self.folds += o.folds;
         self.triangles += o.triangles;
         self.triangles_culled_behind_eye += o.triangles_culled_behind_eye;
-        self.triangles_culled_guard_band += o.triangles_culled_guard_band;
+        self.triangles_clipped += o.triangles_clipped;
         self.triangles_culled_outside += o.triangles_culled_outside;
         self.triangles_degenerate += o.triangles_degenerate;
         self.quads += o.quads;

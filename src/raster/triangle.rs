@@ -21,16 +21,26 @@
 //!   normalised). A fragment is a function of the triangle and the pixel only, so any order
 //!   of evaluation (functional model, or the timed ROPs tile by tile) gives the same bits.
 //!
+//! - **Guard-band clipping**: a triangle with a vertex beyond the 16.8 range (±32767
+//!   pixels) is clipped, as GPUs do, against the four planes x = ±[`CLIP_PX`] and
+//!   y = ±[`CLIP_PX`]. Screen x is (c_x / c_w + 1) W / 2 for clip coordinates c, so each
+//!   plane is linear in the world point, and Sutherland–Hodgman on the world triangle gives
+//!   exact world-space vertices; position and normal are blended linearly along the edges
+//!   (they are affine over the flat triangle), so the pieces' perspective-correct fragments
+//!   are the unclipped triangle's. The polygon (at most 7 vertices) is projected and snapped
+//!   once and fanned into at most 5 pieces that share their snapped vertices and the
+//!   parent's id; the top-left rule then covers each pixel once. A triangle inside the guard
+//!   band takes the unclipped path unchanged.
+//!
 //! Not modelled: near-plane clipping (a triangle with a vertex at or behind the eye is
-//! dropped and counted, as a lembo is), guard-band clipping (a vertex beyond the 16.8 range,
-//! ±32768 pixels, drops the triangle and is counted), back-face culling (the lembo path has
-//! none either; both paths shade two-sided).
+//! dropped and counted, as a lembo is; the lembo path drops those too), back-face culling
+//! (the lembo path has none either; both paths shade two-sided).
 
 use super::Counts;
-use crate::camera::{View, Viewport};
+use crate::camera::{ScreenPoint, View, Viewport};
 use crate::datapath::Real;
 use crate::lembo::tessellate::{Tessellation, Triangle};
-use glam::DVec3;
+use glam::{DVec3, DVec4};
 
 /// Fractional bits of the snapped vertex coordinates (16.8 fixed point).
 pub const SUBPIXEL_BITS: u32 = 8;
@@ -91,7 +101,8 @@ pub fn snap<R: Real>(x: R) -> i64 {
 /// A triangle ready for the rasterizer, in the datapath precision.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ScreenTriangle<R> {
-    /// Global id (tessellation order), also the depth-test tie breaker.
+    /// Global id (tessellation order), also the depth-test tie breaker; the pieces of a
+    /// clipped triangle keep their parent's (they never cover a pixel twice).
     pub id: u32,
     /// Snapped vertex positions [1/256 pixel], counter-clockwise on screen as seen with y
     /// down (edge functions positive inside).
@@ -121,8 +132,6 @@ pub struct ScreenTriangle<R> {
 pub enum TriangleCull {
     /// A vertex is at or behind the eye plane (near clipping is not modelled).
     BehindEye,
-    /// A vertex is beyond the 16.8 guard band (guard-band clipping is not modelled).
-    GuardBand,
     /// The bounding box misses the viewport, or the triangle lies outside the depth range.
     Outside,
     /// Zero area after snapping, or no pixel centre inside the bounding box.
@@ -140,39 +149,303 @@ pub struct TriangleFragment<R> {
     pub position: [R; 3],
 }
 
-/// Sets up triangle `id` (world-space `positions`, unit `normals`, `color`) for `view`.
+/// The clip rectangle of guard-band clipping: |x| <= `CLIP_PX` and |y| <= `CLIP_PX`
+/// [pixels]. One pixel inside [`GUARD_BAND_PX`]: a clipped vertex lies on a clip line up to
+/// rounding, and stays inside the 16.8 range after its conversion to the datapath (an f32
+/// ulp is 1/256 pixel there) and snapping (1/512 pixel). Beyond every viewport (sides of
+/// at most 16384 pixels), so clipping never removes a visible pixel.
+pub const CLIP_PX: f64 = GUARD_BAND_PX - 1.0;
+
+/// Room for the clipped polygon: a triangle gains at most one vertex per clip plane (3 + 4),
+/// and rounding can add a near-duplicate where a vertex lies on a plane; snapping merges
+/// those again ([`make_convex`]).
+const POLYGON_CAPACITY: usize = 16;
+
+/// What setup made of one triangle; its pieces are in the caller's buffer.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SetupOutcome {
+    /// Triangles the guard-band clipper fanned the triangle into, each set up (and perhaps
+    /// culled) as a triangle of its own: 0 when every vertex is inside the guard band (or
+    /// nothing of the triangle is), else the snapped polygon's vertices minus 2, 1 to 5
+    /// (three vertices, and at most one more per clip plane).
+    pub fan: usize,
+    /// Why the triangle yielded no piece; `None` when it yielded at least one.
+    pub cull: Option<TriangleCull>,
+}
+
+impl SetupOutcome {
+    fn culled(cull: TriangleCull) -> Self {
+        SetupOutcome {
+            fan: 0,
+            cull: Some(cull),
+        }
+    }
+
+    /// Counts the triangle: `triangles`, `triangles_clipped`, and its cull if it had one.
+    pub fn count(&self, counts: &mut Counts) {
+        counts.triangles += 1;
+        if self.fan > 0 {
+            counts.triangles_clipped += 1;
+        }
+        if let Some(cull) = self.cull {
+            count_cull(cull, counts);
+        }
+    }
+}
+
+/// Sets up triangle `id` (world-space `positions`, unit `normals`, `color`) for `view` into
+/// `out` (cleared first): the triangle itself when its vertices are inside the 16.8 guard
+/// band; when one is beyond it, the pieces of the triangle clipped to [`CLIP_PX`], all with
+/// id `id`; nothing when it is culled.
 pub fn setup<R: Real>(
     id: u32,
     positions: &[DVec3; 3],
     normals: &[DVec3; 3],
     color: [f64; 3],
     view: &View,
-) -> Result<ScreenTriangle<R>, TriangleCull> {
+    out: &mut Vec<ScreenTriangle<R>>,
+) -> SetupOutcome {
+    out.clear();
     let s = positions.map(|p| view.project(p));
     if s.iter()
         .any(|s| s.w <= 0.0 || !s.x.is_finite() || !s.y.is_finite())
     {
-        return Err(TriangleCull::BehindEye);
-    }
-    if s.iter()
-        .any(|s| !(s.x.abs() <= GUARD_BAND_PX && s.y.abs() <= GUARD_BAND_PX))
-    {
-        return Err(TriangleCull::GuardBand);
+        return SetupOutcome::culled(TriangleCull::BehindEye);
     }
     if s.iter().all(|s| s.depth < 0.0) || s.iter().all(|s| s.depth > 1.0) {
-        return Err(TriangleCull::Outside);
+        return SetupOutcome::culled(TriangleCull::Outside);
     }
-    let x = s.map(|s| snap(R::of(s.x)));
-    let y = s.map(|s| snap(R::of(s.y)));
-    let inv_w = s.map(|s| if view.orthographic { 1.0 } else { 1.0 / s.w });
-    let r3 = |v: DVec3, f: f64| [R::of(v.x * f), R::of(v.y * f), R::of(v.z * f)];
-    let vertices = [0, 1, 2].map(|k| Vertex {
-        z: R::of(s[k].depth),
-        inv_w: R::of(inv_w[k]),
-        normal_w: r3(normals[k], inv_w[k]),
-        position_w: r3(positions[k], inv_w[k]),
-    });
-    ScreenTriangle::assemble(id, x, y, vertices, color.map(R::of), view.viewport)
+    let color = color.map(R::of);
+    if s.iter()
+        .all(|s| s.x.abs() <= GUARD_BAND_PX && s.y.abs() <= GUARD_BAND_PX)
+    {
+        let x = s.map(|s| snap(R::of(s.x)));
+        let y = s.map(|s| snap(R::of(s.y)));
+        let v = [0, 1, 2].map(|k| vertex(view, &s[k], positions[k], normals[k]));
+        return match ScreenTriangle::assemble(id, x, y, v, color, view.viewport) {
+            Ok(t) => {
+                out.push(t);
+                SetupOutcome::default()
+            }
+            Err(cull) => SetupOutcome::culled(cull),
+        };
+    }
+    clip(id, positions, normals, &s, color, view, out)
+}
+
+/// A vertex's attributes for the rasterizer, from its projection `s`, world position `p` and
+/// world normal `n`.
+fn vertex<R: Real>(view: &View, s: &ScreenPoint, p: DVec3, n: DVec3) -> Vertex<R> {
+    let inv_w = if view.orthographic { 1.0 } else { 1.0 / s.w };
+    let r3 = |v: DVec3| [R::of(v.x * inv_w), R::of(v.y * inv_w), R::of(v.z * inv_w)];
+    Vertex {
+        z: R::of(s.depth),
+        inv_w: R::of(inv_w),
+        normal_w: r3(n),
+        position_w: r3(p),
+    }
+}
+
+/// The guard-band clip planes of `view` in world space: a point p in front of the eye is
+/// inside plane q where q · (p, 1) >= 0. Screen x is (c_x / c_w + 1) W / 2 for the clip
+/// coordinates c = M (p, 1), so x >= -G is c_x + (1 + 2G/W) c_w >= 0 (c_w > 0): linear in
+/// c, hence in p. Likewise x <= G, and y (1 - c_y / c_w) H / 2 against ±G.
+fn guard_band_planes(view: &View) -> [DVec4; 4] {
+    let kx = 2.0 * CLIP_PX / view.viewport.width as f64;
+    let ky = 2.0 * CLIP_PX / view.viewport.height as f64;
+    let m = view.view_proj.transpose();
+    [
+        DVec4::new(1.0, 0.0, 0.0, 1.0 + kx),
+        DVec4::new(-1.0, 0.0, 0.0, kx - 1.0),
+        DVec4::new(0.0, -1.0, 0.0, 1.0 + ky),
+        DVec4::new(0.0, 1.0, 0.0, ky - 1.0),
+    ]
+    .map(|l| m * l)
+}
+
+/// A vertex of the clipped polygon: world position and world normal (a linear blend of the
+/// triangle's unit normals, not normalised).
+#[derive(Clone, Copy, Debug, Default)]
+struct ClipVertex {
+    p: DVec3,
+    n: DVec3,
+}
+
+/// The triangle clipped so far, in order around it.
+#[derive(Clone, Copy, Debug)]
+struct Polygon {
+    v: [ClipVertex; POLYGON_CAPACITY],
+    len: usize,
+}
+
+impl Polygon {
+    fn new(positions: &[DVec3; 3], normals: &[DVec3; 3]) -> Self {
+        let mut v = [ClipVertex::default(); POLYGON_CAPACITY];
+        for k in 0..3 {
+            v[k] = ClipVertex {
+                p: positions[k],
+                n: normals[k],
+            };
+        }
+        Polygon { v, len: 3 }
+    }
+
+    fn vertices(&self) -> &[ClipVertex] {
+        &self.v[..self.len]
+    }
+
+    /// Sutherland–Hodgman against one plane: the part where q · (p, 1) >= 0. A vertex on
+    /// the plane is kept once (a crossing needs strictly opposite signs). `None` if the
+    /// polygon outgrows its room, which only rounding at astronomic coordinates could do.
+    fn clip(&self, q: DVec4) -> Option<Polygon> {
+        let d = |v: &ClipVertex| q.dot(v.p.extend(1.0));
+        let mut out = Polygon { v: self.v, len: 0 };
+        let mut push = |v: ClipVertex| {
+            (out.len < POLYGON_CAPACITY).then(|| {
+                out.v[out.len] = v;
+                out.len += 1;
+            })
+        };
+        for (k, a) in self.vertices().iter().enumerate() {
+            let b = &self.v[(k + 1) % self.len];
+            let (da, db) = (d(a), d(b));
+            if da >= 0.0 {
+                push(*a)?;
+            }
+            if (da > 0.0 && db < 0.0) || (da < 0.0 && db > 0.0) {
+                push(crossing(a, da, b, db))?;
+            }
+        }
+        Some(out)
+    }
+}
+
+/// Where edge (a, b), with signed distances `da` and `db` of opposite signs, crosses the
+/// plane. Interpolated from the lexicographically smaller end, so that two triangles sharing
+/// the edge compute the same bits and their pieces still share it exactly. Position and
+/// normal are affine over the flat world triangle, so the linear blend is exact.
+fn crossing(a: &ClipVertex, da: f64, b: &ClipVertex, db: f64) -> ClipVertex {
+    let (a, da, b, db) = if a.p.to_array() <= b.p.to_array() {
+        (a, da, b, db)
+    } else {
+        (b, db, a, da)
+    };
+    let t = da / (da - db);
+    ClipVertex {
+        p: a.p + (b.p - a.p) * t,
+        n: a.n + (b.n - a.n) * t,
+    }
+}
+
+/// Clips a triangle with a vertex beyond the guard band (every vertex in front of the eye)
+/// to [`CLIP_PX`] in world space and fans the snapped polygon into pieces.
+fn clip<R: Real>(
+    id: u32,
+    positions: &[DVec3; 3],
+    normals: &[DVec3; 3],
+    s: &[ScreenPoint; 3],
+    color: [R; 3],
+    view: &View,
+    out: &mut Vec<ScreenTriangle<R>>,
+) -> SetupOutcome {
+    // Trivial reject: every vertex beyond the same side of the viewport.
+    let (w, h) = (view.viewport.width as f64, view.viewport.height as f64);
+    if s.iter().all(|s| s.x < 0.0)
+        || s.iter().all(|s| s.x > w)
+        || s.iter().all(|s| s.y < 0.0)
+        || s.iter().all(|s| s.y > h)
+    {
+        return SetupOutcome::culled(TriangleCull::Outside);
+    }
+    let mut polygon = Polygon::new(positions, normals);
+    for q in guard_band_planes(view) {
+        match polygon.clip(q) {
+            Some(p) => polygon = p,
+            None => return SetupOutcome::culled(TriangleCull::Degenerate),
+        }
+    }
+    if polygon.len == 0 {
+        return SetupOutcome::culled(TriangleCull::Outside);
+    }
+    // Each vertex is projected and snapped once, so the pieces share their vertices exactly
+    // and the top-left rule gives each pixel on a shared edge to one piece.
+    let mut x = [0i64; POLYGON_CAPACITY];
+    let mut y = [0i64; POLYGON_CAPACITY];
+    let mut v = [vertex::<R>(view, &s[0], positions[0], normals[0]); POLYGON_CAPACITY];
+    for (k, c) in polygon.vertices().iter().enumerate() {
+        let sp = view.project(c.p);
+        // A convex blend of points in front of the eye is in front of it; only rounding at
+        // coordinates near the f64 range could break that.
+        if !(sp.w > 0.0 && sp.x.is_finite() && sp.y.is_finite()) {
+            return SetupOutcome::culled(TriangleCull::Degenerate);
+        }
+        // A clipped vertex is on a clip line up to rounding: the clamp puts it there.
+        x[k] = snap(R::of(sp.x.clamp(-CLIP_PX, CLIP_PX)));
+        y[k] = snap(R::of(sp.y.clamp(-CLIP_PX, CLIP_PX)));
+        v[k] = vertex(view, &sp, c.p, c.n);
+    }
+    let mut order: [usize; POLYGON_CAPACITY] = std::array::from_fn(|k| k);
+    let n = make_convex(&x, &y, &mut order, polygon.len);
+    if n < 3 {
+        return SetupOutcome::culled(TriangleCull::Degenerate);
+    }
+    let mut all_outside = true;
+    for k in 1..n - 1 {
+        let [a, b, c] = [order[0], order[k], order[k + 1]];
+        match ScreenTriangle::assemble(
+            id,
+            [x[a], x[b], x[c]],
+            [y[a], y[b], y[c]],
+            [v[a], v[b], v[c]],
+            color,
+            view.viewport,
+        ) {
+            Ok(t) => out.push(t),
+            Err(cull) => all_outside &= cull == TriangleCull::Outside,
+        }
+    }
+    SetupOutcome {
+        fan: n - 2,
+        cull: out.is_empty().then_some(if all_outside {
+            TriangleCull::Outside
+        } else {
+            TriangleCull::Degenerate
+        }),
+    }
+}
+
+/// Drops the vertices (of the first `n` of `order`, indices into `x` and `y`) where the
+/// snapped polygon is not strictly convex: duplicates and collinear runs, and the rare dent
+/// where snapping moves a vertex of a nearly straight angle across the line of its
+/// neighbours (filling it changes the polygon by less than a 1/256-pixel sliver). The fan of
+/// a strictly convex polygon tiles it with triangles of one orientation. Returns the
+/// vertices left; fewer than 3 when the polygon has no area.
+fn make_convex(x: &[i64], y: &[i64], order: &mut [usize], mut n: usize) -> usize {
+    while n >= 3 {
+        // Twice the signed area (shoelace); |coordinates| < 2^23, so no overflow.
+        let area2: i64 = (0..n)
+            .map(|k| {
+                let (a, b) = (order[k], order[(k + 1) % n]);
+                x[a] * y[b] - x[b] * y[a]
+            })
+            .sum();
+        if area2 == 0 {
+            return 0;
+        }
+        let turns_wrong = |k: usize| {
+            let (a, b, c) = (order[(k + n - 1) % n], order[k], order[(k + 1) % n]);
+            let turn = (x[b] - x[a]) * (y[c] - y[a]) - (y[b] - y[a]) * (x[c] - x[a]);
+            turn.signum() != area2.signum()
+        };
+        match (0..n).find(|&k| turns_wrong(k)) {
+            Some(k) => {
+                order.copy_within(k + 1..n, k);
+                n -= 1;
+            }
+            None => break,
+        }
+    }
+    n
 }
 
 /// What a vertex carries into the rasterizer besides its snapped position.
@@ -373,10 +646,9 @@ pub fn rasterize<R: Real, S: TriangleSink<R>>(
 }
 
 /// Counts a culled triangle.
-pub fn count_cull(cull: TriangleCull, counts: &mut Counts) {
+fn count_cull(cull: TriangleCull, counts: &mut Counts) {
     match cull {
         TriangleCull::BehindEye => counts.triangles_culled_behind_eye += 1,
-        TriangleCull::GuardBand => counts.triangles_culled_guard_band += 1,
         TriangleCull::Outside => counts.triangles_culled_outside += 1,
         TriangleCull::Degenerate => counts.triangles_degenerate += 1,
     }
@@ -482,15 +754,14 @@ pub fn render_triangles<R: Real, S: TriangleSink<R>>(
     sink: &mut S,
     counts: &mut Counts,
 ) {
-    let mut triangles = Vec::new();
+    let (mut triangles, mut pieces) = (Vec::new(), Vec::new());
     for c in 0..source.chunks() {
         source.chunk(c, &mut triangles);
         for (k, t) in triangles.iter().enumerate() {
-            counts.triangles += 1;
             let id = source.id(c, k);
-            match setup::<R>(id, &t.positions, &t.normals, t.color, view) {
-                Ok(st) => rasterize(&st, sink, counts),
-                Err(cull) => count_cull(cull, counts),
+            setup::<R>(id, &t.positions, &t.normals, t.color, view, &mut pieces).count(counts);
+            for st in &pieces {
+                rasterize(st, sink, counts);
             }
         }
     }
@@ -528,22 +799,38 @@ mod tests {
         .ok()
     }
 
+    /// Sets up a triangle inside the guard band: its one piece, or why it was culled.
+    fn setup_one<R: Real>(
+        id: u32,
+        p: &[DVec3; 3],
+        n: &[DVec3; 3],
+        view: &View,
+    ) -> Result<ScreenTriangle<R>, TriangleCull> {
+        let mut out = Vec::new();
+        let o = setup::<R>(id, p, n, [1.0; 3], view, &mut out);
+        assert_eq!(o.fan, 0, "not clipped");
+        match o.cull {
+            Some(cull) => {
+                assert!(out.is_empty());
+                Err(cull)
+            }
+            None => {
+                assert_eq!(out.len(), 1);
+                Ok(out.remove(0))
+            }
+        }
+    }
+
     /// Pixel centre (i, j) in sub-pixel units.
     fn c(i: i64, j: i64) -> (i64, i64) {
         (i * SUBPIXEL + SUBPIXEL / 2, j * SUBPIXEL + SUBPIXEL / 2)
     }
 
     /// How often each pixel is covered by the triangles, through the quad walk.
-    fn hits(tris: &[ScreenTriangle<f64>]) -> Vec<u32> {
+    fn hits<R: Real>(tris: &[ScreenTriangle<R>]) -> Vec<u32> {
         struct Hits(Vec<u32>);
-        impl TriangleSink<f64> for Hits {
-            fn fragment(
-                &mut self,
-                _: &ScreenTriangle<f64>,
-                i: u32,
-                j: u32,
-                _: &TriangleFragment<f64>,
-            ) {
+        impl<R: Real> TriangleSink<R> for Hits {
+            fn fragment(&mut self, _: &ScreenTriangle<R>, i: u32, j: u32, _: &TriangleFragment<R>) {
                 self.0[(j * VP.width + i) as usize] += 1;
             }
         }
@@ -746,9 +1033,8 @@ mod tests {
             DVec3::new(12.25, 30.0 + 255.0 / 256.0, 0.0),
         ];
         let nudge = DVec3::new(0.4 / 256.0, -0.45 / 256.0, 0.0);
-        let a = setup::<f64>(0, &p, &[DVec3::Z; 3], [1.0; 3], &view).unwrap();
-        let b = setup::<f64>(0, &p.map(|q| q + nudge), &[DVec3::Z; 3], [1.0; 3], &view);
-        let b = b.unwrap();
+        let a = setup_one::<f64>(0, &p, &[DVec3::Z; 3], &view).unwrap();
+        let b = setup_one::<f64>(0, &p.map(|q| q + nudge), &[DVec3::Z; 3], &view).unwrap();
         assert_eq!((a.x, a.y), (b.x, b.y));
         assert_eq!((a.x[0], a.y[0]), (3 * 256 + 64, 4 * 256 + 32));
     }
@@ -801,7 +1087,7 @@ mod tests {
             DVec3::new(1.0, 0.0, 0.0),
             DVec3::new(0.0, 1.0, 0.0),
         ];
-        let t = setup::<f64>(7, &p, &n, [1.0; 3], &view).unwrap();
+        let t = setup_one::<f64>(7, &p, &n, &view).unwrap();
         let plane_n = (p[1] - p[0]).cross(p[2] - p[0]);
         let (mut checked, mut affine_miss) = (0, 0.0f64);
         for j in 0..VP.height {
@@ -847,7 +1133,7 @@ mod tests {
     fn culls_are_classified() {
         let view = ortho_view();
         let z = DVec3::Z;
-        let cull = |p: [DVec3; 3]| setup::<f32>(0, &p, &[z; 3], [1.0; 3], &view).err();
+        let cull = |p: [DVec3; 3]| setup_one::<f32>(0, &p, &[z; 3], &view).err();
         let (a, b, c) = (
             DVec3::new(1.0, 1.0, 0.0),
             DVec3::new(9.0, 1.0, 0.0),
@@ -860,8 +1146,37 @@ mod tests {
             Some(TriangleCull::Outside)
         );
         assert_eq!(cull([a, b, a]), Some(TriangleCull::Degenerate));
-        let far = DVec3::new(1e6, 0.0, 0.0);
-        assert_eq!(cull([a, b, far]), Some(TriangleCull::GuardBand));
+        // A vertex beyond the guard band: clipped, and drawn.
+        let mut out = Vec::new();
+        let far = DVec3::new(1e6, 3e5, 0.0);
+        let o = setup::<f32>(0, &[a, b, far], &[z; 3], [1.0; 3], &view, &mut out);
+        assert!(o.fan >= 1 && o.cull.is_none() && !out.is_empty(), "{o:?}");
+        // Clipped, but beyond one side of the viewport: trivially rejected.
+        let right = DVec3::new(100.0, 0.0, 0.0);
+        let o = setup::<f32>(
+            0,
+            &[a + right, b + right, far],
+            &[z; 3],
+            [1.0; 3],
+            &view,
+            &mut out,
+        );
+        assert_eq!(
+            (o.fan, o.cull, out.len()),
+            (0, Some(TriangleCull::Outside), 0)
+        );
+        // Spanning the viewport's x and y ranges, but passing outside the guard band's
+        // corner: nothing is left after clipping.
+        let corner = [
+            DVec3::new(-1e6, 1.1e6, 0.0),
+            DVec3::new(1.1e6, -1e6, 0.0),
+            DVec3::new(-1e6, 1.1e6 + 10.0, 0.0),
+        ];
+        let o = setup::<f32>(0, &corner, &[z; 3], [1.0; 3], &view, &mut out);
+        assert_eq!(
+            (o.fan, o.cull, out.len()),
+            (0, Some(TriangleCull::Outside), 0)
+        );
         // Between two pixel centres: no sample inside.
         let tiny = [
             DVec3::new(1.6, 1.6, 0.0),
@@ -875,5 +1190,331 @@ mod tests {
             cull([a + behind, b + behind, c + behind]),
             Some(TriangleCull::Outside)
         );
+    }
+
+    /// The camera of the perspective tests: eye at the origin looking down -z, 60 degrees.
+    fn perspective_view() -> View {
+        View::new(
+            &Camera {
+                eye: [0.0, 0.0, 0.0],
+                target: [0.0, 0.0, -1.0],
+                up: [0.0, 1.0, 0.0],
+                projection: Projection::Perspective {
+                    fovy_deg: 60.0,
+                    near: 0.1,
+                    far: 100.0,
+                },
+            },
+            VP,
+        )
+    }
+
+    /// Per pixel: whether an unbounded-precision rasterizer covers it for the triangle with
+    /// world vertices `p` (projected, snapped to 1/256 pixel in f64 however far, edge
+    /// functions in i128, the top-left rule), and the pixel centre's distance [pixels] to
+    /// the nearest of the snapped triangle's edge lines.
+    fn exact_coverage(p: &[DVec3; 3], view: &View) -> Vec<(bool, f64)> {
+        let s = p.map(|q| view.project(q));
+        let mut x = s.map(|s| (s.x * SUBPIXEL as f64).round() as i128);
+        let mut y = s.map(|s| (s.y * SUBPIXEL as f64).round() as i128);
+        if (x[1] - x[0]) * (y[2] - y[0]) - (y[1] - y[0]) * (x[2] - x[0]) < 0 {
+            x.swap(1, 2);
+            y.swap(1, 2);
+        }
+        let mut cover = Vec::new();
+        for j in 0..VP.height as i128 {
+            for i in 0..VP.width as i128 {
+                let (px, py) = (i * 256 + 128, j * 256 + 128);
+                let (mut inside, mut dist) = (true, f64::INFINITY);
+                for k in 0..3 {
+                    let (a, b) = ((k + 1) % 3, (k + 2) % 3);
+                    let (dx, dy) = (x[b] - x[a], y[b] - y[a]);
+                    let e = dx * (py - y[a]) - dy * (px - x[a]);
+                    let top_left = dy < 0 || (dy == 0 && dx > 0);
+                    inside &= e > 0 || (e == 0 && top_left);
+                    let length = ((dx * dx + dy * dy) as f64).sqrt();
+                    dist = dist.min(e.abs() as f64 / length / SUBPIXEL as f64);
+                }
+                cover.push((inside, dist));
+            }
+        }
+        cover
+    }
+
+    /// Clips triangle `p` (unit normals +z) and checks its pieces against
+    /// [`exact_coverage`]: no pixel twice, and a pixel covered exactly when the exact
+    /// rasterizer covers it, except a centre within 1/128 pixel of an edge (a clipped
+    /// vertex, snapped on its clip line, is up to 1/512 pixel off the exact edge; an f32
+    /// datapath adds up to 1/2048 before snapping). Returns the pieces and the mismatches.
+    fn clip_against_exact<R: Real>(p: &[DVec3; 3], view: &View) -> (Vec<ScreenTriangle<R>>, u32) {
+        let mut pieces = Vec::new();
+        let o = setup::<R>(3, p, &[DVec3::Z; 3], [1.0; 3], view, &mut pieces);
+        let exact = exact_coverage(p, view);
+        if exact.iter().any(|e| e.0) {
+            assert!(o.fan >= 1 && o.cull.is_none(), "{p:?}: {o:?}");
+        }
+        assert!(o.fan <= 5 && pieces.len() <= o.fan, "{o:?}");
+        assert!(pieces.iter().all(|t| t.id == 3));
+        let h = hits(&pieces);
+        let mut mismatches = 0;
+        for (k, (&n, &(want, dist))) in h.iter().zip(&exact).enumerate() {
+            let (i, j) = (k as u32 % VP.width, k as u32 / VP.width);
+            assert!(n <= 1, "{p:?}: pixel ({i}, {j}) covered {n} times");
+            if (n == 1) != want {
+                assert!(dist < 1.0 / 128.0, "{p:?}: pixel ({i}, {j}), {dist} px off");
+                mismatches += 1;
+            }
+        }
+        (pieces, mismatches)
+    }
+
+    #[test]
+    fn a_triangle_a_million_pixels_across_covers_the_viewport_once() {
+        let view = ortho_view();
+        let p = [
+            DVec3::new(-1e6, -1e6, 0.0),
+            DVec3::new(1e6 + 0.3, -2e5, 0.0),
+            DVec3::new(-3e5, 1e6, 0.0),
+        ];
+        let (pieces, mismatches) = clip_against_exact::<f64>(&p, &view);
+        assert_eq!(mismatches, 0);
+        assert!(hits(&pieces).iter().all(|&n| n == 1));
+        // The snapped pieces stay inside the 16.8 range.
+        let limit = (CLIP_PX * SUBPIXEL as f64) as i64;
+        assert!(pieces
+            .iter()
+            .all(|t| t.x.iter().chain(&t.y).all(|c| c.abs() <= limit)));
+        let (pieces, mismatches) = clip_against_exact::<f32>(&p, &view);
+        assert_eq!(mismatches, 0);
+        assert!(hits(&pieces).iter().all(|&n| n == 1));
+    }
+
+    #[test]
+    fn clipped_triangles_cover_the_exact_pixels_of_the_unclipped_ones() {
+        // Random triangles with one, two or three vertices 4·10^4 to 10^7 pixels away, edges
+        // through the viewport at every angle. Both datapaths.
+        let view = ortho_view();
+        let mut seed = 987654321u64;
+        let mut rnd = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut drawn, mut mismatches, mut pixels) = (0, 0, 0);
+        for case in 0..300 {
+            let p: [DVec3; 3] = std::array::from_fn(|k| {
+                if k < 1 + case % 3 {
+                    let (a, r) = (rnd() * std::f64::consts::TAU, 10f64.powf(4.6 + 2.4 * rnd()));
+                    DVec3::new(32.0 + r * a.cos(), 24.0 + r * a.sin(), 0.0)
+                } else {
+                    DVec3::new(-20.0 + 104.0 * rnd(), -20.0 + 88.0 * rnd(), 0.0)
+                }
+            });
+            let (p64, m64) = clip_against_exact::<f64>(&p, &view);
+            let (p32, m32) = clip_against_exact::<f32>(&p, &view);
+            drawn += !p64.is_empty() as u32;
+            mismatches += m64 + m32;
+            pixels += hits(&p64).iter().sum::<u32>();
+            assert_eq!(p64.len(), p32.len(), "{p:?}");
+        }
+        assert!(drawn > 150, "{drawn}");
+        // Only centres a rounding step from an edge can differ.
+        assert!(mismatches * 10_000 < pixels, "{mismatches} of {pixels}");
+    }
+
+    #[test]
+    fn two_clipped_triangles_sharing_an_edge_through_pixel_centres_cover_each_pixel_once() {
+        // The shared edge runs through the centres (20.5 + 3k, 20.5 + k), and both its ends
+        // are about 10^6 pixels away, so both triangles clip it at the same guard-band
+        // crossings (computed from the same end).
+        let view = ortho_view();
+        let k = 333_333.0;
+        let p = DVec3::new(20.5 - 3.0 * k, 20.5 - k, 0.0);
+        let q = DVec3::new(20.5 + 3.0 * k, 20.5 + k, 0.0);
+        let r1 = DVec3::new(-1e6, 1e6, 0.0);
+        let r2 = DVec3::new(1e6, -1e6, 0.0);
+        for (a, b) in [([p, q, r1], [q, p, r2]), ([q, r1, p], [r2, p, q])] {
+            let (mut pa, _) = clip_against_exact::<f64>(&a, &view);
+            let (pb, _) = clip_against_exact::<f64>(&b, &view);
+            pa.extend(pb);
+            let h = hits(&pa);
+            for (k, &n) in h.iter().enumerate() {
+                assert_eq!(
+                    n,
+                    1,
+                    "pixel ({}, {})",
+                    k as u32 % VP.width,
+                    k as u32 / VP.width
+                );
+            }
+        }
+    }
+
+    fn unclipped_bit_for_bit<R: Real>() {
+        // One vertex between the clip line and the end of the 16.8 range: inside the guard
+        // band, so not clipped (clipping would move it onto x = CLIP_PX and count the
+        // triangle as clipped).
+        let view = ortho_view();
+        let p = [
+            DVec3::new(2.3, 3.1, 0.5),
+            DVec3::new(CLIP_PX + 0.75, 20.2, -1.0),
+            DVec3::new(-GUARD_BAND_PX, 40.9, 2.0),
+        ];
+        let n = [
+            DVec3::Z,
+            DVec3::new(0.6, 0.0, 0.8),
+            DVec3::new(0.0, -0.8, 0.6),
+        ];
+        let color = [0.25, 0.5, 1.0];
+        // The setup of a triangle before guard-band clipping existed, written out.
+        let s = p.map(|q| view.project(q));
+        let r3 = |v: DVec3| v.to_array().map(R::of);
+        let v = [0, 1, 2].map(|k| Vertex {
+            z: R::of(s[k].depth),
+            inv_w: R::of(1.0),
+            normal_w: r3(n[k]),
+            position_w: r3(p[k]),
+        });
+        let x = s.map(|s| snap(R::of(s.x)));
+        let y = s.map(|s| snap(R::of(s.y)));
+        let want = ScreenTriangle::assemble(5, x, y, v, color.map(R::of), VP).unwrap();
+        assert!(want.x.contains(&(CLIP_PX as i64 * SUBPIXEL + 192)));
+        let mut out = Vec::new();
+        let o = setup::<R>(5, &p, &n, color, &view, &mut out);
+        assert_eq!(o, SetupOutcome::default());
+        assert_eq!(out, vec![want]);
+        let mut counts = Counts::default();
+        o.count(&mut counts);
+        assert_eq!((counts.triangles, counts.triangles_clipped), (1, 0));
+        // Half a pixel further, past the guard band: clipped onto x = CLIP_PX.
+        let beyond = [p[0], p[1] + DVec3::X, p[2]];
+        let o = setup::<R>(5, &beyond, &n, color, &view, &mut out);
+        assert!(o.fan >= 1 && o.cull.is_none(), "{o:?}");
+        let xmax = out.iter().flat_map(|t| t.x).max().unwrap();
+        assert_eq!(xmax, CLIP_PX as i64 * SUBPIXEL);
+        o.count(&mut counts);
+        assert_eq!((counts.triangles, counts.triangles_clipped), (2, 1));
+    }
+
+    #[test]
+    fn a_triangle_inside_the_guard_band_is_set_up_unclipped_bit_for_bit() {
+        unclipped_bit_for_bit::<f64>();
+        unclipped_bit_for_bit::<f32>();
+    }
+
+    #[test]
+    fn clipped_pieces_interpolate_perspective_correctly_like_the_whole_triangle() {
+        // As perspective_correct_depth_normal_and_position_match_the_plane, with a vertex
+        // about 70 000 pixels to the right: every piece's fragment at a pixel is the ray's
+        // hit with the whole triangle's plane, and the blend of the whole triangle's
+        // normals there.
+        let view = perspective_view();
+        let p = [
+            DVec3::new(-1.0, -0.6, -1.5),
+            DVec3::new(5000.0, -0.4, -3.0),
+            DVec3::new(-0.5, 1.2, -2.0),
+        ];
+        let n = [
+            DVec3::new(0.0, 0.0, 1.0),
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(0.0, 1.0, 0.0),
+        ];
+        assert!(view.project(p[1]).x > 2.0 * GUARD_BAND_PX);
+        let mut pieces = Vec::new();
+        let o = setup::<f64>(7, &p, &n, [1.0; 3], &view, &mut pieces);
+        assert!(o.fan >= 2 && pieces.len() >= 2, "{o:?}");
+        let plane_n = (p[1] - p[0]).cross(p[2] - p[0]);
+        let area = plane_n.length_squared();
+        let h = hits(&pieces);
+        let mut checked = 0;
+        for t in &pieces {
+            for j in 0..VP.height {
+                for i in 0..VP.width {
+                    if !t.covers(i, j) {
+                        continue;
+                    }
+                    assert_eq!(h[(j * VP.width + i) as usize], 1, "({i}, {j})");
+                    let (o, d) = view.ray(i as f64 + 0.5, j as f64 + 0.5);
+                    let hit = o + d * (plane_n.dot(p[0] - o) / plane_n.dot(d));
+                    let b = [
+                        (p[1] - hit).cross(p[2] - hit).dot(plane_n) / area,
+                        (p[2] - hit).cross(p[0] - hit).dot(plane_n) / area,
+                        (p[0] - hit).cross(p[1] - hit).dot(plane_n) / area,
+                    ];
+                    let want_n = (n[0] * b[0] + n[1] * b[1] + n[2] * b[2]).normalize();
+                    let f = t.fragment(i, j);
+                    let got_n = DVec3::from_array(f.normal).normalize();
+                    let got_p = DVec3::from_array(f.position);
+                    assert!(
+                        (f.z - view.depth_of(hit)).abs() < 1e-5,
+                        "depth at ({i}, {j})"
+                    );
+                    assert!((got_p - hit).length() < 3e-3, "position at ({i}, {j})");
+                    assert!((got_n - want_n).length() < 1e-3, "normal at ({i}, {j})");
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked > 200, "{checked}");
+        // A vertex behind the eye drops the triangle, however far the others reach.
+        let behind = [p[0], p[1], DVec3::new(0.0, 0.0, 1.0)];
+        let o = setup::<f64>(7, &behind, &n, [1.0; 3], &view, &mut pieces);
+        assert_eq!(
+            (o.fan, o.cull, pieces.len()),
+            (0, Some(TriangleCull::BehindEye), 0)
+        );
+    }
+
+    #[test]
+    fn triangles_sharing_an_edge_clip_it_at_the_same_points() {
+        // Edges through the view with both ends far beyond the guard band, each shared by
+        // two triangles that walk it in opposite directions: their clipped polygons share
+        // exactly the two crossings, bit for bit, so their pieces meet without a crack.
+        let view = perspective_view();
+        let planes = guard_band_planes(&view);
+        let mut seed = 4242u64;
+        let mut rnd = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let clip_all = |t: [DVec3; 3]| {
+            let mut polygon = Polygon::new(&t, &[DVec3::Z; 3]);
+            for q in planes {
+                polygon = polygon.clip(q).unwrap();
+            }
+            polygon
+        };
+        for case in 0..200 {
+            let mid = DVec3::new(rnd() - 0.5, rnd() - 0.5, -2.0 - 3.0 * rnd());
+            let a = rnd() * std::f64::consts::TAU;
+            let dir = DVec3::new(a.cos(), a.sin(), 0.0);
+            let far = |r: f64| 10f64.powf(4.0 + 2.0 * r);
+            let (p, q) = (mid - dir * far(rnd()), mid + dir * far(rnd()));
+            let side = DVec3::new(-dir.y, dir.x, 0.0);
+            let (r1, r2) = (mid + side * far(rnd()), mid - side * far(rnd()));
+            let (a, b) = (clip_all([p, q, r1]), clip_all([q, p, r2]));
+            let shared = a
+                .vertices()
+                .iter()
+                .filter(|u| b.vertices().iter().any(|v| v.p == u.p))
+                .count();
+            assert_eq!(shared, 2, "case {case}");
+        }
+    }
+
+    #[test]
+    fn a_snapped_polygon_is_made_strictly_convex() {
+        // A duplicate, a collinear vertex and a dent go; the square's corners stay.
+        let x = [0, 0, 100, 200, 200, 200, 0, 99];
+        let y = [0, 0, 1, 0, 100, 200, 200, 100];
+        let mut order: [usize; 8] = std::array::from_fn(|k| k);
+        let n = make_convex(&x, &y, &mut order, 8);
+        assert_eq!(&order[..n], &[1, 3, 5, 6]);
+        // Everything on one line: no area.
+        let mut order: [usize; 3] = [0, 1, 2];
+        assert_eq!(make_convex(&[0, 1, 2], &[0, 1, 2], &mut order, 3), 0);
     }
 }
