@@ -1248,7 +1248,11 @@ fn functional_pipeline_on_arbitrary_lembos() {
     let accepted = AtomicU64::new(0);
     let capped = AtomicU64::new(0);
     let covered = AtomicU64::new(0);
-    run("pipeline", 8_000, pipeline_input(), |input| {
+    let slowest_us = AtomicU64::new(0);
+    // 40000 cases take 20-50 s in release on two shared cores, the slowest lembo render
+    // 0.04 s, since Setup splits lembos far larger than the view (before, 8000 cases took
+    // 25 s and 56 of them were refused at the segment cap).
+    run("pipeline", 40_000, pipeline_input(), |input| {
         let text = input.scene_json().to_string();
         // A failure names the scene as a file the CLI renders, with the case's settings.
         let case = format!(
@@ -1274,11 +1278,13 @@ fn functional_pipeline_on_arbitrary_lembos() {
         let (k, datapath, analyse, tess) = (input.k, input.datapath(), input.analyse, input.tess);
 
         let lembo_scene = scene.clone();
+        let started = std::time::Instant::now();
         let lembos = within_deadline("render_functional", move || {
             let view = View::new(&lembo_scene.camera, lembo_scene.viewport);
             render_functional(&lembo_scene, &view, k, datapath, analyse)
         })
         .map_err(with_case)?;
+        slowest_us.fetch_max(started.elapsed().as_micros() as u64, Relaxed);
         match lembos {
             Ok(frame) => {
                 check_frame("render_functional", &frame, width, height)?;
@@ -1305,9 +1311,11 @@ fn functional_pipeline_on_arbitrary_lembos() {
         check_frame("render_functional_triangles", &frame, width, height)
     });
     eprintln!(
-        "pipeline: {} scenes accepted, {} drew pixels, {} refused at the segment cap",
+        "pipeline: {} scenes accepted, {} drew pixels, {} refused at the segment cap, \
+         slowest lembo render {:.3} s",
         accepted.load(Relaxed),
         covered.load(Relaxed),
-        capped.load(Relaxed)
+        capped.load(Relaxed),
+        slowest_us.load(Relaxed) as f64 * 1e-6
     );
 }
