@@ -190,20 +190,22 @@ fn golden_default_scene() {
 
 #[test]
 fn bad_architecture_field_is_refused_by_name() {
-    let dir = tempfile::tempdir().unwrap();
-    std::fs::write(
-        dir.path().join("a.json"),
-        r#"{"links": {"rop_to_framebuffer": {"fifo_depth": 0}}}"#,
-    )
-    .unwrap();
-    let out = run(&["render", "--arch", "a.json", "--out", "o"], dir.path());
-    assert_eq!(out.status.code(), Some(2));
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(
-        err.contains("links.rop_to_framebuffer.fifo_depth"),
-        "stderr: {err}"
-    );
-    assert!(!dir.path().join("o").exists(), "nothing written");
+    for (arch, field) in [
+        (
+            r#"{"links": {"rop_to_framebuffer": {"fifo_depth": 0}}}"#,
+            "links.rop_to_framebuffer.fifo_depth",
+        ),
+        (r#"{"segmenter": {"count": 0}}"#, "segmenter.count"),
+        (r#"{"rop": {"count": 0}}"#, "rop.count"),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("a.json"), arch).unwrap();
+        let out = run(&["render", "--arch", "a.json", "--out", "o"], dir.path());
+        assert_eq!(out.status.code(), Some(2), "{arch}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(field), "stderr: {err}");
+        assert!(!dir.path().join("o").exists(), "nothing written");
+    }
 }
 
 #[test]

@@ -249,6 +249,28 @@ fn every_scene_has_an_expectation_and_every_expectation_a_scene() {
     }
 }
 
+/// DESIGN §8: a patch that would need more segments than the cap on one interval is refused
+/// with a message naming the lembo and the scanline, as bad input (exit status 2). No
+/// scene reaches the default cap since Setup splits lembos far larger than the view, so a
+/// small cap stands in for it.
+#[test]
+fn segment_cap_is_refused_by_lembo_and_scanline() {
+    use lembo_sim::raster::{render_lembos, Counts};
+    use lembo_sim::rop::{FrameBuffer, Rop};
+    let scene = Scene::load(&dir().join("huge_curved.json")).unwrap();
+    let view = View::new(&scene.camera, scene.viewport);
+    let mut fb = FrameBuffer::new(view.viewport.width, view.viewport.height, [0; 3], false);
+    let mut rop = Rop::<f64>::new(&mut fb, &scene.light, &view);
+    let err = render_lembos::<f64, _>(&scene, &view, 1e-4, 4, &mut rop, &mut Counts::default())
+        .expect_err("more than 4 segments on some interval");
+    let msg = err.to_string();
+    assert!(
+        msg.contains("lembo 0 needs more than 4 segments on scanline"),
+        "{msg}"
+    );
+    assert_eq!(err.exit_code(), 2);
+}
+
 macro_rules! scene_tests {
     ($($test:ident => $file:literal,)*) => {
         $(
