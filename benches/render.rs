@@ -1,7 +1,8 @@
 //! Criterion benchmarks: the functional model on whole scenes by viewport size, the
 //! per-scanline stages on their own, and the timed pipeline against the functional model
 //! on the same frame (the issue 3 figure: timed wall / functional wall), and the triangle
-//! path, functional and timed, and the discoid passes. Setup (scene loading, projection) stays outside the timed
+//! path, functional and timed, the discoid passes, and what off-screen primitives and a
+//! lembo far larger than the view cost. Setup (scene loading, projection) stays outside the timed
 //! closures.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
@@ -318,8 +319,57 @@ fn discoid_passes(c: &mut Criterion) {
     g.finish();
 }
 
+/// sphere24 in view, then `copies` more far to the side, out of the viewport (the scene of
+/// `tests/scope.rs`).
+fn with_offscreen_copies(copies: usize) -> Scene {
+    let mut objects = vec![r#"{"builtin": "sphere24", "color": [0.8, 0.3, 0.2]}"#.to_string()];
+    for c in 0..copies {
+        objects.push(format!(
+            r#"{{"builtin": "sphere24", "transform": {{"translate": [{}, 0, 0]}}}}"#,
+            40.0 + 5.0 * c as f64
+        ));
+    }
+    let json = format!(
+        r#"{{"name": "offscreen", "viewport": {{"width": 512, "height": 512}},
+            "camera": {{"eye": [0, 1.2, 3.8], "target": [0, 0, 0],
+                        "projection": {{"kind": "perspective", "fovy_deg": 40, "near": 0.1, "far": 100}}}},
+            "objects": [{}]}}"#,
+        objects.join(", ")
+    );
+    Scene::from_json(&json, "offscreen", Path::new(".")).unwrap()
+}
+
+/// Model only what a scene requires (issue 7): sphere24 alone against the same with nine
+/// off-screen copies (90 % of the lembos off screen), functional and timed; and a lembo 2e7
+/// px across (`traces/extremes/huge_curved.json`, k = 1e-4), which Setup splits.
+fn scope_and_extremes(c: &mut Criterion) {
+    let mut g = c.benchmark_group("scope_and_extremes");
+    g.sample_size(10);
+    let (arch, options) = (ArchConfig::baseline(), SimOptions::default());
+    for copies in [0usize, 9] {
+        let s = with_offscreen_copies(copies);
+        let view = View::new(&s.camera, s.viewport);
+        g.bench_function(format!("functional/sphere24+{copies}_offscreen/512"), |b| {
+            b.iter(|| raster::render_functional(&s, &view, 0.5, Datapath::F32, false).unwrap())
+        });
+        g.bench_function(
+            format!("timed_baseline/sphere24+{copies}_offscreen/512"),
+            |b| b.iter(|| run_timed(&s, &view, 0.5, Datapath::F32, &arch, None, &options).unwrap()),
+        );
+    }
+    let s = scene("extremes/huge_curved.json");
+    let view = View::new(&s.camera, s.viewport);
+    for dp in [Datapath::F32, Datapath::F64] {
+        g.bench_function(format!("functional/huge_curved/k1e-4/{}", dp.name()), |b| {
+            b.iter(|| raster::render_functional(&s, &view, 1e-4, dp, false).unwrap())
+        });
+    }
+    g.finish();
+}
+
 criterion_group!(
     benches,
+    scope_and_extremes,
     scenes,
     stages,
     timed_vs_functional,
