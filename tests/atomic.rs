@@ -7,26 +7,16 @@
 //! time limits, and a run interrupted earlier or later than expected must leave the same.
 #![cfg(target_os = "linux")]
 
+mod common;
+use common::{bin, files_in, run};
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, ExitStatus, Output, Stdio};
+use std::process::{Child, Command, ExitStatus, Stdio};
 use std::time::{Duration, Instant};
 
 /// Long enough for any poll on a loaded machine; only reached when something is wrong.
 const PATIENCE: Duration = Duration::from_secs(120);
 /// The wait before the renames: far beyond any test, so a held run is always interrupted.
 const HOLD: &str = "600";
-
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_lembo-sim"))
-}
-
-fn run(args: &[&str], cwd: &Path) -> Output {
-    bin()
-        .args(args)
-        .current_dir(cwd)
-        .output()
-        .expect("the binary runs")
-}
 
 /// Starts a render that waits before renaming its outputs.
 fn start_held(args: &[&str], cwd: &Path) -> Child {
@@ -38,17 +28,6 @@ fn start_held(args: &[&str], cwd: &Path) -> Child {
         .stderr(Stdio::piped())
         .spawn()
         .expect("the binary starts")
-}
-
-fn files_in(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = match std::fs::read_dir(dir) {
-        Ok(rd) => rd
-            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-            .collect(),
-        Err(_) => vec![],
-    };
-    v.sort();
-    v
 }
 
 /// Polls `done` until it holds; fails the test after [`PATIENCE`].

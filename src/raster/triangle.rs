@@ -1057,6 +1057,42 @@ mod tests {
         )
     }
 
+    /// Asserts that the fragment of `t` at pixel (i, j) has the depth and position of the
+    /// view ray's hit with the plane of the world triangle `p`, and the normal blended from
+    /// `n` by the hit's world barycentrics; returns the hit.
+    fn assert_fragment_on_plane(
+        view: &View,
+        t: &ScreenTriangle<f64>,
+        i: u32,
+        j: u32,
+        p: &[DVec3; 3],
+        n: &[DVec3; 3],
+    ) -> DVec3 {
+        let plane_n = (p[1] - p[0]).cross(p[2] - p[0]);
+        let (o, d) = view.ray(i as f64 + 0.5, j as f64 + 0.5);
+        let hit = o + d * (plane_n.dot(p[0] - o) / plane_n.dot(d));
+        // World barycentrics of the hit.
+        let area = plane_n.length_squared();
+        let b = [
+            (p[1] - hit).cross(p[2] - hit).dot(plane_n) / area,
+            (p[2] - hit).cross(p[0] - hit).dot(plane_n) / area,
+            (p[0] - hit).cross(p[1] - hit).dot(plane_n) / area,
+        ];
+        let want_n = (n[0] * b[0] + n[1] * b[1] + n[2] * b[2]).normalize();
+        let f = t.fragment(i, j);
+        let got_n = DVec3::from_array(f.normal).normalize();
+        let got_p = DVec3::from_array(f.position);
+        // Tolerances: snapping moves the vertices by up to 1/512 pixel, about 4e-4 world
+        // units at the far vertex, more along the grazing plane.
+        assert!(
+            (f.z - view.depth_of(hit)).abs() < 1e-5,
+            "depth at ({i}, {j})"
+        );
+        assert!((got_p - hit).length() < 3e-3, "position at ({i}, {j})");
+        assert!((got_n - want_n).length() < 1e-3, "normal at ({i}, {j})");
+        hit
+    }
+
     #[test]
     fn perspective_correct_depth_normal_and_position_match_the_plane() {
         // A triangle strongly slanted in depth, seen in perspective, with three different
@@ -1088,34 +1124,13 @@ mod tests {
             DVec3::new(0.0, 1.0, 0.0),
         ];
         let t = setup_one::<f64>(7, &p, &n, &view).unwrap();
-        let plane_n = (p[1] - p[0]).cross(p[2] - p[0]);
         let (mut checked, mut affine_miss) = (0, 0.0f64);
         for j in 0..VP.height {
             for i in 0..VP.width {
                 if !t.covers(i, j) {
                     continue;
                 }
-                let (o, d) = view.ray(i as f64 + 0.5, j as f64 + 0.5);
-                let hit = o + d * (plane_n.dot(p[0] - o) / plane_n.dot(d));
-                // World barycentrics of the hit.
-                let area = plane_n.length_squared();
-                let b = [
-                    (p[1] - hit).cross(p[2] - hit).dot(plane_n) / area,
-                    (p[2] - hit).cross(p[0] - hit).dot(plane_n) / area,
-                    (p[0] - hit).cross(p[1] - hit).dot(plane_n) / area,
-                ];
-                let want_n = (n[0] * b[0] + n[1] * b[1] + n[2] * b[2]).normalize();
-                let f = t.fragment(i, j);
-                let got_n = DVec3::from_array(f.normal).normalize();
-                let got_p = DVec3::from_array(f.position);
-                // Tolerances: snapping moves the vertices by up to 1/512 pixel, about 4e-4
-                // world units at the far vertex, more along the grazing plane.
-                assert!(
-                    (f.z - view.depth_of(hit)).abs() < 1e-5,
-                    "depth at ({i}, {j})"
-                );
-                assert!((got_p - hit).length() < 3e-3, "position at ({i}, {j})");
-                assert!((got_n - want_n).length() < 1e-3, "normal at ({i}, {j})");
+                let hit = assert_fragment_on_plane(&view, &t, i, j, &p, &n);
                 // What affine screen-space weights would give.
                 let e = t.edge_values(i, j).map(|v| v as f64 / t.area2 as f64);
                 let affine: DVec3 = (0..3)
@@ -1424,8 +1439,6 @@ mod tests {
         let mut pieces = Vec::new();
         let o = setup::<f64>(7, &p, &n, [1.0; 3], &view, &mut pieces);
         assert!(o.fan >= 2 && pieces.len() >= 2, "{o:?}");
-        let plane_n = (p[1] - p[0]).cross(p[2] - p[0]);
-        let area = plane_n.length_squared();
         let h = hits(&pieces);
         let mut checked = 0;
         for t in &pieces {
@@ -1435,23 +1448,7 @@ mod tests {
                         continue;
                     }
                     assert_eq!(h[(j * VP.width + i) as usize], 1, "({i}, {j})");
-                    let (o, d) = view.ray(i as f64 + 0.5, j as f64 + 0.5);
-                    let hit = o + d * (plane_n.dot(p[0] - o) / plane_n.dot(d));
-                    let b = [
-                        (p[1] - hit).cross(p[2] - hit).dot(plane_n) / area,
-                        (p[2] - hit).cross(p[0] - hit).dot(plane_n) / area,
-                        (p[0] - hit).cross(p[1] - hit).dot(plane_n) / area,
-                    ];
-                    let want_n = (n[0] * b[0] + n[1] * b[1] + n[2] * b[2]).normalize();
-                    let f = t.fragment(i, j);
-                    let got_n = DVec3::from_array(f.normal).normalize();
-                    let got_p = DVec3::from_array(f.position);
-                    assert!(
-                        (f.z - view.depth_of(hit)).abs() < 1e-5,
-                        "depth at ({i}, {j})"
-                    );
-                    assert!((got_p - hit).length() < 3e-3, "position at ({i}, {j})");
-                    assert!((got_n - want_n).length() < 1e-3, "normal at ({i}, {j})");
+                    assert_fragment_on_plane(&view, t, i, j, &p, &n);
                     checked += 1;
                 }
             }
