@@ -1100,19 +1100,7 @@ mod tests {
         // at P: the fragment's depth is P's depth, its position is P, and its normal is the
         // world-space barycentric blend at P. Affine (not perspective-correct) weights miss
         // by far more than the tolerance, so the test can fail.
-        let view = View::new(
-            &Camera {
-                eye: [0.0, 0.0, 0.0],
-                target: [0.0, 0.0, -1.0],
-                up: [0.0, 1.0, 0.0],
-                projection: Projection::Perspective {
-                    fovy_deg: 60.0,
-                    near: 0.1,
-                    far: 100.0,
-                },
-            },
-            VP,
-        );
+        let view = perspective_view();
         let p = [
             DVec3::new(-1.0, -0.6, -1.5),
             DVec3::new(2.5, -0.4, -8.0),
