@@ -98,9 +98,7 @@ impl Counts {
     pub fn quad_efficiency(&self) -> Option<f64> {
         (self.quads > 0).then(|| self.fragments as f64 / (4 * self.quads) as f64)
     }
-}
 
-impl Counts {
     /// Counts a lembo Setup dropped.
     pub fn add_cull(&mut self, cull: setup::Cull) {
         match cull {
