@@ -24,6 +24,8 @@
 //! - [`rop`]: depth test, per-fragment Phong (paper 000 equation 6), frame buffer.
 //! - [`reference`]: the exact f64 ray-patch reference and the accuracy metrics.
 //! - [`scene`], [`camera`]: the JSON trace format and OpenGL-convention cameras.
+//! - [`datapath_study`]: f32 against f64 over seeded random lembos (issue 7), for
+//!   `examples/datapath_study.rs` and `tests/datapath.rs`.
 //! - [`job`], [`report`]: the `render` command's work and its `report.json` / `report.txt`;
 //!   [`output`]: every output file written whole or not at all, also under Ctrl-C;
 //!   [`compare`]: lembos against triangles against the exact surface; [`sweep`]: many
@@ -39,6 +41,7 @@ pub mod camera;
 pub mod compare;
 pub mod config;
 pub mod datapath;
+pub mod datapath_study;
 pub mod discoid;
 pub mod error;
 pub mod job;

@@ -1,0 +1,264 @@
+//! The datapath study in small (issue 7, item 2): the first cases of the study's default
+//! seed, every family, both datapaths, k = 0.25 and 1 px, against the exact reference
+//! (`lembo_sim::datapath_study`, which `examples/datapath_study.rs` runs in full). It
+//! asserts what a user of the f32 datapath relies on, with the bounds measured by the full
+//! study (README, "f32 against f64 over random lembos") and some headroom:
+//! - no family fails (no error, no panic);
+//! - f64 keeps the guarantee `max_scanline_deviation_px <= k` within 1e-9 px on the
+//!   ordinary families, f32 within [`F32_SLACK_ORDINARY_PX`];
+//! - coverage errors within each family's measured bounds, f32's winning lembo per pixel
+//!   as f64's but for a few pixels (ties in depth where the two lembos meet), and f32's
+//!   shading within [`SHADE_DIFF_MAX`] of f64's elsewhere;
+//! - no unpaired roots, cracks or double hits.
+//!
+//! A second test pins the segmenter defect the study found (`traces/extremes/found/`).
+
+use lembo_sim::camera::View;
+use lembo_sim::datapath::Datapath;
+use lembo_sim::datapath_study::{run, summarise, CaseResult, Family, Settings, FAMILIES};
+use lembo_sim::raster::render_functional;
+use lembo_sim::scene::Scene;
+use std::path::Path;
+
+/// The study's default seed: these cases are the first of its default run.
+const SEED: u64 = 1;
+
+/// Cases per family.
+const CASES: u32 = 10;
+
+const KS: [f64; 2] = [0.25, 1.0];
+
+/// f32's largest slack on the ordinary families [pixels]; the full study measured 1.5e-4.
+const F32_SLACK_ORDINARY_PX: f64 = 1e-3;
+
+/// f64's largest slack on the ordinary families [pixels]: rounding only.
+const F64_SLACK_ORDINARY_PX: f64 = 1e-9;
+
+/// The families whose screen coordinates stay within a few hundred pixels and whose level
+/// curves turn gently: there the guarantee must hold.
+const ORDINARY: [Family; 6] = [
+    Family::Ordinary,
+    Family::Far1e3,
+    Family::Far1e5,
+    Family::Far1e7,
+    Family::NearlyFlat,
+    Family::NearlyDegenerate,
+];
+
+/// Per family: the largest slack [pixels] in f32 and in f64, the largest false positive and
+/// false negative fractions (of the pixels the reference covers) and crack pixels per case
+/// in either datapath, and the pixels whose winning lembo differs between f32 and f64.
+/// The full study's maxima (seed 1, 200 cases per family) with headroom.
+struct Bounds {
+    family: Family,
+    slack_f32_px: f64,
+    slack_f64_px: f64,
+    false_positive_frac: f64,
+    false_negative_frac: f64,
+    crack_pixels: u64,
+    winner_diff_px: u64,
+}
+
+/// The largest colour channel difference between f32 and f64 where both have the same
+/// winner [0-255]; measured 1 in every family.
+const SHADE_DIFF_MAX: u64 = 2;
+
+const BOUNDS: [Bounds; 8] = [
+    Bounds {
+        family: Family::Ordinary,
+        slack_f32_px: F32_SLACK_ORDINARY_PX,
+        slack_f64_px: F64_SLACK_ORDINARY_PX,
+        // Measured 1.8e-2 and 5.6e-3.
+        false_positive_frac: 0.05,
+        false_negative_frac: 0.02,
+        crack_pixels: 0,
+        winner_diff_px: 8,
+    },
+    Bounds {
+        family: Family::Far1e3,
+        slack_f32_px: F32_SLACK_ORDINARY_PX,
+        slack_f64_px: F64_SLACK_ORDINARY_PX,
+        // Measured 1.8e-2 and 5.6e-3.
+        false_positive_frac: 0.05,
+        false_negative_frac: 0.02,
+        crack_pixels: 0,
+        winner_diff_px: 8,
+    },
+    Bounds {
+        family: Family::Far1e5,
+        slack_f32_px: F32_SLACK_ORDINARY_PX,
+        slack_f64_px: F64_SLACK_ORDINARY_PX,
+        // Measured 1.8e-2 and 5.6e-3.
+        false_positive_frac: 0.05,
+        false_negative_frac: 0.02,
+        crack_pixels: 0,
+        winner_diff_px: 8,
+    },
+    Bounds {
+        family: Family::Far1e7,
+        slack_f32_px: F32_SLACK_ORDINARY_PX,
+        slack_f64_px: F64_SLACK_ORDINARY_PX,
+        // Measured 1.8e-2 and 5.6e-3.
+        false_positive_frac: 0.05,
+        false_negative_frac: 0.02,
+        crack_pixels: 0,
+        winner_diff_px: 8,
+    },
+    // Screen coefficients up to 1e6: one f32 rounding step is 0.06 px there. Measured: f32
+    // slack 3.76 px, f64 3.1e-9 px, false positives 1.5e-5, no false negative.
+    Bounds {
+        family: Family::Large,
+        slack_f32_px: 5.0,
+        slack_f64_px: 1e-7,
+        false_positive_frac: 1e-3,
+        false_negative_frac: 1e-3,
+        crack_pixels: 0,
+        winner_diff_px: 4,
+    },
+    Bounds {
+        family: Family::NearlyFlat,
+        slack_f32_px: F32_SLACK_ORDINARY_PX,
+        slack_f64_px: F64_SLACK_ORDINARY_PX,
+        // Measured: coverage equal to the reference's.
+        false_positive_frac: 1e-3,
+        false_negative_frac: 1e-3,
+        crack_pixels: 0,
+        winner_diff_px: 2,
+    },
+    // Slivers: the reference covers a few pixel centres or none, so one extra pixel is a
+    // large fraction. Measured 8.0 and 0.14.
+    Bounds {
+        family: Family::NearlyDegenerate,
+        slack_f32_px: F32_SLACK_ORDINARY_PX,
+        slack_f64_px: F64_SLACK_ORDINARY_PX,
+        false_positive_frac: 12.0,
+        false_negative_frac: 0.3,
+        crack_pixels: 0,
+        winner_diff_px: 12,
+    },
+    // The perspective approximation (section 4) moves the outline, and notches it by a pixel
+    // here and there (measured: 0.12 and 0.21, up to 2 "crack" pixels, outside both lembos'
+    // screen images); the known segmenter defect (traces/extremes/found/README.md) breaks
+    // the guarantee in both datapaths (measured slack 2.91 px). Up to 91 pixels change
+    // winner: depth ties where the two lembos meet, seen at a grazing angle.
+    Bounds {
+        family: Family::SteepPerspective,
+        slack_f32_px: 4.0,
+        slack_f64_px: 4.0,
+        false_positive_frac: 0.3,
+        false_negative_frac: 0.3,
+        crack_pixels: 4,
+        winner_diff_px: 150,
+    },
+];
+
+fn bounds(family: Family) -> &'static Bounds {
+    BOUNDS
+        .iter()
+        .find(|b| b.family == family)
+        .expect("every family has bounds")
+}
+
+fn study() -> (Settings, Vec<CaseResult>) {
+    let settings = Settings {
+        cases_per_family: CASES,
+        seed: SEED,
+        ks: KS.to_vec(),
+        families: FAMILIES.to_vec(),
+    };
+    let results = run(&settings);
+    (settings, results)
+}
+
+#[test]
+fn random_lembos_keep_the_measured_datapath_bounds() {
+    let (settings, results) = study();
+    assert_eq!(results.len(), FAMILIES.len() * CASES as usize);
+    for r in &results {
+        for m in &r.measurements {
+            let what = format!(
+                "{} case {} {} k = {}",
+                m.family.name(),
+                m.index,
+                m.datapath.name(),
+                m.k_px
+            );
+            assert_eq!(m.status, "ok", "{what}");
+            let b = bounds(m.family);
+            let slack_bound = match m.datapath {
+                Datapath::F32 => b.slack_f32_px,
+                Datapath::F64 => b.slack_f64_px,
+            };
+            if let Some(slack) = m.slack_px {
+                assert!(
+                    slack <= slack_bound,
+                    "{what}: max |y - y_j| {} > k + {slack_bound}",
+                    m.max_scanline_deviation_px
+                );
+            }
+            assert!(
+                m.false_positive_frac <= b.false_positive_frac,
+                "{what}: false positives {} px of {}",
+                m.false_positive_px,
+                m.reference_covered_px
+            );
+            assert!(
+                m.false_negative_frac <= b.false_negative_frac,
+                "{what}: false negatives {} px of {}",
+                m.false_negative_px,
+                m.reference_covered_px
+            );
+            assert!(
+                m.winner_diff_vs_f64_px <= b.winner_diff_px,
+                "{what}: {} px have another winner than in f64",
+                m.winner_diff_vs_f64_px
+            );
+            assert!(
+                m.shade_diff_vs_f64_max <= SHADE_DIFF_MAX,
+                "{what}: shading differs from f64 by {} / 255",
+                m.shade_diff_vs_f64_max
+            );
+            assert!(m.crack_pixels <= b.crack_pixels, "{what}: cracks {m:?}");
+            assert_eq!(
+                (m.unpaired_roots, m.double_hit_pixels),
+                (0, 0),
+                "{what}: unpaired roots, double hits"
+            );
+        }
+    }
+    // The ordinary families are where the guarantee is promised: every case drew something.
+    for s in summarise(&settings, &results) {
+        if ORDINARY.contains(&s.family) && s.family != Family::NearlyDegenerate {
+            assert_eq!(s.drawn, s.cases, "{s:?}");
+            assert_eq!(s.holds_frac, 1.0, "{s:?}");
+        }
+    }
+}
+
+/// The defects the full study found (`traces/extremes/found/README.md`) still reproduce:
+/// the segmenter's clamped last chord far off the scanline in both datapaths, and unpaired
+/// roots on a curved sliver in f32. When one is fixed this test fails: update it, the
+/// README there and the bounds above.
+#[test]
+fn found_defects_still_reproduce() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("traces/extremes/found");
+    // (file, k, max |y - y_j| in both datapaths, unpaired roots in f32 and f64)
+    for (file, k, deviation, unpaired) in [
+        ("steep_perspective_25.json", 1.0, 3.9095, [0, 0]),
+        ("steep_perspective_39.json", 0.25, 0.6146, [0, 0]),
+        ("nearly_degenerate_160.json", 0.25, 0.0019, [6, 0]),
+    ] {
+        let scene = Scene::load(&dir.join(file)).unwrap_or_else(|e| panic!("{file}: {e}"));
+        let view = View::new(&scene.camera, scene.viewport);
+        for (datapath, unpaired) in [Datapath::F32, Datapath::F64].into_iter().zip(unpaired) {
+            let what = format!("{file} {} k = {k}", datapath.name());
+            let frame = render_functional(&scene, &view, k, datapath, true).unwrap();
+            let got = frame.probe.expect("probe").max_scanline_deviation_px;
+            assert!(
+                (got - deviation).abs() < 1e-3,
+                "{what}: max |y - y_j| {got}, recorded {deviation}"
+            );
+            assert_eq!(frame.counts.unpaired_roots, unpaired, "{what}");
+        }
+    }
+}
