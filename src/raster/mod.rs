@@ -67,6 +67,8 @@ pub struct Counts {
     pub segments: u64,
     /// Segments clamped to their interval end (the last of each walk, flat curves).
     pub segments_clamped: u64,
+    /// Extra splits of a walk's clamped last chord whose midpoint error exceeded k.
+    pub segments_refined: u64,
     pub subsegments: u64,
     /// Segments split at a fold of x(t).
     pub folds: u64,
@@ -136,6 +138,7 @@ impl std::ops::AddAssign for Counts {
         self.saddle_splits += o.saddle_splits;
         self.segments += o.segments;
         self.segments_clamped += o.segments_clamped;
+        self.segments_refined += o.segments_refined;
         self.subsegments += o.subsegments;
         self.folds += o.folds;
         self.triangles += o.triangles;

@@ -150,8 +150,11 @@ impl<R: Real, S: FragmentSink<R>> FragmentSink<R> for Probe<'_, S> {
 
         let idx = j as usize * self.width as usize + i as usize;
         let mut ends = [NO_END; 2];
+        // Ends on a piece's edges (a lembo Setup split) are not recorded: a piece's edge
+        // indices and crossings are its own, not the lembo's, so they cannot be matched
+        // with a neighbour's; double hits across a split lembo's outer edge go uncounted.
         for (n, (end, other)) in [(&sub.a, &sub.b), (&sub.b, &sub.a)].into_iter().enumerate() {
-            if end.edge != INTERIOR {
+            if end.edge != INTERIOR && l.domain.is_none() {
                 ends[n] = EdgeEnd {
                     edge: end.edge,
                     crossing: crossing_index(l, end),

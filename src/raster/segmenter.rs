@@ -115,13 +115,120 @@ pub fn segments<R: Real>(
                 p = p1;
             }
             None => {
-                out.push(Segment { p0: p, p1: iv.end });
-                counts.segments += 1;
                 counts.segments_clamped += 1;
-                return Ok(());
+                return last_chords(l, yj, k, iv, p, first, cap, out, counts);
             }
         }
     }
+}
+
+/// Closes the walk from `p` to the interval end. The clamped chord's midpoint error is not
+/// k by construction (the step that would have reached the end did not exist, passed it, or
+/// left the domain): where it exceeds k, the chord is split at the curve point halfway in
+/// walk key, recursively, so every chord of the walk stays within k of the scanline. The
+/// curve is a graph over the walk direction inside the interval's part, so the point with a
+/// given key is unique: the root of Y = y_j on the line `tau·p = key` where Y increases
+/// across the curve (towards `rot_ccw(tau)`).
+#[allow(clippy::too_many_arguments)]
+fn last_chords<R: Real>(
+    l: &ScreenLembo<R>,
+    yj: R,
+    k: R,
+    iv: &Interval<R>,
+    p: CurvePoint<R>,
+    first: usize,
+    cap: usize,
+    out: &mut Vec<Segment<R>>,
+    counts: &mut Counts,
+) -> Result<(), CapExceeded> {
+    // Rounding of Y in the datapath, so f32 does not split chords that are exactly k.
+    let slack = k * R::of(1e-3) + R::epsilon() * R::of(64.0) * (yj.abs() + R::one());
+    let too_far = |a: &CurvePoint<R>, b: &CurvePoint<R>| {
+        let m = [
+            (a.uv[0] + b.uv[0]) * R::of(0.5),
+            (a.uv[1] + b.uv[1]) * R::of(0.5),
+        ];
+        (l.y.eval(m[0], m[1]) - yj).abs() > k + slack
+    };
+    // Depth-first, in walk order: (chord end, depth) still to close from `p`.
+    let mut todo = [(iv.end, 0u32); 48];
+    let mut n = 1;
+    let mut p = p;
+    while n > 0 {
+        let (e, depth) = todo[n - 1];
+        let split = if depth + 1 < todo.len() as u32 && too_far(&p, &e) {
+            let key = (dot(iv.tau, p.uv) + dot(iv.tau, e.uv)) * R::of(0.5);
+            curve_at_key(l, yj, iv.tau, key).filter(|q| {
+                let qk = dot(iv.tau, *q);
+                let eps = R::epsilon() * R::of(64.0);
+                qk > dot(iv.tau, p.uv)
+                    && qk < dot(iv.tau, e.uv)
+                    && q[0] >= -eps
+                    && q[1] >= -eps
+                    && q[0] + q[1] <= R::one() + eps
+            })
+        } else {
+            None
+        };
+        match split {
+            Some(q) => {
+                let mid = CurvePoint {
+                    uv: q,
+                    x: l.x.eval(q[0], q[1]),
+                    edge: INTERIOR,
+                };
+                todo[n - 1] = (e, depth + 1);
+                todo[n] = (mid, depth + 1);
+                n += 1;
+                counts.segments_refined += 1;
+            }
+            None => {
+                if out.len() - first >= cap {
+                    return Err(CapExceeded);
+                }
+                out.push(Segment { p0: p, p1: e });
+                counts.segments += 1;
+                p = e;
+                n -= 1;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The point of the curve Y = y_j on the line `tau·p = key` where Y increases towards
+/// `rot_ccw(tau)`, or `None` when the line misses the curve.
+fn curve_at_key<R: Real>(l: &ScreenLembo<R>, yj: R, tau: V2<R>, key: R) -> Option<V2<R>> {
+    let t2 = dot(tau, tau);
+    if !(t2 > R::zero()) {
+        return None;
+    }
+    // p(s) = o + s n, with o on the line and n = rot_ccw(tau) across it.
+    let o = [tau[0] * key / t2, tau[1] * key / t2];
+    let n = [-tau[1], tau[0]];
+    let h = l.hessian;
+    // Y(p(s)) - y_j = a s² + b s + c.
+    let a = R::of(0.5) * quad_form(h, n, n);
+    let (gu, gv) = l.y.grad(o[0], o[1]);
+    let b = gu * n[0] + gv * n[1];
+    let c = l.y.eval(o[0], o[1]) - yj;
+    let disc = b * b - R::of(4.0) * a * c;
+    if !(disc >= R::zero()) {
+        return None;
+    }
+    let sq = disc.sqrt();
+    // The root where dY/ds = 2 a s + b = +sqrt(disc), in the stable form.
+    let s = if b < R::zero() {
+        (sq - b) / (R::of(2.0) * a)
+    } else {
+        let d = b + sq;
+        if d == R::zero() {
+            return None;
+        }
+        -R::of(2.0) * c / d
+    };
+    let q = [o[0] + s * n[0], o[1] + s * n[1]];
+    (q[0].is_finite() && q[1].is_finite()).then_some(q)
 }
 
 /// One step of the extreme method from `p`, or `None` when it has no finite forward solution.
