@@ -198,6 +198,8 @@ fn last_chords<R: Real>(
 
 /// The point of the curve Y = y_j on the line `tau·p = key` where Y increases towards
 /// `rot_ccw(tau)`, or `None` when the line misses the curve.
+// `!(x > 0)` is deliberate: it also rejects NaN.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
 fn curve_at_key<R: Real>(l: &ScreenLembo<R>, yj: R, tau: V2<R>, key: R) -> Option<V2<R>> {
     let t2 = dot(tau, tau);
     if !(t2 > R::zero()) {
