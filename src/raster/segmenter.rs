@@ -395,6 +395,53 @@ mod tests {
         }
     }
 
+    fn closing_chord_is_split_until_within_k<R: Real>(tol: f64) {
+        // As if the walk found no step at an interval's start: the one chord to its end is
+        // far off the curve (half a bowl's level curve), so it is split in walk key until
+        // every chord is within k, in walk order, from the start to the end.
+        let l = screen_lembo::<R>(x_linear(), y_bowl());
+        let (walks, _) = run(&l, 45, 0.1);
+        for (iv, _) in &walks {
+            let (mut out, mut c) = (Vec::new(), Counts::default());
+            let yj = R::of(45.5);
+            last_chords(
+                &l,
+                yj,
+                R::of(0.1),
+                iv,
+                iv.start,
+                0,
+                1 << 16,
+                &mut out,
+                &mut c,
+            )
+            .expect("under the cap");
+            assert!(c.segments_refined > 2 && out.len() > 2, "{c:?}");
+            assert_eq!((out[0].p0, out.last().unwrap().p1), (iv.start, iv.end));
+            for (n, s) in out.iter().enumerate() {
+                let mid = [
+                    (s.p0.uv[0] + s.p1.uv[0]) * R::of(0.5),
+                    (s.p0.uv[1] + s.p1.uv[1]) * R::of(0.5),
+                ];
+                assert!(y_error(&l, 45, mid) <= 0.1 + tol, "chord {n}: {s:?}");
+                assert!(
+                    y_error(&l, 45, s.p1.uv) < tol,
+                    "chord {n} ends off the curve"
+                );
+                assert!(dot(iv.tau, s.p1.uv) > dot(iv.tau, s.p0.uv), "walk order");
+                if n + 1 < out.len() {
+                    assert_eq!(s.p1, out[n + 1].p0);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn segmenter_closing_chord_is_split_until_within_k() {
+        closing_chord_is_split_until_within_k::<f32>(1e-3);
+        closing_chord_is_split_until_within_k::<f64>(1e-9);
+    }
+
     #[test]
     fn segmenter_midpoint_error_stays_within_k_in_f32() {
         for (y, j) in [(y_parabolic(), 40), (y_bowl(), 45)] {
