@@ -286,6 +286,7 @@ scene_tests! {
     subpixel => "subpixel.json",
     huge => "huge.json",
     huge_curved => "huge_curved.json",
+    close_up => "close_up.json",
     edge_on => "edge_on.json",
     degenerate_coincident => "degenerate_coincident.json",
     degenerate_collinear => "degenerate_collinear.json",
