@@ -19,25 +19,16 @@ use lembo_sim::pipeline::{actor::SimOptions, run_timed};
 use lembo_sim::raster::{
     self, fragment, interval, minmax, segmenter, setup, subsegmenter, triangle, Counts,
 };
-use lembo_sim::scene::Scene;
-use std::path::Path;
 
-fn scene(name: &str) -> Scene {
-    Scene::load(
-        &Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("traces")
-            .join(name),
-    )
-    .unwrap()
-}
+#[path = "../tests/support/scenes.rs"]
+mod scenes;
 
 fn scenes(c: &mut Criterion) {
     let mut g = c.benchmark_group("functional_render");
     g.sample_size(10);
     for name in ["sphere24.json", "bunny.json"] {
         for side in [512u32, 1024] {
-            let mut s = scene(name);
-            s.set_viewport(side, side).unwrap();
+            let s = scenes::trace(name, Some(side));
             let view = View::new(&s.camera, s.viewport);
             let frags = raster::render_functional(&s, &view, 0.5, Datapath::F32, false)
                 .unwrap()
@@ -59,7 +50,7 @@ fn scenes(c: &mut Criterion) {
 }
 
 fn stages(c: &mut Criterion) {
-    let s = scene("sphere24.json");
+    let s = scenes::trace("sphere24.json", None);
     let view = View::new(&s.camera, s.viewport);
     let lembos: Vec<_> = s
         .lembos()
@@ -194,7 +185,7 @@ impl<R: lembo_sim::datapath::Real> triangle::TriangleSink<R> for CountSink {
 fn more_stages(c: &mut Criterion) {
     let mut g = c.benchmark_group("stages_more");
     g.sample_size(10);
-    let s = scene("sphere24.json");
+    let s = scenes::trace("sphere24.json", None);
     let view = View::new(&s.camera, s.viewport);
     let t = Tessellation::new(&s, 4);
     let mut tris = Vec::new();
@@ -249,8 +240,7 @@ fn more_stages(c: &mut Criterion) {
 fn timed_vs_functional(c: &mut Criterion) {
     let mut g = c.benchmark_group("timed_vs_functional");
     g.sample_size(10);
-    let mut s = scene("bunny.json");
-    s.set_viewport(1024, 1024).unwrap();
+    let s = scenes::trace("bunny.json", Some(1024));
     let view = View::new(&s.camera, s.viewport);
     let arch = ArchConfig::baseline();
     let options = SimOptions::default();
@@ -268,8 +258,7 @@ fn timed_vs_functional(c: &mut Criterion) {
 fn triangle_path(c: &mut Criterion) {
     let mut g = c.benchmark_group("triangle_path");
     g.sample_size(10);
-    let mut s = scene("bunny.json");
-    s.set_viewport(1024, 1024).unwrap();
+    let s = scenes::trace("bunny.json", Some(1024));
     let view = View::new(&s.camera, s.viewport);
     for n in [1u32, 4] {
         let t = Tessellation::new(&s, n);
@@ -292,7 +281,7 @@ fn triangle_path(c: &mut Criterion) {
 fn discoid_passes(c: &mut Criterion) {
     let mut g = c.benchmark_group("discoid_passes");
     g.sample_size(10);
-    let s = scene("bunny_discoids.json");
+    let s = scenes::trace("bunny_discoids.json", None);
     let view = View::new(&s.camera, s.viewport);
     let t = s.discoid_threshold;
     for mode in [BlendMode::Rgba8, BlendMode::F16, BlendMode::F32] {
@@ -319,26 +308,6 @@ fn discoid_passes(c: &mut Criterion) {
     g.finish();
 }
 
-/// sphere24 in view, then `copies` more far to the side, out of the viewport (the scene of
-/// `tests/scope.rs`).
-fn with_offscreen_copies(copies: usize) -> Scene {
-    let mut objects = vec![r#"{"builtin": "sphere24", "color": [0.8, 0.3, 0.2]}"#.to_string()];
-    for c in 0..copies {
-        objects.push(format!(
-            r#"{{"builtin": "sphere24", "transform": {{"translate": [{}, 0, 0]}}}}"#,
-            40.0 + 5.0 * c as f64
-        ));
-    }
-    let json = format!(
-        r#"{{"name": "offscreen", "viewport": {{"width": 512, "height": 512}},
-            "camera": {{"eye": [0, 1.2, 3.8], "target": [0, 0, 0],
-                        "projection": {{"kind": "perspective", "fovy_deg": 40, "near": 0.1, "far": 100}}}},
-            "objects": [{}]}}"#,
-        objects.join(", ")
-    );
-    Scene::from_json(&json, "offscreen", Path::new(".")).unwrap()
-}
-
 /// Model only what a scene requires (issue 7): sphere24 alone against the same with nine
 /// off-screen copies (90 % of the lembos off screen), functional and timed; and a lembo 2e7
 /// px across (`traces/extremes/huge_curved.json`, k = 1e-4), which Setup splits.
@@ -347,7 +316,7 @@ fn scope_and_extremes(c: &mut Criterion) {
     g.sample_size(10);
     let (arch, options) = (ArchConfig::baseline(), SimOptions::default());
     for copies in [0usize, 9] {
-        let s = with_offscreen_copies(copies);
+        let s = scenes::with_offscreen_copies(copies, 512);
         let view = View::new(&s.camera, s.viewport);
         g.bench_function(format!("functional/sphere24+{copies}_offscreen/512"), |b| {
             b.iter(|| raster::render_functional(&s, &view, 0.5, Datapath::F32, false).unwrap())
@@ -357,7 +326,7 @@ fn scope_and_extremes(c: &mut Criterion) {
             |b| b.iter(|| run_timed(&s, &view, 0.5, Datapath::F32, &arch, None, &options).unwrap()),
         );
     }
-    let s = scene("extremes/huge_curved.json");
+    let s = scenes::trace("extremes/huge_curved.json", None);
     let view = View::new(&s.camera, s.viewport);
     for dp in [Datapath::F32, Datapath::F64] {
         g.bench_function(format!("functional/huge_curved/k1e-4/{}", dp.name()), |b| {

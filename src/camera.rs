@@ -228,9 +228,9 @@ mod tests {
         assert!(0.0 < near && near < far && far < 1.0);
     }
 
-    #[test]
-    fn linear_depth_inverts_the_depth_mapping() {
-        for projection in [
+    /// A perspective and an orthographic projection with the same depth range.
+    fn both_projections() -> [Projection; 2] {
+        [
             Projection::Perspective {
                 fovy_deg: 45.0,
                 near: 0.5,
@@ -241,7 +241,12 @@ mod tests {
                 near: 0.5,
                 far: 20.0,
             },
-        ] {
+        ]
+    }
+
+    #[test]
+    fn linear_depth_inverts_the_depth_mapping() {
+        for projection in both_projections() {
             let v = cam(projection);
             for d in [0.5, 1.0, 4.0, 19.0] {
                 let z = v.depth_of(DVec3::new(0.2, -0.1, 5.0 - d));
@@ -252,18 +257,7 @@ mod tests {
 
     #[test]
     fn rays_pass_through_the_points_that_project_to_their_sample() {
-        for projection in [
-            Projection::Perspective {
-                fovy_deg: 45.0,
-                near: 0.5,
-                far: 20.0,
-            },
-            Projection::Orthographic {
-                height: 3.0,
-                near: 0.5,
-                far: 20.0,
-            },
-        ] {
+        for projection in both_projections() {
             let v = cam(projection);
             let p = DVec3::new(0.3, -0.4, 0.7);
             let s = v.project(p);

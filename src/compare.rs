@@ -412,44 +412,27 @@ pub fn table(r: &CompareReport) -> String {
     let row = |t: &mut String, name: &str, a: String, b: String| {
         let _ = writeln!(t, "{name:<28} {a:>18} {b:>18}");
     };
-    row(
-        &mut t,
-        "primitives",
-        l.primitives.count.to_string(),
-        tr.primitives.count.to_string(),
-    );
-    row(
-        &mut t,
-        "vertices",
-        l.primitives.vertices.to_string(),
-        tr.primitives.vertices.to_string(),
-    );
-    row(
-        &mut t,
-        "primitive bytes",
-        l.primitives.bytes.to_string(),
-        tr.primitives.bytes.to_string(),
-    );
-    let cycles = |r: &Report| {
+    // A row with one value per report.
+    let both = |t: &mut String, name: &str, value: &dyn Fn(&Report) -> String| {
+        row(t, name, value(l), value(tr))
+    };
+    both(&mut t, "primitives", &|r| r.primitives.count.to_string());
+    both(&mut t, "vertices", &|r| r.primitives.vertices.to_string());
+    both(&mut t, "primitive bytes", &|r| {
+        r.primitives.bytes.to_string()
+    });
+    both(&mut t, "cycles", &|r| {
         r.cycles
             .as_ref()
-            .map(|c| c.total.to_string())
-            .unwrap_or_else(|| "-".into())
-    };
-    row(&mut t, "cycles", cycles(l), cycles(tr));
-    let bottleneck = |r: &Report| {
+            .map_or_else(|| "-".into(), |c| c.total.to_string())
+    });
+    both(&mut t, "bottleneck", &|r| {
         r.cycles
             .as_ref()
             .and_then(|c| c.bottleneck.clone())
             .unwrap_or_else(|| "-".into())
-    };
-    row(&mut t, "bottleneck", bottleneck(l), bottleneck(tr));
-    row(
-        &mut t,
-        "fragments",
-        l.counts.fragments.to_string(),
-        tr.counts.fragments.to_string(),
-    );
+    });
+    both(&mut t, "fragments", &|r| r.counts.fragments.to_string());
     row(
         &mut t,
         "quad efficiency",

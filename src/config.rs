@@ -23,7 +23,7 @@
 //! Not modelled here: clock domains (one clock for every unit), per-link overrides within a
 //! crossbar, and DRAM timing beyond a bandwidth-limited port.
 
-use crate::error::{read_input_string, Error, Result, MAX_TEXT_INPUT_BYTES};
+use crate::error::{read_text_file, Error, Result};
 use crate::scene::parse_strict;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -635,10 +635,7 @@ impl Default for LinksConfig {
 impl ArchConfig {
     /// Reads, parses and validates an architecture file.
     pub fn load(path: &Path) -> Result<ArchConfig> {
-        let text = read_input_string(path, MAX_TEXT_INPUT_BYTES).map_err(|source| Error::Read {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = read_text_file(path)?;
         ArchConfig::from_json(&text, &path.display().to_string())
     }
 

@@ -171,3 +171,21 @@ pub fn read_input_string(path: &std::path::Path, max: u64) -> std::io::Result<St
     String::from_utf8(read_input(path, max)?)
         .map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidData, e))
 }
+
+/// A text input file (scene, architecture, sweep spec) of at most
+/// [`MAX_TEXT_INPUT_BYTES`]; a failure is an [`Error::Read`] naming the file.
+pub fn read_text_file(path: &std::path::Path) -> Result<String> {
+    read_input_string(path, MAX_TEXT_INPUT_BYTES).map_err(|source| Error::Read {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// The directory `path` is in (`.` for a bare file name), against which the paths a file
+/// names are resolved.
+pub fn parent_dir(path: &std::path::Path) -> &std::path::Path {
+    match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => std::path::Path::new("."),
+    }
+}

@@ -38,7 +38,7 @@
 //! waits S seconds between steps 2 and 3, so a test can interrupt a run whose temporaries
 //! are all written (`tests/atomic.rs`).
 
-use crate::error::{Error, Result};
+use crate::error::{parent_dir, Error, Result};
 use std::fs::File;
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
@@ -131,10 +131,7 @@ pub fn write_paths(files: &[(PathBuf, &[u8])]) -> Result<()> {
             path: path.clone(),
             source: std::io::Error::new(std::io::ErrorKind::InvalidInput, "names no file"),
         })?;
-        let dir = match path.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-            _ => PathBuf::from("."),
-        };
+        let dir = parent_dir(path).to_path_buf();
         targets.push((dir, name.to_string_lossy().into_owned(), path.clone()));
     }
     let mut staged = Staged::default();

@@ -25,9 +25,7 @@
 use crate::camera::{Camera, Projection, Viewport, MAX_VIEWPORT_SIDE};
 use crate::discoid::shapes::{builtin_discoids, discoids_from_mesh, BUILTIN_DISCOID_NAMES};
 use crate::discoid::{BetaShape, Discoid, DiscoidSet};
-use crate::error::{
-    read_input, read_input_string, Error, Result, MAX_DATA_INPUT_BYTES, MAX_TEXT_INPUT_BYTES,
-};
+use crate::error::{parent_dir, read_input, read_text_file, Error, Result, MAX_DATA_INPUT_BYTES};
 use crate::lembo::construct::TriangleMesh;
 use crate::lembo::shapes::{builtin_mesh, BUILTIN_NAMES};
 use crate::lembo::Lembo;
@@ -107,15 +105,8 @@ pub struct SceneObject {
 impl Scene {
     /// Reads and validates a scene file; mesh paths in it are relative to its directory.
     pub fn load(path: &Path) -> Result<Scene> {
-        let text = read_input_string(path, MAX_TEXT_INPUT_BYTES).map_err(|source| Error::Read {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        let base_dir = match path.parent() {
-            Some(dir) if !dir.as_os_str().is_empty() => dir,
-            _ => Path::new("."),
-        };
-        let mut scene = Scene::from_json(&text, &path.display().to_string(), base_dir)?;
+        let text = read_text_file(path)?;
+        let mut scene = Scene::from_json(&text, &path.display().to_string(), parent_dir(path))?;
         scene.source = Some(path.to_path_buf());
         Ok(scene)
     }

@@ -39,7 +39,7 @@ use crate::config::ArchConfig;
 use crate::datapath::Datapath;
 use crate::discoid::blend::BlendMode;
 use crate::discoid::render::check_scene;
-use crate::error::{read_input_string, Error, Result, MAX_TEXT_INPUT_BYTES};
+use crate::error::{parent_dir, read_text_file, Error, Result};
 use crate::job::{
     check_tess_range, check_triangle_budget, render_reference, run_path, Mode, PrimitivePath,
     RenderJob, COMMAND_LINE, K_RANGE,
@@ -790,15 +790,11 @@ impl Plan {
     /// Reads, parses, expands and validates a spec file; scenes and the base architecture
     /// are relative to its directory.
     pub fn load(path: &Path) -> Result<Plan> {
-        let text = read_input_string(path, MAX_TEXT_INPUT_BYTES).map_err(|source| Error::Read {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        let dir = match path.parent() {
-            Some(d) if !d.as_os_str().is_empty() => d,
-            _ => Path::new("."),
-        };
-        Plan::new(Spec::parse(&text, &path.display().to_string())?, dir)
+        let text = read_text_file(path)?;
+        Plan::new(
+            Spec::parse(&text, &path.display().to_string())?,
+            parent_dir(path),
+        )
     }
 
     /// Validates an expanded spec whose relative paths start at `dir`.
@@ -1686,11 +1682,7 @@ pub fn run_merge(job: &MergeJob) -> Result<MergeOutput> {
     let mut lines: BTreeMap<usize, (String, Value, String)> = BTreeMap::new();
     for shard in &job.shards {
         let spec_path = shard.join(SPEC_JSON);
-        let text =
-            read_input_string(&spec_path, MAX_TEXT_INPUT_BYTES).map_err(|source| Error::Read {
-                path: spec_path.clone(),
-                source,
-            })?;
+        let text = read_text_file(&spec_path)?;
         let this = Spec::parse(&text, &spec_path.display().to_string())?;
         match &spec {
             None => spec = Some((this, text.into_bytes())),

@@ -13,51 +13,25 @@ use lembo_sim::pipeline::{run_timed, TimedFrame, UnitKind};
 use lembo_sim::scene::Scene;
 use std::path::Path;
 
-/// sphere24 in view, then `copies` more far to the side, out of the viewport.
-fn scene_with_offscreen(copies: usize) -> Scene {
-    let mut objects = vec![r#"{"builtin": "sphere24", "color": [0.8, 0.3, 0.2]}"#.to_string()];
-    for c in 0..copies {
-        objects.push(format!(
-            r#"{{"builtin": "sphere24", "transform": {{"translate": [{}, 0, 0]}}}}"#,
-            40.0 + 5.0 * c as f64
-        ));
-    }
-    let json = format!(
-        r#"{{"name": "offscreen", "viewport": {{"width": 128, "height": 128}},
-            "camera": {{"eye": [0, 1.2, 3.8], "target": [0, 0, 0],
-                        "projection": {{"kind": "perspective", "fovy_deg": 40, "near": 0.1, "far": 100}}}},
-            "objects": [{}]}}"#,
-        objects.join(", ")
-    );
-    Scene::from_json(&json, "offscreen", Path::new(".")).unwrap()
-}
+#[path = "support/scenes.rs"]
+mod scenes;
 
-fn lembo_path(s: &Scene) -> TimedFrame {
+/// A timed frame on the default architecture: the lembo path, or the triangle path at
+/// tessellation `tess`.
+fn timed(s: &Scene, tess: Option<u32>) -> TimedFrame {
     let view = View::new(&s.camera, s.viewport);
+    let t = tess.map(|n| Tessellation::new(s, n));
     let a = ArchConfig::default();
+    let source = t
+        .as_ref()
+        .map(|t| t as &dyn lembo_sim::raster::triangle::TriangleSource);
     run_timed(
         s,
         &view,
         0.5,
         Datapath::F32,
         &a,
-        None,
-        &SimOptions::default(),
-    )
-    .unwrap()
-}
-
-fn triangle_path(s: &Scene, n: u32) -> TimedFrame {
-    let view = View::new(&s.camera, s.viewport);
-    let t = Tessellation::new(s, n);
-    let a = ArchConfig::default();
-    run_timed(
-        s,
-        &view,
-        0.5,
-        Datapath::F32,
-        &a,
-        Some(&t),
+        source,
         &SimOptions::default(),
     )
     .unwrap()
@@ -65,14 +39,14 @@ fn triangle_path(s: &Scene, n: u32) -> TimedFrame {
 
 #[test]
 fn off_screen_primitives_cost_their_cull_test_and_no_frame_cycles() {
-    let visible = scene_with_offscreen(0);
-    let mostly_off = scene_with_offscreen(9); // 216 of 240 lembos, 90 %, off-screen
+    let visible = scenes::with_offscreen_copies(0, 128);
+    let mostly_off = scenes::with_offscreen_copies(9, 128); // 216 of 240 lembos, 90 %, off-screen
     for (name, a, b) in [
-        ("lembo", lembo_path(&visible), lembo_path(&mostly_off)),
+        ("lembo", timed(&visible, None), timed(&mostly_off, None)),
         (
             "triangle",
-            triangle_path(&visible, 2),
-            triangle_path(&mostly_off, 2),
+            timed(&visible, Some(2)),
+            timed(&mostly_off, Some(2)),
         ),
     ] {
         assert!(
@@ -95,9 +69,9 @@ fn off_screen_primitives_cost_their_cull_test_and_no_frame_cycles() {
 
 #[test]
 fn each_path_instantiates_only_its_own_units_and_buffers() {
-    let s = scene_with_offscreen(0);
+    let s = scenes::with_offscreen_copies(0, 128);
     let kinds = |t: &TimedFrame| -> Vec<UnitKind> { t.units.iter().map(|u| u.kind).collect() };
-    let lembo = kinds(&lembo_path(&s));
+    let lembo = kinds(&timed(&s, None));
     for k in [
         UnitKind::TriangleSetup,
         UnitKind::TriangleRasterizer,
@@ -105,7 +79,7 @@ fn each_path_instantiates_only_its_own_units_and_buffers() {
     ] {
         assert!(!lembo.contains(&k), "lembo path has no {k:?}");
     }
-    let tri = kinds(&triangle_path(&s, 1));
+    let tri = kinds(&timed(&s, Some(1)));
     for k in [
         UnitKind::Setup,
         UnitKind::Segmenter,
@@ -115,9 +89,9 @@ fn each_path_instantiates_only_its_own_units_and_buffers() {
         assert!(!tri.contains(&k), "triangle path has no {k:?}");
     }
     // A scene without primitives instantiates nothing.
-    let mut empty = scene_with_offscreen(0);
+    let mut empty = scenes::with_offscreen_copies(0, 128);
     empty.objects.clear();
-    assert!(lembo_path(&empty).units.is_empty());
+    assert!(timed(&empty, None).units.is_empty());
     // Blend units and their accumulation buffer exist with discoids only.
     let mut d =
         Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("traces/discoid_sphere20.json"))

@@ -13,18 +13,9 @@ use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
 use std::path::Path;
 
-fn scene(name: &str, side: Option<u32>) -> Scene {
-    let mut s = Scene::load(
-        &Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("traces")
-            .join(name),
-    )
-    .expect("trace loads");
-    if let Some(n) = side {
-        s.set_viewport(n, n).unwrap();
-    }
-    s
-}
+#[path = "support/scenes.rs"]
+mod scenes;
+use scenes::trace as scene;
 
 fn timed(scene: &Scene, arch: &ArchConfig, options: &SimOptions) -> TimedFrame {
     let view = View::new(&scene.camera, scene.viewport);

@@ -16,18 +16,9 @@ use lembo_sim::reference::metrics::measure;
 use lembo_sim::scene::Scene;
 use std::path::Path;
 
-fn scene(name: &str, side: Option<u32>) -> Scene {
-    let mut s = Scene::load(
-        &Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("traces")
-            .join(name),
-    )
-    .expect("trace loads");
-    if let Some(n) = side {
-        s.set_viewport(n, n).unwrap();
-    }
-    s
-}
+#[path = "support/scenes.rs"]
+mod scenes;
+use scenes::trace as scene;
 
 fn arch(name: &str) -> ArchConfig {
     ArchConfig::load(
