@@ -27,6 +27,7 @@ use crate::job::{
 use crate::lembo::tessellate::Tessellation;
 use crate::output::write_files;
 use crate::raster;
+use crate::raster::PerspectiveTol;
 use crate::reference::metrics::{self, Accuracy};
 use crate::reference::montage::{montage, Panel};
 use crate::reference::oracle::ReferenceImage;
@@ -57,6 +58,8 @@ pub struct CompareJob {
     /// Output directory; None for `out/<scene name>/compare/`.
     pub out: Option<PathBuf>,
     pub k: f64,
+    /// Setup's perspective tolerance of the lembo path.
+    pub perspective_tol: PerspectiveTol,
     pub tess: Tess,
     pub datapath: Datapath,
     /// Architecture file; None for the embedded baseline.
@@ -73,6 +76,7 @@ impl CompareJob {
             scene: self.scene.clone(),
             out: None,
             k: self.k,
+            perspective_tol: self.perspective_tol,
             datapath: self.datapath,
             reference: true,
             supersample: self.supersample,

@@ -14,11 +14,12 @@ use crate::output::write_paths;
 use crate::pipeline::{self, actor::SimOptions};
 use crate::raster;
 use crate::raster::triangle::TriangleSource;
+use crate::raster::{PerspectiveTol, Tolerance};
 use crate::reference::oracle::ReferenceImage;
 use crate::reference::{heatmap, metrics, oracle};
 use crate::report::{
-    peak_rss_bytes, png_bytes, Host, Memory, Primitives, Report, SceneInfo, Settings,
-    SCHEMA_VERSION,
+    peak_rss_bytes, png_bytes, Host, Memory, PerspectiveSetting, Primitives, Report, SceneInfo,
+    Settings, SCHEMA_VERSION,
 };
 use crate::rop::FrameBuffer;
 use crate::scene::Scene;
@@ -76,6 +77,8 @@ pub struct RenderJob {
     pub out: Option<PathBuf>,
     /// Tolerance k [pixels].
     pub k: f64,
+    /// Setup's perspective tolerance (`--perspective-tol`; lembo path only).
+    pub perspective_tol: PerspectiveTol,
     pub datapath: Datapath,
     pub reference: bool,
     /// Reference samples per pixel side.
@@ -98,8 +101,18 @@ pub struct RenderJob {
 }
 
 impl RenderJob {
+    /// The lembo path's tolerances: k and Setup's perspective tolerance.
+    pub fn tolerance(&self) -> Tolerance {
+        self.perspective_tol.with_k(self.k)
+    }
+
     /// Checks every flag; errors name the flag and the value.
     pub fn validate(&self) -> Result<()> {
+        if let PerspectiveTol::Px(px) = self.perspective_tol {
+            if let Err(why) = PerspectiveTol::px(px) {
+                return Err(Error::invalid(COMMAND_LINE, "--perspective-tol", px, why));
+            }
+        }
         let (lo, hi) = K_RANGE;
         if !(self.k.is_finite() && self.k >= lo && self.k <= hi) {
             return Err(Error::invalid(
@@ -299,7 +312,7 @@ pub fn run_path(
     };
     let functional = |analyse: bool| -> Result<raster::Frame> {
         match &tessellation {
-            None => raster::render_functional(scene, view, job.k, job.datapath, analyse),
+            None => raster::render_functional(scene, view, job.tolerance(), job.datapath, analyse),
             Some(t) => Ok(raster::render_functional_triangles(
                 scene,
                 view,
@@ -323,7 +336,7 @@ pub fn run_path(
             timed = Some(pipeline::run_timed(
                 scene,
                 view,
-                job.k,
+                job.tolerance(),
                 job.datapath,
                 arch,
                 tessellation.as_ref().map(|t| t as &dyn TriangleSource),
@@ -464,6 +477,10 @@ fn settings(
     tess: Option<u32>,
     reference: bool,
 ) -> Settings {
+    let perspective_tol = k_px.map(|_| match job.tolerance().perspective {
+        Some(px) => PerspectiveSetting::Px(px),
+        None => PerspectiveSetting::Off("off"),
+    });
     Settings {
         mode: match job.mode {
             Mode::Timed => "timed",
@@ -478,6 +495,7 @@ fn settings(
         }),
         path: path.into(),
         k_px,
+        perspective_tol,
         tess,
         datapath: job.datapath.name().into(),
         reference,
@@ -520,7 +538,7 @@ fn run_discoids(
             let t = pipeline::discoid::run_discoid_timed(
                 scene,
                 view,
-                job.k,
+                job.tolerance(),
                 job.datapath,
                 arch,
                 job.blend,
@@ -533,7 +551,7 @@ fn run_discoids(
             let f = discoid::render::render_discoids_functional(
                 scene,
                 view,
-                job.k,
+                job.tolerance(),
                 job.datapath,
                 job.blend,
                 threshold,

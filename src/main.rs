@@ -5,6 +5,7 @@ use lembo_sim::compare::{run_compare, CompareJob, Tess};
 use lembo_sim::datapath::Datapath;
 use lembo_sim::discoid::blend::BlendMode;
 use lembo_sim::job::{self, run_render, PrimitivePath, RenderJob};
+use lembo_sim::raster::PerspectiveTol;
 use lembo_sim::sweep::{run_merge, run_sweep, MergeJob, Shard, SweepJob, SweepOutcome};
 use std::io::Write as _;
 use std::path::PathBuf;
@@ -149,6 +150,12 @@ struct RenderArgs {
         allow_negative_numbers = true
     )]
     k: f64,
+    /// Setup's perspective tolerance [pixels], or `off`: Setup splits a lembo until its
+    /// rebuilt screen quadratics are within this distance of the true perspective projection,
+    /// and splits and clips lembos at the near plane. `off` is the paper's Setup (six
+    /// projected points, no split for perspective, no near-plane clipping) [default: k/2].
+    #[arg(long, value_name = "PX|off", value_parser = parse_perspective_tol, allow_negative_numbers = true)]
+    perspective_tol: Option<PerspectiveTol>,
     /// Datapath precision of the extreme method.
     #[arg(long, value_enum, default_value = "f32")]
     datapath: DatapathArg,
@@ -204,6 +211,12 @@ struct CompareArgs {
         allow_negative_numbers = true
     )]
     k: f64,
+    /// Setup's perspective tolerance [pixels], or `off`: Setup splits a lembo until its
+    /// rebuilt screen quadratics are within this distance of the true perspective projection,
+    /// and splits and clips lembos at the near plane. `off` is the paper's Setup (six
+    /// projected points, no split for perspective, no near-plane clipping) [default: k/2].
+    #[arg(long, value_name = "PX|off", value_parser = parse_perspective_tol, allow_negative_numbers = true)]
+    perspective_tol: Option<PerspectiveTol>,
     /// Tessellation level of the triangle path, or `auto`: the smallest N whose silhouette
     /// error is no larger than the lembo path's at this k.
     #[arg(long, value_name = "N|auto", default_value = "auto", value_parser = parse_tess)]
@@ -220,6 +233,10 @@ struct CompareArgs {
     /// Override the scene's viewport, e.g. 1024x1024.
     #[arg(long, value_name = "WxH", value_parser = parse_viewport)]
     viewport: Option<(u32, u32)>,
+}
+
+fn parse_perspective_tol(s: &str) -> Result<PerspectiveTol, String> {
+    PerspectiveTol::parse(s)
 }
 
 fn parse_tess(s: &str) -> Result<Tess, String> {
@@ -256,6 +273,7 @@ fn default_render() -> RenderArgs {
         scene: None,
         out: None,
         k: 0.5,
+        perspective_tol: None,
         datapath: DatapathArg::F32,
         reference: false,
         supersample: 1,
@@ -371,6 +389,7 @@ fn compare(args: CompareArgs) -> ExitCode {
         scene: args.scene,
         out: args.out,
         k: args.k,
+        perspective_tol: args.perspective_tol.unwrap_or_default(),
         tess: args.tess,
         datapath: datapath(args.datapath),
         arch: args.arch,
@@ -392,6 +411,7 @@ fn render(args: RenderArgs) -> ExitCode {
         scene: args.scene,
         out: args.out,
         k: args.k,
+        perspective_tol: args.perspective_tol.unwrap_or_default(),
         datapath: datapath(args.datapath),
         reference: args.reference,
         supersample: args.supersample,

@@ -61,6 +61,9 @@ pub struct Settings {
     pub path: String,
     /// Tolerance k of the extreme method [pixels]; null for the triangle path.
     pub k_px: Option<f64>,
+    /// Setup's perspective tolerance [pixels] (`--perspective-tol`, default k/2), or `"off"`
+    /// for the paper's Setup; null for the triangle path.
+    pub perspective_tol: Option<PerspectiveSetting>,
     /// Tessellation level n (n² triangles per lembo); null for the lembo path.
     pub tess: Option<u32>,
     /// `f32` or `f64`.
@@ -69,6 +72,16 @@ pub struct Settings {
     pub reference: bool,
     /// Reference sub-samples per pixel side (1 = pixel centres only).
     pub supersample: u32,
+}
+
+/// Setup's perspective tolerance as a report echoes it: pixels, or the string `"off"`.
+#[derive(Clone, Copy, Debug, Serialize, PartialEq)]
+#[serde(untagged)]
+pub enum PerspectiveSetting {
+    /// The tolerance [pixels].
+    Px(f64),
+    /// Always `"off"`: the paper's Setup.
+    Off(&'static str),
 }
 
 /// The primitives a path draws and their size in memory.

@@ -46,6 +46,7 @@ use crate::job::{
 };
 use crate::output::write_files;
 use crate::pipeline::UnitKind;
+use crate::raster::PerspectiveTol;
 use crate::reference::oracle::ReferenceImage;
 use crate::report::Report;
 use crate::scene::{parse_strict, Scene};
@@ -76,7 +77,15 @@ pub const RESULTS_CSV: &str = "results.csv";
 pub const SPEC_JSON: &str = "spec.json";
 
 /// The render settings a point can set, besides `arch.<field>`.
-const SETTINGS: [&str; 6] = ["path", "k", "tess", "datapath", "blend", "threshold"];
+const SETTINGS: [&str; 7] = [
+    "path",
+    "k",
+    "perspective_tol",
+    "tess",
+    "datapath",
+    "blend",
+    "threshold",
+];
 /// A block's or point's scene restriction: not a parameter.
 const SCENES: &str = "scenes";
 /// The prefix of architecture parameters.
@@ -144,6 +153,8 @@ impl<'de> Deserialize<'de> for Params {
 enum Setting {
     Path(PrimitivePath),
     K(f64),
+    /// Setup's perspective tolerance: pixels or `"off"`.
+    PerspectiveTol(PerspectiveTol),
     Tess(u32),
     Datapath(Datapath),
     Blend(BlendMode),
@@ -633,6 +644,14 @@ impl Expander<'_> {
                 }
                 Setting::K(k)
             }
+            "perspective_tol" => {
+                let tol = match (v.as_str(), v.as_f64()) {
+                    (Some("off"), _) => Ok(PerspectiveTol::Off),
+                    (_, Some(px)) => PerspectiveTol::px(px),
+                    _ => Err(format!("expected a number of pixels or \"off\", found {v}")),
+                };
+                Setting::PerspectiveTol(tol.map_err(|why| Error::invalid(file, field, v, why))?)
+            }
             "tess" => {
                 let n = v
                     .as_u64()
@@ -683,6 +702,10 @@ impl Expander<'_> {
         let canonical = match &setting {
             Setting::Path(p) => Value::from(p.name()),
             Setting::K(x) | Setting::Threshold(x) => Value::from(*x),
+            Setting::PerspectiveTol(t) => match t {
+                PerspectiveTol::Px(px) => Value::from(*px),
+                _ => Value::from("off"),
+            },
             Setting::Tess(n) => Value::from(*n),
             Setting::Datapath(d) => Value::from(d.name()),
             Setting::Blend(m) => Value::from(m.name()),
@@ -980,7 +1003,7 @@ fn check_applies(spec: &Spec, point: &Point, scene: &Scene, s: usize) -> Result<
     for name in point.params.keys() {
         let applies = match name.as_str() {
             "path" | "tess" => !discoids,
-            "k" => curved,
+            "k" | "perspective_tol" => curved,
             "blend" | "threshold" => discoids,
             _ => true,
         };
@@ -1007,6 +1030,7 @@ fn render_job(spec: &Spec, point: &Point, scene: &Scene) -> RenderJob {
         scene: None,
         out: None,
         k: DEFAULT_K_PX,
+        perspective_tol: PerspectiveTol::FollowK,
         datapath: Datapath::F32,
         reference: spec.reference && scene.discoid_count() == 0,
         supersample: 1,
@@ -1027,6 +1051,7 @@ fn render_job(spec: &Spec, point: &Point, scene: &Scene) -> RenderJob {
         match s {
             Setting::Path(p) => job.path = *p,
             Setting::K(k) => job.k = *k,
+            Setting::PerspectiveTol(t) => job.perspective_tol = *t,
             Setting::Tess(n) => job.tess = Some(*n),
             Setting::Datapath(d) => job.datapath = *d,
             Setting::Blend(m) => job.blend = *m,

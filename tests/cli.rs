@@ -126,14 +126,27 @@ fn reference_run_writes_the_accuracy_names_and_images() {
 }
 
 /// The default scene's image, counts and cycle report (timed, baseline architecture),
-/// compared exactly with tests/golden/default/.
+/// compared exactly with tests/golden/default/ (Setup's default perspective tolerance, k/2)
+/// and tests/golden/default_paper/ (`--perspective-tol off`: the paper's Setup).
 /// Regenerate with `LEMBO_BLESS=1 cargo test --test cli` after an intended change.
 #[test]
 fn golden_default_scene() {
+    check_golden(&["render", "--out", "o"], "default");
+}
+
+#[test]
+fn golden_default_scene_with_the_papers_setup() {
+    check_golden(
+        &["render", "--out", "o", "--perspective-tol", "off"],
+        "default_paper",
+    );
+}
+
+fn check_golden(args: &[&str], name: &str) {
     let dir = tempfile::tempdir().unwrap();
-    let out = run(&["render", "--out", "o"], dir.path());
+    let out = run(args, dir.path());
     assert!(out.status.success());
-    let golden = manifest().join("tests/golden/default");
+    let golden = manifest().join("tests/golden").join(name);
     let image = std::fs::read(dir.path().join("o/image.png")).unwrap();
     let report: serde_json::Value =
         serde_json::from_slice(&std::fs::read(dir.path().join("o/report.json")).unwrap()).unwrap();

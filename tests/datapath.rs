@@ -16,7 +16,7 @@
 use lembo_sim::camera::View;
 use lembo_sim::datapath::Datapath;
 use lembo_sim::datapath_study::{run, summarise, CaseResult, Family, Settings, FAMILIES};
-use lembo_sim::raster::render_functional;
+use lembo_sim::raster::{render_functional, Tolerance};
 use lembo_sim::scene::Scene;
 use std::path::Path;
 
@@ -218,6 +218,9 @@ fn random_lembos_keep_the_measured_datapath_bounds() {
 /// The defects the study found (`traces/extremes/found/`, seed 1) stay fixed: the steep
 /// perspective cases' last chords are split until they are within k (they were 3.91 and
 /// 0.61 px off the scanline), and the f32 sliver pairs every root (it left 6 unpaired).
+/// Rendered with the paper's Setup (`--perspective-tol off`), which is where the walk met
+/// those chords; the default Setup splits these lembos for perspective, and the guarantee
+/// must hold there too.
 #[test]
 fn found_defects_stay_fixed() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("traces/extremes/found");
@@ -231,14 +234,19 @@ fn found_defects_stay_fixed() {
         let view = View::new(&scene.camera, scene.viewport);
         for (datapath, slack) in [(Datapath::F32, 1e-3), (Datapath::F64, 1e-9)] {
             let what = format!("{file} {} k = {k}", datapath.name());
-            let frame = render_functional(&scene, &view, k, datapath, true).unwrap();
-            let got = frame.probe.expect("probe").max_scanline_deviation_px;
-            assert!(
-                got <= k + slack,
-                "{what}: max |y - y_j| {got} > k + {slack}"
-            );
-            assert_eq!(frame.counts.unpaired_roots, 0, "{what}");
-            assert_eq!(frame.counts.segments_refined > 0, refined, "{what}");
+            for tol in [Tolerance::paper(k), Tolerance::new(k)] {
+                let what = format!("{what} {tol:?}");
+                let frame = render_functional(&scene, &view, tol, datapath, true).unwrap();
+                let got = frame.probe.expect("probe").max_scanline_deviation_px;
+                assert!(
+                    got <= k + slack,
+                    "{what}: max |y - y_j| {got} > k + {slack}"
+                );
+                assert_eq!(frame.counts.unpaired_roots, 0, "{what}");
+                if tol.perspective.is_none() {
+                    assert_eq!(frame.counts.segments_refined > 0, refined, "{what}");
+                }
+            }
         }
     }
 }

@@ -38,6 +38,7 @@ fn job(path: PrimitivePath, datapath: Datapath, k: f64, mode: Mode) -> RenderJob
         scene: None,
         out: None,
         k,
+        perspective_tol: Default::default(),
         datapath,
         reference: false,
         supersample: 1,

@@ -42,7 +42,7 @@ use crate::raster::subsegmenter::Subsegment;
 use crate::raster::triangle::{
     render_triangles, ScreenTriangle, TriangleFragment, TriangleSink, TriangleSource,
 };
-use crate::raster::{render_lembos, Counts, DEFAULT_SEGMENT_CAP};
+use crate::raster::{render_lembos, Counts, Tolerance, DEFAULT_SEGMENT_CAP};
 use crate::rop::framebuffer::{depth_test, NO_PRIMITIVE};
 use crate::rop::rop::{normalize, FragmentShader};
 use crate::rop::shade::to_u8;
@@ -596,21 +596,22 @@ pub fn check_scene(scene: &Scene) -> Result<()> {
 pub fn render_discoids_functional(
     scene: &Scene,
     view: &View,
-    k: f64,
+    tol: impl Into<Tolerance>,
     datapath: Datapath,
     mode: BlendMode,
     threshold: f64,
 ) -> Result<DiscoidFrame> {
+    let tol = tol.into();
     match datapath {
-        Datapath::F32 => passes::<f32>(scene, view, k, mode, threshold),
-        Datapath::F64 => passes::<f64>(scene, view, k, mode, threshold),
+        Datapath::F32 => passes::<f32>(scene, view, tol, mode, threshold),
+        Datapath::F64 => passes::<f64>(scene, view, tol, mode, threshold),
     }
 }
 
 fn passes<R: Real>(
     scene: &Scene,
     view: &View,
-    k: f64,
+    tol: Tolerance,
     mode: BlendMode,
     threshold: f64,
 ) -> Result<DiscoidFrame> {
@@ -630,7 +631,7 @@ fn passes<R: Real>(
         };
         // Each pass draws every discoid; the counts are those of one pass.
         let mut c = Counts::default();
-        render_lembos::<R, _>(scene, view, k, DEFAULT_SEGMENT_CAP, &mut sink, &mut c)?;
+        render_lembos::<R, _>(scene, view, tol, DEFAULT_SEGMENT_CAP, &mut sink, &mut c)?;
         render_triangles::<R, _>(&table.planar, view, &mut sink, &mut c);
         counts = c;
     }

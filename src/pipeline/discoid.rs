@@ -24,7 +24,7 @@ use crate::discoid::render::{
 };
 use crate::error::{Error, Result};
 use crate::raster::triangle::TriangleSource;
-use crate::raster::Counts;
+use crate::raster::{Counts, Tolerance};
 use crate::rop::rop::FragmentShader;
 use crate::rop::shade::to_u8;
 use crate::rop::FrameBuffer;
@@ -47,23 +47,24 @@ pub struct DiscoidTimed {
 pub fn run_discoid_timed(
     scene: &Scene,
     view: &View,
-    k: f64,
+    tol: impl Into<Tolerance>,
     datapath: Datapath,
     arch: &ArchConfig,
     mode: BlendMode,
     threshold: f64,
     options: &SimOptions,
 ) -> Result<DiscoidTimed> {
+    let tol = tol.into();
     match datapath {
-        Datapath::F32 => passes::<f32>(scene, view, k, arch, mode, threshold, options),
-        Datapath::F64 => passes::<f64>(scene, view, k, arch, mode, threshold, options),
+        Datapath::F32 => passes::<f32>(scene, view, tol, arch, mode, threshold, options),
+        Datapath::F64 => passes::<f64>(scene, view, tol, arch, mode, threshold, options),
     }
 }
 
 fn passes<R: Real>(
     scene: &Scene,
     view: &View,
-    k: f64,
+    tol: Tolerance,
     arch: &ArchConfig,
     mode: BlendMode,
     threshold: f64,
@@ -85,7 +86,7 @@ fn passes<R: Real>(
         run_in::<R>(
             scene,
             view,
-            k,
+            tol,
             arch,
             triangles,
             Some(DiscoidPass {

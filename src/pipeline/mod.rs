@@ -47,7 +47,7 @@ use crate::discoid::render::{BlendReport, DiscoidTable, Pass, Pending};
 use crate::error::{Error, Result};
 use crate::raster::setup::ScreenLembo;
 use crate::raster::triangle::TriangleSource;
-use crate::raster::Counts;
+use crate::raster::{Counts, Tolerance};
 use crate::rop::FrameBuffer;
 use crate::scene::Scene;
 use actor::{ActorError, Ctx, Monitor, SimOptions, UnitStats};
@@ -154,6 +154,8 @@ pub struct Shared<'a, R> {
     pub view: &'a View,
     pub arch: &'a ArchConfig,
     pub k: R,
+    /// Setup's perspective tolerance [pixels]; None: the paper's Setup.
+    pub perspective_tol: Option<f64>,
     pub background: [u8; 3],
     /// Screen-space lembos by id, each whole or as the pieces Setup split it into, filled by
     /// Setup before it sends their ids downstream (empty in the triangle path).
@@ -228,15 +230,16 @@ impl Finished {
 pub fn run_timed(
     scene: &Scene,
     view: &View,
-    k: f64,
+    tol: impl Into<Tolerance>,
     datapath: Datapath,
     arch: &ArchConfig,
     triangles: Option<&dyn TriangleSource>,
     options: &SimOptions,
 ) -> Result<TimedFrame> {
+    let tol = tol.into();
     match datapath {
-        Datapath::F32 => run_in::<f32>(scene, view, k, arch, triangles, None, options),
-        Datapath::F64 => run_in::<f64>(scene, view, k, arch, triangles, None, options),
+        Datapath::F32 => run_in::<f32>(scene, view, tol, arch, triangles, None, options),
+        Datapath::F64 => run_in::<f64>(scene, view, tol, arch, triangles, None, options),
     }
 }
 
@@ -400,7 +403,7 @@ fn join<T>(h: Handle<'_, T>, name: &str) -> Result<std::result::Result<T, ActorE
 fn run_in<R: Real>(
     scene: &Scene,
     view: &View,
-    k: f64,
+    tol: Tolerance,
     arch: &ArchConfig,
     triangles: Option<&dyn TriangleSource>,
     discoid: Option<DiscoidPass<R>>,
@@ -437,7 +440,8 @@ fn run_in<R: Real>(
         scene,
         view,
         arch,
-        k: R::of(k),
+        k: R::of(tol.k),
+        perspective_tol: tol.perspective,
         background,
         lembos: match triangles {
             None => (0..n_lembos).map(|_| OnceLock::new()).collect(),

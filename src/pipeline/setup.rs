@@ -35,7 +35,14 @@ pub fn run<R: Real>(mut ctx: Ctx<(), LemboReady>, sh: &Shared<R>) -> Result<Fini
     let mut pieces = Vec::new();
     for (id, (lembo, color)) in sh.scene.lembos().enumerate() {
         counts.lembos += 1;
-        match setup_pieces::<R>(id as u32, lembo, color, sh.view, &mut pieces) {
+        match setup_pieces::<R>(
+            id as u32,
+            lembo,
+            color,
+            sh.view,
+            sh.perspective_tol,
+            &mut pieces,
+        ) {
             Ok(split) => {
                 counts.add_split(split, pieces.len());
                 // Each sub-patch examined is set up as a lembo is (six points evaluated,

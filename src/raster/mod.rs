@@ -13,6 +13,7 @@ pub mod fragment;
 pub mod interval;
 pub mod minmax;
 pub mod probe;
+pub mod refine;
 pub mod segmenter;
 pub mod setup;
 pub mod subsegmenter;
@@ -32,13 +33,105 @@ use triangle::TriangleSource;
 /// at k >= 1e-4 px on a 16384-pixel viewport, low enough to refuse runaway walks quickly.
 pub const DEFAULT_SEGMENT_CAP: usize = 1 << 16;
 
+/// What Setup's perspective tolerance is by default, as a fraction of k: with the walk's
+/// error at most k and Setup's at most k/2, k bounds the end-to-end error of a fragment's
+/// position to within 1.5 k.
+pub const DEFAULT_PERSPECTIVE_FRACTION: f64 = 0.5;
+
+/// The lembo path's tolerances [pixels].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tolerance {
+    /// k: the midpoint error of every segment of the walk (paper 001, section 5).
+    pub k: f64,
+    /// How far Setup's rebuilt screen quadratics may be from the true perspective projection
+    /// before it splits a lembo ([`refine`], `--perspective-tol`); `None` is the paper's
+    /// Setup, which projects six points and neither splits for perspective nor clips.
+    pub perspective: Option<f64>,
+}
+
+impl Tolerance {
+    /// k with the default perspective tolerance, k · [`DEFAULT_PERSPECTIVE_FRACTION`].
+    pub fn new(k: f64) -> Self {
+        Tolerance {
+            k,
+            perspective: Some(k * DEFAULT_PERSPECTIVE_FRACTION),
+        }
+    }
+
+    /// k with Setup as the paper has it (`--perspective-tol off`).
+    pub fn paper(k: f64) -> Self {
+        Tolerance {
+            k,
+            perspective: None,
+        }
+    }
+}
+
+/// Setup's perspective tolerance as a user sets it (`--perspective-tol PX|off`).
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub enum PerspectiveTol {
+    /// k · [`DEFAULT_PERSPECTIVE_FRACTION`].
+    #[default]
+    FollowK,
+    /// A fixed tolerance [pixels], finite and > 0.
+    Px(f64),
+    /// The paper's Setup: no perspective split, no near-plane handling.
+    Off,
+}
+
+impl PerspectiveTol {
+    /// The tolerances for k [pixels].
+    pub fn with_k(self, k: f64) -> Tolerance {
+        match self {
+            PerspectiveTol::FollowK => Tolerance::new(k),
+            PerspectiveTol::Px(px) => Tolerance {
+                k,
+                perspective: Some(px),
+            },
+            PerspectiveTol::Off => Tolerance::paper(k),
+        }
+    }
+
+    /// Parses `off` or a number of pixels; the error says what is accepted.
+    pub fn parse(text: &str) -> std::result::Result<Self, String> {
+        if text.trim() == "off" {
+            return Ok(PerspectiveTol::Off);
+        }
+        match text.trim().parse::<f64>() {
+            Ok(px) => PerspectiveTol::px(px),
+            Err(_) => Err(format!(
+                "must be `off` or a tolerance in pixels, a finite number > 0 (got `{text}`)"
+            )),
+        }
+    }
+
+    /// A fixed tolerance, refused unless finite and > 0.
+    pub fn px(px: f64) -> std::result::Result<Self, String> {
+        if px.is_finite() && px > 0.0 {
+            Ok(PerspectiveTol::Px(px))
+        } else {
+            Err(format!(
+                "must be `off` or a tolerance in pixels, a finite number > 0 (got {px})"
+            ))
+        }
+    }
+}
+
+impl From<f64> for Tolerance {
+    /// k with the default perspective tolerance ([`Tolerance::new`]).
+    fn from(k: f64) -> Self {
+        Tolerance::new(k)
+    }
+}
+
 /// What the functional model produced, stage by stage.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 pub struct Counts {
     /// Lembos in the scene.
     pub lembos: u64,
-    /// Lembos dropped because part of their hull is behind the eye (near clipping is not
-    /// modelled).
+    /// Lembos dropped at the eye: with a perspective tolerance, those wholly nearer than the
+    /// near plane; with `--perspective-tol off` (the paper's Setup, which does not clip),
+    /// those with a point of their hull behind the eye.
     pub lembos_culled_behind_eye: u64,
     /// Lembos whose hull lies outside the viewport or depth range (one cull test each).
     pub lembos_culled_outside: u64,
@@ -52,6 +145,17 @@ pub struct Counts {
     pub lembo_pieces: u64,
     /// Sub-patches of split lembos dropped because their hull misses the viewport.
     pub lembo_pieces_culled: u64,
+    /// Lembos split because their rebuilt screen quadratics were farther than the
+    /// perspective tolerance from the true projection (`refine.rs`).
+    pub lembos_split_perspective: u64,
+    /// Lembos split because part of them lies too near the eye to be projected (they cross
+    /// the near plane; `refine.rs`).
+    pub lembos_split_near: u64,
+    /// Sub-patches of split lembos dropped because they lie wholly nearer than the near plane.
+    pub lembo_pieces_culled_near: u64,
+    /// Sub-patches kept at the split depth or piece cap while still over the perspective
+    /// tolerance or the guard band (or dropped there, still unprojectable).
+    pub lembo_pieces_capped: u64,
     /// (lembo, scanline) pairs handed to the interval manager.
     pub scanlines: u64,
     /// Roots of Y = y_j found on domain edges.
@@ -116,6 +220,10 @@ impl Counts {
             self.lembos_split += 1;
             self.lembo_pieces += pieces as u64;
             self.lembo_pieces_culled += split.culled as u64;
+            self.lembos_split_perspective += split.perspective as u64;
+            self.lembos_split_near += split.near as u64;
+            self.lembo_pieces_culled_near += split.culled_near as u64;
+            self.lembo_pieces_capped += split.capped as u64;
         }
     }
 }
@@ -130,6 +238,10 @@ impl std::ops::AddAssign for Counts {
         self.lembos_split += o.lembos_split;
         self.lembo_pieces += o.lembo_pieces;
         self.lembo_pieces_culled += o.lembo_pieces_culled;
+        self.lembos_split_perspective += o.lembos_split_perspective;
+        self.lembos_split_near += o.lembos_split_near;
+        self.lembo_pieces_culled_near += o.lembo_pieces_culled_near;
+        self.lembo_pieces_capped += o.lembo_pieces_capped;
         self.scanlines += o.scanlines;
         self.edge_roots += o.edge_roots;
         self.virtual_roots += o.virtual_roots;
@@ -157,18 +269,20 @@ impl std::ops::AddAssign for Counts {
 pub fn render_lembos<R: Real, S: FragmentSink<R>>(
     scene: &Scene,
     view: &View,
-    k: f64,
+    tol: impl Into<Tolerance>,
     segment_cap: usize,
     sink: &mut S,
     counts: &mut Counts,
 ) -> Result<()> {
-    let k = R::of(k);
+    let tol = tol.into();
+    let k = R::of(tol.k);
     let mut buffers = Buffers::default();
     let mut pieces = Vec::new();
     for (id, (lembo, color)) in scene.lembos().enumerate() {
         counts.lembos += 1;
         pieces.clear();
-        match setup::setup_pieces::<R>(id as u32, lembo, color, view, &mut pieces) {
+        match setup::setup_pieces::<R>(id as u32, lembo, color, view, tol.perspective, &mut pieces)
+        {
             Ok(split) => counts.add_split(split, pieces.len()),
             Err(cull) => {
                 counts.add_cull(cull);
@@ -251,16 +365,19 @@ pub struct Frame {
 
 /// Renders `scene` with the functional model in the given datapath. With `analyse`, the
 /// frame buffer keeps normals and every fragment is measured by a [`probe::Probe`] (slower).
+///
+/// `tol` is k [pixels] (with the default perspective tolerance) or a [`Tolerance`].
 pub fn render_functional(
     scene: &Scene,
     view: &View,
-    k: f64,
+    tol: impl Into<Tolerance>,
     datapath: Datapath,
     analyse: bool,
 ) -> Result<Frame> {
+    let tol = tol.into();
     match datapath {
-        Datapath::F32 => render_in::<f32>(scene, view, k, analyse),
-        Datapath::F64 => render_in::<f64>(scene, view, k, analyse),
+        Datapath::F32 => render_in::<f32>(scene, view, tol, analyse),
+        Datapath::F64 => render_in::<f64>(scene, view, tol, analyse),
     }
 }
 
@@ -326,15 +443,15 @@ fn triangles_in<R: Real>(
     drawn.expect("the triangle path records no error")
 }
 
-fn render_in<R: Real>(scene: &Scene, view: &View, k: f64, analyse: bool) -> Result<Frame> {
+fn render_in<R: Real>(scene: &Scene, view: &View, tol: Tolerance, analyse: bool) -> Result<Frame> {
     frame_with::<R>(scene, view, analyse, |rop, counts| {
         let cap = DEFAULT_SEGMENT_CAP;
         Ok(if analyse {
             let mut p = probe::Probe::new(scene, view.viewport, rop);
-            render_lembos::<R, _>(scene, view, k, cap, &mut p, counts)?;
+            render_lembos::<R, _>(scene, view, tol, cap, &mut p, counts)?;
             Some(p.report())
         } else {
-            render_lembos::<R, _>(scene, view, k, cap, rop, counts)?;
+            render_lembos::<R, _>(scene, view, tol, cap, rop, counts)?;
             None
         })
     })

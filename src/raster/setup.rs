@@ -137,7 +137,7 @@ pub const DEGENERATE_JACOBIAN: f64 = 1e-9;
 /// Whether the screen map through the six projected points has zero area everywhere. The
 /// Jacobian is a quadratic in (u, v), so it vanishes identically exactly when it vanishes at
 /// the six reference points (they determine a quadratic).
-fn zero_area(sx: [f64; 6], sy: [f64; 6]) -> bool {
+pub(super) fn zero_area(sx: [f64; 6], sy: [f64; 6]) -> bool {
     let (x, y) = (
         Quadratic::from_reference_values(sx),
         Quadratic::from_reference_values(sy),
@@ -166,26 +166,56 @@ pub const MAX_SPLIT_DEPTH: u32 = 40;
 /// unsplit, so the work per lembo stays bounded whatever the input.
 pub const MAX_PIECES: usize = 1024;
 
-/// What splitting one lembo took (all zero for a lembo within the guard band).
+/// What splitting one lembo took (all zero for a lembo set up whole).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Split {
     /// Sub-patches examined: each has its six points evaluated and its hull tested.
     pub examined: u32,
     /// Sub-patches dropped because their Bézier hull misses the viewport or the depth range.
     pub culled: u32,
+    /// Sub-patches dropped because they lie wholly nearer than the near plane, or still
+    /// straddle the plane `w = w_min` at a cap (`refine.rs`).
+    pub culled_near: u32,
+    /// Sub-patches kept (or, unprojectable, dropped) at the depth or piece cap while they
+    /// still wanted splitting.
+    pub capped: u32,
+    /// Whether the perspective tolerance split the lembo (`refine.rs`).
+    pub perspective: bool,
+    /// Whether the lembo was split because part of it could not be projected (it crosses
+    /// the plane `w = w_min` near the eye; `refine.rs`).
+    pub near: bool,
 }
 
 /// A lembo's six reference points on screen: x, y [pixels] and depth, in f64.
 #[derive(Clone, Copy, Debug)]
-struct ScreenPoints {
+pub(super) struct ScreenPoints {
     x: [f64; 6],
     y: [f64; 6],
     z: [f64; 6],
 }
 
 impl ScreenPoints {
+    /// From six (x, y, depth) points.
+    pub(super) fn of(p: &[[f64; 3]; 6]) -> Self {
+        ScreenPoints {
+            x: p.map(|p| p[0]),
+            y: p.map(|p| p[1]),
+            z: p.map(|p| p[2]),
+        }
+    }
+
+    /// Screen x of the six points [pixels].
+    pub(super) fn xs(&self) -> [f64; 6] {
+        self.x
+    }
+
+    /// Screen y of the six points [pixels].
+    pub(super) fn ys(&self) -> [f64; 6] {
+        self.y
+    }
+
     /// The bounding box (lo, hi) of the Bézier net of (x, y, z): the patch lies in it.
-    fn hull(&self) -> (DVec3, DVec3) {
+    pub(super) fn hull(&self) -> (DVec3, DVec3) {
         let p: [DVec3; 6] = std::array::from_fn(|k| DVec3::new(self.x[k], self.y[k], self.z[k]));
         bezier_controls(&p).iter().fold(
             (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
@@ -195,7 +225,7 @@ impl ScreenPoints {
 }
 
 /// Whether a hull (lo, hi) misses the viewport or the depth range.
-fn outside(view: &View, (lo, hi): (DVec3, DVec3)) -> bool {
+pub(super) fn outside(view: &View, (lo, hi): (DVec3, DVec3)) -> bool {
     let (w, h) = (view.viewport.width as f64, view.viewport.height as f64);
     hi.x < 0.0 || hi.y < 0.0 || lo.x > w || lo.y > h || hi.z < 0.0 || lo.z > 1.0
 }
@@ -256,13 +286,21 @@ pub fn setup<R: Real>(
 /// canonical order, as the whole edge is, so a neighbour sharing the edge sees the same
 /// curve. Pieces keep the lembo's id (the depth-test tie breaker) and carry their corners
 /// in the lembo's domain ([`ScreenLembo::domain`]).
+///
+/// With a perspective tolerance (`Some(tol)` [pixels]) Setup also splits until every piece
+/// is within `tol` of the true projection and handles the near plane ([`super::refine`]);
+/// `None` is the paper's Setup, as described here.
 pub fn setup_pieces<R: Real>(
     id: u32,
     lembo: &Lembo,
     color: [f64; 3],
     view: &View,
+    perspective_tol: Option<f64>,
     out: &mut Vec<ScreenLembo<R>>,
 ) -> Result<Split, Cull> {
+    if let Some(tol) = perspective_tol {
+        return super::refine::setup_refined(id, lembo, color, view, tol, out);
+    }
     let points = project(lembo, view)?;
     let (w, h) = (view.viewport.width as f64, view.viewport.height as f64);
     let g = SPLIT_GUARD_VIEWPORTS * w.max(h);
@@ -322,7 +360,7 @@ pub fn setup_pieces<R: Real>(
 
 /// The six reference points (u, v) of the domain triangle `tri`, in the paper's order:
 /// its corners A, B, C, then the middles of AB, CA and BC.
-fn reference_uv(tri: [[f64; 2]; 3]) -> [[f64; 2]; 6] {
+pub(super) fn reference_uv(tri: [[f64; 2]; 3]) -> [[f64; 2]; 6] {
     let mid = |p: [f64; 2], q: [f64; 2]| [(p[0] + q[0]) * 0.5, (p[1] + q[1]) * 0.5];
     let [a, b, c] = tri;
     [a, b, c, mid(a, b), mid(c, a), mid(b, c)]
@@ -393,7 +431,7 @@ impl Restrict {
 }
 
 /// Builds the datapath form of a lembo (or piece) from its six screen points.
-fn build<R: Real>(
+pub(super) fn build<R: Real>(
     id: u32,
     p: &ScreenPoints,
     normal: Quadratic3<f64>,
@@ -808,7 +846,7 @@ pub(crate) mod tests {
     fn setup_pieces_keeps_a_lembo_within_the_guard_band_whole_and_bit_identical() {
         let l = lembo_on_screen(x_linear(), y_bowl());
         let mut out = Vec::new();
-        let split = setup_pieces::<f32>(0, &l, [0.8; 3], &view(), &mut out).unwrap();
+        let split = setup_pieces::<f32>(0, &l, [0.8; 3], &view(), None, &mut out).unwrap();
         assert_eq!(split, Split::default());
         assert_eq!(out.len(), 1);
         let whole = setup::<f32>(0, &l, [0.8; 3], &view()).unwrap();
@@ -821,7 +859,7 @@ pub(crate) mod tests {
         let l = huge_lembo();
         let whole = setup::<f64>(0, &l, [0.8; 3], &view()).unwrap();
         let mut pieces = Vec::new();
-        let split = setup_pieces::<f64>(0, &l, [0.8; 3], &view(), &mut pieces).unwrap();
+        let split = setup_pieces::<f64>(0, &l, [0.8; 3], &view(), None, &mut pieces).unwrap();
         assert!(
             pieces.len() > 1 && split.culled > 0,
             "{} {split:?}",
@@ -879,8 +917,15 @@ pub(crate) mod tests {
         let x = quad(3e14, 0.0, 2e14, 1e15, 1e14, -3e14);
         let y = quad(0.0, -2e14, 1e14, 3e14, 1e15, -4e14);
         let mut pieces = Vec::new();
-        let split =
-            setup_pieces::<f32>(0, &lembo_on_screen(x, y), [0.8; 3], &view(), &mut pieces).unwrap();
+        let split = setup_pieces::<f32>(
+            0,
+            &lembo_on_screen(x, y),
+            [0.8; 3],
+            &view(),
+            None,
+            &mut pieces,
+        )
+        .unwrap();
         assert!(!pieces.is_empty());
         assert!(pieces.len() <= MAX_PIECES + 3, "{}", pieces.len());
         assert!(split.examined as usize <= 4 * (MAX_SPLIT_DEPTH as usize) * (MAX_PIECES + 3));

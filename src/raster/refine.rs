@@ -1,0 +1,466 @@
+//! Setup's perspective-adaptive split and near-plane handling (`--perspective-tol`).
+//!
+//! The paper (001, section 4) assumes the projection is already applied: Setup projects a
+//! lembo's six reference points and rebuilds screen-space quadratics through them. Under
+//! perspective the projection of a quadratic patch is rational, not quadratic, so the rebuilt
+//! patch misses the true image by an error that does not depend on k (1.3 px on sphere24 at
+//! any k). With a perspective tolerance `tol` [pixels], Setup measures that error and splits
+//! the lembo into pieces until every piece is within `tol` of the true projection, with the
+//! same piece mechanism the guard-band split uses ([`super::setup::setup_pieces`]).
+//!
+//! **The estimate.** A piece is a sub-triangle of the lembo's domain with six screen points.
+//! Its error is measured against the true projection of the world surface at extra domain
+//! points: the quarter points (t = 1/4, 3/4) of each of its edges that are still its own
+//! (below), and inside, the middles of the three segments that join its edge middles and its
+//! centroid. The largest screen distance [pixels] there is the piece's error. Each halving
+//! divides the error of a smooth projection by about 8 (the rebuilt quadratic interpolates a
+//! smooth map at six points: its error is third order in the piece's size).
+//!
+//! **Watertight by construction.** A shared edge must be one curve for both pieces (or
+//! lembos) on its sides. So an edge's fate is decided from the edge alone: it is *refined*
+//! (both halves get their middles from the true projection) when its own quarter points are
+//! farther than `tol` from the parabola through its three points, or when it is not wholly in
+//! front of the plane `w = w_min` (below). A piece splits when any of its own edges is refined,
+//! when its interior error exceeds `tol`, when it reaches beyond the guard band, or when it
+//! cannot be projected. When a piece splits but one of its edges is not refined, the edge is
+//! *frozen*: its halves, and every later piece along it, take their points from the parabola
+//! through its three screen points, in a canonical order (by world position of its ends), so
+//! the piece that stays whole on the other side draws the same curve. The lembo's own edges
+//! are evaluated from their world-space parabola in canonical order (as construction computed
+//! them), so neighbouring lembos make the same decisions from the same bits. Where one side
+//! is split deeper than the other along a frozen edge, the two agree up to the rounding of
+//! evaluating the same parabola (a T-junction), as the guard-band split's pieces do.
+//!
+//! **Near plane.** Points with clip `w <= 0` cannot be projected. The world position is
+//! quadratic and clip coordinates are affine in it, so the clip coordinates of the lembo's
+//! Bézier net bound the patch's. A piece whose net lies wholly beyond one plane of the view
+//! frustum is dropped (in front of the near plane: counted apart); a piece whose net has every
+//! `w >= w_min` (half the near distance; any positive `w` for orthographic views) is projected
+//! and drawn, and its fragments nearer than the near plane fail the depth test's `[0, 1]`
+//! range (clipped per fragment); any other piece straddles the plane `w = w_min` and is split.
+//!
+//! Splitting is bounded as the guard-band split is: at most [`MAX_SPLIT_DEPTH`] halvings and
+//! [`MAX_PIECES`] pieces per lembo. A piece kept at a cap while still over the tolerance is
+//! counted (`capped`); one that still cannot be projected there is dropped and counted.
+
+use super::setup::{
+    build, outside, reference_uv, zero_area, Cull, ScreenLembo, ScreenPoints, Split, EDGE_POINTS,
+    MAX_PIECES, MAX_SPLIT_DEPTH, SPLIT_GUARD_VIEWPORTS,
+};
+use crate::camera::View;
+use crate::datapath::Real;
+use crate::lembo::construct::canonical_order;
+use crate::lembo::{bezier_controls, Lembo, Quadratic, Quadratic3};
+use glam::{DVec3, DVec4};
+use std::cmp::Ordering;
+
+/// A screen point: x, y [pixels] and window depth.
+type S3 = [f64; 3];
+
+/// A domain point (u, v) of the lembo.
+type Uv = [f64; 2];
+
+/// Lagrange weights of the parabola through t = 0, 1/2, 1 at `t` (exact at those three).
+#[inline]
+fn weights(t: f64) -> [f64; 3] {
+    [
+        (1.0 - t) * (1.0 - 2.0 * t),
+        4.0 * t * (1.0 - t),
+        t * (2.0 * t - 1.0),
+    ]
+}
+
+/// The parabola through `p` (at t = 0, 1/2, 1) at `t`.
+#[inline]
+fn parabola<const N: usize>(p: &[[f64; N]; 3], t: f64) -> [f64; N] {
+    let w = weights(t);
+    std::array::from_fn(|c| w[0] * p[0][c] + w[1] * p[1][c] + w[2] * p[2][c])
+}
+
+fn mid(p: Uv, q: Uv) -> Uv {
+    [(p[0] + q[0]) * 0.5, (p[1] + q[1]) * 0.5]
+}
+
+/// Where the screen points of a piece's edge come from.
+#[derive(Clone, Copy, Debug)]
+enum EdgeSource {
+    /// The edge's middle is the projection of its world point: the edge may still be refined.
+    Own,
+    /// A stretch of a frozen ancestor edge: the parabola `curve` through that edge's three
+    /// screen points in canonical order, from canonical parameter `t[0]` (at this edge's
+    /// start, in the piece's counter-clockwise order) to `t[1]` (at its end).
+    Frozen { curve: [S3; 3], t: [f64; 2] },
+}
+
+/// A sub-triangle of the lembo's domain under examination.
+#[derive(Clone, Debug)]
+struct Node {
+    /// Its corners A, B, C in the lembo's domain.
+    tri: [Uv; 3],
+    depth: u32,
+    /// Its six reference points on the world surface and on screen, in the paper's order.
+    world: [DVec3; 6],
+    screen: [S3; 6],
+    /// Its edges A→B, B→C, C→A ([`EDGE_POINTS`]).
+    edges: [EdgeSource; 3],
+}
+
+/// A lembo's world surface, as Setup samples it for splitting.
+struct Surface<'a> {
+    lembo: &'a Lembo,
+    view: &'a View,
+    /// Per domain edge A→B, B→C, C→A: its three world points in canonical order and whether
+    /// that order runs against the lembo's.
+    edges: [([[f64; 3]; 3], bool); 3],
+    /// Pieces whose Bézier net has every clip w at least this can be projected.
+    w_min: f64,
+    tol: f64,
+}
+
+impl<'a> Surface<'a> {
+    fn new(lembo: &'a Lembo, view: &'a View, tol: f64) -> Self {
+        let p = &lembo.points;
+        let edges = EDGE_POINTS.map(|[s, m, e]| {
+            let reversed = canonical_order(p[e], p[s]) == Ordering::Less;
+            let (s, e) = if reversed { (e, s) } else { (s, e) };
+            ([s, m, e].map(|k| p[k].to_array()), reversed)
+        });
+        let w_min = if view.orthographic {
+            0.0
+        } else {
+            0.5 * view.near
+        };
+        Surface {
+            lembo,
+            view,
+            edges,
+            w_min,
+            tol,
+        }
+    }
+
+    /// The world point at domain point `uv`; on a domain edge, from the edge's parabola in
+    /// canonical order, so every lembo that shares the edge computes the same bits.
+    fn world(&self, [u, v]: Uv) -> DVec3 {
+        // Domain points here are dyadic, so these tests are exact.
+        let on = if v == 0.0 {
+            Some((0, u))
+        } else if u + v == 1.0 {
+            Some((1, v))
+        } else if u == 0.0 {
+            Some((2, 1.0 - v))
+        } else {
+            None
+        };
+        match on {
+            Some((e, t)) => {
+                let (p, reversed) = &self.edges[e];
+                DVec3::from_array(parabola(p, if *reversed { 1.0 - t } else { t }))
+            }
+            None => self.lembo.position_at(u, v),
+        }
+    }
+
+    fn clip(&self, p: DVec3) -> DVec4 {
+        self.view.view_proj * p.extend(1.0)
+    }
+
+    fn screen(&self, p: DVec3) -> S3 {
+        let s = self.view.project(p);
+        [s.x, s.y, s.depth]
+    }
+
+    /// Clip coordinates of the Bézier net through six world points.
+    fn net(&self, world: &[DVec3; 6]) -> [DVec4; 6] {
+        bezier_controls(world).map(|p| self.clip(p))
+    }
+
+    /// Whether the patch through these clip-space control points can be projected.
+    fn projectable(&self, net: &[DVec4]) -> bool {
+        net.iter().all(|c| c.w >= self.w_min && c.w > 0.0)
+    }
+
+    /// Whether an edge, from its ends and middle (uv, world, screen), must be refined: it
+    /// cannot be projected, or its quarter points are farther than the tolerance from the
+    /// parabola through its three screen points. Computed in canonical order, so the pieces
+    /// on both sides decide the same.
+    fn refine(&self, ends: [(Uv, DVec3, S3); 3]) -> bool {
+        let [s, m, e] = canonical(ends);
+        let (ws, wm, we) = (s.1, m.1, e.1);
+        let net = [ws, 2.0 * wm - 0.5 * (ws + we), we].map(|p| self.clip(p));
+        if !self.projectable(&net) {
+            return true;
+        }
+        let curve = [s.2, m.2, e.2];
+        [(s.0, 0.25), (e.0, 0.75)].into_iter().any(|(end, t)| {
+            let truth = self.screen(self.world(mid(end, m.0)));
+            let got = parabola(&curve, t);
+            (got[0] - truth[0]).hypot(got[1] - truth[1]) > self.tol
+        })
+    }
+
+    /// The largest distance [pixels] between the piece's rebuilt screen quadratics and the
+    /// true projection at its interior check points.
+    fn interior_error(&self, node: &Node) -> f64 {
+        let x = Quadratic::from_reference_values(node.screen.map(|s| s[0]));
+        let y = Quadratic::from_reference_values(node.screen.map(|s| s[1]));
+        let [a, b, c] = node.tri;
+        let at = |u: f64, v: f64| {
+            [
+                a[0] + u * (b[0] - a[0]) + v * (c[0] - a[0]),
+                a[1] + u * (b[1] - a[1]) + v * (c[1] - a[1]),
+            ]
+        };
+        let third = 1.0 / 3.0;
+        [(0.25, 0.25), (0.5, 0.25), (0.25, 0.5), (third, third)]
+            .into_iter()
+            .map(|(u, v)| {
+                let truth = self.screen(self.world(at(u, v)));
+                (x.eval(u, v) - truth[0]).hypot(y.eval(u, v) - truth[1])
+            })
+            .fold(0.0, f64::max)
+    }
+}
+
+/// The three points of an edge ordered by the world position of its ends (the middle stays in
+/// the middle).
+fn canonical<T: Copy>(p: [(Uv, DVec3, T); 3]) -> [(Uv, DVec3, T); 3] {
+    if canonical_order(p[2].1, p[0].1) == Ordering::Less {
+        [p[2], p[1], p[0]]
+    } else {
+        p
+    }
+}
+
+/// Why a frustum test failed for a net wholly beyond one of its planes.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Beyond {
+    Near,
+    Other,
+}
+
+/// Whether every control point lies beyond one plane of the view frustum.
+fn beyond(net: &[DVec4; 6]) -> Option<Beyond> {
+    let all = |f: &dyn Fn(&DVec4) -> bool| net.iter().all(f);
+    if all(&|c| c.z < -c.w) {
+        Some(Beyond::Near)
+    } else if all(&|c| c.x < -c.w)
+        || all(&|c| c.x > c.w)
+        || all(&|c| c.y < -c.w)
+        || all(&|c| c.y > c.w)
+        || all(&|c| c.z > c.w)
+    {
+        Some(Beyond::Other)
+    } else {
+        None
+    }
+}
+
+/// Sets up one lembo with the perspective tolerance `tol` [pixels] into `out`: whole when
+/// it can be projected, is within `tol` of its true projection and within the guard band;
+/// otherwise split (see the module documentation).
+pub fn setup_refined<R: Real>(
+    id: u32,
+    lembo: &Lembo,
+    color: [f64; 3],
+    view: &View,
+    tol: f64,
+    out: &mut Vec<ScreenLembo<R>>,
+) -> Result<Split, Cull> {
+    let s = Surface::new(lembo, view, tol);
+    let (w, h) = (view.viewport.width as f64, view.viewport.height as f64);
+    let g = SPLIT_GUARD_VIEWPORTS * w.max(h);
+    let within =
+        |(lo, hi): (DVec3, DVec3)| lo.x >= -g && lo.y >= -g && hi.x <= w + g && hi.y <= h + g;
+    let world = lembo.points;
+    let root = Node {
+        tri: [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
+        depth: 0,
+        world,
+        screen: world.map(|p| s.screen(p)),
+        edges: [EdgeSource::Own; 3],
+    };
+    let net = s.net(&world);
+    if s.projectable(&net) {
+        let points = ScreenPoints::of(&root.screen);
+        if outside(view, points.hull()) {
+            return Err(Cull::Outside);
+        }
+        if zero_area(points.xs(), points.ys()) {
+            return Err(Cull::Degenerate);
+        }
+    } else {
+        match beyond(&net) {
+            Some(Beyond::Near) => return Err(Cull::BehindEye),
+            Some(Beyond::Other) => return Err(Cull::Outside),
+            None => {}
+        }
+    }
+    let mut split = Split::default();
+    let mut pending = vec![root];
+    let first = out.len();
+    while let Some(node) = pending.pop() {
+        let full = out.len() - first + pending.len() >= MAX_PIECES;
+        if node.depth > 0 {
+            split.examined += 1;
+        }
+        let net = s.net(&node.world);
+        let projectable = s.projectable(&net);
+        let points = ScreenPoints::of(&node.screen);
+        if node.depth > 0 {
+            let culled = if projectable {
+                outside(view, points.hull()).then_some(Beyond::Other)
+            } else {
+                beyond(&net)
+            };
+            match culled {
+                Some(Beyond::Near) => {
+                    split.culled_near += 1;
+                    continue;
+                }
+                Some(Beyond::Other) => {
+                    split.culled += 1;
+                    continue;
+                }
+                None => {}
+            }
+        }
+        // Why this piece would split (decided before the caps, to count what they cut).
+        let own_refined: [bool; 3] = std::array::from_fn(|e| {
+            matches!(node.edges[e], EdgeSource::Own) && s.refine(edge_points(&node, e))
+        });
+        let perspective =
+            projectable && (own_refined.iter().any(|&r| r) || s.interior_error(&node) > tol);
+        let guard = projectable && !within(points.hull());
+        let wants = !projectable || perspective || guard;
+        if !wants || node.depth >= MAX_SPLIT_DEPTH || full {
+            if !projectable {
+                // At a cap and still straddling w = w_min: nothing of it can be drawn.
+                split.capped += 1;
+                split.culled_near += 1;
+                continue;
+            }
+            if wants {
+                split.capped += 1;
+            }
+            if node.depth == 0 {
+                out.push(build(
+                    id,
+                    &points,
+                    lembo.normal,
+                    lembo.position,
+                    color,
+                    None,
+                ));
+                return Ok(split);
+            }
+            let uv = reference_uv(node.tri);
+            let restrict = |q: &Quadratic3<f64>| {
+                [0, 1, 2]
+                    .map(|c| Quadratic::from_reference_values(uv.map(|[u, v]| q[c].eval(u, v))))
+            };
+            out.push(build(
+                id,
+                &points,
+                restrict(&lembo.normal),
+                restrict(&lembo.position),
+                color,
+                Some(node.tri),
+            ));
+            continue;
+        }
+        split.perspective |= perspective;
+        split.near |= !projectable;
+        // Pushed in reverse, so pieces come out in the order A, B, C, middle.
+        for child in children(&s, &node, own_refined).into_iter().rev() {
+            pending.push(child);
+        }
+    }
+    Ok(split)
+}
+
+/// Edge `e` of a node as (uv, world, screen) at its start, middle and end.
+fn edge_points(node: &Node, e: usize) -> [(Uv, DVec3, S3); 3] {
+    let uv = reference_uv(node.tri);
+    EDGE_POINTS[e].map(|k| (uv[k], node.world[k], node.screen[k]))
+}
+
+/// The four children of a node, with the screen points of their new edge middles taken from
+/// the true projection (refined and inner edges) or from the frozen parabola of an edge.
+fn children(s: &Surface, node: &Node, refined: [bool; 3]) -> [Node; 4] {
+    let uv = reference_uv(node.tri);
+    // Per parent edge: the middles of its two halves (world, screen) and the halves' sources.
+    let halves: [_; 3] = std::array::from_fn(|e| {
+        let [i0, im, i1] = EDGE_POINTS[e];
+        let (q0, q1) = (mid(uv[i0], uv[im]), mid(uv[im], uv[i1]));
+        let (w0, w1) = (s.world(q0), s.world(q1));
+        let frozen = match node.edges[e] {
+            EdgeSource::Own if refined[e] => None,
+            EdgeSource::Own => {
+                let p = edge_points(node, e);
+                let forward = canonical(p)[0].0 == p[0].0;
+                let c = canonical(p).map(|q| q.2);
+                Some((c, if forward { [0.0, 1.0] } else { [1.0, 0.0] }))
+            }
+            EdgeSource::Frozen { curve, t } => Some((curve, t)),
+        };
+        match frozen {
+            None => (
+                [(w0, s.screen(w0)), (w1, s.screen(w1))],
+                [EdgeSource::Own; 2],
+            ),
+            Some((curve, [t0, t1])) => {
+                let tm = 0.5 * (t0 + t1);
+                let (ta, tb) = (0.5 * (t0 + tm), 0.5 * (tm + t1));
+                (
+                    [(w0, parabola(&curve, ta)), (w1, parabola(&curve, tb))],
+                    [
+                        EdgeSource::Frozen { curve, t: [t0, tm] },
+                        EdgeSource::Frozen { curve, t: [tm, t1] },
+                    ],
+                )
+            }
+        }
+    });
+    let [a, b, c] = node.tri;
+    let [_, _, _, ab, ca, bc] = uv;
+    let p = |k: usize| (node.world[k], node.screen[k]);
+    let inner = |x: Uv, y: Uv| {
+        let w = s.world(mid(x, y));
+        (w, s.screen(w))
+    };
+    let (m_ab_ca, m_ab_bc, m_bc_ca) = (inner(ab, ca), inner(ab, bc), inner(bc, ca));
+    let own = EdgeSource::Own;
+    let make = |tri: [Uv; 3], pts: [(DVec3, S3); 6], edges: [EdgeSource; 3]| Node {
+        tri,
+        depth: node.depth + 1,
+        world: pts.map(|q| q.0),
+        screen: pts.map(|q| q.1),
+        edges,
+    };
+    // Points: corners A, B, C (0, 1, 2), edge middles AB (3), CA (4), BC (5); the halves of
+    // edge e are halves[e].0[0] (from its start) and halves[e].0[1] (towards its end).
+    let (h0, h1, h2) = (halves[0], halves[1], halves[2]);
+    [
+        make(
+            [a, ab, ca],
+            [p(0), p(3), p(4), h0.0[0], h2.0[1], m_ab_ca],
+            [h0.1[0], own, h2.1[1]],
+        ),
+        make(
+            [ab, b, bc],
+            [p(3), p(1), p(5), h0.0[1], m_ab_bc, h1.0[0]],
+            [h0.1[1], h1.1[0], own],
+        ),
+        make(
+            [ca, bc, c],
+            [p(4), p(5), p(2), m_bc_ca, h2.0[0], h1.0[1]],
+            [own, h1.1[1], h2.1[0]],
+        ),
+        make(
+            [bc, ca, ab],
+            [p(5), p(4), p(3), m_bc_ca, m_ab_bc, m_ab_ca],
+            [own, own, own],
+        ),
+    ]
+}
