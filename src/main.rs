@@ -154,7 +154,12 @@ struct RenderArgs {
     /// rebuilt screen quadratics are within this distance of the true perspective projection,
     /// and splits and clips lembos at the near plane. `off` is the paper's Setup (six
     /// projected points, no split for perspective, no near-plane clipping) [default: k/2].
-    #[arg(long, value_name = "PX|off", value_parser = parse_perspective_tol, allow_negative_numbers = true)]
+    #[arg(
+        long,
+        value_name = "PX|off",
+        value_parser = parse_perspective_tol,
+        allow_hyphen_values = true
+    )]
     perspective_tol: Option<PerspectiveTol>,
     /// Datapath precision of the extreme method.
     #[arg(long, value_enum, default_value = "f32")]
@@ -215,7 +220,12 @@ struct CompareArgs {
     /// rebuilt screen quadratics are within this distance of the true perspective projection,
     /// and splits and clips lembos at the near plane. `off` is the paper's Setup (six
     /// projected points, no split for perspective, no near-plane clipping) [default: k/2].
-    #[arg(long, value_name = "PX|off", value_parser = parse_perspective_tol, allow_negative_numbers = true)]
+    #[arg(
+        long,
+        value_name = "PX|off",
+        value_parser = parse_perspective_tol,
+        allow_hyphen_values = true
+    )]
     perspective_tol: Option<PerspectiveTol>,
     /// Tessellation level of the triangle path, or `auto`: the smallest N whose silhouette
     /// error is no larger than the lembo path's at this k.

@@ -307,6 +307,37 @@ fn k_out_of_range_is_refused() {
 }
 
 #[test]
+fn bad_perspective_tolerance_is_refused() {
+    for tol in ["0", "-0.1", "NaN", "inf", "-inf", "fine"] {
+        for cmd in ["render", "compare"] {
+            assert_refused(&[cmd, "--perspective-tol", tol], "--perspective-tol");
+        }
+    }
+}
+
+/// report.json echoes Setup's perspective tolerance: k/2 by default, the given pixels, or
+/// "off"; null on the triangle path.
+#[test]
+fn perspective_tolerance_is_echoed_in_the_report() {
+    let dir = tempfile::tempdir().unwrap();
+    for (args, want) in [
+        (&["--k", "0.25"][..], serde_json::json!(0.125)),
+        (&["--perspective-tol", "0.3"][..], serde_json::json!(0.3)),
+        (&["--perspective-tol", "off"][..], serde_json::json!("off")),
+        (&["--path", "triangle"][..], serde_json::Value::Null),
+    ] {
+        let mut all = vec!["render", "--mode", "functional", "--out", "o"];
+        all.extend_from_slice(args);
+        let out = run(&all, dir.path());
+        assert!(out.status.success(), "{args:?}");
+        let report: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.path().join("o/report.json")).unwrap())
+                .unwrap();
+        assert_eq!(report["settings"]["perspective_tol"], want, "{args:?}");
+    }
+}
+
+#[test]
 fn viewport_out_of_range_is_refused() {
     let dir = tempfile::tempdir().unwrap();
     for (w, field) in [("0", "viewport.width"), ("16385", "viewport.width")] {

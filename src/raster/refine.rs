@@ -464,3 +464,144 @@ fn children(s: &Surface, node: &Node, refined: [bool; 3]) -> [Node; 4] {
         ),
     ]
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::{Camera, Projection, Viewport};
+    use crate::lembo::shapes::builtin_lembos;
+
+    fn view(eye: [f64; 3], near: f64) -> View {
+        View::new(
+            &Camera {
+                eye,
+                target: [0.0; 3],
+                up: [0.0, 1.0, 0.0],
+                projection: Projection::Perspective {
+                    fovy_deg: 50.0,
+                    near,
+                    far: 100.0,
+                },
+            },
+            Viewport {
+                width: 256,
+                height: 256,
+            },
+        )
+    }
+
+    /// The largest screen distance between a piece's quadratics and the true projection of
+    /// the lembo at a 21 x 21 lattice of the piece's domain [pixels].
+    fn worst(lembo: &Lembo, v: &View, p: &ScreenLembo<f64>) -> f64 {
+        let mut worst = 0.0f64;
+        for a in 0..=20 {
+            for b in 0..=(20 - a) {
+                let (u, w) = (a as f64 / 20.0, b as f64 / 20.0);
+                let (lu, lv) = p.lembo_uv(u, w);
+                let truth = v.project(lembo.position_at(lu, lv));
+                let (x, y) = (p.x.eval(u, w), p.y.eval(u, w));
+                worst = worst.max((x - truth.x).hypot(y - truth.y));
+            }
+        }
+        worst
+    }
+
+    /// The estimate (edge quarter points, four interior points) is what Setup trusts; on
+    /// sampled points of every piece the true error stays within 1.5 tol, and without the
+    /// split it is far above it.
+    #[test]
+    fn pieces_are_within_the_tolerance_of_the_true_projection() {
+        let v = view([0.4, 0.6, 1.8], 0.1);
+        let lembos = builtin_lembos("sphere24").unwrap();
+        for tol in [0.5, 0.05, 0.005] {
+            let (mut split, mut whole_worst) = (0, 0.0f64);
+            for (id, l) in lembos.iter().enumerate() {
+                let mut out = Vec::new();
+                let Ok(s) = setup_refined::<f64>(id as u32, l, [0.8; 3], &v, tol, &mut out) else {
+                    continue;
+                };
+                split += s.perspective as u32;
+                assert_eq!(s.capped, 0);
+                for p in &out {
+                    let e = worst(l, &v, p);
+                    assert!(e <= 1.5 * tol, "lembo {id} tol {tol}: {e} px");
+                }
+                let mut whole = Vec::new();
+                if super::super::setup::setup_pieces::<f64>(0, l, [0.8; 3], &v, None, &mut whole)
+                    .is_ok()
+                {
+                    whole_worst = whole
+                        .iter()
+                        .map(|p| worst(l, &v, p))
+                        .fold(whole_worst, f64::max);
+                }
+            }
+            assert!(
+                split > 0 && whole_worst > 4.0 * tol.min(0.5),
+                "{split} {whole_worst}"
+            );
+        }
+    }
+
+    /// A lembo crossing the eye plane is split at the near plane: every piece drawn can be
+    /// projected (its Bézier net in front of w = near/2), the parts nearer than the near
+    /// plane are dropped, and the work stays bounded.
+    #[test]
+    fn a_lembo_through_the_eye_plane_is_split_at_the_near_plane() {
+        // A large flat lembo on y = 0 under an eye at height 1, looking along -z: it runs
+        // from 10 units behind the eye to 30 in front.
+        let p = [
+            DVec3::new(-20.0, 0.0, 10.0),
+            DVec3::new(20.0, 0.0, 10.0),
+            DVec3::new(0.0, 0.0, -30.0),
+        ];
+        let m = |a: DVec3, b: DVec3| (a + b) * 0.5;
+        let l = Lembo::new(
+            [
+                p[0],
+                p[1],
+                p[2],
+                m(p[0], p[1]),
+                m(p[0], p[2]),
+                m(p[1], p[2]),
+            ],
+            [DVec3::Y; 6],
+        );
+        let v = View::new(
+            &Camera {
+                eye: [0.0, 1.0, 0.0],
+                target: [0.0, 0.8, -10.0],
+                up: [0.0, 1.0, 0.0],
+                projection: Projection::Perspective {
+                    fovy_deg: 60.0,
+                    near: 0.1,
+                    far: 100.0,
+                },
+            },
+            Viewport {
+                width: 128,
+                height: 128,
+            },
+        );
+        let mut none = Vec::new();
+        assert_eq!(
+            super::super::setup::setup_pieces::<f32>(0, &l, [0.8; 3], &v, None, &mut none).err(),
+            Some(Cull::BehindEye),
+            "the paper's Setup drops it"
+        );
+        let mut out = Vec::new();
+        let s = setup_refined::<f32>(0, &l, [0.8; 3], &v, 0.25, &mut out).unwrap();
+        assert!(
+            s.near && !out.is_empty() && out.len() <= MAX_PIECES,
+            "{s:?}"
+        );
+        assert!(s.culled_near + s.culled > 0, "{s:?}");
+        for piece in &out {
+            let [a, b, c] = piece.domain.unwrap();
+            for (u, w) in [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (0.3, 0.3)] {
+                let at = |k: usize| a[k] + u * (b[k] - a[k]) + w * (c[k] - a[k]);
+                assert!(v.project(l.position_at(at(0), at(1))).w >= 0.05);
+            }
+        }
+    }
+}
