@@ -13,7 +13,7 @@ use std::fmt::Write as _;
 const MIB: f64 = (1u64 << 20) as f64;
 
 /// Version of the `report.json` layout; bumped when a field changes meaning or moves.
-pub const SCHEMA_VERSION: u32 = 4;
+pub const SCHEMA_VERSION: u32 = 5;
 
 /// Everything a run reports.
 #[derive(Clone, Debug, Serialize)]
