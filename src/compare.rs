@@ -76,7 +76,10 @@ impl CompareJob {
             scene: self.scene.clone(),
             out: None,
             k: self.k,
-            perspective_tol: self.perspective_tol,
+            perspective_tol: match path {
+                PrimitivePath::Lembo => self.perspective_tol,
+                PrimitivePath::Triangle => PerspectiveTol::FollowK,
+            },
             datapath: self.datapath,
             reference: true,
             supersample: self.supersample,

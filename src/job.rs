@@ -113,6 +113,14 @@ impl RenderJob {
                 return Err(Error::invalid(COMMAND_LINE, "--perspective-tol", px, why));
             }
         }
+        if self.perspective_tol != PerspectiveTol::FollowK && self.path == PrimitivePath::Triangle {
+            return Err(Error::invalid(
+                COMMAND_LINE,
+                "--perspective-tol",
+                format!("{:?}", self.perspective_tol),
+                "only meaningful with --path lembo (the triangle path clips its triangles)",
+            ));
+        }
         let (lo, hi) = K_RANGE;
         if !(self.k.is_finite() && self.k >= lo && self.k <= hi) {
             return Err(Error::invalid(

@@ -582,6 +582,11 @@ impl Expander<'_> {
         for (name, needs, ok) in [
             ("tess", "path triangle", triangle),
             ("k", "path lembo (and curved discoids)", !triangle),
+            (
+                "perspective_tol",
+                "path lembo (and curved discoids)",
+                !triangle,
+            ),
         ] {
             if point.params.contains_key(name) && !ok {
                 return Err(Error::invalid(
@@ -1630,6 +1635,7 @@ pub fn csv_bytes(records: &[Value]) -> Result<Vec<u8>> {
             "primitives",
             "primitive_bytes",
             "fragments",
+            "lembo_pieces",
             "blend.error_mean",
             "blend.error_max",
             "wall_seconds",
@@ -1665,6 +1671,7 @@ pub fn csv_bytes(records: &[Value]) -> Result<Vec<u8>> {
         row.push(cell(report["primitives"].get("count")));
         row.push(cell(report["primitives"].get("bytes")));
         row.push(cell(report["counts"].get("fragments")));
+        row.push(cell(report["counts"].get("lembo_pieces")));
         row.push(cell(report["blend"].get("error_mean")));
         row.push(cell(report["blend"].get("error_max")));
         row.push(cell(report["host"].get("wall_seconds")));
@@ -1941,7 +1948,8 @@ mod tests {
                 "report": {"cycles": {"total": 10, "fps": 5.0, "bottleneck": "Rop",
                     "units": [{"name": "Rop", "busy": 5}]},
                     "accuracy": null, "primitives": {"count": 2, "bytes": 8},
-                    "counts": {"fragments": 3}, "blend": null, "host": {"wall_seconds": 0.5}}}),
+                    "counts": {"fragments": 3, "lembo_pieces": 4}, "blend": null,
+                    "host": {"wall_seconds": 0.5}}}),
             serde_json::json!({"index": 1, "scene": "s, \"quoted\"", "params": {"tess": 2},
                 "report": {"cycles": null, "accuracy": {"psnr_db": 40.0},
                     "primitives": {"count": 2, "bytes": 8}, "counts": {"fragments": 3},
@@ -1949,8 +1957,11 @@ mod tests {
         ];
         let text = String::from_utf8(csv_bytes(&records).unwrap()).unwrap();
         let lines: Vec<&str> = text.lines().collect();
-        assert_eq!(lines[0], "index,scene,k,tess,cycles_total,fps,bottleneck,util.Rop,acc.psnr_db,primitives,primitive_bytes,fragments,blend.error_mean,blend.error_max,wall_seconds");
-        assert_eq!(lines[1], "0,s,1.0,,10,5.0,Rop,0.5,,2,8,3,,,0.5");
-        assert_eq!(lines[2], "1,\"s, \"\"quoted\"\"\",,2,,,,,40.0,2,8,3,,,0.25");
+        assert_eq!(lines[0], "index,scene,k,tess,cycles_total,fps,bottleneck,util.Rop,acc.psnr_db,primitives,primitive_bytes,fragments,lembo_pieces,blend.error_mean,blend.error_max,wall_seconds");
+        assert_eq!(lines[1], "0,s,1.0,,10,5.0,Rop,0.5,,2,8,3,4,,,0.5");
+        assert_eq!(
+            lines[2],
+            "1,\"s, \"\"quoted\"\"\",,2,,,,,40.0,2,8,3,,,,0.25"
+        );
     }
 }

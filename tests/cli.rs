@@ -313,6 +313,10 @@ fn bad_perspective_tolerance_is_refused() {
             assert_refused(&[cmd, "--perspective-tol", tol], "--perspective-tol");
         }
     }
+    assert_refused(
+        &["render", "--path", "triangle", "--perspective-tol", "0.1"],
+        "--perspective-tol",
+    );
 }
 
 /// report.json echoes Setup's perspective tolerance: k/2 by default, the given pixels, or
@@ -324,7 +328,10 @@ fn perspective_tolerance_is_echoed_in_the_report() {
         (&["--k", "0.25"][..], serde_json::json!(0.125)),
         (&["--perspective-tol", "0.3"][..], serde_json::json!(0.3)),
         (&["--perspective-tol", "off"][..], serde_json::json!("off")),
-        (&["--path", "triangle"][..], serde_json::Value::Null),
+        (
+            &["--path", "triangle", "--tess", "2"][..],
+            serde_json::Value::Null,
+        ),
     ] {
         let mut all = vec!["render", "--mode", "functional", "--out", "o"];
         all.extend_from_slice(args);

@@ -283,6 +283,18 @@ fn bad_specs_are_refused_before_any_run() {
             "field `points[0].arch.links.rasterizer_to_rop.fifo_depth` = 0",
         ),
         (r#""points": [{"tess": 2}]"#, "field `points[0].tess`"),
+        (
+            r#""grid": [{"perspective_tol": [0.1, -1]}]"#,
+            "field `grid[0].perspective_tol[1]` = -1",
+        ),
+        (
+            r#""points": [{"perspective_tol": "on"}]"#,
+            "field `points[0].perspective_tol`",
+        ),
+        (
+            r#""points": [{"path": "triangle", "perspective_tol": "off"}]"#,
+            "field `points[0].perspective_tol`",
+        ),
         (r#""points": [{"blend": "f16"}]"#, "has no discoids"),
     ] {
         assert_refused(&small_spec(rest), &[], needle);
