@@ -209,11 +209,12 @@ pub struct TriangleSetupConfig {
     /// Initiation interval per triangle \[cycles\]. Default 1: DESIGN §5's "setup 1 triangle
     /// per cycle", the rate of GPUs of the papers' era and since.
     pub cycles_per_triangle: u64,
-    /// Further busy cycles per piece of a triangle clipped to the guard band \[cycles\]: a
-    /// triangle with a vertex beyond the 16.8 range (±32767 pixels) is clipped against the
-    /// four guard-band planes and its polygon fanned into 1 to 5 triangles, each set up (and
-    /// culled or emitted) as a triangle of its own, so it costs `cycles_per_triangle` plus
-    /// this per fan triangle. Default 1: each piece takes the snap and edge-function stage
+    /// Further busy cycles per piece of a clipped triangle \[cycles\]: a triangle crossing
+    /// the near or far plane, or with a vertex beyond the 16.8 range (±32767 pixels), is
+    /// clipped against the two depth planes and the four guard-band planes (those it
+    /// crosses) and its polygon fanned into 1 to 7 triangles, each set up (and culled or
+    /// emitted) as a triangle of its own, so it costs `cycles_per_triangle` plus this per
+    /// fan triangle. Default 1: each piece takes the snap and edge-function stage
     /// for one cycle, as a triangle does; meanwhile the polygon's new vertices (at most
     /// fan + 2; a plane distance, a divide and a blend each, then the projection) fit in
     /// the three vertex slots per cycle of the transform stage, which the pieces leave idle.

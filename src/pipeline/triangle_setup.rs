@@ -1,7 +1,8 @@
 //! TriangleSetup (the triangle path, DESIGN §5): projects a triangle's three vertices,
-//! clips it to the guard band when a vertex is beyond the 16.8 range, snaps the vertices to
-//! 16.8 fixed point, sets up the integer edge functions and the perspective-correct
-//! attribute planes, and culls (one test per triangle, or per piece of a clipped one).
+//! clips it in clip space to the near and far planes when it crosses one, and to the guard
+//! band when a vertex (of what is left) is beyond the 16.8 range, snaps the vertices to 16.8
+//! fixed point, sets up the integer edge functions and the perspective-correct attribute
+//! planes, and culls (one test per triangle, or per piece of a clipped one).
 //!
 //! Input: the triangles (the tessellated scene), in their source's order (the unit is the
 //! source: the Tessellator's output is read from memory, so the unit is never starved until
@@ -9,8 +10,8 @@
 //! parent's id), round-robin to the triangle rasterizers.
 //!
 //! Cost: `triangle_setup.cycles_per_triangle` busy cycles per triangle, culled or not, plus
-//! `triangle_setup.cycles_per_clipped_piece` per triangle of a clipped triangle's fan,
-//! culled or not (the fan's culled triangles are spent before its first piece is emitted);
+//! `triangle_setup.cycles_per_clipped_piece` per triangle of a clipped triangle's fan
+//! (clipped at the near or far plane, the guard band, or both: one fan), culled or not (the fan's culled triangles are spent before its first piece is emitted);
 //! a result is ready `triangle_setup.latency_cycles` after the operation that produces it.
 //! Not modelled: vertex fetch and the post-transform vertex cache (each triangle's three
 //! vertices are transformed here).

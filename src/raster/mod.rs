@@ -178,12 +178,17 @@ pub struct Counts {
     pub folds: u64,
     /// Triangles of the triangle path (tessellated lembos).
     pub triangles: u64,
-    /// Triangles dropped because a vertex is at or behind the eye plane.
+    /// Triangles dropped because they lie wholly on the eye's side of the near plane
+    /// (nearer than it, or behind the eye).
     pub triangles_culled_behind_eye: u64,
     /// Triangles with a vertex beyond the 16.8 guard band (±32767 px), clipped to it and
     /// fanned into pieces that are set up and rasterized as triangles with their parent's id.
     pub triangles_clipped: u64,
-    /// Triangles outside the viewport or the depth range (one cull test each).
+    /// Triangles crossing the near or the far plane, clipped to the depth range in clip
+    /// space (then to the guard band if they still reach beyond it) and fanned into pieces
+    /// as above.
+    pub triangles_clipped_depth: u64,
+    /// Triangles beside the viewport or wholly beyond the far plane (one cull test each).
     pub triangles_culled_outside: u64,
     /// Triangles of zero area after snapping, or covering no pixel centre of their box.
     pub triangles_degenerate: u64,
@@ -256,6 +261,7 @@ impl std::ops::AddAssign for Counts {
         self.triangles += o.triangles;
         self.triangles_culled_behind_eye += o.triangles_culled_behind_eye;
         self.triangles_clipped += o.triangles_clipped;
+        self.triangles_clipped_depth += o.triangles_clipped_depth;
         self.triangles_culled_outside += o.triangles_culled_outside;
         self.triangles_degenerate += o.triangles_degenerate;
         self.quads += o.quads;

@@ -21,20 +21,34 @@
 //!   normalised). A fragment is a function of the triangle and the pixel only, so any order
 //!   of evaluation (functional model, or the timed ROPs tile by tile) gives the same bits.
 //!
+//! - **Near- and far-plane clipping**: a triangle crossing the near or the far plane is
+//!   clipped, as GPUs do, in homogeneous clip space before the divide, to -w <= z <= w (GL).
+//!   Clip coordinates are linear in the world point (c = M (p, 1)), so each clip-space plane
+//!   e · c >= 0 is the world plane (Mᵀ e) · (p, 1) >= 0, and Sutherland–Hodgman on the world
+//!   triangle is the clip-space clip, for any sign of w (vertices behind the eye included).
+//!   A triangle wholly nearer than the near plane (or behind the eye) is culled as
+//!   [`TriangleCull::BehindEye`], one wholly beyond the far plane or (clip-space outcodes)
+//!   beside the viewport as [`TriangleCull::Outside`]. What the depth planes leave is then
+//!   clipped to the guard band (below) and fanned the same way; its vertices' window depths
+//!   are clamped to [0, 1] (removing only the rounding of a crossing on a depth plane), so
+//!   its fragments' depths are in [0, 1] too (the far end up to one rounding, which the
+//!   ROP's depth test discards).
 //! - **Guard-band clipping**: a triangle with a vertex beyond the 16.8 range (±32767
 //!   pixels) is clipped, as GPUs do, against the four planes x = ±[`CLIP_PX`] and
 //!   y = ±[`CLIP_PX`]. Screen x is (c_x / c_w + 1) W / 2 for clip coordinates c, so each
 //!   plane is linear in the world point, and Sutherland–Hodgman on the world triangle gives
 //!   exact world-space vertices; position and normal are blended linearly along the edges
 //!   (they are affine over the flat triangle), so the pieces' perspective-correct fragments
-//!   are the unclipped triangle's. The polygon (at most 7 vertices) is projected and snapped
-//!   once and fanned into at most 5 pieces that share their snapped vertices and the
-//!   parent's id; the top-left rule then covers each pixel once. A triangle inside the guard
-//!   band takes the unclipped path unchanged.
+//!   are the unclipped triangle's. The polygon (at most 7 vertices, 9 after the depth
+//!   planes too) is projected and snapped once and fanned into at most 5 (7) pieces that
+//!   share their snapped vertices and the parent's id; the top-left rule then covers each
+//!   pixel once. Edge crossings are computed from the edge's lexicographically smaller end,
+//!   so two triangles sharing an edge cut it at the same points, bit for bit. A triangle
+//!   inside the depth range and the guard band takes the unclipped path unchanged.
 //!
-//! Not modelled: near-plane clipping (a triangle with a vertex at or behind the eye is
-//! dropped and counted, as a lembo is; the lembo path drops those too), back-face culling
-//! (the lembo path has none either; both paths shade two-sided).
+//! Not modelled: back-face culling (the lembo path has none either; both paths shade
+//! two-sided). The lembo path has no near-plane clipping: it drops a lembo with a control
+//! point behind the eye.
 
 use super::Counts;
 use crate::camera::{ScreenPoint, View, Viewport};
@@ -130,9 +144,9 @@ pub struct ScreenTriangle<R> {
 /// Why a triangle produced no [`ScreenTriangle`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TriangleCull {
-    /// A vertex is at or behind the eye plane (near clipping is not modelled).
+    /// Wholly on the eye's side of the near plane: nearer than it, or behind the eye.
     BehindEye,
-    /// The bounding box misses the viewport, or the triangle lies outside the depth range.
+    /// The bounding box misses the viewport, or the triangle lies beyond the far plane.
     Outside,
     /// Zero area after snapping, or no pixel centre inside the bounding box.
     Degenerate,
@@ -156,19 +170,25 @@ pub struct TriangleFragment<R> {
 /// at most 16384 pixels), so clipping never removes a visible pixel.
 pub const CLIP_PX: f64 = GUARD_BAND_PX - 1.0;
 
-/// Room for the clipped polygon: a triangle gains at most one vertex per clip plane (3 + 4),
-/// and rounding can add a near-duplicate where a vertex lies on a plane; snapping merges
-/// those again ([`make_convex`]).
+/// Room for the clipped polygon: a triangle gains at most one vertex per clip plane
+/// (3 + 2 depth planes + 4 guard-band planes), and rounding can add a near-duplicate where a
+/// vertex lies on a plane; snapping merges those again ([`make_convex`]).
 const POLYGON_CAPACITY: usize = 16;
 
 /// What setup made of one triangle; its pieces are in the caller's buffer.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct SetupOutcome {
-    /// Triangles the guard-band clipper fanned the triangle into, each set up (and perhaps
-    /// culled) as a triangle of its own: 0 when every vertex is inside the guard band (or
-    /// nothing of the triangle is), else the snapped polygon's vertices minus 2, 1 to 5
-    /// (three vertices, and at most one more per clip plane).
+    /// Triangles the clipper fanned the triangle into, each set up (and perhaps culled) as a
+    /// triangle of its own: 0 when the triangle is inside the depth range and every vertex
+    /// inside the guard band (or nothing of it is in view), else the snapped polygon's
+    /// vertices minus 2, 1 to 7 (three vertices, and at most one more per clip plane).
     pub fan: usize,
+    /// Clipped to the guard band (a guard-band plane cut the triangle, or what the depth
+    /// planes left of it) and fanned: counted in `triangles_clipped`.
+    pub guard_band: bool,
+    /// Crossed the near or the far plane, clipped there and fanned: counted in
+    /// `triangles_clipped_depth`.
+    pub depth: bool,
     /// Why the triangle yielded no piece; `None` when it yielded at least one.
     pub cull: Option<TriangleCull>,
 }
@@ -176,17 +196,17 @@ pub struct SetupOutcome {
 impl SetupOutcome {
     fn culled(cull: TriangleCull) -> Self {
         SetupOutcome {
-            fan: 0,
             cull: Some(cull),
+            ..Default::default()
         }
     }
 
-    /// Counts the triangle: `triangles`, `triangles_clipped`, and its cull if it had one.
+    /// Counts the triangle: `triangles`, `triangles_clipped`, `triangles_clipped_depth`, and
+    /// its cull if it had one.
     pub fn count(&self, counts: &mut Counts) {
         counts.triangles += 1;
-        if self.fan > 0 {
-            counts.triangles_clipped += 1;
-        }
+        counts.triangles_clipped += self.guard_band as u64;
+        counts.triangles_clipped_depth += self.depth as u64;
         if let Some(cull) = self.cull {
             count_cull(cull, counts);
         }
@@ -194,9 +214,10 @@ impl SetupOutcome {
 }
 
 /// Sets up triangle `id` (world-space `positions`, unit `normals`, `color`) for `view` into
-/// `out` (cleared first): the triangle itself when its vertices are inside the 16.8 guard
-/// band; when one is beyond it, the pieces of the triangle clipped to [`CLIP_PX`], all with
-/// id `id`; nothing when it is culled.
+/// `out` (cleared first): the triangle itself when it lies inside the depth range and its
+/// vertices inside the 16.8 guard band; when it crosses the near or far plane, or a vertex
+/// is beyond the guard band, the pieces of the triangle clipped to the depth range and to
+/// [`CLIP_PX`], all with id `id`; nothing when it is culled.
 pub fn setup<R: Real>(
     id: u32,
     positions: &[DVec3; 3],
@@ -206,6 +227,22 @@ pub fn setup<R: Real>(
     out: &mut Vec<ScreenTriangle<R>>,
 ) -> SetupOutcome {
     out.clear();
+    // The near and far planes: a triangle wholly beyond one is culled, one crossing either
+    // is clipped to both before anything is projected.
+    let depth = depth_planes(view);
+    let d = depth.map(|q| positions.map(|p| q.dot(p.extend(1.0))));
+    if d[0].iter().all(|&d| d < 0.0) {
+        return SetupOutcome::culled(TriangleCull::BehindEye);
+    }
+    if d[1].iter().all(|&d| d < 0.0) {
+        return SetupOutcome::culled(TriangleCull::Outside);
+    }
+    let color = color.map(R::of);
+    if d.iter().flatten().any(|&d| d < 0.0) {
+        return clip_depth(id, positions, normals, color, view, out);
+    }
+    // Inside the depth range: every vertex is in front of the eye (w >= near > 0, or w = 1
+    // for orthographic views); the checks below only catch rounding.
     let s = positions.map(|p| view.project(p));
     if s.iter()
         .any(|s| s.w <= 0.0 || !s.x.is_finite() || !s.y.is_finite())
@@ -215,7 +252,6 @@ pub fn setup<R: Real>(
     if s.iter().all(|s| s.depth < 0.0) || s.iter().all(|s| s.depth > 1.0) {
         return SetupOutcome::culled(TriangleCull::Outside);
     }
-    let color = color.map(R::of);
     if s.iter()
         .all(|s| s.x.abs() <= GUARD_BAND_PX && s.y.abs() <= GUARD_BAND_PX)
     {
@@ -261,6 +297,33 @@ fn guard_band_planes(view: &View) -> [DVec4; 4] {
         DVec4::new(0.0, 1.0, 0.0, ky - 1.0),
     ]
     .map(|l| m * l)
+}
+
+/// The near and far planes of `view` in world space. Clip space keeps -w <= z <= w (GL),
+/// that is e · c >= 0 for e = (0, 0, 1, 1) and (0, 0, -1, 1), and the clip coordinates are
+/// linear in the world point, c = M (p, 1); so q = Mᵀ e gives q · (p, 1) = e · c exactly:
+/// the clip-space half-spaces, before the divide, for any sign of w. Clipping the world
+/// triangle against q is clipping in homogeneous clip space, and blends position and normal
+/// linearly, as the clip-space blend does (both are affine over the flat triangle).
+fn depth_planes(view: &View) -> [DVec4; 2] {
+    let m = view.view_proj.transpose();
+    [
+        DVec4::new(0.0, 0.0, 1.0, 1.0),
+        DVec4::new(0.0, 0.0, -1.0, 1.0),
+    ]
+    .map(|e| m * e)
+}
+
+/// The viewport's four sides in world space, as [`depth_planes`]: -w <= x, y <= w.
+fn viewport_planes(view: &View) -> [DVec4; 4] {
+    let m = view.view_proj.transpose();
+    [
+        DVec4::new(1.0, 0.0, 0.0, 1.0),
+        DVec4::new(-1.0, 0.0, 0.0, 1.0),
+        DVec4::new(0.0, 1.0, 0.0, 1.0),
+        DVec4::new(0.0, -1.0, 0.0, 1.0),
+    ]
+    .map(|e| m * e)
 }
 
 /// A vertex of the clipped polygon: world position and world normal (a linear blend of the
@@ -337,8 +400,9 @@ fn crossing(a: &ClipVertex, da: f64, b: &ClipVertex, db: f64) -> ClipVertex {
     }
 }
 
-/// Clips a triangle with a vertex beyond the guard band (every vertex in front of the eye)
-/// to [`CLIP_PX`] in world space and fans the snapped polygon into pieces.
+/// Clips a triangle inside the depth range with a vertex beyond the guard band (every
+/// vertex in front of the eye) to [`CLIP_PX`] in world space and fans the snapped polygon
+/// into pieces.
 fn clip<R: Real>(
     id: u32,
     positions: &[DVec3; 3],
@@ -367,17 +431,93 @@ fn clip<R: Real>(
     if polygon.len == 0 {
         return SetupOutcome::culled(TriangleCull::Outside);
     }
+    let outcome = fan(id, &polygon, color, view, false, out);
+    SetupOutcome {
+        guard_band: outcome.fan > 0,
+        ..outcome
+    }
+}
+
+/// Clips a triangle that crosses the near or the far plane (a vertex may be behind the eye)
+/// to both, in homogeneous coordinates before any divide ([`depth_planes`]), then what is
+/// left to the guard band when it reaches beyond it, and fans the snapped polygon into
+/// pieces.
+fn clip_depth<R: Real>(
+    id: u32,
+    positions: &[DVec3; 3],
+    normals: &[DVec3; 3],
+    color: [R; 3],
+    view: &View,
+    out: &mut Vec<ScreenTriangle<R>>,
+) -> SetupOutcome {
+    // Trivial reject by clip-space outcodes: every vertex beyond the same side of the
+    // viewport, which holds whatever the signs of the vertices' w.
+    if viewport_planes(view)
+        .iter()
+        .any(|q| positions.iter().all(|p| q.dot(p.extend(1.0)) < 0.0))
+    {
+        return SetupOutcome::culled(TriangleCull::Outside);
+    }
+    let mut polygon = Polygon::new(positions, normals);
+    for q in depth_planes(view) {
+        match polygon.clip(q) {
+            Some(p) => polygon = p,
+            None => return SetupOutcome::culled(TriangleCull::Degenerate),
+        }
+    }
+    // Every vertex is now in front of the eye (at or beyond the near plane, up to rounding),
+    // where the guard band's planes hold.
+    let mut guard_band = false;
+    for q in guard_band_planes(view) {
+        guard_band |= polygon
+            .vertices()
+            .iter()
+            .any(|v| q.dot(v.p.extend(1.0)) < 0.0);
+        match polygon.clip(q) {
+            Some(p) => polygon = p,
+            None => return SetupOutcome::culled(TriangleCull::Degenerate),
+        }
+    }
+    if polygon.len == 0 {
+        return SetupOutcome::culled(TriangleCull::Outside);
+    }
+    let outcome = fan(id, &polygon, color, view, true, out);
+    SetupOutcome {
+        guard_band: guard_band && outcome.fan > 0,
+        depth: outcome.fan > 0,
+        ..outcome
+    }
+}
+
+/// Projects and snaps each vertex of the clipped `polygon` (non-empty, every vertex in
+/// front of the eye) once and fans it into pieces with id `id`, into `out`. With
+/// `clamp_depth` (a polygon clipped to the depth range) the vertices' window depths are
+/// clamped into [0, 1], which only removes the rounding of a crossing on the near or far
+/// plane: fragments, convex blends of the vertices' depths, then stay >= 0.
+fn fan<R: Real>(
+    id: u32,
+    polygon: &Polygon,
+    color: [R; 3],
+    view: &View,
+    clamp_depth: bool,
+    out: &mut Vec<ScreenTriangle<R>>,
+) -> SetupOutcome {
     // Each vertex is projected and snapped once, so the pieces share their vertices exactly
     // and the top-left rule gives each pixel on a shared edge to one piece.
     let mut x = [0i64; POLYGON_CAPACITY];
     let mut y = [0i64; POLYGON_CAPACITY];
-    let mut v = [vertex::<R>(view, &s[0], positions[0], normals[0]); POLYGON_CAPACITY];
+    let first = &polygon.v[0];
+    let mut v = [vertex::<R>(view, &view.project(first.p), first.p, first.n); POLYGON_CAPACITY];
     for (k, c) in polygon.vertices().iter().enumerate() {
-        let sp = view.project(c.p);
-        // A convex blend of points in front of the eye is in front of it; only rounding at
-        // coordinates near the f64 range could break that.
+        let mut sp = view.project(c.p);
+        // A convex blend of points in front of the eye is in front of it (and the near clip
+        // leaves only such points); only rounding at coordinates near the f64 range could
+        // break that.
         if !(sp.w > 0.0 && sp.x.is_finite() && sp.y.is_finite()) {
             return SetupOutcome::culled(TriangleCull::Degenerate);
+        }
+        if clamp_depth {
+            sp.depth = sp.depth.clamp(0.0, 1.0);
         }
         // A clipped vertex is on a clip line up to rounding: the clamp puts it there.
         x[k] = snap(R::of(sp.x.clamp(-CLIP_PX, CLIP_PX)));
@@ -411,6 +551,7 @@ fn clip<R: Real>(
         } else {
             TriangleCull::Degenerate
         }),
+        ..Default::default()
     }
 }
 
@@ -771,6 +912,7 @@ pub fn render_triangles<R: Real, S: TriangleSink<R>>(
 mod tests {
     use super::*;
     use crate::camera::{Camera, Projection};
+    use crate::datapath::Datapath;
 
     const VP: Viewport = Viewport {
         width: 64,
@@ -1069,8 +1211,18 @@ mod tests {
         n: &[DVec3; 3],
     ) -> DVec3 {
         let plane_n = (p[1] - p[0]).cross(p[2] - p[0]);
-        let (o, d) = view.ray(i as f64 + 0.5, j as f64 + 0.5);
-        let hit = o + d * (plane_n.dot(p[0] - o) / plane_n.dot(d));
+        let on_plane = |x: f64, y: f64| {
+            let (o, d) = view.ray(x, y);
+            o + d * (plane_n.dot(p[0] - o) / plane_n.dot(d))
+        };
+        let (x, y) = (i as f64 + 0.5, j as f64 + 0.5);
+        let hit = on_plane(x, y);
+        // The plane's depth gradient [per pixel] there (from a quarter pixel either side: a
+        // pixel centre is half a pixel from a row or column where the plane may meet the
+        // horizon).
+        let z = |x: f64, y: f64| view.depth_of(on_plane(x, y));
+        let gradient =
+            2.0 * (z(x + 0.25, y) - z(x - 0.25, y)).hypot(z(x, y + 0.25) - z(x, y - 0.25));
         // World barycentrics of the hit.
         let area = plane_n.length_squared();
         let b = [
@@ -1083,10 +1235,14 @@ mod tests {
         let got_n = DVec3::from_array(f.normal).normalize();
         let got_p = DVec3::from_array(f.position);
         // Tolerances: snapping moves the vertices by up to 1/512 pixel, about 4e-4 world
-        // units at the far vertex, more along the grazing plane.
+        // units at the far vertex, more along the grazing plane; each moved vertex tilts the
+        // depth plane by up to the gradient times 1/512 at a pixel inside (a triangle cut
+        // by the near plane has depth 0 on the cut: steep).
         assert!(
-            (f.z - view.depth_of(hit)).abs() < 1e-5,
-            "depth at ({i}, {j})"
+            (f.z - view.depth_of(hit)).abs() < 1e-5 + gradient / 128.0,
+            "depth at ({i}, {j}): {} against {}, gradient {gradient}",
+            f.z,
+            view.depth_of(hit)
         );
         assert!((got_p - hit).length() < 3e-3, "position at ({i}, {j})");
         assert!((got_n - want_n).length() < 1e-3, "normal at ({i}, {j})");
@@ -1427,28 +1583,45 @@ mod tests {
         let mut pieces = Vec::new();
         let o = setup::<f64>(7, &p, &n, [1.0; 3], &view, &mut pieces);
         assert!(o.fan >= 2 && pieces.len() >= 2, "{o:?}");
-        let h = hits(&pieces);
+        assert!(o.guard_band && !o.depth, "{o:?}");
+        let checked = pieces_on_plane(&view, &pieces, &p, &n);
+        assert!(checked > 200, "{checked}");
+        // A vertex behind the eye: the triangle is clipped at the near plane (and what is
+        // left of it at the guard band), and the pieces are still the whole triangle's.
+        let behind = [p[0], p[1], DVec3::new(0.0, 0.0, 1.0)];
+        let o = setup::<f64>(7, &behind, &n, [1.0; 3], &view, &mut pieces);
+        assert!(
+            o.fan >= 2 && o.cull.is_none() && o.depth && o.guard_band,
+            "{o:?}"
+        );
+        let checked = pieces_on_plane(&view, &pieces, &behind, &n);
+        assert!(checked > 200, "{checked}");
+    }
+
+    /// Asserts that the pieces of the triangle with world vertices `p` and normals `n` cover
+    /// each pixel at most once and that each fragment lies on the triangle's plane
+    /// ([`assert_fragment_on_plane`]); returns the fragments checked.
+    fn pieces_on_plane(
+        view: &View,
+        pieces: &[ScreenTriangle<f64>],
+        p: &[DVec3; 3],
+        n: &[DVec3; 3],
+    ) -> u32 {
+        let h = hits(pieces);
         let mut checked = 0;
-        for t in &pieces {
+        for t in pieces {
             for j in 0..VP.height {
                 for i in 0..VP.width {
                     if !t.covers(i, j) {
                         continue;
                     }
                     assert_eq!(h[(j * VP.width + i) as usize], 1, "({i}, {j})");
-                    assert_fragment_on_plane(&view, t, i, j, &p, &n);
+                    assert_fragment_on_plane(view, t, i, j, p, n);
                     checked += 1;
                 }
             }
         }
-        assert!(checked > 200, "{checked}");
-        // A vertex behind the eye drops the triangle, however far the others reach.
-        let behind = [p[0], p[1], DVec3::new(0.0, 0.0, 1.0)];
-        let o = setup::<f64>(7, &behind, &n, [1.0; 3], &view, &mut pieces);
-        assert_eq!(
-            (o.fan, o.cull, pieces.len()),
-            (0, Some(TriangleCull::BehindEye), 0)
-        );
+        checked
     }
 
     #[test]
@@ -1501,5 +1674,341 @@ mod tests {
         // Everything on one line: no area.
         let mut order: [usize; 3] = [0, 1, 2];
         assert_eq!(make_convex(&[0, 1, 2], &[0, 1, 2], &mut order, 3), 0);
+    }
+
+    /// A xorshift generator of numbers in [0, 1).
+    fn uniform(seed: &mut u64) -> f64 {
+        *seed ^= *seed << 13;
+        *seed ^= *seed >> 7;
+        *seed ^= *seed << 17;
+        (*seed >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// Per pixel: fragments received, and the range of their depths.
+    struct Fragments {
+        hits: Vec<u32>,
+        z: [f64; 2],
+    }
+
+    impl<R: Real> TriangleSink<R> for Fragments {
+        fn fragment(&mut self, _: &ScreenTriangle<R>, i: u32, j: u32, f: &TriangleFragment<R>) {
+            self.hits[(j * VP.width + i) as usize] += 1;
+            let z = f.z.f64();
+            self.z = [self.z[0].min(z), self.z[1].max(z)];
+        }
+    }
+
+    impl Fragments {
+        fn new() -> Self {
+            Fragments {
+                hits: vec![0; VP.pixels()],
+                z: [f64::INFINITY, f64::NEG_INFINITY],
+            }
+        }
+    }
+
+    /// Whether the view ray through screen point (sx, sy) meets the world triangle `p`
+    /// between the near plane (the ray's origin) and the far plane: exact visible coverage.
+    fn sees(view: &View, p: &[DVec3; 3], sx: f64, sy: f64) -> bool {
+        let (o, d) = view.ray(sx, sy);
+        let normal = (p[1] - p[0]).cross(p[2] - p[0]);
+        let t = normal.dot(p[0] - o) / normal.dot(d);
+        // A ray in the triangle's plane (t not a number) or meeting it before the near plane
+        // does not see it.
+        if t.is_nan() || t < 0.0 {
+            return false;
+        }
+        let hit = o + d * t;
+        (0..3).all(|k| {
+            (p[(k + 1) % 3] - hit)
+                .cross(p[(k + 2) % 3] - hit)
+                .dot(normal)
+                >= 0.0
+        }) && view.depth_of(hit) <= 1.0
+    }
+
+    /// Exact visible coverage of pixel (i, j) by any of `tris`, when it is the same at the
+    /// centre and 1/64 pixel away from it in the four axis directions; `None` for a centre
+    /// that close to the outline of what is visible (snapping moves a vertex by up to 1/512
+    /// pixel, a crossing on the near plane is exact up to rounding).
+    fn sees_clearly(view: &View, tris: &[[DVec3; 3]], i: u32, j: u32) -> Option<bool> {
+        let (x, y) = (i as f64 + 0.5, j as f64 + 0.5);
+        let d = 1.0 / 64.0;
+        let at = |x: f64, y: f64| tris.iter().any(|p| sees(view, p, x, y));
+        let c = at(x, y);
+        [(d, 0.0), (-d, 0.0), (0.0, d), (0.0, -d)]
+            .iter()
+            .all(|&(dx, dy)| at(x + dx, y + dy) == c)
+            .then_some(c)
+    }
+
+    /// Sets up and rasterizes `tris` (unit normals +z) through a [`TriangleProbe`] and
+    /// checks the union of their pieces against [`sees_clearly`]: no pixel twice, no double
+    /// hit on a shared edge, each fragment's depth in [0, 1], and a pixel covered exactly
+    /// when the rays see the triangles, except within 1/64 pixel of the outline. Returns the
+    /// outcomes, the pixels covered and the pixels within 1/64 pixel of the outline.
+    fn clip_against_rays<R: Real>(
+        tris: &[[DVec3; 3]],
+        view: &View,
+    ) -> (Vec<SetupOutcome>, u32, u32) {
+        let mut sink = Fragments::new();
+        let mut probe = TriangleProbe::new(VP.width, &mut sink);
+        let (mut pieces, mut outcomes, mut counts) = (Vec::new(), Vec::new(), Counts::default());
+        for (k, p) in tris.iter().enumerate() {
+            let o = setup::<R>(k as u32, p, &[DVec3::Z; 3], [1.0; 3], view, &mut pieces);
+            assert!(o.fan <= 7 && pieces.len() <= o.fan.max(1), "{o:?}");
+            for t in &pieces {
+                rasterize(t, &mut probe, &mut counts);
+            }
+            outcomes.push(o);
+        }
+        assert_eq!(probe.double_hit_pixels(), 0, "{tris:?}");
+        let (mut covered, mut unclear) = (0, 0);
+        for (k, &n) in sink.hits.iter().enumerate() {
+            let (i, j) = (k as u32 % VP.width, k as u32 / VP.width);
+            assert!(n <= 1, "{tris:?}: pixel ({i}, {j}) covered {n} times");
+            covered += n;
+            match sees_clearly(view, tris, i, j) {
+                Some(want) => assert_eq!(n == 1, want, "{tris:?}: pixel ({i}, {j})"),
+                None => unclear += 1,
+            }
+        }
+        if covered > 0 {
+            assert!(
+                0.0 <= sink.z[0] && sink.z[1] <= 1.0,
+                "{tris:?}: depths {:?}",
+                sink.z
+            );
+        }
+        (outcomes, covered, unclear)
+    }
+
+    #[test]
+    fn a_triangle_straddling_the_near_plane_covers_its_visible_side_once() {
+        let view = perspective_view();
+        // A floor 3 cm below the eye, from behind it to 6 units ahead: the near plane cuts it
+        // along row 36.5 (y_ndc = -0.03 / (0.1 tan 30°)), its far vertex is on row 24.2.
+        let floor = [
+            DVec3::new(-3.0, -0.03, 1.0),
+            DVec3::new(3.0, -0.03, 1.0),
+            DVec3::new(0.0, -0.03, -6.0),
+        ];
+        for datapath in [Datapath::F32, Datapath::F64] {
+            let (o, covered, unclear) = match datapath {
+                Datapath::F32 => clip_against_rays::<f32>(&[floor], &view),
+                Datapath::F64 => clip_against_rays::<f64>(&[floor], &view),
+            };
+            assert!(o[0].depth && o[0].cull.is_none(), "{o:?}");
+            // Rows 24 to 36, narrowing towards the far vertex.
+            assert!((11 * 64..=13 * 64).contains(&covered), "{covered}");
+            assert!(unclear <= 2 * 64, "{unclear}");
+        }
+        // A ramp from 1 unit ahead, 0.5 below the eye, up to a vertex behind the eye: the near
+        // plane cuts it along row 32.3 (y = -0.02 there), its front edge is on row 44.8. The
+        // pieces interpolate like the whole triangle.
+        let ramp = [
+            DVec3::new(-1.0, -0.5, -1.0),
+            DVec3::new(1.0, -0.5, -1.0),
+            DVec3::new(0.0, 0.3, 0.5),
+        ];
+        let n = [DVec3::Y, DVec3::new(0.0, 0.8, 0.6), DVec3::Z];
+        let (o, covered, _) = clip_against_rays::<f64>(&[ramp], &view);
+        assert!(
+            o[0].depth && (11 * 64..=13 * 64).contains(&covered),
+            "{o:?} {covered}"
+        );
+        let mut pieces = Vec::new();
+        let o = setup::<f64>(0, &ramp, &n, [1.0; 3], &view, &mut pieces);
+        assert_eq!(pieces_on_plane(&view, &pieces, &ramp, &n), covered);
+        let mut counts = Counts::default();
+        o.count(&mut counts);
+        assert_eq!(
+            (counts.triangles_clipped_depth, counts.triangles_clipped),
+            (1, 0)
+        );
+
+        // Random triangles around a point near the near plane, vertices 0.03 to 3 units from
+        // it in any direction (behind the eye too), both datapaths.
+        let mut seed = 20240611u64;
+        let mut rnd = || uniform(&mut seed);
+        let (mut clipped, mut pixels, mut unclear) = (0, 0, 0);
+        for _ in 0..300 {
+            let m = DVec3::new(
+                0.06 * (2.0 * rnd() - 1.0),
+                0.05 * (2.0 * rnd() - 1.0),
+                -0.1 + 0.04 * (2.0 * rnd() - 1.0),
+            );
+            let p: [DVec3; 3] = std::array::from_fn(|_| {
+                let (a, z) = (rnd() * std::f64::consts::TAU, 2.0 * rnd() - 1.0);
+                let r = (1.0 - z * z).sqrt();
+                m + DVec3::new(r * a.cos(), r * a.sin(), z) * 0.03 * 100f64.powf(rnd())
+            });
+            let (o64, c64, u64_) = clip_against_rays::<f64>(&[p], &view);
+            let (o32, c32, u32_) = clip_against_rays::<f32>(&[p], &view);
+            assert_eq!(o64[0].depth, o32[0].depth, "{p:?}");
+            clipped += o64[0].depth as u32;
+            pixels += c64 + c32;
+            unclear += u64_ + u32_;
+        }
+        assert!(clipped > 150, "{clipped}");
+        assert!(pixels > 50 * 64 * 48, "{pixels}");
+        assert!(unclear * 20 < pixels, "{unclear} of {pixels}");
+    }
+
+    #[test]
+    fn a_triangle_crossing_the_far_plane_is_clipped_there() {
+        // The orthographic view's far plane is z = 10 (eye at z = -10, far 20).
+        let view = ortho_view();
+        let p = [
+            DVec3::new(-10.0, 5.0, 0.0),
+            DVec3::new(70.0, 10.0, 16.0),
+            DVec3::new(20.0, 60.0, 8.0),
+        ];
+        for datapath in [Datapath::F32, Datapath::F64] {
+            let (o, covered, _) = match datapath {
+                Datapath::F32 => clip_against_rays::<f32>(&[p], &view),
+                Datapath::F64 => clip_against_rays::<f64>(&[p], &view),
+            };
+            assert!(
+                o[0].depth && !o[0].guard_band && o[0].cull.is_none(),
+                "{o:?}"
+            );
+            assert!(covered > 500, "{covered}");
+        }
+    }
+
+    #[test]
+    fn triangles_sharing_an_edge_across_the_near_plane_have_no_crack_and_no_double_hit() {
+        // Orthographic (near plane z = -9): a shared edge through the pixel centres
+        // (20.5 + 3k, 20.5 + k), from 1 unit nearer than the near plane to 1 beyond it, so
+        // the plane cuts it at (20.5, 20.5); the third vertices on either side reach
+        // nearer than the near plane too. The fill rule must give each centre on the edge
+        // to one triangle.
+        let view = ortho_view();
+        let (p, q) = (DVec3::new(-9.5, 10.5, -10.0), DVec3::new(50.5, 30.5, -8.0));
+        for (z1, z2) in [(-9.5, -8.5), (-12.0, -3.0), (-8.0, -9.9), (0.0, -20.0)] {
+            let (r1, r2) = (DVec3::new(-30.0, 60.0, z1), DVec3::new(80.0, -20.0, z2));
+            for tris in [[[p, q, r1], [q, p, r2]], [[q, r1, p], [r2, p, q]]] {
+                let (o, covered, unclear) = clip_against_rays::<f64>(&tris, &view);
+                assert!(o.iter().all(|o| o.depth), "{o:?}");
+                assert!(covered > 300 && unclear < 200, "{covered} {unclear}");
+                let (_, covered32, _) = clip_against_rays::<f32>(&tris, &view);
+                assert!(covered32.abs_diff(covered) < 40, "{covered32} {covered}");
+            }
+        }
+        // Perspective: random shared edges from behind the eye to ahead of it, through the
+        // view; third vertices on either side, anywhere in depth.
+        let view = perspective_view();
+        let planes: Vec<DVec4> = depth_planes(&view)
+            .into_iter()
+            .chain(guard_band_planes(&view))
+            .collect();
+        let clip_all = |t: [DVec3; 3]| {
+            let mut polygon = Polygon::new(&t, &[DVec3::Z; 3]);
+            for &q in &planes {
+                polygon = polygon.clip(q).unwrap();
+            }
+            polygon
+        };
+        let mut seed = 777u64;
+        let mut rnd = || uniform(&mut seed);
+        let mut pixels = 0;
+        for case in 0..200 {
+            let at = |x: f64, y: f64, z: f64| DVec3::new(x * z.abs(), y * z.abs(), z);
+            let p = at(rnd() - 0.5, rnd() - 0.5, 0.05 + 2.0 * rnd());
+            let q = at(0.5 * rnd() - 0.25, 0.4 * rnd() - 0.2, -0.15 - 5.0 * rnd());
+            // A planar quadrilateral split along pq (two triangles folded along a shared
+            // edge may overlap on screen legitimately; coplanar ones may not).
+            let e = q - p;
+            let side = e
+                .cross(DVec3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5))
+                .normalize()
+                * e.length();
+            let along = |t: f64| p + e * t;
+            let r1 = along(rnd()) + side * (0.05 + 2.0 * rnd());
+            let r2 = along(rnd()) - side * (0.05 + 2.0 * rnd());
+            let (a, b) = (clip_all([p, q, r1]), clip_all([q, p, r2]));
+            if a.len > 0 && b.len > 0 {
+                let shared = a
+                    .vertices()
+                    .iter()
+                    .filter(|u| b.vertices().iter().any(|v| v.p == u.p))
+                    .count();
+                assert_eq!(shared, 2, "case {case}");
+            }
+            let (_, c64, _) = clip_against_rays::<f64>(&[[p, q, r1], [q, p, r2]], &view);
+            let (_, c32, _) = clip_against_rays::<f32>(&[[p, q, r1], [q, p, r2]], &view);
+            pixels += c64 + c32;
+        }
+        assert!(pixels > 100 * 64 * 48, "{pixels}");
+    }
+
+    #[test]
+    fn triangles_beyond_a_depth_plane_are_culled_and_clipped_ones_counted() {
+        let view = perspective_view();
+        let z = DVec3::Z;
+        let mut out = Vec::new();
+        let mut outcome = |p: [DVec3; 3]| setup::<f32>(0, &p, &[z; 3], [1.0; 3], &view, &mut out);
+        let tri = |z0: f64, z1: f64, z2: f64| {
+            [
+                DVec3::new(-0.01, -0.01, z0),
+                DVec3::new(0.01, -0.01, z1),
+                DVec3::new(0.0, 0.01, z2),
+            ]
+        };
+        // Between the eye and the near plane (z = -0.1), behind the eye, and both.
+        for p in [
+            tri(-0.05, -0.09, -0.02),
+            tri(0.5, 1.0, 0.1),
+            tri(0.5, -0.05, -0.09),
+        ] {
+            assert_eq!(outcome(p), SetupOutcome::culled(TriangleCull::BehindEye));
+        }
+        // Beyond the far plane (z = -100).
+        assert_eq!(
+            outcome(tri(-100.5, -120.0, -101.0)),
+            SetupOutcome::culled(TriangleCull::Outside)
+        );
+        // Crossing the near plane, but wholly to the right of the view: rejected before any
+        // clipping, whatever the sign of w.
+        let right = [
+            DVec3::new(1.0, 0.0, 0.5),
+            DVec3::new(2.0, 0.0, -1.0),
+            DVec3::new(3.0, 1.0, -1.0),
+        ];
+        assert_eq!(outcome(right), SetupOutcome::culled(TriangleCull::Outside));
+        // Crossing near, far, both: clipped and drawn; counted once each.
+        let mut counts = Counts::default();
+        let big =
+            |z0: f64, z1: f64, z2: f64| tri(z0, z1, z2).map(|p| p * DVec3::new(100.0, 100.0, 1.0));
+        for p in [
+            tri(0.5, -1.0, -1.0),
+            big(-50.0, -150.0, -50.0),
+            big(1.0, -200.0, -1.0),
+        ] {
+            let o = outcome(p);
+            assert!(
+                o.depth && !o.guard_band && o.fan >= 1 && o.cull.is_none(),
+                "{o:?}"
+            );
+            o.count(&mut counts);
+        }
+        // Crossing the near plane and beyond the guard band: both clips.
+        let wide = [
+            DVec3::new(-1.0, -0.5, -2.0),
+            DVec3::new(1e5, 0.0, -2.0),
+            DVec3::new(0.0, 0.5, 1.0),
+        ];
+        let o = outcome(wide);
+        assert!(o.depth && o.guard_band && o.cull.is_none(), "{o:?}");
+        o.count(&mut counts);
+        assert_eq!(
+            (
+                counts.triangles,
+                counts.triangles_clipped_depth,
+                counts.triangles_clipped
+            ),
+            (4, 4, 1)
+        );
     }
 }
