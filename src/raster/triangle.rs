@@ -47,8 +47,8 @@
 //!   inside the depth range and the guard band takes the unclipped path unchanged.
 //!
 //! Not modelled: back-face culling (the lembo path has none either; both paths shade
-//! two-sided). The lembo path has no near-plane clipping: it drops a lembo with a control
-//! point behind the eye.
+//! two-sided). The lembo path's counterpart of near-plane clipping is Setup's near-plane
+//! split (`refine.rs`), which leaves the near plane itself to the depth test per fragment.
 
 use super::Counts;
 use crate::camera::{ScreenPoint, View, Viewport};
