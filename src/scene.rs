@@ -26,7 +26,7 @@ use crate::camera::{Camera, Projection, Viewport, MAX_VIEWPORT_SIDE};
 use crate::discoid::shapes::{builtin_discoids, discoids_from_mesh, BUILTIN_DISCOID_NAMES};
 use crate::discoid::{BetaShape, Discoid, DiscoidSet};
 use crate::error::{parent_dir, read_input, read_text_file, Error, Result, MAX_DATA_INPUT_BYTES};
-use crate::lembo::construct::TriangleMesh;
+use crate::lembo::construct::{CollapsedTriangle, TriangleMesh};
 use crate::lembo::shapes::{builtin_mesh, BUILTIN_NAMES};
 use crate::lembo::Lembo;
 use crate::rop::shade::Light;
@@ -305,6 +305,8 @@ struct ObjectSpec {
     discoids: Option<DiscoidsSpec>,
     color: Option<[f64; 3]>,
     transform: Option<TransformSpec>,
+    /// With `mesh` only: recompute the normals by auto-smooth at this crease angle.
+    crease_angle_deg: Option<f64>,
 }
 
 /// An object's discoids: exactly one source, and the beta texture they carry.
@@ -621,6 +623,10 @@ impl Check<'_> {
             Some(t) => Some(self.transform(&format!("{field}.transform"), t)?),
             None => None,
         };
+        let crease = match o.crease_angle_deg {
+            Some(a) => Some(self.crease_angle(&field, a, o.mesh.is_some())?),
+            None => None,
+        };
         let (label, lembos, mesh, discoids) = match (&o.builtin, &o.lembos, &o.mesh, &o.discoids) {
             (Some(name), None, None, None) => {
                 let Some(mesh) = builtin_mesh(name) else {
@@ -631,12 +637,18 @@ impl Check<'_> {
                     ));
                 };
                 let mesh = transform_mesh(mesh, transform.as_ref());
-                (
-                    format!("builtin {name}"),
-                    mesh.to_lembos(),
-                    Some(mesh),
-                    None,
-                )
+                self.mesh_in_range(&field, transform.is_some(), &mesh)?;
+                let mesh = mesh.welded();
+                // Only a transform can collapse a builtin's triangle (a scale so small that
+                // positions round together).
+                let lembos = mesh.to_lembos().map_err(|c| {
+                    self.invalid(
+                        format!("{field}.transform"),
+                        "(world-space geometry)",
+                        format!("builtin {name}: {c}"),
+                    )
+                })?;
+                (format!("builtin {name}"), lembos, Some(mesh), None)
             }
             (None, Some(specs), None, None) => {
                 if specs.is_empty() {
@@ -656,9 +668,24 @@ impl Check<'_> {
                 ("inline lembos".to_string(), lembos, None, None)
             }
             (None, None, Some(path), None) => {
-                let mesh = load_obj(self.file, &format!("{field}.mesh"), &base_dir.join(path))?;
+                let mesh_field = format!("{field}.mesh");
+                let full = base_dir.join(path);
+                let mesh = load_obj(self.file, &mesh_field, &full)?;
                 let mesh = transform_mesh(mesh, transform.as_ref());
-                (format!("mesh {path}"), mesh.to_lembos(), Some(mesh), None)
+                self.mesh_in_range(&field, transform.is_some(), &mesh)?;
+                let mesh = mesh.welded();
+                let collapsed = |c: CollapsedTriangle| Error::Mesh {
+                    file: self.file.to_string(),
+                    field: mesh_field.clone(),
+                    path: full.clone(),
+                    message: c.to_string(),
+                };
+                let mesh = match crease {
+                    Some(angle) => mesh.with_crease_angle(angle).map_err(collapsed)?,
+                    None => mesh,
+                };
+                let lembos = mesh.to_lembos().map_err(collapsed)?;
+                (format!("mesh {path}"), lembos, Some(mesh), None)
             }
             (None, None, None, Some(spec)) => {
                 let (label, lembos, set) =
@@ -682,16 +709,7 @@ impl Check<'_> {
         // Finite input can still be huge, or become so after the transform; refuse it here
         // rather than let the rasterizer overflow.
         if let Some(j) = lembos.iter().position(|l| !lembo_in_range(l)) {
-            let where_ = if transform.is_some() {
-                format!("{field}.transform")
-            } else {
-                field.clone()
-            };
-            let reason = format!(
-                "lembo {j} of this object has a world coordinate or coefficient beyond \
-                 {MAX_WORLD_COORDINATE:e} in magnitude (after the transform)"
-            );
-            return Err(self.invalid(where_, "(world-space geometry)", reason));
+            return Err(self.out_of_range(&field, transform.is_some(), j));
         }
         Ok(SceneObject {
             label,
@@ -700,6 +718,51 @@ impl Check<'_> {
             mesh,
             discoids,
         })
+    }
+
+    /// The error for lembo `j` of the object at `field` being out of range.
+    fn out_of_range(&self, field: &str, transformed: bool, j: usize) -> Error {
+        let where_ = if transformed {
+            format!("{field}.transform")
+        } else {
+            field.to_string()
+        };
+        let reason = format!(
+            "lembo {j} of this object has a world coordinate or coefficient beyond \
+             {MAX_WORLD_COORDINATE:e} in magnitude (after the transform)"
+        );
+        self.invalid(where_, "(world-space geometry)", reason)
+    }
+
+    /// Refuses a mesh with a vertex beyond [`MAX_WORLD_COORDINATE`] before welding and
+    /// building lembos from it (as the lembo of its first triangle using the vertex).
+    fn mesh_in_range(&self, field: &str, transformed: bool, mesh: &TriangleMesh) -> Result<()> {
+        let small = |p: DVec3| p.is_finite() && p.abs().max_element() <= MAX_WORLD_COORDINATE;
+        match mesh
+            .triangles
+            .iter()
+            .position(|t| t.iter().any(|&i| !small(mesh.positions[i as usize])))
+        {
+            Some(j) => Err(self.out_of_range(field, transformed, j)),
+            None => Ok(()),
+        }
+    }
+
+    /// Validates the crease angle of the object at `field` (`mesh` objects only).
+    fn crease_angle(&self, field: &str, angle: f64, mesh: bool) -> Result<f64> {
+        let name = format!("{field}.crease_angle_deg");
+        if !mesh {
+            return Err(self.invalid(
+                name,
+                angle,
+                "applies to `mesh` objects only (it recomputes an OBJ mesh's normals)",
+            ));
+        }
+        let angle = self.finite(&name, angle)?;
+        if !(0.0..=180.0).contains(&angle) {
+            return Err(self.invalid(name, angle, "must be in [0, 180] degrees"));
+        }
+        Ok(angle)
     }
 
     /// Validates the `discoids` of the object at `field`: its label, its lembos (curved
@@ -1345,6 +1408,9 @@ mod tests {
             ("surface96", 96),
             ("bunny", 3674),
             ("default", 24),
+            ("capped_cylinder", 48),
+            ("bevel_cube", 44),
+            ("bunny_creased", 3674),
         ] {
             let path = traces().join(format!("{file}.json"));
             let scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
@@ -1682,6 +1748,78 @@ mod tests {
         assert_eq!(mesh.triangles.len(), 2);
         assert!(mesh.normals.iter().all(|n| *n == DVec3::Z));
         assert_eq!(scene.lembo_count(), 2);
+    }
+
+    #[test]
+    fn obj_triangle_whose_corners_weld_is_a_mesh_error_naming_it() {
+        // Triangle 1's corners 2 and 3 differ by far less than the weld tolerance.
+        let message = assert_mesh_err(
+            scene_with_obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1e-12 0\nf 1 2 3\nf 2 4 3\n"),
+            "objects[0].mesh",
+        );
+        assert!(
+            message.starts_with("triangle 1 ") && message.contains("corners 0 and 1"),
+            "{message}"
+        );
+    }
+
+    #[test]
+    fn split_obj_vertices_are_welded_into_shared_edges() {
+        // Two triangles on one edge, written with separate positions and normals: the edge's
+        // midpoint is shared and each side keeps its normals.
+        let scene = scene_with_obj(
+            "v 0 0 0\nv 2 0 0\nv 1 1 0\nv 0 0 0\nv 2 0 0\nv 1 -1 1\n\
+             vn 0 0 1\nvn 0 -0.7 0.7\n\
+             f 1//1 2//1 3//1\nf 5//2 4//2 6//2\n",
+        )
+        .unwrap();
+        let l = &scene.objects[0].lembos;
+        assert_eq!(l[0].points[3], l[1].points[3]);
+        assert_eq!(l[0].normals[0], DVec3::Z);
+        assert_ne!(l[1].normals[0], DVec3::Z);
+    }
+
+    #[test]
+    fn crease_angle_recomputes_a_meshs_normals() {
+        let with = |angle: &str| {
+            let text = SPHERE.replacen(
+                r#""builtin": "sphere24""#,
+                &format!(r#""mesh": "meshes/bunny.obj", "crease_angle_deg": {angle}"#),
+                1,
+            );
+            parse(&text)
+        };
+        let creased = with("40").unwrap();
+        let mesh = creased.objects[0].mesh.as_ref().unwrap();
+        assert_eq!(mesh.triangles.len(), 3674);
+        assert!(
+            mesh.positions.len() > 1839,
+            "split vertices: {}",
+            mesh.positions.len()
+        );
+        // 180 degrees averages every face: the computed normals, one per vertex.
+        let all = with("180").unwrap();
+        let computed = bunny_mesh().with_computed_normals();
+        let mesh = all.objects[0].mesh.as_ref().unwrap();
+        assert_eq!(mesh.positions.len(), 1839);
+        for (t, u) in mesh.triangles.iter().zip(&computed.triangles) {
+            for (&i, &j) in t.iter().zip(u) {
+                assert_eq!(mesh.normals[i as usize], computed.normals[j as usize]);
+            }
+        }
+        for bad in ["-1", "180.5", "1e300"] {
+            let reason = assert_invalid(with(bad), "objects[0].crease_angle_deg");
+            assert!(reason.contains("[0, 180]"), "{reason}");
+        }
+        assert_parse_err(with("\"40\""), "objects[0].crease_angle_deg");
+        let reason = assert_invalid(
+            sphere_with(
+                r#""builtin": "sphere24""#,
+                r#""builtin": "sphere24", "crease_angle_deg": 40"#,
+            ),
+            "objects[0].crease_angle_deg",
+        );
+        assert!(reason.contains("`mesh` objects only"), "{reason}");
     }
 
     const INLINE: &str = r#"{"lembos": [{"points": [[0,0,0],[1,0,0],[0,1,0],[0.5,0,0.25],[0,0.5,0.25],[0.5,0.5,0.125]],

@@ -300,6 +300,48 @@ fn nan_in_a_mesh_is_refused_by_field() {
 }
 
 #[test]
+fn mesh_triangle_whose_corners_weld_is_refused_by_file_and_index() {
+    // Triangle 1 (0-based) has two corners 1e-12 apart: welded, it would be a sliver.
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("sliver.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1e-12 0\nf 1 2 3\nf 2 4 3\n",
+    )
+    .unwrap();
+    let s = scene_file(
+        dir.path(),
+        "sliver.json",
+        &GOOD.replace("{\"builtin\": \"sphere24\"}", "{\"mesh\": \"sliver.obj\"}"),
+    );
+    for needle in [
+        "sliver.json",
+        "objects[0].mesh",
+        "sliver.obj",
+        "triangle 1 ",
+    ] {
+        assert_refused(&["render", &s], needle);
+    }
+}
+
+#[test]
+fn crease_angle_out_of_range_is_refused_by_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = manifest().join("traces/meshes/bevel_cube.obj");
+    let s = scene_file(
+        dir.path(),
+        "crease.json",
+        &GOOD.replace(
+            "{\"builtin\": \"sphere24\"}",
+            &format!(
+                "{{\"mesh\": {:?}, \"crease_angle_deg\": 190}}",
+                mesh.to_string_lossy()
+            ),
+        ),
+    );
+    assert_refused(&["render", &s], "objects[0].crease_angle_deg");
+}
+
+#[test]
 fn k_out_of_range_is_refused() {
     for k in ["0", "-1", "64.5", "NaN", "inf"] {
         assert_refused(&["render", "--k", k], "--k");

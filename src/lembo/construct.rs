@@ -16,6 +16,15 @@
 //! Both are computed from the edge's two end points in a canonical order (the smaller
 //! position first, compared coordinate by coordinate), so two lembos that share an edge get
 //! bit-identical edge points whatever their winding.
+//!
+//! A mesh with hard edges (split vertices: one position, a different normal on each side)
+//! would still give two different midpoints for one edge, each side's from its own normals,
+//! and the surface would leak between them. [`TriangleMesh::to_lembos`] therefore welds
+//! positions ([`WELD_RELATIVE`]) and gives every lembo on an edge one shared midpoint: the
+//! average of the distinct midpoints its sides compute (the quadratic analogue of PN-AEN,
+//! McDonald and Kilgard 2010), which is today's midpoint where the sides agree. Shading
+//! normals stay each side's own. [`TriangleMesh::with_crease_angle`] computes split normals
+//! from a crease angle (auto-smooth).
 
 use super::Lembo;
 use glam::DVec3;
@@ -84,12 +93,79 @@ pub fn lembo_from_triangle(p: [DVec3; 3], n: [DVec3; 3]) -> Lembo {
     )
 }
 
-/// An indexed triangle mesh with one normal per vertex.
+/// How close two mesh positions must be to be welded into one, relative to the mesh's
+/// bounding-box diagonal: 1e-9.
+///
+/// Welding decides which triangles share an edge (ends at the same welded positions), and
+/// welded positions are snapped to one position, so shared edges are bit-identical. The
+/// usual split vertex (an OBJ face corner `f 7//3` and its neighbour's `f 7//9`, or a
+/// generator writing the same position twice) has bit-identical positions and welds at any
+/// tolerance; the tolerance only decides what else welds. 1e-9 of the object's size is
+/// far above the round-off of computing one position two ways in f64 (about 1e-16 of the
+/// coordinates, which may be up to 10⁶ times the object's size away from the origin and
+/// still weld) and far below anything visible (1e-9 × 16384 px, the largest viewport, is
+/// 2e-5 px), so welding moves no vertex visibly; vertices that close are, for the image,
+/// one vertex anyway (a triangle they would collapse is refused). Two positions weld when they are within the tolerance (Euclidean),
+/// and welding is transitive (a chain of such pairs welds as one); unlike rounding
+/// positions to a grid, no pair within the tolerance is ever split by a cell boundary.
+pub const WELD_RELATIVE: f64 = 1e-9;
+
+/// An indexed triangle mesh with one normal per vertex. Vertices at the same position with
+/// different normals (split vertices) make hard edges; [`TriangleMesh::to_lembos`] welds
+/// them so the surface stays closed.
 #[derive(Clone, Debug, Default)]
 pub struct TriangleMesh {
     pub positions: Vec<DVec3>,
     pub normals: Vec<DVec3>,
     pub triangles: Vec<[u32; 3]>,
+}
+
+/// A triangle two of whose corners weld to the same position (or are the same vertex): it
+/// has no area and no third edge, and is refused rather than drawn as a sliver.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CollapsedTriangle {
+    /// Index of the triangle in the mesh.
+    pub triangle: usize,
+    /// The two corners (0, 1, 2 for A, B, C) that weld together.
+    pub corners: [usize; 2],
+    /// Their vertex indices.
+    pub vertices: [u32; 2],
+    /// The welded position.
+    pub position: DVec3,
+    /// The weld tolerance used [world units].
+    pub tolerance: f64,
+}
+
+impl std::fmt::Display for CollapsedTriangle {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let p = self.position;
+        write!(
+            f,
+            "triangle {} (0-based, after triangulation): corners {} and {} (vertices {} and {}) \
+             weld to the same position [{}, {}, {}] (positions within {:e} world units, \
+             {WELD_RELATIVE:e} of the bounding-box diagonal, are one vertex); a triangle needs \
+             three distinct corners",
+            self.triangle,
+            self.corners[0],
+            self.corners[1],
+            self.vertices[0],
+            self.vertices[1],
+            p.x,
+            p.y,
+            p.z,
+            self.tolerance
+        )
+    }
+}
+
+/// The welded positions of a mesh: for every vertex, the lowest-numbered vertex it welds to.
+#[derive(Clone, Debug)]
+pub struct Weld {
+    /// The representative vertex of each vertex (itself when it is the lowest of its set).
+    pub representative: Vec<u32>,
+    /// The tolerance used [world units]: [`WELD_RELATIVE`] × the bounding-box diagonal (0
+    /// when that is not a positive finite number: then only bit-identical positions weld).
+    pub tolerance: f64,
 }
 
 impl TriangleMesh {
@@ -107,21 +183,531 @@ impl TriangleMesh {
         self
     }
 
-    /// One lembo per triangle (paper 001: "use the Lembo Model to refine a triangular mesh").
-    pub fn to_lembos(&self) -> Vec<Lembo> {
-        self.triangles
+    /// Which vertices are at the same position, within [`WELD_RELATIVE`] of the
+    /// bounding-box diagonal (see there). Deterministic: it depends on the positions and
+    /// their order only.
+    pub fn weld(&self) -> Weld {
+        let n = self.positions.len();
+        let mut rep: Vec<u32> = (0..n as u32).collect();
+        if n == 0 {
+            return Weld {
+                representative: rep,
+                tolerance: 0.0,
+            };
+        }
+        let (lo, hi) = self.positions.iter().fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), &p| (lo.min(p), hi.max(p)),
+        );
+        let extent = hi - lo;
+        let m = extent.abs().max_element();
+        let diagonal = if m > 0.0 && m.is_finite() {
+            m * (extent / m).length()
+        } else {
+            0.0
+        };
+        let tolerance = WELD_RELATIVE * diagonal;
+        fn find(rep: &mut [u32], mut i: u32) -> u32 {
+            while rep[i as usize] != i {
+                let up = rep[rep[i as usize] as usize];
+                rep[i as usize] = up;
+                i = up;
+            }
+            i
+        }
+        let union = |rep: &mut Vec<u32>, a: u32, b: u32| {
+            let (ra, rb) = (find(rep, a), find(rep, b));
+            // The lower index becomes the root, so every set's root is its lowest vertex.
+            let (lo, hi) = (ra.min(rb), ra.max(rb));
+            rep[hi as usize] = lo;
+        };
+        if tolerance > 0.0 && tolerance.is_finite() {
+            // Cells twice the tolerance wide: two positions within the tolerance are in the
+            // same or adjacent cells whatever the rounding of the cell coordinates.
+            let cell = 2.0 * tolerance;
+            let key = |p: DVec3| ((p - lo) / cell).floor().as_i64vec3().to_array();
+            let mut grid: std::collections::HashMap<[i64; 3], Vec<u32>> =
+                std::collections::HashMap::new();
+            for (i, &p) in self.positions.iter().enumerate() {
+                let k = key(p);
+                for dx in -1..=1 {
+                    for dy in -1..=1 {
+                        for dz in -1..=1 {
+                            let near = [k[0] + dx, k[1] + dy, k[2] + dz];
+                            let Some(others) = grid.get(&near) else {
+                                continue;
+                            };
+                            for &j in others {
+                                if (self.positions[j as usize] - p).length() <= tolerance {
+                                    union(&mut rep, i as u32, j);
+                                }
+                            }
+                        }
+                    }
+                }
+                grid.entry(k).or_default().push(i as u32);
+            }
+        } else {
+            let mut seen: std::collections::HashMap<[u64; 3], u32> =
+                std::collections::HashMap::new();
+            for (i, p) in self.positions.iter().enumerate() {
+                let bits = p.to_array().map(f64::to_bits);
+                let first = *seen.entry(bits).or_insert(i as u32);
+                union(&mut rep, i as u32, first);
+            }
+        }
+        for i in 0..n as u32 {
+            let r = find(&mut rep, i);
+            rep[i as usize] = r;
+        }
+        Weld {
+            representative: rep,
+            tolerance: if tolerance.is_finite() {
+                tolerance
+            } else {
+                0.0
+            },
+        }
+    }
+
+    /// The same mesh with every position replaced by its welded position (the position of
+    /// the lowest-numbered vertex it welds to). Idempotent; a mesh whose split vertices
+    /// have bit-identical positions is returned unchanged.
+    pub fn welded(mut self) -> Self {
+        let rep = self.weld().representative;
+        for (i, &r) in rep.iter().enumerate() {
+            self.positions[i] = self.positions[r as usize];
+        }
+        self
+    }
+
+    /// The first triangle two of whose corners weld together, if any.
+    fn collapsed(&self, weld: &Weld) -> Option<CollapsedTriangle> {
+        let rep = &weld.representative;
+        self.triangles.iter().enumerate().find_map(|(t, tri)| {
+            let r = tri.map(|i| rep[i as usize]);
+            [(0, 1), (0, 2), (1, 2)]
+                .into_iter()
+                .find(|&(a, b)| r[a] == r[b])
+                .map(|(a, b)| CollapsedTriangle {
+                    triangle: t,
+                    corners: [a, b],
+                    vertices: [tri[a], tri[b]],
+                    position: self.positions[r[a] as usize],
+                    tolerance: weld.tolerance,
+                })
+        })
+    }
+
+    /// The mesh with new normals for a crease angle of `angle_deg` degrees (auto-smooth):
+    /// each face corner gets the area-weighted average of the normals of the faces around
+    /// its (welded) vertex whose face normal is within `angle_deg` of its own face's
+    /// (inclusive, with 1e-12 slack on the cosine for rounding; the corner's own face always
+    /// counts). Faces meeting at more than the angle are thus shaded apart (a hard edge,
+    /// split normals) and faces meeting at less are shaded smooth. The file's normals are
+    /// not used. A corner of a zero-area face averages all faces around its vertex; a
+    /// corner whose average vanishes takes its face's normal. Sums run over the faces in
+    /// mesh order, so at 180° the normals are [`Self::with_computed_normals`]'s bit for
+    /// bit. Vertices are rebuilt: one per distinct (welded position, normal), numbered in
+    /// order of first use by the triangles.
+    pub fn with_crease_angle(&self, angle_deg: f64) -> Result<TriangleMesh, CollapsedTriangle> {
+        let weld = self.weld();
+        if let Some(c) = self.collapsed(&weld) {
+            return Err(c);
+        }
+        let rep = &weld.representative;
+        let pos = |i: u32| self.positions[rep[i as usize] as usize];
+        let area_normals: Vec<DVec3> = self
+            .triangles
             .iter()
             .map(|t| {
-                let i = t.map(|i| i as usize);
-                lembo_from_triangle(i.map(|i| self.positions[i]), i.map(|i| self.normals[i]))
+                let [a, b, c] = t.map(pos);
+                (b - a).cross(c - a)
             })
-            .collect()
+            .collect();
+        let unit: Vec<DVec3> = area_normals.iter().map(|n| n.normalize_or_zero()).collect();
+        // The faces around each welded vertex, in mesh order.
+        let mut faces: Vec<Vec<u32>> = vec![Vec::new(); self.positions.len()];
+        for (f, t) in self.triangles.iter().enumerate() {
+            for &i in t {
+                faces[rep[i as usize] as usize].push(f as u32);
+            }
+        }
+        let cos_limit = angle_deg.to_radians().cos() - 1e-12;
+        let all = angle_deg >= 180.0;
+        let mut out = TriangleMesh {
+            positions: Vec::new(),
+            normals: Vec::new(),
+            triangles: Vec::with_capacity(self.triangles.len()),
+        };
+        let mut index: std::collections::HashMap<(u32, [u64; 3]), u32> =
+            std::collections::HashMap::new();
+        for (f, t) in self.triangles.iter().enumerate() {
+            let own = unit[f];
+            let tri = t.map(|i| {
+                let v = rep[i as usize];
+                let mut sum = DVec3::ZERO;
+                for &g in &faces[v as usize] {
+                    let g = g as usize;
+                    if all || g == f || own == DVec3::ZERO || unit[g].dot(own) >= cos_limit {
+                        sum += area_normals[g];
+                    }
+                }
+                let n = sum.normalize_or_zero();
+                let n = if n == DVec3::ZERO { own } else { n };
+                *index
+                    .entry((v, n.to_array().map(f64::to_bits)))
+                    .or_insert_with(|| {
+                        out.positions.push(self.positions[v as usize]);
+                        out.normals.push(n);
+                        (out.positions.len() - 1) as u32
+                    })
+            });
+            out.triangles.push(tri);
+        }
+        Ok(out)
+    }
+
+    /// One lembo per triangle (paper 001: "use the Lembo Model to refine a triangular mesh"),
+    /// watertight across hard edges.
+    ///
+    /// Positions are welded first ([`Self::weld`]): corners are the welded positions, and an
+    /// edge is identified by its two welded ends. Every lembo on an edge gets the same
+    /// midpoint, bit for bit: each side computes the midpoint its own end normals give
+    /// ([`edge_midpoint`], canonical order), and the shared midpoint is the average of the
+    /// distinct ones, summed in the total order of [`canonical_order`] (PN-AEN's rule for
+    /// PN triangles, McDonald and Kilgard 2010, for a quadratic edge). Where both sides have
+    /// the same normals (a smooth mesh) their midpoints are identical and the shared one is
+    /// that midpoint unchanged, so a smooth mesh gives the lembos of
+    /// [`lembo_from_triangle`] bit for bit. Each lembo keeps its own corner normals and its
+    /// own edge mid-normals, so a hard edge is still shaded hard.
+    ///
+    /// Refuses a triangle two of whose corners weld together.
+    pub fn to_lembos(&self) -> Result<Vec<Lembo>, CollapsedTriangle> {
+        let weld = self.weld();
+        if let Some(c) = self.collapsed(&weld) {
+            return Err(c);
+        }
+        let rep = &weld.representative;
+        let pos = |i: u32| self.positions[rep[i as usize] as usize];
+        let normal = |i: u32| self.normals[i as usize];
+        // Each triangle's own midpoints and mid-normals of AB, AC, BC (D, E, F).
+        let own: Vec<[(DVec3, DVec3); 3]> = self
+            .triangles
+            .iter()
+            .map(|t| {
+                EDGES.map(|(a, b)| edge_midpoint(pos(t[a]), normal(t[a]), pos(t[b]), normal(t[b])))
+            })
+            .collect();
+        // Every (edge key, triangle, edge) sorted by key: the sides of each edge are adjacent.
+        let mut sides: Vec<((u32, u32), u32, u8)> = Vec::with_capacity(3 * self.triangles.len());
+        for (t, tri) in self.triangles.iter().enumerate() {
+            for (k, (a, b)) in EDGES.into_iter().enumerate() {
+                let (ra, rb) = (rep[tri[a] as usize], rep[tri[b] as usize]);
+                sides.push(((ra.min(rb), ra.max(rb)), t as u32, k as u8));
+            }
+        }
+        sides.sort_unstable();
+        let mut mid: Vec<[DVec3; 3]> = own.iter().map(|e| e.map(|(m, _)| m)).collect();
+        let mut distinct: Vec<DVec3> = Vec::new();
+        for edge in sides.chunk_by(|x, y| x.0 == y.0) {
+            distinct.clear();
+            distinct.extend(edge.iter().map(|&(_, t, k)| own[t as usize][k as usize].0));
+            distinct.sort_unstable_by(|p, q| canonical_order(*p, *q));
+            distinct.dedup_by(|p, q| canonical_order(*p, *q) == Ordering::Equal);
+            if distinct.len() < 2 {
+                continue;
+            }
+            let shared = shared_midpoint(&distinct);
+            for &(_, t, k) in edge {
+                mid[t as usize][k as usize] = shared;
+            }
+        }
+        let unit = |v: DVec3| v.normalize_or_zero();
+        Ok(self
+            .triangles
+            .iter()
+            .zip(own.iter().zip(&mid))
+            .map(|(t, (own, mid))| {
+                let [a, b, c] = t.map(pos);
+                let [na, nb, nc] = t.map(|i| unit(normal(i)));
+                Lembo::new(
+                    [a, b, c, mid[0], mid[1], mid[2]],
+                    [na, nb, nc, own[0].1, own[1].1, own[2].1],
+                )
+            })
+            .collect())
+    }
+}
+
+/// The corners of the lembo edges AB, AC, BC (midpoints D, E, F).
+const EDGES: [(usize, usize); 3] = [(0, 1), (0, 2), (1, 2)];
+
+/// The shared midpoint of an edge from the distinct midpoints its sides compute, in
+/// [`canonical_order`]: their average (the two-sided case is `0.5 * (a + b)`).
+pub fn shared_midpoint(distinct: &[DVec3]) -> DVec3 {
+    match distinct {
+        [m] => *m,
+        [a, b] => 0.5 * (*a + *b),
+        _ => distinct.iter().fold(DVec3::ZERO, |s, &m| s + m) / distinct.len() as f64,
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn bits(v: DVec3) -> [u64; 3] {
+        v.to_array().map(f64::to_bits)
+    }
+
+    fn lembo_bits(l: &Lembo) -> ([[u64; 3]; 6], [[u64; 3]; 6]) {
+        (l.points.map(bits), l.normals.map(bits))
+    }
+
+    /// Today's construction: every lembo from its own triangle alone.
+    fn independent(m: &TriangleMesh) -> Vec<Lembo> {
+        m.triangles
+            .iter()
+            .map(|t| {
+                let i = t.map(|i| i as usize);
+                lembo_from_triangle(i.map(|i| m.positions[i]), i.map(|i| m.normals[i]))
+            })
+            .collect()
+    }
+
+    #[test]
+    fn smooth_meshes_give_the_independent_lembos_bit_for_bit() {
+        for name in crate::lembo::shapes::BUILTIN_NAMES {
+            let m = crate::lembo::shapes::builtin_mesh(name).unwrap();
+            let shared = m.to_lembos().unwrap();
+            let alone = independent(&m);
+            for (a, b) in shared.iter().zip(&alone) {
+                assert_eq!(lembo_bits(a), lembo_bits(b), "{name}");
+            }
+        }
+    }
+
+    /// Two triangles on the edge (0,0,0)-(2,0,0), split: each side has its own normals.
+    fn split_pair(n_left: [DVec3; 2], n_right: [DVec3; 2]) -> TriangleMesh {
+        TriangleMesh {
+            positions: vec![
+                DVec3::ZERO,
+                DVec3::new(2.0, 0.0, 0.0),
+                DVec3::new(1.0, 1.0, 0.0),
+                DVec3::ZERO,
+                DVec3::new(2.0, 0.0, 0.0),
+                DVec3::new(1.0, -1.0, 0.3),
+            ],
+            normals: vec![
+                n_left[0],
+                n_left[1],
+                DVec3::Z,
+                n_right[0],
+                n_right[1],
+                DVec3::Z,
+            ],
+            // The edge is AB of the first and BA (as AB, reversed) of the second.
+            triangles: vec![[0, 1, 2], [4, 3, 5]],
+        }
+    }
+
+    #[test]
+    fn a_split_edge_gets_the_average_of_both_sides_midpoints() {
+        let left = [DVec3::new(-1.0, 0.0, 1.0), DVec3::new(1.0, 0.0, 1.0)];
+        let right = [DVec3::Z, DVec3::Z];
+        let m = split_pair(left, right);
+        let l = m.to_lembos().unwrap();
+        let (own_left, nl) = edge_midpoint(m.positions[0], left[0], m.positions[1], left[1]);
+        let (own_right, nr) = edge_midpoint(m.positions[3], right[0], m.positions[4], right[1]);
+        assert!(own_left.z > 0.1 && own_right == DVec3::new(1.0, 0.0, 0.0));
+        // One midpoint, bit for bit, on both sides: the average.
+        assert_eq!(bits(l[0].points[3]), bits(l[1].points[3]));
+        assert_eq!(bits(l[0].points[3]), bits(0.5 * (own_left + own_right)));
+        // Each side keeps its own corner normals and mid-normal.
+        assert_eq!(l[0].normals[3], nl);
+        assert_eq!(l[1].normals[3], nr);
+        assert_eq!(l[0].normals[0], left[0].normalize());
+        assert_eq!(l[1].normals[1], right[0]);
+        // The other edges are not shared and keep their own midpoints.
+        let alone = independent(&m);
+        for k in [4, 5] {
+            assert_eq!(bits(l[0].points[k]), bits(alone[0].points[k]));
+            assert_eq!(bits(l[1].points[k]), bits(alone[1].points[k]));
+        }
+        // The order of the triangles (and of the sides) does not matter.
+        let swapped = TriangleMesh {
+            triangles: vec![m.triangles[1], m.triangles[0]],
+            ..m.clone()
+        };
+        let s = swapped.to_lembos().unwrap();
+        assert_eq!(lembo_bits(&s[0]), lembo_bits(&l[1]));
+        assert_eq!(lembo_bits(&s[1]), lembo_bits(&l[0]));
+    }
+
+    #[test]
+    fn capped_cylinder_rim_is_half_the_walls_bulge() {
+        // A rim edge of a 12-sided cylinder of radius 1: radial normals seen from the wall,
+        // +y from the cap.
+        let (p, q) = (DVec3::new(1.0, 1.0, 0.0), {
+            let phi = std::f64::consts::PI / 6.0;
+            DVec3::new(phi.cos(), 1.0, -phi.sin())
+        });
+        let radial = |v: DVec3| DVec3::new(v.x, 0.0, v.z);
+        let (wall, _) = edge_midpoint(p, radial(p), q, radial(q));
+        let (cap, _) = edge_midpoint(p, DVec3::Y, q, DVec3::Y);
+        let shared = 0.5 * (wall + cap);
+        let r = |v: DVec3| radial(v).length();
+        let chord = (15f64).to_radians().cos();
+        assert!((r(cap) - chord).abs() < 1e-15);
+        assert!((r(wall) - 0.998278).abs() < 1e-6, "wall {}", r(wall));
+        assert!((r(shared) - 0.982102).abs() < 1e-6, "shared {}", r(shared));
+        assert!((r(shared) - 0.5 * (r(wall) + chord)).abs() < 1e-12);
+        assert_eq!(shared.y, 1.0);
+    }
+
+    #[test]
+    fn positions_weld_within_the_tolerance_only_and_transitively() {
+        // Diagonal 1e6 × sqrt(3): tolerance 1.73e-3.
+        let far = DVec3::splat(1e6);
+        let p = DVec3::new(0.5, 0.5, 0.5);
+        let tol = WELD_RELATIVE * far.length();
+        let m = TriangleMesh {
+            positions: vec![
+                DVec3::ZERO,
+                far,
+                p,
+                p + DVec3::X * (0.9 * tol),
+                p + DVec3::X * (1.8 * tol), // within of the previous one only
+                p + DVec3::Y * (1.1 * tol), // beyond the tolerance of every other
+                p,                          // bit-identical
+            ],
+            ..Default::default()
+        };
+        let w = m.weld();
+        assert!((w.tolerance - tol).abs() < 1e-18);
+        assert_eq!(w.representative, [0, 1, 2, 2, 2, 5, 2]);
+        // Across a grid cell boundary (cells are 2 tol wide, from the bounding box's corner).
+        let edge = 2.0 * tol * 100.0;
+        let m = TriangleMesh {
+            positions: vec![
+                DVec3::ZERO,
+                far,
+                DVec3::splat(edge - 1e-3 * tol),
+                DVec3::splat(edge + 1e-3 * tol),
+            ],
+            ..Default::default()
+        };
+        assert_eq!(m.weld().representative, [0, 1, 2, 2]);
+        let welded = m.clone().welded();
+        assert_eq!(welded.positions[3], welded.positions[2]);
+        assert_eq!(welded.clone().welded().positions, welded.positions);
+    }
+
+    #[test]
+    fn nearly_equal_split_vertices_are_snapped_and_share_the_edge() {
+        let mut m = split_pair([DVec3::Z; 2], [DVec3::Y + DVec3::Z; 2]);
+        m.positions[4] += DVec3::new(1e-12, 0.0, 0.0);
+        let l = m.to_lembos().unwrap();
+        assert_eq!(bits(l[1].points[0]), bits(l[0].points[1]));
+        assert_eq!(bits(l[0].points[3]), bits(l[1].points[3]));
+    }
+
+    #[test]
+    fn a_triangle_whose_corners_weld_is_refused_by_index() {
+        let mut m = split_pair([DVec3::Z; 2], [DVec3::Z; 2]);
+        m.positions[5] = m.positions[3] + DVec3::new(0.0, 1e-10, 0.0);
+        let c = m.to_lembos().unwrap_err();
+        assert_eq!(c.triangle, 1);
+        assert_eq!(c.corners, [1, 2]);
+        assert_eq!(c.vertices, [3, 5]);
+        assert!(c.to_string().starts_with("triangle 1 "), "{c}");
+        assert_eq!(m.with_crease_angle(40.0).unwrap_err(), c);
+        // The same vertex twice.
+        let m = TriangleMesh {
+            triangles: vec![[0, 1, 0]],
+            ..split_pair([DVec3::Z; 2], [DVec3::Z; 2])
+        };
+        assert_eq!(m.to_lembos().unwrap_err().corners, [0, 2]);
+    }
+
+    /// The unit cube as 12 triangles over 8 shared vertices, outward.
+    fn cube() -> TriangleMesh {
+        let positions = (0..8)
+            .map(|i| DVec3::new((i & 1) as f64, (i >> 1 & 1) as f64, (i >> 2 & 1) as f64))
+            .collect();
+        let quads = [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ];
+        let triangles = quads
+            .iter()
+            .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+            .collect();
+        TriangleMesh {
+            positions,
+            normals: vec![],
+            triangles,
+        }
+    }
+
+    #[test]
+    fn crease_angle_splits_normals_at_edges_sharper_than_it() {
+        let m = cube();
+        // 40°: every corner takes its face's normal (the faces meet at 90°).
+        let c = m.with_crease_angle(40.0).unwrap();
+        assert_eq!(c.triangles.len(), 12);
+        assert_eq!(c.positions.len(), 24, "8 corners x 3 faces");
+        for t in &c.triangles {
+            let [a, b, p] = t.map(|i| c.positions[i as usize]);
+            let face = (b - a).cross(p - a).normalize();
+            for &i in t {
+                assert!((c.normals[i as usize] - face).length() < 1e-15);
+            }
+        }
+        // 90° (inclusive) and beyond: one normal per corner of the cube, pointing out of
+        // the corner (area-weighted by triangle, so a face split through the corner counts
+        // twice: not exactly the diagonal).
+        for angle in [90.0, 180.0] {
+            let c = m.with_crease_angle(angle).unwrap();
+            assert_eq!(c.positions.len(), 8, "{angle}");
+            for (p, n) in c.positions.iter().zip(&c.normals) {
+                let d = (*p - DVec3::splat(0.5)).normalize();
+                assert!(
+                    n.dot(d) > 0.9 && (n.length() - 1.0).abs() < 1e-15,
+                    "{angle}: {p} {n}"
+                );
+            }
+        }
+        // The lembos of the creased cube share every edge.
+        let l = c.to_lembos().unwrap();
+        assert_eq!(l.len(), 12);
+    }
+
+    #[test]
+    fn crease_angle_180_is_the_computed_normals_bit_for_bit() {
+        let m = crate::lembo::shapes::sphere_mesh(7, 5);
+        let smooth = m.clone().with_computed_normals();
+        let c = m.with_crease_angle(180.0).unwrap();
+        // Same vertices (none is split), in order of first use by the triangles.
+        assert_eq!(c.positions.len(), smooth.positions.len());
+        for (t, s) in c.triangles.iter().zip(&smooth.triangles) {
+            for (&i, &j) in t.iter().zip(s) {
+                assert_eq!(
+                    bits(c.positions[i as usize]),
+                    bits(smooth.positions[j as usize])
+                );
+                assert_eq!(
+                    bits(c.normals[i as usize]),
+                    bits(smooth.normals[j as usize])
+                );
+            }
+        }
+    }
 
     #[test]
     fn shared_edge_gets_identical_points_from_both_sides() {

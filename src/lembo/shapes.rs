@@ -29,7 +29,10 @@ pub fn builtin_mesh(name: &str) -> Option<TriangleMesh> {
 
 /// The lembos of a builtin shape, or `None` for an unknown name.
 pub fn builtin_lembos(name: &str) -> Option<Vec<Lembo>> {
-    builtin_mesh(name).map(|m| m.to_lembos())
+    builtin_mesh(name).map(|m| {
+        m.to_lembos()
+            .expect("the builtin meshes have three distinct corners per triangle")
+    })
 }
 
 /// A UV sphere with `slices` longitudes and `stacks` latitude bands (poles shared).
