@@ -356,5 +356,8 @@ fn every_committed_spec_is_valid() {
         }
     }
     names.sort();
-    assert_eq!(names, ["precision", "smoke", "tradeoff", "units"]);
+    assert_eq!(
+        names,
+        ["perspective", "precision", "smoke", "tradeoff", "units"]
+    );
 }

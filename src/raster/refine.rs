@@ -14,7 +14,12 @@
 //! (below), and inside, the middles of the three segments that join its edge middles and its
 //! centroid. The largest screen distance [pixels] there is the piece's error. Each halving
 //! divides the error of a smooth projection by about 8 (the rebuilt quadratic interpolates a
-//! smooth map at six points: its error is third order in the piece's size).
+//! smooth map at six points: its error is third order in the piece's size). An error counts
+//! only beyond the rounding noise of projecting its point ([`NOISE_ULPS`] rounding units of
+//! the world coordinates' magnitude, carried to pixels by the projection's scale there):
+//! far from the origin or under extreme zoom, rounding alone exceeds a small tolerance, and
+//! splitting would chase it to the caps. An orthographic view projects affinely, so Setup
+//! never calls this for one ([`super::setup::setup_pieces`]).
 //!
 //! **Watertight by construction.** A shared edge must be one curve for both pieces (or
 //! lembos) on its sides. So an edge's fate is decided from the edge alone: it is *refined*
@@ -115,7 +120,17 @@ struct Surface<'a> {
     /// Pieces whose Bézier net has every clip w at least this can be projected.
     w_min: f64,
     tol: f64,
+    /// The largest absolute world coordinate of the lembo and the eye (at least 1): the
+    /// scale of the rounding in evaluating and projecting a world point.
+    magnitude: f64,
+    /// Per screen axis: half the viewport side times the L1 norm of the view-projection
+    /// row of that axis and of w (their linear parts).
+    rows: [[f64; 2]; 2],
 }
+
+/// How many rounding units of a projected point's noise an error must exceed before it
+/// counts (the six points' noise reaches the rebuilt quadratic through weights up to 5).
+const NOISE_ULPS: f64 = 64.0;
 
 impl<'a> Surface<'a> {
     fn new(lembo: &'a Lembo, view: &'a View, tol: f64) -> Self {
@@ -130,13 +145,45 @@ impl<'a> Surface<'a> {
         } else {
             0.5 * view.near
         };
+        let magnitude = p
+            .iter()
+            .chain([&view.eye])
+            .map(|q| q.abs().max_element())
+            .fold(1.0, f64::max);
+        let m = view.view_proj;
+        let row = |r: usize| m.row(r).truncate().abs().element_sum();
+        let (w, h) = (view.viewport.width as f64, view.viewport.height as f64);
+        let rows = [
+            [0.5 * w * row(0), 0.5 * w * row(3)],
+            [0.5 * h * row(1), 0.5 * h * row(3)],
+        ];
         Surface {
             lembo,
             view,
             edges,
             w_min,
             tol,
+            magnitude,
+            rows,
         }
+    }
+
+    /// An error [pixels] at world point `p` beyond the tolerance and beyond the rounding
+    /// noise of projecting `p` there (far from the origin, or under extreme zoom, rounding
+    /// alone can exceed a small tolerance; splitting would then chase noise to the caps).
+    fn exceeds(&self, err: f64, p: DVec3) -> bool {
+        if err <= self.tol {
+            return false;
+        }
+        let c = self.clip(p);
+        let w = c.w.abs();
+        let along = |axis: usize, ndc: f64| self.rows[axis][0] + ndc.abs() * self.rows[axis][1];
+        let noise = NOISE_ULPS
+            * f64::EPSILON
+            * self.magnitude
+            * (along(0, c.x / c.w) + along(1, c.y / c.w))
+            / w;
+        err > self.tol + noise
     }
 
     /// The world point at domain point `uv`; on a domain edge, from the edge's parabola in
@@ -193,15 +240,16 @@ impl<'a> Surface<'a> {
         }
         let curve = [s.2, m.2, e.2];
         [(s.0, 0.25), (e.0, 0.75)].into_iter().any(|(end, t)| {
-            let truth = self.screen(self.world(mid(end, m.0)));
+            let world = self.world(mid(end, m.0));
+            let truth = self.screen(world);
             let got = parabola(&curve, t);
-            (got[0] - truth[0]).hypot(got[1] - truth[1]) > self.tol
+            self.exceeds((got[0] - truth[0]).hypot(got[1] - truth[1]), world)
         })
     }
 
-    /// The largest distance [pixels] between the piece's rebuilt screen quadratics and the
-    /// true projection at its interior check points.
-    fn interior_error(&self, node: &Node) -> f64 {
+    /// Whether the piece's rebuilt screen quadratics miss the true projection by more than
+    /// the tolerance at one of its interior check points.
+    fn interior_exceeds(&self, node: &Node) -> bool {
         let x = Quadratic::from_reference_values(node.screen.map(|s| s[0]));
         let y = Quadratic::from_reference_values(node.screen.map(|s| s[1]));
         let [a, b, c] = node.tri;
@@ -214,11 +262,14 @@ impl<'a> Surface<'a> {
         let third = 1.0 / 3.0;
         [(0.25, 0.25), (0.5, 0.25), (0.25, 0.5), (third, third)]
             .into_iter()
-            .map(|(u, v)| {
-                let truth = self.screen(self.world(at(u, v)));
-                (x.eval(u, v) - truth[0]).hypot(y.eval(u, v) - truth[1])
+            .any(|(u, v)| {
+                let world = self.world(at(u, v));
+                let truth = self.screen(world);
+                self.exceeds(
+                    (x.eval(u, v) - truth[0]).hypot(y.eval(u, v) - truth[1]),
+                    world,
+                )
             })
-            .fold(0.0, f64::max)
     }
 }
 
@@ -330,7 +381,7 @@ pub fn setup_refined<R: Real>(
             matches!(node.edges[e], EdgeSource::Own) && s.refine(edge_points(&node, e))
         });
         let perspective =
-            projectable && (own_refined.iter().any(|&r| r) || s.interior_error(&node) > tol);
+            projectable && (own_refined.iter().any(|&r| r) || s.interior_exceeds(&node));
         let guard = projectable && !within(points.hull());
         let wants = !projectable || perspective || guard;
         if !wants || node.depth >= MAX_SPLIT_DEPTH || full {
@@ -372,7 +423,8 @@ pub fn setup_refined<R: Real>(
         split.perspective |= perspective;
         split.near |= !projectable;
         // Pushed in reverse, so pieces come out in the order A, B, C, middle.
-        for child in children(&s, &node, own_refined).into_iter().rev() {
+        let project = perspective || !projectable;
+        for child in children(&s, &node, own_refined, project).into_iter().rev() {
             pending.push(child);
         }
     }
@@ -386,8 +438,9 @@ fn edge_points(node: &Node, e: usize) -> [(Uv, DVec3, S3); 3] {
 }
 
 /// The four children of a node, with the screen points of their new edge middles taken from
-/// the true projection (refined and inner edges) or from the frozen parabola of an edge.
-fn children(s: &Surface, node: &Node, refined: [bool; 3]) -> [Node; 4] {
+/// the true projection (refined edges, and inner edges when `project`), from the node's own
+/// quadratics (inner edges otherwise) or from the frozen parabola of an edge.
+fn children(s: &Surface, node: &Node, refined: [bool; 3], project: bool) -> [Node; 4] {
     let uv = reference_uv(node.tri);
     // Per parent edge: the middles of its two halves (world, screen) and the halves' sources.
     let halves: [_; 3] = std::array::from_fn(|e| {
@@ -425,11 +478,26 @@ fn children(s: &Surface, node: &Node, refined: [bool; 3]) -> [Node; 4] {
     let [a, b, c] = node.tri;
     let [_, _, _, ab, ca, bc] = uv;
     let p = |k: usize| (node.world[k], node.screen[k]);
-    let inner = |x: Uv, y: Uv| {
+    // The parent's own screen quadratics, for children of a split that is not for
+    // perspective or the near plane (the guard band alone): they restrict the parent as the
+    // paper's Setup's pieces restrict the lembo, rather than bring in projected points
+    // whose error (rounding noise, at such sizes) the parent was not split for.
+    let q: [Quadratic<f64>; 3] =
+        std::array::from_fn(|c| Quadratic::from_reference_values(node.screen.map(|p| p[c])));
+    // The middle of the inner edge from x to y, at (u, v) in the node's own domain.
+    let inner = |x: Uv, y: Uv, (u, v): (f64, f64)| {
         let w = s.world(mid(x, y));
-        (w, s.screen(w))
+        if project {
+            (w, s.screen(w))
+        } else {
+            (w, q.map(|q| q.eval(u, v)))
+        }
     };
-    let (m_ab_ca, m_ab_bc, m_bc_ca) = (inner(ab, ca), inner(ab, bc), inner(bc, ca));
+    let (m_ab_ca, m_ab_bc, m_bc_ca) = (
+        inner(ab, ca, (0.25, 0.25)),
+        inner(ab, bc, (0.5, 0.25)),
+        inner(bc, ca, (0.25, 0.5)),
+    );
     let own = EdgeSource::Own;
     let make = |tri: [Uv; 3], pts: [(DVec3, S3); 6], edges: [EdgeSource; 3]| Node {
         tri,
@@ -603,5 +671,78 @@ mod tests {
                 assert!(v.project(l.position_at(at(0), at(1))).w >= 0.05);
             }
         }
+    }
+
+    /// Far from the origin (10⁷) under a 0.001° field of view, projecting a point is
+    /// rounding noise beyond a 10⁻⁴ px tolerance: the split must not chase it (the fuzzer's
+    /// case walked 75 million segments over 1023 capped pieces before the noise floor and
+    /// the guard band's restricted children). It splits as the paper's Setup does.
+    #[test]
+    fn rounding_noise_is_not_split_for() {
+        let points = [
+            DVec3::new(
+                -4.0178843468598275e-07,
+                -9350946.264265798,
+                3194294.8382927338,
+            ),
+            DVec3::new(
+                -5.984584631500639e-07,
+                -9350946.26426625,
+                3194294.8382922173,
+            ),
+            DVec3::new(
+                -4.0948767840699985e-07,
+                -9350946.264266629,
+                3194294.838292417,
+            ),
+            DVec3::new(
+                3.671684551033988e-08,
+                -9350946.264265366,
+                3194294.8382922183,
+            ),
+            DVec3::new(
+                -4.460708523236915e-07,
+                -9350946.264266318,
+                3194294.8382923515,
+            ),
+            DVec3::new(
+                -2.1879361066201438e-07,
+                -9350946.264264904,
+                3194294.8382929303,
+            ),
+        ];
+        let l = Lembo::new(points, [DVec3::Z; 6]);
+        let v = View::new(
+            &Camera {
+                eye: [
+                    2.2805598618962026e-06,
+                    -9350946.264269004,
+                    3194294.8382904935,
+                ],
+                target: [
+                    -4.730917155276137e-07,
+                    -9350946.264265714,
+                    3194294.8382926024,
+                ],
+                up: [0.0, 1.0, 0.0],
+                projection: Projection::Perspective {
+                    fovy_deg: 0.001,
+                    near: 4.77966906581814e-07,
+                    far: 0.47796690658181407,
+                },
+            },
+            Viewport {
+                width: 60,
+                height: 64,
+            },
+        );
+        let mut paper = Vec::new();
+        let p = super::super::setup::setup_pieces::<f64>(0, &l, [0.8; 3], &v, None, &mut paper)
+            .unwrap();
+        let mut out = Vec::new();
+        let s = setup_refined::<f64>(0, &l, [0.8; 3], &v, 1e-4, &mut out).unwrap();
+        assert_eq!(s.capped, 0, "{s:?}");
+        assert!(!s.perspective, "{s:?}");
+        assert_eq!((out.len(), s.culled), (paper.len(), p.culled));
     }
 }

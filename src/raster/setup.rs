@@ -298,7 +298,8 @@ pub fn setup_pieces<R: Real>(
     perspective_tol: Option<f64>,
     out: &mut Vec<ScreenLembo<R>>,
 ) -> Result<Split, Cull> {
-    if let Some(tol) = perspective_tol {
+    // An orthographic projection is affine: the rebuilt quadratics are the true image.
+    if let (Some(tol), false) = (perspective_tol, view.orthographic) {
         return super::refine::setup_refined(id, lembo, color, view, tol, out);
     }
     let points = project(lembo, view)?;
