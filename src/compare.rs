@@ -28,7 +28,7 @@ use crate::lembo::tessellate::Tessellation;
 use crate::output::write_files;
 use crate::raster;
 use crate::raster::PerspectiveTol;
-use crate::reference::metrics::{self, Accuracy};
+use crate::reference::metrics::Accuracy;
 use crate::reference::montage::{montage, Panel};
 use crate::reference::oracle::ReferenceImage;
 use crate::report::{png_bytes, Report};
@@ -167,8 +167,14 @@ fn triangle_accuracy(
 ) -> Accuracy {
     let t = Tessellation::new(scene, n);
     let frame = raster::render_functional_triangles(scene, view, &t, datapath, true);
-    let probe = frame.probe.unwrap_or_default();
-    metrics::measure(&frame.framebuffer, reference, probe.double_hit_pixels, None)
+    job::measure_frame(
+        scene,
+        view,
+        &frame,
+        reference,
+        PrimitivePath::Triangle,
+        t.triangles_per_lembo(),
+    )
 }
 
 /// `--tess auto`: doubling, then bisection (module doc).

@@ -31,10 +31,9 @@
 
 use crate::camera::View;
 use crate::datapath::Datapath;
-use crate::job::render_reference;
+use crate::job::{measure_frame, render_reference, PrimitivePath};
 use crate::lembo::Lembo;
 use crate::raster::render_functional;
-use crate::reference::metrics::measure;
 use crate::scene::Scene;
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
@@ -661,12 +660,7 @@ pub fn measure_case(case: &Case, ks: &[f64]) -> CaseResult {
                 }
             };
             let probe = frame.probe.unwrap_or_default();
-            let a = measure(
-                &frame.framebuffer,
-                &reference,
-                probe.double_hit_pixels,
-                Some(probe.max_scanline_deviation_px),
-            );
+            let a = measure_frame(&scene, &view, &frame, &reference, PrimitivePath::Lembo, 1);
             let fb = &frame.framebuffer;
             let (winner_diff, shade_diff) = match &f64_image {
                 Some((winner64, color64)) => {

@@ -10,13 +10,14 @@ use crate::datapath::Datapath;
 use crate::discoid::{self, blend::BlendMode};
 use crate::error::{Error, Result};
 use crate::lembo::tessellate::Tessellation;
+use crate::lembo::Lembo;
 use crate::output::write_paths;
 use crate::pipeline::{self, actor::SimOptions};
 use crate::raster;
 use crate::raster::triangle::TriangleSource;
 use crate::raster::{PerspectiveTol, Tolerance};
 use crate::reference::oracle::ReferenceImage;
-use crate::reference::{heatmap, metrics, oracle};
+use crate::reference::{heatmap, metrics, oracle, see_through, Accuracy};
 use crate::report::{
     peak_rss_bytes, png_bytes, Host, Memory, PerspectiveSetting, Primitives, Report, SceneInfo,
     Settings, SCHEMA_VERSION,
@@ -373,18 +374,19 @@ pub fn run_path(
     let mut accuracy = None;
     let mut error_map = None;
     let mut reference_wall = None;
+    let mut metrics_wall = None;
     if let (Some((reference, wall)), Some(frame)) = (reference, frame.as_ref()) {
         let t1 = Instant::now();
-        let probe = frame.probe.unwrap_or_default();
-        accuracy = Some(metrics::measure(
-            &frame.framebuffer,
+        let ids_per_lembo = tessellation.as_ref().map_or(1, |t| t.triangles_per_lembo());
+        accuracy = Some(measure_frame(
+            scene,
+            view,
+            frame,
             reference,
-            probe.double_hit_pixels,
-            match job.path {
-                PrimitivePath::Lembo => Some(probe.max_scanline_deviation_px),
-                PrimitivePath::Triangle => None,
-            },
+            job.path,
+            ids_per_lembo,
         ));
+        metrics_wall = Some(t1.elapsed().as_secs_f64());
         error_map = Some(heatmap::error_heatmap(&frame.framebuffer, reference));
         reference_wall = Some(wall + t1.elapsed().as_secs_f64());
     }
@@ -437,6 +439,7 @@ pub fn run_path(
             counts.fragments,
             timed.as_ref().map(|t| t.cycles.total),
             reference_wall,
+            metrics_wall,
         ),
     };
     let (framebuffer, trace) = match (timed, frame) {
@@ -450,6 +453,53 @@ pub fn run_path(
         error_map,
         trace,
     })
+}
+
+/// The accuracy of `frame` (rendered with `analyse`) of `scene` against its `reference`:
+/// the metrics, with the reference traced anew where the sub-pixel silhouette asks, the
+/// fragment probe's counts and the see-through count. `ids_per_lembo` maps the frame's
+/// winner ids to lembo ids: 1 on the lembo path, n² on the triangle path at level n.
+pub fn measure_frame(
+    scene: &Scene,
+    view: &View,
+    frame: &raster::Frame,
+    reference: &ReferenceImage,
+    path: PrimitivePath,
+    ids_per_lembo: u64,
+) -> Accuracy {
+    let probe = frame.probe.unwrap_or_default();
+    let tracer = oracle::Tracer::new(scene.lembos().map(|(l, _)| l), view);
+    metrics::measure(
+        &frame.framebuffer,
+        reference,
+        &tracer,
+        probe.double_hit_pixels,
+        match path {
+            PrimitivePath::Lembo => Some(probe.max_scanline_deviation_px),
+            PrimitivePath::Triangle => None,
+        },
+        see_through_px(scene, view, &frame.framebuffer, ids_per_lembo),
+    )
+}
+
+/// The see-through pixels of a render of `scene` (`reference::see_through`): the lembos
+/// of objects built from a triangle mesh (`mesh` and `builtin` objects) are checked against
+/// their triangles; None when the scene has no such object.
+pub fn see_through_px(
+    scene: &Scene,
+    view: &View,
+    render: &FrameBuffer,
+    ids_per_lembo: u64,
+) -> Option<u64> {
+    if scene.objects.iter().all(|o| o.mesh.is_none()) {
+        return None;
+    }
+    let lembos: Vec<(&Lembo, bool)> = scene
+        .objects
+        .iter()
+        .flat_map(|o| o.lembos.iter().map(move |l| (l, o.mesh.is_some())))
+        .collect();
+    Some(see_through::see_through(&lembos, view, render, ids_per_lembo).total())
 }
 
 /// The scene section of a report.
@@ -512,7 +562,13 @@ fn settings(
 }
 
 /// The host section of a report.
-fn host(wall: f64, fragments: u64, cycles: Option<u64>, reference_wall: Option<f64>) -> Host {
+fn host(
+    wall: f64,
+    fragments: u64,
+    cycles: Option<u64>,
+    reference_wall: Option<f64>,
+    metrics_wall: Option<f64>,
+) -> Host {
     Host {
         wall_seconds: wall,
         fragments_per_second: if wall > 0.0 {
@@ -522,6 +578,7 @@ fn host(wall: f64, fragments: u64, cycles: Option<u64>, reference_wall: Option<f
         },
         simulated_cycles_per_second: cycles.map(|c| c as f64 / wall.max(1e-9)),
         reference_wall_seconds: reference_wall,
+        metrics_wall_seconds: metrics_wall,
         peak_rss_bytes: peak_rss_bytes(),
     }
 }
@@ -610,7 +667,7 @@ fn run_discoids(
         accuracy: None,
         blend: Some(blend),
         memory,
-        host: host(wall, counts.fragments, cycles.map(|c| c.total), None),
+        host: host(wall, counts.fragments, cycles.map(|c| c.total), None, None),
     };
     Ok(PathRun {
         report,

@@ -524,13 +524,16 @@ fn render(args: RenderArgs) -> ExitCode {
             }
             if let Some(a) = &r.accuracy {
                 out!(
-                    "accuracy: PSNR {:.2} dB, coverage +{} / -{} px, silhouette max {:.2} px, cracks {}, double hits {}{}",
+                    "accuracy: PSNR {:.2} dB, coverage +{} / -{} px, silhouette max {:.3} px, cracks {}, double hits {}{}{}",
                     a.psnr_db,
                     a.coverage_false_positive,
                     a.coverage_false_negative,
                     a.silhouette_max_px,
                     a.crack_pixels,
                     a.double_hit_pixels,
+                    a.see_through_px
+                        .map(|n| format!(", see-through {n} px"))
+                        .unwrap_or_default(),
                     a.max_scanline_deviation_px
                         .map(|d| format!(", max |y - y_j| {d:.4} px"))
                         .unwrap_or_default()

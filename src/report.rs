@@ -156,6 +156,9 @@ pub struct Host {
     pub simulated_cycles_per_second: Option<f64>,
     /// Wall time of the reference and metrics [s]; null without `--reference`.
     pub reference_wall_seconds: Option<f64>,
+    /// Of that, the accuracy metrics (the sub-pixel silhouette's reference queries and the
+    /// see-through check included) [s]; null without `--reference`.
+    pub metrics_wall_seconds: Option<f64>,
     /// Peak resident set of the simulator process so far (Linux `VmHWM`; null elsewhere).
     /// For `render`, read after the images are encoded, just before the report is written;
     /// a sweep's runs share one process, so theirs is the process's peak [bytes].
@@ -324,7 +327,7 @@ impl Report {
         let h = &self.host;
         let _ = writeln!(
             t,
-            "\nhost      render {:.3} s, {:.1} M fragments/s{}{}",
+            "\nhost      render {:.3} s, {:.1} M fragments/s{}{}{}",
             h.wall_seconds,
             h.fragments_per_second / 1e6,
             h.simulated_cycles_per_second
@@ -332,6 +335,9 @@ impl Report {
                 .unwrap_or_default(),
             h.reference_wall_seconds
                 .map(|r| format!(", reference {r:.3} s"))
+                .unwrap_or_default(),
+            h.metrics_wall_seconds
+                .map(|m| format!(" (metrics {m:.3} s)"))
                 .unwrap_or_default()
         );
         if let Some(rss) = h.peak_rss_bytes {

@@ -457,11 +457,12 @@ fn help_explains_the_render_flags() {
 }
 
 /// The accuracy names of `render --reference` (DESIGN §6).
-const ACCURACY_NAMES: [&str; 12] = [
+const ACCURACY_NAMES: [&str; 14] = [
     "coverage_false_positive",
     "coverage_false_negative",
     "silhouette_max_px",
     "silhouette_mean_px",
+    "silhouette_resolution_px",
     "depth_max_abs",
     "normal_max_deg",
     "normal_mean_deg",
@@ -469,6 +470,7 @@ const ACCURACY_NAMES: [&str; 12] = [
     "max_abs_error",
     "crack_pixels",
     "double_hit_pixels",
+    "see_through_px",
     "max_scanline_deviation_px",
 ];
 

@@ -12,6 +12,7 @@
 use glam::DVec3;
 use lembo_sim::camera::View;
 use lembo_sim::datapath::{Datapath, Real};
+use lembo_sim::job::{measure_frame, PrimitivePath};
 use lembo_sim::lembo::construct::lembo_from_triangle;
 use lembo_sim::lembo::Lembo;
 use lembo_sim::raster::fragment::FragmentSink;
@@ -22,7 +23,7 @@ use lembo_sim::raster::subsegmenter::Subsegment;
 use lembo_sim::raster::{
     minmax, render_functional, render_lembos, Counts, Frame, DEFAULT_SEGMENT_CAP,
 };
-use lembo_sim::reference::metrics::{measure, Accuracy};
+use lembo_sim::reference::metrics::Accuracy;
 use lembo_sim::reference::oracle::{render_reference, ReferenceImage, ReferenceInput};
 use lembo_sim::rop::framebuffer::NO_PRIMITIVE;
 use lembo_sim::scene::Scene;
@@ -88,13 +89,15 @@ fn reference(scene: &Scene, view: &View) -> ReferenceImage {
     })
 }
 
-fn accuracy(frame: &Frame, reference: &ReferenceImage) -> Accuracy {
-    let probe = frame.probe.expect("rendered with analyse");
-    measure(
-        &frame.framebuffer,
+fn accuracy(scene: &Scene, frame: &Frame, reference: &ReferenceImage) -> Accuracy {
+    assert!(frame.probe.is_some(), "rendered with analyse");
+    measure_frame(
+        scene,
+        &view_of(scene),
+        frame,
         reference,
-        probe.double_hit_pixels,
-        Some(probe.max_scanline_deviation_px),
+        PrimitivePath::Lembo,
+        1,
     )
 }
 
@@ -378,7 +381,7 @@ fn check_pair_render<R: Real>(
     };
     let view = view_of(scene);
     let frame = render_functional(scene, &view, k, datapath, true).unwrap();
-    let acc = accuracy(&frame, reference);
+    let acc = accuracy(scene, &frame, reference);
     prop_assert_eq!(acc.double_hit_pixels, 0, "{}", R::NAME);
     prop_assert_eq!(acc.crack_pixels, 0, "{}", R::NAME);
     let far = disagreements_beyond(
@@ -499,7 +502,7 @@ fn check_closed_mesh(scene: &Scene, datapath: Datapath) -> Accuracy {
         "{} {datapath:?}",
         scene.name
     );
-    accuracy(&frame, &reference)
+    accuracy(scene, &frame, &reference)
 }
 
 /// Cracks as a seam fault makes them: runs of at most two pixels in a row that the render

@@ -11,7 +11,7 @@ use glam::DVec3;
 use lembo_sim::camera::View;
 use lembo_sim::config::ArchConfig;
 use lembo_sim::datapath::{Datapath, Real};
-use lembo_sim::job::render_reference;
+use lembo_sim::job::{measure_frame, render_reference, PrimitivePath};
 use lembo_sim::lembo::tessellate::{Tessellation, Triangle};
 use lembo_sim::lembo::Lembo;
 use lembo_sim::pipeline::actor::SimOptions;
@@ -38,11 +38,13 @@ fn against_reference(s: &Scene, n: u32, datapath: Datapath) -> (Accuracy, Counts
     let view = View::new(&s.camera, s.viewport);
     let (reference, _) = render_reference(s, &view, 1);
     let f = functional(s, n, datapath);
-    let a = measure(
-        &f.framebuffer,
+    let a = measure_frame(
+        s,
+        &view,
+        &f,
         &reference,
-        f.probe.unwrap().double_hit_pixels,
-        None,
+        PrimitivePath::Triangle,
+        u64::from(n * n),
     );
     let c = &f.counts;
     eprintln!(
@@ -106,10 +108,13 @@ fn against_facets(s: &Scene, n: u32, datapath: Datapath) -> Accuracy {
         supersample: 1,
     });
     let f = functional(s, n, datapath);
+    let tracer = oracle::Tracer::new(facets.iter().map(|(l, _)| l), &view);
     let a = measure(
         &f.framebuffer,
         &reference,
+        &tracer,
         f.probe.unwrap().double_hit_pixels,
+        None,
         None,
     );
     eprintln!(

@@ -6,13 +6,12 @@
 use lembo_sim::camera::View;
 use lembo_sim::config::ArchConfig;
 use lembo_sim::datapath::{Datapath, Real};
-use lembo_sim::job::render_reference;
+use lembo_sim::job::{measure_frame, render_reference, PrimitivePath};
 use lembo_sim::lembo::tessellate::Tessellation;
 use lembo_sim::pipeline::actor::SimOptions;
 use lembo_sim::pipeline::{run_timed, TimedFrame, UnitKind};
 use lembo_sim::raster::triangle::{setup, TriangleSource};
 use lembo_sim::raster::{render_functional_triangles, Frame};
-use lembo_sim::reference::metrics::measure;
 use lembo_sim::scene::Scene;
 use std::path::Path;
 
@@ -206,7 +205,14 @@ fn silhouette_error_falls_roughly_as_one_over_n_squared() {
         .iter()
         .map(|&n| {
             let f = functional(&s, n, Datapath::F32, true);
-            let a = measure(&f.framebuffer, &reference, 0, None);
+            let a = measure_frame(
+                &s,
+                &view,
+                &f,
+                &reference,
+                PrimitivePath::Triangle,
+                n as u64 * n as u64,
+            );
             assert_eq!(a.crack_pixels, 0, "n={n}: a watertight tessellation");
             a.silhouette_max_px
         })

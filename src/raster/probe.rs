@@ -3,7 +3,8 @@
 //! - the largest |y(u, v) - (j + 0.5)| over all fragments, in f64 from the lembo's screen
 //!   quadratic (paper 001: the curve is followed within k);
 //! - the largest distance of a fragment's (u, v) outside the domain;
-//! - double hits on shared edges: a pixel claimed by two lembos that share an edge, each
+//! - double hits on shared edges: a pixel claimed by two lembos that share an edge curve
+//!   (the same three points: both ends and the midpoint; [`shared_edges`]), each
 //!   through a subsegment that ends on the *same crossing* of that edge, from opposite sides
 //!   of it along the scanline. Neighbours on opposite sides must split the scanline at the
 //!   crossing, so any pixel both claim is a pixel-rule fault (the crossing's x computed
@@ -96,17 +97,24 @@ impl<'a, S> Probe<'a, S> {
     }
 }
 
-/// Pairs of lembo ids (smaller first) whose world-space edges have identical end points,
-/// with the domain edge index (0: AB, 1: BC, 2: CA) of the shared edge in each.
+/// Pairs of lembo ids (smaller first) that share an edge curve, with the domain edge index
+/// (0: AB, 1: BC, 2: CA) of the shared edge in each. An edge's curve is the quadratic
+/// through its three world-space points (both ends and the curved midpoint), so two lembos
+/// share it exactly when the three points are the same, bit for bit: corners alone are not
+/// enough, since split normals at the corners (a hard edge) give each side its own
+/// midpoint, two different curves between the same corners, which do not split the
+/// scanline between them (the gap or overlap between them is see-through's to measure, not
+/// a pixel-rule fault).
 pub fn shared_edges(scene: &Scene) -> HashMap<(u32, u32), (u8, u8)> {
-    let mut by_edge: HashMap<[u64; 6], Vec<(u32, u8)>> = HashMap::new();
+    let mut by_edge: HashMap<[u64; 9], Vec<(u32, u8)>> = HashMap::new();
     for (id, (l, _)) in scene.lembos().enumerate() {
-        for (edge, (s, e)) in [(0, 1), (1, 2), (2, 0)].into_iter().enumerate() {
+        for (edge, (s, e, m)) in [(0, 1, 3), (1, 2, 5), (2, 0, 4)].into_iter().enumerate() {
             let (mut p, mut q) = (l.points[s], l.points[e]);
             if canonical_order(p, q).is_gt() {
                 std::mem::swap(&mut p, &mut q);
             }
-            let key = [p.x, p.y, p.z, q.x, q.y, q.z].map(f64::to_bits);
+            let mid = l.points[m];
+            let key = [p.x, p.y, p.z, q.x, q.y, q.z, mid.x, mid.y, mid.z].map(f64::to_bits);
             by_edge
                 .entry(key)
                 .or_default()
@@ -313,5 +321,57 @@ mod tests {
             b: inner(50.0),
         };
         assert_eq!(run([(right_of_x2, 58), (left_of_wrong_x2, 58)]), 1);
+    }
+
+    #[test]
+    fn probe_pairs_neighbours_by_their_edge_curve_not_their_corners() {
+        // Two lembos with the same corners P, Q on their edge AB. With the same midpoint
+        // they share the curve and a pixel both claim from opposite sides of the same
+        // crossing is a double hit; with different midpoints (split normals at P and Q give
+        // each side its own curve) they are not neighbours and it is not.
+        let (p, q, m) = ([30.0, 40.0], [60.0, 40.0], [45.0, 35.0]);
+        let run = |other_mid: [f64; 2]| {
+            let scene = scene_of(vec![
+                lembo(p, q, [45.0, 80.0], m),
+                lembo(q, p, [45.0, 10.0], other_mid),
+            ]);
+            let adjacent = shared_edges(&scene).contains_key(&(0, 1));
+            let view = View::new(&scene.camera, scene.viewport);
+            let ls: Vec<ScreenLembo<f64>> = scene
+                .lembos()
+                .enumerate()
+                .map(|(id, (l, c))| setup(id as u32, l, c, &view).unwrap())
+                .collect();
+            // Scanline 38 (y = 38.5) crosses lembo 0's edge at t = 0.9187 (x = 57.56);
+            // lembo 0 to its right, lembo 1 to its left but computing x 1.1 px too far
+            // right, so both claim pixel 58.
+            let t = (1.0 - (1.0f64 - 4.0 * 0.075).sqrt()) / 2.0;
+            let x2 = 30.0 + 30.0 * (1.0 - t);
+            let on_edge = |u: f64, x: f64| CurvePoint {
+                uv: [u, 0.0],
+                x,
+                edge: 0,
+            };
+            let inner = |x: f64| CurvePoint {
+                uv: [0.3, 0.3],
+                x,
+                edge: INTERIOR,
+            };
+            let right = Subsegment {
+                a: on_edge(1.0 - t, x2),
+                b: inner(70.0),
+            };
+            let left = Subsegment {
+                a: on_edge(t, x2 + 1.1),
+                b: inner(50.0),
+            };
+            let mut sink = Collect::default();
+            let mut probe = Probe::new(&scene, scene.viewport, &mut sink);
+            probe.fragment(&ls[0], &right, 58, 38, 0.3, 0.3, 0.5);
+            probe.fragment(&ls[1], &left, 58, 38, 0.3, 0.3, 0.5);
+            (adjacent, probe.report().double_hit_pixels)
+        };
+        assert_eq!(run(m), (true, 1));
+        assert_eq!(run([45.0, 36.0]), (false, 0));
     }
 }

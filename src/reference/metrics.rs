@@ -2,15 +2,16 @@
 //! report carries.
 //!
 //! Coverage is per pixel centre: the render covers a pixel when some primitive won it, the
-//! reference when its centre sample hit a surface. Where the two disagree, the silhouette
-//! error is the Euclidean distance from the pixel to the nearest pixel centre whose
-//! reference coverage equals the render's value there, i.e. how far the reference's
-//! silhouette would have to move to agree, from an exact distance transform of the
-//! reference mask (Felzenszwalb and Huttenlocher, "Distance Transforms of Sampled
-//! Functions", 2012). Crack pixels (holes inside the reference coverage) are counted apart
-//! and left out of the silhouette error.
+//! reference when its centre sample hit a surface. Where the two disagree (a *misplaced*
+//! pixel), the silhouette error is the distance from the pixel's centre to the reference's
+//! true outline, sub-pixel ([`super::outline`]): the nearest pixel centre of the other
+//! reference state, from an exact distance transform of the reference mask (Felzenszwalb
+//! and Huttenlocher, "Distance Transforms of Sampled Functions", 2012), bounds it, and the
+//! reference is asked about the points in between. Crack pixels (holes inside the
+//! reference coverage) are counted apart and left out of the silhouette error.
 
 use super::oracle::ReferenceImage;
+use super::outline::{outline_distances, Misplaced, ReferenceCoverage, SILHOUETTE_RESOLUTION_PX};
 use crate::rop::framebuffer::{FrameBuffer, NO_PRIMITIVE};
 use serde::Serialize;
 
@@ -25,13 +26,18 @@ pub struct Accuracy {
     pub coverage_false_positive: u64,
     /// Pixels the reference covers and the render does not, cracks included [pixels].
     pub coverage_false_negative: u64,
-    /// Largest distance from a coverage disagreement (cracks excluded) to the reference
-    /// silhouette [pixels]; 0 when coverage agrees. When the reference has no pixel of the
-    /// needed kind at all (it covers nothing, or everything), the distance is the image
-    /// diagonal.
+    /// Largest distance from the centre of a misplaced pixel (covered by the render and not
+    /// the reference, or the reverse; cracks excluded) to the reference's true outline,
+    /// sub-pixel [pixels]; 0 when no pixel is misplaced (an outline off by less than the
+    /// distance to the nearest centre shows no error). When the reference has no pixel
+    /// centre of the other state at all (it covers nothing, or everything), the distance is
+    /// the image diagonal.
     pub silhouette_max_px: f64,
-    /// Mean of the same distances over the disagreeing pixels [pixels]; 0 when none.
+    /// Mean of the same distances over the misplaced pixels [pixels]; 0 when none.
     pub silhouette_mean_px: f64,
+    /// How finely the outline is located for the two figures above: points of the
+    /// reference outline are bisected to within this [pixels].
+    pub silhouette_resolution_px: f64,
     /// Largest |render depth - reference depth| over pixels both cover, in depth-buffer
     /// units [0, 1]; includes the error of the perspective approximation.
     pub depth_max_abs: f64,
@@ -53,6 +59,11 @@ pub struct Accuracy {
     /// Pixels written by more than one primitive on a shared edge, as the renderer counted
     /// them [pixels].
     pub double_hit_pixels: u64,
+    /// Pixels where the input mesh's own flat triangles show a front-facing surface but the
+    /// render shows the background, a surface facing away from the eye, or a surface behind
+    /// that triangle from a primitive sharing no corner with it: a gap between primitives
+    /// one can see through (`see_through.rs`) [pixels]; null for scenes without a mesh.
+    pub see_through_px: Option<u64>,
     /// The paper's guarantee: largest |y(u, v) - (j + 0.5)| over all lembo fragments, as
     /// the renderer measured it [pixels]; null for the triangle path (no curve to follow).
     pub max_scanline_deviation_px: Option<f64>,
@@ -77,6 +88,10 @@ impl Accuracy {
                 "silhouette_mean_px",
                 format!("{:.3} px", self.silhouette_mean_px),
             ),
+            (
+                "silhouette_resolution_px",
+                format!("{:.4} px", self.silhouette_resolution_px),
+            ),
             ("depth_max_abs", format!("{:.3e}", self.depth_max_abs)),
             ("normal_max_deg", format!("{:.3} deg", self.normal_max_deg)),
             (
@@ -95,6 +110,12 @@ impl Accuracy {
             ("crack_pixels", px(self.crack_pixels)),
             ("double_hit_pixels", px(self.double_hit_pixels)),
             (
+                "see_through_px",
+                self.see_through_px
+                    .map(px)
+                    .unwrap_or_else(|| "n/a (no mesh)".into()),
+            ),
+            (
                 "max_scanline_deviation_px",
                 self.max_scanline_deviation_px
                     .map(|d| format!("{d:.4} px"))
@@ -109,7 +130,9 @@ impl Accuracy {
     }
 }
 
-/// Measures `render` against `reference`; the two renderer-side counts are passed through.
+/// Measures `render` against `reference`, whose coverage at any screen position `outline`
+/// gives (the reference's [`super::oracle::Tracer`]); the renderer-side counts and the
+/// see-through count are passed through.
 ///
 /// # Panics
 /// If the two images differ in size, or the render kept no normal buffer
@@ -117,8 +140,10 @@ impl Accuracy {
 pub fn measure(
     render: &FrameBuffer,
     reference: &ReferenceImage,
+    outline: &dyn ReferenceCoverage,
     double_hit_pixels: u64,
     max_scanline_deviation_px: Option<f64>,
+    see_through_px: Option<u64>,
 ) -> Accuracy {
     assert_eq!(
         (render.width, render.height),
@@ -138,12 +163,12 @@ pub fn measure(
     let theirs: Vec<bool> = reference.hits.iter().map(|h| h.is_some()).collect();
 
     let cracks = crack_mask(&ours, &theirs, w, h);
-    let to_covered = distance_to(&theirs, w, h, true);
-    let to_uncovered = distance_to(&theirs, w, h, false);
+    let mut bounds = Bounds::new(&theirs, w, h);
     let diagonal = ((w * w + h * h) as f64).sqrt();
 
     let (mut fp, mut fn_, mut n_crack) = (0u64, 0u64, 0u64);
-    let (mut sil_max, mut sil_sum, mut sil_n) = (0.0f64, 0.0f64, 0u64);
+    // Misplaced pixels with a bound, to search; those without one are the diagonal.
+    let (mut misplaced, mut unbounded) = (Vec::new(), 0u64);
     let (mut depth_max, mut normal_max, mut normal_sum, mut compared) =
         (0.0f64, 0.0f64, 0.0f64, 0u64);
     let (mut squared_error, mut max_abs) = (0u64, 0u64);
@@ -173,18 +198,21 @@ pub fn measure(
                     n_crack += 1;
                     continue;
                 }
-                let d = if covered {
-                    to_covered[k]
-                } else {
-                    to_uncovered[k]
+                match bounds.nearest(k, covered) {
+                    Some(bound) => misplaced.push(Misplaced { index: k, bound }),
+                    None => unbounded += 1,
                 }
-                .unwrap_or(diagonal);
-                sil_max = sil_max.max(d);
-                sil_sum += d;
-                sil_n += 1;
             }
         }
     }
+    let distances = outline_distances(&theirs, w, h, &misplaced, outline);
+    let sil_n = distances.len() as u64 + unbounded;
+    let sil_max = if unbounded > 0 {
+        diagonal
+    } else {
+        distances.iter().copied().fold(0.0, f64::max)
+    };
+    let sil_sum = distances.iter().sum::<f64>() + unbounded as f64 * diagonal;
     let mse = squared_error as f64 / (3 * w * h).max(1) as f64;
     let psnr_db = if mse == 0.0 {
         PSNR_CAP_DB
@@ -200,6 +228,7 @@ pub fn measure(
         } else {
             0.0
         },
+        silhouette_resolution_px: SILHOUETTE_RESOLUTION_PX,
         depth_max_abs: depth_max,
         normal_max_deg: normal_max,
         normal_mean_deg: if compared > 0 {
@@ -211,6 +240,7 @@ pub fn measure(
         max_abs_error: max_abs,
         crack_pixels: n_crack,
         double_hit_pixels,
+        see_through_px,
         max_scanline_deviation_px,
         supersample: reference.supersample as u64,
         pixels_compared: compared,
@@ -240,6 +270,67 @@ fn crack_mask(ours: &[bool], theirs: &[bool], w: usize, h: usize) -> Vec<bool> {
         }
     }
     out
+}
+
+/// Rings searched around a pixel for the nearest centre of a mask value before the whole
+/// image's distance transform is computed instead.
+const RING_SEARCH_LIMIT: usize = 16;
+
+/// The distance from a pixel to the nearest pixel of a mask value: by searching rings
+/// around it (misplaced pixels are mostly near the outline), or, past
+/// [`RING_SEARCH_LIMIT`], from the exact distance transform of the whole mask, computed
+/// once per value when first needed. Both give the same exact distance.
+struct Bounds<'a> {
+    mask: &'a [bool],
+    w: usize,
+    h: usize,
+    /// The transforms to `false` and `true` pixels, when computed.
+    transforms: [Option<Vec<Option<f64>>>; 2],
+}
+
+impl<'a> Bounds<'a> {
+    fn new(mask: &'a [bool], w: usize, h: usize) -> Self {
+        Bounds {
+            mask,
+            w,
+            h,
+            transforms: [None, None],
+        }
+    }
+
+    /// The Euclidean distance [pixels] from pixel `k` to the nearest pixel whose mask
+    /// value is `value`; None when there is none.
+    fn nearest(&mut self, k: usize, value: bool) -> Option<f64> {
+        let (w, h) = (self.w as i64, self.h as i64);
+        let (x, y) = ((k % self.w) as i64, (k / self.w) as i64);
+        if self.mask[k] == value {
+            return Some(0.0);
+        }
+        let mut best = i64::MAX;
+        for r in 1..=RING_SEARCH_LIMIT as i64 {
+            // Every pixel of ring r (Chebyshev distance r) is at least r away.
+            if r * r >= best {
+                return Some((best as f64).sqrt());
+            }
+            for j in (y - r).max(0)..=(y + r).min(h - 1) {
+                let dy = j - y;
+                // The ring's pixels in row j: both ends, or the whole row at the top and bottom.
+                let step = if dy.abs() == r { 1 } else { 2 * r };
+                let mut i = x - r;
+                while i <= x + r {
+                    if i >= 0 && i < w && self.mask[(j * w + i) as usize] == value {
+                        best = best.min((i - x) * (i - x) + dy * dy);
+                    }
+                    i += step;
+                }
+            }
+        }
+        if best <= (RING_SEARCH_LIMIT as i64 + 1).pow(2) {
+            return Some((best as f64).sqrt());
+        }
+        let (mask, w, h) = (self.mask, self.w, self.h);
+        self.transforms[value as usize].get_or_insert_with(|| distance_to(mask, w, h, value))[k]
+    }
 }
 
 /// Per pixel, the Euclidean distance [pixels] to the nearest pixel whose mask value is
@@ -385,6 +476,43 @@ mod tests {
         fb
     }
 
+    /// The reference disc's coverage anywhere: its outline is the circle of radius 10 about
+    /// (16, 16).
+    struct Disc;
+
+    impl ReferenceCoverage for Disc {
+        fn covered(&self, x: f64, y: f64) -> bool {
+            (x - 16.0).powi(2) + (y - 16.0).powi(2) <= 100.0
+        }
+    }
+
+    fn measure_disc(render: &FrameBuffer, double_hits: u64, deviation: Option<f64>) -> Accuracy {
+        measure(
+            render,
+            &reference_disc(),
+            &Disc,
+            double_hits,
+            deviation,
+            None,
+        )
+    }
+
+    /// The exact silhouette figures of a render of the disc centred at `cx`: the distance
+    /// from each misplaced centre to the circle, max and mean.
+    fn exact_silhouette(cx: f64) -> (f64, f64, u64) {
+        let mut d = Vec::new();
+        for j in 0..SIZE {
+            for i in 0..SIZE {
+                if in_disc(i, j, cx) != in_disc(i, j, 16.0) {
+                    let (x, y) = (i as f64 + 0.5 - 16.0, j as f64 + 0.5 - 16.0);
+                    d.push(((x * x + y * y).sqrt() - 10.0).abs());
+                }
+            }
+        }
+        let max = d.iter().copied().fold(0.0, f64::max);
+        (max, d.iter().sum::<f64>() / d.len() as f64, d.len() as u64)
+    }
+
     fn count(f: impl Fn(u32, u32) -> bool) -> u64 {
         (0..SIZE)
             .flat_map(|j| (0..SIZE).map(move |i| (i, j)))
@@ -394,7 +522,7 @@ mod tests {
 
     #[test]
     fn measure_identical_images_have_no_error_and_capped_psnr() {
-        let a = measure(&render_disc(16.0), &reference_disc(), 0, Some(0.0));
+        let a = measure_disc(&render_disc(16.0), 0, Some(0.0));
         assert_eq!(
             a.coverage_false_positive
                 + a.coverage_false_negative
@@ -415,8 +543,8 @@ mod tests {
     }
 
     #[test]
-    fn measure_one_pixel_shifted_disc_is_a_one_pixel_silhouette_error() {
-        let a = measure(&render_disc(17.0), &reference_disc(), 3, Some(0.25));
+    fn measure_one_pixel_shifted_disc_is_measured_to_the_true_outline() {
+        let a = measure_disc(&render_disc(17.0), 3, Some(0.25));
         let fp = count(|i, j| in_disc(i, j, 17.0) && !in_disc(i, j, 16.0));
         let fn_ = count(|i, j| !in_disc(i, j, 17.0) && in_disc(i, j, 16.0));
         assert!(fp > 0);
@@ -424,7 +552,17 @@ mod tests {
             (a.coverage_false_positive, a.coverage_false_negative),
             (fp, fn_)
         );
-        assert_eq!((a.silhouette_max_px, a.silhouette_mean_px), (1.0, 1.0));
+        // Misplaced centres lie between the two outlines, within 1 px of the reference's.
+        let (max, mean, n) = exact_silhouette(17.0);
+        assert_eq!(n, fp + fn_);
+        let r = a.silhouette_resolution_px;
+        assert_eq!(r, SILHOUETTE_RESOLUTION_PX);
+        assert!((a.silhouette_max_px - max).abs() <= r, "{a:?} vs {max}");
+        assert!((a.silhouette_mean_px - mean).abs() <= r, "{a:?} vs {mean}");
+        assert!(
+            a.silhouette_max_px > 0.7 && a.silhouette_max_px < 1.0,
+            "{a:?}"
+        );
         assert_eq!(a.crack_pixels, 0);
         assert_eq!(
             (a.double_hit_pixels, a.max_scanline_deviation_px),
@@ -432,6 +570,88 @@ mod tests {
         );
         assert_eq!(a.max_abs_error, 200);
         assert!(a.psnr_db < 30.0);
+    }
+
+    #[test]
+    fn measure_sub_pixel_shift_gives_a_sub_pixel_silhouette_error() {
+        // The disc drawn 0.3 px to the right: the misplaced centres are those the shift
+        // moves across the outline, each less than 0.3 px from the reference's.
+        let a = measure_disc(&render_disc(16.3), 0, Some(0.0));
+        let (max, mean, n) = exact_silhouette(16.3);
+        assert!(n > 0);
+        assert_eq!(a.coverage_false_positive + a.coverage_false_negative, n);
+        let r = a.silhouette_resolution_px;
+        assert!((a.silhouette_max_px - max).abs() <= r, "{a:?} vs {max}");
+        assert!((a.silhouette_mean_px - mean).abs() <= r, "{a:?} vs {mean}");
+        assert!(a.silhouette_max_px < 0.3, "{a:?}");
+    }
+
+    #[test]
+    fn measure_against_the_exact_reference_of_a_square_shifted_by_0_4_px() {
+        use crate::camera::{Camera, Projection, View, Viewport};
+        use crate::lembo::construct::lembo_from_triangle;
+        use crate::reference::oracle::{render_reference, ReferenceInput, Tracer};
+        use crate::rop::shade::Light;
+        // Orthographic, world (X, Y) on screen (X + 32, 32 - Y): the square of two flat
+        // lembos covers screen x in [10.2, 50.2], y in [10.25, 50.25].
+        let camera = Camera {
+            eye: [0.0, 0.0, 10.0],
+            target: [0.0; 3],
+            up: [0.0, 1.0, 0.0],
+            projection: Projection::Orthographic {
+                height: 64.0,
+                near: 0.1,
+                far: 100.0,
+            },
+        };
+        let view = View::new(
+            &camera,
+            Viewport {
+                width: 64,
+                height: 64,
+            },
+        );
+        let corner = |x: f64, y: f64| DVec3::new(x - 32.0, 32.0 - y, 0.0);
+        let (a, b, c, d) = (
+            corner(10.2, 50.25),
+            corner(50.2, 50.25),
+            corner(50.2, 10.25),
+            corner(10.2, 10.25),
+        );
+        let lembos = [
+            lembo_from_triangle([a, b, c], [DVec3::Z; 3]),
+            lembo_from_triangle([a, c, d], [DVec3::Z; 3]),
+        ];
+        let colored: Vec<_> = lembos.iter().map(|l| (l, [0.8, 0.6, 0.4])).collect();
+        let reference = render_reference(&ReferenceInput {
+            lembos: &colored,
+            view: &view,
+            light: &Light::default(),
+            background: [0.0; 3],
+            supersample: 1,
+        });
+        // The render: the square 0.4 px to the right, x in [10.6, 50.6].
+        let mut fb = FrameBuffer::new(64, 64, [0; 3], true);
+        for j in 0..64 {
+            for i in 0..64 {
+                let (x, y) = (i as f64 + 0.5, j as f64 + 0.5);
+                if (10.6..=50.6).contains(&x) && (10.25..=50.25).contains(&y) {
+                    let k = fb.index(i, j);
+                    fb.write(k, 0.5, 0, [200; 3]);
+                }
+            }
+        }
+        let tracer = Tracer::new(lembos.iter(), &view);
+        let a = measure(&fb, &reference, &tracer, 0, None, None);
+        // Column x = 10.5 is the reference's and not the render's, x = 50.5 the reverse:
+        // each centre 0.3 px from the reference's outline.
+        assert_eq!(
+            (a.coverage_false_negative, a.coverage_false_positive),
+            (40, 40)
+        );
+        let r = a.silhouette_resolution_px;
+        assert!((a.silhouette_max_px - 0.3).abs() <= r, "{a:?}");
+        assert!((a.silhouette_mean_px - 0.3).abs() <= r, "{a:?}");
     }
 
     #[test]
@@ -448,7 +668,7 @@ mod tests {
                 fb.color[k] = BACKGROUND;
             }
         }
-        let a = measure(&fb, &reference_disc(), 0, Some(0.0));
+        let a = measure_disc(&fb, 0, Some(0.0));
         assert!(a.coverage_false_negative > 10);
         assert_eq!(a.crack_pixels, 0);
     }
@@ -459,7 +679,7 @@ mod tests {
         let k = fb.index(16, 16);
         fb.primitive[k] = NO_PRIMITIVE;
         fb.color[k] = BACKGROUND;
-        let a = measure(&fb, &reference_disc(), 0, Some(0.0));
+        let a = measure_disc(&fb, 0, Some(0.0));
         assert_eq!(
             (
                 a.crack_pixels,
@@ -478,7 +698,7 @@ mod tests {
         let tilt = 10f64.to_radians();
         fb.normal.as_mut().unwrap()[k] = [0.0, -tilt.sin() as f32, -tilt.cos() as f32];
         fb.depth[k] = 0.25;
-        let a = measure(&fb, &reference_disc(), 0, Some(0.0));
+        let a = measure_disc(&fb, 0, Some(0.0));
         assert!(
             (a.normal_max_deg - 10.0).abs() < 1e-4,
             "{}",
@@ -510,10 +730,26 @@ mod tests {
     }
 
     #[test]
+    fn ring_search_matches_the_distance_transform() {
+        // Sparse features: some pixels find one within the rings, others need the transform.
+        let (w, h) = (61, 47);
+        let mask: Vec<bool> = (0..w * h).map(|k| (k * 7919) % 401 == 0).collect();
+        let mut bounds = Bounds::new(&mask, w, h);
+        for value in [true, false] {
+            let exact = distance_to(&mask, w, h, value);
+            for (k, want) in exact.iter().enumerate() {
+                assert_eq!(bounds.nearest(k, value), *want, "pixel {k}, {value}");
+            }
+        }
+        let none = [false; 6];
+        assert_eq!(Bounds::new(&none, 3, 2).nearest(4, true), None);
+    }
+
+    #[test]
     fn lines_name_every_field_with_its_unit() {
-        let a = measure(&render_disc(16.0), &reference_disc(), 0, Some(0.0));
+        let a = measure_disc(&render_disc(16.0), 0, Some(0.0));
         let lines = a.lines();
-        assert_eq!(lines.len(), 14);
+        assert_eq!(lines.len(), 16);
         let json = serde_json::to_value(&a).unwrap();
         for (name, _) in &lines {
             assert!(json.get(name).is_some(), "{name}");

@@ -4,7 +4,9 @@
 //! [`oracle`] intersects the ray through every sample with the world-space lembos
 //! themselves (no projection approximation, no datapath rounding) and shades the nearest
 //! hit with the exact normal function; [`metrics`] compares a frame buffer with that image
-//! under the names the report carries; [`heatmap`] draws the difference for a person to read;
+//! under the names the report carries, with [`outline`] locating the reference's outline
+//! between pixel centres and [`see_through`] holding the render against the input mesh's
+//! own triangles; [`heatmap`] draws the difference for a person to read;
 //! [`montage`] puts images side by side under their labels.
 //!
 //! Architecture Invariant: this module knows nothing of cycles, units, the extreme method
@@ -15,7 +17,12 @@ pub mod heatmap;
 pub mod metrics;
 pub mod montage;
 pub mod oracle;
+pub mod outline;
+pub mod see_through;
 
 pub use heatmap::{error_heatmap, legend_height};
 pub use metrics::{measure, Accuracy};
-pub use oracle::{intersect_ray, render_reference, ReferenceHit, ReferenceImage, ReferenceInput};
+pub use oracle::{
+    intersect_ray, render_reference, ReferenceHit, ReferenceImage, ReferenceInput, Tracer,
+};
+pub use outline::ReferenceCoverage;

@@ -36,6 +36,13 @@
 //! normal function.
 //! Rows are rendered in parallel; every sample is computed by the same sequential code, so
 //! the image does not depend on the thread count.
+//!
+//! The same machinery answers at any screen position ([`Tracer`]), which the accuracy
+//! metrics use between pixel centres. [`Tracer::covers`] asks only whether a ray hits: it
+//! stops at the first root Newton finds inside a sub-triangle (no uniqueness proof), and
+//! also prunes sub-triangles whose Bézier net's convex hull in the (Q1, Q2) plane excludes
+//! the origin, which the box test cannot do for rays grazing the surface until the
+//! sub-triangles are tiny. The image keeps the box test alone.
 
 use crate::camera::View;
 use crate::lembo::{bezier_controls, Lembo, Quadratic, Quadratic3};
@@ -261,6 +268,37 @@ impl<'a> Patch<'a> {
         scratch: &mut Scratch,
         out: &mut Vec<Root>,
     ) {
+        self.search(origin, dir, t_lo, t_hi, scratch, None);
+        out.extend_from_slice(&scratch.roots);
+    }
+
+    /// Whether the line has a root with `t_lo <= t <= t_hi` that `accept` takes. Stops at
+    /// the first: any root Newton converges to inside a sub-triangle proves a hit, so the
+    /// uniqueness proofs and the deep subdivision near grazing rays (double roots) that
+    /// [`Patch::roots`] needs are skipped where a root is found.
+    fn any_root(
+        &self,
+        origin: DVec3,
+        dir: DVec3,
+        t_lo: f64,
+        t_hi: f64,
+        scratch: &mut Scratch,
+        accept: &mut dyn FnMut(&Root) -> bool,
+    ) -> bool {
+        self.search(origin, dir, t_lo, t_hi, scratch, Some(accept))
+    }
+
+    /// The subdivision search (module documentation) for all roots into `scratch.roots`,
+    /// or, with `accept`, until a root it takes is found (then true).
+    fn search(
+        &self,
+        origin: DVec3,
+        dir: DVec3,
+        t_lo: f64,
+        t_hi: f64,
+        scratch: &mut Scratch,
+        mut accept: Option<&mut dyn FnMut(&Root) -> bool>,
+    ) -> bool {
         let (n1, n2) = dir.any_orthonormal_pair();
         let position = &self.lembo.position;
         let size = (self.controls[0] - origin).length() + self.extent;
@@ -292,11 +330,20 @@ impl<'a> Patch<'a> {
                 mid(node.a, node.c),
                 mid(node.b, node.c),
             ];
-            if !frame.may_hold_root(&uv, t_lo, t_hi) {
+            if !frame.may_hold_root(&uv, t_lo, t_hi, accept.is_some()) {
                 continue;
             }
             let centroid = (node.a + node.b + node.c) / 3.0;
             if let Some(r) = frame.newton(centroid, NEWTON_PROBE_ITERATIONS) {
+                if let Some(accept) = accept.as_mut() {
+                    if inside_triangle(r, &node) {
+                        if let Some(root) = frame.keep(r, t_lo, t_hi, &mut scratch.roots) {
+                            if accept(&root) {
+                                return true;
+                            }
+                        }
+                    }
+                }
                 // Another root x of the node would make J((x + r) / 2) singular.
                 let half = [node.a, node.b, node.c].map(|p| mid(p, r));
                 let half = [
@@ -316,7 +363,12 @@ impl<'a> Patch<'a> {
             }
             if node.depth >= MAX_DEPTH || visited >= NODE_BUDGET {
                 if let Some(r) = frame.newton(centroid, NEWTON_ITERATIONS) {
-                    frame.keep(r, t_lo, t_hi, &mut scratch.roots);
+                    let kept = frame.keep(r, t_lo, t_hi, &mut scratch.roots);
+                    if let (Some(accept), Some(root)) = (accept.as_mut(), kept) {
+                        if accept(&root) {
+                            return true;
+                        }
+                    }
                 }
                 continue;
             }
@@ -348,7 +400,7 @@ impl<'a> Patch<'a> {
                 depth,
             });
         }
-        out.extend_from_slice(&scratch.roots);
+        false
     }
 }
 
@@ -365,7 +417,11 @@ impl RayFrame {
     /// Whether the sub-triangle with these six reference points may hold a root with `t`
     /// in [t_lo, t_hi]: the box of its Bézier net contains the origin of (Q1, Q2) and
     /// meets the range of t.
-    fn may_hold_root(&self, uv: &[DVec2; 6], t_lo: f64, t_hi: f64) -> bool {
+    ///
+    /// With `hull`, the origin must also lie within the net's convex hull in the (Q1, Q2)
+    /// plane (up to the slack), a tighter test that prunes the sub-triangles along a ray
+    /// grazing the surface, where the box holds the origin down to tiny sub-triangles.
+    fn may_hold_root(&self, uv: &[DVec2; 6], t_lo: f64, t_hi: f64, hull: bool) -> bool {
         let net = bezier_controls(&uv.map(|p| self.eval(p)));
         let (mut lo, mut hi) = (net[0], net[0]);
         for p in &net[1..] {
@@ -373,7 +429,13 @@ impl RayFrame {
             hi = hi.max(*p);
         }
         let s = self.slack;
-        lo.x <= s && hi.x >= -s && lo.y <= s && hi.y >= -s && hi.z >= t_lo - s && lo.z <= t_hi + s
+        let boxed = lo.x <= s
+            && hi.x >= -s
+            && lo.y <= s
+            && hi.y >= -s
+            && hi.z >= t_lo - s
+            && lo.z <= t_hi + s;
+        boxed && !(hull && separated(&net.map(|p| p.truncate()), s))
     }
 
     /// Whether the Jacobian determinant of (Q1, Q2) keeps one strict sign on the triangle
@@ -423,11 +485,11 @@ impl RayFrame {
     }
 
     /// Keeps a root if it lies in the domain (within the tolerance, then clamped onto it),
-    /// has `t` in [t_lo, t_hi] and is not a root already kept.
-    fn keep(&self, p: DVec2, t_lo: f64, t_hi: f64, roots: &mut Vec<Root>) {
+    /// has `t` in [t_lo, t_hi] and is not a root already kept; the root kept.
+    fn keep(&self, p: DVec2, t_lo: f64, t_hi: f64, roots: &mut Vec<Root>) -> Option<Root> {
         let tol = DOMAIN_TOLERANCE;
         if p.x < -tol || p.y < -tol || p.x + p.y > 1.0 + tol {
-            return;
+            return None;
         }
         let (mut u, mut v) = (p.x.max(0.0), p.y.max(0.0));
         let excess = u + v - 1.0;
@@ -439,12 +501,15 @@ impl RayFrame {
             .iter()
             .any(|r| (r.u - u).abs() + (r.v - v).abs() < SAME_ROOT_UV)
         {
-            return;
+            return None;
         }
         let t = self.q[2].eval(u, v);
         if t >= t_lo && t <= t_hi {
-            roots.push(Root { t, u, v });
+            let root = Root { t, u, v };
+            roots.push(root);
+            return Some(root);
         }
+        None
     }
 }
 
@@ -465,6 +530,38 @@ fn along(position: &Quadratic3<f64>, axis: DVec3, origin: DVec3) -> Quadratic<f6
         e: dot(|q| q.e),
         f: axis.dot(DVec3::new(position[0].f, position[1].f, position[2].f) - origin),
     }
+}
+
+/// Whether the origin lies farther than `slack` from the convex hull of `points`: the
+/// distance from a point to a convex polygon is attained along an edge's normal or towards
+/// a vertex, so those directions are tried, each as min over the points of their
+/// projection on it.
+fn separated(points: &[DVec2; 6], slack: f64) -> bool {
+    let margin = |d: DVec2| {
+        points
+            .iter()
+            .map(|p| d.dot(*p))
+            .fold(f64::INFINITY, f64::min)
+    };
+    for (i, p) in points.iter().enumerate() {
+        let len = p.length();
+        if len > 0.0 && margin(*p / len) > slack {
+            return true;
+        }
+        for q in &points[i + 1..] {
+            let n = (*q - *p).perp();
+            let len = n.length();
+            if len > 0.0 {
+                let n = n / len;
+                // The side of the line the points are on, facing away from the origin.
+                let n = if n.dot(*p) >= 0.0 { n } else { -n };
+                if margin(n) > slack {
+                    return true;
+                }
+            }
+        }
+    }
+    false
 }
 
 #[inline]
@@ -536,30 +633,30 @@ fn footprint(patch: &Patch, view: &View) -> Option<Footprint> {
     (!outside).then_some(Footprint::Box { x0, y0, x1, y1, z0 })
 }
 
-/// The prepared scene: patches, footprints and the lembos binned per tile.
-struct Scene<'a> {
-    input: &'a ReferenceInput<'a>,
+/// The lembos prepared for ray queries at any screen position: patches, footprints and the
+/// lembos binned per tile. The reference image samples it at fixed positions; the accuracy
+/// metrics ask it about any point (the sub-pixel silhouette, `metrics.rs`).
+pub struct Tracer<'a> {
+    view: &'a View,
     patches: Vec<Patch<'a>>,
     footprints: Vec<Option<Footprint>>,
     tiles_x: u32,
+    tiles_y: u32,
     /// Per tile, the lembos whose footprint meets it, nearest first.
     bins: Vec<Vec<u32>>,
-    shader: Shader<f64>,
-    background: [f64; 3],
 }
 
-/// One rendered row.
-struct Row {
-    hits: Vec<Option<ReferenceHit>>,
-    color: Vec<[u8; 3]>,
-    color_supersampled: Option<Vec<[u8; 3]>>,
-    coverage: Option<Vec<f32>>,
+/// Buffers a [`Tracer`] reuses from query to query (one per thread).
+#[derive(Default)]
+pub struct TraceScratch {
+    scratch: Scratch,
+    roots: Vec<Root>,
 }
 
-impl<'a> Scene<'a> {
-    fn new(input: &'a ReferenceInput<'a>) -> Self {
-        let view = input.view;
-        let patches: Vec<Patch> = input.lembos.iter().map(|(l, _)| Patch::new(l)).collect();
+impl<'a> Tracer<'a> {
+    /// The lembos (index = lembo id) seen by `view`.
+    pub fn new(lembos: impl IntoIterator<Item = &'a Lembo>, view: &'a View) -> Self {
+        let patches: Vec<Patch> = lembos.into_iter().map(Patch::new).collect();
         let footprints: Vec<Option<Footprint>> =
             patches.iter().map(|p| footprint(p, view)).collect();
         let tiles_x = view.viewport.width.div_ceil(TILE);
@@ -594,15 +691,60 @@ impl<'a> Scene<'a> {
         for bin in &mut bins {
             bin.sort_by(|a, b| near(a).total_cmp(&near(b)).then(a.cmp(b)));
         }
-        Scene {
-            input,
+        Tracer {
+            view,
             patches,
             footprints,
             tiles_x,
+            tiles_y,
             bins,
-            shader: Shader::new(input.light),
-            background: input.background,
         }
+    }
+
+    /// The lembos of the tile holding screen position (x, y), clamped into the viewport.
+    fn bin_at(&self, x: f64, y: f64) -> &[u32] {
+        let tile = |x: f64, n: u32| ((x / TILE as f64).floor().max(0.0) as u32).min(n - 1);
+        let (tx, ty) = (tile(x, self.tiles_x), tile(y, self.tiles_y));
+        &self.bins[(ty * self.tiles_x + tx) as usize]
+    }
+
+    /// The nearest hit at screen position (x, y) [pixels; pixel (i, j)'s centre is
+    /// (i + 0.5, j + 0.5)], as the reference image's samples are computed: at a pixel centre
+    /// it is that pixel's `hits` entry. Positions outside the viewport see only the lembos
+    /// whose footprint meets the viewport.
+    pub fn hit(&self, x: f64, y: f64, scratch: &mut TraceScratch) -> Option<ReferenceHit> {
+        let bin = self.bin_at(x, y);
+        self.trace(x, y, bin, &mut scratch.scratch, &mut scratch.roots)
+    }
+
+    /// Whether the ray through screen position (x, y) [pixels] hits a surface: the same
+    /// condition as [`Tracer::hit`] being `Some` (a root with t > 0 and depth in [0, 1]),
+    /// decided at the first such root found, which makes rays grazing an outline far
+    /// cheaper to answer.
+    pub fn covers(&self, x: f64, y: f64, scratch: &mut TraceScratch) -> bool {
+        let view = self.view;
+        let (origin, dir) = view.ray(x, y);
+        for &id in self.bin_at(x, y) {
+            let footprint = self.footprints[id as usize].expect("binned lembos have a footprint");
+            if !footprint.contains(x, y) {
+                continue;
+            }
+            let patch = &self.patches[id as usize];
+            let mut accept = |r: &Root| {
+                r.t > 0.0 && (0.0..=1.0).contains(&view.depth_of(patch.lembo.position_at(r.u, r.v)))
+            };
+            if patch.any_root(
+                origin,
+                dir,
+                0.0,
+                f64::INFINITY,
+                &mut scratch.scratch,
+                &mut accept,
+            ) {
+                return true;
+            }
+        }
+        false
     }
 
     /// The nearest hit at screen position (x, y) [pixels] among the lembos of `bin`.
@@ -614,7 +756,7 @@ impl<'a> Scene<'a> {
         scratch: &mut Scratch,
         roots: &mut Vec<Root>,
     ) -> Option<ReferenceHit> {
-        let view = self.input.view;
+        let view = self.view;
         let (origin, dir) = view.ray(x, y);
         let mut best: Option<ReferenceHit> = None;
         let mut best_t = f64::INFINITY;
@@ -647,13 +789,42 @@ impl<'a> Scene<'a> {
         }
         best
     }
+}
+
+/// The prepared scene: the tracer, the colours and the shader.
+struct Scene<'a> {
+    input: &'a ReferenceInput<'a>,
+    tracer: Tracer<'a>,
+    shader: Shader<f64>,
+    background: [f64; 3],
+}
+
+/// One rendered row.
+struct Row {
+    hits: Vec<Option<ReferenceHit>>,
+    color: Vec<[u8; 3]>,
+    color_supersampled: Option<Vec<[u8; 3]>>,
+    coverage: Option<Vec<f32>>,
+}
+
+impl<'a> Scene<'a> {
+    fn new(input: &'a ReferenceInput<'a>) -> Self {
+        Scene {
+            input,
+            tracer: Tracer::new(input.lembos.iter().map(|(l, _)| *l), input.view),
+            shader: Shader::new(input.light),
+            background: input.background,
+        }
+    }
 
     /// Linear RGB of a sample.
     fn shade(&self, hit: &Option<ReferenceHit>) -> [f64; 3] {
         match hit {
             None => self.background,
             Some(h) => {
-                let p = self.patches[h.lembo as usize].lembo.position_at(h.u, h.v);
+                let p = self.tracer.patches[h.lembo as usize]
+                    .lembo
+                    .position_at(h.u, h.v);
                 let to_eye = self.input.view.to_eye(p);
                 let color = self.input.lembos[h.lembo as usize].1;
                 self.shader
@@ -675,7 +846,7 @@ impl<'a> Scene<'a> {
         let quantise = |c: [f64; 3]| c.map(to_u8);
         let ty = j / TILE;
         for i in 0..width {
-            let bin = &self.bins[(ty * self.tiles_x + i / TILE) as usize];
+            let bin = &self.tracer.bins[(ty * self.tracer.tiles_x + i / TILE) as usize];
             let (x, y) = (i as f64, j as f64);
             // For odd s the middle sub-sample is the pixel centre, (k + 0.5) / (2k + 1) = 0.5
             // exactly, so it is traced once.
@@ -683,7 +854,10 @@ impl<'a> Scene<'a> {
             let centre = if centre_in_grid {
                 None
             } else {
-                Some(self.trace(x + 0.5, y + 0.5, bin, &mut scratch, &mut roots))
+                Some(
+                    self.tracer
+                        .trace(x + 0.5, y + 0.5, bin, &mut scratch, &mut roots),
+                )
             };
             let mut centre_hit = centre.flatten();
             if s > 1 {
@@ -693,7 +867,7 @@ impl<'a> Scene<'a> {
                     for a in 0..s {
                         let sx = x + (a as f64 + 0.5) / s as f64;
                         let sy = y + (b as f64 + 0.5) / s as f64;
-                        let hit = self.trace(sx, sy, bin, &mut scratch, &mut roots);
+                        let hit = self.tracer.trace(sx, sy, bin, &mut scratch, &mut roots);
                         if centre_in_grid && a == s / 2 && b == s / 2 {
                             centre_hit = hit;
                         }
@@ -1016,6 +1190,48 @@ mod tests {
         let background = [0, 0, to_u8(0.1)];
         assert_eq!(image.color[0], background);
         assert_ne!(image.color[32 * 64 + 32], background);
+    }
+
+    #[test]
+    fn tracer_answers_at_pixel_centres_as_the_image_and_between_them_as_the_image_would() {
+        let view = sphere_view(48);
+        let image = render_sphere(&view, 1);
+        let lembos = builtin_lembos("sphere24").unwrap();
+        let tracer = Tracer::new(lembos.iter(), &view);
+        let mut scratch = TraceScratch::default();
+        for j in 0..48 {
+            for i in 0..48 {
+                let (x, y) = (i as f64 + 0.5, j as f64 + 0.5);
+                let want = image.hits[(j * 48 + i) as usize];
+                assert_eq!(tracer.hit(x, y, &mut scratch), want, "({i}, {j})");
+                assert_eq!(
+                    tracer.covers(x, y, &mut scratch),
+                    want.is_some(),
+                    "({i}, {j})"
+                );
+            }
+        }
+        // Between centres, coverage is that of a reference sampled there: a 3x3 supersampled
+        // image's sub-samples.
+        let three = render_sphere(&view, 3);
+        let coverage = three.coverage.unwrap();
+        for j in 0..48u32 {
+            for i in 0..48u32 {
+                let n = (0..3)
+                    .flat_map(|b| (0..3).map(move |a| (a, b)))
+                    .filter(|&(a, b)| {
+                        let x = i as f64 + (a as f64 + 0.5) / 3.0;
+                        let y = j as f64 + (b as f64 + 0.5) / 3.0;
+                        tracer.covers(x, y, &mut scratch)
+                    })
+                    .count();
+                assert_eq!(
+                    n as f32 / 9.0,
+                    coverage[(j * 48 + i) as usize],
+                    "({i}, {j})"
+                );
+            }
+        }
     }
 
     #[test]
