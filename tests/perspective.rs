@@ -42,19 +42,24 @@ fn job(k: f64, perspective_tol: PerspectiveTol, datapath: Datapath) -> RenderJob
     }
 }
 
-/// The lembo path's accuracy and counts on `scene` at k, functional, against the reference.
-fn measure(scene: &Scene, k: f64, tol: PerspectiveTol, datapath: Datapath) -> (Accuracy, Counts) {
+/// The lembo path's accuracy and counts on `scene` for each (k, tolerance, datapath),
+/// functional, against the exact reference (rendered once).
+fn measure(scene: &Scene, runs: &[(f64, PerspectiveTol, Datapath)]) -> Vec<(Accuracy, Counts)> {
     let view = View::new(&scene.camera, scene.viewport);
     let (reference, wall) = render_reference(scene, &view, 1);
-    let run = run_path(
-        &job(k, tol, datapath),
-        scene,
-        &view,
-        None,
-        Some((&reference, wall)),
-    )
-    .unwrap();
-    (run.report.accuracy.unwrap(), run.report.counts)
+    runs.iter()
+        .map(|&(k, tol, datapath)| {
+            let run = run_path(
+                &job(k, tol, datapath),
+                scene,
+                &view,
+                None,
+                Some((&reference, wall)),
+            )
+            .unwrap();
+            (run.report.accuracy.unwrap(), run.report.counts)
+        })
+        .collect()
 }
 
 fn misplaced(a: &Accuracy) -> u64 {
@@ -68,14 +73,13 @@ fn misplaced(a: &Accuracy) -> u64 {
 fn k_bounds_the_error_under_perspective() {
     let s = scene("sphere24.json");
     let ks = [0.5, 0.05, 0.005];
-    let on: Vec<_> = ks
-        .iter()
-        .map(|&k| measure(&s, k, PerspectiveTol::FollowK, Datapath::F64))
+    let runs: Vec<_> = [PerspectiveTol::FollowK, PerspectiveTol::Off]
+        .into_iter()
+        .flat_map(|tol| ks.map(|k| (k, tol, Datapath::F64)))
         .collect();
-    let off: Vec<_> = ks
-        .iter()
-        .map(|&k| measure(&s, k, PerspectiveTol::Off, Datapath::F64))
-        .collect();
+    let mut all = measure(&s, &runs);
+    let off = all.split_off(ks.len());
+    let on = all;
     for w in on.windows(2) {
         assert!(misplaced(&w[1].0) < misplaced(&w[0].0), "{on:?}");
         assert!(w[1].0.psnr_db > w[0].0.psnr_db + 3.0, "{on:?}");
@@ -228,18 +232,23 @@ fn near_plane_scenes_match_their_reference_on_the_lembo_path() {
         ("inside_mesh.json", true),
     ] {
         let s = scene(file);
-        for (datapath, slack) in [(Datapath::F32, 1e-3), (Datapath::F64, 1e-9)] {
-            let (a, c) = measure(&s, k, PerspectiveTol::FollowK, datapath);
-            let what = format!("{file} {datapath:?}: {a:?} {c:?}");
+        let runs = [
+            (k, PerspectiveTol::FollowK, Datapath::F32),
+            (k, PerspectiveTol::FollowK, Datapath::F64),
+            (k, PerspectiveTol::Off, Datapath::F64),
+        ];
+        let got = measure(&s, &runs);
+        for ((a, c), slack) in got[..2].iter().zip([1e-3, 1e-9]) {
+            let what = format!("{file}: {a:?} {c:?}");
             assert!(a.psnr_db >= 45.0, "{what}");
-            assert!(misplaced(&a) <= 30, "{what}");
+            assert!(misplaced(a) <= 30, "{what}");
             assert_eq!((a.crack_pixels, a.double_hit_pixels), (0, 0), "{what}");
             assert!(a.max_scanline_deviation_px.unwrap() <= k + slack, "{what}");
             assert!(c.lembos_split_near > 0, "{what}");
             assert_eq!(c.lembo_pieces_capped, 0, "{what}");
         }
-        let (a, _) = measure(&s, k, PerspectiveTol::Off, Datapath::F64);
-        assert_eq!(misplaced(&a) > 10_000, broken_without, "{file}: {a:?}");
+        let a = &got[2].0;
+        assert_eq!(misplaced(a) > 10_000, broken_without, "{file}: {a:?}");
     }
 }
 
@@ -252,7 +261,10 @@ fn crease_scenes_have_no_see_through_and_no_double_hits() {
         "bevel_cube.json",
         "bunny_creased.json",
     ] {
-        let (a, _) = measure(&scene(file), 0.5, PerspectiveTol::FollowK, Datapath::F32);
+        let (a, _) = &measure(
+            &scene(file),
+            &[(0.5, PerspectiveTol::FollowK, Datapath::F32)],
+        )[0];
         assert_eq!(a.see_through_px, Some(0), "{file}: {a:?}");
         assert_eq!(
             (a.crack_pixels, a.double_hit_pixels),

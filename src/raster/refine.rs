@@ -49,8 +49,8 @@
 //! counted (`capped`); one that still cannot be projected there is dropped and counted.
 
 use super::setup::{
-    build, outside, reference_uv, zero_area, Cull, ScreenLembo, ScreenPoints, Split, EDGE_POINTS,
-    MAX_PIECES, MAX_SPLIT_DEPTH, SPLIT_GUARD_VIEWPORTS,
+    build, on_domain_edge, outside, parabola, reference_uv, zero_area, Cull, ScreenLembo,
+    ScreenPoints, Split, EDGE_POINTS, MAX_PIECES, MAX_SPLIT_DEPTH, SPLIT_GUARD_VIEWPORTS,
 };
 use crate::camera::View;
 use crate::datapath::Real;
@@ -64,23 +64,6 @@ type S3 = [f64; 3];
 
 /// A domain point (u, v) of the lembo.
 type Uv = [f64; 2];
-
-/// Lagrange weights of the parabola through t = 0, 1/2, 1 at `t` (exact at those three).
-#[inline]
-fn weights(t: f64) -> [f64; 3] {
-    [
-        (1.0 - t) * (1.0 - 2.0 * t),
-        4.0 * t * (1.0 - t),
-        t * (2.0 * t - 1.0),
-    ]
-}
-
-/// The parabola through `p` (at t = 0, 1/2, 1) at `t`.
-#[inline]
-fn parabola<const N: usize>(p: &[[f64; N]; 3], t: f64) -> [f64; N] {
-    let w = weights(t);
-    std::array::from_fn(|c| w[0] * p[0][c] + w[1] * p[1][c] + w[2] * p[2][c])
-}
 
 fn mid(p: Uv, q: Uv) -> Uv {
     [(p[0] + q[0]) * 0.5, (p[1] + q[1]) * 0.5]
@@ -188,23 +171,13 @@ impl<'a> Surface<'a> {
 
     /// The world point at domain point `uv`; on a domain edge, from the edge's parabola in
     /// canonical order, so every lembo that shares the edge computes the same bits.
-    fn world(&self, [u, v]: Uv) -> DVec3 {
-        // Domain points here are dyadic, so these tests are exact.
-        let on = if v == 0.0 {
-            Some((0, u))
-        } else if u + v == 1.0 {
-            Some((1, v))
-        } else if u == 0.0 {
-            Some((2, 1.0 - v))
-        } else {
-            None
-        };
-        match on {
+    fn world(&self, uv: Uv) -> DVec3 {
+        match on_domain_edge(uv) {
             Some((e, t)) => {
                 let (p, reversed) = &self.edges[e];
                 DVec3::from_array(parabola(p, if *reversed { 1.0 - t } else { t }))
             }
-            None => self.lembo.position_at(u, v),
+            None => self.lembo.position_at(uv[0], uv[1]),
         }
     }
 

@@ -395,29 +395,16 @@ impl Restrict {
     /// (x, y, z) at domain point (u, v). On a domain edge the value comes from the edge's
     /// own parabola in canonical order (exact at the edge's three points), so every lembo
     /// that shares the edge computes the same bits there.
-    fn at(&self, [u, v]: [f64; 2]) -> [f64; 3] {
-        // Domain points are dyadic, so these tests are exact.
-        let on = if v == 0.0 {
-            Some((0, u))
-        } else if u + v == 1.0 {
-            Some((1, v))
-        } else if u == 0.0 {
-            Some((2, 1.0 - v))
-        } else {
-            None
-        };
-        match on {
+    fn at(&self, uv: [f64; 2]) -> [f64; 3] {
+        match on_domain_edge(uv) {
             Some((e, t)) => {
                 let (p, reversed) = &self.edges[e];
-                let t = if *reversed { 1.0 - t } else { t };
-                let w = [
-                    (1.0 - t) * (1.0 - 2.0 * t),
-                    4.0 * t * (1.0 - t),
-                    t * (2.0 * t - 1.0),
-                ];
-                [0, 1, 2].map(|c| w[0] * p[0][c] + w[1] * p[1][c] + w[2] * p[2][c])
+                parabola(p, if *reversed { 1.0 - t } else { t })
             }
-            None => [self.x.eval(u, v), self.y.eval(u, v), self.z.eval(u, v)],
+            None => {
+                let [u, v] = uv;
+                [self.x.eval(u, v), self.y.eval(u, v), self.z.eval(u, v)]
+            }
         }
     }
 
@@ -429,6 +416,31 @@ impl Restrict {
             z: p.map(|p| p[2]),
         }
     }
+}
+
+/// The domain edge (A→B, B→C, C→A) a point (u, v) lies on and its lembo-order parameter
+/// there; `None` inside. Split points are dyadic, so these tests are exact.
+pub(super) fn on_domain_edge([u, v]: [f64; 2]) -> Option<(usize, f64)> {
+    if v == 0.0 {
+        Some((0, u))
+    } else if u + v == 1.0 {
+        Some((1, v))
+    } else if u == 0.0 {
+        Some((2, 1.0 - v))
+    } else {
+        None
+    }
+}
+
+/// The parabola through `p` (at t = 0, 1/2, 1, exact there) at `t`.
+#[inline]
+pub(super) fn parabola<const N: usize>(p: &[[f64; N]; 3], t: f64) -> [f64; N] {
+    let w = [
+        (1.0 - t) * (1.0 - 2.0 * t),
+        4.0 * t * (1.0 - t),
+        t * (2.0 * t - 1.0),
+    ];
+    std::array::from_fn(|c| w[0] * p[0][c] + w[1] * p[1][c] + w[2] * p[2][c])
 }
 
 /// Builds the datapath form of a lembo (or piece) from its six screen points.

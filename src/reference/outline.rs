@@ -33,7 +33,8 @@
 //! outline of curvature radius R px (and short by up to half a cell's diagonal where a
 //! chord cuts a corner). With no centre of the other state in the image at all, the caller
 //! takes the image diagonal; in an image one pixel wide or high (no cells) the distance is
-//! `D`.
+//! `D`. Pixels farther than [`CONTOUR_BOUND_PX`] from every centre of the other state take
+//! `D` itself (within 0.71 px of the outline's distance).
 
 use glam::DVec2;
 use rayon::prelude::*;
@@ -52,6 +53,12 @@ const ANGLE_STEP: f64 = 0.1;
 /// farther ones take the distance to the contour, so that the work grows with the
 /// outline's length, not with the area of a gross error.
 pub const RAY_BOUND_PX: f64 = 3.0;
+
+/// Misplaced pixels farther than this [pixels] from every centre of the other state take
+/// that distance `D` itself, within half a cell's diagonal (0.71 px) of the outline's: a
+/// contour search over a disc of radius `D` per pixel would make a gross error's metric
+/// cost grow as its area times `D²` (25 s for a floor of 78 767 missed pixels).
+pub const CONTOUR_BOUND_PX: f64 = 16.0;
 
 /// The reference's coverage at any screen position.
 pub trait ReferenceCoverage: Sync {
@@ -211,7 +218,7 @@ pub fn outline_distances(
     let grid = Grid { covered, w, h };
     // Which edges and saddle cells the searches read, each computed once.
     let (mut edges, mut saddles) = (Vec::new(), Vec::new());
-    for m in pixels {
+    for m in pixels.iter().filter(|m| m.bound <= CONTOUR_BOUND_PX) {
         grid.candidate_cells(m.index, m.bound, |a, b| {
             let (mixed, saddle) = grid.cell_kind(a, b);
             if !mixed {
@@ -260,6 +267,9 @@ pub fn outline_distances(
     pixels
         .par_iter()
         .map(|m| {
+            if m.bound > CONTOUR_BOUND_PX {
+                return m.bound;
+            }
             let c = grid.centre(m.index);
             let mine = covered[m.index];
             let mut best: Option<(f64, DVec2)> = None;
