@@ -395,8 +395,8 @@ pub fn setup_refined<R: Real>(
         }
         split.perspective |= perspective;
         split.near |= !projectable;
-        // Pushed in reverse, so pieces come out in the order A, B, C, middle.
         let project = perspective || !projectable;
+        // Pushed in reverse, so pieces come out in the order A, B, C, middle.
         for child in children(&s, &node, own_refined, project).into_iter().rev() {
             pending.push(child);
         }
