@@ -49,13 +49,14 @@
 //! counted (`capped`); one that still cannot be projected there is dropped and counted.
 
 use super::setup::{
-    build, on_domain_edge, outside, parabola, reference_uv, zero_area, Cull, ScreenLembo,
-    ScreenPoints, Split, EDGE_POINTS, MAX_PIECES, MAX_SPLIT_DEPTH, SPLIT_GUARD_VIEWPORTS,
+    build, build_piece, on_domain_edge, outside, parabola, reference_uv, zero_area, Cull,
+    ScreenLembo, ScreenPoints, Split, EDGE_POINTS, MAX_PIECES, MAX_SPLIT_DEPTH,
+    SPLIT_GUARD_VIEWPORTS,
 };
 use crate::camera::View;
 use crate::datapath::Real;
 use crate::lembo::construct::canonical_order;
-use crate::lembo::{bezier_controls, Lembo, Quadratic, Quadratic3};
+use crate::lembo::{bezier_controls, Lembo, Quadratic};
 use glam::{DVec3, DVec4};
 use std::cmp::Ordering;
 
@@ -378,19 +379,7 @@ pub fn setup_refined<R: Real>(
                 ));
                 return Ok(split);
             }
-            let uv = reference_uv(node.tri);
-            let restrict = |q: &Quadratic3<f64>| {
-                [0, 1, 2]
-                    .map(|c| Quadratic::from_reference_values(uv.map(|[u, v]| q[c].eval(u, v))))
-            };
-            out.push(build(
-                id,
-                &points,
-                restrict(&lembo.normal),
-                restrict(&lembo.position),
-                color,
-                Some(node.tri),
-            ));
+            out.push(build_piece(id, &points, lembo, color, node.tri));
             continue;
         }
         split.perspective |= perspective;

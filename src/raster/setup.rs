@@ -335,18 +335,7 @@ pub fn setup_pieces<R: Real>(
             continue;
         }
         if depth > 0 && (within(hull) || depth >= MAX_SPLIT_DEPTH || full) {
-            let restrict = |q: &Quadratic3<f64>| {
-                [0, 1, 2]
-                    .map(|c| Quadratic::from_reference_values(uv.map(|[u, v]| q[c].eval(u, v))))
-            };
-            out.push(build(
-                id,
-                &piece,
-                restrict(&lembo.normal),
-                restrict(&lembo.position),
-                color,
-                Some(tri),
-            ));
+            out.push(build_piece(id, &piece, lembo, color, tri));
             continue;
         }
         let [a, b, c] = tri;
@@ -441,6 +430,29 @@ pub(super) fn parabola<const N: usize>(p: &[[f64; N]; 3], t: f64) -> [f64; N] {
         t * (2.0 * t - 1.0),
     ];
     std::array::from_fn(|c| w[0] * p[0][c] + w[1] * p[1][c] + w[2] * p[2][c])
+}
+
+/// Builds a piece of `lembo` over the sub-triangle `tri` of its domain from the piece's six
+/// screen points: the lembo's normal and position functions restricted to the sub-triangle.
+pub(super) fn build_piece<R: Real>(
+    id: u32,
+    points: &ScreenPoints,
+    lembo: &Lembo,
+    color: [f64; 3],
+    tri: [[f64; 2]; 3],
+) -> ScreenLembo<R> {
+    let uv = reference_uv(tri);
+    let restrict = |q: &Quadratic3<f64>| {
+        [0, 1, 2].map(|c| Quadratic::from_reference_values(uv.map(|[u, v]| q[c].eval(u, v))))
+    };
+    build(
+        id,
+        points,
+        restrict(&lembo.normal),
+        restrict(&lembo.position),
+        color,
+        Some(tri),
+    )
 }
 
 /// Builds the datapath form of a lembo (or piece) from its six screen points.
