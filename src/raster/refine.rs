@@ -49,9 +49,8 @@
 //! counted (`capped`); one that still cannot be projected there is dropped and counted.
 
 use super::setup::{
-    build, build_piece, on_domain_edge, outside, parabola, reference_uv, zero_area, Cull,
-    ScreenLembo, ScreenPoints, Split, EDGE_POINTS, MAX_PIECES, MAX_SPLIT_DEPTH,
-    SPLIT_GUARD_VIEWPORTS,
+    build_piece, build_whole, on_domain_edge, outside, parabola, reference_uv, within_guard_band,
+    zero_area, Cull, ScreenLembo, ScreenPoints, Split, EDGE_POINTS, MAX_PIECES, MAX_SPLIT_DEPTH,
 };
 use crate::camera::View;
 use crate::datapath::Real;
@@ -293,10 +292,6 @@ pub fn setup_refined<R: Real>(
     out: &mut Vec<ScreenLembo<R>>,
 ) -> Result<Split, Cull> {
     let s = Surface::new(lembo, view, tol);
-    let (w, h) = (view.viewport.width as f64, view.viewport.height as f64);
-    let g = SPLIT_GUARD_VIEWPORTS * w.max(h);
-    let within =
-        |(lo, hi): (DVec3, DVec3)| lo.x >= -g && lo.y >= -g && hi.x <= w + g && hi.y <= h + g;
     let world = lembo.points;
     let root = Node {
         tri: [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
@@ -356,7 +351,7 @@ pub fn setup_refined<R: Real>(
         });
         let perspective =
             projectable && (own_refined.iter().any(|&r| r) || s.interior_exceeds(&node));
-        let guard = projectable && !within(points.hull());
+        let guard = projectable && !within_guard_band(view, points.hull());
         let wants = !projectable || perspective || guard;
         if !wants || node.depth >= MAX_SPLIT_DEPTH || full {
             if !projectable {
@@ -369,14 +364,7 @@ pub fn setup_refined<R: Real>(
                 split.capped += 1;
             }
             if node.depth == 0 {
-                out.push(build(
-                    id,
-                    &points,
-                    lembo.normal,
-                    lembo.position,
-                    color,
-                    None,
-                ));
+                out.push(build_whole(id, &points, lembo, color));
                 return Ok(split);
             }
             out.push(build_piece(id, &points, lembo, color, node.tri));

@@ -264,14 +264,7 @@ pub fn setup<R: Real>(
     view: &View,
 ) -> Result<ScreenLembo<R>, Cull> {
     let points = project(lembo, view)?;
-    Ok(build(
-        id,
-        &points,
-        lembo.normal,
-        lembo.position,
-        color,
-        None,
-    ))
+    Ok(build_whole(id, &points, lembo, color))
 }
 
 /// Projects and prepares one lembo into `out`: whole when its Bézier hull stays within
@@ -303,19 +296,9 @@ pub fn setup_pieces<R: Real>(
         return super::refine::setup_refined(id, lembo, color, view, tol, out);
     }
     let points = project(lembo, view)?;
-    let (w, h) = (view.viewport.width as f64, view.viewport.height as f64);
-    let g = SPLIT_GUARD_VIEWPORTS * w.max(h);
-    let within =
-        |(lo, hi): (DVec3, DVec3)| lo.x >= -g && lo.y >= -g && hi.x <= w + g && hi.y <= h + g;
+    let within = |hull| within_guard_band(view, hull);
     if within(points.hull()) {
-        out.push(build(
-            id,
-            &points,
-            lembo.normal,
-            lembo.position,
-            color,
-            None,
-        ));
+        out.push(build_whole(id, &points, lembo, color));
         return Ok(Split::default());
     }
     let surface = Restrict::new(&points);
@@ -430,6 +413,23 @@ pub(super) fn parabola<const N: usize>(p: &[[f64; N]; 3], t: f64) -> [f64; N] {
         t * (2.0 * t - 1.0),
     ];
     std::array::from_fn(|c| w[0] * p[0][c] + w[1] * p[1][c] + w[2] * p[2][c])
+}
+
+/// Whether a hull (lo, hi) stays within [`SPLIT_GUARD_VIEWPORTS`] of the viewport.
+pub(super) fn within_guard_band(view: &View, (lo, hi): (DVec3, DVec3)) -> bool {
+    let (w, h) = (view.viewport.width as f64, view.viewport.height as f64);
+    let g = SPLIT_GUARD_VIEWPORTS * w.max(h);
+    lo.x >= -g && lo.y >= -g && hi.x <= w + g && hi.y <= h + g
+}
+
+/// Builds a whole lembo from its six screen points.
+pub(super) fn build_whole<R: Real>(
+    id: u32,
+    points: &ScreenPoints,
+    lembo: &Lembo,
+    color: [f64; 3],
+) -> ScreenLembo<R> {
+    build(id, points, lembo.normal, lembo.position, color, None)
 }
 
 /// Builds a piece of `lembo` over the sub-triangle `tri` of its domain from the piece's six

@@ -357,6 +357,11 @@ impl Polygon {
         &self.v[..self.len]
     }
 
+    /// Clipped against each plane in turn; `None` if it outgrows its room ([`Self::clip`]).
+    fn clip_all(self, planes: impl IntoIterator<Item = DVec4>) -> Option<Polygon> {
+        planes.into_iter().try_fold(self, |p, q| p.clip(q))
+    }
+
     /// Sutherland–Hodgman against one plane: the part where q · (p, 1) >= 0. A vertex on
     /// the plane is kept once (a crossing needs strictly opposite signs). `None` if the
     /// polygon outgrows its room, which only rounding at astronomic coordinates could do.
@@ -421,13 +426,9 @@ fn clip<R: Real>(
     {
         return SetupOutcome::culled(TriangleCull::Outside);
     }
-    let mut polygon = Polygon::new(positions, normals);
-    for q in guard_band_planes(view) {
-        match polygon.clip(q) {
-            Some(p) => polygon = p,
-            None => return SetupOutcome::culled(TriangleCull::Degenerate),
-        }
-    }
+    let Some(polygon) = Polygon::new(positions, normals).clip_all(guard_band_planes(view)) else {
+        return SetupOutcome::culled(TriangleCull::Degenerate);
+    };
     if polygon.len == 0 {
         return SetupOutcome::culled(TriangleCull::Outside);
     }
@@ -458,26 +459,21 @@ fn clip_depth<R: Real>(
     {
         return SetupOutcome::culled(TriangleCull::Outside);
     }
-    let mut polygon = Polygon::new(positions, normals);
-    for q in depth_planes(view) {
-        match polygon.clip(q) {
-            Some(p) => polygon = p,
-            None => return SetupOutcome::culled(TriangleCull::Degenerate),
-        }
-    }
+    let Some(polygon) = Polygon::new(positions, normals).clip_all(depth_planes(view)) else {
+        return SetupOutcome::culled(TriangleCull::Degenerate);
+    };
     // Every vertex is now in front of the eye (at or beyond the near plane, up to rounding),
     // where the guard band's planes hold.
-    let mut guard_band = false;
-    for q in guard_band_planes(view) {
-        guard_band |= polygon
+    let planes = guard_band_planes(view);
+    let guard_band = planes.iter().any(|q| {
+        polygon
             .vertices()
             .iter()
-            .any(|v| q.dot(v.p.extend(1.0)) < 0.0);
-        match polygon.clip(q) {
-            Some(p) => polygon = p,
-            None => return SetupOutcome::culled(TriangleCull::Degenerate),
-        }
-    }
+            .any(|v| q.dot(v.p.extend(1.0)) < 0.0)
+    });
+    let Some(polygon) = polygon.clip_all(planes) else {
+        return SetupOutcome::culled(TriangleCull::Degenerate);
+    };
     if polygon.len == 0 {
         return SetupOutcome::culled(TriangleCull::Outside);
     }
