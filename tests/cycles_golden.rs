@@ -1,0 +1,210 @@
+//! The timed model's cycle reports, every counter of every unit, kept as goldens: every
+//! shipped scene (`traces/*.json`, `traces/extremes/*.json`) through the lembo path and the
+//! triangle path (n = 2) on the three shipped architectures, and 200 seeded random
+//! architectures on sphere24 through both paths. A change to the timed engine must
+//! reproduce them exactly; a report that changes is a change of the model, to be explained.
+//!
+//! Recorded before the discrete-event executor replaced the thread-per-unit runtime.
+//! Regenerate with `LEMBO_BLESS=1 cargo test --release --test cycles_golden` only after
+//! an intended change of the timing model.
+
+use lembo_sim::camera::View;
+use lembo_sim::config::ArchConfig;
+use lembo_sim::datapath::Datapath;
+use lembo_sim::discoid::blend::BlendMode;
+use lembo_sim::lembo::tessellate::Tessellation;
+use lembo_sim::pipeline::discoid::run_discoid_timed;
+use lembo_sim::pipeline::{run_timed, CycleReport, SimOptions};
+use lembo_sim::raster::triangle::TriangleSource;
+use lembo_sim::raster::Counts;
+use lembo_sim::scene::Scene;
+use proptest::prelude::*;
+use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+#[path = "support/scenes.rs"]
+mod scenes;
+
+const SIDE: u32 = 128;
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).to_path_buf()
+}
+
+fn arch(name: &str) -> ArchConfig {
+    ArchConfig::load(&root().join("sim/arch").join(name)).unwrap()
+}
+
+/// One line per unit (name, busy, starved, blocked, items in, items out, most items in an
+/// input FIFO) and one for the counts: everything a cycle report holds.
+fn digest(cycles: &CycleReport, counts: &Counts) -> String {
+    let mut s = format!("total {} bottleneck {:?}\n", cycles.total, cycles.bottleneck);
+    for u in &cycles.units {
+        writeln!(
+            s,
+            "{} {} {} {} {} {} {}",
+            u.name, u.busy, u.starved, u.blocked, u.items_in, u.items_out, u.max_fifo_occupancy
+        )
+        .unwrap();
+    }
+    s + &serde_json::to_string(counts).unwrap()
+}
+
+/// The digest of one timed run of `scene` on `a` (lembo path, or triangle path at n = 2),
+/// or its error.
+fn run(scene: &Scene, a: &ArchConfig, triangles: bool) -> String {
+    let view = View::new(&scene.camera, scene.viewport);
+    let options = SimOptions::default();
+    if scene.discoid_count() > 0 {
+        return match run_discoid_timed(
+            scene,
+            &view,
+            0.5,
+            Datapath::F32,
+            a,
+            BlendMode::Rgba8,
+            scene.discoid_threshold,
+            &options,
+        ) {
+            Ok(t) => digest(&t.cycles, &t.counts),
+            Err(e) => format!("error: {e}"),
+        };
+    }
+    let tess = triangles.then(|| Tessellation::new(scene, 2));
+    let source = tess.as_ref().map(|t| t as &dyn TriangleSource);
+    match run_timed(scene, &view, 0.5, Datapath::F32, a, source, &options) {
+        Ok(t) => digest(&t.cycles, &t.counts),
+        Err(e) => format!("error: {e}"),
+    }
+}
+
+/// Compares `got` with the golden file `name`, or writes it when blessing.
+fn check(name: &str, got: BTreeMap<String, String>) {
+    let path = root().join("tests/golden/cycles").join(name);
+    if std::env::var_os("LEMBO_BLESS").is_some() {
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(&path, serde_json::to_string_pretty(&got).unwrap() + "\n").unwrap();
+        return;
+    }
+    let want: BTreeMap<String, String> =
+        serde_json::from_str(&std::fs::read_to_string(&path).expect("golden exists")).unwrap();
+    assert_eq!(
+        want.keys().collect::<Vec<_>>(),
+        got.keys().collect::<Vec<_>>(),
+        "cases of {name}"
+    );
+    let mut differ = Vec::new();
+    for (case, w) in &want {
+        let g = &got[case];
+        if g != w {
+            let line = w
+                .lines()
+                .zip(g.lines())
+                .find(|(a, b)| a != b)
+                .map(|(a, b)| format!("\n  want {a}\n  got  {b}"))
+                .unwrap_or_default();
+            differ.push(format!("{case}:{line}"));
+        }
+    }
+    assert!(
+        differ.is_empty(),
+        "{} of {} cycle reports differ:\n{}",
+        differ.len(),
+        want.len(),
+        differ.join("\n")
+    );
+}
+
+/// Every shipped scene, at 128 x 128, each path, each shipped architecture.
+#[test]
+fn shipped_scenes_keep_their_cycle_reports() {
+    let mut files = Vec::new();
+    for dir in ["traces", "traces/extremes"] {
+        for entry in std::fs::read_dir(root().join(dir)).unwrap() {
+            let p = entry.unwrap().path();
+            let name = p.file_name().unwrap().to_string_lossy().to_string();
+            if name.ends_with(".json") && name != "expect.json" {
+                files.push((format!("{dir}/{name}"), p));
+            }
+        }
+    }
+    files.sort();
+    let archs = ["baseline.json", "minimal.json", "wide.json"].map(|n| (n, arch(n)));
+    let mut got = BTreeMap::new();
+    for (name, path) in &files {
+        let mut scene = Scene::load(path).unwrap();
+        scene.set_viewport(SIDE, SIDE).unwrap();
+        let paths: &[bool] = if scene.discoid_count() > 0 {
+            &[false]
+        } else {
+            &[false, true]
+        };
+        for (an, a) in &archs {
+            for &triangles in paths {
+                let path = if triangles { "triangle" } else { "lembo" };
+                got.insert(format!("{name} {an} {path}"), run(&scene, a, triangles));
+            }
+        }
+    }
+    check("shipped.json", got);
+}
+
+/// 200 seeded random architectures (unit counts 1-8, costs, FIFO depths 1-64, latencies,
+/// tile sizes) on sphere24 at 40 x 40, both paths.
+#[test]
+fn random_architectures_keep_their_cycle_reports() {
+    let s = scenes::trace("sphere24.json", Some(40));
+    let mut runner = TestRunner::new_with_rng(
+        Config {
+            cases: 200,
+            failure_persistence: None,
+            ..Config::default()
+        },
+        TestRng::from_seed(RngAlgorithm::ChaCha, &[11; 32]),
+    );
+    let unit = 1u32..=8;
+    let cost = 1u64..=20;
+    let depth = prop_oneof![Just(1u32), 2u32..=8, Just(64)];
+    let strategy = (
+        (unit.clone(), unit.clone(), unit.clone(), unit.clone(), unit),
+        (cost.clone(), cost.clone(), cost.clone(), cost.clone(), cost),
+        proptest::collection::vec((depth, 1u64..=6), 9),
+        1u32..=16,
+    );
+    let got = std::cell::RefCell::new(BTreeMap::new());
+    let case = std::cell::Cell::new(0);
+    runner
+        .run(
+            &strategy,
+            |((ns, nb, nr, np, nt), (c1, c2, c3, lat, ppc), links, tile)| {
+                let mut a = ArchConfig::default();
+                a.segmenter.count = ns;
+                a.subsegmenter.count = nb;
+                a.rasterizer.count = nr;
+                a.rop.count = np;
+                a.triangle_rasterizer.count = nt;
+                a.segmenter.cycles_per_segment = c1;
+                a.subsegmenter.cycles_per_subsegment = c2;
+                a.interval_manager.cycles_per_scanline = c3;
+                a.rasterizer.latency_cycles = lat;
+                a.rop.latency_cycles = lat + 1;
+                a.triangle_rasterizer.pixels_per_cycle = ppc;
+                a.rop.tile_px = tile;
+                for (c, (d, latency)) in a.links.all_mut().into_iter().zip(links) {
+                    c.fifo_depth = d;
+                    c.latency_cycles = latency;
+                }
+                a.validate("random").unwrap();
+                let n = case.get();
+                let mut got = got.borrow_mut();
+                got.insert(format!("{n:03} lembo"), run(&s, &a, false));
+                got.insert(format!("{n:03} triangle"), run(&s, &a, true));
+                case.set(n + 1);
+                Ok(())
+            },
+        )
+        .unwrap();
+    check("random.json", got.into_inner());
+}
