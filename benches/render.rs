@@ -15,7 +15,7 @@ use lembo_sim::discoid::render::render_discoids_functional;
 use lembo_sim::job::render_reference;
 use lembo_sim::lembo::tessellate::Tessellation;
 use lembo_sim::pipeline::discoid::run_discoid_timed;
-use lembo_sim::pipeline::{actor::SimOptions, run_timed};
+use lembo_sim::pipeline::{run_timed, SimOptions};
 use lembo_sim::raster::{
     self, fragment, interval, minmax, segmenter, setup, subsegmenter, triangle, Counts,
 };

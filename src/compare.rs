@@ -67,6 +67,8 @@ pub struct CompareJob {
     pub viewport: Option<(u32, u32)>,
     /// Reference samples per pixel side for reference.png.
     pub supersample: u32,
+    /// Host threads of the timed runs (`--host-threads`).
+    pub host_threads: u32,
 }
 
 impl CompareJob {
@@ -91,6 +93,7 @@ impl CompareJob {
             tess,
             blend: BlendMode::Rgba8,
             threshold: None,
+            host_threads: self.host_threads,
         }
     }
 }

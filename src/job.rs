@@ -12,7 +12,7 @@ use crate::error::{Error, Result};
 use crate::lembo::tessellate::Tessellation;
 use crate::lembo::Lembo;
 use crate::output::write_paths;
-use crate::pipeline::{self, actor::SimOptions};
+use crate::pipeline::{self, SimOptions};
 use crate::raster;
 use crate::raster::triangle::TriangleSource;
 use crate::raster::{PerspectiveTol, Tolerance};
@@ -99,7 +99,13 @@ pub struct RenderJob {
     pub blend: BlendMode,
     /// The discoid threshold t [world units]; None for the scene's.
     pub threshold: Option<f64>,
+    /// Host threads the timed model's units are partitioned over (`--host-threads`, >= 1;
+    /// no simulated result depends on it).
+    pub host_threads: u32,
 }
+
+/// Most host threads a timed run may use (`--host-threads`).
+pub const MAX_HOST_THREADS: u32 = 1024;
 
 impl RenderJob {
     /// The lembo path's tolerances: k and Setup's perspective tolerance.
@@ -150,6 +156,14 @@ impl RenderJob {
                     ));
                 }
             }
+        }
+        if !(1..=MAX_HOST_THREADS).contains(&self.host_threads) {
+            return Err(Error::invalid(
+                COMMAND_LINE,
+                "--host-threads",
+                self.host_threads,
+                format!("must be in 1..={MAX_HOST_THREADS} host threads"),
+            ));
         }
         if let Some(path) = &self.trace_out {
             if path.file_name().is_none() {
@@ -338,10 +352,11 @@ pub fn run_path(
     let mut frame = None;
     match arch {
         Some(arch) => {
-            let options = SimOptions {
-                trace: job.trace_out.is_some(),
-                ..SimOptions::default()
+            let path = match job.path {
+                PrimitivePath::Lembo => pipeline::Path::Lembo,
+                PrimitivePath::Triangle => pipeline::Path::Triangle,
             };
+            let options = sim_options(job, arch, path)?;
             timed = Some(pipeline::run_timed(
                 scene,
                 view,
@@ -437,7 +452,7 @@ pub fn run_path(
         host: host(
             wall,
             counts.fragments,
-            timed.as_ref().map(|t| t.cycles.total),
+            timed.as_ref().map(|t| (t.cycles.total, job.host_threads)),
             reference_wall,
             metrics_wall,
         ),
@@ -561,11 +576,30 @@ fn settings(
     }
 }
 
-/// The host section of a report.
+/// The host options of a timed run of `job` on `path`: `--host-threads` is refused when it
+/// exceeds the units the run instantiates (each host thread runs at least one unit).
+fn sim_options(job: &RenderJob, arch: &ArchConfig, path: pipeline::Path) -> Result<SimOptions> {
+    let units = pipeline::graph::units(path, arch).len();
+    if job.host_threads as usize > units {
+        return Err(Error::invalid(
+            COMMAND_LINE,
+            "--host-threads",
+            job.host_threads,
+            format!("more than the {units} units this run instantiates (each host thread runs at least one)"),
+        ));
+    }
+    Ok(SimOptions {
+        host_threads: job.host_threads as usize,
+        trace: job.trace_out.is_some(),
+        ..SimOptions::default()
+    })
+}
+
+/// The host section of a report; `timed` is the frame's cycles and the host threads.
 fn host(
     wall: f64,
     fragments: u64,
-    cycles: Option<u64>,
+    timed: Option<(u64, u32)>,
     reference_wall: Option<f64>,
     metrics_wall: Option<f64>,
 ) -> Host {
@@ -576,7 +610,8 @@ fn host(
         } else {
             0.0
         },
-        simulated_cycles_per_second: cycles.map(|c| c as f64 / wall.max(1e-9)),
+        simulated_cycles_per_second: timed.map(|(c, _)| c as f64 / wall.max(1e-9)),
+        host_threads: timed.map(|(_, n)| n),
         reference_wall_seconds: reference_wall,
         metrics_wall_seconds: metrics_wall,
         peak_rss_bytes: peak_rss_bytes(),
@@ -608,7 +643,15 @@ fn run_discoids(
                 arch,
                 job.blend,
                 threshold,
-                &SimOptions::default(),
+                &sim_options(
+                    job,
+                    arch,
+                    if scene.lembo_count() > 0 {
+                        pipeline::Path::Lembo
+                    } else {
+                        pipeline::Path::Triangle
+                    },
+                )?,
             )?;
             (t.framebuffer, t.counts, t.blend, t.units, Some(t.cycles))
         }
@@ -667,7 +710,13 @@ fn run_discoids(
         accuracy: None,
         blend: Some(blend),
         memory,
-        host: host(wall, counts.fragments, cycles.map(|c| c.total), None, None),
+        host: host(
+            wall,
+            counts.fragments,
+            cycles.map(|c| (c.total, job.host_threads)),
+            None,
+            None,
+        ),
     };
     Ok(PathRun {
         report,

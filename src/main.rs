@@ -70,6 +70,10 @@ struct SweepArgs {
     /// directories with sweep-merge.
     #[arg(long, value_name = "I/N", value_parser = parse_shard)]
     shard: Option<(u32, u32)>,
+    /// Host threads of each timed run (see `render --help`), clamped to each run's unit
+    /// count; `--jobs` runs already fill the cores, so 1 is usually best.
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    host_threads: u32,
 }
 
 #[derive(Args)]
@@ -120,7 +124,7 @@ enum PathArg {
 
 #[derive(Clone, Copy, ValueEnum)]
 enum Mode {
-    /// The Figure 5 pipeline, one thread per unit, with cycle accounting.
+    /// The Figure 5 pipeline with cycle accounting, run by a deterministic executor.
     Timed,
     /// The untimed functional model (what is drawn; the same image, no cycles).
     Functional,
@@ -199,6 +203,12 @@ struct RenderArgs {
     /// vertices on the true patch [default: 1, a mesh's own triangles].
     #[arg(long, value_name = "N")]
     tess: Option<u32>,
+    /// Host threads the timed model's units are partitioned over (contiguous runs of the
+    /// dataflow order). Results are identical for every N; one thread runs all units with
+    /// no synchronisation, which is fastest on small machines. At most the number of units
+    /// the run instantiates.
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    host_threads: u32,
 }
 
 #[derive(Args)]
@@ -243,6 +253,12 @@ struct CompareArgs {
     /// Override the scene's viewport, e.g. 1024x1024.
     #[arg(long, value_name = "WxH", value_parser = parse_viewport)]
     viewport: Option<(u32, u32)>,
+    /// Host threads the timed model's units are partitioned over (contiguous runs of the
+    /// dataflow order). Results are identical for every N; one thread runs all units with
+    /// no synchronisation, which is fastest on small machines. At most the number of units
+    /// the run instantiates.
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    host_threads: u32,
 }
 
 fn parse_perspective_tol(s: &str) -> Result<PerspectiveTol, String> {
@@ -295,6 +311,7 @@ fn default_render() -> RenderArgs {
         tess: None,
         blend: BlendArg::Rgba8,
         threshold: None,
+        host_threads: 1,
     }
 }
 
@@ -343,6 +360,7 @@ fn sweep(args: SweepArgs) -> ExitCode {
         shard,
         stop_after,
         progress: true,
+        host_threads: args.host_threads,
     };
     match run_sweep(&job) {
         Ok(SweepOutcome::Done(out)) => {
@@ -405,6 +423,7 @@ fn compare(args: CompareArgs) -> ExitCode {
         arch: args.arch,
         viewport: args.viewport,
         supersample: args.supersample,
+        host_threads: args.host_threads,
     };
     match run_compare(&job) {
         Ok(out) => {
@@ -443,6 +462,7 @@ fn render(args: RenderArgs) -> ExitCode {
             BlendArg::F32 => BlendMode::F32,
         },
         threshold: args.threshold,
+        host_threads: args.host_threads,
     };
     match run_render(&job) {
         Ok(out) => {

@@ -154,6 +154,8 @@ pub struct Host {
     pub fragments_per_second: f64,
     /// Simulated cycles per wall second of the timed render; null in functional mode.
     pub simulated_cycles_per_second: Option<f64>,
+    /// Host threads the timed model ran on (`--host-threads`); null in functional mode.
+    pub host_threads: Option<u32>,
     /// Wall time of the reference and metrics [s]; null without `--reference`.
     pub reference_wall_seconds: Option<f64>,
     /// Of that, the accuracy metrics (the sub-pixel silhouette's reference queries and the

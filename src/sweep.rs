@@ -42,7 +42,7 @@ use crate::discoid::render::check_scene;
 use crate::error::{parent_dir, read_text_file, Error, Result};
 use crate::job::{
     check_tess_range, check_triangle_budget, render_reference, run_path, Mode, PrimitivePath,
-    RenderJob, COMMAND_LINE, K_RANGE,
+    RenderJob, COMMAND_LINE, K_RANGE, MAX_HOST_THREADS,
 };
 use crate::output::write_files;
 use crate::pipeline::UnitKind;
@@ -887,7 +887,7 @@ impl Plan {
             let point = &spec.points[run.point];
             let scene = &scenes[run.scene];
             check_applies(&spec, point, scene, run.scene)?;
-            let job = render_job(&spec, point, scene);
+            let job = render_job(&spec, point, scene, 1);
             job.validate().map_err(|e| {
                 let field = match &e {
                     Error::Invalid { field, .. } => field.trim_start_matches("--").to_string(),
@@ -1030,7 +1030,7 @@ fn check_applies(spec: &Spec, point: &Point, scene: &Scene, s: usize) -> Result<
 }
 
 /// The render job of a point on a scene.
-fn render_job(spec: &Spec, point: &Point, scene: &Scene) -> RenderJob {
+fn render_job(spec: &Spec, point: &Point, scene: &Scene, host_threads: u32) -> RenderJob {
     let mut job = RenderJob {
         scene: None,
         out: None,
@@ -1051,6 +1051,7 @@ fn render_job(spec: &Spec, point: &Point, scene: &Scene) -> RenderJob {
         tess: None,
         blend: BlendMode::Rgba8,
         threshold: None,
+        host_threads,
     };
     for s in &point.settings {
         match s {
@@ -1124,6 +1125,8 @@ pub struct SweepJob {
     pub stop_after: Option<usize>,
     /// Draw a progress bar on stderr (hidden anyway when stderr is not a terminal).
     pub progress: bool,
+    /// Host threads of each timed run (`--host-threads`; results do not depend on it).
+    pub host_threads: u32,
 }
 
 /// What a sweep did.
@@ -1198,6 +1201,14 @@ impl SweepJob {
             }
         }
         Shard::new(self.shard.index, self.shard.count)?;
+        if !(1..=MAX_HOST_THREADS).contains(&self.host_threads) {
+            return Err(Error::invalid(
+                COMMAND_LINE,
+                "--host-threads",
+                self.host_threads,
+                format!("must be in 1..={MAX_HOST_THREADS} host threads"),
+            ));
+        }
         Ok(())
     }
 }
@@ -1206,7 +1217,22 @@ impl SweepJob {
 pub fn run_sweep(job: &SweepJob) -> std::result::Result<SweepOutcome, SweepError> {
     let t0 = Instant::now();
     job.validate()?;
-    let plan = Plan::load(&job.spec)?;
+    let mut plan = Plan::load(&job.spec)?;
+    // At most as many host threads as a run has units (points may differ in unit counts).
+    for (run, rj) in plan.spec.runs.iter().zip(plan.jobs.iter_mut()) {
+        if let Some(arch) = &plan.archs[run.point] {
+            let scene = &plan.scenes[run.scene];
+            let path = if rj.path == PrimitivePath::Triangle
+                || (scene.discoid_count() > 0 && scene.lembo_count() == 0)
+            {
+                crate::pipeline::Path::Triangle
+            } else {
+                crate::pipeline::Path::Lembo
+            };
+            let units = crate::pipeline::graph::units(path, arch).len().max(1);
+            rj.host_threads = job.host_threads.min(units as u32);
+        }
+    }
     let spec = &plan.spec;
     let dir = job
         .out

@@ -50,6 +50,7 @@ fn job(path: PrimitivePath, datapath: Datapath, k: f64, mode: Mode) -> RenderJob
         tess: (path == PrimitivePath::Triangle).then_some(TESS),
         blend: BlendMode::Rgba8,
         threshold: None,
+        host_threads: 1,
     }
 }
 

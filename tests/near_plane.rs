@@ -14,7 +14,7 @@ use lembo_sim::datapath::{Datapath, Real};
 use lembo_sim::job::{measure_frame, render_reference, PrimitivePath};
 use lembo_sim::lembo::tessellate::{Tessellation, Triangle};
 use lembo_sim::lembo::Lembo;
-use lembo_sim::pipeline::actor::SimOptions;
+use lembo_sim::pipeline::SimOptions;
 use lembo_sim::pipeline::{run_timed, UnitKind};
 use lembo_sim::raster::triangle::{
     render_triangles, setup, ScreenTriangle, TriangleFragment, TriangleSink, TriangleSource,

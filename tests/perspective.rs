@@ -39,6 +39,7 @@ fn job(k: f64, perspective_tol: PerspectiveTol, datapath: Datapath) -> RenderJob
         tess: None,
         blend: BlendMode::Rgba8,
         threshold: None,
+        host_threads: 1,
     }
 }
 

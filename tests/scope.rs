@@ -7,7 +7,7 @@ use lembo_sim::config::ArchConfig;
 use lembo_sim::datapath::Datapath;
 use lembo_sim::discoid::blend::BlendMode;
 use lembo_sim::lembo::tessellate::Tessellation;
-use lembo_sim::pipeline::actor::SimOptions;
+use lembo_sim::pipeline::SimOptions;
 use lembo_sim::pipeline::discoid::run_discoid_timed;
 use lembo_sim::pipeline::{run_timed, TimedFrame, UnitKind};
 use lembo_sim::scene::Scene;

@@ -167,6 +167,7 @@ fn render_reports_see_through_in_both_reports() {
         tess: None,
         blend: BlendMode::Rgba8,
         threshold: None,
+        host_threads: 1,
     };
     let out = run_render(&job).unwrap();
     let accuracy = out.report.accuracy.as_ref().unwrap();

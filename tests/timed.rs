@@ -5,7 +5,7 @@
 use lembo_sim::camera::View;
 use lembo_sim::config::ArchConfig;
 use lembo_sim::datapath::Datapath;
-use lembo_sim::pipeline::actor::SimOptions;
+use lembo_sim::pipeline::SimOptions;
 use lembo_sim::pipeline::{run_timed, TimedFrame};
 use lembo_sim::raster::render_functional;
 use lembo_sim::scene::Scene;

@@ -8,7 +8,7 @@ use lembo_sim::config::ArchConfig;
 use lembo_sim::datapath::{Datapath, Real};
 use lembo_sim::job::{measure_frame, render_reference, PrimitivePath};
 use lembo_sim::lembo::tessellate::Tessellation;
-use lembo_sim::pipeline::actor::SimOptions;
+use lembo_sim::pipeline::SimOptions;
 use lembo_sim::pipeline::{run_timed, TimedFrame, UnitKind};
 use lembo_sim::raster::triangle::{setup, TriangleSource};
 use lembo_sim::raster::{render_functional_triangles, Frame};

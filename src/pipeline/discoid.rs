@@ -30,8 +30,8 @@ use crate::rop::shade::to_u8;
 use crate::rop::FrameBuffer;
 use crate::scene::Scene;
 
-use super::actor::SimOptions;
-use super::rop::RopTiles;
+use super::SimOptions;
+use super::units::rop::RopTiles;
 
 /// What the timed discoid passes produced.
 pub struct DiscoidTimed {

@@ -1,43 +1,35 @@
-//! The timed pipeline: Figure 5 of paper 001 as actors on bounded crossbeam channels
-//! (DESIGN §3). Each unit instance is a host thread that calls the functional code of
-//! [`crate::raster`] and adds only time; the image is bit-identical to the functional
-//! model's for every architecture configuration.
+//! The timed pipeline: Figure 5 of paper 001 as units run by a deterministic
+//! discrete-event executor (DESIGN §3). Each unit instance is an `async fn` that calls the
+//! functional code of [`crate::raster`] and adds only time; the image is bit-identical to
+//! the functional model's for every architecture configuration and every host partition.
 //!
 //! ```text
 //!  Setup ─► MinMax ─► IntervalManager ─┬► Segmenter[0..Ns] ─┬► Subsegmenter[0..Nb] ─┬► FragmentRasterizer[0..Nr] ─┬► Rop[0..Np] ─► FrameBuffer
 //!                                      round-robin          round-robin             round-robin                   by screen tile   (memory port)
 //! ```
 //!
-//! The triangle path (`run_timed` with a triangle source) instantiates instead
+//! The triangle path instantiates instead
 //! `TriangleSetup ─► TriangleRasterizer[0..Nt] ─► Rop[0..Np] ─► FrameBuffer`, the same ROPs
-//! and port ([`triangle_setup`], [`triangle_rasterizer`]).
+//! and port.
 //!
-//! Every arrow of a crossbar is its own link (FIFO depth and latency from the
-//! architecture's `links`); a unit with several inputs merges them by (arrival, port).
+//! - [`runtime`]: the framework: clocks, links, the executor, the timeline. It knows no
+//!   unit.
+//! - [`units`]: one file per box of Figure 5, each using only [`runtime::Ctx`].
+//! - [`graph`]: which units each path instantiates and which boundaries carry links,
+//!   written once.
+//! - this file: elaboration (units, links, host threads) and the cycle report;
+//!   [`discoid`]: the timed discoid passes.
 //!
-//! - [`link`]: `Timed` items, credits, watermarks: the timing semantics of a FIFO.
-//! - [`actor`]: the per-unit clock ([`actor::Ctx`]), host protocol and deadlock watchdog.
-//! - one file per unit, in dataflow order: [`setup`], [`minmax`], [`interval_manager`],
-//!   [`segmenter`], [`subsegmenter`], [`rasterizer`], [`rop`], [`framebuffer`].
-//! - [`trace`]: the Chrome trace-event timeline.
-//!
-//! Model only what a scene requires: a scene without lembos instantiates no units, and each
-//! path only its own.
+//! Model only what a scene requires: a scene without primitives instantiates no units,
+//! and each path only its own.
 
-pub mod actor;
 pub mod discoid;
-pub mod framebuffer;
-pub mod interval_manager;
-pub mod link;
-pub mod minmax;
-pub mod rasterizer;
-pub mod rop;
-pub mod segmenter;
-pub mod setup;
-pub mod subsegmenter;
-pub mod trace;
-pub mod triangle_rasterizer;
-pub mod triangle_setup;
+pub mod graph;
+pub mod runtime;
+pub mod units;
+
+pub use graph::{fifo_entries, lembo_units, triangle_units, Path, UnitInstance, UnitKind};
+pub use runtime::{Cycle, SimOptions};
 
 use crate::camera::View;
 use crate::config::{ArchConfig, LinkConfig};
@@ -46,62 +38,25 @@ use crate::discoid::blend::BlendMode;
 use crate::discoid::render::{BlendReport, DiscoidTable, Pass, Pending};
 use crate::error::{Error, Result};
 use crate::raster::setup::ScreenLembo;
-use crate::raster::triangle::TriangleSource;
+use crate::raster::triangle::{ScreenTriangle, TriangleSource};
 use crate::raster::{Counts, Tolerance};
 use crate::rop::FrameBuffer;
 use crate::scene::Scene;
-pub use actor::SimOptions;
-use actor::{ActorError, Ctx, Monitor, UnitStats};
-use link::{link, Cycle, LinkName, LinkSpec, Rx, Tx};
-use rop::{RopTiles, TileStore};
+use runtime::core::Core;
+use runtime::executor::{Board, HostThread, Recoveries, Signal, Stop, UnitFuture};
+use runtime::link::{Ends, LocalLink, RemoteEnd, RemoteParts, Rx, Tx};
+use runtime::trace::{self, Recorder};
+use runtime::{Ctx, LinkName, LinkSpec, UnitStats};
 use serde::Serialize;
-use std::sync::OnceLock;
-use std::thread::{Scope, ScopedJoinHandle};
-use trace::Recorder;
-
-/// The kinds of unit, in dataflow order.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
-pub enum UnitKind {
-    Setup,
-    MinMax,
-    IntervalManager,
-    Segmenter,
-    Subsegmenter,
-    FragmentRasterizer,
-    TriangleSetup,
-    TriangleRasterizer,
-    Rop,
-    /// A ROP's discoid blend unit (listed for scenes with discoids; its cycles are its
-    /// ROP's).
-    BlendUnit,
-    FrameBuffer,
-}
-
-impl UnitKind {
-    pub fn name(self) -> &'static str {
-        match self {
-            UnitKind::Setup => "Setup",
-            UnitKind::MinMax => "MinMax",
-            UnitKind::IntervalManager => "IntervalManager",
-            UnitKind::Segmenter => "Segmenter",
-            UnitKind::Subsegmenter => "Subsegmenter",
-            UnitKind::FragmentRasterizer => "FragmentRasterizer",
-            UnitKind::TriangleSetup => "TriangleSetup",
-            UnitKind::TriangleRasterizer => "TriangleRasterizer",
-            UnitKind::Rop => "Rop",
-            UnitKind::BlendUnit => "BlendUnit",
-            UnitKind::FrameBuffer => "FrameBuffer",
-        }
-    }
-}
-
-/// One instantiated unit.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct UnitInstance {
-    /// `Segmenter[2]`, or the kind's name for a single unit.
-    pub name: String,
-    pub kind: UnitKind,
-}
+use std::ops::Range;
+use std::rc::Rc;
+use std::sync::{Arc, OnceLock};
+use units::interval_manager::ScanInterval;
+use units::minmax::ScanlineRange;
+use units::rop::{RopItem, RopTiles, SharedFrame, WriteBurst};
+use units::segmenter::ScanSegment;
+use units::setup::LemboReady;
+use units::subsegmenter::ScanSubsegment;
 
 /// The cycle accounting of one unit over the frame [cycles].
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -147,6 +102,8 @@ pub struct TimedFrame {
     pub trace: Option<String>,
     /// An accumulation pass's kept fragments and counters, over all ROPs.
     pub discoid: Option<(Vec<Pending>, BlendReport)>,
+    /// How often the executor needed a recovery (host statistics).
+    pub recoveries: Recoveries,
 }
 
 /// Read-only state the units share: the scene, the configuration and the lembo table.
@@ -211,21 +168,18 @@ pub struct Finished {
 }
 
 impl Finished {
-    pub fn new<I: Send + 'static, O: Send + 'static>(
-        ctx: Ctx<I, O>,
-        counts: Counts,
-    ) -> std::result::Result<Self, ActorError> {
-        let (stats, trace) = ctx.finish()?;
-        Ok(Finished {
+    /// Ends `ctx`'s outputs and collects its counters with the unit's `counts`.
+    pub fn new<I, O>(ctx: Ctx<I, O>, counts: Counts) -> Self {
+        let (stats, trace) = ctx.finish();
+        Finished {
             stats,
             trace,
             counts,
             error: None,
             discoid: None,
-        })
+        }
     }
 }
-
 /// Renders `scene` on the timed pipeline of `arch`: the lembo path, or with a
 /// triangle source (a tessellation) the triangle path.
 pub fn run_timed(
@@ -244,161 +198,295 @@ pub fn run_timed(
     }
 }
 
-/// Appends `n` units of `kind`, named `Kind[i]` when `indexed`.
-fn add_units(units: &mut Vec<UnitInstance>, kind: UnitKind, n: u32, indexed: bool) {
-    for i in 0..n {
-        let name = if indexed {
-            format!("{}[{i}]", kind.name())
-        } else {
-            kind.name().to_string()
+/// The links of one boundary: producers `producers` to consumers `consumers` (global unit
+/// indices), with the channels of each link whose ends are on different host threads.
+struct Crossbar<T> {
+    producers: Range<usize>,
+    consumers: Range<usize>,
+    spec: LinkSpec,
+    /// By producer position * consumers + consumer position.
+    remote: Vec<Option<RemoteParts<T>>>,
+}
+
+impl<T> Crossbar<T> {
+    fn new(units: &[UnitInstance], from: UnitKind, to: UnitKind, thread: &[usize], c: &LinkConfig) -> Self {
+        let of = |kind: UnitKind| {
+            let first = units.iter().position(|u| u.kind == kind).unwrap_or(0);
+            first..first + units.iter().filter(|u| u.kind == kind).count()
         };
-        units.push(UnitInstance { name, kind });
-    }
-}
-
-/// The units a lembo scene instantiates, in dataflow order.
-pub fn lembo_units(arch: &ArchConfig) -> Vec<UnitInstance> {
-    let mut units = Vec::new();
-    add_units(&mut units, UnitKind::Setup, 1, false);
-    add_units(&mut units, UnitKind::MinMax, 1, false);
-    add_units(&mut units, UnitKind::IntervalManager, 1, false);
-    add_units(&mut units, UnitKind::Segmenter, arch.segmenter.count, true);
-    add_units(
-        &mut units,
-        UnitKind::Subsegmenter,
-        arch.subsegmenter.count,
-        true,
-    );
-    add_units(
-        &mut units,
-        UnitKind::FragmentRasterizer,
-        arch.rasterizer.count,
-        true,
-    );
-    add_units(&mut units, UnitKind::Rop, arch.rop.count, true);
-    add_units(&mut units, UnitKind::FrameBuffer, 1, false);
-    units
-}
-
-/// The units the triangle path instantiates, in dataflow order.
-pub fn triangle_units(arch: &ArchConfig) -> Vec<UnitInstance> {
-    let mut units = Vec::new();
-    add_units(&mut units, UnitKind::TriangleSetup, 1, false);
-    let n = arch.triangle_rasterizer.count;
-    add_units(&mut units, UnitKind::TriangleRasterizer, n, true);
-    add_units(&mut units, UnitKind::Rop, arch.rop.count, true);
-    add_units(&mut units, UnitKind::FrameBuffer, 1, false);
-    units
-}
-
-/// The FIFO entries of every link `units` instantiate: each boundary's crossbar has one
-/// link per (producer, consumer) pair, each `fifo_depth` entries deep; a boundary between
-/// kinds absent from `units` has no links. Item sizes are not modelled, so this counts
-/// entries, not bytes [entries].
-pub fn fifo_entries(arch: &ArchConfig, units: &[UnitInstance]) -> u64 {
-    use UnitKind::*;
-    let l = &arch.links;
-    let boundaries = [
-        (&l.setup_to_minmax, Setup, MinMax),
-        (&l.minmax_to_interval_manager, MinMax, IntervalManager),
-        (&l.interval_manager_to_segmenter, IntervalManager, Segmenter),
-        (&l.segmenter_to_subsegmenter, Segmenter, Subsegmenter),
-        (
-            &l.subsegmenter_to_rasterizer,
-            Subsegmenter,
-            FragmentRasterizer,
-        ),
-        (&l.rasterizer_to_rop, FragmentRasterizer, Rop),
-        (&l.rop_to_framebuffer, Rop, FrameBuffer),
-        (
-            &l.triangle_setup_to_rasterizer,
-            TriangleSetup,
-            TriangleRasterizer,
-        ),
-        (&l.triangle_rasterizer_to_rop, TriangleRasterizer, Rop),
-    ];
-    let count = |kind: UnitKind| units.iter().filter(|u| u.kind == kind).count() as u64;
-    boundaries
-        .iter()
-        .map(|(link, from, to)| count(*from) * count(*to) * link.fifo_depth as u64)
-        .sum()
-}
-
-fn spec(c: &LinkConfig) -> LinkSpec {
-    LinkSpec {
-        fifo_depth: c.fifo_depth,
-        latency_cycles: c.latency_cycles,
-    }
-}
-
-/// Links from every producer to every consumer: `tx[p][c]`, `rx[c][p]`.
-#[allow(clippy::type_complexity)]
-fn crossbar<T>(
-    c: &LinkConfig,
-    producers: &[UnitInstance],
-    consumers: &[UnitInstance],
-) -> (Vec<Vec<Tx<T>>>, Vec<Vec<Rx<T>>>) {
-    let mut tx: Vec<Vec<Tx<T>>> = producers.iter().map(|_| Vec::new()).collect();
-    let mut rx: Vec<Vec<Rx<T>>> = consumers.iter().map(|_| Vec::new()).collect();
-    for (p, producer) in producers.iter().enumerate() {
-        for (q, consumer) in consumers.iter().enumerate() {
-            let (t, r) = link(
-                spec(c),
-                LinkName {
-                    producer: producer.name.clone(),
-                    consumer: consumer.name.clone(),
-                },
-            );
-            tx[p].push(t);
-            rx[q].push(r);
+        let (producers, consumers) = (of(from), of(to));
+        let spec = LinkSpec {
+            fifo_depth: c.fifo_depth,
+            latency_cycles: c.latency_cycles,
+        };
+        let mut remote = Vec::new();
+        for p in producers.clone() {
+            for q in consumers.clone() {
+                remote.push((thread[p] != thread[q]).then(|| RemoteParts::new(spec)));
+            }
+        }
+        Crossbar {
+            producers,
+            consumers,
+            spec,
+            remote,
         }
     }
-    (tx, rx)
 }
 
-type Handle<'s, T> = ScopedJoinHandle<'s, std::result::Result<T, ActorError>>;
-/// A unit's thread: its result and, for a ROP, its pixels.
-type UnitHandle<'s> = Handle<'s, (Finished, Option<TileStore>)>;
-
-/// Marks a unit done when its thread ends, also by panic (then the run is aborted).
-struct DoneGuard<'m> {
-    monitor: &'m Monitor,
-    unit: usize,
+/// Builds one host thread's share of the graph: its core and its ends of every link.
+struct Builder<'p> {
+    units: &'p [UnitInstance],
+    thread: &'p [usize],
+    me: usize,
+    core: Rc<Core>,
+    /// Local index of each global unit on this thread.
+    local: Vec<Option<u32>>,
+    remotes: Vec<Rc<dyn RemoteEnd>>,
+    /// One per host thread; empty when there is only one.
+    signals: &'p [Arc<Signal>],
 }
 
-impl Drop for DoneGuard<'_> {
+impl<'p> Builder<'p> {
+    fn new(
+        units: &'p [(UnitInstance, u64)],
+        names: &'p [UnitInstance],
+        thread: &'p [usize],
+        me: usize,
+        perturb: Option<u64>,
+        signals: &'p [Arc<Signal>],
+    ) -> Self {
+        let mut local = vec![None; units.len()];
+        let mut mine = Vec::new();
+        for (g, (u, latency)) in units.iter().enumerate() {
+            if thread[g] == me {
+                local[g] = Some(mine.len() as u32);
+                mine.push((u.name.clone(), *latency));
+            }
+        }
+        Builder {
+            units: names,
+            thread,
+            me,
+            core: Rc::new(Core::new(mine, perturb.map(|p| p ^ me as u64))),
+            local,
+            remotes: Vec::new(),
+            signals,
+        }
+    }
+
+    /// This thread's ends of `xb`'s links: `tx[p]` the outputs of producer position p,
+    /// `rx[c]` the inputs of consumer position c (empty for units of other threads).
+    #[allow(clippy::type_complexity)]
+    fn wire<T: Send + 'static>(&mut self, xb: &Crossbar<T>) -> (Vec<Vec<Tx<T>>>, Vec<Vec<Rx<T>>>) {
+        let mut tx: Vec<Vec<Tx<T>>> = xb.producers.clone().map(|_| Vec::new()).collect();
+        let mut rx: Vec<Vec<Rx<T>>> = xb.consumers.clone().map(|_| Vec::new()).collect();
+        let nc = xb.consumers.len();
+        for (pi, p) in xb.producers.clone().enumerate() {
+            for (ci, c) in xb.consumers.clone().enumerate() {
+                let name = LinkName {
+                    producer: self.units[p].name.clone(),
+                    consumer: self.units[c].name.clone(),
+                };
+                let ends = Ends {
+                    producer: self.local[p].unwrap_or(u32::MAX),
+                    port: ci as u32,
+                    consumer: self.local[c].unwrap_or(u32::MAX),
+                    from: p as u32,
+                };
+                let (mine_p, mine_c) = (self.thread[p] == self.me, self.thread[c] == self.me);
+                if mine_p {
+                    self.core.slots[ends.producer as usize]
+                        .consumers
+                        .borrow_mut()
+                        .push((c, name.consumer.clone()));
+                }
+                match (mine_p, mine_c, &xb.remote[pi * nc + ci]) {
+                    (true, true, _) => {
+                        let link = Rc::new(LocalLink::new(self.core.clone(), xb.spec, name, ends));
+                        self.core.slots[ends.consumer as usize]
+                            .inputs
+                            .borrow_mut()
+                            .push(link.clone());
+                        tx[pi].push(Tx::Local(link.clone()));
+                        rx[ci].push(Rx::Local(link));
+                    }
+                    (true, false, Some(parts)) => {
+                        let peer = self.signals[self.thread[c]].clone();
+                        let half = Rc::new(parts.tx(self.core.clone(), xb.spec, name, ends, peer));
+                        self.remotes.push(half.clone());
+                        tx[pi].push(Tx::Remote(half));
+                    }
+                    (false, true, Some(parts)) => {
+                        let peer = self.signals[self.thread[p]].clone();
+                        let half = Rc::new(parts.rx(self.core.clone(), xb.spec, name, ends, peer));
+                        self.remotes.push(half.clone());
+                        self.core.slots[ends.consumer as usize]
+                            .inputs
+                            .borrow_mut()
+                            .push(half.clone());
+                        rx[ci].push(Rx::Remote(half));
+                    }
+                    _ => {}
+                }
+            }
+        }
+        (tx, rx)
+    }
+
+    fn ctx<I, O>(&self, g: usize, inputs: Vec<Rx<I>>, outputs: Vec<Tx<O>>, trace: Option<usize>) -> Ctx<I, O> {
+        let u = self.local[g].expect("a unit of this thread");
+        Ctx::new(self.core.clone(), u, inputs, outputs, trace)
+    }
+}
+
+/// The typed links of a run, one crossbar per boundary of its path.
+enum Bars<R> {
+    Lembo {
+        setup: Crossbar<LemboReady>,
+        minmax: Crossbar<ScanlineRange>,
+        intervals: Crossbar<ScanInterval<R>>,
+        segments: Crossbar<ScanSegment<R>>,
+        subsegments: Crossbar<ScanSubsegment<R>>,
+        spans: Crossbar<RopItem<R>>,
+        bursts: Crossbar<WriteBurst>,
+    },
+    Triangle {
+        triangles: Crossbar<Arc<ScreenTriangle<R>>>,
+        pieces: Crossbar<RopItem<R>>,
+        bursts: Crossbar<WriteBurst>,
+    },
+}
+
+impl<R: Real> Bars<R> {
+    fn new(path: Path, arch: &ArchConfig, units: &[UnitInstance], thread: &[usize]) -> Self {
+        use UnitKind::*;
+        let l = &arch.links;
+        match path {
+            Path::Lembo => Bars::Lembo {
+                setup: Crossbar::new(units, Setup, MinMax, thread, &l.setup_to_minmax),
+                minmax: Crossbar::new(units, MinMax, IntervalManager, thread, &l.minmax_to_interval_manager),
+                intervals: Crossbar::new(units, IntervalManager, Segmenter, thread, &l.interval_manager_to_segmenter),
+                segments: Crossbar::new(units, Segmenter, Subsegmenter, thread, &l.segmenter_to_subsegmenter),
+                subsegments: Crossbar::new(units, Subsegmenter, FragmentRasterizer, thread, &l.subsegmenter_to_rasterizer),
+                spans: Crossbar::new(units, FragmentRasterizer, Rop, thread, &l.rasterizer_to_rop),
+                bursts: Crossbar::new(units, Rop, FrameBuffer, thread, &l.rop_to_framebuffer),
+            },
+            Path::Triangle => Bars::Triangle {
+                triangles: Crossbar::new(units, TriangleSetup, TriangleRasterizer, thread, &l.triangle_setup_to_rasterizer),
+                pieces: Crossbar::new(units, TriangleRasterizer, Rop, thread, &l.triangle_rasterizer_to_rop),
+                bursts: Crossbar::new(units, Rop, FrameBuffer, thread, &l.rop_to_framebuffer),
+            },
+        }
+    }
+}
+
+/// Builds host thread `b.me`'s units: their links and their bodies, in local order.
+fn build<'a, R: Real>(
+    b: &mut Builder,
+    bars: &Bars<R>,
+    sh: &'a Shared<'a, R>,
+    frame: &'a SharedFrame<'a>,
+    trace: Option<usize>,
+) -> Vec<UnitFuture<'a, Finished>> {
+    use UnitKind::*;
+    let mut futures: Vec<UnitFuture<'a, Finished>> = Vec::new();
+    let n = b.units.len();
+    let pos = |g: usize, kind: UnitKind| g - b.units.iter().position(|u| u.kind == kind).unwrap_or(0);
+    match bars {
+        Bars::Lembo {
+            setup,
+            minmax,
+            intervals,
+            segments,
+            subsegments,
+            spans,
+            bursts,
+        } => {
+            let (mut s_tx, mut m_rx) = b.wire(setup);
+            let (mut m_tx, mut i_rx) = b.wire(minmax);
+            let (mut i_tx, mut g_rx) = b.wire(intervals);
+            let (mut g_tx, mut b_rx) = b.wire(segments);
+            let (mut b_tx, mut r_rx) = b.wire(subsegments);
+            let (mut r_tx, mut p_rx) = b.wire(spans);
+            let (mut p_tx, mut f_rx) = b.wire(bursts);
+            for g in (0..n).filter(|&g| b.local[g].is_some()) {
+                let kind = b.units[g].kind;
+                let i = pos(g, kind);
+                let body: UnitFuture<'a, Finished> = match kind {
+                    Setup => Box::pin(units::setup::run(b.ctx(g, Vec::new(), take(&mut s_tx, i), trace), sh)),
+                    MinMax => Box::pin(units::minmax::run(b.ctx(g, take(&mut m_rx, i), take(&mut m_tx, i), trace), sh)),
+                    IntervalManager => Box::pin(units::interval_manager::run(
+                        b.ctx(g, take(&mut i_rx, i), take(&mut i_tx, i), trace),
+                        sh,
+                    )),
+                    Segmenter => Box::pin(units::segmenter::run(b.ctx(g, take(&mut g_rx, i), take(&mut g_tx, i), trace), sh)),
+                    Subsegmenter => Box::pin(units::subsegmenter::run(
+                        b.ctx(g, take(&mut b_rx, i), take(&mut b_tx, i), trace),
+                        sh,
+                    )),
+                    FragmentRasterizer => Box::pin(units::rasterizer::run(
+                        b.ctx(g, take(&mut r_rx, i), take(&mut r_tx, i), trace),
+                        sh,
+                    )),
+                    Rop => Box::pin(units::rop::run(b.ctx(g, take(&mut p_rx, i), take(&mut p_tx, i), trace), sh, i, frame)),
+                    FrameBuffer => Box::pin(units::framebuffer::run(
+                        b.ctx(g, take(&mut f_rx, i), Vec::new(), trace),
+                        &sh.arch.framebuffer,
+                    )),
+                    other => unreachable!("{other:?} is not on the lembo path"),
+                };
+                futures.push(body);
+            }
+        }
+        Bars::Triangle {
+            triangles,
+            pieces,
+            bursts,
+        } => {
+            let (mut s_tx, mut r_rx) = b.wire(triangles);
+            let (mut r_tx, mut p_rx) = b.wire(pieces);
+            let (mut p_tx, mut f_rx) = b.wire(bursts);
+            for g in (0..n).filter(|&g| b.local[g].is_some()) {
+                let kind = b.units[g].kind;
+                let i = pos(g, kind);
+                let body: UnitFuture<'a, Finished> = match kind {
+                    TriangleSetup => Box::pin(units::triangle_setup::run(
+                        b.ctx(g, Vec::new(), take(&mut s_tx, i), trace),
+                        sh,
+                    )),
+                    TriangleRasterizer => Box::pin(units::triangle_rasterizer::run(
+                        b.ctx(g, take(&mut r_rx, i), take(&mut r_tx, i), trace),
+                        sh,
+                    )),
+                    Rop => Box::pin(units::rop::run(b.ctx(g, take(&mut p_rx, i), take(&mut p_tx, i), trace), sh, i, frame)),
+                    FrameBuffer => Box::pin(units::framebuffer::run(
+                        b.ctx(g, take(&mut f_rx, i), Vec::new(), trace),
+                        &sh.arch.framebuffer,
+                    )),
+                    other => unreachable!("{other:?} is not on the triangle path"),
+                };
+                futures.push(body);
+            }
+        }
+    }
+    futures
+}
+
+/// The ends of position `i` of a crossbar side, taken once.
+fn take<T>(v: &mut [Vec<T>], i: usize) -> Vec<T> {
+    std::mem::take(&mut v[i])
+}
+
+/// Sets the run's abort flag if a host thread panics, so the others stop.
+struct AbortOnPanic<'b>(&'b Board);
+
+impl Drop for AbortOnPanic<'_> {
     fn drop(&mut self) {
         if std::thread::panicking() {
-            self.monitor.abort();
+            self.0.abort();
         }
-        self.monitor.done(self.unit);
     }
-}
-
-/// Spawns one unit's thread.
-fn spawn<'s, 'e: 's, T: Send + 's>(
-    scope: &'s Scope<'s, 'e>,
-    monitor: &'e Monitor,
-    unit: usize,
-    body: impl FnOnce() -> std::result::Result<T, ActorError> + Send + 's,
-) -> Result<Handle<'s, T>> {
-    std::thread::Builder::new()
-        .name(monitor.name(unit).to_string())
-        .spawn_scoped(scope, move || {
-            let _guard = DoneGuard { monitor, unit };
-            let result = body();
-            if let Err(ActorError::Disconnected(_)) = result {
-                monitor.abort();
-            }
-            result
-        })
-        .map_err(|e| Error::Internal(format!("cannot start a unit thread: {e}")))
-}
-
-/// Joins a unit's thread.
-fn join<T>(h: Handle<'_, T>, name: &str) -> Result<std::result::Result<T, ActorError>> {
-    h.join()
-        .map_err(|_| Error::Internal(format!("unit {name} panicked")))
 }
 
 fn run_in<R: Real>(
@@ -413,19 +501,19 @@ fn run_in<R: Real>(
     let vp = view.viewport;
     let background = scene.background.map(crate::rop::shade::to_u8::<f64>);
     let n_lembos = scene.lembo_count();
+    let mut fb = FrameBuffer::new(vp.width, vp.height, background, false);
     // Model only what the scene requires: no primitives, no units.
-    let units = match triangles {
-        Some(t) if t.chunks() == 0 => Vec::new(),
-        None if n_lembos == 0 => Vec::new(),
-        None => lembo_units(arch),
-        Some(_) => triangle_units(arch),
+    let path = match triangles {
+        Some(t) if t.chunks() == 0 => None,
+        None if n_lembos == 0 => None,
+        None => Some(Path::Lembo),
+        Some(_) => Some(Path::Triangle),
     };
-    if units.is_empty() {
-        let fb = FrameBuffer::new(vp.width, vp.height, background, false);
+    let Some(path) = path else {
         return Ok(TimedFrame {
             framebuffer: fb,
             counts: Counts::default(),
-            units,
+            units: Vec::new(),
             cycles: CycleReport {
                 total: 0,
                 clock_mhz: arch.clock_mhz,
@@ -435,8 +523,13 @@ fn run_in<R: Real>(
             },
             trace: None,
             discoid: None,
+            recoveries: Recoveries::default(),
         });
-    }
+    };
+    let planned = graph::units(path, arch);
+    let units: Vec<UnitInstance> = planned.iter().map(|u| u.0.clone()).collect();
+    let threads = options.host_threads.clamp(1, units.len());
+    let thread = runtime::partition(units.len(), threads, options.partition_seed);
     let shared = Shared {
         scene,
         view,
@@ -444,185 +537,124 @@ fn run_in<R: Real>(
         k: R::of(tol.k),
         perspective_tol: tol.perspective,
         background,
-        lembos: match triangles {
-            None => (0..n_lembos).map(|_| OnceLock::new()).collect(),
-            Some(_) => Vec::new(),
+        lembos: match path {
+            Path::Lembo => (0..n_lembos).map(|_| OnceLock::new()).collect(),
+            Path::Triangle => Vec::new(),
         },
         triangles,
         tiles: RopTiles::new(vp.width, vp.height, arch.rop.tile_px, arch.rop.count),
         discoid,
     };
-    let monitor = Monitor::new(units.iter().map(|u| u.name.clone()).collect());
     let trace_cap = options.trace_event_cap / units.len();
+    let trace = options.trace.then_some(trace_cap);
+    let bars = Bars::<R>::new(path, arch, &units, &thread);
 
-    // Unit indices by kind, in the order of `lembo_units` or `triangle_units`.
-    let of = |kind: UnitKind| -> Vec<usize> {
-        (0..units.len())
-            .filter(|&u| units[u].kind == kind)
-            .collect()
+    let results: std::result::Result<(Vec<(usize, Finished)>, Recoveries), Stop> = {
+        let frame = SharedFrame::new(&mut fb);
+        if threads == 1 {
+            let mut b = Builder::new(&planned, &units, &thread, 0, options.perturb, &[]);
+            let futures = build(&mut b, &bars, &shared, &frame, trace);
+            HostThread {
+                core: b.core.clone(),
+                futures,
+                global: (0..units.len()).collect(),
+                remotes: b.remotes,
+            }
+            .run(None)
+        } else {
+            let board = Board::new(threads, thread.clone());
+            let outcome = std::thread::scope(|s| {
+                let handles: Vec<_> = (0..threads)
+                    .map(|me| {
+                        let (planned, units, thread, board) = (&planned, &units, &thread, &board);
+                        let (bars, shared, frame) = (&bars, &shared, &frame);
+                        std::thread::Builder::new()
+                            .name(format!("lembo-sim host {me}"))
+                            .spawn_scoped(s, move || {
+                                let _guard = AbortOnPanic(board);
+                                let mut b = Builder::new(
+                                    planned,
+                                    units,
+                                    thread,
+                                    me,
+                                    options.perturb,
+                                    &board.signals,
+                                );
+                                let futures = build(&mut b, bars, shared, frame, trace);
+                                let global = (0..units.len()).filter(|&g| thread[g] == me).collect();
+                                let r = HostThread {
+                                    core: b.core.clone(),
+                                    futures,
+                                    global,
+                                    remotes: b.remotes,
+                                }
+                                .run(Some((board, me)));
+                                if r.is_err() {
+                                    board.abort();
+                                }
+                                r
+                            })
+                    })
+                    .collect();
+                let mut all = Vec::new();
+                let mut waiting = Vec::new();
+                let mut failure = None;
+                for h in handles {
+                    match h.map_err(|e| Error::Internal(format!("cannot start a host thread: {e}")))?.join() {
+                        Err(_) => failure = Some(Error::Internal("a host thread of the timed model panicked".into())),
+                        Ok(Ok((done, _))) => all.extend(done),
+                        Ok(Err(Stop::Deadlock(w))) => waiting.extend(w),
+                        Ok(Err(Stop::Aborted)) => {}
+                    }
+                }
+                if let Some(e) = failure {
+                    return Err(e);
+                }
+                if board.deadlocked() {
+                    waiting.sort();
+                    return Ok(Err(Stop::Deadlock(waiting)));
+                }
+                if all.len() != units.len() {
+                    return Err(Error::Internal("a unit stopped without a result".into()));
+                }
+                Ok(Ok((all, board.recoveries())))
+            })?;
+            outcome
+        }
     };
-    let rop_ids = of(UnitKind::Rop);
-    let fb_id = units.len() - 1;
-    let pick =
-        |ids: &[usize]| -> Vec<UnitInstance> { ids.iter().map(|&u| units[u].clone()).collect() };
-    let l = &arch.links;
-    let (rop_tx, mut fb_rx) = crossbar(&l.rop_to_framebuffer, &pick(&rop_ids), &units[fb_id..]);
+    let (mut results, recoveries) = match results {
+        Ok(r) => r,
+        Err(Stop::Deadlock(waiting)) => {
+            return Err(Error::Deadlock {
+                waiting: waiting.into_iter().map(|(_, w)| w).collect(),
+            })
+        }
+        Err(Stop::Aborted) => return Err(Error::Internal("the timed run was aborted".into())),
+    };
+    results.sort_by_key(|(u, _)| *u);
+    let mut frame = finish(arch, fb, units, results, options, trace_cap)?;
+    frame.recoveries = recoveries;
+    Ok(frame)
+}
 
-    let results: Result<Vec<(usize, Finished, Option<TileStore>)>> = std::thread::scope(|s| {
-        let sh = &shared;
-        let mon = &monitor;
-        macro_rules! ctx {
-            ($unit:expr, $latency:expr, $inputs:expr, $outputs:expr) => {
-                Ctx::new($unit, $inputs, $outputs, $latency, mon, options, trace_cap)
-            };
-        }
-        let mut handles: Vec<(usize, UnitHandle<'_>)> = Vec::new();
-        let plain = |r: std::result::Result<Finished, ActorError>| r.map(|f| (f, None));
-
-        // The front end, up to the links into the ROPs.
-        let rop_rx = match triangles {
-            None => {
-                let (seg_ids, sub_ids, ras_ids) = (
-                    of(UnitKind::Segmenter),
-                    of(UnitKind::Subsegmenter),
-                    of(UnitKind::FragmentRasterizer),
-                );
-                let (mut setup_tx, mut minmax_rx) =
-                    crossbar(&l.setup_to_minmax, &units[0..1], &units[1..2]);
-                let (mut minmax_tx, mut im_rx) =
-                    crossbar(&l.minmax_to_interval_manager, &units[1..2], &units[2..3]);
-                let (mut im_tx, seg_rx) = crossbar(
-                    &l.interval_manager_to_segmenter,
-                    &units[2..3],
-                    &pick(&seg_ids),
-                );
-                let (seg_tx, sub_rx) = crossbar(
-                    &l.segmenter_to_subsegmenter,
-                    &pick(&seg_ids),
-                    &pick(&sub_ids),
-                );
-                let (sub_tx, ras_rx) = crossbar(
-                    &l.subsegmenter_to_rasterizer,
-                    &pick(&sub_ids),
-                    &pick(&ras_ids),
-                );
-                let (ras_tx, rop_rx) =
-                    crossbar(&l.rasterizer_to_rop, &pick(&ras_ids), &pick(&rop_ids));
-
-                let c = ctx!(0, arch.setup.latency_cycles, Vec::new(), setup_tx.remove(0));
-                handles.push((0, spawn(s, mon, 0, move || plain(setup::run(c, sh)))?));
-                let c = ctx!(
-                    1,
-                    arch.minmax.latency_cycles,
-                    minmax_rx.remove(0),
-                    minmax_tx.remove(0)
-                );
-                handles.push((1, spawn(s, mon, 1, move || plain(minmax::run(c, sh)))?));
-                let c = ctx!(
-                    2,
-                    arch.interval_manager.latency_cycles,
-                    im_rx.remove(0),
-                    im_tx.remove(0)
-                );
-                handles.push((
-                    2,
-                    spawn(s, mon, 2, move || plain(interval_manager::run(c, sh)))?,
-                ));
-                for ((&u, rx), tx) in seg_ids.iter().zip(seg_rx).zip(seg_tx) {
-                    let c = ctx!(u, arch.segmenter.latency_cycles, rx, tx);
-                    handles.push((u, spawn(s, mon, u, move || plain(segmenter::run(c, sh)))?));
-                }
-                for ((&u, rx), tx) in sub_ids.iter().zip(sub_rx).zip(sub_tx) {
-                    let c = ctx!(u, arch.subsegmenter.latency_cycles, rx, tx);
-                    handles.push((
-                        u,
-                        spawn(s, mon, u, move || plain(subsegmenter::run(c, sh)))?,
-                    ));
-                }
-                for ((&u, rx), tx) in ras_ids.iter().zip(ras_rx).zip(ras_tx) {
-                    let c = ctx!(u, arch.rasterizer.latency_cycles, rx, tx);
-                    handles.push((u, spawn(s, mon, u, move || plain(rasterizer::run(c, sh)))?));
-                }
-                rop_rx
-            }
-            Some(_) => {
-                let tr_ids = of(UnitKind::TriangleRasterizer);
-                let (mut setup_tx, tr_rx) = crossbar(
-                    &l.triangle_setup_to_rasterizer,
-                    &units[0..1],
-                    &pick(&tr_ids),
-                );
-                let (tr_tx, rop_rx) = crossbar(
-                    &l.triangle_rasterizer_to_rop,
-                    &pick(&tr_ids),
-                    &pick(&rop_ids),
-                );
-                let c = ctx!(
-                    0,
-                    arch.triangle_setup.latency_cycles,
-                    Vec::new(),
-                    setup_tx.remove(0)
-                );
-                handles.push((
-                    0,
-                    spawn(s, mon, 0, move || plain(triangle_setup::run(c, sh)))?,
-                ));
-                for ((&u, rx), tx) in tr_ids.iter().zip(tr_rx).zip(tr_tx) {
-                    let c = ctx!(u, arch.triangle_rasterizer.latency_cycles, rx, tx);
-                    handles.push((
-                        u,
-                        spawn(s, mon, u, move || plain(triangle_rasterizer::run(c, sh)))?,
-                    ));
-                }
-                rop_rx
-            }
-        };
-        for (r, ((&u, rx), tx)) in rop_ids.iter().zip(rop_rx).zip(rop_tx).enumerate() {
-            let c = ctx!(u, arch.rop.latency_cycles, rx, tx);
-            handles.push((
-                u,
-                spawn(s, mon, u, move || {
-                    rop::run(c, sh, r).map(|(f, store)| (f, Some(store)))
-                })?,
-            ));
-        }
-        let c = ctx!(fb_id, 1, fb_rx.remove(0), Vec::new());
-        let fbc = &arch.framebuffer;
-        handles.push((
-            fb_id,
-            spawn(s, mon, fb_id, move || plain(framebuffer::run(c, fbc)))?,
-        ));
-
-        let mut done = Vec::new();
-        let mut failure: Option<Error> = None;
-        for (u, h) in handles {
-            match join(h, &units[u].name)? {
-                Ok((f, store)) => done.push((u, f, store)),
-                Err(ActorError::Aborted) => {}
-                Err(ActorError::Disconnected(link)) => {
-                    failure.get_or_insert(Error::Internal(format!(
-                        "link {link} disconnected before it ended"
-                    )));
-                }
-            }
-        }
-        if let Some(waiting) = monitor.deadlock() {
-            return Err(Error::Deadlock { waiting });
-        }
-        if let Some(e) = failure {
-            return Err(e);
-        }
-        if done.len() != units.len() {
-            return Err(Error::Internal("a unit stopped without a result".into()));
-        }
-        Ok(done)
-    });
-    let mut results = results?;
-    results.sort_by_key(|(u, _, _)| *u);
-
+/// The frame's cycle report, counts and timeline from every unit's result.
+fn finish(
+    arch: &ArchConfig,
+    fb: FrameBuffer,
+    units: Vec<UnitInstance>,
+    mut results: Vec<(usize, Finished)>,
+    options: &SimOptions,
+    trace_cap: usize,
+) -> Result<TimedFrame> {
+    if let Some((u, _)) = results.iter().find(|(_, f)| f.stats.out_of_order > 0) {
+        return Err(Error::Internal(format!(
+            "the timed model's {} took items out of merge order",
+            units[*u].name
+        )));
+    }
     // A recorded functional error: the first in scene order.
     let mut first_error: Option<Error> = None;
-    for (_, f, _) in &mut results {
+    for (_, f) in &mut results {
         if let Some(e) = f.error.take() {
             let key = |e: &Error| match e {
                 Error::SegmentCap {
@@ -641,17 +673,13 @@ fn run_in<R: Real>(
 
     let total = results
         .iter()
-        .map(|(_, f, _)| f.stats.end)
+        .map(|(_, f)| f.stats.end)
         .max()
         .unwrap_or(Cycle::ZERO);
     let mut counts = Counts::default();
-    let mut fb = FrameBuffer::new(vp.width, vp.height, background, false);
     let mut unit_cycles = Vec::with_capacity(units.len());
-    for (u, f, store) in &results {
+    for (u, f) in &results {
         counts += f.counts;
-        if let Some(store) = store {
-            store.write_into(&shared.tiles, &mut fb);
-        }
         let st = &f.stats;
         unit_cycles.push(UnitCycles {
             name: units[*u].name.clone(),
@@ -668,7 +696,7 @@ fn run_in<R: Real>(
     let trace = options.trace.then(|| {
         let tracks: Vec<trace::Track> = results
             .iter()
-            .filter_map(|(u, f, _)| {
+            .filter_map(|(u, f)| {
                 f.trace.as_ref().map(|recorder| trace::Track {
                     name: &units[*u].name,
                     kind: units[*u].kind.name(),
@@ -693,7 +721,7 @@ fn run_in<R: Real>(
         units: unit_cycles,
     };
     let mut discoid: Option<(Vec<Pending>, BlendReport)> = None;
-    for (_, f, _) in &mut results {
+    for (_, f) in &mut results {
         if let Some((pending, report)) = f.discoid.take() {
             let (all, sum) = discoid.get_or_insert_with(Default::default);
             all.extend(pending);
@@ -709,5 +737,6 @@ fn run_in<R: Real>(
         cycles,
         trace,
         discoid,
+        recoveries: Recoveries::default(),
     })
 }

@@ -6,14 +6,14 @@
 //! Cost: ceil(bytes / bytes_per_cycle) per burst (at least one cycle). Not modelled:
 //! DRAM pages, refresh, compression, caches.
 
-use super::actor::{ActorError, Ctx};
+use crate::pipeline::runtime::Ctx;
 use super::rop::WriteBurst;
-use super::Finished;
+use crate::pipeline::Finished;
 use crate::config::FrameBufferConfig;
 use crate::raster::Counts;
 
-pub fn run(mut ctx: Ctx<WriteBurst, ()>, cfg: &FrameBufferConfig) -> Result<Finished, ActorError> {
-    while let Some(WriteBurst { bytes }) = ctx.next_input()? {
+pub async fn run(mut ctx: Ctx<WriteBurst, ()>, cfg: &FrameBufferConfig) -> Finished {
+    while let Some(WriteBurst { bytes }) = ctx.next_input().await {
         ctx.work(bytes.div_ceil(cfg.bytes_per_cycle).max(1));
     }
     Finished::new(ctx, Counts::default())

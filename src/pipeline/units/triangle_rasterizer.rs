@@ -13,9 +13,9 @@
 //! Quads with no covered pixel are skipped for free, as a hierarchical rasterizer rejects
 //! them by tile. Ready `latency_cycles` later.
 
-use super::actor::{ActorError, Ctx};
+use crate::pipeline::runtime::Ctx;
 use super::rop::RopItem;
-use super::{Finished, Shared};
+use crate::pipeline::{Finished, Shared};
 use crate::datapath::Real;
 use crate::raster::triangle::{quads_in, ScreenTriangle};
 use crate::raster::Counts;
@@ -54,15 +54,15 @@ fn clip((a, b): (u32, u32), lo: u32, hi: u32) -> (u32, u32) {
     }
 }
 
-pub fn run<R: Real>(
+pub async fn run<R: Real>(
     mut ctx: Ctx<Arc<ScreenTriangle<R>>, RopItem<R>>,
-    sh: &Shared<R>,
-) -> Result<Finished, ActorError> {
+    sh: &Shared<'_, R>,
+) -> Finished {
     let ppc = sh.arch.triangle_rasterizer.pixels_per_cycle;
     let tiles = &sh.tiles;
     let tile = tiles.tile_px;
     let mut counts = Counts::default();
-    while let Some(tri) = ctx.next_input()? {
+    while let Some(tri) = ctx.next_input().await {
         let [_, _, j0, j1] = tri.bbox;
         let mut emitted = false;
         let mut qj = j0 & !1;
@@ -103,7 +103,7 @@ pub fn run<R: Real>(
                     };
                     let (rop, _) = tiles.owner(i, row);
                     let cycles = (4 * quads_in(&piece.rows)).div_ceil(ppc).max(1);
-                    ctx.emit(cycles, rop, RopItem::Triangle(piece))?;
+                    ctx.emit(cycles, rop, RopItem::Triangle(piece)).await;
                     emitted = true;
                 }
                 i = end;

@@ -10,9 +10,9 @@
 //! error and the interval dropped, so the run still ends and reports the first such
 //! interval in scene order, whatever the schedule.
 
-use super::actor::{ActorError, Ctx};
+use crate::pipeline::runtime::Ctx;
 use super::interval_manager::ScanInterval;
-use super::{Finished, PieceId, Shared};
+use crate::pipeline::{Finished, PieceId, Shared};
 use crate::datapath::Real;
 use crate::error::Error;
 use crate::raster::segmenter::{segments, Segment};
@@ -26,17 +26,17 @@ pub struct ScanSegment<R> {
     pub segment: Segment<R>,
 }
 
-pub fn run<R: Real>(
+pub async fn run<R: Real>(
     mut ctx: Ctx<ScanInterval<R>, ScanSegment<R>>,
-    sh: &Shared<R>,
-) -> Result<Finished, ActorError> {
+    sh: &Shared<'_, R>,
+) -> Finished {
     let cost = sh.arch.segmenter.cycles_per_segment;
     let mut counts = Counts::default();
     let mut segs = Vec::new();
     let mut next_port = 0;
     // The first (lembo, piece, scanline) over the cap, as the functional model meets them.
     let mut cap_error: Option<(u32, u32, u32)> = None;
-    while let Some(ScanInterval { id, j, interval }) = ctx.next_input()? {
+    while let Some(ScanInterval { id, j, interval }) = ctx.next_input().await {
         let l = sh.lembo(id);
         segs.clear();
         if segments(
@@ -55,15 +55,15 @@ pub fn run<R: Real>(
             continue;
         }
         for &segment in &segs {
-            ctx.emit(cost, next_port, ScanSegment { id, j, segment })?;
+            ctx.emit(cost, next_port, ScanSegment { id, j, segment }).await;
             next_port = (next_port + 1) % ctx.outputs();
         }
     }
-    let mut done = Finished::new(ctx, counts)?;
+    let mut done = Finished::new(ctx, counts);
     done.error = cap_error.map(|(lembo, _, scanline)| Error::SegmentCap {
         lembo: lembo as usize,
         scanline,
         cap: DEFAULT_SEGMENT_CAP,
     });
-    Ok(done)
+    done
 }

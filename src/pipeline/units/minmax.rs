@@ -7,9 +7,9 @@
 //!
 //! Cost: `minmax.cycles_per_lembo` per lembo, ready `minmax.latency_cycles` later.
 
-use super::actor::{ActorError, Ctx};
+use crate::pipeline::runtime::Ctx;
 use super::setup::LemboReady;
-use super::{Finished, PieceId, Shared};
+use crate::pipeline::{Finished, PieceId, Shared};
 use crate::datapath::Real;
 use crate::raster::{minmax, Counts};
 
@@ -21,16 +21,16 @@ pub struct ScanlineRange {
     pub j1: u32,
 }
 
-pub fn run<R: Real>(
+pub async fn run<R: Real>(
     mut ctx: Ctx<LemboReady, ScanlineRange>,
-    sh: &Shared<R>,
-) -> Result<Finished, ActorError> {
+    sh: &Shared<'_, R>,
+) -> Finished {
     let cost = sh.arch.minmax.cycles_per_lembo;
     let mut counts = Counts::default();
-    while let Some(LemboReady { id }) = ctx.next_input()? {
+    while let Some(LemboReady { id }) = ctx.next_input().await {
         let l = sh.lembo(id);
         match minmax::scanlines(l, sh.view.viewport.height) {
-            Some((j0, j1)) => ctx.emit(cost, 0, ScanlineRange { id, j0, j1 })?,
+            Some((j0, j1)) => ctx.emit(cost, 0, ScanlineRange { id, j0, j1 }).await,
             None => {
                 counts.lembos_culled_outside += 1;
                 ctx.work(cost);

@@ -12,10 +12,10 @@
 //! ceil(n / fragments_per_cycle) per span of n fragments, ready `latency_cycles` later.
 //! Depth is evaluated from the depth quadratic in the ROP, with the depth test.
 
-use super::actor::{ActorError, Ctx};
+use crate::pipeline::runtime::Ctx;
 use super::rop::RopItem;
 use super::subsegmenter::ScanSubsegment;
-use super::{Finished, PieceId, Shared};
+use crate::pipeline::{Finished, PieceId, Shared};
 use crate::datapath::Real;
 use crate::raster::fragment::{span, Span};
 use crate::raster::Counts;
@@ -28,14 +28,14 @@ pub struct FragmentSpan<R> {
     pub span: Span<R>,
 }
 
-pub fn run<R: Real>(
+pub async fn run<R: Real>(
     mut ctx: Ctx<ScanSubsegment<R>, RopItem<R>>,
-    sh: &Shared<R>,
-) -> Result<Finished, ActorError> {
+    sh: &Shared<'_, R>,
+) -> Finished {
     let cfg = &sh.arch.rasterizer;
     let mut counts = Counts::default();
     let width = sh.view.viewport.width;
-    while let Some(ScanSubsegment { id, j, subsegment }) = ctx.next_input()? {
+    while let Some(ScanSubsegment { id, j, subsegment }) = ctx.next_input().await {
         ctx.work(cfg.cycles_per_subsegment);
         let Some(mut run) = span(&subsegment, width) else {
             continue;
@@ -53,7 +53,7 @@ pub fn run<R: Real>(
                 cycles,
                 rop,
                 RopItem::Lembo(FragmentSpan { id, j, span: piece }),
-            )?;
+            ).await;
             run.advance(n);
         }
     }

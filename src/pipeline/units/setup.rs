@@ -17,8 +17,8 @@
 //! (it was computed with the split). The result is ready `setup.latency_cycles` later. Not
 //! modelled: the memory traffic of fetching the lembos.
 
-use super::actor::{ActorError, Ctx};
-use super::{Finished, PieceId, Shared};
+use crate::pipeline::runtime::Ctx;
+use crate::pipeline::{Finished, PieceId, Shared};
 use crate::datapath::Real;
 use crate::raster::setup::setup_pieces;
 use crate::raster::Counts;
@@ -29,7 +29,7 @@ pub struct LemboReady {
     pub id: PieceId,
 }
 
-pub fn run<R: Real>(mut ctx: Ctx<(), LemboReady>, sh: &Shared<R>) -> Result<Finished, ActorError> {
+pub async fn run<R: Real>(mut ctx: Ctx<(), LemboReady>, sh: &Shared<'_, R>) -> Finished {
     let cost = sh.arch.setup.cycles_per_lembo;
     let mut counts = Counts::default();
     let mut pieces = Vec::new();
@@ -56,7 +56,7 @@ pub fn run<R: Real>(mut ctx: Ctx<(), LemboReady>, sh: &Shared<R>) -> Result<Fini
                         lembo: id as u32,
                         piece: piece as u32,
                     };
-                    ctx.emit(owed.max(1), 0, LemboReady { id })?;
+                    ctx.emit(owed.max(1), 0, LemboReady { id }).await;
                     owed = 0;
                 }
                 if n == 0 {

@@ -16,17 +16,17 @@
 //! Not modelled: vertex fetch and the post-transform vertex cache (each triangle's three
 //! vertices are transformed here).
 
-use super::actor::{ActorError, Ctx};
-use super::{Finished, Shared};
+use crate::pipeline::runtime::Ctx;
+use crate::pipeline::{Finished, Shared};
 use crate::datapath::Real;
 use crate::raster::triangle::{setup, ScreenTriangle};
 use crate::raster::Counts;
 use std::sync::Arc;
 
-pub fn run<R: Real>(
+pub async fn run<R: Real>(
     mut ctx: Ctx<(), Arc<ScreenTriangle<R>>>,
-    sh: &Shared<R>,
-) -> Result<Finished, ActorError> {
+    sh: &Shared<'_, R>,
+) -> Finished {
     let per_triangle = sh.arch.triangle_setup.cycles_per_triangle;
     let per_piece = sh.arch.triangle_setup.cycles_per_clipped_piece;
     let source = sh
@@ -50,7 +50,7 @@ pub fn run<R: Real>(
                 if outcome.fan > 0 {
                     cost += per_piece;
                 }
-                ctx.emit(cost, next, Arc::new(st))?;
+                ctx.emit(cost, next, Arc::new(st)).await;
                 next = (next + 1) % ctx.outputs();
                 cost = 0;
             }

@@ -9,17 +9,17 @@
 //! to the frame-buffer memory port: depth reads for every fragment tested, colour and depth
 //! writes for every fragment that passed.
 //!
-//! Storage: each ROP owns the pixels of its tiles ([`RopTiles`]), held tile by tile, so the
-//! ROPs never share a pixel and together hold one frame buffer.
+//! Storage: each ROP owns the pixels of its tiles ([`RopTiles`]) and writes them in place
+//! in the one frame buffer ([`SharedFrame`]); the ROPs never share a pixel.
 //!
 //! Cost: ceil(n / `rop.fragments_per_cycle`) per span of n fragments, ready
 //! `latency_cycles` later. Not modelled: caches; the frame-buffer port's bandwidth is the
 //! memory model.
 
-use super::actor::{ActorError, Ctx};
+use crate::pipeline::runtime::Ctx;
 use super::rasterizer::FragmentSpan;
 use super::triangle_rasterizer::TrianglePiece;
-use super::{DiscoidPass, Finished, Shared};
+use crate::pipeline::{DiscoidPass, Finished, Shared};
 use crate::config::BlendConfig;
 use crate::datapath::Real;
 use crate::discoid::blend::BlendMode;
@@ -27,7 +27,7 @@ use crate::discoid::render::{
     accumulation_keeps, depth_pass_wins, evaluate, BlendReport, DiscoidFragment, Pass, Pending,
 };
 use crate::raster::Counts;
-use crate::rop::framebuffer::{depth_test, NO_PRIMITIVE};
+use crate::rop::framebuffer::depth_test;
 use crate::rop::rop::FragmentShader;
 use crate::rop::FrameBuffer;
 
@@ -35,36 +35,24 @@ use crate::rop::FrameBuffer;
 /// (tx + ty) mod Np, so neighbouring tiles, along rows and columns, go to different ROPs.
 #[derive(Clone, Debug)]
 pub struct RopTiles {
+    /// Tile side [pixels].
     pub tile_px: u32,
+    /// Tiles per row.
     pub tiles_x: u32,
+    /// Tiles per column.
     pub tiles_y: u32,
+    /// ROPs sharing the screen.
     pub rops: u32,
-    /// Per tile (row-major): its slot among the tiles of its ROP.
-    slot: Vec<u32>,
-    /// Tiles per ROP.
-    owned: Vec<u32>,
 }
 
 impl RopTiles {
+    /// The tiles of a `width` x `height` screen over `rops` ROPs.
     pub fn new(width: u32, height: u32, tile_px: u32, rops: u32) -> Self {
-        let tiles_x = width.div_ceil(tile_px);
-        let tiles_y = height.div_ceil(tile_px);
-        let mut owned = vec![0u32; rops as usize];
-        let mut slot = Vec::with_capacity((tiles_x * tiles_y) as usize);
-        for ty in 0..tiles_y {
-            for tx in 0..tiles_x {
-                let r = ((tx + ty) % rops) as usize;
-                slot.push(owned[r]);
-                owned[r] += 1;
-            }
-        }
         RopTiles {
             tile_px,
-            tiles_x,
-            tiles_y,
+            tiles_x: width.div_ceil(tile_px),
+            tiles_y: height.div_ceil(tile_px),
             rops,
-            slot,
-            owned,
         }
     }
 
@@ -74,53 +62,108 @@ impl RopTiles {
         let (tx, ty) = (i / self.tile_px, j / self.tile_px);
         (((tx + ty) % self.rops) as usize, (tx + 1) * self.tile_px)
     }
+}
 
-    /// Index of pixel (i, j) in its owner's storage.
-    #[inline]
-    fn local(&self, i: u32, j: u32) -> usize {
-        let (tx, ty) = (i / self.tile_px, j / self.tile_px);
-        let slot = self.slot[(ty * self.tiles_x + tx) as usize] as usize;
-        let t = self.tile_px as usize;
-        slot * t * t + (j % self.tile_px) as usize * t + (i % self.tile_px) as usize
+/// The frame buffer the ROPs write in place, each only the pixels of its own tiles.
+///
+/// The ROPs run as units of one host thread or of several; a pixel belongs to exactly one
+/// ROP ([`RopTiles`]), so no two ROPs ever touch the same pixel and the frame needs no
+/// lock and no per-ROP copy. Each ROP reaches it through [`RopPixels`], which checks that
+/// every row of pixels it is given lies inside one of its own tiles.
+pub struct SharedFrame<'f> {
+    depth: *mut f32,
+    primitive: *mut u32,
+    color: *mut [u8; 3],
+    len: usize,
+    _frame: std::marker::PhantomData<&'f mut FrameBuffer>,
+}
+
+// SAFETY: the pointers come from a `&'f mut FrameBuffer` held for 'f, and every access goes
+// through a `RopPixels`, which confines ROP r to the pixels of its own tiles (checked per
+// row); distinct ROPs therefore never access the same element, from any thread.
+unsafe impl Send for SharedFrame<'_> {}
+unsafe impl Sync for SharedFrame<'_> {}
+
+impl<'f> SharedFrame<'f> {
+    /// Shares `fb`'s depth, winner and colour planes among the ROPs for `'f`.
+    pub fn new(fb: &'f mut FrameBuffer) -> Self {
+        SharedFrame {
+            depth: fb.depth.as_mut_ptr(),
+            primitive: fb.primitive.as_mut_ptr(),
+            color: fb.color.as_mut_ptr(),
+            len: fb.depth.len(),
+            _frame: std::marker::PhantomData,
+        }
     }
 }
 
-/// The pixels one ROP owns: depth, winner id and colour, tile by tile.
-pub struct TileStore {
+/// ROP `rop`'s access to the pixels of its tiles.
+pub struct RopPixels<'a, 'f> {
+    frame: &'a SharedFrame<'f>,
+    tiles: &'a RopTiles,
     rop: usize,
-    depth: Vec<f32>,
-    primitive: Vec<u32>,
-    color: Vec<[u8; 3]>,
+    width: usize,
 }
 
-impl TileStore {
-    fn new(tiles: &RopTiles, rop: usize, background: [u8; 3]) -> Self {
-        let n = tiles.owned[rop] as usize * (tiles.tile_px as usize).pow(2);
-        TileStore {
+impl<'a, 'f> RopPixels<'a, 'f> {
+    /// ROP `rop`'s pixels of `frame`, `width` pixels a row.
+    pub fn new(frame: &'a SharedFrame<'f>, tiles: &'a RopTiles, rop: usize, width: u32) -> Self {
+        RopPixels {
+            frame,
+            tiles,
             rop,
-            depth: vec![1.0; n],
-            primitive: vec![NO_PRIMITIVE; n],
-            color: vec![background; n],
+            width: width as usize,
         }
     }
 
-    /// Copies this ROP's pixels into the frame buffer.
-    pub fn write_into(&self, tiles: &RopTiles, fb: &mut FrameBuffer) {
-        for j in 0..fb.height {
-            let ty = j / tiles.tile_px;
-            for tx in 0..tiles.tiles_x {
-                if ((tx + ty) % tiles.rops) as usize != self.rop {
-                    continue;
-                }
-                let i0 = tx * tiles.tile_px;
-                for i in i0..(i0 + tiles.tile_px).min(fb.width) {
-                    let (src, dst) = (tiles.local(i, j), fb.index(i, j));
-                    fb.depth[dst] = self.depth[src];
-                    fb.primitive[dst] = self.primitive[src];
-                    fb.color[dst] = self.color[src];
-                }
-            }
+    /// The index of pixel (0, j): pixels i0..i1 of row j are `row + i`. Panics unless the
+    /// run lies inside one tile of this ROP (the rasterizers cut their output at tile
+    /// borders), which is what makes the unsynchronised writes sound.
+    #[inline]
+    fn row(&self, i0: u32, i1: u32, j: u32) -> usize {
+        let (owner, tile_end) = self.tiles.owner(i0, j);
+        assert!(
+            owner == self.rop && i1 <= tile_end && i0 < i1,
+            "ROP {} given pixels {i0}..{i1} of row {j}",
+            self.rop
+        );
+        let row = j as usize * self.width;
+        assert!(row + (i1 as usize) <= self.frame.len);
+        row
+    }
+
+    #[inline(always)]
+    fn depth(&self, idx: usize) -> f32 {
+        // SAFETY: idx is in a row `row` checked to be this ROP's (type doc).
+        unsafe { *self.frame.depth.add(idx) }
+    }
+
+    #[inline(always)]
+    fn primitive(&self, idx: usize) -> u32 {
+        // SAFETY: as for `depth`.
+        unsafe { *self.frame.primitive.add(idx) }
+    }
+
+    #[inline(always)]
+    fn set_depth(&mut self, idx: usize, z: f32, id: u32) {
+        // SAFETY: as for `depth`; `&mut self` keeps one writer per ROP.
+        unsafe {
+            *self.frame.depth.add(idx) = z;
+            *self.frame.primitive.add(idx) = id;
         }
+    }
+
+    /// The depth test and write of fragment (z, id) at pixel index `idx`; `shade` gives
+    /// the colour of a fragment that passes.
+    #[inline(always)]
+    fn test_and_write(&mut self, idx: usize, z: f32, id: u32, shade: impl FnOnce() -> [u8; 3]) -> bool {
+        if !depth_test(z, id, self.depth(idx), self.primitive(idx)) {
+            return false;
+        }
+        self.set_depth(idx, z, id);
+        // SAFETY: as for `depth`.
+        unsafe { *self.frame.color.add(idx) = shade() };
+        true
     }
 }
 
@@ -131,54 +174,31 @@ pub enum RopItem<R> {
     Triangle(TrianglePiece<R>),
 }
 
-impl TileStore {
-    /// The depth test and write of fragment (z, id) at storage index `idx`; `shade` gives
-    /// the colour of a fragment that passes.
-    #[inline(always)]
-    fn test_and_write(
-        &mut self,
-        idx: usize,
-        z: f32,
-        id: u32,
-        shade: impl FnOnce() -> [u8; 3],
-    ) -> bool {
-        if !depth_test(z, id, self.depth[idx], self.primitive[idx]) {
-            return false;
-        }
-        self.depth[idx] = z;
-        self.primitive[idx] = id;
-        self.color[idx] = shade();
-        true
-    }
-}
-
 /// Frame-buffer traffic of one span [bytes].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct WriteBurst {
     pub bytes: u64,
 }
 
-/// A discoid pass's work on one fragment at storage index `local` (global `idx`):
-/// returns whether it passed (the depth pass) or was kept (the accumulation pass).
+/// A discoid pass's work on one fragment at pixel index `idx`: returns whether it passed
+/// (the depth pass) or was kept (the accumulation pass).
 #[allow(clippy::too_many_arguments)]
 #[inline]
 fn discoid_fragment<R: Real>(
     dp: &DiscoidPass<R>,
-    sh: &Shared<R>,
+    sh: &Shared<'_, R>,
     shader: &FragmentShader<R>,
-    store: &mut TileStore,
+    pixels: &mut RopPixels,
     kept: &mut (Vec<Pending>, BlendReport),
-    local: usize,
     idx: usize,
     f: &DiscoidFragment<R>,
 ) -> bool {
     let e = evaluate(dp.table, shader, f);
     match dp.pass {
         Pass::Depth => {
-            let wins = depth_pass_wins(&e, f.id, store.depth[local], store.primitive[local]);
+            let wins = depth_pass_wins(&e, f.id, pixels.depth(idx), pixels.primitive(idx));
             if wins {
-                store.depth[local] = e.z;
-                store.primitive[local] = f.id;
+                pixels.set_depth(idx, e.z, f.id);
             }
             wins
         }
@@ -208,40 +228,34 @@ fn discoid_fragment<R: Real>(
     }
 }
 
-pub fn run<R: Real>(
+/// ROP `rop`: depth-tests, shades and writes the fragments it is given into `frame`.
+pub async fn run<R: Real>(
     mut ctx: Ctx<RopItem<R>, WriteBurst>,
-    sh: &Shared<R>,
+    sh: &Shared<'_, R>,
     rop: usize,
-) -> Result<(Finished, TileStore), ActorError> {
+    frame: &SharedFrame<'_>,
+) -> Finished {
     let cfg = &sh.arch.rop;
     let fbc = &sh.arch.framebuffer;
     let mut counts = Counts::default();
-    let mut store = TileStore::new(&sh.tiles, rop, sh.background);
+    let mut pixels = RopPixels::new(frame, &sh.tiles, rop, sh.view.viewport.width);
     let shader = FragmentShader::<R>::new(&sh.scene.light, sh.view);
-    let width = sh.view.viewport.width as usize;
     let mut kept = (Vec::new(), BlendReport::default());
-    while let Some(item) = ctx.next_input()? {
+    while let Some(item) = ctx.next_input().await {
         let mut passed = 0u64;
-        // The rasterizers cut their output at tile borders: a row's pixels are consecutive
-        // in the tile's storage row, so the index is found once per row, not per fragment.
-        let row_start = |i: u32, j: u32| {
-            debug_assert!(sh.tiles.owner(i, j).0 == rop, "item for another ROP");
-            sh.tiles.local(i, j) as isize - i as isize
-        };
         let n = match item {
             RopItem::Lembo(FragmentSpan { id, j, span }) => {
                 let l = sh.lembo(id);
-                let first = row_start(span.i0, j);
+                let row = pixels.row(span.i0, span.i1, j);
                 span.walk(|i, u, v| {
-                    let local = (first + i as isize) as usize;
+                    let idx = row + i as usize;
                     let z = l.z.eval(u, v);
                     let wins = match &sh.discoid {
-                        None => store.test_and_write(local, z.f64() as f32, l.id, || {
+                        None => pixels.test_and_write(idx, z.f64() as f32, l.id, || {
                             shader.shade(l, u, v).0
                         }),
                         Some(dp) => dp.table.lembo_fragment(l, u, v, z).is_some_and(|f| {
-                            let idx = j as usize * width + i as usize;
-                            discoid_fragment(dp, sh, &shader, &mut store, &mut kept, local, idx, &f)
+                            discoid_fragment(dp, sh, &shader, &mut pixels, &mut kept, idx, &f)
                         }),
                     };
                     passed += wins as u64;
@@ -255,20 +269,17 @@ pub fn run<R: Real>(
                     if a >= b {
                         continue;
                     }
-                    let first = row_start(a, j);
+                    let row = pixels.row(a, b, j);
                     for i in a..b {
                         let f = t.fragment(i, j);
-                        let local = (first + i as isize) as usize;
+                        let idx = row + i as usize;
                         let wins = match &sh.discoid {
-                            None => store.test_and_write(local, f.z.f64() as f32, t.id, || {
+                            None => pixels.test_and_write(idx, f.z.f64() as f32, t.id, || {
                                 shader.shade_at(f.normal, f.position, t.color).0
                             }),
                             Some(dp) => {
                                 let df = dp.table.planar_fragment(t, &f);
-                                let idx = j as usize * width + i as usize;
-                                discoid_fragment(
-                                    dp, sh, &shader, &mut store, &mut kept, local, idx, &df,
-                                )
+                                discoid_fragment(dp, sh, &shader, &mut pixels, &mut kept, idx, &df)
                             }
                         };
                         passed += wins as u64;
@@ -294,9 +305,10 @@ pub fn run<R: Real>(
             n.div_ceil(cfg.fragments_per_cycle) + extra,
             0,
             WriteBurst { bytes },
-        )?;
+        )
+        .await;
     }
-    let mut finished = Finished::new(ctx, counts)?;
+    let mut finished = Finished::new(ctx, counts);
     if matches!(
         &sh.discoid,
         Some(DiscoidPass {
@@ -306,7 +318,7 @@ pub fn run<R: Real>(
     ) {
         finished.discoid = Some(kept);
     }
-    Ok((finished, store))
+    finished
 }
 
 /// Blend-unit cycles per kept fragment in `mode`.

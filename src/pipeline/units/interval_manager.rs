@@ -11,9 +11,9 @@
 //! interval emitted; ready `latency_cycles` after issue. Not modelled: the small sort of
 //! the roots by walk key, taken as part of the per-interval cycle.
 
-use super::actor::{ActorError, Ctx};
+use crate::pipeline::runtime::Ctx;
 use super::minmax::ScanlineRange;
-use super::{Finished, PieceId, Shared};
+use crate::pipeline::{Finished, PieceId, Shared};
 use crate::datapath::Real;
 use crate::raster::interval::{intervals, Interval, IntervalScratch};
 use crate::raster::Counts;
@@ -26,16 +26,16 @@ pub struct ScanInterval<R> {
     pub interval: Interval<R>,
 }
 
-pub fn run<R: Real>(
+pub async fn run<R: Real>(
     mut ctx: Ctx<ScanlineRange, ScanInterval<R>>,
-    sh: &Shared<R>,
-) -> Result<Finished, ActorError> {
+    sh: &Shared<'_, R>,
+) -> Finished {
     let cfg = &sh.arch.interval_manager;
     let mut counts = Counts::default();
     let mut scratch = IntervalScratch::default();
     let mut ivs = Vec::new();
     let mut next_port = 0;
-    while let Some(ScanlineRange { id, j0, j1 }) = ctx.next_input()? {
+    while let Some(ScanlineRange { id, j0, j1 }) = ctx.next_input().await {
         let l = sh.lembo(id);
         for j in j0..=j1 {
             counts.scanlines += 1;
@@ -47,7 +47,7 @@ pub fn run<R: Real>(
                     cfg.cycles_per_interval,
                     next_port,
                     ScanInterval { id, j, interval },
-                )?;
+                ).await;
                 next_port = (next_port + 1) % ctx.outputs();
             }
         }

@@ -7,9 +7,9 @@
 //!
 //! Cost: `subsegmenter.cycles_per_subsegment` per subsegment, ready `latency_cycles` later.
 
-use super::actor::{ActorError, Ctx};
+use crate::pipeline::runtime::Ctx;
 use super::segmenter::ScanSegment;
-use super::{Finished, PieceId, Shared};
+use crate::pipeline::{Finished, PieceId, Shared};
 use crate::datapath::Real;
 use crate::raster::subsegmenter::{subsegments, Subsegment};
 use crate::raster::Counts;
@@ -22,20 +22,20 @@ pub struct ScanSubsegment<R> {
     pub subsegment: Subsegment<R>,
 }
 
-pub fn run<R: Real>(
+pub async fn run<R: Real>(
     mut ctx: Ctx<ScanSegment<R>, ScanSubsegment<R>>,
-    sh: &Shared<R>,
-) -> Result<Finished, ActorError> {
+    sh: &Shared<'_, R>,
+) -> Finished {
     let cost = sh.arch.subsegmenter.cycles_per_subsegment;
     let mut counts = Counts::default();
     let mut subs = Vec::new();
     let mut next_port = 0;
-    while let Some(ScanSegment { id, j, segment }) = ctx.next_input()? {
+    while let Some(ScanSegment { id, j, segment }) = ctx.next_input().await {
         let l = sh.lembo(id);
         subs.clear();
         subsegments(l, &segment, sh.k, &mut subs, &mut counts);
         for &subsegment in &subs {
-            ctx.emit(cost, next_port, ScanSubsegment { id, j, subsegment })?;
+            ctx.emit(cost, next_port, ScanSubsegment { id, j, subsegment }).await;
             next_port = (next_port + 1) % ctx.outputs();
         }
     }

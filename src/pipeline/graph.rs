@@ -1,0 +1,227 @@
+//! The unit graph, described once: which kinds of unit each path instantiates, how many
+//! of each, and which boundaries between kinds carry links. Elaboration ([`super::run_in`]),
+//! the report's unit list, the FIFO entry count and the sweep's column order all read it,
+//! so adding a unit means adding it here and writing its body in [`super::units`].
+//!
+//! Every boundary is a crossbar: one link (FIFO depth and latency from the architecture's
+//! `links`) from every producer instance to every consumer instance; which link a producer
+//! pushes an item on is its dispatch rule (round-robin, or by screen tile into the ROPs).
+
+use crate::config::{ArchConfig, LinkConfig};
+use serde::Serialize;
+
+/// The kinds of unit, in dataflow order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize)]
+pub enum UnitKind {
+    /// Projects lembos and sets up their screen quadratics (paper 001 section 4).
+    Setup,
+    /// Finds a lembo's y range (section 5).
+    MinMax,
+    /// Finds each scanline's intervals (section 5.1).
+    IntervalManager,
+    /// Walks intervals in segments of midpoint error k (section 5.2).
+    Segmenter,
+    /// Splits segments so x is linear (section 5.3).
+    Subsegmenter,
+    /// Generates fragments along subsegments (section 5.3).
+    FragmentRasterizer,
+    /// The triangle path's setup.
+    TriangleSetup,
+    /// The triangle path's quad rasterizer.
+    TriangleRasterizer,
+    /// Depth test, shading and frame-buffer write, by screen tile.
+    Rop,
+    /// A ROP's discoid blend unit (listed for scenes with discoids; its cycles are its
+    /// ROP's).
+    BlendUnit,
+    /// The frame-buffer memory port.
+    FrameBuffer,
+}
+
+/// Every kind, in dataflow order.
+pub const KINDS: [UnitKind; 11] = [
+    UnitKind::Setup,
+    UnitKind::MinMax,
+    UnitKind::IntervalManager,
+    UnitKind::Segmenter,
+    UnitKind::Subsegmenter,
+    UnitKind::FragmentRasterizer,
+    UnitKind::TriangleSetup,
+    UnitKind::TriangleRasterizer,
+    UnitKind::Rop,
+    UnitKind::BlendUnit,
+    UnitKind::FrameBuffer,
+];
+
+impl UnitKind {
+    /// The kind's name, as in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            UnitKind::Setup => "Setup",
+            UnitKind::MinMax => "MinMax",
+            UnitKind::IntervalManager => "IntervalManager",
+            UnitKind::Segmenter => "Segmenter",
+            UnitKind::Subsegmenter => "Subsegmenter",
+            UnitKind::FragmentRasterizer => "FragmentRasterizer",
+            UnitKind::TriangleSetup => "TriangleSetup",
+            UnitKind::TriangleRasterizer => "TriangleRasterizer",
+            UnitKind::Rop => "Rop",
+            UnitKind::BlendUnit => "BlendUnit",
+            UnitKind::FrameBuffer => "FrameBuffer",
+        }
+    }
+
+    /// Whether the architecture replicates this kind (its instances are named `Kind[i]`).
+    pub fn replicated(self) -> bool {
+        matches!(
+            self,
+            UnitKind::Segmenter
+                | UnitKind::Subsegmenter
+                | UnitKind::FragmentRasterizer
+                | UnitKind::TriangleRasterizer
+                | UnitKind::Rop
+                | UnitKind::BlendUnit
+        )
+    }
+
+    /// Instances in `arch` and the latency of each [cycles].
+    pub fn in_arch(self, arch: &ArchConfig) -> (u32, u64) {
+        match self {
+            UnitKind::Setup => (1, arch.setup.latency_cycles),
+            UnitKind::MinMax => (1, arch.minmax.latency_cycles),
+            UnitKind::IntervalManager => (1, arch.interval_manager.latency_cycles),
+            UnitKind::Segmenter => (arch.segmenter.count, arch.segmenter.latency_cycles),
+            UnitKind::Subsegmenter => (arch.subsegmenter.count, arch.subsegmenter.latency_cycles),
+            UnitKind::FragmentRasterizer => (arch.rasterizer.count, arch.rasterizer.latency_cycles),
+            UnitKind::TriangleSetup => (1, arch.triangle_setup.latency_cycles),
+            UnitKind::TriangleRasterizer => (
+                arch.triangle_rasterizer.count,
+                arch.triangle_rasterizer.latency_cycles,
+            ),
+            UnitKind::Rop | UnitKind::BlendUnit => (arch.rop.count, arch.rop.latency_cycles),
+            UnitKind::FrameBuffer => (1, 1),
+        }
+    }
+}
+
+/// Which primitives the timed pipeline draws.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Path {
+    /// Lembos by the extreme method (Figure 5).
+    Lembo,
+    /// The tessellated scene as triangles.
+    Triangle,
+}
+
+impl Path {
+    /// The kinds this path instantiates, in dataflow order.
+    pub fn kinds(self) -> &'static [UnitKind] {
+        use UnitKind::*;
+        match self {
+            Path::Lembo => &[
+                Setup,
+                MinMax,
+                IntervalManager,
+                Segmenter,
+                Subsegmenter,
+                FragmentRasterizer,
+                Rop,
+                FrameBuffer,
+            ],
+            Path::Triangle => &[TriangleSetup, TriangleRasterizer, Rop, FrameBuffer],
+        }
+    }
+}
+
+/// Every boundary of both paths: producer kind, consumer kind and the link configuration
+/// of each of its links.
+pub fn boundaries(arch: &ArchConfig) -> [(UnitKind, UnitKind, &LinkConfig); 9] {
+    use UnitKind::*;
+    let l = &arch.links;
+    [
+        (Setup, MinMax, &l.setup_to_minmax),
+        (MinMax, IntervalManager, &l.minmax_to_interval_manager),
+        (IntervalManager, Segmenter, &l.interval_manager_to_segmenter),
+        (Segmenter, Subsegmenter, &l.segmenter_to_subsegmenter),
+        (Subsegmenter, FragmentRasterizer, &l.subsegmenter_to_rasterizer),
+        (FragmentRasterizer, Rop, &l.rasterizer_to_rop),
+        (Rop, FrameBuffer, &l.rop_to_framebuffer),
+        (TriangleSetup, TriangleRasterizer, &l.triangle_setup_to_rasterizer),
+        (TriangleRasterizer, Rop, &l.triangle_rasterizer_to_rop),
+    ]
+}
+
+/// One instantiated unit.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct UnitInstance {
+    /// `Segmenter[2]`, or the kind's name for a unit the architecture does not replicate.
+    pub name: String,
+    /// Its kind.
+    pub kind: UnitKind,
+}
+
+/// The units `path` instantiates on `arch`, in dataflow order, with their latencies.
+pub fn units(path: Path, arch: &ArchConfig) -> Vec<(UnitInstance, u64)> {
+    let mut units = Vec::new();
+    for &kind in path.kinds() {
+        let (n, latency) = kind.in_arch(arch);
+        for i in 0..n {
+            let name = if kind.replicated() {
+                format!("{}[{i}]", kind.name())
+            } else {
+                kind.name().to_string()
+            };
+            units.push((UnitInstance { name, kind }, latency));
+        }
+    }
+    units
+}
+
+/// The units a lembo scene instantiates, in dataflow order.
+pub fn lembo_units(arch: &ArchConfig) -> Vec<UnitInstance> {
+    units(Path::Lembo, arch).into_iter().map(|u| u.0).collect()
+}
+
+/// The units the triangle path instantiates, in dataflow order.
+pub fn triangle_units(arch: &ArchConfig) -> Vec<UnitInstance> {
+    units(Path::Triangle, arch).into_iter().map(|u| u.0).collect()
+}
+
+/// The FIFO entries of every link `units` instantiate: each boundary's crossbar has one
+/// link per (producer, consumer) pair, each `fifo_depth` entries deep; a boundary between
+/// kinds absent from `units` has no links. Item sizes are not modelled, so this counts
+/// entries, not bytes [entries].
+pub fn fifo_entries(arch: &ArchConfig, units: &[UnitInstance]) -> u64 {
+    let count = |kind: UnitKind| units.iter().filter(|u| u.kind == kind).count() as u64;
+    boundaries(arch)
+        .iter()
+        .map(|(from, to, link)| count(*from) * count(*to) * link.fifo_depth as u64)
+        .sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every kind a path instantiates is fed by a boundary from the kind before it (the
+    /// graph is a chain of crossbars), and every boundary joins kinds of one path.
+    #[test]
+    fn graph_boundaries_chain_each_path() {
+        let arch = ArchConfig::default();
+        let b = boundaries(&arch);
+        for path in [Path::Lembo, Path::Triangle] {
+            for pair in path.kinds().windows(2) {
+                assert!(
+                    b.iter().any(|(f, t, _)| (*f, *t) == (pair[0], pair[1])),
+                    "{pair:?}"
+                );
+            }
+        }
+        for (f, t, _) in b {
+            assert!([Path::Lembo, Path::Triangle]
+                .iter()
+                .any(|p| p.kinds().contains(&f) && p.kinds().contains(&t)));
+        }
+        assert!(KINDS.windows(2).all(|w| w[0] < w[1]));
+    }
+}

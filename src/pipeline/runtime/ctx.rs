@@ -1,0 +1,244 @@
+//! A unit's timing context: its links, its clock and its counters (DESIGN §3).
+//!
+//! A unit is an `async fn` whose life is a sequence of ops. [`Ctx::next_input`] takes the
+//! next input by merge order; [`Ctx::work`] spends busy cycles with no output;
+//! [`Ctx::emit`] spends busy cycles and pushes one output item. The awaits are where the
+//! unit waits: the executor ([`super::executor`]) then runs another unit. Every cycle from
+//! 0 to the unit's last op is exactly one of busy, starved (waiting for an input to
+//! arrive) or blocked (a full FIFO downstream):
+//!
+//! - an input is accepted at max(arrival, now); the wait is *starved*;
+//! - an op of c cycles issued at s is *busy* for [s, s + c); its output is ready at
+//!   r = s + c - 1 + latency (pipelined: the unit issues its next op at s + c);
+//! - the output is pushed at p = max(r, q_(n-D)) where q_(n-D) is the credit of the link;
+//!   if p > r the unit's pipeline freezes for p - r cycles: *blocked*. The freeze is
+//!   accounted right after the op (the totals are exact; a timeline shows it up to
+//!   `latency` cycles early).
+//!
+//! Merging: a unit with several inputs takes the queued item with the smallest (arrival,
+//! port), once every other input's bound proves nothing earlier can come (or a recovery
+//! proved it, see [`super::core::Core::go_ahead`]).
+
+use super::core::{Core, Wait};
+use super::cycle::Cycle;
+use super::link::{Rx, Tx};
+use super::trace::{Recorder, State};
+use std::future::poll_fn;
+use std::rc::Rc;
+use std::task::Poll;
+
+/// Counters of one unit over its life, [cycles] unless named otherwise.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct UnitStats {
+    /// Cycles issuing ops.
+    pub busy: u64,
+    /// Cycles waiting for an input to arrive.
+    pub starved: u64,
+    /// Cycles frozen by a full FIFO downstream.
+    pub blocked: u64,
+    /// Cycle of the unit's last activity: busy + starved + blocked.
+    pub end: Cycle,
+    /// Items popped [items].
+    pub items_in: u64,
+    /// Items pushed [items].
+    pub items_out: u64,
+    /// Most items in any one input FIFO at once [items].
+    pub max_fifo_occupancy: u64,
+    /// Pops that broke the merge order (an item taken after a later one): always 0 unless
+    /// the executor is wrong; checked on every run.
+    pub out_of_order: u64,
+}
+
+/// What a merge can do.
+enum Choice {
+    Take(usize, Cycle),
+    Finished,
+    /// Wait; with the arrival of the earliest item held, if any.
+    Wait(Option<Cycle>),
+}
+
+/// The timing context of one unit: inputs, outputs, its clock and counters.
+pub struct Ctx<I, O> {
+    core: Rc<Core>,
+    unit: u32,
+    inputs: Vec<Rx<I>>,
+    outputs: Vec<Tx<O>>,
+    /// Cycles from an op's last cycle to its output being ready.
+    latency: u64,
+    now: Cycle,
+    /// (arrival, port) of the last item taken: the merge takes items in this order.
+    last_taken: (Cycle, usize),
+    stats: UnitStats,
+    trace: Option<Recorder>,
+}
+
+impl<I, O> Ctx<I, O> {
+    /// The context of unit `unit` of `core`, with a timeline of up to `trace_cap` events
+    /// when given.
+    pub fn new(
+        core: Rc<Core>,
+        unit: u32,
+        inputs: Vec<Rx<I>>,
+        outputs: Vec<Tx<O>>,
+        trace_cap: Option<usize>,
+    ) -> Self {
+        let latency = core.slots[unit as usize].latency;
+        Ctx {
+            core,
+            unit,
+            inputs,
+            outputs,
+            latency,
+            now: Cycle::ZERO,
+            last_taken: (Cycle::ZERO, 0),
+            stats: UnitStats::default(),
+            trace: trace_cap.map(Recorder::new),
+        }
+    }
+
+    /// Number of output ports.
+    pub fn outputs(&self) -> usize {
+        self.outputs.len()
+    }
+
+    #[inline(always)]
+    fn set_now(&mut self, now: Cycle) {
+        self.now = now;
+        self.core.slots[self.unit as usize].now.set(now);
+    }
+
+    /// Spends `cycles` busy cycles with no output.
+    #[inline]
+    pub fn work(&mut self, cycles: u64) {
+        let start = self.now;
+        self.set_now(start + cycles);
+        self.stats.busy += cycles;
+        if let Some(t) = self.trace.as_mut() {
+            t.record(start.0, self.now.0, State::Busy);
+        }
+    }
+
+    /// Spends `cycles` (>= 1) busy cycles producing `item` for output `port`, then pushes
+    /// it when the FIFO has room (see the module doc for the freeze).
+    pub async fn emit(&mut self, cycles: u64, port: usize, item: O) {
+        debug_assert!(cycles >= 1);
+        let cycles = cycles.max(1);
+        let issue = self.now;
+        self.work(cycles);
+        let ready = issue + (cycles - 1 + self.latency);
+        let credit = match self.outputs[port].credit_needed() {
+            Some(q) => q,
+            None => self.wait_credit(port).await,
+        };
+        let push = ready.max(credit);
+        if push > ready {
+            let start = self.now;
+            self.set_now(start + (push - ready));
+            self.stats.blocked += push - ready;
+            if let Some(t) = self.trace.as_mut() {
+                t.record(start.0, self.now.0, State::Blocked);
+            }
+        }
+        self.stats.items_out += 1;
+        self.outputs[port].push(push, item);
+    }
+
+    async fn wait_credit(&mut self, port: usize) -> Cycle {
+        let slot = &self.core.slots[self.unit as usize];
+        let tx = &self.outputs[port];
+        poll_fn(|_| match tx.credit_needed() {
+            Some(q) => Poll::Ready(q),
+            None => {
+                slot.wait.set(Wait::Credit { port: port as u32 });
+                Poll::Pending
+            }
+        })
+        .await
+    }
+
+    /// The next input item in merge order, after waiting for it (starved cycles); `None`
+    /// once every input has ended.
+    pub async fn next_input(&mut self) -> Option<I> {
+        if let Choice::Take(port, arrival) = self.choose() {
+            return Some(self.pop(port, arrival));
+        }
+        poll_fn(|_| match self.choose() {
+            Choice::Take(port, arrival) => Poll::Ready(Some(self.pop(port, arrival))),
+            Choice::Finished => Poll::Ready(None),
+            Choice::Wait(held) => {
+                self.core.park_input(self.unit, held);
+                Poll::Pending
+            }
+        })
+        .await
+    }
+
+    /// What the merge can do now: the queued item with the smallest (arrival, port), once
+    /// every other input's bound proves nothing earlier can come (or a recovery did).
+    #[inline]
+    fn choose(&self) -> Choice {
+        let mut best: Option<(Cycle, usize)> = None;
+        for (i, rx) in self.inputs.iter().enumerate() {
+            if let Some(a) = rx.head() {
+                if best.is_none_or(|(b, _)| a < b) {
+                    best = Some((a, i));
+                }
+            }
+        }
+        match best {
+            Some((arrival, port)) => {
+                let go = self.core.slots[self.unit as usize].go.get() == Some(arrival);
+                let safe = go
+                    || self.inputs.iter().enumerate().all(|(j, rx)| {
+                        rx.head().is_some() || {
+                            let b = rx.next_arrival(&self.core);
+                            b > arrival || (b == arrival && j > port)
+                        }
+                    });
+                if safe {
+                    Choice::Take(port, arrival)
+                } else {
+                    Choice::Wait(Some(arrival))
+                }
+            }
+            None if self.inputs.iter().all(Rx::finished) => Choice::Finished,
+            None => Choice::Wait(None),
+        }
+    }
+
+    #[inline]
+    fn pop(&mut self, port: usize, arrival: Cycle) -> I {
+        self.core.slots[self.unit as usize].go.set(None);
+        // Every item a merge takes is the earliest (arrival, port) of all it will ever
+        // take, so the taken sequence is sorted: a cheap check of the whole executor.
+        if (arrival, port) < self.last_taken {
+            self.stats.out_of_order += 1;
+        }
+        self.last_taken = (arrival, port);
+        if arrival > self.now {
+            self.stats.starved += arrival - self.now;
+            self.set_now(arrival);
+        }
+        self.stats.items_in += 1;
+        self.inputs[port].pop(self.now)
+    }
+
+    /// Ends every output and returns the unit's counters and timeline. Consumes the
+    /// context: a finished unit does nothing more.
+    pub fn finish(mut self) -> (UnitStats, Option<Recorder>) {
+        self.core.slots[self.unit as usize].wait.set(Wait::Done);
+        for tx in &self.outputs {
+            tx.end();
+        }
+        let mut stats = std::mem::take(&mut self.stats);
+        stats.end = self.now;
+        stats.max_fifo_occupancy = self
+            .inputs
+            .iter()
+            .map(Rx::max_occupancy)
+            .max()
+            .unwrap_or(0);
+        debug_assert_eq!(stats.busy + stats.starved + stats.blocked, stats.end.0);
+        (stats, self.trace.take())
+    }
+}

@@ -1,0 +1,53 @@
+//! Simulated time: [`Cycle`] and the timestamped item [`Timed`].
+
+use std::fmt;
+use std::ops::{Add, AddAssign, Sub};
+
+/// A point in simulated time, or a number of cycles [clock cycles].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct Cycle(pub u64);
+
+impl Cycle {
+    /// The start of the frame.
+    pub const ZERO: Cycle = Cycle(0);
+    /// Later than any real time: the bound of an input that has ended.
+    pub const NEVER: Cycle = Cycle(u64::MAX);
+}
+
+impl Add<u64> for Cycle {
+    type Output = Cycle;
+    #[inline(always)]
+    fn add(self, rhs: u64) -> Cycle {
+        Cycle(self.0.saturating_add(rhs))
+    }
+}
+
+impl AddAssign<u64> for Cycle {
+    #[inline(always)]
+    fn add_assign(&mut self, rhs: u64) {
+        self.0 = self.0.saturating_add(rhs);
+    }
+}
+
+impl Sub for Cycle {
+    type Output = u64;
+    #[inline(always)]
+    fn sub(self, rhs: Cycle) -> u64 {
+        self.0 - rhs.0
+    }
+}
+
+impl fmt::Display for Cycle {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.0)
+    }
+}
+
+/// An item on a link with its push time.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Timed<T> {
+    /// Push time p_n [cycle].
+    pub at: Cycle,
+    /// What was pushed.
+    pub item: T,
+}

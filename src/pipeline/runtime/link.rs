@@ -1,0 +1,768 @@
+//! Timed links: the FIFOs between units (DESIGN §3).
+//!
+//! A link is a FIFO of depth `D >= 1` and latency `L >= 1`. Item n is pushed at p_n and
+//! popped at q_n, with
+//!
+//! ```text
+//!   q_n >= p_n + L,   q_n >= q_(n-1)        (the consumer: arrival, in order)
+//!   p_n >= q_(n-D)                          (the producer: a full FIFO blocks)
+//! ```
+//!
+//! The consumer records every pop time as a *credit*; the producer reads the credit of
+//! item n-D before it pushes item n. Stalls are computed in simulated time from the
+//! credits, never from the host.
+//!
+//! A link between two units of one host thread is a plain queue shared by both ends
+//! ([`LocalLink`]). A link between host threads has a half on each side
+//! ([`RemoteTx`], [`RemoteRx`]) joined by two bounded crossbeam channels (item batches one
+//! way, credit batches the other) and an atomic *horizon*: the producer's bound (see
+//! [`super::core`]) published after its batch was sent, so the consumer's merge can
+//! know an idle input's time. The producer cannot push item n before the consumer popped
+//! item n-D, so at most D items and the end are ever in the item channel: host memory is
+//! bounded by the FIFOs.
+
+use super::core::{Core, InputSnap, InputView, Wait};
+use super::cycle::{Cycle, Timed};
+use super::executor::Signal;
+use crossbeam_channel::{Receiver, Sender, TryRecvError};
+use std::cell::{Cell, RefCell};
+use std::collections::VecDeque;
+use std::fmt;
+use std::rc::Rc;
+use std::sync::atomic::{AtomicU64, Ordering::Acquire, Ordering::Release};
+use std::sync::Arc;
+
+/// FIFO depth and latency of one link.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LinkSpec {
+    /// Items the FIFO holds (D >= 1).
+    pub fifo_depth: u32,
+    /// Cycles from push to the earliest pop (L >= 1).
+    pub latency_cycles: u64,
+}
+
+/// Names of a link's ends, for deadlock reports.
+#[derive(Clone, Debug)]
+pub struct LinkName {
+    /// The producing unit.
+    pub producer: String,
+    /// The consuming unit.
+    pub consumer: String,
+}
+
+impl fmt::Display for LinkName {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{} -> {}", self.producer, self.consumer)
+    }
+}
+
+/// Most items per message on a link between host threads (a producer also sends whenever
+/// its thread runs out of work).
+pub const MAX_BATCH: usize = 64;
+
+/// The most items ever in a FIFO at once, from push and pop times: after push n the FIFO
+/// holds item n and every earlier item popped after p_n. Pop times are non-decreasing,
+/// so the first earlier item still in the FIFO only moves forward: a pointer, not a search.
+#[derive(Debug)]
+struct Occupancy {
+    /// Pop times of the last D - 1 items: item `first + i` at index i.
+    pops: VecDeque<Cycle>,
+    first: u64,
+    /// The first item whose pop time is after the current push time.
+    still_in: u64,
+    keep: usize,
+    max: u64,
+}
+
+impl Occupancy {
+    fn new(depth: u32) -> Self {
+        Occupancy {
+            pops: VecDeque::with_capacity(depth as usize),
+            first: 0,
+            still_in: 0,
+            keep: depth as usize - 1,
+            max: 0,
+        }
+    }
+
+    /// Item n, pushed at `pushed_at`, is popped at `q`.
+    #[inline]
+    fn pop(&mut self, n: u64, pushed_at: Cycle, q: Cycle) {
+        // Item n-D was popped before p_n: only the last D - 1 can still be in.
+        self.still_in = self.still_in.max(self.first);
+        while self.still_in < n && self.pops[(self.still_in - self.first) as usize] <= pushed_at
+        {
+            self.still_in += 1;
+        }
+        self.max = self.max.max(1 + n - self.still_in);
+        if self.keep > 0 {
+            if self.pops.len() == self.keep {
+                self.pops.pop_front();
+                self.first += 1;
+            }
+            self.pops.push_back(q);
+        } else {
+            self.first = n + 1;
+        }
+    }
+}
+
+/// The pop times the producer still needs: item m's at index m - first.
+#[derive(Debug, Default)]
+struct Credits {
+    window: VecDeque<Cycle>,
+    /// Credits received so far (the index after the window's last).
+    seen: u64,
+}
+
+impl Credits {
+    fn push(&mut self, q: Cycle, depth: usize) {
+        if self.window.len() == depth {
+            self.window.pop_front();
+        }
+        self.window.push_back(q);
+        self.seen += 1;
+    }
+
+    /// The pop time of item m, if received.
+    fn get(&self, m: u64) -> Option<Cycle> {
+        if m >= self.seen {
+            return None;
+        }
+        let first = self.seen - self.window.len() as u64;
+        debug_assert!(m >= first, "credit {m} dropped (window starts at {first})");
+        Some(self.window[(m - first) as usize])
+    }
+}
+
+/// The ends of a link: which unit and port on each side.
+#[derive(Clone, Copy, Debug)]
+pub struct Ends {
+    /// Producer's index in its host thread's core.
+    pub producer: u32,
+    /// Producer's output port.
+    pub port: u32,
+    /// Consumer's index in its host thread's core.
+    pub consumer: u32,
+    /// Producer's global index.
+    pub from: u32,
+}
+
+/// A link between two units of one host thread.
+pub struct LocalLink<T> {
+    core: Rc<Core>,
+    spec: LinkSpec,
+    name: LinkName,
+    ends: Ends,
+    /// (arrival = p + L, push time, item).
+    queue: RefCell<VecDeque<(Cycle, Cycle, T)>>,
+    credits: RefCell<Credits>,
+    occupancy: RefCell<Occupancy>,
+    pushed: Cell<u64>,
+    popped: Cell<u64>,
+    last_push: Cell<Cycle>,
+    ended: Cell<bool>,
+}
+
+impl<T> LocalLink<T> {
+    /// A link from `ends.producer` to `ends.consumer` of `core`.
+    pub fn new(core: Rc<Core>, spec: LinkSpec, name: LinkName, ends: Ends) -> Self {
+        LocalLink {
+            core,
+            spec,
+            name,
+            ends,
+            queue: RefCell::new(VecDeque::with_capacity(spec.fifo_depth.min(1024) as usize)),
+            credits: RefCell::new(Credits::default()),
+            occupancy: RefCell::new(Occupancy::new(spec.fifo_depth)),
+            pushed: Cell::new(0),
+            popped: Cell::new(0),
+            last_push: Cell::new(Cycle::ZERO),
+            ended: Cell::new(false),
+        }
+    }
+}
+
+impl<T> InputView for LocalLink<T> {
+    #[inline]
+    fn next_arrival(&self, core: &Core) -> Cycle {
+        if let Some(&(arrival, _, _)) = self.queue.borrow().front() {
+            return arrival;
+        }
+        if self.ended.get() {
+            return Cycle::NEVER;
+        }
+        self.last_push.get().max(core.bound(self.ends.producer)) + self.spec.latency_cycles
+    }
+
+    fn producer_name(&self) -> &str {
+        &self.name.producer
+    }
+
+    fn snap(&self) -> InputSnap {
+        InputSnap {
+            producer: self.ends.from as usize,
+            latency: self.spec.latency_cycles,
+            head: self.queue.borrow().front().map(|h| h.0),
+            ended: self.ended.get(),
+            last_push: self.last_push.get(),
+        }
+    }
+}
+
+/// A link's half on the producer's host thread when the consumer is on another.
+pub struct RemoteTx<T> {
+    core: Rc<Core>,
+    spec: LinkSpec,
+    name: LinkName,
+    ends: Ends,
+    data: Sender<Msg<T>>,
+    credit_rx: Receiver<Vec<Cycle>>,
+    horizon: Arc<AtomicU64>,
+    /// The consumer's host thread.
+    peer: Arc<Signal>,
+    credits: RefCell<Credits>,
+    batch: RefCell<Vec<Timed<T>>>,
+    pushed: Cell<u64>,
+    last_push: Cell<Cycle>,
+    published: Cell<Cycle>,
+    ended: Cell<bool>,
+}
+
+/// A link's half on the consumer's host thread when the producer is on another.
+pub struct RemoteRx<T> {
+    core: Rc<Core>,
+    spec: LinkSpec,
+    name: LinkName,
+    ends: Ends,
+    data: Receiver<Msg<T>>,
+    credit_tx: Sender<Vec<Cycle>>,
+    horizon: Arc<AtomicU64>,
+    /// The producer's host thread.
+    peer: Arc<Signal>,
+    queue: RefCell<VecDeque<(Cycle, Cycle, T)>>,
+    occupancy: RefCell<Occupancy>,
+    pending_credits: RefCell<Vec<Cycle>>,
+    popped: Cell<u64>,
+    /// No item will be pushed before this cycle (the last item's push or the horizon).
+    bound: Cell<Cycle>,
+    ended: Cell<bool>,
+}
+
+/// What a link between host threads carries producer → consumer.
+pub enum Msg<T> {
+    /// Items in push order, times non-decreasing.
+    Items(Vec<Timed<T>>),
+    /// The producer finished; no more items.
+    End,
+}
+
+/// The channels of a link between host threads, made before the threads start and moved
+/// into them.
+pub struct RemoteParts<T> {
+    data: (Sender<Msg<T>>, Receiver<Msg<T>>),
+    credits: (Sender<Vec<Cycle>>, Receiver<Vec<Cycle>>),
+    horizon: Arc<AtomicU64>,
+}
+
+impl<T> RemoteParts<T> {
+    /// Channels for a link of `spec`.
+    pub fn new(spec: LinkSpec) -> Self {
+        let d = spec.fifo_depth as usize;
+        RemoteParts {
+            data: crossbeam_channel::bounded(d + 1),
+            credits: crossbeam_channel::bounded(d + 1),
+            horizon: Arc::new(AtomicU64::new(0)),
+        }
+    }
+
+    /// The producer's half.
+    pub fn tx(
+        &self,
+        core: Rc<Core>,
+        spec: LinkSpec,
+        name: LinkName,
+        ends: Ends,
+        peer: Arc<Signal>,
+    ) -> RemoteTx<T> {
+        RemoteTx {
+            core,
+            spec,
+            name,
+            ends,
+            data: self.data.0.clone(),
+            credit_rx: self.credits.1.clone(),
+            horizon: self.horizon.clone(),
+            peer,
+            credits: RefCell::new(Credits::default()),
+            batch: RefCell::new(Vec::with_capacity(MAX_BATCH)),
+            pushed: Cell::new(0),
+            last_push: Cell::new(Cycle::ZERO),
+            published: Cell::new(Cycle::ZERO),
+            ended: Cell::new(false),
+        }
+    }
+
+    /// The consumer's half.
+    pub fn rx(
+        &self,
+        core: Rc<Core>,
+        spec: LinkSpec,
+        name: LinkName,
+        ends: Ends,
+        peer: Arc<Signal>,
+    ) -> RemoteRx<T> {
+        RemoteRx {
+            core,
+            spec,
+            name,
+            ends,
+            data: self.data.1.clone(),
+            credit_tx: self.credits.0.clone(),
+            horizon: self.horizon.clone(),
+            peer,
+            queue: RefCell::new(VecDeque::new()),
+            occupancy: RefCell::new(Occupancy::new(spec.fifo_depth)),
+            pending_credits: RefCell::new(Vec::new()),
+            popped: Cell::new(0),
+            bound: Cell::new(Cycle::ZERO),
+            ended: Cell::new(false),
+        }
+    }
+}
+
+impl<T> InputView for RemoteRx<T> {
+    #[inline]
+    fn next_arrival(&self, _: &Core) -> Cycle {
+        if let Some(&(arrival, _, _)) = self.queue.borrow().front() {
+            return arrival;
+        }
+        if self.ended.get() {
+            return Cycle::NEVER;
+        }
+        self.bound.get() + self.spec.latency_cycles
+    }
+
+    fn producer_name(&self) -> &str {
+        &self.name.producer
+    }
+
+    fn snap(&self) -> InputSnap {
+        InputSnap {
+            producer: self.ends.from as usize,
+            latency: self.spec.latency_cycles,
+            head: self.queue.borrow().front().map(|h| h.0),
+            ended: self.ended.get(),
+            last_push: self.bound.get(),
+        }
+    }
+}
+
+/// What a host thread does with its halves of links to other threads when it runs out of
+/// work: send what it holds, take what arrived.
+pub trait RemoteEnd {
+    /// Sends batched items (and the horizon) or credits. Returns whether anything was sent.
+    fn flush(&self) -> bool;
+    /// Takes what arrived; wakes the unit it concerns. Returns whether a unit was woken.
+    fn drain(&self) -> bool;
+}
+
+impl<T> RemoteTx<T> {
+    fn send_batch(&self) -> bool {
+        let mut batch = self.batch.borrow_mut();
+        if batch.is_empty() {
+            return false;
+        }
+        let items = std::mem::replace(&mut *batch, Vec::with_capacity(MAX_BATCH));
+        // A consumer that already finished reads no more; that is not an error.
+        let _ = self.data.send(Msg::Items(items));
+        true
+    }
+
+    fn take_credits(&self) {
+        let depth = self.spec.fifo_depth as usize;
+        let mut credits = self.credits.borrow_mut();
+        while let Ok(batch) = self.credit_rx.try_recv() {
+            for q in batch {
+                credits.push(q, depth);
+            }
+        }
+    }
+}
+
+impl<T> RemoteEnd for RemoteTx<T> {
+    fn flush(&self) -> bool {
+        let mut sent = self.send_batch();
+        if !self.ended.get() {
+            let bound = self.core.bound(self.ends.producer).max(self.last_push.get());
+            if bound > self.published.get() {
+                self.published.set(bound);
+                self.horizon.store(bound.0, Release);
+                sent = true;
+            }
+        }
+        if sent {
+            self.peer.notify();
+        }
+        sent
+    }
+
+    fn drain(&self) -> bool {
+        let s = &self.core.slots[self.ends.producer as usize];
+        if s.wait.get() != (Wait::Credit { port: self.ends.port }) {
+            return false;
+        }
+        self.take_credits();
+        let depth = self.spec.fifo_depth as u64;
+        let want = self.pushed.get() - depth;
+        if self.credits.borrow().get(want).is_some() {
+            self.core.wake(self.ends.producer);
+            return true;
+        }
+        false
+    }
+}
+
+impl<T> RemoteRx<T> {
+    fn send_credits(&self) -> bool {
+        let mut pending = self.pending_credits.borrow_mut();
+        if pending.is_empty() {
+            return false;
+        }
+        let batch = std::mem::take(&mut *pending);
+        // A producer that already finished reads no more credits; that is not an error.
+        let _ = self.credit_tx.send(batch);
+        self.peer.notify();
+        true
+    }
+}
+
+impl<T> RemoteEnd for RemoteRx<T> {
+    fn flush(&self) -> bool {
+        self.send_credits()
+    }
+
+    fn drain(&self) -> bool {
+        if self.ended.get() {
+            return false;
+        }
+        // The horizon first: it was stored after the items sent before it.
+        let horizon = Cycle(self.horizon.load(Acquire));
+        let mut changed = false;
+        let latency = self.spec.latency_cycles;
+        loop {
+            match self.data.try_recv() {
+                Ok(Msg::Items(items)) => {
+                    let mut queue = self.queue.borrow_mut();
+                    for Timed { at, item } in items {
+                        self.bound.set(at);
+                        queue.push_back((at + latency, at, item));
+                    }
+                    changed = true;
+                }
+                Ok(Msg::End) => {
+                    self.ended.set(true);
+                    changed = true;
+                    break;
+                }
+                Err(TryRecvError::Empty) | Err(TryRecvError::Disconnected) => break,
+            }
+        }
+        if horizon > self.bound.get() {
+            self.bound.set(horizon);
+            changed = true;
+        }
+        if changed {
+            self.core.wake_if_input(self.ends.consumer);
+        }
+        changed
+    }
+}
+
+/// The producer's end of a link.
+pub enum Tx<T> {
+    /// Both ends on this host thread.
+    Local(Rc<LocalLink<T>>),
+    /// The consumer on another host thread.
+    Remote(Rc<RemoteTx<T>>),
+}
+
+/// The consumer's end of a link.
+pub enum Rx<T> {
+    /// Both ends on this host thread.
+    Local(Rc<LocalLink<T>>),
+    /// The producer on another host thread.
+    Remote(Rc<RemoteRx<T>>),
+}
+
+impl<T> Tx<T> {
+    /// The link's name.
+    pub fn name(&self) -> &LinkName {
+        match self {
+            Tx::Local(l) => &l.name,
+            Tx::Remote(l) => &l.name,
+        }
+    }
+
+    /// The pop time of the item whose credit the next push needs: `Cycle::ZERO` while the
+    /// FIFO has never been full, `None` if that item has not been popped yet.
+    #[inline]
+    pub fn credit_needed(&self) -> Option<Cycle> {
+        let (pushed, depth) = match self {
+            Tx::Local(l) => (l.pushed.get(), l.spec.fifo_depth as u64),
+            Tx::Remote(l) => (l.pushed.get(), l.spec.fifo_depth as u64),
+        };
+        if pushed < depth {
+            return Some(Cycle::ZERO);
+        }
+        let want = pushed - depth;
+        match self {
+            Tx::Local(l) => l.credits.borrow().get(want),
+            Tx::Remote(l) => {
+                if let Some(q) = l.credits.borrow().get(want) {
+                    return Some(q);
+                }
+                l.take_credits();
+                l.credits.borrow().get(want)
+            }
+        }
+    }
+
+    /// Pushes an item at cycle `at` (the caller checked the credit); wakes the consumer
+    /// if it waits for input.
+    #[inline]
+    pub fn push(&self, at: Cycle, item: T) {
+        match self {
+            Tx::Local(l) => {
+                debug_assert!(at >= l.last_push.get() && !l.ended.get());
+                l.last_push.set(at);
+                l.pushed.set(l.pushed.get() + 1);
+                l.queue
+                    .borrow_mut()
+                    .push_back((at + l.spec.latency_cycles, at, item));
+                l.core.wake_if_input(l.ends.consumer);
+            }
+            Tx::Remote(l) => {
+                debug_assert!(at >= l.last_push.get() && !l.ended.get());
+                l.last_push.set(at);
+                l.pushed.set(l.pushed.get() + 1);
+                let full = {
+                    let mut batch = l.batch.borrow_mut();
+                    batch.push(Timed { at, item });
+                    batch.len() >= MAX_BATCH
+                };
+                if full && l.send_batch() {
+                    l.peer.notify();
+                }
+            }
+        }
+    }
+
+    /// Ends the link: nothing more will be pushed.
+    pub fn end(&self) {
+        match self {
+            Tx::Local(l) => {
+                l.ended.set(true);
+                l.core.wake_if_input(l.ends.consumer);
+            }
+            Tx::Remote(l) => {
+                if l.ended.replace(true) {
+                    return;
+                }
+                l.send_batch();
+                let _ = l.data.send(Msg::End);
+                l.peer.notify();
+            }
+        }
+    }
+}
+
+impl<T> Rx<T> {
+    /// The link's name.
+    pub fn name(&self) -> &LinkName {
+        match self {
+            Rx::Local(l) => &l.name,
+            Rx::Remote(l) => &l.name,
+        }
+    }
+
+    /// The arrival of the queued head item, if any.
+    #[inline]
+    pub fn head(&self) -> Option<Cycle> {
+        match self {
+            Rx::Local(l) => l.queue.borrow().front().map(|h| h.0),
+            Rx::Remote(l) => l.queue.borrow().front().map(|h| h.0),
+        }
+    }
+
+    /// The earliest arrival of the next item ([`InputView::next_arrival`]).
+    #[inline]
+    pub fn next_arrival(&self, core: &Core) -> Cycle {
+        match self {
+            Rx::Local(l) => l.next_arrival(core),
+            Rx::Remote(l) => l.next_arrival(core),
+        }
+    }
+
+    /// Whether the producer ended and every item was popped.
+    pub fn finished(&self) -> bool {
+        match self {
+            Rx::Local(l) => l.ended.get() && l.queue.borrow().is_empty(),
+            Rx::Remote(l) => l.ended.get() && l.queue.borrow().is_empty(),
+        }
+    }
+
+    /// Pops the head item at cycle `q` (>= its arrival): records the credit (waking a
+    /// producer that waits for it) and the FIFO occupancy.
+    #[inline]
+    pub fn pop(&self, q: Cycle) -> T {
+        match self {
+            Rx::Local(l) => {
+                let (arrival, pushed_at, item) =
+                    l.queue.borrow_mut().pop_front().expect("caller checked");
+                debug_assert!(q >= arrival);
+                let n = l.popped.get();
+                l.popped.set(n + 1);
+                l.occupancy.borrow_mut().pop(n, pushed_at, q);
+                l.credits.borrow_mut().push(q, l.spec.fifo_depth as usize);
+                let p = &l.core.slots[l.ends.producer as usize];
+                if p.wait.get() == (Wait::Credit { port: l.ends.port }) {
+                    l.core.wake(l.ends.producer);
+                }
+                item
+            }
+            Rx::Remote(l) => {
+                let (arrival, pushed_at, item) =
+                    l.queue.borrow_mut().pop_front().expect("caller checked");
+                debug_assert!(q >= arrival);
+                let n = l.popped.get();
+                l.popped.set(n + 1);
+                l.occupancy.borrow_mut().pop(n, pushed_at, q);
+                let full = {
+                    let mut pending = l.pending_credits.borrow_mut();
+                    pending.push(q);
+                    pending.len() >= (l.spec.fifo_depth as usize / 2).clamp(1, MAX_BATCH)
+                };
+                if full {
+                    l.send_credits();
+                }
+                item
+            }
+        }
+    }
+
+    /// Most items ever in this FIFO at once.
+    pub fn max_occupancy(&self) -> u64 {
+        match self {
+            Rx::Local(l) => l.occupancy.borrow().max,
+            Rx::Remote(l) => l.occupancy.borrow().max,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spec(d: u32, l: u64) -> LinkSpec {
+        LinkSpec {
+            fifo_depth: d,
+            latency_cycles: l,
+        }
+    }
+
+    fn local(d: u32, l: u64) -> (Rc<Core>, Tx<u32>, Rx<u32>) {
+        let core = Rc::new(Core::new(vec![("p".into(), 1), ("c".into(), 1)], None));
+        let link = Rc::new(LocalLink::new(
+            core.clone(),
+            spec(d, l),
+            LinkName {
+                producer: "p".into(),
+                consumer: "c".into(),
+            },
+            Ends {
+                producer: 0,
+                port: 0,
+                consumer: 1,
+                from: 0,
+            },
+        ));
+        (core, Tx::Local(link.clone()), Rx::Local(link))
+    }
+
+    #[test]
+    fn link_credit_of_item_n_minus_depth_gates_push_n() {
+        let (core, tx, rx) = local(2, 1);
+        assert_eq!(tx.credit_needed(), Some(Cycle::ZERO));
+        tx.push(Cycle(0), 0);
+        tx.push(Cycle(1), 1);
+        // Item 2 needs the pop time of item 0, not yet recorded.
+        assert_eq!(tx.credit_needed(), None);
+        assert_eq!(rx.head(), Some(Cycle(1)));
+        assert_eq!(rx.pop(Cycle(5)), 0);
+        assert_eq!(tx.credit_needed(), Some(Cycle(5)));
+        core.clear();
+    }
+
+    #[test]
+    fn link_occupancy_counts_items_pushed_and_not_popped() {
+        let (core, tx, rx) = local(4, 1);
+        // Four pushes at 0..3, pops at 10..13: all four are in the FIFO at cycle 3.
+        for n in 0..4 {
+            tx.push(Cycle(n), n as u32);
+        }
+        for n in 0..4 {
+            rx.pop(Cycle(10 + n));
+        }
+        assert_eq!(rx.max_occupancy(), 4);
+        core.clear();
+    }
+
+    #[test]
+    fn link_occupancy_of_a_consumer_that_keeps_up_is_one() {
+        let (core, tx, rx) = local(8, 1);
+        for n in 0..6 {
+            tx.push(Cycle(2 * n), 0);
+            rx.pop(Cycle(2 * n + 1));
+        }
+        assert_eq!(rx.max_occupancy(), 1);
+        core.clear();
+    }
+
+    /// The pointer against the definition: after push n, item n and every earlier item
+    /// popped after p_n, for seeded random push and pop times obeying the link's rules.
+    #[test]
+    fn link_occupancy_matches_its_definition() {
+        let mut x = 0x9E37_79B9_7F4A_7C15u64;
+        let mut rnd = |m: u64| {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x % m
+        };
+        for depth in [1u32, 2, 3, 8] {
+            let (core, tx, rx) = local(depth, 1);
+            let (mut p, mut q) = (Vec::new(), Vec::<u64>::new());
+            let mut last_q = 0;
+            for n in 0..300usize {
+                let credit = if n >= depth as usize {
+                    q[n - depth as usize]
+                } else {
+                    0
+                };
+                let push = p.last().copied().unwrap_or(0).max(credit) + rnd(3);
+                p.push(push);
+                tx.push(Cycle(push), 0);
+                last_q = last_q.max(push + 1) + rnd(4);
+                q.push(last_q);
+                rx.pop(Cycle(last_q));
+            }
+            let want = (0..p.len())
+                .map(|n| 1 + (0..n).filter(|&m| q[m] > p[n]).count() as u64)
+                .max()
+                .unwrap();
+            assert_eq!(rx.max_occupancy(), want, "depth {depth}");
+            core.clear();
+        }
+    }
+}

@@ -1,0 +1,257 @@
+//! The timed model's runtime: what a unit is, how links keep time and how units are run.
+//! The units themselves live in [`super::units`] and use only [`Ctx`].
+//!
+//! - [`cycle`]: [`Cycle`] and [`Timed`].
+//! - [`link`]: FIFOs with depth, latency and credits, inside a host thread or across.
+//! - [`ctx`]: a unit's clock and its ops (`next_input`, `work`, `emit`) and the busy,
+//!   starved and blocked accounting.
+//! - [`core`]: one host thread's units, their ready queue and the bounds merges read.
+//! - [`executor`]: runs the units deterministically, smallest local clock first, on one
+//!   host thread or partitioned over several; recovery and deadlock reports.
+//! - [`trace`]: the Chrome trace-event timeline.
+
+pub mod core;
+pub mod ctx;
+pub mod cycle;
+pub mod executor;
+pub mod link;
+pub mod trace;
+
+pub use ctx::{Ctx, UnitStats};
+pub use cycle::{Cycle, Timed};
+pub use link::{LinkName, LinkSpec};
+
+/// Host-side options of a timed run; none of them changes a simulated result.
+#[derive(Clone, Debug)]
+pub struct SimOptions {
+    /// Host threads the units are partitioned over (>= 1; `--host-threads`).
+    pub host_threads: usize,
+    /// Test switch: partition the units over the host threads at random (seeded) instead
+    /// of in contiguous runs of the dataflow order.
+    pub partition_seed: Option<u64>,
+    /// Test switch: run units in a random order (seeded) instead of smallest clock first,
+    /// to show that results do not depend on the schedule.
+    pub perturb: Option<u64>,
+    /// Record a timeline of unit activity (for `--trace-out`).
+    pub trace: bool,
+    /// Most timeline events kept over all units; beyond it events are coarsened.
+    pub trace_event_cap: usize,
+}
+
+impl Default for SimOptions {
+    fn default() -> Self {
+        SimOptions {
+            host_threads: 1,
+            partition_seed: None,
+            perturb: None,
+            trace: false,
+            trace_event_cap: 200_000,
+        }
+    }
+}
+
+/// Which host thread runs each of `units` units: contiguous runs of the dataflow order,
+/// as even as the count allows, or a seeded random assignment. Threads beyond the unit
+/// count get none.
+pub fn partition(units: usize, threads: usize, seed: Option<u64>) -> Vec<usize> {
+    let threads = threads.clamp(1, units.max(1));
+    match seed {
+        None => (0..units).map(|u| u * threads / units.max(1)).collect(),
+        Some(seed) => {
+            let mut x = seed | 1;
+            (0..units)
+                .map(|_| {
+                    x ^= x << 13;
+                    x ^= x >> 7;
+                    x ^= x << 17;
+                    (x % threads as u64) as usize
+                })
+                .collect()
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pipeline::runtime::core::Core;
+    use crate::pipeline::runtime::executor::{HostThread, Stop, UnitFuture};
+    use crate::pipeline::runtime::link::{Ends, LocalLink, Rx, Tx};
+    use std::rc::Rc;
+
+    fn spec(d: u32, l: u64) -> LinkSpec {
+        LinkSpec {
+            fifo_depth: d,
+            latency_cycles: l,
+        }
+    }
+
+    /// A local link from unit `p` (output `port`) to unit `c` of `core`.
+    fn local<T: 'static>(core: &Rc<Core>, p: u32, port: u32, c: u32, d: u32) -> (Tx<T>, Rx<T>) {
+        let name = LinkName {
+            producer: core.slots[p as usize].name.clone(),
+            consumer: core.slots[c as usize].name.clone(),
+        };
+        core.slots[p as usize]
+            .consumers
+            .borrow_mut()
+            .push((c as usize, name.consumer.clone()));
+        let link = Rc::new(LocalLink::new(
+            core.clone(),
+            spec(d, 1),
+            name,
+            Ends {
+                producer: p,
+                port,
+                consumer: c,
+                from: p,
+            },
+        ));
+        core.slots[c as usize].inputs.borrow_mut().push(link.clone());
+        (Tx::Local(link.clone()), Rx::Local(link))
+    }
+
+    fn thread<'a, F>(core: Rc<Core>, futures: Vec<UnitFuture<'a, F>>) -> HostThread<'a, F> {
+        let n = futures.len();
+        HostThread {
+            core,
+            futures,
+            global: (0..n).collect(),
+            remotes: Vec::new(),
+        }
+    }
+
+    /// Source: 3 ops of 2 cycles, latency 3, into a FIFO of depth 1 and latency 1; sink: 5
+    /// busy cycles per item. By hand (p push, q pop):
+    ///   op0 issues 0, ready 0+2-1+3 = 4, p0 = 4;  sink: arrives 5, q0 = 5, busy 5..10
+    ///   op1 issues 2, ready 6, credit q0 = 5, p1 = 6;  arrives 7, q1 = 10, busy 10..15
+    ///   op2 issues 4, ready 8, credit q1 = 10, p2 = 10: frozen 2 cycles; q2 = 15, busy 15..20
+    /// Source: busy 6, blocked 2, ends at 8. Sink: busy 15, starved 5, ends at 20.
+    #[test]
+    fn executor_cycles_of_a_tiny_pipeline_are_exact() {
+        let core = Rc::new(Core::new(
+            vec![("Source".into(), 3), ("Sink".into(), 1)],
+            None,
+        ));
+        let (tx, rx) = local::<u32>(&core, 0, 0, 1, 1);
+        let mut src = Ctx::<(), u32>::new(core.clone(), 0, Vec::new(), vec![tx], None);
+        let mut snk = Ctx::<u32, ()>::new(core.clone(), 1, vec![rx], Vec::new(), None);
+        let futures: Vec<UnitFuture<'_, (UnitStats, Vec<u32>)>> = vec![
+            Box::pin(async move {
+                for n in 0..3 {
+                    src.emit(2, 0, n).await;
+                }
+                (src.finish().0, Vec::new())
+            }),
+            Box::pin(async move {
+                let mut seen = Vec::new();
+                while let Some(n) = snk.next_input().await {
+                    seen.push(n);
+                    snk.work(5);
+                }
+                (snk.finish().0, seen)
+            }),
+        ];
+        let out = thread(core, futures).run(None).unwrap().0;
+        let (src, snk) = (&out[0].1 .0, &out[1].1);
+        assert_eq!(
+            (src.busy, src.starved, src.blocked, src.end),
+            (6, 0, 2, Cycle(8))
+        );
+        let (s, seen) = snk;
+        assert_eq!(seen, &[0, 1, 2]);
+        assert_eq!((s.busy, s.starved, s.blocked, s.end), (15, 5, 0, Cycle(20)));
+        assert_eq!((src.items_out, s.items_in), (3, 3));
+        assert_eq!(s.max_fifo_occupancy, 1);
+    }
+
+    /// Two sources into one merging sink: items are taken by (arrival, port), whatever
+    /// order the executor runs the units in. A: items at arrival 2, 5, 8 (port 0); B:
+    /// arrival 2, 3 (port 1). Merge order: A0 (2, port 0), B0 (2, port 1), B1 (3), A1 (5),
+    /// A2 (8).
+    #[test]
+    fn executor_merge_takes_items_by_arrival_then_port() {
+        for perturb in [None, Some(1), Some(7), Some(99)] {
+            let core = Rc::new(Core::new(
+                vec![("A".into(), 1), ("B".into(), 1), ("Sink".into(), 1)],
+                perturb,
+            ));
+            let (ta, ra) = local::<(char, u32)>(&core, 0, 0, 2, 8);
+            let (tb, rb) = local::<(char, u32)>(&core, 1, 0, 2, 8);
+            let mut a = Ctx::<(), (char, u32)>::new(core.clone(), 0, Vec::new(), vec![ta], None);
+            let mut b = Ctx::<(), (char, u32)>::new(core.clone(), 1, Vec::new(), vec![tb], None);
+            let mut sink = Ctx::<(char, u32), ()>::new(core.clone(), 2, vec![ra, rb], Vec::new(), None);
+            let futures: Vec<UnitFuture<'_, Vec<(char, u32)>>> = vec![
+                Box::pin(async move {
+                    for n in 0..3 {
+                        a.work(if n == 0 { 1 } else { 2 });
+                        a.emit(1, 0, ('A', n)).await;
+                    }
+                    a.finish();
+                    Vec::new()
+                }),
+                Box::pin(async move {
+                    b.work(1);
+                    b.emit(1, 0, ('B', 0)).await;
+                    b.emit(1, 0, ('B', 1)).await;
+                    b.finish();
+                    Vec::new()
+                }),
+                Box::pin(async move {
+                    let mut order = Vec::new();
+                    while let Some(item) = sink.next_input().await {
+                        order.push(item);
+                    }
+                    sink.finish();
+                    order
+                }),
+            ];
+            let out = thread(core, futures).run(None).unwrap().0;
+            assert_eq!(
+                out[2].1,
+                [('A', 0), ('B', 0), ('B', 1), ('A', 1), ('A', 2)],
+                "perturb {perturb:?}"
+            );
+        }
+    }
+
+    /// Two units wired into a loop, each waiting for the other's first item: the run stops
+    /// at once with a deadlock naming both and what they wait for.
+    #[test]
+    fn executor_miswired_loop_is_reported_as_a_deadlock() {
+        let core = Rc::new(Core::new(
+            vec![("Left".into(), 1), ("Right".into(), 1)],
+            None,
+        ));
+        let (t1, r1) = local::<u32>(&core, 0, 0, 1, 2);
+        let (t2, r2) = local::<u32>(&core, 1, 0, 0, 2);
+        let mk = |unit: u32, rx, tx| -> UnitFuture<'static, ()> {
+            let mut c = Ctx::<u32, u32>::new(core.clone(), unit, vec![rx], vec![tx], None);
+            Box::pin(async move {
+                while let Some(n) = c.next_input().await {
+                    c.emit(1, 0, n).await;
+                }
+                c.finish();
+            })
+        };
+        let futures = vec![mk(0, r2, t1), mk(1, r1, t2)];
+        let err = thread(core, futures).run(None).unwrap_err();
+        assert_eq!(
+            err,
+            Stop::Deadlock(vec![
+                (0, "Left waits for input from [Right]".to_string()),
+                (1, "Right waits for input from [Left]".to_string()),
+            ])
+        );
+    }
+
+    #[test]
+    fn partitions_cover_every_unit_with_valid_threads() {
+        assert_eq!(partition(5, 2, None), [0, 0, 0, 1, 1]);
+        assert_eq!(partition(3, 8, None), [0, 1, 2]);
+        assert_eq!(partition(4, 1, None), [0, 0, 0, 0]);
+        let p = partition(20, 3, Some(5));
+        assert!(p.iter().all(|&t| t < 3));
+        assert_eq!(p, partition(20, 3, Some(5)));
+    }
+}
