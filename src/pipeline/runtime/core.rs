@@ -120,6 +120,7 @@ pub struct Core {
     /// xorshift state: when set, the queue is keyed by random numbers instead of clocks
     /// (the schedule-independence tests).
     perturb: Cell<Option<u64>>,
+    pub bound_calls: Cell<u64>,
 }
 
 impl Core {
@@ -144,6 +145,7 @@ impl Core {
             ready: RefCell::new(BinaryHeap::new()),
             step: Cell::new(0),
             perturb: Cell::new(perturb.map(|s| s | 1)),
+            bound_calls: Cell::new(0),
         }
     }
 
@@ -214,6 +216,7 @@ impl Core {
     /// doc); [`Cycle::NEVER`] once it finished.
     pub fn bound(&self, u: u32) -> Cycle {
         let s = &self.slots[u as usize];
+        self.bound_calls.set(self.bound_calls.get() + 1);
         let (step, cached) = s.memo.get();
         if step == self.step.get() {
             return cached;

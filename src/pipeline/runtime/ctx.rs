@@ -68,6 +68,9 @@ pub struct Ctx<I, O> {
     now: Cycle,
     /// (arrival, port) of the last item taken: the merge takes items in this order.
     last_taken: (Cycle, usize),
+    /// Per input: a lower bound on its next arrival, computed when last needed. A bound
+    /// stays valid as time goes on, so it is recomputed only when it cannot decide.
+    horizon: Vec<Cycle>,
     stats: UnitStats,
     trace: Option<Recorder>,
 }
@@ -83,6 +86,7 @@ impl<I, O> Ctx<I, O> {
         trace_cap: Option<usize>,
     ) -> Self {
         let latency = core.slots[unit as usize].latency;
+        let n = inputs.len();
         Ctx {
             core,
             unit,
@@ -91,6 +95,7 @@ impl<I, O> Ctx<I, O> {
             latency,
             now: Cycle::ZERO,
             last_taken: (Cycle::ZERO, 0),
+            horizon: vec![Cycle::ZERO; n],
             stats: UnitStats::default(),
             trace: trace_cap.map(Recorder::new),
         }
@@ -176,7 +181,7 @@ impl<I, O> Ctx<I, O> {
     /// What the merge can do now: the queued item with the smallest (arrival, port), once
     /// every other input's bound proves nothing earlier can come (or a recovery did).
     #[inline]
-    fn choose(&self) -> Choice {
+    fn choose(&mut self) -> Choice {
         let mut best: Option<(Cycle, usize)> = None;
         for (i, rx) in self.inputs.iter().enumerate() {
             if let Some(a) = rx.head() {
@@ -188,13 +193,20 @@ impl<I, O> Ctx<I, O> {
         match best {
             Some((arrival, port)) => {
                 let go = self.core.slots[self.unit as usize].go.get() == Some(arrival);
-                let safe = go
-                    || self.inputs.iter().enumerate().all(|(j, rx)| {
-                        rx.head().is_some() || {
-                            let b = rx.next_arrival(&self.core);
-                            b > arrival || (b == arrival && j > port)
+                let past = |b: Cycle, j: usize| b > arrival || (b == arrival && j > port);
+                let mut safe = true;
+                if !go {
+                    for (j, rx) in self.inputs.iter().enumerate() {
+                        if j == port || past(self.horizon[j], j) || rx.head().is_some() {
+                            continue;
                         }
-                    });
+                        self.horizon[j] = rx.next_arrival(&self.core);
+                        if !past(self.horizon[j], j) {
+                            safe = false;
+                            break;
+                        }
+                    }
+                }
                 if safe {
                     Choice::Take(port, arrival)
                 } else {

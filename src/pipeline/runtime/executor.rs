@@ -347,6 +347,9 @@ impl<F> HostThread<'_, F> {
                 }
             }
         }
+        if std::env::var_os("LEMBO_STATS").is_some() {
+            eprintln!("polls {polls} recoveries {stats:?} bound calls {}", core.bound_calls.get());
+        }
         let outputs = outputs
             .into_iter()
             .enumerate()

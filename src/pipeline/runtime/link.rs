@@ -60,78 +60,62 @@ impl fmt::Display for LinkName {
 /// its thread runs out of work).
 pub const MAX_BATCH: usize = 64;
 
-/// The most items ever in a FIFO at once, from push and pop times: after push n the FIFO
-/// holds item n and every earlier item popped after p_n. Pop times are non-decreasing,
-/// so the first earlier item still in the FIFO only moves forward: a pointer, not a search.
+/// The pop times of a link's last items in a ring of a power of two >= D entries: the
+/// credits the producer reads (item n - D's pop time gates push n) and the FIFO's
+/// occupancy. After push n the FIFO holds item n and every earlier item popped after p_n;
+/// pop times are non-decreasing, so the first earlier item still in only moves forward:
+/// a pointer, not a search.
 #[derive(Debug)]
-struct Occupancy {
-    /// Pop times of the last D - 1 items: item `first + i` at index i.
-    pops: VecDeque<Cycle>,
-    first: u64,
+struct PopRing {
+    times: Box<[Cycle]>,
+    mask: u64,
+    /// Items popped so far (the index of the next).
+    count: u64,
+    /// D - 1: item n - D was popped before p_n, so only the last D - 1 can still be in.
+    keep: u64,
     /// The first item whose pop time is after the current push time.
     still_in: u64,
-    keep: usize,
+    /// Most items in the FIFO at once.
     max: u64,
 }
 
-impl Occupancy {
+impl PopRing {
     fn new(depth: u32) -> Self {
-        Occupancy {
-            pops: VecDeque::with_capacity(depth as usize),
-            first: 0,
+        let cap = (depth as u64).next_power_of_two();
+        PopRing {
+            times: vec![Cycle::ZERO; cap as usize].into_boxed_slice(),
+            mask: cap - 1,
+            count: 0,
+            keep: depth as u64 - 1,
             still_in: 0,
-            keep: depth as usize - 1,
             max: 0,
         }
     }
 
-    /// Item n, pushed at `pushed_at`, is popped at `q`.
+    /// The next item, pushed at `pushed_at`, is popped at `q`.
     #[inline]
-    fn pop(&mut self, n: u64, pushed_at: Cycle, q: Cycle) {
-        // Item n-D was popped before p_n: only the last D - 1 can still be in.
-        self.still_in = self.still_in.max(self.first);
-        while self.still_in < n && self.pops[(self.still_in - self.first) as usize] <= pushed_at
-        {
+    fn pop(&mut self, pushed_at: Cycle, q: Cycle) {
+        let n = self.count;
+        self.still_in = self.still_in.max(n.saturating_sub(self.keep));
+        while self.still_in < n && self.times[(self.still_in & self.mask) as usize] <= pushed_at {
             self.still_in += 1;
         }
         self.max = self.max.max(1 + n - self.still_in);
-        if self.keep > 0 {
-            if self.pops.len() == self.keep {
-                self.pops.pop_front();
-                self.first += 1;
-            }
-            self.pops.push_back(q);
-        } else {
-            self.first = n + 1;
-        }
-    }
-}
-
-/// The pop times the producer still needs: item m's at index m - first.
-#[derive(Debug, Default)]
-struct Credits {
-    window: VecDeque<Cycle>,
-    /// Credits received so far (the index after the window's last).
-    seen: u64,
-}
-
-impl Credits {
-    fn push(&mut self, q: Cycle, depth: usize) {
-        if self.window.len() == depth {
-            self.window.pop_front();
-        }
-        self.window.push_back(q);
-        self.seen += 1;
+        self.record(q);
     }
 
-    /// The pop time of item m, if received.
+    /// The next item's pop time, without the occupancy (a producer's copy of the credits).
+    #[inline]
+    fn record(&mut self, q: Cycle) {
+        self.times[(self.count & self.mask) as usize] = q;
+        self.count += 1;
+    }
+
+    /// The pop time of item m, if it was popped (m is never older than the last D).
+    #[inline]
     fn get(&self, m: u64) -> Option<Cycle> {
-        if m >= self.seen {
-            return None;
-        }
-        let first = self.seen - self.window.len() as u64;
-        debug_assert!(m >= first, "credit {m} dropped (window starts at {first})");
-        Some(self.window[(m - first) as usize])
+        debug_assert!(m + self.mask + 1 >= self.count, "credit {m} overwritten");
+        (m < self.count).then(|| self.times[(m & self.mask) as usize])
     }
 }
 
@@ -154,14 +138,17 @@ pub struct LocalLink<T> {
     spec: LinkSpec,
     name: LinkName,
     ends: Ends,
+    fifo: RefCell<Fifo<T>>,
+}
+
+/// The state of a [`LocalLink`], under one borrow.
+struct Fifo<T> {
     /// (arrival = p + L, push time, item).
-    queue: RefCell<VecDeque<(Cycle, Cycle, T)>>,
-    credits: RefCell<Credits>,
-    occupancy: RefCell<Occupancy>,
-    pushed: Cell<u64>,
-    popped: Cell<u64>,
-    last_push: Cell<Cycle>,
-    ended: Cell<bool>,
+    queue: VecDeque<(Cycle, Cycle, T)>,
+    pops: PopRing,
+    pushed: u64,
+    last_push: Cycle,
+    ended: bool,
 }
 
 impl<T> LocalLink<T> {
@@ -172,13 +159,13 @@ impl<T> LocalLink<T> {
             spec,
             name,
             ends,
-            queue: RefCell::new(VecDeque::with_capacity(spec.fifo_depth.min(1024) as usize)),
-            credits: RefCell::new(Credits::default()),
-            occupancy: RefCell::new(Occupancy::new(spec.fifo_depth)),
-            pushed: Cell::new(0),
-            popped: Cell::new(0),
-            last_push: Cell::new(Cycle::ZERO),
-            ended: Cell::new(false),
+            fifo: RefCell::new(Fifo {
+                queue: VecDeque::with_capacity(spec.fifo_depth.min(1024) as usize),
+                pops: PopRing::new(spec.fifo_depth),
+                pushed: 0,
+                last_push: Cycle::ZERO,
+                ended: false,
+            }),
         }
     }
 }
@@ -186,13 +173,17 @@ impl<T> LocalLink<T> {
 impl<T> InputView for LocalLink<T> {
     #[inline]
     fn next_arrival(&self, core: &Core) -> Cycle {
-        if let Some(&(arrival, _, _)) = self.queue.borrow().front() {
-            return arrival;
-        }
-        if self.ended.get() {
-            return Cycle::NEVER;
-        }
-        self.last_push.get().max(core.bound(self.ends.producer)) + self.spec.latency_cycles
+        let last_push = {
+            let f = self.fifo.borrow();
+            if let Some(&(arrival, _, _)) = f.queue.front() {
+                return arrival;
+            }
+            if f.ended {
+                return Cycle::NEVER;
+            }
+            f.last_push
+        };
+        last_push.max(core.bound(self.ends.producer)) + self.spec.latency_cycles
     }
 
     fn producer_name(&self) -> &str {
@@ -200,12 +191,13 @@ impl<T> InputView for LocalLink<T> {
     }
 
     fn snap(&self) -> InputSnap {
+        let f = self.fifo.borrow();
         InputSnap {
             producer: self.ends.from as usize,
             latency: self.spec.latency_cycles,
-            head: self.queue.borrow().front().map(|h| h.0),
-            ended: self.ended.get(),
-            last_push: self.last_push.get(),
+            head: f.queue.front().map(|h| h.0),
+            ended: f.ended,
+            last_push: f.last_push,
         }
     }
 }
@@ -221,7 +213,7 @@ pub struct RemoteTx<T> {
     horizon: Arc<AtomicU64>,
     /// The consumer's host thread.
     peer: Arc<Signal>,
-    credits: RefCell<Credits>,
+    credits: RefCell<PopRing>,
     batch: RefCell<Vec<Timed<T>>>,
     pushed: Cell<u64>,
     last_push: Cell<Cycle>,
@@ -241,9 +233,8 @@ pub struct RemoteRx<T> {
     /// The producer's host thread.
     peer: Arc<Signal>,
     queue: RefCell<VecDeque<(Cycle, Cycle, T)>>,
-    occupancy: RefCell<Occupancy>,
+    pops: RefCell<PopRing>,
     pending_credits: RefCell<Vec<Cycle>>,
-    popped: Cell<u64>,
     /// No item will be pushed before this cycle (the last item's push or the horizon).
     bound: Cell<Cycle>,
     ended: Cell<bool>,
@@ -294,7 +285,7 @@ impl<T> RemoteParts<T> {
             credit_rx: self.credits.1.clone(),
             horizon: self.horizon.clone(),
             peer,
-            credits: RefCell::new(Credits::default()),
+            credits: RefCell::new(PopRing::new(spec.fifo_depth)),
             batch: RefCell::new(Vec::with_capacity(MAX_BATCH)),
             pushed: Cell::new(0),
             last_push: Cell::new(Cycle::ZERO),
@@ -322,9 +313,8 @@ impl<T> RemoteParts<T> {
             horizon: self.horizon.clone(),
             peer,
             queue: RefCell::new(VecDeque::new()),
-            occupancy: RefCell::new(Occupancy::new(spec.fifo_depth)),
+            pops: RefCell::new(PopRing::new(spec.fifo_depth)),
             pending_credits: RefCell::new(Vec::new()),
-            popped: Cell::new(0),
             bound: Cell::new(Cycle::ZERO),
             ended: Cell::new(false),
         }
@@ -380,11 +370,10 @@ impl<T> RemoteTx<T> {
     }
 
     fn take_credits(&self) {
-        let depth = self.spec.fifo_depth as usize;
         let mut credits = self.credits.borrow_mut();
         while let Ok(batch) = self.credit_rx.try_recv() {
             for q in batch {
-                credits.push(q, depth);
+                credits.record(q);
             }
         }
     }
@@ -413,8 +402,7 @@ impl<T> RemoteEnd for RemoteTx<T> {
             return false;
         }
         self.take_credits();
-        let depth = self.spec.fifo_depth as u64;
-        let want = self.pushed.get() - depth;
+        let want = self.pushed.get() - self.spec.fifo_depth as u64;
         if self.credits.borrow().get(want).is_some() {
             self.core.wake(self.ends.producer);
             return true;
@@ -508,22 +496,26 @@ impl<T> Tx<T> {
     /// FIFO has never been full, `None` if that item has not been popped yet.
     #[inline]
     pub fn credit_needed(&self) -> Option<Cycle> {
-        let (pushed, depth) = match self {
-            Tx::Local(l) => (l.pushed.get(), l.spec.fifo_depth as u64),
-            Tx::Remote(l) => (l.pushed.get(), l.spec.fifo_depth as u64),
-        };
-        if pushed < depth {
-            return Some(Cycle::ZERO);
-        }
-        let want = pushed - depth;
         match self {
-            Tx::Local(l) => l.credits.borrow().get(want),
+            Tx::Local(l) => {
+                let f = l.fifo.borrow();
+                let depth = l.spec.fifo_depth as u64;
+                if f.pushed < depth {
+                    return Some(Cycle::ZERO);
+                }
+                f.pops.get(f.pushed - depth)
+            }
             Tx::Remote(l) => {
-                if let Some(q) = l.credits.borrow().get(want) {
+                let depth = l.spec.fifo_depth as u64;
+                let pushed = l.pushed.get();
+                if pushed < depth {
+                    return Some(Cycle::ZERO);
+                }
+                if let Some(q) = l.credits.borrow().get(pushed - depth) {
                     return Some(q);
                 }
                 l.take_credits();
-                l.credits.borrow().get(want)
+                l.credits.borrow().get(pushed - depth)
             }
         }
     }
@@ -534,12 +526,13 @@ impl<T> Tx<T> {
     pub fn push(&self, at: Cycle, item: T) {
         match self {
             Tx::Local(l) => {
-                debug_assert!(at >= l.last_push.get() && !l.ended.get());
-                l.last_push.set(at);
-                l.pushed.set(l.pushed.get() + 1);
-                l.queue
-                    .borrow_mut()
-                    .push_back((at + l.spec.latency_cycles, at, item));
+                {
+                    let mut f = l.fifo.borrow_mut();
+                    debug_assert!(at >= f.last_push && !f.ended);
+                    f.last_push = at;
+                    f.pushed += 1;
+                    f.queue.push_back((at + l.spec.latency_cycles, at, item));
+                }
                 l.core.wake_if_input(l.ends.consumer);
             }
             Tx::Remote(l) => {
@@ -562,7 +555,7 @@ impl<T> Tx<T> {
     pub fn end(&self) {
         match self {
             Tx::Local(l) => {
-                l.ended.set(true);
+                l.fifo.borrow_mut().ended = true;
                 l.core.wake_if_input(l.ends.consumer);
             }
             Tx::Remote(l) => {
@@ -590,7 +583,7 @@ impl<T> Rx<T> {
     #[inline]
     pub fn head(&self) -> Option<Cycle> {
         match self {
-            Rx::Local(l) => l.queue.borrow().front().map(|h| h.0),
+            Rx::Local(l) => l.fifo.borrow().queue.front().map(|h| h.0),
             Rx::Remote(l) => l.queue.borrow().front().map(|h| h.0),
         }
     }
@@ -607,7 +600,10 @@ impl<T> Rx<T> {
     /// Whether the producer ended and every item was popped.
     pub fn finished(&self) -> bool {
         match self {
-            Rx::Local(l) => l.ended.get() && l.queue.borrow().is_empty(),
+            Rx::Local(l) => {
+                let f = l.fifo.borrow();
+                f.ended && f.queue.is_empty()
+            }
             Rx::Remote(l) => l.ended.get() && l.queue.borrow().is_empty(),
         }
     }
@@ -618,13 +614,13 @@ impl<T> Rx<T> {
     pub fn pop(&self, q: Cycle) -> T {
         match self {
             Rx::Local(l) => {
-                let (arrival, pushed_at, item) =
-                    l.queue.borrow_mut().pop_front().expect("caller checked");
-                debug_assert!(q >= arrival);
-                let n = l.popped.get();
-                l.popped.set(n + 1);
-                l.occupancy.borrow_mut().pop(n, pushed_at, q);
-                l.credits.borrow_mut().push(q, l.spec.fifo_depth as usize);
+                let item = {
+                    let mut f = l.fifo.borrow_mut();
+                    let (arrival, pushed_at, item) = f.queue.pop_front().expect("caller checked");
+                    debug_assert!(q >= arrival);
+                    f.pops.pop(pushed_at, q);
+                    item
+                };
                 let p = &l.core.slots[l.ends.producer as usize];
                 if p.wait.get() == (Wait::Credit { port: l.ends.port }) {
                     l.core.wake(l.ends.producer);
@@ -635,9 +631,7 @@ impl<T> Rx<T> {
                 let (arrival, pushed_at, item) =
                     l.queue.borrow_mut().pop_front().expect("caller checked");
                 debug_assert!(q >= arrival);
-                let n = l.popped.get();
-                l.popped.set(n + 1);
-                l.occupancy.borrow_mut().pop(n, pushed_at, q);
+                l.pops.borrow_mut().pop(pushed_at, q);
                 let full = {
                     let mut pending = l.pending_credits.borrow_mut();
                     pending.push(q);
@@ -654,8 +648,8 @@ impl<T> Rx<T> {
     /// Most items ever in this FIFO at once.
     pub fn max_occupancy(&self) -> u64 {
         match self {
-            Rx::Local(l) => l.occupancy.borrow().max,
-            Rx::Remote(l) => l.occupancy.borrow().max,
+            Rx::Local(l) => l.fifo.borrow().pops.max,
+            Rx::Remote(l) => l.pops.borrow().max,
         }
     }
 }
