@@ -68,7 +68,13 @@ fn chain(items: u64) -> u64 {
         rxs.push(Some(r));
     }
     let mut futures: Vec<UnitFuture<'_, u64>> = Vec::new();
-    let mut src = Ctx::<(), u64>::new(core.clone(), 0, Vec::new(), vec![txs[0].take().unwrap()], None);
+    let mut src = Ctx::<(), u64>::new(
+        core.clone(),
+        0,
+        Vec::new(),
+        vec![txs[0].take().unwrap()],
+        None,
+    );
     futures.push(Box::pin(async move {
         for n in 0..items {
             src.emit(1, 0, n).await;
@@ -92,7 +98,13 @@ fn chain(items: u64) -> u64 {
             0
         }));
     }
-    let mut sink = Ctx::<u64, ()>::new(core.clone(), 4, vec![rxs[3].take().unwrap()], Vec::new(), None);
+    let mut sink = Ctx::<u64, ()>::new(
+        core.clone(),
+        4,
+        vec![rxs[3].take().unwrap()],
+        Vec::new(),
+        None,
+    );
     futures.push(Box::pin(async move {
         let mut sum = 0;
         while let Some(x) = sink.next_input().await {
@@ -107,7 +119,16 @@ fn chain(items: u64) -> u64 {
 fn merge(items: u64) -> u64 {
     let core = Rc::new(Core::new(
         (0..5)
-            .map(|i| (if i < 4 { format!("Source[{i}]") } else { "Sink".into() }, 1))
+            .map(|i| {
+                (
+                    if i < 4 {
+                        format!("Source[{i}]")
+                    } else {
+                        "Sink".into()
+                    },
+                    1,
+                )
+            })
             .collect(),
         None,
     ));

@@ -200,6 +200,7 @@ impl RenderJob {
             for (flag, set) in [
                 ("--arch", self.arch.is_some()),
                 ("--trace-out", self.trace_out.is_some()),
+                ("--host-threads", self.host_threads != 1),
             ] {
                 if set {
                     return Err(Error::invalid(

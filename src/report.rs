@@ -333,7 +333,12 @@ impl Report {
             h.wall_seconds,
             h.fragments_per_second / 1e6,
             h.simulated_cycles_per_second
-                .map(|c| format!(", {:.1} M simulated cycles/s", c / 1e6))
+                .map(|c| format!(
+                    ", {:.1} M simulated cycles/s on {} host thread{}",
+                    c / 1e6,
+                    h.host_threads.unwrap_or(1),
+                    if h.host_threads == Some(1) { "" } else { "s" }
+                ))
                 .unwrap_or_default(),
             h.reference_wall_seconds
                 .map(|r| format!(", reference {r:.3} s"))

@@ -256,6 +256,47 @@ fn functional_mode_refuses_timed_only_flags() {
         &["render", "--mode", "functional", "--arch", "x.json"],
         "--arch",
     );
+    assert_refused(
+        &["render", "--mode", "functional", "--host-threads", "2"],
+        "--host-threads",
+    );
+}
+
+/// `--host-threads` 0 and more threads than units are refused by name; any valid count
+/// gives the same report (cycles, counts) and image, and report.json says how many ran.
+#[test]
+fn host_threads_change_nothing_simulated() {
+    assert_refused(&["render", "--host-threads", "0"], "--host-threads");
+    // The baseline's lembo path has 16 units.
+    assert_refused(&["render", "--host-threads", "17"], "16 units");
+    let dir = tempfile::tempdir().unwrap();
+    let s = scene_file(dir.path(), "s.json", GOOD);
+    let mut reports = Vec::new();
+    for threads in ["1", "3", "16"] {
+        let out_dir = dir.path().join(format!("out{threads}"));
+        let out = run(
+            &[
+                "render",
+                &s,
+                "--host-threads",
+                threads,
+                "--out",
+                out_dir.to_str().unwrap(),
+            ],
+            dir.path(),
+        );
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let r: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out_dir.join("report.json")).unwrap()).unwrap();
+        assert_eq!(r["host"]["host_threads"], threads.parse::<u32>().unwrap());
+        let image = std::fs::read(out_dir.join("image.png")).unwrap();
+        reports.push((r["cycles"].clone(), r["counts"].clone(), image));
+    }
+    assert!(reports.windows(2).all(|w| w[0] == w[1]));
 }
 
 #[test]

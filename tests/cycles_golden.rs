@@ -50,7 +50,10 @@ fn arch(name: &str) -> ArchConfig {
 /// One line per unit (name, busy, starved, blocked, items in, items out, most items in an
 /// input FIFO) and one for the counts: everything a cycle report holds.
 fn digest(cycles: &CycleReport, counts: &Counts) -> String {
-    let mut s = format!("total {} bottleneck {:?}\n", cycles.total, cycles.bottleneck);
+    let mut s = format!(
+        "total {} bottleneck {:?}\n",
+        cycles.total, cycles.bottleneck
+    );
     for u in &cycles.units {
         writeln!(
             s,
@@ -242,7 +245,12 @@ fn random_architectures_keep_their_cycle_reports() {
                 ];
                 for o in &hosts {
                     prop_assert_eq!(&run_with(&s, &a, false, o), &lembo, "lembo path, {:?}", o);
-                    prop_assert_eq!(&run_with(&s, &a, true, o), &triangle, "triangle path, {:?}", o);
+                    prop_assert_eq!(
+                        &run_with(&s, &a, true, o),
+                        &triangle,
+                        "triangle path, {:?}",
+                        o
+                    );
                 }
                 got.insert(format!("{n:03} lembo"), lembo);
                 got.insert(format!("{n:03} triangle"), triangle);

@@ -116,9 +116,20 @@ fn timed_results_do_not_depend_on_the_host_schedule() {
     let s = scene("sphere24.json", Some(256));
     let a = arch("wide.json");
     let first = timed(&s, &a, &SimOptions::default());
-    let runs = (0..10)
-        .map(|_| SimOptions::default())
+    // Units run in seeded random orders, or partitioned over 2 to 6 host threads, in
+    // contiguous runs or at random.
+    let runs = (1..=5)
+        .map(|seed| SimOptions {
+            perturb: Some(seed),
+            ..SimOptions::default()
+        })
+        .chain((2..=6).map(|threads| SimOptions {
+            host_threads: threads,
+            ..SimOptions::default()
+        }))
         .chain((1..=5).map(|seed| SimOptions {
+            host_threads: 2 + seed as usize % 3,
+            partition_seed: Some(seed),
             perturb: Some(seed),
             ..SimOptions::default()
         }));

@@ -30,8 +30,8 @@ use crate::rop::shade::to_u8;
 use crate::rop::FrameBuffer;
 use crate::scene::Scene;
 
-use super::SimOptions;
 use super::units::rop::RopTiles;
+use super::SimOptions;
 
 /// What the timed discoid passes produced.
 pub struct DiscoidTimed {

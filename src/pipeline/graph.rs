@@ -143,10 +143,18 @@ pub fn boundaries(arch: &ArchConfig) -> [(UnitKind, UnitKind, &LinkConfig); 9] {
         (MinMax, IntervalManager, &l.minmax_to_interval_manager),
         (IntervalManager, Segmenter, &l.interval_manager_to_segmenter),
         (Segmenter, Subsegmenter, &l.segmenter_to_subsegmenter),
-        (Subsegmenter, FragmentRasterizer, &l.subsegmenter_to_rasterizer),
+        (
+            Subsegmenter,
+            FragmentRasterizer,
+            &l.subsegmenter_to_rasterizer,
+        ),
         (FragmentRasterizer, Rop, &l.rasterizer_to_rop),
         (Rop, FrameBuffer, &l.rop_to_framebuffer),
-        (TriangleSetup, TriangleRasterizer, &l.triangle_setup_to_rasterizer),
+        (
+            TriangleSetup,
+            TriangleRasterizer,
+            &l.triangle_setup_to_rasterizer,
+        ),
         (TriangleRasterizer, Rop, &l.triangle_rasterizer_to_rop),
     ]
 }
@@ -184,7 +192,10 @@ pub fn lembo_units(arch: &ArchConfig) -> Vec<UnitInstance> {
 
 /// The units the triangle path instantiates, in dataflow order.
 pub fn triangle_units(arch: &ArchConfig) -> Vec<UnitInstance> {
-    units(Path::Triangle, arch).into_iter().map(|u| u.0).collect()
+    units(Path::Triangle, arch)
+        .into_iter()
+        .map(|u| u.0)
+        .collect()
 }
 
 /// The FIFO entries of every link `units` instantiate: each boundary's crossbar has one

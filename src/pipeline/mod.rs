@@ -209,7 +209,13 @@ struct Crossbar<T> {
 }
 
 impl<T> Crossbar<T> {
-    fn new(units: &[UnitInstance], from: UnitKind, to: UnitKind, thread: &[usize], c: &LinkConfig) -> Self {
+    fn new(
+        units: &[UnitInstance],
+        from: UnitKind,
+        to: UnitKind,
+        thread: &[usize],
+        c: &LinkConfig,
+    ) -> Self {
         let of = |kind: UnitKind| {
             let first = units.iter().position(|u| u.kind == kind).unwrap_or(0);
             first..first + units.iter().filter(|u| u.kind == kind).count()
@@ -334,13 +340,21 @@ impl<'p> Builder<'p> {
         (tx, rx)
     }
 
-    fn ctx<I, O>(&self, g: usize, inputs: Vec<Rx<I>>, outputs: Vec<Tx<O>>, trace: Option<usize>) -> Ctx<I, O> {
+    fn ctx<I, O>(
+        &self,
+        g: usize,
+        inputs: Vec<Rx<I>>,
+        outputs: Vec<Tx<O>>,
+        trace: Option<usize>,
+    ) -> Ctx<I, O> {
         let u = self.local[g].expect("a unit of this thread");
         Ctx::new(self.core.clone(), u, inputs, outputs, trace)
     }
 }
 
-/// The typed links of a run, one crossbar per boundary of its path.
+/// The typed links of a run, one crossbar per boundary of its path (made once per run, so
+/// the variants' sizes do not matter).
+#[allow(clippy::large_enum_variant)]
 enum Bars<R> {
     Lembo {
         setup: Crossbar<LemboReady>,
@@ -365,16 +379,52 @@ impl<R: Real> Bars<R> {
         match path {
             Path::Lembo => Bars::Lembo {
                 setup: Crossbar::new(units, Setup, MinMax, thread, &l.setup_to_minmax),
-                minmax: Crossbar::new(units, MinMax, IntervalManager, thread, &l.minmax_to_interval_manager),
-                intervals: Crossbar::new(units, IntervalManager, Segmenter, thread, &l.interval_manager_to_segmenter),
-                segments: Crossbar::new(units, Segmenter, Subsegmenter, thread, &l.segmenter_to_subsegmenter),
-                subsegments: Crossbar::new(units, Subsegmenter, FragmentRasterizer, thread, &l.subsegmenter_to_rasterizer),
+                minmax: Crossbar::new(
+                    units,
+                    MinMax,
+                    IntervalManager,
+                    thread,
+                    &l.minmax_to_interval_manager,
+                ),
+                intervals: Crossbar::new(
+                    units,
+                    IntervalManager,
+                    Segmenter,
+                    thread,
+                    &l.interval_manager_to_segmenter,
+                ),
+                segments: Crossbar::new(
+                    units,
+                    Segmenter,
+                    Subsegmenter,
+                    thread,
+                    &l.segmenter_to_subsegmenter,
+                ),
+                subsegments: Crossbar::new(
+                    units,
+                    Subsegmenter,
+                    FragmentRasterizer,
+                    thread,
+                    &l.subsegmenter_to_rasterizer,
+                ),
                 spans: Crossbar::new(units, FragmentRasterizer, Rop, thread, &l.rasterizer_to_rop),
                 bursts: Crossbar::new(units, Rop, FrameBuffer, thread, &l.rop_to_framebuffer),
             },
             Path::Triangle => Bars::Triangle {
-                triangles: Crossbar::new(units, TriangleSetup, TriangleRasterizer, thread, &l.triangle_setup_to_rasterizer),
-                pieces: Crossbar::new(units, TriangleRasterizer, Rop, thread, &l.triangle_rasterizer_to_rop),
+                triangles: Crossbar::new(
+                    units,
+                    TriangleSetup,
+                    TriangleRasterizer,
+                    thread,
+                    &l.triangle_setup_to_rasterizer,
+                ),
+                pieces: Crossbar::new(
+                    units,
+                    TriangleRasterizer,
+                    Rop,
+                    thread,
+                    &l.triangle_rasterizer_to_rop,
+                ),
                 bursts: Crossbar::new(units, Rop, FrameBuffer, thread, &l.rop_to_framebuffer),
             },
         }
@@ -392,7 +442,8 @@ fn build<'a, R: Real>(
     use UnitKind::*;
     let mut futures: Vec<UnitFuture<'a, Finished>> = Vec::new();
     let n = b.units.len();
-    let pos = |g: usize, kind: UnitKind| g - b.units.iter().position(|u| u.kind == kind).unwrap_or(0);
+    let pos =
+        |g: usize, kind: UnitKind| g - b.units.iter().position(|u| u.kind == kind).unwrap_or(0);
     match bars {
         Bars::Lembo {
             setup,
@@ -414,13 +465,22 @@ fn build<'a, R: Real>(
                 let kind = b.units[g].kind;
                 let i = pos(g, kind);
                 let body: UnitFuture<'a, Finished> = match kind {
-                    Setup => Box::pin(units::setup::run(b.ctx(g, Vec::new(), take(&mut s_tx, i), trace), sh)),
-                    MinMax => Box::pin(units::minmax::run(b.ctx(g, take(&mut m_rx, i), take(&mut m_tx, i), trace), sh)),
+                    Setup => Box::pin(units::setup::run(
+                        b.ctx(g, Vec::new(), take(&mut s_tx, i), trace),
+                        sh,
+                    )),
+                    MinMax => Box::pin(units::minmax::run(
+                        b.ctx(g, take(&mut m_rx, i), take(&mut m_tx, i), trace),
+                        sh,
+                    )),
                     IntervalManager => Box::pin(units::interval_manager::run(
                         b.ctx(g, take(&mut i_rx, i), take(&mut i_tx, i), trace),
                         sh,
                     )),
-                    Segmenter => Box::pin(units::segmenter::run(b.ctx(g, take(&mut g_rx, i), take(&mut g_tx, i), trace), sh)),
+                    Segmenter => Box::pin(units::segmenter::run(
+                        b.ctx(g, take(&mut g_rx, i), take(&mut g_tx, i), trace),
+                        sh,
+                    )),
                     Subsegmenter => Box::pin(units::subsegmenter::run(
                         b.ctx(g, take(&mut b_rx, i), take(&mut b_tx, i), trace),
                         sh,
@@ -429,7 +489,12 @@ fn build<'a, R: Real>(
                         b.ctx(g, take(&mut r_rx, i), take(&mut r_tx, i), trace),
                         sh,
                     )),
-                    Rop => Box::pin(units::rop::run(b.ctx(g, take(&mut p_rx, i), take(&mut p_tx, i), trace), sh, i, frame)),
+                    Rop => Box::pin(units::rop::run(
+                        b.ctx(g, take(&mut p_rx, i), take(&mut p_tx, i), trace),
+                        sh,
+                        i,
+                        frame,
+                    )),
                     FrameBuffer => Box::pin(units::framebuffer::run(
                         b.ctx(g, take(&mut f_rx, i), Vec::new(), trace),
                         &sh.arch.framebuffer,
@@ -459,7 +524,12 @@ fn build<'a, R: Real>(
                         b.ctx(g, take(&mut r_rx, i), take(&mut r_tx, i), trace),
                         sh,
                     )),
-                    Rop => Box::pin(units::rop::run(b.ctx(g, take(&mut p_rx, i), take(&mut p_tx, i), trace), sh, i, frame)),
+                    Rop => Box::pin(units::rop::run(
+                        b.ctx(g, take(&mut p_rx, i), take(&mut p_tx, i), trace),
+                        sh,
+                        i,
+                        frame,
+                    )),
                     FrameBuffer => Box::pin(units::framebuffer::run(
                         b.ctx(g, take(&mut f_rx, i), Vec::new(), trace),
                         &sh.arch.framebuffer,
@@ -581,7 +651,8 @@ fn run_in<R: Real>(
                                     &board.signals,
                                 );
                                 let futures = build(&mut b, bars, shared, frame, trace);
-                                let global = (0..units.len()).filter(|&g| thread[g] == me).collect();
+                                let global =
+                                    (0..units.len()).filter(|&g| thread[g] == me).collect();
                                 let r = HostThread {
                                     core: b.core.clone(),
                                     futures,
@@ -600,8 +671,15 @@ fn run_in<R: Real>(
                 let mut waiting = Vec::new();
                 let mut failure = None;
                 for h in handles {
-                    match h.map_err(|e| Error::Internal(format!("cannot start a host thread: {e}")))?.join() {
-                        Err(_) => failure = Some(Error::Internal("a host thread of the timed model panicked".into())),
+                    match h
+                        .map_err(|e| Error::Internal(format!("cannot start a host thread: {e}")))?
+                        .join()
+                    {
+                        Err(_) => {
+                            failure = Some(Error::Internal(
+                                "a host thread of the timed model panicked".into(),
+                            ))
+                        }
                         Ok(Ok((done, _))) => all.extend(done),
                         Ok(Err(Stop::Deadlock(w))) => waiting.extend(w),
                         Ok(Err(Stop::Aborted)) => {}

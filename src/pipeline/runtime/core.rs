@@ -120,7 +120,6 @@ pub struct Core {
     /// xorshift state: when set, the queue is keyed by random numbers instead of clocks
     /// (the schedule-independence tests).
     perturb: Cell<Option<u64>>,
-    pub bound_calls: Cell<u64>,
 }
 
 impl Core {
@@ -145,7 +144,6 @@ impl Core {
             ready: RefCell::new(BinaryHeap::new()),
             step: Cell::new(0),
             perturb: Cell::new(perturb.map(|s| s | 1)),
-            bound_calls: Cell::new(0),
         }
     }
 
@@ -216,7 +214,6 @@ impl Core {
     /// doc); [`Cycle::NEVER`] once it finished.
     pub fn bound(&self, u: u32) -> Cycle {
         let s = &self.slots[u as usize];
-        self.bound_calls.set(self.bound_calls.get() + 1);
         let (step, cached) = s.memo.get();
         if step == self.step.get() {
             return cached;
@@ -378,7 +375,12 @@ pub fn recover(snaps: &[UnitSnap]) -> Vec<(usize, Cycle)> {
     for _sweep in 0..4096 {
         let mut moved = false;
         for (i, s) in snaps.iter().enumerate() {
-            let a = s.inputs.iter().map(|inp| bound(inp, &x)).min().unwrap_or(Cycle::NEVER);
+            let a = s
+                .inputs
+                .iter()
+                .map(|inp| bound(inp, &x))
+                .min()
+                .unwrap_or(Cycle::NEVER);
             let (ei, xi) = match s.wait {
                 Wait::Done => continue,
                 Wait::Runnable => (s.now, s.now + s.latency),
@@ -387,7 +389,9 @@ pub fn recover(snaps: &[UnitSnap]) -> Vec<(usize, Cycle)> {
                     (ei, if never(ei) { ei } else { ei + s.latency })
                 }
                 Wait::Credit { .. } => {
-                    let c = s.credit_from.map_or(usize::MAX, |c| at.get(c).copied().unwrap_or(usize::MAX));
+                    let c = s
+                        .credit_from
+                        .map_or(usize::MAX, |c| at.get(c).copied().unwrap_or(usize::MAX));
                     let q = if c == usize::MAX {
                         Cycle::ZERO
                     } else {

@@ -49,6 +49,18 @@ pub struct UnitStats {
     pub out_of_order: u64,
 }
 
+/// ceil(n / d) for d >= 1, without a division when d is a power of two (the usual rates):
+/// the per-item cost of a unit is often such a quotient.
+#[inline(always)]
+pub fn ceil_div(n: u64, d: u64) -> u64 {
+    debug_assert!(d >= 1);
+    if d.is_power_of_two() {
+        (n >> d.trailing_zeros()) + (n & (d - 1) != 0) as u64
+    } else {
+        n.div_ceil(d)
+    }
+}
+
 /// What a merge can do.
 enum Choice {
     Take(usize, Cycle),
@@ -244,13 +256,23 @@ impl<I, O> Ctx<I, O> {
         }
         let mut stats = std::mem::take(&mut self.stats);
         stats.end = self.now;
-        stats.max_fifo_occupancy = self
-            .inputs
-            .iter()
-            .map(Rx::max_occupancy)
-            .max()
-            .unwrap_or(0);
+        stats.max_fifo_occupancy = self.inputs.iter().map(Rx::max_occupancy).max().unwrap_or(0);
         debug_assert_eq!(stats.busy + stats.starved + stats.blocked, stats.end.0);
         (stats, self.trace.take())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::ceil_div;
+
+    #[test]
+    fn ceil_div_matches_div_ceil() {
+        for d in 1..=70u64 {
+            for n in 0..300u64 {
+                assert_eq!(ceil_div(n, d), n.div_ceil(d), "{n} / {d}");
+            }
+        }
+        assert_eq!(ceil_div(u64::MAX, 64), u64::MAX.div_ceil(64));
     }
 }

@@ -41,7 +41,11 @@ pub type UnitFuture<'a, F> = Pin<Box<dyn Future<Output = F> + 'a>>;
 /// Wakes a host thread: something was sent to it.
 #[derive(Debug, Default)]
 pub struct Signal {
+    /// Items, an end or credits were sent: the thread is not quiescent until it read them.
     dirty: AtomicBool,
+    /// Only a horizon moved: the thread should look, but stays idle unless a unit can run
+    /// (in a mis-wired loop horizons would otherwise circle forever and hide the deadlock).
+    horizon: AtomicBool,
     thread: OnceLock<std::thread::Thread>,
 }
 
@@ -49,6 +53,16 @@ impl Signal {
     /// Marks the thread as having something to read and unparks it.
     pub fn notify(&self) {
         self.dirty.store(true, SeqCst);
+        self.unpark();
+    }
+
+    /// Tells the thread a horizon it reads moved.
+    pub fn nudge(&self) {
+        self.horizon.store(true, SeqCst);
+        self.unpark();
+    }
+
+    fn unpark(&self) {
         if let Some(t) = self.thread.get() {
             t.unpark();
         }
@@ -70,6 +84,8 @@ struct ThreadState {
 enum Resume {
     Go(Vec<(usize, Cycle)>),
     Continue,
+    /// A horizon moved; the thread is still idle on the board.
+    Horizon,
     Stop,
 }
 
@@ -186,16 +202,26 @@ impl Board {
         }
     }
 
-    fn idle(&self, me: usize, snap: Vec<UnitSnap>) -> Resume {
-        {
-            let mut st = self.state.lock().expect("not poisoned");
-            if self.signals[me].dirty.load(SeqCst) {
-                return Resume::Continue;
-            }
-            st[me].idle = true;
-            st[me].snap = snap;
-            self.check_quiescence(&mut st);
+    /// Registers thread `me` as idle with its units' states, unless something was sent to
+    /// it meanwhile (then false).
+    fn enter_idle(&self, me: usize, snap: Vec<UnitSnap>) -> bool {
+        let mut st = self.state.lock().expect("not poisoned");
+        if self.signals[me].dirty.load(SeqCst) {
+            return false;
         }
+        st[me].idle = true;
+        st[me].snap = snap;
+        self.check_quiescence(&mut st);
+        true
+    }
+
+    /// Thread `me`, idle, has a unit to run again.
+    fn leave_idle(&self, me: usize) {
+        self.state.lock().expect("not poisoned")[me].idle = false;
+    }
+
+    /// Waits, idle, for a go-ahead, something sent, a horizon or the end of the run.
+    fn wait(&self, me: usize) -> Resume {
         loop {
             {
                 let mut st = self.state.lock().expect("not poisoned");
@@ -210,6 +236,9 @@ impl Board {
                 if self.signals[me].dirty.load(SeqCst) {
                     st[me].idle = false;
                     return Resume::Continue;
+                }
+                if self.signals[me].horizon.swap(false, SeqCst) {
+                    return Resume::Horizon;
                 }
             }
             std::thread::park_timeout(TICK);
@@ -304,7 +333,7 @@ impl<F> HostThread<'_, F> {
                     slot.wait.set(super::core::Wait::Done);
                 }
                 polls = polls.wrapping_add(1);
-                if polls % 1024 == 0 {
+                if polls.is_multiple_of(1024) {
                     if let Some((board, _)) = sync {
                         if board.abort.load(SeqCst) {
                             return Err(self.stopped(board));
@@ -324,31 +353,35 @@ impl<F> HostThread<'_, F> {
                 }
                 Some((board, me)) => {
                     core.next_step();
-                    for r in &self.remotes {
-                        r.flush();
-                    }
+                    self.flush();
                     if core.all_done() {
                         board.done(me);
                         break;
                     }
                     board.signals[me].dirty.store(false, SeqCst);
-                    let mut woke = false;
-                    for r in &self.remotes {
-                        woke |= r.drain();
-                    }
-                    if woke {
+                    board.signals[me].horizon.store(false, SeqCst);
+                    if self.drain() || !board.enter_idle(me, core.snapshot(&self.global)) {
                         continue;
                     }
-                    match board.idle(me, core.snapshot(&self.global)) {
-                        Resume::Go(go) => go_ahead(go),
-                        Resume::Continue => {}
-                        Resume::Stop => return Err(self.stopped(board)),
+                    loop {
+                        match board.wait(me) {
+                            Resume::Go(go) => go_ahead(go),
+                            Resume::Continue => {}
+                            Resume::Stop => return Err(self.stopped(board)),
+                            Resume::Horizon => {
+                                core.next_step();
+                                if self.drain() {
+                                    board.leave_idle(me);
+                                } else {
+                                    self.flush();
+                                    continue;
+                                }
+                            }
+                        }
+                        break;
                     }
                 }
             }
-        }
-        if std::env::var_os("LEMBO_STATS").is_some() {
-            eprintln!("polls {polls} recoveries {stats:?} bound calls {}", core.bound_calls.get());
         }
         let outputs = outputs
             .into_iter()
@@ -356,6 +389,22 @@ impl<F> HostThread<'_, F> {
             .map(|(u, out)| (self.global[u], out.expect("every unit finished")))
             .collect();
         Ok((outputs, stats))
+    }
+
+    /// Sends what this thread holds for others (items, credits, horizons).
+    fn flush(&self) {
+        for r in &self.remotes {
+            r.flush();
+        }
+    }
+
+    /// Takes what others sent; whether a unit can run.
+    fn drain(&self) -> bool {
+        let mut woke = false;
+        for r in &self.remotes {
+            woke |= r.drain();
+        }
+        woke
     }
 
     fn waiting(&self) -> Vec<(usize, String)> {

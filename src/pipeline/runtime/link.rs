@@ -381,24 +381,34 @@ impl<T> RemoteTx<T> {
 
 impl<T> RemoteEnd for RemoteTx<T> {
     fn flush(&self) -> bool {
-        let mut sent = self.send_batch();
+        let sent = self.send_batch();
+        let mut moved = false;
         if !self.ended.get() {
-            let bound = self.core.bound(self.ends.producer).max(self.last_push.get());
+            let bound = self
+                .core
+                .bound(self.ends.producer)
+                .max(self.last_push.get());
             if bound > self.published.get() {
                 self.published.set(bound);
                 self.horizon.store(bound.0, Release);
-                sent = true;
+                moved = true;
             }
         }
         if sent {
             self.peer.notify();
+        } else if moved {
+            self.peer.nudge();
         }
-        sent
+        sent || moved
     }
 
     fn drain(&self) -> bool {
         let s = &self.core.slots[self.ends.producer as usize];
-        if s.wait.get() != (Wait::Credit { port: self.ends.port }) {
+        if s.wait.get()
+            != (Wait::Credit {
+                port: self.ends.port,
+            })
+        {
             return false;
         }
         self.take_credits();

@@ -17,7 +17,7 @@ pub mod executor;
 pub mod link;
 pub mod trace;
 
-pub use ctx::{Ctx, UnitStats};
+pub use ctx::{ceil_div, Ctx, UnitStats};
 pub use cycle::{Cycle, Timed};
 pub use link::{LinkName, LinkSpec};
 
@@ -107,7 +107,10 @@ mod tests {
                 from: p,
             },
         ));
-        core.slots[c as usize].inputs.borrow_mut().push(link.clone());
+        core.slots[c as usize]
+            .inputs
+            .borrow_mut()
+            .push(link.clone());
         (Tx::Local(link.clone()), Rx::Local(link))
     }
 
@@ -180,7 +183,8 @@ mod tests {
             let (tb, rb) = local::<(char, u32)>(&core, 1, 0, 2, 8);
             let mut a = Ctx::<(), (char, u32)>::new(core.clone(), 0, Vec::new(), vec![ta], None);
             let mut b = Ctx::<(), (char, u32)>::new(core.clone(), 1, Vec::new(), vec![tb], None);
-            let mut sink = Ctx::<(char, u32), ()>::new(core.clone(), 2, vec![ra, rb], Vec::new(), None);
+            let mut sink =
+                Ctx::<(char, u32), ()>::new(core.clone(), 2, vec![ra, rb], Vec::new(), None);
             let futures: Vec<UnitFuture<'_, Vec<(char, u32)>>> = vec![
                 Box::pin(async move {
                     for n in 0..3 {
@@ -242,6 +246,107 @@ mod tests {
                 (0, "Left waits for input from [Right]".to_string()),
                 (1, "Right waits for input from [Left]".to_string()),
             ])
+        );
+    }
+
+    /// The same loop with each unit on its own host thread, joined by links between
+    /// threads: the board sees both threads idle with nothing held and reports both units.
+    #[test]
+    fn executor_miswired_loop_across_host_threads_is_reported_as_a_deadlock() {
+        use crate::pipeline::runtime::executor::Board;
+        use crate::pipeline::runtime::link::RemoteParts;
+        let names = ["Left", "Right"];
+        let board = Board::new(2, vec![0, 1]);
+        let parts = [
+            RemoteParts::<u32>::new(spec(2, 1)),
+            RemoteParts::<u32>::new(spec(2, 1)),
+        ];
+        let started = std::time::Instant::now();
+        let results: Vec<_> = std::thread::scope(|s| {
+            let handles: Vec<_> = (0..2usize)
+                .map(|me| {
+                    let (board, parts) = (&board, &parts);
+                    s.spawn(move || {
+                        let other = 1 - me;
+                        let core = Rc::new(Core::new(vec![(names[me].into(), 1)], None));
+                        let name = |p: usize, c: usize| LinkName {
+                            producer: names[p].into(),
+                            consumer: names[c].into(),
+                        };
+                        let out = Ends {
+                            producer: 0,
+                            port: 0,
+                            consumer: u32::MAX,
+                            from: me as u32,
+                        };
+                        let inp = Ends {
+                            producer: u32::MAX,
+                            port: 0,
+                            consumer: 0,
+                            from: other as u32,
+                        };
+                        let peer = board.signals[other].clone();
+                        let tx = Rc::new(parts[me].tx(
+                            core.clone(),
+                            spec(2, 1),
+                            name(me, other),
+                            out,
+                            peer.clone(),
+                        ));
+                        let rx = Rc::new(parts[other].rx(
+                            core.clone(),
+                            spec(2, 1),
+                            name(other, me),
+                            inp,
+                            peer,
+                        ));
+                        core.slots[0]
+                            .consumers
+                            .borrow_mut()
+                            .push((other, names[other].into()));
+                        core.slots[0].inputs.borrow_mut().push(rx.clone());
+                        let mut c = Ctx::<u32, u32>::new(
+                            core.clone(),
+                            0,
+                            vec![Rx::Remote(rx.clone())],
+                            vec![Tx::Remote(tx.clone())],
+                            None,
+                        );
+                        let body: UnitFuture<'static, ()> = Box::pin(async move {
+                            while let Some(n) = c.next_input().await {
+                                c.emit(1, 0, n).await;
+                            }
+                            c.finish();
+                        });
+                        HostThread {
+                            core,
+                            futures: vec![body],
+                            global: vec![me],
+                            remotes: vec![tx, rx],
+                        }
+                        .run(Some((board, me)))
+                        .map(|_| ())
+                    })
+                })
+                .collect();
+            handles.into_iter().map(|h| h.join().unwrap()).collect()
+        });
+        assert!(started.elapsed() < std::time::Duration::from_secs(5));
+        assert!(board.deadlocked());
+        let mut waiting: Vec<(usize, String)> = results
+            .into_iter()
+            .flat_map(|r| match r {
+                Err(Stop::Deadlock(w)) => w,
+                other => panic!("{other:?}"),
+            })
+            .collect();
+        waiting.sort();
+        assert_eq!(
+            waiting,
+            [
+                (0, "Left waits for input from [Right]".to_string()),
+                (1, "Right waits for input from [Left]".to_string()),
+            ]
         );
     }
 

@@ -6,15 +6,15 @@
 //! Cost: ceil(bytes / bytes_per_cycle) per burst (at least one cycle). Not modelled:
 //! DRAM pages, refresh, compression, caches.
 
-use crate::pipeline::runtime::Ctx;
 use super::rop::WriteBurst;
-use crate::pipeline::Finished;
 use crate::config::FrameBufferConfig;
+use crate::pipeline::runtime::{ceil_div, Ctx};
+use crate::pipeline::Finished;
 use crate::raster::Counts;
 
 pub async fn run(mut ctx: Ctx<WriteBurst, ()>, cfg: &FrameBufferConfig) -> Finished {
     while let Some(WriteBurst { bytes }) = ctx.next_input().await {
-        ctx.work(bytes.div_ceil(cfg.bytes_per_cycle).max(1));
+        ctx.work(ceil_div(bytes, cfg.bytes_per_cycle).max(1));
     }
     Finished::new(ctx, Counts::default())
 }

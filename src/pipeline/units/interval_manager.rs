@@ -11,10 +11,10 @@
 //! interval emitted; ready `latency_cycles` after issue. Not modelled: the small sort of
 //! the roots by walk key, taken as part of the per-interval cycle.
 
-use crate::pipeline::runtime::Ctx;
 use super::minmax::ScanlineRange;
-use crate::pipeline::{Finished, PieceId, Shared};
 use crate::datapath::Real;
+use crate::pipeline::runtime::Ctx;
+use crate::pipeline::{Finished, PieceId, Shared};
 use crate::raster::interval::{intervals, Interval, IntervalScratch};
 use crate::raster::Counts;
 
@@ -47,7 +47,8 @@ pub async fn run<R: Real>(
                     cfg.cycles_per_interval,
                     next_port,
                     ScanInterval { id, j, interval },
-                ).await;
+                )
+                .await;
                 next_port = (next_port + 1) % ctx.outputs();
             }
         }

@@ -7,10 +7,10 @@
 //!
 //! Cost: `minmax.cycles_per_lembo` per lembo, ready `minmax.latency_cycles` later.
 
-use crate::pipeline::runtime::Ctx;
 use super::setup::LemboReady;
-use crate::pipeline::{Finished, PieceId, Shared};
 use crate::datapath::Real;
+use crate::pipeline::runtime::Ctx;
+use crate::pipeline::{Finished, PieceId, Shared};
 use crate::raster::{minmax, Counts};
 
 /// The scanlines j0..=j1 of lembo `id`.
@@ -21,10 +21,7 @@ pub struct ScanlineRange {
     pub j1: u32,
 }
 
-pub async fn run<R: Real>(
-    mut ctx: Ctx<LemboReady, ScanlineRange>,
-    sh: &Shared<'_, R>,
-) -> Finished {
+pub async fn run<R: Real>(mut ctx: Ctx<LemboReady, ScanlineRange>, sh: &Shared<'_, R>) -> Finished {
     let cost = sh.arch.minmax.cycles_per_lembo;
     let mut counts = Counts::default();
     while let Some(LemboReady { id }) = ctx.next_input().await {

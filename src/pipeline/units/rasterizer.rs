@@ -12,11 +12,11 @@
 //! ceil(n / fragments_per_cycle) per span of n fragments, ready `latency_cycles` later.
 //! Depth is evaluated from the depth quadratic in the ROP, with the depth test.
 
-use crate::pipeline::runtime::Ctx;
 use super::rop::RopItem;
 use super::subsegmenter::ScanSubsegment;
-use crate::pipeline::{Finished, PieceId, Shared};
 use crate::datapath::Real;
+use crate::pipeline::runtime::{ceil_div, Ctx};
+use crate::pipeline::{Finished, PieceId, Shared};
 use crate::raster::fragment::{span, Span};
 use crate::raster::Counts;
 
@@ -48,12 +48,13 @@ pub async fn run<R: Real>(
                 i1: run.i0 + n,
                 ..run
             };
-            let cycles = (n as u64).div_ceil(cfg.fragments_per_cycle);
+            let cycles = ceil_div(n as u64, cfg.fragments_per_cycle);
             ctx.emit(
                 cycles,
                 rop,
                 RopItem::Lembo(FragmentSpan { id, j, span: piece }),
-            ).await;
+            )
+            .await;
             run.advance(n);
         }
     }

@@ -16,16 +16,16 @@
 //! `latency_cycles` later. Not modelled: caches; the frame-buffer port's bandwidth is the
 //! memory model.
 
-use crate::pipeline::runtime::Ctx;
 use super::rasterizer::FragmentSpan;
 use super::triangle_rasterizer::TrianglePiece;
-use crate::pipeline::{DiscoidPass, Finished, Shared};
 use crate::config::BlendConfig;
 use crate::datapath::Real;
 use crate::discoid::blend::BlendMode;
 use crate::discoid::render::{
     accumulation_keeps, depth_pass_wins, evaluate, BlendReport, DiscoidFragment, Pass, Pending,
 };
+use crate::pipeline::runtime::{ceil_div, Ctx};
+use crate::pipeline::{DiscoidPass, Finished, Shared};
 use crate::raster::Counts;
 use crate::rop::framebuffer::depth_test;
 use crate::rop::rop::FragmentShader;
@@ -43,6 +43,10 @@ pub struct RopTiles {
     pub tiles_y: u32,
     /// ROPs sharing the screen.
     pub rops: u32,
+    /// log2 of `tile_px` and `rops - 1` when they are powers of two (the usual sizes): the
+    /// owner of a pixel is then found without a division.
+    shift: Option<u32>,
+    mask: Option<u32>,
 }
 
 impl RopTiles {
@@ -53,14 +57,23 @@ impl RopTiles {
             tiles_x: width.div_ceil(tile_px),
             tiles_y: height.div_ceil(tile_px),
             rops,
+            shift: tile_px.is_power_of_two().then(|| tile_px.trailing_zeros()),
+            mask: rops.is_power_of_two().then(|| rops - 1),
         }
     }
 
     /// The ROP owning pixel (i, j) and the first pixel column past its tile.
     #[inline]
     pub fn owner(&self, i: u32, j: u32) -> (usize, u32) {
-        let (tx, ty) = (i / self.tile_px, j / self.tile_px);
-        (((tx + ty) % self.rops) as usize, (tx + 1) * self.tile_px)
+        let (tx, ty) = match self.shift {
+            Some(s) => (i >> s, j >> s),
+            None => (i / self.tile_px, j / self.tile_px),
+        };
+        let rop = match self.mask {
+            Some(m) => (tx + ty) & m,
+            None => (tx + ty) % self.rops,
+        };
+        (rop as usize, (tx + 1) * self.tile_px)
     }
 }
 
@@ -156,7 +169,13 @@ impl<'a, 'f> RopPixels<'a, 'f> {
     /// The depth test and write of fragment (z, id) at pixel index `idx`; `shade` gives
     /// the colour of a fragment that passes.
     #[inline(always)]
-    fn test_and_write(&mut self, idx: usize, z: f32, id: u32, shade: impl FnOnce() -> [u8; 3]) -> bool {
+    fn test_and_write(
+        &mut self,
+        idx: usize,
+        z: f32,
+        id: u32,
+        shade: impl FnOnce() -> [u8; 3],
+    ) -> bool {
         if !depth_test(z, id, self.depth(idx), self.primitive(idx)) {
             return false;
         }
@@ -251,9 +270,8 @@ pub async fn run<R: Real>(
                     let idx = row + i as usize;
                     let z = l.z.eval(u, v);
                     let wins = match &sh.discoid {
-                        None => pixels.test_and_write(idx, z.f64() as f32, l.id, || {
-                            shader.shade(l, u, v).0
-                        }),
+                        None => pixels
+                            .test_and_write(idx, z.f64() as f32, l.id, || shader.shade(l, u, v).0),
                         Some(dp) => dp.table.lembo_fragment(l, u, v, z).is_some_and(|f| {
                             discoid_fragment(dp, sh, &shader, &mut pixels, &mut kept, idx, &f)
                         }),
@@ -302,7 +320,7 @@ pub async fn run<R: Real>(
             ),
         };
         ctx.emit(
-            n.div_ceil(cfg.fragments_per_cycle) + extra,
+            ceil_div(n, cfg.fragments_per_cycle) + extra,
             0,
             WriteBurst { bytes },
         )

@@ -10,11 +10,11 @@
 //! error and the interval dropped, so the run still ends and reports the first such
 //! interval in scene order, whatever the schedule.
 
-use crate::pipeline::runtime::Ctx;
 use super::interval_manager::ScanInterval;
-use crate::pipeline::{Finished, PieceId, Shared};
 use crate::datapath::Real;
 use crate::error::Error;
+use crate::pipeline::runtime::Ctx;
+use crate::pipeline::{Finished, PieceId, Shared};
 use crate::raster::segmenter::{segments, Segment};
 use crate::raster::{Counts, DEFAULT_SEGMENT_CAP};
 
@@ -55,7 +55,8 @@ pub async fn run<R: Real>(
             continue;
         }
         for &segment in &segs {
-            ctx.emit(cost, next_port, ScanSegment { id, j, segment }).await;
+            ctx.emit(cost, next_port, ScanSegment { id, j, segment })
+                .await;
             next_port = (next_port + 1) % ctx.outputs();
         }
     }

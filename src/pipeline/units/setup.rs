@@ -17,9 +17,9 @@
 //! (it was computed with the split). The result is ready `setup.latency_cycles` later. Not
 //! modelled: the memory traffic of fetching the lembos.
 
+use crate::datapath::Real;
 use crate::pipeline::runtime::Ctx;
 use crate::pipeline::{Finished, PieceId, Shared};
-use crate::datapath::Real;
 use crate::raster::setup::setup_pieces;
 use crate::raster::Counts;
 

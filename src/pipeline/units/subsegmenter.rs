@@ -7,10 +7,10 @@
 //!
 //! Cost: `subsegmenter.cycles_per_subsegment` per subsegment, ready `latency_cycles` later.
 
-use crate::pipeline::runtime::Ctx;
 use super::segmenter::ScanSegment;
-use crate::pipeline::{Finished, PieceId, Shared};
 use crate::datapath::Real;
+use crate::pipeline::runtime::Ctx;
+use crate::pipeline::{Finished, PieceId, Shared};
 use crate::raster::subsegmenter::{subsegments, Subsegment};
 use crate::raster::Counts;
 
@@ -35,7 +35,8 @@ pub async fn run<R: Real>(
         subs.clear();
         subsegments(l, &segment, sh.k, &mut subs, &mut counts);
         for &subsegment in &subs {
-            ctx.emit(cost, next_port, ScanSubsegment { id, j, subsegment }).await;
+            ctx.emit(cost, next_port, ScanSubsegment { id, j, subsegment })
+                .await;
             next_port = (next_port + 1) % ctx.outputs();
         }
     }

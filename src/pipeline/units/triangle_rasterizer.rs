@@ -13,10 +13,10 @@
 //! Quads with no covered pixel are skipped for free, as a hierarchical rasterizer rejects
 //! them by tile. Ready `latency_cycles` later.
 
-use crate::pipeline::runtime::Ctx;
 use super::rop::RopItem;
-use crate::pipeline::{Finished, Shared};
 use crate::datapath::Real;
+use crate::pipeline::runtime::{ceil_div, Ctx};
+use crate::pipeline::{Finished, Shared};
 use crate::raster::triangle::{quads_in, ScreenTriangle};
 use crate::raster::Counts;
 use std::sync::Arc;
@@ -102,7 +102,7 @@ pub async fn run<R: Real>(
                         qj + 1
                     };
                     let (rop, _) = tiles.owner(i, row);
-                    let cycles = (4 * quads_in(&piece.rows)).div_ceil(ppc).max(1);
+                    let cycles = ceil_div(4 * quads_in(&piece.rows), ppc).max(1);
                     ctx.emit(cycles, rop, RopItem::Triangle(piece)).await;
                     emitted = true;
                 }

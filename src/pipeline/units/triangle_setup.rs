@@ -16,9 +16,9 @@
 //! Not modelled: vertex fetch and the post-transform vertex cache (each triangle's three
 //! vertices are transformed here).
 
+use crate::datapath::Real;
 use crate::pipeline::runtime::Ctx;
 use crate::pipeline::{Finished, Shared};
-use crate::datapath::Real;
 use crate::raster::triangle::{setup, ScreenTriangle};
 use crate::raster::Counts;
 use std::sync::Arc;
