@@ -65,7 +65,7 @@ use std::time::Instant;
 /// The most runs (points × scenes) a spec may expand to: beyond it a sweep takes days, and
 /// a typo in a grid should be refused rather than expanded.
 pub const MAX_RUNS: usize = 100_000;
-/// The most threads `--jobs` accepts; each timed run adds one thread per unit instance.
+/// The most threads `--jobs` accepts; each run is one host thread (or `--host-threads`).
 pub const MAX_JOBS: usize = 256;
 /// Tolerance k of a point that sets none [pixels]: `render`'s default.
 pub const DEFAULT_K_PX: f64 = 0.5;
