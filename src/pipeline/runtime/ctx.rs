@@ -194,40 +194,48 @@ impl<I, O> Ctx<I, O> {
     /// every other input's bound proves nothing earlier can come (or a recovery did).
     #[inline]
     fn choose(&mut self) -> Choice {
+        // One pass: the earliest queued item, and the earliest cached bound of an empty
+        // input (both as (cycle, port), the merge's order).
         let mut best: Option<(Cycle, usize)> = None;
+        let mut empty: Option<(Cycle, usize)> = None;
         for (i, rx) in self.inputs.iter().enumerate() {
-            if let Some(a) = rx.head() {
-                if best.is_none_or(|(b, _)| a < b) {
-                    best = Some((a, i));
-                }
-            }
-        }
-        match best {
-            Some((arrival, port)) => {
-                let go = self.core.slots[self.unit as usize].go.get() == Some(arrival);
-                let past = |b: Cycle, j: usize| b > arrival || (b == arrival && j > port);
-                let mut safe = true;
-                if !go {
-                    for (j, rx) in self.inputs.iter().enumerate() {
-                        if j == port || past(self.horizon[j], j) || rx.head().is_some() {
-                            continue;
-                        }
-                        self.horizon[j] = rx.next_arrival(&self.core);
-                        if !past(self.horizon[j], j) {
-                            safe = false;
-                            break;
-                        }
+            match rx.head() {
+                Some(a) => {
+                    if best.is_none_or(|b| (a, i) < b) {
+                        best = Some((a, i));
                     }
                 }
-                if safe {
-                    Choice::Take(port, arrival)
-                } else {
-                    Choice::Wait(Some(arrival))
+                None => {
+                    let h = (self.horizon[i], i);
+                    if empty.is_none_or(|e| h < e) {
+                        empty = Some(h);
+                    }
                 }
             }
-            None if self.inputs.iter().all(Rx::finished) => Choice::Finished,
-            None => Choice::Wait(None),
         }
+        let Some((arrival, port)) = best else {
+            return if self.inputs.iter().all(Rx::finished) {
+                Choice::Finished
+            } else {
+                Choice::Wait(None)
+            };
+        };
+        if empty.is_none_or(|e| e > (arrival, port))
+            || self.core.slots[self.unit as usize].go.get() == Some(arrival)
+        {
+            return Choice::Take(port, arrival);
+        }
+        // Some cached bound cannot decide: recompute those (a bound only grows).
+        for (j, rx) in self.inputs.iter().enumerate() {
+            if (self.horizon[j], j) > (arrival, port) || rx.head().is_some() {
+                continue;
+            }
+            self.horizon[j] = rx.next_arrival(&self.core);
+            if (self.horizon[j], j) < (arrival, port) {
+                return Choice::Wait(Some(arrival));
+            }
+        }
+        Choice::Take(port, arrival)
     }
 
     #[inline]
