@@ -45,7 +45,7 @@ use crate::job::{
     RenderJob, COMMAND_LINE, K_RANGE, MAX_HOST_THREADS,
 };
 use crate::output::write_files;
-use crate::pipeline::UnitKind;
+use crate::pipeline::graph::KINDS;
 use crate::raster::PerspectiveTol;
 use crate::reference::oracle::ReferenceImage;
 use crate::report::Report;
@@ -1591,21 +1591,6 @@ fn write_final(
 
 // ---- results.csv ---------------------------------------------------------------------
 
-/// Dataflow order of the unit kinds, for the `util.*` columns.
-const KIND_ORDER: [UnitKind; 11] = [
-    UnitKind::Setup,
-    UnitKind::MinMax,
-    UnitKind::IntervalManager,
-    UnitKind::Segmenter,
-    UnitKind::Subsegmenter,
-    UnitKind::FragmentRasterizer,
-    UnitKind::TriangleSetup,
-    UnitKind::TriangleRasterizer,
-    UnitKind::Rop,
-    UnitKind::BlendUnit,
-    UnitKind::FrameBuffer,
-];
-
 /// Sort key of a unit name: its kind in dataflow order, then its instance number
 /// (`Segmenter[10]` after `Segmenter[9]`).
 fn unit_order(name: &str) -> (usize, u64, String) {
@@ -1613,10 +1598,10 @@ fn unit_order(name: &str) -> (usize, u64, String) {
         Some((k, rest)) => (k, rest.trim_end_matches(']').parse().unwrap_or(0)),
         None => (name, 0),
     };
-    let rank = KIND_ORDER
+    let rank = KINDS
         .iter()
         .position(|k| k.name() == kind)
-        .unwrap_or(KIND_ORDER.len());
+        .unwrap_or(KINDS.len());
     (rank, instance, name.to_string())
 }
 
