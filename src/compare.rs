@@ -19,7 +19,7 @@ use crate::camera::View;
 use crate::config::ArchConfig;
 use crate::datapath::Datapath;
 use crate::discoid::blend::BlendMode;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::job::{
     self, check_tess_range, check_triangle_budget, load_arch, render_reference, run_path, Mode,
     PrimitivePath, RenderJob, MAX_TRIANGLES,
@@ -248,6 +248,25 @@ pub fn run_compare(job: &CompareJob) -> Result<CompareOutput> {
     }
     let view = View::new(&scene.camera, scene.viewport);
     let arch = load_arch(&lembo_job)?;
+    if let Some(a) = &arch {
+        // Refused before any work: each path's run needs a unit per host thread.
+        let units = [
+            crate::pipeline::Path::Lembo,
+            crate::pipeline::Path::Triangle,
+        ]
+        .map(|p| crate::pipeline::graph::units(p, a).len())
+        .into_iter()
+        .min()
+        .unwrap_or(1);
+        if job.host_threads as usize > units {
+            return Err(Error::invalid(
+                job::COMMAND_LINE,
+                "--host-threads",
+                job.host_threads,
+                format!("more than the {units} units of the smaller path's pipeline (each host thread runs at least one)"),
+            ));
+        }
+    }
     let (reference, reference_wall) = render_reference(&scene, &view, job.supersample);
 
     let lembo = run_path(

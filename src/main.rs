@@ -253,10 +253,8 @@ struct CompareArgs {
     /// Override the scene's viewport, e.g. 1024x1024.
     #[arg(long, value_name = "WxH", value_parser = parse_viewport)]
     viewport: Option<(u32, u32)>,
-    /// Host threads the timed model's units are partitioned over (contiguous runs of the
-    /// dataflow order). Results are identical for every N; one thread runs all units with
-    /// no synchronisation, which is fastest on small machines. At most the number of units
-    /// the run instantiates.
+    /// Host threads each path's timed model is partitioned over (see `render --help`). At
+    /// most the unit count of the smaller path (the triangle path's).
     #[arg(long, value_name = "N", default_value_t = 1)]
     host_threads: u32,
 }

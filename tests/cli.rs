@@ -269,6 +269,8 @@ fn host_threads_change_nothing_simulated() {
     assert_refused(&["render", "--host-threads", "0"], "--host-threads");
     // The baseline's lembo path has 16 units.
     assert_refused(&["render", "--host-threads", "17"], "16 units");
+    // compare needs a unit per thread on both paths: the baseline's triangle path has 7.
+    assert_refused(&["compare", "--host-threads", "8"], "7 units");
     let dir = tempfile::tempdir().unwrap();
     let s = scene_file(dir.path(), "s.json", GOOD);
     let mut reports = Vec::new();
