@@ -1,5 +1,5 @@
 //! The unit graph, described once: which kinds of unit each path instantiates, how many
-//! of each, and which boundaries between kinds carry links. Elaboration ([`super::run_in`]),
+//! of each, and which boundaries between kinds carry links. Elaboration (`run_in` in the parent module),
 //! the report's unit list, the FIFO entry count and the sweep's column order all read it,
 //! so adding a unit means adding it here and writing its body in [`super::units`].
 //!
