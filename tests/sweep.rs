@@ -361,3 +361,18 @@ fn every_committed_spec_is_valid() {
         ["perspective", "precision", "smoke", "tradeoff", "units"]
     );
 }
+
+/// `--host-threads` partitions each timed run's units over host threads: the results are
+/// the one-thread sweep's exactly (host timing aside), and 0 threads is refused.
+#[test]
+fn host_threads_leave_sweep_results_unchanged() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("threads");
+    ok(&run_smoke(&dir, &["--host-threads", "3"], &[]));
+    assert_eq!(&masked(&dir), reference_run());
+    assert_refused(
+        &small_spec(r#""grid": [{"k": [1]}]"#),
+        &["--host-threads", "0"],
+        "--host-threads",
+    );
+}
