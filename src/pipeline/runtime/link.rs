@@ -139,6 +139,9 @@ pub struct LocalLink<T> {
     name: LinkName,
     ends: Ends,
     fifo: RefCell<Fifo<T>>,
+    /// The queued head's arrival, [`Cycle::NEVER`] when the queue is empty: the merge reads
+    /// it for every input at every item, without borrowing the queue.
+    head: Cell<Cycle>,
 }
 
 /// The state of a [`LocalLink`], under one borrow.
@@ -166,6 +169,7 @@ impl<T> LocalLink<T> {
                 last_push: Cycle::ZERO,
                 ended: false,
             }),
+            head: Cell::new(Cycle::NEVER),
         }
     }
 }
@@ -541,7 +545,11 @@ impl<T> Tx<T> {
                     debug_assert!(at >= f.last_push && !f.ended);
                     f.last_push = at;
                     f.pushed += 1;
-                    f.queue.push_back((at + l.spec.latency_cycles, at, item));
+                    let arrival = at + l.spec.latency_cycles;
+                    if f.queue.is_empty() {
+                        l.head.set(arrival);
+                    }
+                    f.queue.push_back((arrival, at, item));
                 }
                 l.core.wake_if_input(l.ends.consumer);
             }
@@ -593,7 +601,10 @@ impl<T> Rx<T> {
     #[inline]
     pub fn head(&self) -> Option<Cycle> {
         match self {
-            Rx::Local(l) => l.fifo.borrow().queue.front().map(|h| h.0),
+            Rx::Local(l) => {
+                let h = l.head.get();
+                (h != Cycle::NEVER).then_some(h)
+            }
             Rx::Remote(l) => l.queue.borrow().front().map(|h| h.0),
         }
     }
@@ -628,6 +639,7 @@ impl<T> Rx<T> {
                     let mut f = l.fifo.borrow_mut();
                     let (arrival, pushed_at, item) = f.queue.pop_front().expect("caller checked");
                     debug_assert!(q >= arrival);
+                    l.head.set(f.queue.front().map_or(Cycle::NEVER, |h| h.0));
                     f.pops.pop(pushed_at, q);
                     item
                 };
