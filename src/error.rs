@@ -46,11 +46,12 @@ pub enum Error {
         path: PathBuf,
         source: std::io::Error,
     },
-    /// The timed pipeline stopped moving: every unit waited and no message moved for the
-    /// watchdog's period. `waiting` names each unit and what it waits for. A simulator bug
-    /// or a mis-wired graph, not bad input (exit status 1).
+    /// The timed pipeline stopped moving: every unit waits and none holds an item it could
+    /// take. `waiting` names each unit and what it waits for. A simulator bug or a
+    /// mis-wired graph, not bad input (exit status 1).
     Deadlock { waiting: Vec<String> },
-    /// A simulator fault (a unit thread panicked or could not start). Exit status 1.
+    /// A simulator fault (a host thread of the timed model panicked or could not start, or a
+    /// merge took items out of order). Exit status 1.
     Internal(String),
 }
 
