@@ -118,6 +118,16 @@ impl<I, O> Ctx<I, O> {
         self.outputs.len()
     }
 
+    /// The port after `port`, round-robin (without a division per item).
+    #[inline]
+    pub fn next_port(&self, port: usize) -> usize {
+        if port + 1 >= self.outputs.len() {
+            0
+        } else {
+            port + 1
+        }
+    }
+
     #[inline(always)]
     fn set_now(&mut self, now: Cycle) {
         self.now = now;

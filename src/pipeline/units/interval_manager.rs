@@ -49,7 +49,7 @@ pub async fn run<R: Real>(
                     ScanInterval { id, j, interval },
                 )
                 .await;
-                next_port = (next_port + 1) % ctx.outputs();
+                next_port = ctx.next_port(next_port);
             }
         }
     }

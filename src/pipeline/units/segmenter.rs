@@ -57,7 +57,7 @@ pub async fn run<R: Real>(
         for &segment in &segs {
             ctx.emit(cost, next_port, ScanSegment { id, j, segment })
                 .await;
-            next_port = (next_port + 1) % ctx.outputs();
+            next_port = ctx.next_port(next_port);
         }
     }
     let mut done = Finished::new(ctx, counts);

@@ -37,7 +37,7 @@ pub async fn run<R: Real>(
         for &subsegment in &subs {
             ctx.emit(cost, next_port, ScanSubsegment { id, j, subsegment })
                 .await;
-            next_port = (next_port + 1) % ctx.outputs();
+            next_port = ctx.next_port(next_port);
         }
     }
     Finished::new(ctx, counts)

@@ -51,7 +51,7 @@ pub async fn run<R: Real>(
                     cost += per_piece;
                 }
                 ctx.emit(cost, next, Arc::new(st)).await;
-                next = (next + 1) % ctx.outputs();
+                next = ctx.next_port(next);
                 cost = 0;
             }
         }
