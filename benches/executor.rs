@@ -10,7 +10,7 @@
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use lembo_sim::pipeline::runtime::core::Core;
 use lembo_sim::pipeline::runtime::executor::{HostThread, UnitFuture};
-use lembo_sim::pipeline::runtime::link::{Ends, LocalLink, Rx, Tx};
+use lembo_sim::pipeline::runtime::link::{local_link, Ends, Rx, Tx};
 use lembo_sim::pipeline::runtime::{Ctx, LinkName, LinkSpec};
 use std::rc::Rc;
 
@@ -19,26 +19,17 @@ fn link(core: &Rc<Core>, p: u32, port: u32, c: u32) -> (Tx<u64>, Rx<u64>) {
         producer: core.slots[p as usize].name.clone(),
         consumer: core.slots[c as usize].name.clone(),
     };
-    core.slots[p as usize]
-        .consumers
-        .borrow_mut()
-        .push((c as usize, name.consumer.clone()));
-    let l = Rc::new(LocalLink::new(
-        core.clone(),
-        LinkSpec {
-            fifo_depth: 8,
-            latency_cycles: 1,
-        },
-        name,
-        Ends {
-            producer: p,
-            port,
-            consumer: c,
-            from: p,
-        },
-    ));
-    core.slots[c as usize].inputs.borrow_mut().push(l.clone());
-    (Tx::Local(l.clone()), Rx::Local(l))
+    let spec = LinkSpec {
+        fifo_depth: 8,
+        latency_cycles: 1,
+    };
+    let ends = Ends {
+        producer: p,
+        port,
+        consumer: c,
+        from: p,
+    };
+    local_link(core, spec, name, ends, c as usize)
 }
 
 fn run(core: Rc<Core>, futures: Vec<UnitFuture<'_, u64>>) -> u64 {

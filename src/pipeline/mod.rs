@@ -44,7 +44,7 @@ use crate::rop::FrameBuffer;
 use crate::scene::Scene;
 use runtime::core::Core;
 use runtime::executor::{Board, HostThread, Recoveries, Signal, Stop, UnitFuture};
-use runtime::link::{Ends, LocalLink, RemoteEnd, RemoteParts, Rx, Tx};
+use runtime::link::{local_link, Ends, RemoteEnd, RemoteParts, Rx, Tx};
 use runtime::trace::{self, Recorder};
 use runtime::{Ctx, LinkName, LinkSpec, UnitStats};
 use serde::Serialize;
@@ -301,23 +301,17 @@ impl<'p> Builder<'p> {
                     from: p as u32,
                 };
                 let (mine_p, mine_c) = (self.thread[p] == self.me, self.thread[c] == self.me);
-                if mine_p {
-                    self.core.slots[ends.producer as usize]
-                        .consumers
-                        .borrow_mut()
-                        .push((c, name.consumer.clone()));
-                }
                 match (mine_p, mine_c, &xb.remote[pi * nc + ci]) {
                     (true, true, _) => {
-                        let link = Rc::new(LocalLink::new(self.core.clone(), xb.spec, name, ends));
-                        self.core.slots[ends.consumer as usize]
-                            .inputs
-                            .borrow_mut()
-                            .push(link.clone());
-                        tx[pi].push(Tx::Local(link.clone()));
-                        rx[ci].push(Rx::Local(link));
+                        let (t, r) = local_link(&self.core, xb.spec, name, ends, c);
+                        tx[pi].push(t);
+                        rx[ci].push(r);
                     }
                     (true, false, Some(parts)) => {
+                        self.core.slots[ends.producer as usize]
+                            .consumers
+                            .borrow_mut()
+                            .push((c, name.consumer.clone()));
                         let peer = self.signals[self.thread[c]].clone();
                         let half = Rc::new(parts.tx(self.core.clone(), xb.spec, name, ends, peer));
                         self.remotes.push(half.clone());
@@ -459,8 +453,8 @@ fn build<'a, R: Real>(
             let (mut i_tx, mut g_rx) = b.wire(intervals);
             let (mut g_tx, mut b_rx) = b.wire(segments);
             let (mut b_tx, mut r_rx) = b.wire(subsegments);
-            let (mut r_tx, mut p_rx) = b.wire(spans);
-            let (mut p_tx, mut f_rx) = b.wire(bursts);
+            let (mut r_tx, rop_in) = b.wire(spans);
+            let mut back = BackEnd::wire(b, rop_in, bursts);
             for g in (0..n).filter(|&g| b.local[g].is_some()) {
                 let kind = b.units[g].kind;
                 let i = pos(g, kind);
@@ -489,16 +483,7 @@ fn build<'a, R: Real>(
                         b.ctx(g, take(&mut r_rx, i), take(&mut r_tx, i), trace),
                         sh,
                     )),
-                    Rop => Box::pin(units::rop::run(
-                        b.ctx(g, take(&mut p_rx, i), take(&mut p_tx, i), trace),
-                        sh,
-                        i,
-                        frame,
-                    )),
-                    FrameBuffer => Box::pin(units::framebuffer::run(
-                        b.ctx(g, take(&mut f_rx, i), Vec::new(), trace),
-                        &sh.arch.framebuffer,
-                    )),
+                    Rop | FrameBuffer => back.body(b, g, i, sh, frame, trace),
                     other => unreachable!("{other:?} is not on the lembo path"),
                 };
                 futures.push(body);
@@ -510,8 +495,8 @@ fn build<'a, R: Real>(
             bursts,
         } => {
             let (mut s_tx, mut r_rx) = b.wire(triangles);
-            let (mut r_tx, mut p_rx) = b.wire(pieces);
-            let (mut p_tx, mut f_rx) = b.wire(bursts);
+            let (mut r_tx, rop_in) = b.wire(pieces);
+            let mut back = BackEnd::wire(b, rop_in, bursts);
             for g in (0..n).filter(|&g| b.local[g].is_some()) {
                 let kind = b.units[g].kind;
                 let i = pos(g, kind);
@@ -524,16 +509,7 @@ fn build<'a, R: Real>(
                         b.ctx(g, take(&mut r_rx, i), take(&mut r_tx, i), trace),
                         sh,
                     )),
-                    Rop => Box::pin(units::rop::run(
-                        b.ctx(g, take(&mut p_rx, i), take(&mut p_tx, i), trace),
-                        sh,
-                        i,
-                        frame,
-                    )),
-                    FrameBuffer => Box::pin(units::framebuffer::run(
-                        b.ctx(g, take(&mut f_rx, i), Vec::new(), trace),
-                        &sh.arch.framebuffer,
-                    )),
+                    Rop | FrameBuffer => back.body(b, g, i, sh, frame, trace),
                     other => unreachable!("{other:?} is not on the triangle path"),
                 };
                 futures.push(body);
@@ -541,6 +517,58 @@ fn build<'a, R: Real>(
         }
     }
     futures
+}
+
+/// The back end both paths share: the ROPs' inputs and outputs and the frame-buffer
+/// port's inputs on one host thread.
+struct BackEnd<R> {
+    rop_in: Vec<Vec<Rx<RopItem<R>>>>,
+    rop_out: Vec<Vec<Tx<WriteBurst>>>,
+    port_in: Vec<Vec<Rx<WriteBurst>>>,
+}
+
+impl<R: Real> BackEnd<R> {
+    fn wire(
+        b: &mut Builder,
+        rop_in: Vec<Vec<Rx<RopItem<R>>>>,
+        bursts: &Crossbar<WriteBurst>,
+    ) -> Self {
+        let (rop_out, port_in) = b.wire(bursts);
+        BackEnd {
+            rop_in,
+            rop_out,
+            port_in,
+        }
+    }
+
+    /// The body of unit `g`, ROP `i` or the port.
+    fn body<'a>(
+        &mut self,
+        b: &Builder,
+        g: usize,
+        i: usize,
+        sh: &'a Shared<'a, R>,
+        frame: &'a SharedFrame<'a>,
+        trace: Option<usize>,
+    ) -> UnitFuture<'a, Finished> {
+        match b.units[g].kind {
+            UnitKind::Rop => Box::pin(units::rop::run(
+                b.ctx(
+                    g,
+                    take(&mut self.rop_in, i),
+                    take(&mut self.rop_out, i),
+                    trace,
+                ),
+                sh,
+                i,
+                frame,
+            )),
+            _ => Box::pin(units::framebuffer::run(
+                b.ctx(g, take(&mut self.port_in, i), Vec::new(), trace),
+                &sh.arch.framebuffer,
+            )),
+        }
+    }
 }
 
 /// The ends of position `i` of a crossbar side, taken once.

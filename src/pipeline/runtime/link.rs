@@ -174,6 +174,28 @@ impl<T> LocalLink<T> {
     }
 }
 
+/// A link between units `ends.producer` and `ends.consumer` of `core`, registered with
+/// both: as the producer's next output (to unit `to`, a global index, for deadlock reports
+/// and recoveries) and as the consumer's next input (for its bounds).
+pub fn local_link<T: 'static>(
+    core: &Rc<Core>,
+    spec: LinkSpec,
+    name: LinkName,
+    ends: Ends,
+    to: usize,
+) -> (Tx<T>, Rx<T>) {
+    core.slots[ends.producer as usize]
+        .consumers
+        .borrow_mut()
+        .push((to, name.consumer.clone()));
+    let link = Rc::new(LocalLink::new(core.clone(), spec, name, ends));
+    core.slots[ends.consumer as usize]
+        .inputs
+        .borrow_mut()
+        .push(link.clone());
+    (Tx::Local(link.clone()), Rx::Local(link))
+}
+
 impl<T> InputView for LocalLink<T> {
     #[inline]
     fn next_arrival(&self, core: &Core) -> Cycle {

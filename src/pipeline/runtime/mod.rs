@@ -76,7 +76,7 @@ mod tests {
     use super::*;
     use crate::pipeline::runtime::core::Core;
     use crate::pipeline::runtime::executor::{HostThread, Stop, UnitFuture};
-    use crate::pipeline::runtime::link::{Ends, LocalLink, Rx, Tx};
+    use crate::pipeline::runtime::link::{local_link, Ends, Rx, Tx};
     use std::rc::Rc;
 
     fn spec(d: u32, l: u64) -> LinkSpec {
@@ -92,26 +92,13 @@ mod tests {
             producer: core.slots[p as usize].name.clone(),
             consumer: core.slots[c as usize].name.clone(),
         };
-        core.slots[p as usize]
-            .consumers
-            .borrow_mut()
-            .push((c as usize, name.consumer.clone()));
-        let link = Rc::new(LocalLink::new(
-            core.clone(),
-            spec(d, 1),
-            name,
-            Ends {
-                producer: p,
-                port,
-                consumer: c,
-                from: p,
-            },
-        ));
-        core.slots[c as usize]
-            .inputs
-            .borrow_mut()
-            .push(link.clone());
-        (Tx::Local(link.clone()), Rx::Local(link))
+        let ends = Ends {
+            producer: p,
+            port,
+            consumer: c,
+            from: p,
+        };
+        local_link(core, spec(d, 1), name, ends, c as usize)
     }
 
     fn thread<'a, F>(core: Rc<Core>, futures: Vec<UnitFuture<'a, F>>) -> HostThread<'a, F> {
