@@ -1,4 +1,4 @@
-//! Camera and viewport, with OpenGL conventions (DESIGN §2).
+//! Camera and viewport, with OpenGL conventions (DESIGN.md §2).
 //!
 //! World to clip space by `look_at_rh` and `perspective_rh_gl` (or `orthographic_rh_gl`),
 //! then to the viewport: pixel (i, j) is centred at (i + 0.5, j + 0.5), row 0 at the top,
@@ -7,16 +7,16 @@
 use glam::{DMat4, DVec3, DVec4};
 use serde::{Deserialize, Serialize};
 
-/// The largest accepted viewport side [pixels] (DESIGN §8).
+/// The largest accepted viewport side \[pixels\] (DESIGN.md §8).
 pub const MAX_VIEWPORT_SIDE: u32 = 16384;
 
-/// Image size [pixels].
+/// Image size \[pixels\].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Viewport {
-    /// Width [pixels], 1..=16384.
+    /// Width \[pixels\], 1..=16384.
     pub width: u32,
-    /// Height [pixels], 1..=16384.
+    /// Height \[pixels\], 1..=16384.
     pub height: u32,
 }
 
@@ -32,7 +32,7 @@ impl Viewport {
 pub enum Projection {
     /// `Mat4::perspective_rh_gl(fovy, aspect, near, far)`.
     Perspective {
-        /// Vertical field of view [degrees], in (0, 180).
+        /// Vertical field of view \[degrees\], in (0, 180).
         fovy_deg: f64,
         /// Near plane distance [world units], > 0.
         near: f64,
@@ -81,9 +81,9 @@ pub struct View {
 /// A point projected to the viewport.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ScreenPoint {
-    /// Horizontal position [pixels], 0 at the left edge.
+    /// Horizontal position \[pixels\], 0 at the left edge.
     pub x: f64,
-    /// Vertical position [pixels], 0 at the top edge.
+    /// Vertical position \[pixels\], 0 at the top edge.
     pub y: f64,
     /// Depth in [0, 1] inside the frustum, smaller is nearer.
     pub depth: f64,
@@ -143,7 +143,7 @@ impl View {
         }
     }
 
-    /// The world-space ray through viewport position (sx, sy) [pixels]: origin on the near
+    /// The world-space ray through viewport position (sx, sy) \[pixels\]: origin on the near
     /// plane and unit direction.
     pub fn ray(&self, sx: f64, sy: f64) -> (DVec3, DVec3) {
         let nx = 2.0 * sx / self.viewport.width as f64 - 1.0;

@@ -1,5 +1,5 @@
 //! `lembo-sim compare`: the lembo path, the triangle path and the exact reference of the
-//! same scene, side by side (DESIGN §5-§7).
+//! same scene, side by side (DESIGN.md §5-§7).
 //!
 //! Both paths run on the timed pipeline of the same architecture (same ROPs, same
 //! frame-buffer port) and are measured against one reference of the lembo surfaces. The
@@ -114,7 +114,7 @@ pub struct TessChoice {
     pub level: u32,
     /// Whether it was chosen by `--tess auto`.
     pub auto: bool,
-    /// The lembo path's silhouette_max_px, the target of `auto` [pixels].
+    /// The lembo path's silhouette_max_px, the target of `auto` \[pixels\].
     pub target_silhouette_px: Option<f64>,
     /// Whether the level used meets the target (always true for a given level).
     pub reached: bool,
@@ -127,9 +127,9 @@ pub struct TessChoice {
 pub struct Ratios {
     /// The architecture both paths ran on.
     pub arch: String,
-    /// Frame cycles per lembo [cycles].
+    /// Frame cycles per lembo \[cycles\].
     pub cycles_per_lembo: f64,
-    /// Frame cycles per triangle [cycles].
+    /// Frame cycles per triangle \[cycles\].
     pub cycles_per_triangle: f64,
     /// cycles_per_lembo / cycles_per_triangle: how many triangles one lembo costs, for the
     /// same surface, hence the same screen area (the paper claims 2-3).

@@ -1,5 +1,5 @@
-//! The architecture configuration of the timed pipeline (DESIGN §3): how many instances of
-//! each unit of paper 001 Figure 5 there are, what each costs per item, and the depth and
+//! The architecture configuration of the timed pipeline (DESIGN.md §3): how many instances of
+//! each unit of Martinelli 2006 Figure 5 there are, what each costs per item, and the depth and
 //! latency of the FIFOs between them. Files live in `sim/arch/*.json`; `sim/arch/README.md`
 //! states each unit's cost model in words.
 //!
@@ -196,7 +196,7 @@ pub struct RasterizerConfig {
     pub fragments_per_cycle: u64,
 }
 
-/// TriangleSetup (the triangle path, DESIGN §5): projects a triangle's three vertices,
+/// TriangleSetup (the triangle path, DESIGN.md §5): projects a triangle's three vertices,
 /// snaps them to 16.8 fixed point and sets up the integer edge functions and the
 /// perspective-correct attribute planes. One instance. Item: one triangle.
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
@@ -206,7 +206,7 @@ pub struct TriangleSetupConfig {
     /// the lembo Setup: a transform and perspective divide per vertex (about 16 stages) and
     /// the edge-function and plane setup (about 4).
     pub latency_cycles: u64,
-    /// Initiation interval per triangle \[cycles\]. Default 1: DESIGN §5's "setup 1 triangle
+    /// Initiation interval per triangle \[cycles\]. Default 1: DESIGN.md §5's "setup 1 triangle
     /// per cycle", the rate of GPUs of the papers' era and since.
     pub cycles_per_triangle: u64,
     /// Further busy cycles per piece of a clipped triangle \[cycles\]: a triangle crossing
@@ -221,7 +221,7 @@ pub struct TriangleSetupConfig {
     pub cycles_per_clipped_piece: u64,
 }
 
-/// TriangleRasterizer (the triangle path, DESIGN §5): tests 2x2 pixel quads against the
+/// TriangleRasterizer (the triangle path, DESIGN.md §5): tests 2x2 pixel quads against the
 /// integer edge functions with the top-left fill rule. Replicated; triangles are dispatched
 /// round-robin. Items: one triangle, and one quad-row piece (a triangle's quads in one
 /// pair of pixel rows inside one ROP tile).
@@ -235,7 +235,7 @@ pub struct TriangleRasterizerConfig {
     /// as the lembo FragmentRasterizer.
     pub latency_cycles: u64,
     /// Pixels tested per cycle; a piece of q quads costs ceil(4 q / this) cycles, at least
-    /// one, and a triangle that covers no pixel costs one cycle. Default 8: DESIGN §5, two
+    /// one, and a triangle that covers no pixel costs one cycle. Default 8: DESIGN.md §5, two
     /// quads per cycle.
     pub pixels_per_cycle: u64,
 }
@@ -261,7 +261,7 @@ pub struct RopConfig {
     pub tile_px: u32,
 }
 
-/// The discoid blend units (paper 000, DESIGN §4): one per ROP, instantiated only for
+/// The discoid blend units (Piranda et al. 2006, DESIGN.md §4): one per ROP, instantiated only for
 /// scenes with discoids. A fragment kept by the accumulation pass costs the ROP
 /// `cycles_per_fragment_<mode>` more than its depth test and moves
 /// `BlendMode::bytes_per_fragment` through the frame-buffer port (8, 16 or 32 bytes).
@@ -307,7 +307,7 @@ pub struct FrameBufferConfig {
     pub bytes_per_fragment_written: u64,
 }
 
-/// One FIFO between two units: a bounded queue with a transit latency (DESIGN §3).
+/// One FIFO between two units: a bounded queue with a transit latency (DESIGN.md §3).
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
 #[serde(default, deny_unknown_fields)]
 pub struct LinkConfig {

@@ -44,11 +44,11 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
 use std::time::Instant;
 
-/// Side of the study's square viewport [pixels].
+/// Side of the study's square viewport \[pixels\].
 pub const SIDE: u32 = 256;
 
 /// A case's guarantee "holds" when `max_scanline_deviation_px` is at most k plus this
-/// [pixels].
+/// \[pixels\].
 pub const HOLD_TOLERANCE_PX: f64 = 1e-3;
 
 /// The families of random cases, each aimed at one numerical hazard.
@@ -511,7 +511,7 @@ pub struct Measurement {
     pub index: u32,
     pub seed: u64,
     pub datapath: Datapath,
-    /// The segmenter's k [pixels].
+    /// The segmenter's k \[pixels\].
     pub k_px: f64,
     /// `ok`, or the error or panic message: a refused scene, an `Error` from the renderer,
     /// or a panic (a defect).
@@ -519,14 +519,14 @@ pub struct Measurement {
     /// Lembos culled (behind the eye, outside, degenerate) of the case's two.
     pub lembos_culled: u64,
     pub fragments: u64,
-    /// The probe's largest |y(u, v) − (j + 0.5)| over the fragments [pixels]; 0 without
+    /// The probe's largest |y(u, v) − (j + 0.5)| over the fragments \[pixels\]; 0 without
     /// fragments.
     pub max_scanline_deviation_px: f64,
-    /// `max_scanline_deviation_px − k` [pixels]; None without fragments.
+    /// `max_scanline_deviation_px − k` \[pixels\]; None without fragments.
     pub slack_px: Option<f64>,
-    /// Pixel centres the reference covers [pixels].
+    /// Pixel centres the reference covers \[pixels\].
     pub reference_covered_px: u64,
-    /// Largest |x| or |y| of the case's projected points [pixels]: the magnitude of the
+    /// Largest |x| or |y| of the case's projected points \[pixels\]: the magnitude of the
     /// screen coordinates the datapath works with.
     pub max_screen_coordinate_px: f64,
     pub false_positive_px: u64,
@@ -536,7 +536,7 @@ pub struct Measurement {
     /// False negatives over `max(reference_covered_px, 1)`.
     pub false_negative_frac: f64,
     /// Pixels whose winning lembo (or none) differs from the f64 render's at the same k
-    /// [pixels] (0 for f64).
+    /// \[pixels\] (0 for f64).
     pub winner_diff_vs_f64_px: u64,
     /// Largest difference of a colour channel from the f64 render's at the same k, over
     /// the pixels with the same winner: the shading's share of f32 [0-255] (0 for f64).
@@ -545,7 +545,7 @@ pub struct Measurement {
     pub crack_pixels: u64,
     pub double_hit_pixels: u64,
     pub psnr_db: f64,
-    /// Wall time of the render with the probe [seconds] (host-dependent).
+    /// Wall time of the render with the probe \[seconds\] (host-dependent).
     pub render_seconds: f64,
 }
 
@@ -554,7 +554,7 @@ pub struct Measurement {
 pub struct CaseResult {
     pub family: Family,
     pub index: u32,
-    /// Wall time of the exact reference [seconds] (host-dependent).
+    /// Wall time of the exact reference \[seconds\] (host-dependent).
     pub reference_seconds: f64,
     /// One per datapath and k: f64 then f32, k in the given order.
     pub measurements: Vec<Measurement>,
@@ -726,7 +726,7 @@ pub struct Settings {
     /// Cases (pairs of lembos) per family.
     pub cases_per_family: u32,
     pub seed: u64,
-    /// The segmenter's k values [pixels].
+    /// The segmenter's k values \[pixels\].
     pub ks: Vec<f64>,
     pub families: Vec<Family>,
 }
@@ -756,7 +756,7 @@ pub struct Summary {
     pub failures: u64,
     /// Cases with at least one fragment: the slack statistics are over these.
     pub drawn: u64,
-    /// Median and largest `max_scanline_deviation_px − k` [pixels]; None when nothing
+    /// Median and largest `max_scanline_deviation_px − k` \[pixels\]; None when nothing
     /// was drawn.
     pub slack_median_px: Option<f64>,
     pub slack_max_px: Option<f64>,
@@ -778,7 +778,7 @@ pub struct Summary {
     pub cases_with_unpaired_roots: u64,
     pub crack_pixels: u64,
     pub double_hit_pixels: u64,
-    /// Sum of the renders' wall times [seconds] (host-dependent).
+    /// Sum of the renders' wall times \[seconds\] (host-dependent).
     pub render_seconds: f64,
 }
 
@@ -857,17 +857,17 @@ pub fn summarise(settings: &Settings, results: &[CaseResult]) -> Vec<Summary> {
 /// f32's slack against the magnitude of the screen coordinates, half a decade per row.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct ExtentSummary {
-    /// The bin: largest screen coordinate in [lo_px, hi_px) [pixels], hi_px = √10 lo_px.
+    /// The bin: largest screen coordinate in [lo_px, hi_px) \[pixels\], hi_px = √10 lo_px.
     pub lo_px: f64,
     pub hi_px: f64,
     pub k_px: f64,
     /// Drawn f32 cases in the bin.
     pub drawn: u64,
-    /// Largest f32 slack [pixels].
+    /// Largest f32 slack \[pixels\].
     pub f32_slack_max_px: f64,
     /// Drawn f32 cases whose slack is at most [`HOLD_TOLERANCE_PX`].
     pub f32_holds: u64,
-    /// Largest f64 slack over the same cases [pixels].
+    /// Largest f64 slack over the same cases \[pixels\].
     pub f64_slack_max_px: f64,
 }
 
@@ -934,7 +934,7 @@ pub fn extent_markdown(rows: &[ExtentSummary]) -> String {
     t
 }
 
-/// An f64 slack above this is a defect of the method, not rounding [pixels]: f64 rounding
+/// An f64 slack above this is a defect of the method, not rounding \[pixels\]: f64 rounding
 /// of screen coordinates up to 10⁶ px stays below 10⁻⁸ px.
 pub const F64_DEFECT_PX: f64 = 1e-6;
 

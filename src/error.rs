@@ -1,5 +1,5 @@
 //! The crate's error type. Every input error names the file (or flag), the field path and
-//! the offending value; `main` maps input errors to exit status 2 (DESIGN §8).
+//! the offending value; `main` maps input errors to exit status 2 (DESIGN.md §8).
 
 use std::fmt;
 use std::path::PathBuf;
@@ -34,7 +34,7 @@ pub enum Error {
         path: PathBuf,
         message: String,
     },
-    /// A patch needs more segments than the stated cap on one scanline interval (DESIGN §8):
+    /// A patch needs more segments than the stated cap on one scanline interval (DESIGN.md §8):
     /// refused instead of running out of memory or time. Input error.
     SegmentCap {
         lembo: usize,
@@ -145,9 +145,9 @@ impl std::error::Error for Error {
 
 pub type Result<T> = std::result::Result<T, Error>;
 
-/// The largest scene, architecture or sweep-spec file read [bytes].
+/// The largest scene, architecture or sweep-spec file read \[bytes\].
 pub const MAX_TEXT_INPUT_BYTES: u64 = 256 << 20;
-/// The largest mesh or point-cloud file read [bytes].
+/// The largest mesh or point-cloud file read \[bytes\].
 pub const MAX_DATA_INPUT_BYTES: u64 = 1 << 30;
 
 /// Reads an input file of at most `max` bytes. A larger file, or one that never ends (a

@@ -29,7 +29,7 @@ use std::time::Instant;
 
 /// Where command-line errors say they come from.
 pub const COMMAND_LINE: &str = "command line";
-/// Accepted range of the tolerance k [pixels] (DESIGN §8).
+/// Accepted range of the tolerance k \[pixels\] (DESIGN.md §8).
 pub const K_RANGE: (f64, f64) = (1e-4, 64.0);
 /// Largest accepted reference supersampling factor (samples per pixel side).
 pub const MAX_SUPERSAMPLE: u32 = 8;
@@ -76,7 +76,7 @@ pub struct RenderJob {
     pub scene: Option<PathBuf>,
     /// Output directory; None for `out/<scene name>/`.
     pub out: Option<PathBuf>,
-    /// Tolerance k [pixels].
+    /// Tolerance k \[pixels\].
     pub k: f64,
     /// Setup's perspective tolerance (`--perspective-tol`; lembo path only).
     pub perspective_tol: PerspectiveTol,
@@ -84,7 +84,7 @@ pub struct RenderJob {
     pub reference: bool,
     /// Reference samples per pixel side.
     pub supersample: u32,
-    /// Viewport override (width, height) [pixels].
+    /// Viewport override (width, height) \[pixels\].
     pub viewport: Option<(u32, u32)>,
     pub mode: Mode,
     /// Architecture file; None for the embedded baseline. Timed mode only.
@@ -624,7 +624,7 @@ pub const PLANAR_DISCOID_BYTES: u64 = 7 * 4;
 /// Bytes of a curved discoid: a lembo and six texture-coordinate pairs in f32.
 pub const CURVED_DISCOID_BYTES: u64 = LEMBO_BYTES + 6 * 2 * 4;
 
-/// A discoid scene's three passes (paper 000): timed on `arch`, or functional. With both,
+/// A discoid scene's three passes (Piranda et al. 2006): timed on `arch`, or functional. With both,
 /// the timed image is checked against the functional one.
 fn run_discoids(
     job: &RenderJob,

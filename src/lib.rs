@@ -15,14 +15,14 @@
 //! Triangle path (the baseline): `Tessellator ─► TriangleSetup ─► TriangleRasterizer ─►` the
 //! same ROPs and frame buffer.
 //!
-//! - [`lembo`]: the model (paper 001 section 2): six-point construction, evaluation, edges
+//! - [`lembo`]: the model (Martinelli 2006 section 2): six-point construction, evaluation, edges
 //!   from vertex normals, meshes, the builtin shapes of Figures 6-8, the tessellator.
 //! - [`raster`]: the functional extreme method (section 5), one module per stage, generic
 //!   over the datapath ([`datapath::Real`]: `f32` or `f64`); the triangle rasterizer.
 //! - [`pipeline`]: the timed pipeline (Figure 5 as actors on bounded channels with cycle
 //!   accounting), and the triangle path's timed units; [`config`] its architecture files.
-//! - [`rop`]: depth test, per-fragment Phong (paper 000 equation 6), frame buffer.
-//! - [`reference`]: the exact f64 ray-patch reference and the accuracy metrics.
+//! - [`rop`]: depth test, per-fragment Phong (Piranda et al. 2006 equation 6), frame buffer.
+//! - [`reference`](mod@reference): the exact f64 ray-patch reference and the accuracy metrics.
 //! - [`scene`], [`camera`]: the JSON trace format and OpenGL-convention cameras.
 //! - [`datapath_study`]: f32 against f64 over seeded random lembos (issue 7), for
 //!   `examples/datapath_study.rs` and `tests/datapath.rs`.

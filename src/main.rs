@@ -105,7 +105,7 @@ fn parse_shard(s: &str) -> Result<(u32, u32), String> {
 
 #[derive(Clone, Copy, ValueEnum)]
 enum BlendArg {
-    /// Paper 000 Table 1: averages in R and G, the sum of betas nibble-split in B and A,
+    /// Piranda et al. 2006 Table 1: averages in R and G, the sum of betas nibble-split in B and A,
     /// 8-bit saturating adds (8 bytes per fragment).
     Rgba8,
     /// Half-float target (16 bytes per fragment).
@@ -154,7 +154,7 @@ struct RenderArgs {
         allow_negative_numbers = true
     )]
     k: f64,
-    /// Setup's perspective tolerance [pixels], or `off`: Setup splits a lembo until its
+    /// Setup's perspective tolerance \[pixels\], or `off`: Setup splits a lembo until its
     /// rebuilt screen quadratics are within this distance of the true perspective projection,
     /// and splits and clips lembos at the near plane. `off` is the paper's Setup (six
     /// projected points, no split for perspective, no near-plane clipping) [default: k/2].
@@ -218,7 +218,7 @@ struct CompareArgs {
     /// Output directory [default: out/<scene name>/compare/].
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
-    /// Tolerance k of the lembo path [pixels], in [0.0001, 64].
+    /// Tolerance k of the lembo path \[pixels\], in [0.0001, 64].
     #[arg(
         long,
         value_name = "PX",
@@ -226,7 +226,7 @@ struct CompareArgs {
         allow_negative_numbers = true
     )]
     k: f64,
-    /// Setup's perspective tolerance [pixels], or `off`: Setup splits a lembo until its
+    /// Setup's perspective tolerance \[pixels\], or `off`: Setup splits a lembo until its
     /// rebuilt screen quadratics are within this distance of the true perspective projection,
     /// and splits and clips lembos at the near plane. `off` is the paper's Setup (six
     /// projected points, no split for perspective, no near-plane clipping) [default: k/2].

@@ -1,4 +1,4 @@
-//! Output files that appear whole or not at all (DESIGN §8: a failed run "leaves no partial
+//! Output files that appear whole or not at all (DESIGN.md §8: a failed run "leaves no partial
 //! output file").
 //!
 //! A write ([`write_files`], [`write_paths`]) has three steps:

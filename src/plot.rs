@@ -7,9 +7,9 @@
 //!
 //! | file | x | y | series |
 //! |---|---|---|---|
-//! | `tradeoff_<scene>.svg` | frame time [cycles], log | RMS colour error [0-255], log | one per path, and the Pareto front |
-//! | `cycles_vs_k_<scene>.svg` | k [px], log | frame time [cycles] | one per combination of the other varying parameters run at two k or more (lembo path) |
-//! | `cycles_vs_units_<scene>.svg` | unit instances | frame time [cycles] | one per varying `arch.*.count`, the other parameters at their most common value |
+//! | `tradeoff_<scene>.svg` | frame time \[cycles\], log | RMS colour error [0-255], log | one per path, and the Pareto front |
+//! | `cycles_vs_k_<scene>.svg` | k \[px\], log | frame time \[cycles\] | one per combination of the other varying parameters run at two k or more (lembo path) |
+//! | `cycles_vs_units_<scene>.svg` | unit instances | frame time \[cycles\] | one per varying `arch.*.count`, the other parameters at their most common value |
 //! | `utilisation_<scene>.svg` | share of the frame time [%] | unit | busy / starved / blocked bars at the most and the fewest cycles |
 //!
 //! A record whose report has no cycles (functional mode) takes part in no plot, and one
@@ -110,14 +110,14 @@ struct Point {
     scene: String,
     /// `lembo` or `triangle` (`report.settings.path`).
     path: String,
-    /// Tolerance k [px]; lembo path only.
+    /// Tolerance k \[px\]; lembo path only.
     k_px: Option<f64>,
     /// Tessellation level n; triangle path only.
     tess: Option<u64>,
     /// The sweep's parameters of this point; a parameter another point has and this one
     /// lacks counts as null.
     params: BTreeMap<String, Value>,
-    /// Frame time [cycles]; `None` in functional mode.
+    /// Frame time \[cycles\]; `None` in functional mode.
     cycles: Option<u64>,
     units: Vec<UnitTime>,
     /// RMS colour error 255·10^(−PSNR/20) [0-255]; `None` without a reference.
@@ -215,7 +215,7 @@ fn svg(size: (u32, u32), draw: impl FnOnce(&Area) -> DrawResult) -> Plot {
 }
 
 const FONT: &str = "sans-serif";
-/// Width of every plot and height of the chart above its legend [px].
+/// Width of every plot and height of the chart above its legend \[px\].
 const WIDTH: u32 = 900;
 const CHART_HEIGHT: u32 = 600;
 const LEMBO: RGBColor = RGBColor(31, 119, 180);

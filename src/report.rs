@@ -1,4 +1,4 @@
-//! The run report (DESIGN §7): `report.json` for tools, `report.txt` for people. The files
+//! The run report (DESIGN.md §7): `report.json` for tools, `report.txt` for people. The files
 //! are written by [`crate::output`].
 
 use crate::config::ArchConfig;
@@ -59,9 +59,9 @@ pub struct Settings {
     pub arch_file: Option<String>,
     /// `lembo` or `triangle`.
     pub path: String,
-    /// Tolerance k of the extreme method [pixels]; null for the triangle path.
+    /// Tolerance k of the extreme method \[pixels\]; null for the triangle path.
     pub k_px: Option<f64>,
-    /// Setup's perspective tolerance [pixels] (`--perspective-tol`, default k/2), or `"off"`
+    /// Setup's perspective tolerance \[pixels\] (`--perspective-tol`, default k/2), or `"off"`
     /// for the paper's Setup; null for the triangle path.
     pub perspective_tol: Option<PerspectiveSetting>,
     /// Tessellation level n (n² triangles per lembo); null for the lembo path.
@@ -78,7 +78,7 @@ pub struct Settings {
 #[derive(Clone, Copy, Debug, Serialize, PartialEq)]
 #[serde(untagged)]
 pub enum PerspectiveSetting {
-    /// The tolerance [pixels].
+    /// The tolerance \[pixels\].
     Px(f64),
     /// Always `"off"`: the paper's Setup.
     Off(&'static str),
@@ -89,14 +89,14 @@ pub enum PerspectiveSetting {
 pub struct Primitives {
     /// `lembo` or `triangle`.
     pub kind: String,
-    /// Primitives in the scene [primitives].
+    /// Primitives in the scene \[primitives\].
     pub count: u64,
     /// Vertices the primitive data holds: six control points per lembo (each lembo is read
-    /// whole); the distinct vertices of the tessellated mesh for triangles [vertices].
+    /// whole); the distinct vertices of the tessellated mesh for triangles \[vertices\].
     pub vertices: u64,
     /// Bytes of primitive data in f32: 144 per lembo (six points and six normals); for
     /// triangles an indexed mesh, 24 per vertex (position and normal) and 12 per triangle
-    /// (three 32-bit indices) [bytes].
+    /// (three 32-bit indices) \[bytes\].
     pub bytes: u64,
     /// Covered pixels over pixels of the quads shaded, fragments / (4 quads); null for
     /// lembos, which are not rasterized in quads.
@@ -110,20 +110,20 @@ pub struct Primitives {
 pub struct Memory {
     /// The frame buffer as stored: RGB8 colour, f32 depth and u32 winner id per pixel,
     /// width × height × 11 (the normal buffer kept for the accuracy metrics is the
-    /// simulator's, not the unit's) [bytes].
+    /// simulator's, not the unit's) \[bytes\].
     pub framebuffer_bytes: u64,
     /// The discoid accumulation target, `blend.accumulation_buffer_bytes`: width × height ×
     /// half the mode's `bytes_per_fragment` (which counts a read and a write), so 4, 8 or 16
-    /// per pixel for rgba8, f16, f32; 0 for scenes without discoids [bytes].
+    /// per pixel for rgba8, f16, f32; 0 for scenes without discoids \[bytes\].
     pub accumulation_bytes: u64,
-    /// Primitive (parameter) storage, `primitives.bytes` [bytes].
+    /// Primitive (parameter) storage, `primitives.bytes` \[bytes\].
     pub primitive_bytes: u64,
     /// FIFO capacity of the instantiated links: over every link (one per producer and
     /// consumer pair at each boundary), its `fifo_depth`. Item sizes are not modelled, so
-    /// this is entries, not bytes; null in functional mode [entries].
+    /// this is entries, not bytes; null in functional mode \[entries\].
     pub fifo_entries: Option<u64>,
     /// framebuffer_bytes + accumulation_bytes + primitive_bytes (the FIFOs are in entries
-    /// and not included) [bytes].
+    /// and not included) \[bytes\].
     pub total_bytes: u64,
 }
 
@@ -148,7 +148,7 @@ impl Memory {
 /// Measurements of the simulator itself on this host (not deterministic).
 #[derive(Clone, Debug, Serialize)]
 pub struct Host {
-    /// Wall time of the render, without the reference [s].
+    /// Wall time of the render, without the reference \[s\].
     pub wall_seconds: f64,
     /// Fragments generated per wall second of the render.
     pub fragments_per_second: f64,
@@ -156,18 +156,18 @@ pub struct Host {
     pub simulated_cycles_per_second: Option<f64>,
     /// Host threads the timed model ran on (`--host-threads`); null in functional mode.
     pub host_threads: Option<u32>,
-    /// Wall time of the reference and metrics [s]; null without `--reference`.
+    /// Wall time of the reference and metrics \[s\]; null without `--reference`.
     pub reference_wall_seconds: Option<f64>,
     /// Of that, the accuracy metrics (the sub-pixel silhouette's reference queries and the
-    /// see-through check included) [s]; null without `--reference`.
+    /// see-through check included) \[s\]; null without `--reference`.
     pub metrics_wall_seconds: Option<f64>,
     /// Peak resident set of the simulator process so far (Linux `VmHWM`; null elsewhere).
     /// For `render`, read after the images are encoded, just before the report is written;
-    /// a sweep's runs share one process, so theirs is the process's peak [bytes].
+    /// a sweep's runs share one process, so theirs is the process's peak \[bytes\].
     pub peak_rss_bytes: Option<u64>,
 }
 
-/// The peak resident set of this process (`VmHWM` of /proc/self/status) [bytes]; None
+/// The peak resident set of this process (`VmHWM` of /proc/self/status) \[bytes\]; None
 /// where there is no such file.
 pub fn peak_rss_bytes() -> Option<u64> {
     let status = std::fs::read_to_string("/proc/self/status").ok()?;

@@ -1,21 +1,21 @@
-//! Scenes: the JSON trace files of `traces/` (DESIGN §7), parsed and validated once into a
+//! Scenes: the JSON trace files of `traces/` (DESIGN.md §7), parsed and validated once into a
 //! [`Scene`] that nothing downstream re-checks.
 //!
 //! A scene file holds a name, a viewport, a camera, a light, a background colour, a
 //! discoid blending threshold and a list of objects. Each object is a builtin shape (paper
 //! 001 Figures 6-8), inline lembos (six points and six normals each), a triangle mesh in an
-//! OBJ file, or discoids (paper 000; DESIGN §4), with a material colour and a similarity
+//! OBJ file, or discoids (Piranda et al. 2006; DESIGN.md §4), with a material colour and a similarity
 //! transform. Builtins, inline lembos and meshes end up as world-space lembos; builtins and
 //! meshes also keep their world-space triangle mesh for the triangle path. Discoid objects
 //! end up as a [`DiscoidSet`]: planar discoids given inline, placed at the vertices of an
-//! OBJ mesh, or read as surfels from a PLY point cloud (paper 002); or the curved discoids of
-//! `sphere20` (paper 000 Figure 10), whose lembos also go into the object's lembos so that
+//! OBJ mesh, or read as surfels from a PLY point cloud (Pfister et al. 2000); or the curved discoids of
+//! `sphere20` (Piranda et al. 2006 Figure 10), whose lembos also go into the object's lembos so that
 //! the lembo path draws them.
 //!
 //! The file is read into private `*Spec` structs (serde, `deny_unknown_fields`) and then
 //! validated field by field. Every error names the file, the field path in one style
 //! (`viewport.width`, `camera.projection.near`, `objects[1].transform.scale`) and the
-//! value (DESIGN §8): serde errors become [`Error::Parse`] with the path that
+//! value (DESIGN.md §8): serde errors become [`Error::Parse`] with the path that
 //! `serde_path_to_error` tracked, refused values become [`Error::Invalid`], and mesh files
 //! and point-cloud files that cannot be loaded or hold bad numbers become [`Error::Mesh`].
 //!
@@ -37,7 +37,7 @@ use serde::Deserialize;
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-/// The viewport of a scene file without one [pixels].
+/// The viewport of a scene file without one \[pixels\].
 pub const DEFAULT_VIEWPORT: Viewport = Viewport {
     width: 512,
     height: 512,
@@ -75,7 +75,7 @@ pub struct Scene {
     pub light: Light,
     /// Background colour, linear RGB in [0, 1].
     pub background: [f64; 3],
-    /// The discoid blending threshold t [world units] (paper 000 section 3, Figure 9): a
+    /// The discoid blending threshold t [world units] (Piranda et al. 2006 section 3, Figure 9): a
     /// discoid fragment farther than t behind the depth pass's surface, along the view
     /// direction, is not blended. From the file's `discoid_threshold` (> 0); without one,
     /// [`DEFAULT_THRESHOLD_PER_RADIUS`] × the median of the scene's discoid radii (planar

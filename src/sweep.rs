@@ -1,4 +1,4 @@
-//! `lembo-sim sweep` and `sweep-merge` (DESIGN §7, issue 6): many runs of one spec file,
+//! `lembo-sim sweep` and `sweep-merge` (DESIGN.md §7, issue 6): many runs of one spec file,
 //! each a point of a parameter space on a scene, into one table.
 //!
 //! ```text
@@ -67,7 +67,7 @@ use std::time::Instant;
 pub const MAX_RUNS: usize = 100_000;
 /// The most threads `--jobs` accepts; each run is one host thread (or `--host-threads`).
 pub const MAX_JOBS: usize = 256;
-/// Tolerance k of a point that sets none [pixels]: `render`'s default.
+/// Tolerance k of a point that sets none \[pixels\]: `render`'s default.
 pub const DEFAULT_K_PX: f64 = 0.5;
 /// The records file of a sweep directory.
 pub const RESULTS_JSONL: &str = "results.jsonl";

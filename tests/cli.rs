@@ -9,7 +9,7 @@ fn manifest() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// Runs a failing command in a fresh directory and checks the contract of DESIGN §8.
+/// Runs a failing command in a fresh directory and checks the contract of DESIGN.md §8.
 fn assert_refused(args: &[&str], needle: &str) {
     let dir = tempfile::tempdir().unwrap();
     let out = run(args, dir.path());
@@ -499,7 +499,7 @@ fn help_explains_the_render_flags() {
     }
 }
 
-/// The accuracy names of `render --reference` (DESIGN §6).
+/// The accuracy names of `render --reference` (DESIGN.md §6).
 const ACCURACY_NAMES: [&str; 14] = [
     "coverage_false_positive",
     "coverage_false_negative",

@@ -1,4 +1,4 @@
-//! The discoid blend units against their contract (DESIGN §4, issue 5): the timed passes
+//! The discoid blend units against their contract (DESIGN.md §4, issue 5): the timed passes
 //! draw the functional image bit for bit, the threshold separates surfaces, the precision
 //! modes trade bytes and cycles for error in the stated order, and surfel scenes count
 //! holes.

@@ -1,4 +1,4 @@
-//! The extreme method against its guarantees (paper 001 section 5, DESIGN §2 and §6), end to
+//! The extreme method against its guarantees (Martinelli 2006 section 5, DESIGN.md §2 and §6), end to
 //! end through `render_functional`:
 //! - random lembos: every fragment within k of its scanline and inside the domain, every
 //!   edge root paired, and coverage equal to the exact reference outside a band of k + 1.5

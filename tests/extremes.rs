@@ -251,7 +251,7 @@ fn every_scene_has_an_expectation_and_every_expectation_a_scene() {
     }
 }
 
-/// DESIGN §8: a patch that would need more segments than the cap on one interval is refused
+/// DESIGN.md §8: a patch that would need more segments than the cap on one interval is refused
 /// with a message naming the lembo and the scanline, as bad input (exit status 2). No
 /// scene reaches the default cap since Setup splits lembos far larger than the view, so a
 /// small cap stands in for it.

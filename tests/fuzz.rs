@@ -1,4 +1,4 @@
-//! Bounded fuzzing of the three places where hostile input enters (DESIGN §8, issue 7):
+//! Bounded fuzzing of the three places where hostile input enters (DESIGN.md §8, issue 7):
 //! the scene parser, the architecture parser and the functional pipeline.
 //!
 //! # Fuzzing

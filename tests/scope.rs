@@ -1,4 +1,4 @@
-//! Model only what a scene requires (DESIGN §3, issue 7): primitives off-screen cost their
+//! Model only what a scene requires (DESIGN.md §3, issue 7): primitives off-screen cost their
 //! cull test and nothing downstream, and each path instantiates only its own units and
 //! buffers, as report.json's `units` and `memory` say.
 

@@ -1,4 +1,4 @@
-//! The timed pipeline against its contract (DESIGN §3, issue 3): timing never changes
+//! The timed pipeline against its contract (DESIGN.md §3, issue 3): timing never changes
 //! pixels, results do not depend on the host schedule, every cycle is accounted once, and
 //! deeper FIFOs and more units never make a frame slower where they should help.
 

@@ -1,4 +1,4 @@
-//! The triangle path against its contract (DESIGN §5, issue 4): the timed units draw the
+//! The triangle path against its contract (DESIGN.md §5, issue 4): the timed units draw the
 //! functional model's image bit for bit on every architecture, the tessellation converges
 //! to the surface as a GPU mesh would, a mesh at level 1 is drawn as given, and only the
 //! triangle units are instantiated.

@@ -1,5 +1,5 @@
 //! The arithmetic of the ROP's blend units in the accumulation pass of the atlas of discoids
-//! (paper 000 section 3, equations 4-6, Table 1 and its shaders), one pixel at a time.
+//! (Piranda et al. 2006 section 3, equations 4-6, Table 1 and its shaders), one pixel at a time.
 //!
 //! Each fragment brings its beta and two interest values, cos α and cos^N γ (the diffuse
 //! and specular factors of equation 6). The pixel keeps their beta-weighted averages and
@@ -144,7 +144,7 @@ impl BlendMode {
 }
 
 /// What one fragment brings to the accumulation: its beta and its two interest values
-/// (paper 000: cos α and cos^N γ), each in [0, 1].
+/// (Piranda et al. 2006: cos α and cos^N γ), each in [0, 1].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BlendInput {
     /// The discoid's beta at the fragment (the sampled texture), in [0, 1].

@@ -1,10 +1,10 @@
-//! Discoids (paper 000): disk-like patches carrying a gray-level beta texture, blended in
-//! the ROP into one smooth surface (DESIGN §4).
+//! Discoids (Piranda et al. 2006): disk-like patches carrying a gray-level beta texture, blended in
+//! the ROP into one smooth surface (DESIGN.md §4).
 //!
 //! A discoid is *planar* (centre, unit normal, radius: drawn as a square through the
 //! triangle path, the texture coordinates from the world position in its tangent frame)
 //! or *curved* (a lembo whose six reference points carry texture coordinates, drawn
-//! through the lembo path). Surfels (paper 002) are planar discoids tangent to a point
+//! through the lembo path). Surfels (Pfister et al. 2000) are planar discoids tangent to a point
 //! cloud. beta = 0 is outside the discoid.
 //!
 //! These types are what the scene hands the renderers; the textures, the blend modes and the
@@ -18,7 +18,7 @@ pub mod render;
 pub mod shapes;
 pub mod texture;
 
-/// The gray-level texture a discoid carries (paper 000 Figure 5, and a gaussian).
+/// The gray-level texture a discoid carries (Piranda et al. 2006 Figure 5, and a gaussian).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum BetaShape {

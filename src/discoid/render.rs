@@ -1,4 +1,4 @@
-//! The three passes of the atlas of discoids (paper 000 section 3, DESIGN §4) in the
+//! The three passes of the atlas of discoids (Piranda et al. 2006 section 3, DESIGN.md §4) in the
 //! functional model.
 //!
 //! 1. **Depth**: every discoid fragment with beta > 0 that faces the eye writes the nearest
@@ -55,9 +55,9 @@ use serde::Serialize;
 pub struct BlendReport {
     /// `rgba8`, `f16` or `f32`.
     pub mode: String,
-    /// Accumulation-target bytes per accumulated fragment (read and write) [bytes].
+    /// Accumulation-target bytes per accumulated fragment (read and write) \[bytes\].
     pub bytes_per_fragment: u64,
-    /// Size of the accumulation target: a pixel holds half the bytes per fragment [bytes].
+    /// Size of the accumulation target: a pixel holds half the bytes per fragment \[bytes\].
     pub accumulation_buffer_bytes: u64,
     /// Fragments blended in the accumulation pass.
     pub fragments_accumulated: u64,
@@ -542,7 +542,7 @@ pub fn resolve<R: Real>(
 }
 
 /// Uncovered pixels with a covered pixel within `reach` pixels to their left, right, top
-/// and bottom: holes inside the silhouette (paper 002's hole detection, on the image).
+/// and bottom: holes inside the silhouette (the hole detection of Pfister et al. 2000, on the image).
 pub fn count_holes(fb: &FrameBuffer, reach: u32) -> u64 {
     let (w, h) = (fb.width as i64, fb.height as i64);
     let covered = |i: i64, j: i64| {

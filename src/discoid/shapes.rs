@@ -1,6 +1,6 @@
-//! Discoid shapes: the curved discoids of the paper's Figure 10 (paper 000: "a sphere
+//! Discoid shapes: the curved discoids of the paper's Figure 10 (Piranda et al. 2006: "a sphere
 //! covered by 20 curved discoids") and planar discoids at the vertices of a triangle mesh
-//! (the atlases of Figures 11 and 12, and the surfels of paper 002).
+//! (the atlases of Figures 11 and 12, and the surfels of Pfister et al. 2000).
 //!
 //! ## `sphere20`
 //!
@@ -53,7 +53,7 @@ pub const BUILTIN_DISCOID_NAMES: [&str; 1] = ["sphere20"];
 /// The tangent-plane radius R of each of `sphere20`'s discoids [world units, unit sphere].
 pub const SPHERE20_RADIUS: f64 = 0.65;
 
-/// The angle between a `sphere20` lembo's corners and its face centre [degrees].
+/// The angle between a `sphere20` lembo's corners and its face centre \[degrees\].
 pub const SPHERE20_CORNER_ANGLE_DEG: f64 = 62.0;
 
 /// Curved discoids: lembos with texture coordinates at their six reference points.

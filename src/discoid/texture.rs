@@ -1,4 +1,4 @@
-//! The beta textures of paper 000 (section 2, Figure 5): the 8-bit gray-level textures a
+//! The beta textures of Piranda et al. 2006 (section 2, Figure 5): the 8-bit gray-level textures a
 //! discoid carries, generated procedurally, and their bilinear sampling.
 //!
 //! Texture coordinates (s, t) span the discoid's square, [0, 1]², with the discoid's centre

@@ -1,7 +1,8 @@
-//! Construction of lembos from triangles with vertex normals (paper 001, section 2).
+//! Construction of lembos from triangles with vertex normals (Martinelli 2006, section 2).
 //!
-//! The edge midpoint comes from the near-least-squares quadratic edge of [Bar00a] as the
-//! paper prints it, with two repairs documented in ARCHITECTURE.md:
+//! The edge midpoint comes from the near-least-squares quadratic edge of Barrera, Hast and
+//! Bengtsson ("Surface construction with near least square acceleration", SIGRAD 2002) as
+//! Martinelli prints it, with two repairs documented in ARCHITECTURE.md:
 //! - the printed `T2 = -N1 - N2 (N1·N2)` is not tangent at P2; we use the tangent
 //!   `T2 = -N1 + N2 (N1·N2)` (the mirror image of `T1`), which makes the construction
 //!   symmetric and reproduces circular arcs' tangents on a sphere;
@@ -368,7 +369,7 @@ impl TriangleMesh {
         Ok(out)
     }
 
-    /// One lembo per triangle (paper 001: "use the Lembo Model to refine a triangular mesh"),
+    /// One lembo per triangle (Martinelli 2006: "use the Lembo Model to refine a triangular mesh"),
     /// watertight across hard edges.
     ///
     /// Positions are welded first ([`Self::weld`]): corners are the welded positions, and an

@@ -1,4 +1,4 @@
-//! The lembo model (paper 001, section 2).
+//! The lembo model (Martinelli 2006, section 2).
 //!
 //! A lembo is a quadratic triangular patch on the fixed domain `u >= 0, v >= 0, u + v <= 1`
 //! with a separate quadratic normal function on the same domain:
@@ -142,7 +142,7 @@ pub struct Lembo {
 }
 
 impl Lembo {
-    /// Builds a lembo from its six construction points and normals (paper 001, section 2).
+    /// Builds a lembo from its six construction points and normals (Martinelli 2006, section 2).
     pub fn new(points: [DVec3; 6], normals: [DVec3; 6]) -> Self {
         Lembo {
             position: quadratic3_from(&points),

@@ -1,4 +1,4 @@
-//! The Tessellator of the triangle path (DESIGN §2 and §5; paper 001 section 3's fixed-step
+//! The Tessellator of the triangle path (DESIGN.md §2 and §5; Martinelli 2006 section 3's fixed-step
 //! subdivision): each lembo becomes n² triangles, uniform in the domain, with their vertices
 //! on the true patch and their normals from the lembo's normal function.
 //!
@@ -49,10 +49,10 @@ pub struct Triangle {
     pub color: [f64; 3],
 }
 
-/// Bytes of one vertex of the indexed mesh: an f32 position and an f32 normal [bytes].
+/// Bytes of one vertex of the indexed mesh: an f32 position and an f32 normal \[bytes\].
 pub const VERTEX_BYTES: u64 = 24;
 
-/// Bytes of one triangle's indices in the indexed mesh: three u32 indices [bytes].
+/// Bytes of one triangle's indices in the indexed mesh: three u32 indices \[bytes\].
 pub const INDEX_BYTES_PER_TRIANGLE: u64 = 12;
 
 /// A scene's lembos tessellated at level n: n² triangles per lembo, computed on demand.
@@ -202,7 +202,7 @@ impl<'a> Tessellation<'a> {
     }
 
     /// Bytes of the tessellated mesh as an indexed mesh: vertex_count * VERTEX_BYTES +
-    /// len * INDEX_BYTES_PER_TRIANGLE [bytes].
+    /// len * INDEX_BYTES_PER_TRIANGLE \[bytes\].
     pub fn bytes(&self) -> u64 {
         self.vertex_count() * VERTEX_BYTES + self.len() * INDEX_BYTES_PER_TRIANGLE
     }

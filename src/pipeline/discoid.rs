@@ -1,4 +1,4 @@
-//! The timed discoid passes (paper 000, DESIGN §4): the depth pass and the accumulation
+//! The timed discoid passes (Piranda et al. 2006, DESIGN.md §4): the depth pass and the accumulation
 //! pass each run the whole pipeline (the lembo path for curved discoids, the triangle path
 //! for planar ones) with the ROPs in that pass's mode, one after the other as a GPU runs
 //! render passes; the resolve pass reads every pixel's accumulation target and writes its

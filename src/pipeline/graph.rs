@@ -13,7 +13,7 @@ use serde::Serialize;
 /// The kinds of unit, in dataflow order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize)]
 pub enum UnitKind {
-    /// Projects lembos and sets up their screen quadratics (paper 001 section 4).
+    /// Projects lembos and sets up their screen quadratics (Martinelli 2006 section 4).
     Setup,
     /// Finds a lembo's y range (section 5).
     MinMax,
@@ -84,7 +84,7 @@ impl UnitKind {
         )
     }
 
-    /// Instances in `arch` and the latency of each [cycles].
+    /// Instances in `arch` and the latency of each \[cycles\].
     pub fn in_arch(self, arch: &ArchConfig) -> (u32, u64) {
         match self {
             UnitKind::Setup => (1, arch.setup.latency_cycles),
@@ -201,7 +201,7 @@ pub fn triangle_units(arch: &ArchConfig) -> Vec<UnitInstance> {
 /// The FIFO entries of every link `units` instantiate: each boundary's crossbar has one
 /// link per (producer, consumer) pair, each `fifo_depth` entries deep; a boundary between
 /// kinds absent from `units` has no links. Item sizes are not modelled, so this counts
-/// entries, not bytes [entries].
+/// entries, not bytes \[entries\].
 pub fn fifo_entries(arch: &ArchConfig, units: &[UnitInstance]) -> u64 {
     let count = |kind: UnitKind| units.iter().filter(|u| u.kind == kind).count() as u64;
     boundaries(arch)

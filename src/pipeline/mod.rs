@@ -1,5 +1,5 @@
-//! The timed pipeline: Figure 5 of paper 001 as units run by a deterministic
-//! discrete-event executor (DESIGN §3). Each unit instance is an `async fn` that calls the
+//! The timed pipeline: Figure 5 of Martinelli 2006 as units run by a deterministic
+//! discrete-event executor (DESIGN.md §3). Each unit instance is an `async fn` that calls the
 //! functional code of [`crate::raster`] and adds only time; the image is bit-identical to
 //! the functional model's for every architecture configuration and every host partition.
 //!
@@ -58,7 +58,7 @@ use units::segmenter::ScanSegment;
 use units::setup::LemboReady;
 use units::subsegmenter::ScanSubsegment;
 
-/// The cycle accounting of one unit over the frame [cycles].
+/// The cycle accounting of one unit over the frame \[cycles\].
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct UnitCycles {
     pub name: String,
@@ -69,11 +69,11 @@ pub struct UnitCycles {
     pub starved: u64,
     /// Cycles frozen because a FIFO downstream was full.
     pub blocked: u64,
-    /// Items popped from its input FIFOs [items].
+    /// Items popped from its input FIFOs \[items\].
     pub items_in: u64,
-    /// Items pushed to its output FIFOs [items].
+    /// Items pushed to its output FIFOs \[items\].
     pub items_out: u64,
-    /// Most items in any one of its input FIFOs at once [items].
+    /// Most items in any one of its input FIFOs at once \[items\].
     pub max_fifo_occupancy: u64,
 }
 
@@ -81,7 +81,7 @@ pub struct UnitCycles {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct CycleReport {
     /// Cycle at which the last unit finished: the last write through the frame-buffer
-    /// port, or a later unit that produced nothing [cycles].
+    /// port, or a later unit that produced nothing \[cycles\].
     pub total: u64,
     pub clock_mhz: f64,
     /// Frames per second at the clock; null for an empty frame.
@@ -112,7 +112,7 @@ pub struct Shared<'a, R> {
     pub view: &'a View,
     pub arch: &'a ArchConfig,
     pub k: R,
-    /// Setup's perspective tolerance [pixels]; None: the paper's Setup.
+    /// Setup's perspective tolerance \[pixels\]; None: the paper's Setup.
     pub perspective_tol: Option<f64>,
     pub background: [u8; 3],
     /// Screen-space lembos by id, each whole or as the pieces Setup split it into, filled by

@@ -1,10 +1,10 @@
-//! FragmentRasterizer: the fragments of one subsegment (paper 001 section 5: "the generation
+//! FragmentRasterizer: the fragments of one subsegment (Martinelli 2006 section 5: "the generation
 //! of fragments along the subsegment may be done with a simple linear equation for the u
 //! and v components, which may be evaluated step by step with simple increments").
 //!
 //! Input: a [`Subsegment`] of scanline j. Output: one fragment per pixel centre it covers,
 //! passed to a [`FragmentSink`] with its (u, v) and depth z(u, v) from the lembo's depth
-//! quadratic. Pixel rule (DESIGN §2): with the ends ordered so x0 <= x1, pixel i is covered
+//! quadratic. Pixel rule (DESIGN.md §2): with the ends ordered so x0 <= x1, pixel i is covered
 //! when x0 <= i + 0.5 < x1, so consecutive subsegments neither drop nor double a pixel.
 //! Pixels outside the viewport are clipped here.
 

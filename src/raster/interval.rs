@@ -1,5 +1,5 @@
 //! IntervalManager: the pieces of the curve Y(u, v) = y_j inside the domain, per scanline
-//! (paper 001 section 5, "Managing Intervals").
+//! (Martinelli 2006 section 5, "Managing Intervals").
 //!
 //! Input: a [`ScreenLembo`] and a scanline j (sample line y_j = j + 0.5). Output: the
 //! [`Interval`]s of that scanline: each a start and an end point on the curve, in walking
@@ -30,7 +30,7 @@ use super::v2::{dot, rot_cw, V2};
 use super::Counts;
 use crate::datapath::Real;
 
-/// A point of the curve with its screen x [pixels] (from the edge curve on domain edges,
+/// A point of the curve with its screen x \[pixels\] (from the edge curve on domain edges,
 /// so shared edges agree bit for bit).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CurvePoint<R> {
@@ -419,7 +419,7 @@ mod tests {
         })
     }
 
-    /// A tolerance on |y - y_j| for curve points computed in `R` [pixels].
+    /// A tolerance on |y - y_j| for curve points computed in `R` \[pixels\].
     fn tol<R: Real>() -> f64 {
         if R::epsilon().f64() > 1e-10 {
             1e-3

@@ -1,4 +1,4 @@
-//! MinMax finder: the y range of a lembo and the scanlines it covers (paper 001 section 5,
+//! MinMax finder: the y range of a lembo and the scanlines it covers (Martinelli 2006 section 5,
 //! "Finding maximum and minimum values for y").
 //!
 //! Input: a [`ScreenLembo`]. Output: the inclusive range of scanlines `j` whose sample line
@@ -14,10 +14,10 @@
 use super::setup::{Partition, ScreenLembo};
 use crate::datapath::Real;
 
-/// Widening of the y range [pixels] before rounding to scanlines.
+/// Widening of the y range \[pixels\] before rounding to scanlines.
 const PAD_PX: f64 = 1e-3;
 
-/// The y range [y_min, y_max] of the lembo over its domain [pixels].
+/// The y range [y_min, y_max] of the lembo over its domain \[pixels\].
 pub fn y_range<R: Real>(l: &ScreenLembo<R>) -> (R, R) {
     let y = &l.y;
     let (zero, one, two) = (R::zero(), R::one(), R::of(2.0));

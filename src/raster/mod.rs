@@ -1,4 +1,4 @@
-//! The functional extreme method (paper 001 section 5): what is drawn, with no notion of
+//! The functional extreme method (Martinelli 2006 section 5): what is drawn, with no notion of
 //! time. One file per stage of Figure 5, in dataflow order:
 //!
 //! ```text
@@ -29,7 +29,7 @@ use fragment::FragmentSink;
 use serde::Serialize;
 use triangle::TriangleSource;
 
-/// Default cap on segments per interval (DESIGN §8): far above what a visible patch needs
+/// Default cap on segments per interval (DESIGN.md §8): far above what a visible patch needs
 /// at k >= 1e-4 px on a 16384-pixel viewport, low enough to refuse runaway walks quickly.
 pub const DEFAULT_SEGMENT_CAP: usize = 1 << 16;
 
@@ -38,10 +38,10 @@ pub const DEFAULT_SEGMENT_CAP: usize = 1 << 16;
 /// position to within 1.5 k.
 pub const DEFAULT_PERSPECTIVE_FRACTION: f64 = 0.5;
 
-/// The lembo path's tolerances [pixels].
+/// The lembo path's tolerances \[pixels\].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Tolerance {
-    /// k: the midpoint error of every segment of the walk (paper 001, section 5).
+    /// k: the midpoint error of every segment of the walk (Martinelli 2006, section 5).
     pub k: f64,
     /// How far Setup's rebuilt screen quadratics may be from the true perspective projection
     /// before it splits a lembo ([`refine`], `--perspective-tol`); `None` is the paper's
@@ -73,14 +73,14 @@ pub enum PerspectiveTol {
     /// k · [`DEFAULT_PERSPECTIVE_FRACTION`].
     #[default]
     FollowK,
-    /// A fixed tolerance [pixels], finite and > 0.
+    /// A fixed tolerance \[pixels\], finite and > 0.
     Px(f64),
     /// The paper's Setup: no perspective split, no near-plane handling.
     Off,
 }
 
 impl PerspectiveTol {
-    /// The tolerances for k [pixels].
+    /// The tolerances for k \[pixels\].
     pub fn with_k(self, k: f64) -> Tolerance {
         match self {
             PerspectiveTol::FollowK => Tolerance::new(k),
@@ -372,7 +372,7 @@ pub struct Frame {
 /// Renders `scene` with the functional model in the given datapath. With `analyse`, the
 /// frame buffer keeps normals and every fragment is measured by a [`probe::Probe`] (slower).
 ///
-/// `tol` is k [pixels] (with the default perspective tolerance) or a [`Tolerance`].
+/// `tol` is k \[pixels\] (with the default perspective tolerance) or a [`Tolerance`].
 pub fn render_functional(
     scene: &Scene,
     view: &View,

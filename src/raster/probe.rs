@@ -1,7 +1,7 @@
 //! A fragment sink that measures what the paper guarantees and what a closed mesh must
 //! satisfy, then forwards each fragment to the real sink:
 //! - the largest |y(u, v) - (j + 0.5)| over all fragments, in f64 from the lembo's screen
-//!   quadratic (paper 001: the curve is followed within k);
+//!   quadratic (Martinelli 2006: the curve is followed within k);
 //! - the largest distance of a fragment's (u, v) outside the domain;
 //! - double hits on shared edges: a pixel claimed by two lembos that share an edge curve
 //!   (the same three points: both ends and the midpoint; [`shared_edges`]), each

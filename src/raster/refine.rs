@@ -4,7 +4,7 @@
 //! lembo's six reference points and rebuilds screen-space quadratics through them. Under
 //! perspective the projection of a quadratic patch is rational, not quadratic, so the rebuilt
 //! patch misses the true image by an error that does not depend on k (1.3 px on sphere24 at
-//! any k). With a perspective tolerance `tol` [pixels], Setup measures that error and splits
+//! any k). With a perspective tolerance `tol` \[pixels\], Setup measures that error and splits
 //! the lembo into pieces until every piece is within `tol` of the true projection, with the
 //! same piece mechanism the guard-band split uses ([`super::setup::setup_pieces`]).
 //!
@@ -12,10 +12,10 @@
 //! Its error is measured against the true projection of the world surface at extra domain
 //! points: the quarter points (t = 1/4, 3/4) of each of its edges that are still its own
 //! (below), and inside, the middles of the three segments that join its edge middles and its
-//! centroid. The largest screen distance [pixels] there is the piece's error. Each halving
+//! centroid. The largest screen distance \[pixels\] there is the piece's error. Each halving
 //! divides the error of a smooth projection by about 8 (the rebuilt quadratic interpolates a
 //! smooth map at six points: its error is third order in the piece's size). An error counts
-//! only beyond the rounding noise of projecting its point ([`NOISE_ULPS`] rounding units of
+//! only beyond the rounding noise of projecting its point (`NOISE_ULPS` rounding units of
 //! the world coordinates' magnitude, carried to pixels by the projection's scale there):
 //! far from the origin or under extreme zoom, rounding alone exceeds a small tolerance, and
 //! splitting would chase it to the caps. An orthographic view projects affinely, so Setup
@@ -59,7 +59,7 @@ use crate::lembo::{bezier_controls, Lembo, Quadratic};
 use glam::{DVec3, DVec4};
 use std::cmp::Ordering;
 
-/// A screen point: x, y [pixels] and window depth.
+/// A screen point: x, y \[pixels\] and window depth.
 type S3 = [f64; 3];
 
 /// A domain point (u, v) of the lembo.
@@ -151,7 +151,7 @@ impl<'a> Surface<'a> {
         }
     }
 
-    /// An error [pixels] at world point `p` beyond the tolerance and beyond the rounding
+    /// An error \[pixels\] at world point `p` beyond the tolerance and beyond the rounding
     /// noise of projecting `p` there (far from the origin, or under extreme zoom, rounding
     /// alone can exceed a small tolerance; splitting would then chase noise to the caps).
     fn exceeds(&self, err: f64, p: DVec3) -> bool {
@@ -280,7 +280,7 @@ fn beyond(net: &[DVec4; 6]) -> Option<Beyond> {
     }
 }
 
-/// Sets up one lembo with the perspective tolerance `tol` [pixels] into `out`: whole when
+/// Sets up one lembo with the perspective tolerance `tol` \[pixels\] into `out`: whole when
 /// it can be projected, is within `tol` of its true projection and within the guard band;
 /// otherwise split (see the module documentation).
 pub fn setup_refined<R: Real>(
@@ -509,7 +509,7 @@ mod tests {
     }
 
     /// The largest screen distance between a piece's quadratics and the true projection of
-    /// the lembo at a 21 x 21 lattice of the piece's domain [pixels].
+    /// the lembo at a 21 x 21 lattice of the piece's domain \[pixels\].
     fn worst(lembo: &Lembo, v: &View, p: &ScreenLembo<f64>) -> f64 {
         let mut worst = 0.0f64;
         for a in 0..=20 {

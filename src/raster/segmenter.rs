@@ -1,5 +1,5 @@
 //! Segmenter: walks the curve Y(u, v) = y_j over one interval in chords whose midpoint error
-//! is exactly k (paper 001 section 5, "The segmentation problem").
+//! is exactly k (Martinelli 2006 section 5, "The segmentation problem").
 //!
 //! Input: a [`ScreenLembo`], the scanline and an [`Interval`]. Output: [`Segment`]s from the
 //! interval's start to its end.

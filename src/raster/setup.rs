@@ -1,5 +1,5 @@
 //! Setup: projects a lembo's six points, rebuilds screen-space coefficients, and prepares
-//! what the later stages need once per lembo (paper 001 sections 4 and 5).
+//! what the later stages need once per lembo (Martinelli 2006 sections 4 and 5).
 //!
 //! Input: a world-space [`Lembo`], its colour and the [`View`]. Output: a [`ScreenLembo`]
 //! in the datapath precision, or `None` when the lembo is culled (a control point behind
@@ -27,9 +27,9 @@ use glam::DVec3;
 /// points, ordered so that two lembos sharing the edge compute bit-identical roots.
 #[derive(Clone, Copy, Debug)]
 pub struct EdgeCurve<R> {
-    /// Screen y at canonical t = 0, 1/2, 1 [pixels].
+    /// Screen y at canonical t = 0, 1/2, 1 \[pixels\].
     pub y: [R; 3],
-    /// Screen x at canonical t = 0, 1/2, 1 [pixels].
+    /// Screen x at canonical t = 0, 1/2, 1 \[pixels\].
     pub x: [R; 3],
     /// Whether canonical t runs against the lembo's edge direction.
     pub reversed: bool,
@@ -61,7 +61,7 @@ pub enum Partition<R> {
     Central {
         /// The critical point (u, v).
         centre: V2<R>,
-        /// Screen y at the critical point [pixels].
+        /// Screen y at the critical point \[pixels\].
         y_centre: R,
         /// Determinant of the Hessian of y.
         det: R,
@@ -78,7 +78,7 @@ pub enum Partition<R> {
 pub struct ScreenLembo<R> {
     /// Global id (scene order), also the depth-test tie breaker.
     pub id: u32,
-    /// Screen x [pixels], y [pixels] and depth [0, 1] as quadratics in (u, v).
+    /// Screen x \[pixels\], y \[pixels\] and depth [0, 1] as quadratics in (u, v).
     pub x: Quadratic<R>,
     pub y: Quadratic<R>,
     pub z: Quadratic<R>,
@@ -90,7 +90,7 @@ pub struct ScreenLembo<R> {
     pub color: [R; 3],
     /// The three domain edges in canonical order.
     pub edges: [EdgeCurve<R>; 3],
-    /// Screen y of the three vertices A, B, C [pixels] (shared bit-identically with
+    /// Screen y of the three vertices A, B, C \[pixels\] (shared bit-identically with
     /// neighbours).
     pub vertex_y: [R; 3],
     /// Hessian of y: (y_uu, y_uv, y_vv).
@@ -186,7 +186,7 @@ pub struct Split {
     pub near: bool,
 }
 
-/// A lembo's six reference points on screen: x, y [pixels] and depth, in f64.
+/// A lembo's six reference points on screen: x, y \[pixels\] and depth, in f64.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct ScreenPoints {
     x: [f64; 6],
@@ -204,12 +204,12 @@ impl ScreenPoints {
         }
     }
 
-    /// Screen x of the six points [pixels].
+    /// Screen x of the six points \[pixels\].
     pub(super) fn xs(&self) -> [f64; 6] {
         self.x
     }
 
-    /// Screen y of the six points [pixels].
+    /// Screen y of the six points \[pixels\].
     pub(super) fn ys(&self) -> [f64; 6] {
         self.y
     }
@@ -280,7 +280,7 @@ pub fn setup<R: Real>(
 /// curve. Pieces keep the lembo's id (the depth-test tie breaker) and carry their corners
 /// in the lembo's domain ([`ScreenLembo::domain`]).
 ///
-/// With a perspective tolerance (`Some(tol)` [pixels]) Setup also splits until every piece
+/// With a perspective tolerance (`Some(tol)` \[pixels\]) Setup also splits until every piece
 /// is within `tol` of the true projection and handles the near plane ([`super::refine`]);
 /// `None` is the paper's Setup, as described here.
 pub fn setup_pieces<R: Real>(
@@ -620,7 +620,7 @@ pub(crate) mod tests {
         Quadratic { a, b, c, d, e, f }
     }
 
-    /// Side of the test viewport [pixels].
+    /// Side of the test viewport \[pixels\].
     pub(crate) const SIDE: u32 = 128;
 
     /// A 128 x 128 orthographic view down -z, 128 world units high: world (X, Y, Z) lands on
@@ -645,7 +645,7 @@ pub(crate) mod tests {
         )
     }
 
-    /// A lembo whose screen x and y [pixels] are the quadratics `x` and `y` in the test view,
+    /// A lembo whose screen x and y \[pixels\] are the quadratics `x` and `y` in the test view,
     /// with depth growing along u + v and normals towards the eye.
     pub(crate) fn lembo_on_screen(x: Quadratic<f64>, y: Quadratic<f64>) -> Lembo {
         let points = REFERENCE_UV
@@ -701,7 +701,7 @@ pub(crate) mod tests {
     }
 
     /// Every fragment (i, u, v) of scanline `j` of `l`, through all the stages at tolerance
-    /// `k` [pixels], with the stages' counts.
+    /// `k` \[pixels\], with the stages' counts.
     pub(crate) fn scanline_fragments<R: Real>(
         l: &ScreenLembo<R>,
         j: u32,
@@ -733,7 +733,7 @@ pub(crate) mod tests {
         (sink.0, counts)
     }
 
-    /// |y(u, v) - (j + 0.5)| in f64 [pixels].
+    /// |y(u, v) - (j + 0.5)| in f64 \[pixels\].
     pub(crate) fn y_error<R: Real>(l: &ScreenLembo<R>, j: u32, uv: [R; 2]) -> f64 {
         (l.y.cast::<f64>().eval(uv[0].f64(), uv[1].f64()) - (j as f64 + 0.5)).abs()
     }

@@ -1,4 +1,4 @@
-//! Subsegmenter: splits a segment so that x is linear within k on each piece (paper 001
+//! Subsegmenter: splits a segment so that x is linear within k on each piece (Martinelli 2006
 //! section 5, "The sub-segmentation").
 //!
 //! Input: a [`Segment`]. Output: [`Subsegment`]s. Along the segment, u(t) and v(t) are

@@ -1,4 +1,4 @@
-//! The triangle path's setup and rasterizer (DESIGN §5): the fair baseline, rasterized as
+//! The triangle path's setup and rasterizer (DESIGN.md §5): the fair baseline, rasterized as
 //! a GPU does it.
 //!
 //! - **Setup** projects the three vertices, snaps x and y to 16.8 fixed point (16 integer
@@ -60,7 +60,7 @@ use glam::{DVec3, DVec4};
 pub const SUBPIXEL_BITS: u32 = 8;
 /// Sub-pixel steps per pixel.
 pub const SUBPIXEL: i64 = 1 << SUBPIXEL_BITS;
-/// The largest |x| or |y| a snapped vertex may have [pixels]: 16 integer bits, signed.
+/// The largest |x| or |y| a snapped vertex may have \[pixels\]: 16 integer bits, signed.
 pub const GUARD_BAND_PX: f64 = 32767.0;
 
 /// One edge function `E(X, Y) = a X + b Y + c` in sub-pixel units, positive inside.
@@ -106,7 +106,7 @@ pub fn pixel_centre(i: u32, j: u32) -> (i64, i64) {
     )
 }
 
-/// Snaps a screen coordinate [pixels] to 16.8 fixed point, rounding to nearest.
+/// Snaps a screen coordinate \[pixels\] to 16.8 fixed point, rounding to nearest.
 #[inline]
 pub fn snap<R: Real>(x: R) -> i64 {
     (x * R::of(SUBPIXEL as f64)).round().to_i64().unwrap_or(0)
@@ -164,7 +164,7 @@ pub struct TriangleFragment<R> {
 }
 
 /// The clip rectangle of guard-band clipping: |x| <= `CLIP_PX` and |y| <= `CLIP_PX`
-/// [pixels]. One pixel inside [`GUARD_BAND_PX`]: a clipped vertex lies on a clip line up to
+/// \[pixels\]. One pixel inside [`GUARD_BAND_PX`]: a clipped vertex lies on a clip line up to
 /// rounding, and stays inside the 16.8 range after its conversion to the datapath (an f32
 /// ulp is 1/256 pixel there) and snapping (1/512 pixel). Beyond every viewport (sides of
 /// at most 16384 pixels), so clipping never removes a visible pixel.
@@ -1366,7 +1366,7 @@ mod tests {
 
     /// Per pixel: whether an unbounded-precision rasterizer covers it for the triangle with
     /// world vertices `p` (projected, snapped to 1/256 pixel in f64 however far, edge
-    /// functions in i128, the top-left rule), and the pixel centre's distance [pixels] to
+    /// functions in i128, the top-left rule), and the pixel centre's distance \[pixels\] to
     /// the nearest of the snapped triangle's edge lines.
     fn exact_coverage(p: &[DVec3; 3], view: &View) -> Vec<(bool, f64)> {
         let s = p.map(|q| view.project(q));

@@ -36,7 +36,7 @@ const RAMP: [[u8; 3]; 9] = [
     [252, 255, 164],
 ];
 
-/// Height of the legend strip appended below the image [pixels].
+/// Height of the legend strip appended below the image \[pixels\].
 pub fn legend_height() -> u32 {
     LEGEND_HEIGHT
 }
@@ -173,7 +173,7 @@ fn fill(img: &mut RgbImage, x0: i64, y0: i64, x1: i64, y1: i64, color: [u8; 3]) 
 const GLYPH_WIDTH: i64 = 5;
 const GLYPH_ADVANCE: i64 = 6;
 
-/// Width of a string in the legend font [pixels].
+/// Width of a string in the legend font \[pixels\].
 fn text_width(s: &str) -> i64 {
     (s.chars().count() as i64 * GLYPH_ADVANCE - 1).max(0)
 }

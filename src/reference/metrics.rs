@@ -1,4 +1,4 @@
-//! Accuracy of a rendered frame against the reference (DESIGN §6), under the names the
+//! Accuracy of a rendered frame against the reference (DESIGN.md §6), under the names the
 //! report carries.
 //!
 //! Coverage is per pixel centre: the render covers a pixel when some primitive won it, the
@@ -15,61 +15,61 @@ use super::outline::{outline_distances, Misplaced, ReferenceCoverage, SILHOUETTE
 use crate::rop::framebuffer::{FrameBuffer, NO_PRIMITIVE};
 use serde::Serialize;
 
-/// The PSNR reported for identical images [dB] (the true value is infinite, which JSON
+/// The PSNR reported for identical images \[dB\] (the true value is infinite, which JSON
 /// cannot carry).
 pub const PSNR_CAP_DB: f64 = 100.0;
 
 /// The accuracy section of the report.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Accuracy {
-    /// Pixels the render covers and the reference does not [pixels].
+    /// Pixels the render covers and the reference does not \[pixels\].
     pub coverage_false_positive: u64,
-    /// Pixels the reference covers and the render does not, cracks included [pixels].
+    /// Pixels the reference covers and the render does not, cracks included \[pixels\].
     pub coverage_false_negative: u64,
     /// Largest distance from the centre of a misplaced pixel (covered by the render and not
     /// the reference, or the reverse; cracks excluded) to the reference's true outline,
-    /// sub-pixel [pixels]; 0 when no pixel is misplaced (an outline off by less than the
+    /// sub-pixel \[pixels\]; 0 when no pixel is misplaced (an outline off by less than the
     /// distance to the nearest centre shows no error). When the reference has no pixel
     /// centre of the other state at all (it covers nothing, or everything), the distance is
     /// the image diagonal.
     pub silhouette_max_px: f64,
-    /// Mean of the same distances over the misplaced pixels [pixels]; 0 when none.
+    /// Mean of the same distances over the misplaced pixels \[pixels\]; 0 when none.
     pub silhouette_mean_px: f64,
     /// How finely the outline is located for the two figures above: points of the
-    /// reference outline are bisected to within this [pixels].
+    /// reference outline are bisected to within this \[pixels\].
     pub silhouette_resolution_px: f64,
     /// Largest |render depth - reference depth| over pixels both cover, in depth-buffer
     /// units [0, 1]; includes the error of the perspective approximation.
     pub depth_max_abs: f64,
     /// Largest angle between the render's and the reference's normals, up to sign (shading
-    /// is two-sided), over pixels both cover [degrees].
+    /// is two-sided), over pixels both cover \[degrees\].
     pub normal_max_deg: f64,
-    /// Mean of the same angles [degrees].
+    /// Mean of the same angles \[degrees\].
     pub normal_mean_deg: f64,
     /// PSNR of the RGB8 image against the reference's centre-sample colours over the whole
-    /// image [dB], capped at [`PSNR_CAP_DB`] (identical images).
+    /// image \[dB\], capped at [`PSNR_CAP_DB`] (identical images).
     pub psnr_db: f64,
     /// Largest channel difference [0-255].
     pub max_abs_error: u64,
-    /// Holes in the render's surface [pixels]: pixels the reference covers together with
+    /// Holes in the render's surface \[pixels\]: pixels the reference covers together with
     /// their 4 neighbours, that the render misses while covering both neighbours of an
     /// opposite pair (left and right, or above and below). A band of misses along the
     /// silhouette (the outline drawn slightly inside the true one) is not a crack.
     pub crack_pixels: u64,
     /// Pixels written by more than one primitive on a shared edge, as the renderer counted
-    /// them [pixels].
+    /// them \[pixels\].
     pub double_hit_pixels: u64,
     /// Pixels where the input mesh's own flat triangles show a front-facing surface but the
     /// render shows the background, a surface facing away from the eye, or a surface behind
     /// that triangle from a primitive sharing no corner with it: a gap between primitives
-    /// one can see through (`see_through.rs`) [pixels]; null for scenes without a mesh.
+    /// one can see through (`see_through.rs`) \[pixels\]; null for scenes without a mesh.
     pub see_through_px: Option<u64>,
     /// The paper's guarantee: largest |y(u, v) - (j + 0.5)| over all lembo fragments, as
-    /// the renderer measured it [pixels]; null for the triangle path (no curve to follow).
+    /// the renderer measured it \[pixels\]; null for the triangle path (no curve to follow).
     pub max_scanline_deviation_px: Option<f64>,
     /// Sub-samples per pixel side of the reference.
     pub supersample: u64,
-    /// Pixels both cover, over which depth and normals are compared [pixels].
+    /// Pixels both cover, over which depth and normals are compared \[pixels\].
     pub pixels_compared: u64,
 }
 
@@ -247,7 +247,7 @@ pub fn measure(
     }
 }
 
-/// The angle between two directions up to sign [degrees], in [0, 90]; 90 when either is
+/// The angle between two directions up to sign \[degrees\], in [0, 90]; 90 when either is
 /// zero. `atan2` keeps small angles accurate where `acos` of a dot product would not.
 fn angle_up_to_sign(a: glam::DVec3, b: glam::DVec3) -> f64 {
     if a == glam::DVec3::ZERO || b == glam::DVec3::ZERO {
@@ -298,7 +298,7 @@ impl<'a> Bounds<'a> {
         }
     }
 
-    /// The Euclidean distance [pixels] from pixel `k` to the nearest pixel whose mask
+    /// The Euclidean distance \[pixels\] from pixel `k` to the nearest pixel whose mask
     /// value is `value`; None when there is none.
     fn nearest(&mut self, k: usize, value: bool) -> Option<f64> {
         let (w, h) = (self.w as i64, self.h as i64);
@@ -333,7 +333,7 @@ impl<'a> Bounds<'a> {
     }
 }
 
-/// Per pixel, the Euclidean distance [pixels] to the nearest pixel whose mask value is
+/// Per pixel, the Euclidean distance \[pixels\] to the nearest pixel whose mask value is
 /// `value`; `None` everywhere when there is no such pixel.
 fn distance_to(mask: &[bool], w: usize, h: usize, value: bool) -> Vec<Option<f64>> {
     if !mask.contains(&value) {

@@ -1,5 +1,5 @@
 //! The reference: an exact, untimed `f64` renderer of the true surfaces, and the accuracy
-//! metrics that hold a rendered frame against it (DESIGN §6).
+//! metrics that hold a rendered frame against it (DESIGN.md §6).
 //!
 //! [`oracle`] intersects the ray through every sample with the world-space lembos
 //! themselves (no projection approximation, no datapath rounding) and shades the nearest

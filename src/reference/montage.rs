@@ -23,7 +23,7 @@ use image::{Rgb, RgbImage};
 
 /// Pixels per glyph pixel in the labels.
 pub const LABEL_SCALE: u32 = 2;
-/// Space between panels and around the edge of the montage [pixels].
+/// Space between panels and around the edge of the montage \[pixels\].
 pub const GAP: u32 = 8;
 
 /// Side of a glyph cell, and so the horizontal advance [glyph pixels].
@@ -42,12 +42,12 @@ pub struct Panel<'a> {
 }
 
 /// The panels side by side, left to right, each under its label (white 8x8 glyphs scaled by
-/// [`LABEL_SCALE`], lines split at `'\n'`), on a dark background with [`GAP`] pixels between
+/// `LABEL_SCALE`, lines split at `'\n'`), on a dark background with [`GAP`] pixels between
 /// panels and around the edge.
 ///
 /// Panels may differ in size; they are aligned at the top. The montage is
 /// `GAP + Σ (width + GAP)` wide and `GAP + band + tallest panel + GAP` tall, where the label
-/// band holds as many lines as the label with most lines ([`LINE_ADVANCE`] x [`LABEL_SCALE`]
+/// band holds as many lines as the label with most lines (`LINE_ADVANCE` x `LABEL_SCALE`
 /// pixels each). Characters outside printable ASCII are drawn as `'?'`. A label wider than
 /// its panel is clipped at the panel's right edge, never drawn over a neighbour. No panels
 /// give a blank `GAP` x `2 GAP` image.
@@ -74,7 +74,7 @@ pub fn montage(panels: &[Panel]) -> RgbImage {
 /// Draws `text` with its top-left corner at (x, y), `scale` pixels per glyph pixel, clipped to
 /// the image and to x < `clip_right`.
 ///
-/// Glyphs advance 8 x `scale` pixels; `'\n'` starts a new line [`LINE_ADVANCE`] x `scale`
+/// Glyphs advance 8 x `scale` pixels; `'\n'` starts a new line `LINE_ADVANCE` x `scale`
 /// pixels lower at x. Characters outside printable ASCII are drawn as `'?'`. Only set glyph
 /// pixels are written; the rest of the cell keeps what is under it.
 pub fn draw_text(

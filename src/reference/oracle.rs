@@ -1,4 +1,4 @@
-//! The exact reference renderer (DESIGN §6): per sample, the ray against the true
+//! The exact reference renderer (DESIGN.md §6): per sample, the ray against the true
 //! world-space lembo, in `f64`, with no projection approximation.
 //!
 //! A ray is the intersection of two planes through it, with unit normals `n1` and `n2`
@@ -70,7 +70,7 @@ const NEWTON_PROBE_ITERATIONS: usize = 10;
 const RESIDUAL_TOLERANCE: f64 = 1e-11;
 /// Slack on box tests, relative to the size of the problem, against rounding.
 const BOX_SLACK: f64 = 1e-12;
-/// Side of the square screen tiles that lembos are binned into [pixels].
+/// Side of the square screen tiles that lembos are binned into \[pixels\].
 const TILE: u32 = 16;
 
 /// The winning surface at a sample.
@@ -584,7 +584,7 @@ fn inside_triangle(p: DVec2, node: &Node) -> bool {
 enum Footprint {
     /// Part of the control net is at or behind the eye: test every sample.
     Everywhere,
-    /// The screen box of the projected control net [pixels] and its nearest depth.
+    /// The screen box of the projected control net \[pixels\] and its nearest depth.
     Box {
         x0: f64,
         y0: f64,
@@ -604,7 +604,7 @@ impl Footprint {
     }
 }
 
-/// Slack on screen boxes [pixels]: the hit of a sample on the box's edge projects to it
+/// Slack on screen boxes \[pixels\]: the hit of a sample on the box's edge projects to it
 /// only up to rounding.
 const SCREEN_SLACK: f64 = 1e-6;
 
@@ -717,7 +717,7 @@ impl<'a> Tracer<'a> {
         self.trace(x, y, bin, &mut scratch.scratch, &mut scratch.roots)
     }
 
-    /// Whether the ray through screen position (x, y) [pixels] hits a surface: the same
+    /// Whether the ray through screen position (x, y) \[pixels\] hits a surface: the same
     /// condition as [`Tracer::hit`] being `Some` (a root with t > 0 and depth in [0, 1]),
     /// decided at the first such root found, which makes rays grazing an outline far
     /// cheaper to answer.
@@ -747,7 +747,7 @@ impl<'a> Tracer<'a> {
         false
     }
 
-    /// The nearest hit at screen position (x, y) [pixels] among the lembos of `bin`.
+    /// The nearest hit at screen position (x, y) \[pixels\] among the lembos of `bin`.
     fn trace(
         &self,
         x: f64,

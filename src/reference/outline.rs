@@ -14,7 +14,7 @@
 //!    these segments to `c` is the *foot*.
 //! 2. **Rays.** The ray from `c` through the foot, continued half a pixel beyond it (and
 //!    clipped to the viewport), is bisected with the reference; so are the rays turned by
-//!    ±[`ANGLE_STEP`] and, when the three distances make a parabola open upwards, the ray
+//!    ±`ANGLE_STEP` and, when the three distances make a parabola open upwards, the ray
 //!    at its vertex (a segment's normal is the outline's at the segment's middle, not at
 //!    the foot). Each ray whose end lies on the other side gives a crossing.
 //!
@@ -42,19 +42,19 @@ use std::cell::RefCell;
 
 use super::oracle::{TraceScratch, Tracer};
 
-/// How finely outline points are located [pixels]: bisection stops when the interval
+/// How finely outline points are located \[pixels\]: bisection stops when the interval
 /// holding the crossing is this short, and the crossing is taken at its middle.
 pub const SILHOUETTE_RESOLUTION_PX: f64 = 1.0 / 256.0;
 
 /// The turn of the two rays beside the one through the contour's foot [radians].
 const ANGLE_STEP: f64 = 0.1;
 
-/// Rays are cast only from misplaced pixels whose bound `D` is at most this [pixels];
+/// Rays are cast only from misplaced pixels whose bound `D` is at most this \[pixels\];
 /// farther ones take the distance to the contour, so that the work grows with the
 /// outline's length, not with the area of a gross error.
 pub const RAY_BOUND_PX: f64 = 3.0;
 
-/// Misplaced pixels farther than this [pixels] from every centre of the other state take
+/// Misplaced pixels farther than this \[pixels\] from every centre of the other state take
 /// that distance `D` itself, within half a cell's diagonal (0.71 px) of the outline's: a
 /// contour search over a disc of radius `D` per pixel would make a gross error's metric
 /// cost grow as its area times `D²` (25 s for a floor of 78 767 missed pixels).
@@ -78,7 +78,7 @@ impl ReferenceCoverage for Tracer<'_> {
 }
 
 /// A misplaced pixel: its index and the distance `D` to the nearest pixel centre of the
-/// other reference state [pixels].
+/// other reference state \[pixels\].
 #[derive(Clone, Copy, Debug)]
 pub struct Misplaced {
     pub index: usize,
@@ -205,7 +205,7 @@ fn to_segment(p: DVec2, a: DVec2, b: DVec2) -> (f64, DVec2) {
     ((p - q).length(), q)
 }
 
-/// The distance [pixels] from each misplaced pixel's centre to the reference outline (see
+/// The distance \[pixels\] from each misplaced pixel's centre to the reference outline (see
 /// the module documentation), in the order given. `covered` is the reference's centre
 /// samples, row-major `w` x `h`.
 pub fn outline_distances(

@@ -21,7 +21,7 @@
 //! places, or reach past it), and any surface in front of T (a smooth patch bulging over a
 //! part of the mesh behind it, near an outline).
 //!
-//! Not checked: pixels near the flat mesh's outline ([`near_outline`]: within
+//! Not checked: pixels near the flat mesh's outline (`near_outline`: within
 //! [`OUTLINE_MARGIN_PX`] plus the lembos' own deviation from their triangles), where the
 //! smooth surface's outline legitimately differs from the flat one, by up to a few pixels
 //! on a coarse mesh (a smooth rim bulging past its chord shows what is behind the flat
@@ -44,7 +44,7 @@ use glam::{DVec2, DVec3};
 use std::collections::BTreeMap;
 
 /// Pixels this close to the flat mesh's outline, beyond the lembos' own deviation from
-/// their triangles, are not checked [pixels] (see [`near_outline`]).
+/// their triangles, are not checked \[pixels\] (see `near_outline`).
 pub const OUTLINE_MARGIN_PX: f64 = 2.0;
 
 /// See-through pixels by what the render shows there (see the module documentation).
@@ -142,7 +142,7 @@ fn faces_eye(l: &Lembo, view: &View) -> bool {
     n.dot(view.to_eye((a + b + c) / 3.0)) > 0.0
 }
 
-/// How far a lembo strays from its flat triangle on screen [pixels]: 4/3 of the largest
+/// How far a lembo strays from its flat triangle on screen \[pixels\]: 4/3 of the largest
 /// screen offset of an edge midpoint from its chord's middle. With barycentrics (w, u, v)
 /// the patch is its triangle plus 4 (wu e_AB + wv e_CA + uv e_BC), e the midpoint offsets,
 /// and wu + wv + uv <= 1/3.
@@ -169,7 +169,7 @@ fn near_outline(lembos: &[(&Lembo, bool)], front: &[bool], view: &View) -> Vec<b
     let (w, h) = (view.viewport.width as usize, view.viewport.height as usize);
     let bits = |p: DVec3| p.to_array().map(f64::to_bits);
     /// The triangles using an edge: how many face the eye, how many not, and how far the
-    /// farthest-straying one strays [pixels].
+    /// farthest-straying one strays \[pixels\].
     #[derive(Default)]
     struct Uses {
         front: u32,

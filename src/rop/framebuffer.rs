@@ -33,7 +33,7 @@ pub struct FrameBuffer {
 
 impl FrameBuffer {
     /// Bytes one pixel takes as stored: RGB8 colour, f32 depth and u32 winner id (the
-    /// normal buffer is the accuracy metrics', not the unit's, and is not counted) [bytes].
+    /// normal buffer is the accuracy metrics', not the unit's, and is not counted) \[bytes\].
     pub const BYTES_PER_PIXEL: u64 = (std::mem::size_of::<[u8; 3]>()
         + std::mem::size_of::<f32>()
         + std::mem::size_of::<u32>()) as u64;

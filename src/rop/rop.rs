@@ -11,7 +11,7 @@ use crate::raster::setup::ScreenLembo;
 use crate::raster::subsegmenter::Subsegment;
 use crate::raster::triangle::{ScreenTriangle, TriangleFragment, TriangleSink};
 
-/// Per-fragment shading (paper 000 equation 6) from the lembo's normal and position
+/// Per-fragment shading (Piranda et al. 2006 equation 6) from the lembo's normal and position
 /// functions; shared by the functional ROP and the timed ROP units so both give the same
 /// colour bit for bit.
 pub struct FragmentShader<R> {

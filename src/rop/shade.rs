@@ -1,4 +1,4 @@
-//! Per-fragment Phong shading, paper 000 equation (6): `L = Ka + Kd cos(alpha) + Ks cos^N(gamma)`.
+//! Per-fragment Phong shading, Piranda et al. 2006 equation (6): `L = Ka + Kd cos(alpha) + Ks cos^N(gamma)`.
 //!
 //! `alpha` is the angle between the unit normal and the direction to the light, `gamma` the
 //! angle between the light reflected about the normal and the direction to the eye. The
@@ -9,7 +9,7 @@
 use crate::datapath::Real;
 use serde::{Deserialize, Serialize};
 
-/// One directional light with the Phong terms of paper 000 equation (6).
+/// One directional light with the Phong terms of Piranda et al. 2006 equation (6).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Light {

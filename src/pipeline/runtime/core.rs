@@ -4,7 +4,7 @@
 //! watermark messages.
 //!
 //! **Bounds.** A merge may take its earliest queued item at arrival `a` only when no other
-//! input can still deliver an item arriving earlier (DESIGN §3). With every unit's state
+//! input can still deliver an item arriving earlier (DESIGN.md §3). With every unit's state
 //! in view that is read from the producer itself, as DAM reads a sender's clock
 //! (`tick_lower_bound`): a unit that can run issues its next op at or after its clock
 //! `now`, so it pushes nothing before `now + latency`; one waiting for a credit pushes its
@@ -28,7 +28,7 @@ pub enum Wait {
     /// Waiting for input: its merge cannot take anything yet. `held` is the arrival of the
     /// earliest item it holds but may not take (another input's bound is not past it).
     Input {
-        /// Arrival of the earliest queued item [cycle], if any.
+        /// Arrival of the earliest queued item \[cycle\], if any.
         held: Option<Cycle>,
     },
     /// Waiting for the credit of output `port` (its FIFO is full).
@@ -57,7 +57,7 @@ pub trait InputView {
 pub struct InputSnap {
     /// The producing unit (global index).
     pub producer: usize,
-    /// The link's latency [cycles].
+    /// The link's latency \[cycles\].
     pub latency: u64,
     /// The arrival of the queued head item, if any.
     pub head: Option<Cycle>,
@@ -74,7 +74,7 @@ pub struct UnitSnap {
     pub unit: usize,
     /// Its clock.
     pub now: Cycle,
-    /// Its op latency [cycles].
+    /// Its op latency \[cycles\].
     pub latency: u64,
     /// What it waits for.
     pub wait: Wait,

@@ -1,4 +1,4 @@
-//! A unit's timing context: its links, its clock and its counters (DESIGN §3).
+//! A unit's timing context: its links, its clock and its counters (DESIGN.md §3).
 //!
 //! A unit is an `async fn` whose life is a sequence of ops. [`Ctx::next_input`] takes the
 //! next input by merge order; [`Ctx::work`] spends busy cycles with no output;
@@ -27,7 +27,7 @@ use std::future::poll_fn;
 use std::rc::Rc;
 use std::task::Poll;
 
-/// Counters of one unit over its life, [cycles] unless named otherwise.
+/// Counters of one unit over its life, \[cycles\] unless named otherwise.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct UnitStats {
     /// Cycles issuing ops.
@@ -38,11 +38,11 @@ pub struct UnitStats {
     pub blocked: u64,
     /// Cycle of the unit's last activity: busy + starved + blocked.
     pub end: Cycle,
-    /// Items popped [items].
+    /// Items popped \[items\].
     pub items_in: u64,
-    /// Items pushed [items].
+    /// Items pushed \[items\].
     pub items_out: u64,
-    /// Most items in any one input FIFO at once [items].
+    /// Most items in any one input FIFO at once \[items\].
     pub max_fifo_occupancy: u64,
     /// Pops that broke the merge order (an item taken after a later one): always 0 unless
     /// the executor is wrong; checked on every run.

@@ -46,7 +46,7 @@ impl fmt::Display for Cycle {
 /// An item on a link with its push time.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Timed<T> {
-    /// Push time p_n [cycle].
+    /// Push time p_n \[cycle\].
     pub at: Cycle,
     /// What was pushed.
     pub item: T,

@@ -1,4 +1,4 @@
-//! Timed links: the FIFOs between units (DESIGN §3).
+//! Timed links: the FIFOs between units (DESIGN.md §3).
 //!
 //! A link is a FIFO of depth `D >= 1` and latency `L >= 1`. Item n is pushed at p_n and
 //! popped at q_n, with

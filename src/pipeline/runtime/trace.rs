@@ -31,7 +31,7 @@ impl State {
 pub struct Recorder {
     /// (start, end, state) in cycles, start-ordered, non-overlapping.
     events: Vec<(u64, u64, State)>,
-    /// Same-state events closer than this many cycles are merged [cycles].
+    /// Same-state events closer than this many cycles are merged \[cycles\].
     quantum: u64,
     cap: usize,
 }

@@ -1,4 +1,4 @@
-//! The frame-buffer memory port (DESIGN §3): the ROPs' depth reads and colour and depth
+//! The frame-buffer memory port (DESIGN.md §3): the ROPs' depth reads and colour and depth
 //! writes share one port of `framebuffer.bytes_per_cycle`. The frame ends when the last
 //! write has gone through it.
 //!

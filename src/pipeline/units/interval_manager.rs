@@ -1,4 +1,4 @@
-//! IntervalManager (paper 001 section 5.1): for each scanline y_j of a lembo, the roots of
+//! IntervalManager (Martinelli 2006 section 5.1): for each scanline y_j of a lembo, the roots of
 //! Y(u, v) = y_j on the three domain edges (and the virtual roots at the tips of a closed
 //! loop), paired into intervals: the pieces of the curve the segmenters walk.
 //!

@@ -1,4 +1,4 @@
-//! MinMax finder (paper 001 section 5, "the first step ... is to find the minimum and the
+//! MinMax finder (Martinelli 2006 section 5, "the first step ... is to find the minimum and the
 //! maximum of y"): the y range of a lembo over its domain (corners, edge extrema, interior
 //! critical point) and the scanlines it covers, clipped to the viewport.
 //!

@@ -1,4 +1,4 @@
-//! FragmentRasterizer (paper 001 section 5.3: "the generation of fragments along the
+//! FragmentRasterizer (Martinelli 2006 section 5.3: "the generation of fragments along the
 //! subsegment may be done with a simple linear equation for the u and v components, which
 //! may be evaluated step by step with simple increments").
 //!

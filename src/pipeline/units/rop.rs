@@ -1,11 +1,11 @@
-//! Rop (DESIGN §2 and §3; paper 000 section 4 for the ROP's place): the depth test and the
+//! Rop (DESIGN.md §2 and §3; Piranda et al. 2006 section 4 for the ROP's place): the depth test and the
 //! frame-buffer write, Np units screen-interleaved by tiles.
 //!
 //! Input: [`RopItem`]s from every rasterizer, merged by (arrival, port): lembo
 //! [`FragmentSpan`]s, or [`TrianglePiece`]s in the triangle path. For each fragment: its
 //! depth (from the lembo's depth quadratic, or the triangle's plane), the depth test on
 //! (z, id) (the winner does not depend on arrival order), and for a fragment that passes,
-//! Phong shading (paper 000 equation 6) and the write. Output: one [`WriteBurst`] per item
+//! Phong shading (Piranda et al. 2006 equation 6) and the write. Output: one [`WriteBurst`] per item
 //! to the frame-buffer memory port: depth reads for every fragment tested, colour and depth
 //! writes for every fragment that passed.
 //!
@@ -35,7 +35,7 @@ use crate::rop::FrameBuffer;
 /// (tx + ty) mod Np, so neighbouring tiles, along rows and columns, go to different ROPs.
 #[derive(Clone, Debug)]
 pub struct RopTiles {
-    /// Tile side [pixels].
+    /// Tile side \[pixels\].
     pub tile_px: u32,
     /// Tiles per row.
     pub tiles_x: u32,
@@ -193,7 +193,7 @@ pub enum RopItem<R> {
     Triangle(TrianglePiece<R>),
 }
 
-/// Frame-buffer traffic of one span [bytes].
+/// Frame-buffer traffic of one span \[bytes\].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct WriteBurst {
     pub bytes: u64,

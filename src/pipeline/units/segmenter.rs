@@ -1,4 +1,4 @@
-//! Segmenter (paper 001 section 5.2): walks one interval of the curve Y(u, v) = y_j in
+//! Segmenter (Martinelli 2006 section 5.2): walks one interval of the curve Y(u, v) = y_j in
 //! chords whose midpoint error is exactly k, solving the paper's 2x2 system per step.
 //!
 //! Input: [`ScanInterval`] from the IntervalManager. Output: one [`ScanSegment`] per chord,

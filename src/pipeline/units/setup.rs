@@ -1,4 +1,4 @@
-//! Setup (paper 001 section 4, Figure 5's first unit): projects a lembo's six reference
+//! Setup (Martinelli 2006 section 4, Figure 5's first unit): projects a lembo's six reference
 //! points, rebuilds the screen-space coefficients of x, y and depth with the paper's linear
 //! transform, and culls lembos outside the viewport or behind the eye (one cull test each).
 //!

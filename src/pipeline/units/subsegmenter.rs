@@ -1,4 +1,4 @@
-//! Subsegmenter (paper 001 section 5.3): splits a segment where x(t) folds and into equal
+//! Subsegmenter (Martinelli 2006 section 5.3): splits a segment where x(t) folds and into equal
 //! steps no longer than dt, so that x is linear within k along each subsegment.
 //!
 //! Input: [`ScanSegment`] from the segmenters, merged by (arrival, port). Output: one

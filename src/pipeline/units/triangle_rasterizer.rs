@@ -1,4 +1,4 @@
-//! TriangleRasterizer (the triangle path, DESIGN §5): tests 2x2 quads against the integer
+//! TriangleRasterizer (the triangle path, DESIGN.md §5): tests 2x2 quads against the integer
 //! edge functions with the top-left fill rule.
 //!
 //! Input: set-up triangles from TriangleSetup (round-robin). Output: [`TrianglePiece`]s,

@@ -1,4 +1,4 @@
-//! TriangleSetup (the triangle path, DESIGN §5): projects a triangle's three vertices,
+//! TriangleSetup (the triangle path, DESIGN.md §5): projects a triangle's three vertices,
 //! clips it in clip space to the near and far planes when it crosses one, and to the guard
 //! band when a vertex (of what is left) is beyond the 16.8 range, snaps the vertices to 16.8
 //! fixed point, sets up the integer edge functions and the perspective-correct attribute
