@@ -266,14 +266,14 @@ pub struct DiscoidTarget {
     pub accum: Vec<Accum>,
     pub exact: Vec<ExactAccum>,
     /// Fragments kept by the accumulation pass, blended in order at its end.
-    pub pending: Vec<Pending>,
+    pub kept: Vec<KeptFragment>,
     pub report: BlendReport,
 }
 
 /// A fragment the accumulation pass keeps: pixel, primitive id, texture coordinates (the
 /// order within a primitive) and what it blends.
 #[derive(Clone, Copy, Debug)]
-pub struct Pending {
+pub struct KeptFragment {
     pub idx: u32,
     pub id: u32,
     pub st: [u64; 2],
@@ -291,7 +291,7 @@ impl DiscoidTarget {
             winner: vec![NO_PRIMITIVE; n],
             accum: vec![Accum::default(); n],
             exact: vec![ExactAccum::default(); n],
-            pending: Vec::new(),
+            kept: Vec::new(),
             report: BlendReport {
                 mode: mode.name().to_string(),
                 bytes_per_fragment: mode.bytes_per_fragment(),
@@ -306,7 +306,7 @@ impl DiscoidTarget {
 impl DiscoidTarget {
     /// Blends the pending fragments, pixel by pixel in primitive order.
     pub fn blend_in_order(&mut self) {
-        let mut pending = std::mem::take(&mut self.pending);
+        let mut pending = std::mem::take(&mut self.kept);
         pending.sort_unstable_by_key(|p| (p.idx, p.id, p.st));
         for p in &pending {
             let idx = p.idx as usize;
@@ -436,7 +436,7 @@ pub fn process<R: Real>(
                 depth,
                 winner,
             ) {
-                target.pending.push(Pending {
+                target.kept.push(KeptFragment {
                     idx: idx as u32,
                     id: f.id,
                     st: f.st.map(f64::to_bits),

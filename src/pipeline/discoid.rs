@@ -109,7 +109,7 @@ fn passes<R: Real>(
     target.depth = depth;
     target.winner = winner;
     if let Some((pending, counters)) = second.discoid {
-        target.pending = pending;
+        target.kept = pending;
         let r = &mut target.report;
         r.culled_backface = counters.culled_backface;
         r.discarded_beta_zero = counters.discarded_beta_zero;

@@ -35,7 +35,7 @@ use crate::camera::View;
 use crate::config::{ArchConfig, LinkConfig};
 use crate::datapath::{Datapath, Real};
 use crate::discoid::blend::BlendMode;
-use crate::discoid::render::{BlendReport, DiscoidTable, Pass, Pending};
+use crate::discoid::render::{BlendReport, DiscoidTable, KeptFragment, Pass};
 use crate::error::{Error, Result};
 use crate::raster::setup::ScreenLembo;
 use crate::raster::triangle::{ScreenTriangle, TriangleSource};
@@ -101,7 +101,7 @@ pub struct TimedFrame {
     /// Chrome trace-event JSON, when requested.
     pub trace: Option<String>,
     /// An accumulation pass's kept fragments and counters, over all ROPs.
-    pub discoid: Option<(Vec<Pending>, BlendReport)>,
+    pub discoid: Option<(Vec<KeptFragment>, BlendReport)>,
     /// How often the executor needed a recovery (host statistics).
     pub recoveries: Recoveries,
 }
@@ -164,7 +164,7 @@ pub struct Finished {
     pub error: Option<Error>,
     /// A ROP's accumulation-pass output in a discoid pass: the fragments it kept and its
     /// counters.
-    pub discoid: Option<(Vec<Pending>, BlendReport)>,
+    pub discoid: Option<(Vec<KeptFragment>, BlendReport)>,
 }
 
 impl Finished {
@@ -826,7 +826,7 @@ fn finish(
         bottleneck,
         units: unit_cycles,
     };
-    let mut discoid: Option<(Vec<Pending>, BlendReport)> = None;
+    let mut discoid: Option<(Vec<KeptFragment>, BlendReport)> = None;
     for (_, f) in &mut results {
         if let Some((pending, report)) = f.discoid.take() {
             let (all, sum) = discoid.get_or_insert_with(Default::default);

@@ -22,7 +22,7 @@ use crate::config::BlendConfig;
 use crate::datapath::Real;
 use crate::discoid::blend::BlendMode;
 use crate::discoid::render::{
-    accumulation_keeps, depth_pass_wins, evaluate, BlendReport, DiscoidFragment, Pass, Pending,
+    accumulation_keeps, depth_pass_wins, evaluate, BlendReport, DiscoidFragment, KeptFragment, Pass,
 };
 use crate::pipeline::runtime::{ceil_div, Ctx};
 use crate::pipeline::{DiscoidPass, Finished, Shared};
@@ -208,7 +208,7 @@ fn discoid_fragment<R: Real>(
     sh: &Shared<'_, R>,
     shader: &FragmentShader<R>,
     pixels: &mut RopPixels,
-    kept: &mut (Vec<Pending>, BlendReport),
+    kept: &mut (Vec<KeptFragment>, BlendReport),
     idx: usize,
     f: &DiscoidFragment<R>,
 ) -> bool {
@@ -233,7 +233,7 @@ fn discoid_fragment<R: Real>(
                 winner,
             ) {
                 Some(input) => {
-                    kept.0.push(Pending {
+                    kept.0.push(KeptFragment {
                         idx: idx as u32,
                         id: f.id,
                         st: f.st.map(f64::to_bits),
