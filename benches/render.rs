@@ -15,7 +15,7 @@ use lembo_sim::discoid::render::render_discoids_functional;
 use lembo_sim::job::render_reference;
 use lembo_sim::lembo::tessellate::Tessellation;
 use lembo_sim::pipeline::discoid::run_discoid_timed;
-use lembo_sim::pipeline::{run_timed, SimOptions};
+use lembo_sim::pipeline::{run_timed, SimOptions, Source};
 use lembo_sim::raster::{
     self, fragment, interval, minmax, segmenter, setup, subsegmenter, triangle, Counts,
 };
@@ -254,7 +254,18 @@ fn timed_vs_functional(c: &mut Criterion) {
                 ..SimOptions::default()
             };
             g.bench_function(format!("timed_baseline_{threads}t/{name}/1024"), |b| {
-                b.iter(|| run_timed(&s, &view, 0.5, Datapath::F32, &arch, None, &options).unwrap())
+                b.iter(|| {
+                    run_timed(
+                        &s,
+                        &view,
+                        0.5,
+                        Datapath::F32,
+                        &arch,
+                        Source::Lembos,
+                        &options,
+                    )
+                    .unwrap()
+                })
             });
         }
     }
@@ -279,7 +290,18 @@ fn triangle_path(c: &mut Criterion) {
     let (arch, options) = (ArchConfig::baseline(), SimOptions::default());
     g.throughput(Throughput::Elements(t.len()));
     g.bench_function("timed_baseline/bunny/1024/1", |b| {
-        b.iter(|| run_timed(&s, &view, 0.5, Datapath::F32, &arch, Some(&t), &options).unwrap())
+        b.iter(|| {
+            run_timed(
+                &s,
+                &view,
+                0.5,
+                Datapath::F32,
+                &arch,
+                Source::Triangles(&t),
+                &options,
+            )
+            .unwrap()
+        })
     });
     g.finish();
 }
@@ -331,7 +353,20 @@ fn scope_and_extremes(c: &mut Criterion) {
         });
         g.bench_function(
             format!("timed_baseline/sphere24+{copies}_offscreen/512"),
-            |b| b.iter(|| run_timed(&s, &view, 0.5, Datapath::F32, &arch, None, &options).unwrap()),
+            |b| {
+                b.iter(|| {
+                    run_timed(
+                        &s,
+                        &view,
+                        0.5,
+                        Datapath::F32,
+                        &arch,
+                        Source::Lembos,
+                        &options,
+                    )
+                    .unwrap()
+                })
+            },
         );
     }
     let s = scenes::trace("extremes/huge_curved.json", None);

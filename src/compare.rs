@@ -22,7 +22,7 @@ use crate::discoid::blend::BlendMode;
 use crate::error::{Error, Result};
 use crate::job::{
     self, check_tess_range, check_triangle_budget, load_arch, render_reference, run_path, Mode,
-    PrimitivePath, RenderJob, MAX_TRIANGLES,
+    Model, PathRun, PrimitivePath, RenderJob, MAX_TRIANGLES,
 };
 use crate::lembo::tessellate::Tessellation;
 use crate::output::write_files;
@@ -249,23 +249,7 @@ pub fn run_compare(job: &CompareJob) -> Result<CompareOutput> {
     let view = View::new(&scene.camera, scene.viewport);
     let arch = load_arch(&lembo_job)?;
     if let Some(a) = &arch {
-        // Refused before any work: each path's run needs a unit per host thread.
-        let units = [
-            crate::pipeline::Path::Lembo,
-            crate::pipeline::Path::Triangle,
-        ]
-        .map(|p| crate::pipeline::graph::units(p, a).len())
-        .into_iter()
-        .min()
-        .unwrap_or(1);
-        if job.host_threads as usize > units {
-            return Err(Error::invalid(
-                job::COMMAND_LINE,
-                "--host-threads",
-                job.host_threads,
-                format!("more than the {units} units of the smaller path's pipeline (each host thread runs at least one)"),
-            ));
-        }
+        check_host_threads(job, a)?;
     }
     let (reference, reference_wall) = render_reference(&scene, &view, job.supersample);
 
@@ -273,7 +257,7 @@ pub fn run_compare(job: &CompareJob) -> Result<CompareOutput> {
         &lembo_job,
         &scene,
         &view,
-        arch.as_ref(),
+        Model::new(arch.as_ref()),
         Some((&reference, reference_wall)),
     )?;
     let lembo_accuracy = lembo.report.accuracy.clone().expect("measured");
@@ -298,7 +282,7 @@ pub fn run_compare(job: &CompareJob) -> Result<CompareOutput> {
         &triangle_job,
         &scene,
         &view,
-        arch.as_ref(),
+        Model::new(arch.as_ref()),
         Some((&reference, reference_wall)),
     )?;
 
@@ -307,11 +291,57 @@ pub fn run_compare(job: &CompareJob) -> Result<CompareOutput> {
         schema_version: COMPARE_SCHEMA_VERSION,
         tess: choice,
         ratios,
-        lembo: lembo.report,
-        triangle: triangle.report,
+        lembo: lembo.report.clone(),
+        triangle: triangle.report.clone(),
     };
     let table = table(&report);
 
+    let files = images(job, &report, &table, &reference, &lembo, &triangle);
+    let dir = job
+        .out
+        .clone()
+        .unwrap_or_else(|| Path::new("out").join(&scene.name).join("compare"));
+    write_files(&dir, &files)?;
+    Ok(CompareOutput {
+        report,
+        table,
+        dir,
+        files: files.iter().map(|(n, _)| n.to_string()).collect(),
+    })
+}
+
+/// `--host-threads` is refused before any work when it exceeds the units of the smaller
+/// path's pipeline: each host thread runs at least one unit.
+fn check_host_threads(job: &CompareJob, arch: &ArchConfig) -> Result<()> {
+    let units = [
+        crate::pipeline::Path::Lembo,
+        crate::pipeline::Path::Triangle,
+    ]
+    .map(|p| crate::pipeline::graph::units(p, arch).len())
+    .into_iter()
+    .min()
+    .unwrap_or(1);
+    if job.host_threads as usize > units {
+        return Err(Error::invalid(
+            job::COMMAND_LINE,
+            "--host-threads",
+            job.host_threads,
+            format!("more than the {units} units of the smaller path's pipeline (each host thread runs at least one)"),
+        ));
+    }
+    Ok(())
+}
+
+/// The files of a compare: each path's image and error map, the reference, the labelled
+/// montage of all five, `compare.json` and `compare.txt`.
+fn images(
+    job: &CompareJob,
+    report: &CompareReport,
+    table: &str,
+    reference: &ReferenceImage,
+    lembo: &PathRun,
+    triangle: &PathRun,
+) -> Vec<(&'static str, Vec<u8>)> {
     let reference_image = reference
         .to_image_supersampled()
         .unwrap_or_else(|| reference.to_image());
@@ -320,8 +350,8 @@ pub fn run_compare(job: &CompareJob) -> Result<CompareOutput> {
         triangle.framebuffer.to_image(),
     );
     let (lembo_error, triangle_error) = (
-        lembo.error_map.expect("measured"),
-        triangle.error_map.expect("measured"),
+        lembo.error_map.as_ref().expect("measured"),
+        triangle.error_map.as_ref().expect("measured"),
     );
     let cycles = |r: &Report| {
         r.cycles
@@ -361,8 +391,8 @@ pub fn run_compare(job: &CompareJob) -> Result<CompareOutput> {
         &lembo_image,
         &triangle_image,
         &reference_image,
-        &lembo_error,
-        &triangle_error,
+        lembo_error,
+        triangle_error,
     ];
     let panels: Vec<Panel> = labels
         .iter()
@@ -371,30 +401,19 @@ pub fn run_compare(job: &CompareJob) -> Result<CompareOutput> {
         .collect();
     let montage_image = montage(&panels);
 
-    let files: Vec<(&str, Vec<u8>)> = vec![
+    vec![
         ("lembo.png", png_bytes(&lembo_image)),
         ("triangle.png", png_bytes(&triangle_image)),
         ("reference.png", png_bytes(&reference_image)),
-        ("lembo_error.png", png_bytes(&lembo_error)),
-        ("triangle_error.png", png_bytes(&triangle_error)),
+        ("lembo_error.png", png_bytes(lembo_error)),
+        ("triangle_error.png", png_bytes(triangle_error)),
         ("montage.png", png_bytes(&montage_image)),
         (
             "compare.json",
             serde_json::to_vec_pretty(&report).expect("the report serialises"),
         ),
-        ("compare.txt", table.clone().into_bytes()),
-    ];
-    let dir = job
-        .out
-        .clone()
-        .unwrap_or_else(|| Path::new("out").join(&scene.name).join("compare"));
-    write_files(&dir, &files)?;
-    Ok(CompareOutput {
-        report,
-        table,
-        dir,
-        files: files.iter().map(|(n, _)| n.to_string()).collect(),
-    })
+        ("compare.txt", table.as_bytes().to_vec()),
+    ]
 }
 
 fn ratios(arch: Option<&ArchConfig>, lembo: &Report, triangle: &Report) -> Option<Ratios> {

@@ -12,9 +12,8 @@ use crate::error::{Error, Result};
 use crate::lembo::tessellate::Tessellation;
 use crate::lembo::Lembo;
 use crate::output::write_paths;
-use crate::pipeline::{self, SimOptions};
+use crate::pipeline::{self, SimOptions, Source};
 use crate::raster;
-use crate::raster::triangle::TriangleSource;
 use crate::raster::{PerspectiveTol, Tolerance};
 use crate::reference::oracle::ReferenceImage;
 use crate::reference::{heatmap, metrics, oracle, see_through, Accuracy};
@@ -292,9 +291,62 @@ pub fn load_arch(job: &RenderJob) -> Result<Option<ArchConfig>> {
 /// Bytes of one lembo as the Setup unit reads it: six points and six normals in f32.
 pub const LEMBO_BYTES: u64 = 6 * 2 * 3 * 4;
 
+/// Which model a run is simulated on.
+#[derive(Clone, Copy, Debug)]
+pub enum Model<'a> {
+    /// The functional model alone: the image and its counts, no cycles.
+    Functional,
+    /// The timed pipeline of this architecture (the image is checked against the
+    /// functional model's wherever both ran).
+    Timed(&'a ArchConfig),
+}
+
+impl<'a> Model<'a> {
+    /// The model of a job whose architecture [`load_arch`] gave: timed when there is one.
+    pub fn new(arch: Option<&'a ArchConfig>) -> Self {
+        arch.map_or(Model::Functional, Model::Timed)
+    }
+
+    /// The architecture, for a timed run.
+    pub fn arch(self) -> Option<&'a ArchConfig> {
+        match self {
+            Model::Functional => None,
+            Model::Timed(arch) => Some(arch),
+        }
+    }
+}
+
+/// What a scene is drawn as: decided once, from the scene and `--path`.
+pub enum Route<'s> {
+    /// Its lembos, by the extreme method.
+    Lembos,
+    /// Its lembos tessellated into triangles, rasterized as a GPU does.
+    Triangles(Tessellation<'s>),
+    /// Its atlas of discoids, in three passes through the ROPs' blend units.
+    Discoids,
+}
+
+impl<'s> Route<'s> {
+    /// The route of `job` on `scene`; a tessellation must stay within [`MAX_TRIANGLES`].
+    pub fn new(job: &RenderJob, scene: &'s Scene) -> Result<Self> {
+        if scene.discoid_count() > 0 {
+            return Ok(Route::Discoids);
+        }
+        Ok(match job.path {
+            PrimitivePath::Lembo => Route::Lembos,
+            PrimitivePath::Triangle => {
+                let level = job.tess.unwrap_or(1);
+                check_triangle_budget(scene, level)?;
+                Route::Triangles(Tessellation::new(scene, level))
+            }
+        })
+    }
+}
+
 /// One path's run on a loaded scene: what `render` writes, and what `compare` puts side by
 /// side.
 pub struct PathRun {
+    /// The run's report.
     pub report: Report,
     /// The image (the timed pipeline's, or the functional model's).
     pub framebuffer: FrameBuffer,
@@ -304,18 +356,18 @@ pub struct PathRun {
     pub trace: Option<String>,
 }
 
-/// Runs `job`'s path on `scene`: the timed pipeline of `arch` (functional model when None),
-/// and with a `reference` (and the wall time it took) the accuracy metrics, from the
-/// functional model's fragment probe; the timed image must equal the functional one bit
-/// for bit, and this is checked on every such run.
+/// Runs `job`'s path on `scene` on `model`, and with a `reference` (and the wall time it
+/// took) the accuracy metrics, from the functional model's fragment probe; the timed image
+/// must equal the functional one bit for bit, and this is checked on every such run.
 pub fn run_path(
     job: &RenderJob,
     scene: &Scene,
     view: &View,
-    arch: Option<&ArchConfig>,
+    model: Model,
     reference: Option<(&ReferenceImage, f64)>,
 ) -> Result<PathRun> {
-    if scene.discoid_count() > 0 {
+    let route = Route::new(job, scene)?;
+    if let Route::Discoids = route {
         if reference.is_some() {
             return Err(Error::invalid(
                 COMMAND_LINE,
@@ -324,151 +376,205 @@ pub fn run_path(
                 "the exact reference renders lembo surfaces; a discoid scene's error is measured against an f64 accumulation of its fragments (report.json blend)",
             ));
         }
-        return run_discoids(job, scene, view, arch);
+        return run_discoids(job, scene, view, model);
     }
-    let tess_level = job.tess.unwrap_or(1);
-    let tessellation = match job.path {
-        PrimitivePath::Lembo => None,
-        PrimitivePath::Triangle => {
-            check_triangle_budget(scene, tess_level)?;
-            Some(Tessellation::new(scene, tess_level))
-        }
-    };
-    let functional = |analyse: bool| -> Result<raster::Frame> {
-        match &tessellation {
-            None => raster::render_functional(scene, view, job.tolerance(), job.datapath, analyse),
-            Some(t) => Ok(raster::render_functional_triangles(
-                scene,
-                view,
-                t,
-                job.datapath,
-                analyse,
-            )),
-        }
-    };
-    let analyse = reference.is_some();
-
     let t0 = Instant::now();
-    let mut timed = None;
-    let mut frame = None;
-    match arch {
-        Some(arch) => {
-            let path = match job.path {
-                PrimitivePath::Lembo => pipeline::Path::Lembo,
-                PrimitivePath::Triangle => pipeline::Path::Triangle,
-            };
-            let options = sim_options(job, arch, path)?;
-            timed = Some(pipeline::run_timed(
-                scene,
-                view,
-                job.tolerance(),
-                job.datapath,
-                arch,
-                tessellation.as_ref().map(|t| t as &dyn TriangleSource),
-                &options,
-            )?);
-        }
-        None => frame = Some(functional(analyse)?),
-    }
+    let drawn = draw(job, scene, view, model, &route, reference.is_some())?;
     let wall = t0.elapsed().as_secs_f64();
-    if analyse && frame.is_none() {
-        frame = Some(functional(true)?);
-    }
-    if let (Some(t), Some(f)) = (&timed, &frame) {
-        if t.framebuffer.color != f.framebuffer.color {
-            return Err(Error::Internal(
-                "the timed image differs from the functional one".into(),
-            ));
-        }
-    }
-    let counts = match (&timed, &frame) {
-        (Some(t), _) => t.counts,
-        (None, Some(f)) => f.counts,
-        (None, None) => unreachable!("one model ran"),
+    let measured = match (reference, drawn.probed()) {
+        (Some(reference), Some(frame)) => Some(measure(job, scene, view, &route, frame, reference)),
+        _ => None,
     };
-
-    let mut accuracy = None;
-    let mut error_map = None;
-    let mut reference_wall = None;
-    let mut metrics_wall = None;
-    if let (Some((reference, wall)), Some(frame)) = (reference, frame.as_ref()) {
-        let t1 = Instant::now();
-        let ids_per_lembo = tessellation.as_ref().map_or(1, |t| t.triangles_per_lembo());
-        accuracy = Some(measure_frame(
-            scene,
-            view,
-            frame,
-            reference,
-            job.path,
-            ids_per_lembo,
-        ));
-        metrics_wall = Some(t1.elapsed().as_secs_f64());
-        error_map = Some(heatmap::error_heatmap(&frame.framebuffer, reference));
-        reference_wall = Some(wall + t1.elapsed().as_secs_f64());
-    }
-
-    let lembos = scene.lembo_count() as u64;
-    let primitives = match &tessellation {
-        None => Primitives {
-            kind: "lembo".into(),
-            count: lembos,
-            vertices: 6 * lembos,
-            bytes: LEMBO_BYTES * lembos,
-            quad_efficiency: None,
-        },
-        Some(t) => Primitives {
+    let counts = drawn.counts();
+    let primitives = match &route {
+        Route::Triangles(t) => Primitives {
             kind: "triangle".into(),
             count: t.len(),
             vertices: t.vertex_count(),
             bytes: t.bytes(),
             quad_efficiency: counts.quad_efficiency(),
         },
+        _ => {
+            let lembos = scene.lembo_count() as u64;
+            Primitives {
+                kind: "lembo".into(),
+                count: lembos,
+                vertices: 6 * lembos,
+                bytes: LEMBO_BYTES * lembos,
+                quad_efficiency: None,
+            }
+        }
     };
-    let units = timed.as_ref().map(|t| t.units.clone()).unwrap_or_default();
+    let (framebuffer, units, cycles, trace) = match drawn {
+        Drawn::Functional(f) => (f.framebuffer, Vec::new(), None, None),
+        Drawn::Timed { timed, .. } => (
+            timed.framebuffer,
+            timed.units,
+            Some(timed.cycles),
+            timed.trace,
+        ),
+    };
     let memory = Memory::new(
         FrameBuffer::stored_bytes(scene.viewport.width, scene.viewport.height),
         0,
         primitives.bytes,
-        arch.map(|a| pipeline::fifo_entries(a, &units)),
+        model.arch().map(|a| pipeline::fifo_entries(a, &units)),
     );
+    let tess = match &route {
+        Route::Triangles(t) => Some(t.level()),
+        _ => None,
+    };
     let report = Report {
         schema_version: SCHEMA_VERSION,
         scene: scene_info(scene),
         settings: settings(
             job,
-            arch,
+            model,
             job.path.name(),
             (job.path == PrimitivePath::Lembo).then_some(job.k),
-            tessellation.as_ref().map(|t| t.level()),
+            tess,
             reference.is_some(),
         ),
         primitives,
         units,
         counts,
-        cycles: timed.as_ref().map(|t| t.cycles.clone()),
-        arch: arch.cloned(),
-        accuracy,
-        blend: None,
-        memory,
         host: host(
             wall,
             counts.fragments,
-            timed.as_ref().map(|t| (t.cycles.total, job.host_threads)),
-            reference_wall,
-            metrics_wall,
+            cycles.as_ref().map(|c| (c.total, job.host_threads)),
+            measured.as_ref().map(|m| m.reference_wall),
+            measured.as_ref().map(|m| m.metrics_wall),
         ),
-    };
-    let (framebuffer, trace) = match (timed, frame) {
-        (Some(t), _) => (t.framebuffer, t.trace),
-        (None, Some(f)) => (f.framebuffer, None),
-        (None, None) => unreachable!("one model ran"),
+        cycles,
+        arch: model.arch().cloned(),
+        accuracy: measured.as_ref().map(|m| m.accuracy.clone()),
+        blend: None,
+        memory,
     };
     Ok(PathRun {
         report,
         framebuffer,
-        error_map,
+        error_map: measured.map(|m| m.error_map),
         trace,
     })
+}
+
+/// A surface path's image with what each model contributed.
+enum Drawn {
+    /// The functional model alone (with its probe when the run is measured).
+    Functional(raster::Frame),
+    /// The timed pipeline; for a measured run also the functional model's probed frame.
+    Timed {
+        timed: pipeline::TimedFrame,
+        probed: Option<raster::Frame>,
+    },
+}
+
+impl Drawn {
+    /// The functional frame carrying the fragment probe, when the run is measured.
+    fn probed(&self) -> Option<&raster::Frame> {
+        match self {
+            Drawn::Functional(f) => Some(f),
+            Drawn::Timed { probed, .. } => probed.as_ref(),
+        }
+    }
+
+    /// The counts of the model that made the image.
+    fn counts(&self) -> raster::Counts {
+        match self {
+            Drawn::Functional(f) => f.counts,
+            Drawn::Timed { timed, .. } => timed.counts,
+        }
+    }
+}
+
+/// Draws a lembo or triangle `route` on `model`; with `analyse`, the functional model also
+/// runs with its probe (timed runs check their image against it).
+fn draw(
+    job: &RenderJob,
+    scene: &Scene,
+    view: &View,
+    model: Model,
+    route: &Route,
+    analyse: bool,
+) -> Result<Drawn> {
+    let functional = |analyse: bool| -> Result<raster::Frame> {
+        match route {
+            Route::Triangles(t) => Ok(raster::render_functional_triangles(
+                scene,
+                view,
+                t,
+                job.datapath,
+                analyse,
+            )),
+            _ => raster::render_functional(scene, view, job.tolerance(), job.datapath, analyse),
+        }
+    };
+    let arch = match model {
+        Model::Functional => return Ok(Drawn::Functional(functional(analyse)?)),
+        Model::Timed(arch) => arch,
+    };
+    let (path, source) = match route {
+        Route::Triangles(t) => (pipeline::Path::Triangle, Source::Triangles(t)),
+        _ => (pipeline::Path::Lembo, Source::Lembos),
+    };
+    let options = sim_options(job, arch, path)?;
+    let timed = pipeline::run_timed(
+        scene,
+        view,
+        job.tolerance(),
+        job.datapath,
+        arch,
+        source,
+        &options,
+    )?;
+    let probed = if analyse {
+        let frame = functional(true)?;
+        if timed.framebuffer.color != frame.framebuffer.color {
+            return Err(Error::Internal(
+                "the timed image differs from the functional one".into(),
+            ));
+        }
+        Some(frame)
+    } else {
+        None
+    };
+    Ok(Drawn::Timed { timed, probed })
+}
+
+/// A measured run's accuracy, error map and the wall time the measuring took.
+struct Measured {
+    accuracy: Accuracy,
+    error_map: image::RgbImage,
+    /// The reference's wall time plus the metrics' \[seconds\].
+    reference_wall: f64,
+    /// The metrics' wall time \[seconds\].
+    metrics_wall: f64,
+}
+
+/// Measures `frame` (probed) against `reference` (with the wall time it took).
+fn measure(
+    job: &RenderJob,
+    scene: &Scene,
+    view: &View,
+    route: &Route,
+    frame: &raster::Frame,
+    (reference, wall): (&ReferenceImage, f64),
+) -> Measured {
+    let t1 = Instant::now();
+    let ids_per_lembo = match route {
+        Route::Triangles(t) => t.triangles_per_lembo(),
+        _ => 1,
+    };
+    let accuracy = measure_frame(scene, view, frame, reference, job.path, ids_per_lembo);
+    let metrics_wall = t1.elapsed().as_secs_f64();
+    let error_map = heatmap::error_heatmap(&frame.framebuffer, reference);
+    Measured {
+        accuracy,
+        error_map,
+        reference_wall: wall + t1.elapsed().as_secs_f64(),
+        metrics_wall,
+    }
 }
 
 /// The accuracy of `frame` (rendered with `analyse`) of `scene` against its `reference`:
@@ -545,7 +651,7 @@ fn scene_info(scene: &Scene) -> SceneInfo {
 /// The settings section of a report.
 fn settings(
     job: &RenderJob,
-    arch: Option<&ArchConfig>,
+    model: Model,
     path: &str,
     k_px: Option<f64>,
     tess: Option<u32>,
@@ -556,12 +662,12 @@ fn settings(
         None => PerspectiveSetting::Off("off"),
     });
     Settings {
-        mode: match job.mode {
-            Mode::Timed => "timed",
-            Mode::Functional => "functional",
+        mode: match model {
+            Model::Timed(_) => "timed",
+            Model::Functional => "functional",
         }
         .into(),
-        arch_file: arch.map(|_| {
+        arch_file: model.arch().map(|_| {
             job.arch
                 .as_ref()
                 .map(|p| p.display().to_string())
@@ -626,16 +732,11 @@ pub const CURVED_DISCOID_BYTES: u64 = LEMBO_BYTES + 6 * 2 * 4;
 
 /// A discoid scene's three passes (Piranda et al. 2006): timed on `arch`, or functional. With both,
 /// the timed image is checked against the functional one.
-fn run_discoids(
-    job: &RenderJob,
-    scene: &Scene,
-    view: &View,
-    arch: Option<&ArchConfig>,
-) -> Result<PathRun> {
+fn run_discoids(job: &RenderJob, scene: &Scene, view: &View, model: Model) -> Result<PathRun> {
     let threshold = job.threshold.unwrap_or(scene.discoid_threshold);
     let t0 = Instant::now();
-    let (framebuffer, counts, blend, units, cycles) = match arch {
-        Some(arch) => {
+    let (framebuffer, counts, blend, units, cycles) = match model {
+        Model::Timed(arch) => {
             let t = pipeline::discoid::run_discoid_timed(
                 scene,
                 view,
@@ -656,7 +757,7 @@ fn run_discoids(
             )?;
             (t.framebuffer, t.counts, t.blend, t.units, Some(t.cycles))
         }
-        None => {
+        Model::Functional => {
             let f = discoid::render::render_discoids_functional(
                 scene,
                 view,
@@ -684,14 +785,14 @@ fn run_discoids(
         FrameBuffer::stored_bytes(scene.viewport.width, scene.viewport.height),
         blend.accumulation_buffer_bytes,
         primitive_bytes,
-        arch.map(|a| pipeline::fifo_entries(a, &units)),
+        model.arch().map(|a| pipeline::fifo_entries(a, &units)),
     );
     let report = Report {
         schema_version: SCHEMA_VERSION,
         scene: scene_info(scene),
         settings: settings(
             job,
-            arch,
+            model,
             "discoid",
             (curved > 0).then_some(job.k),
             None,
@@ -707,7 +808,7 @@ fn run_discoids(
         units,
         counts,
         cycles: cycles.clone(),
-        arch: arch.cloned(),
+        arch: model.arch().cloned(),
         accuracy: None,
         blend: Some(blend),
         memory,
@@ -743,7 +844,7 @@ pub fn run_render(job: &RenderJob) -> Result<RenderOutput> {
         job,
         &scene,
         &view,
-        arch.as_ref(),
+        Model::new(arch.as_ref()),
         reference.as_ref().map(|(r, w)| (r, *w)),
     )?;
 

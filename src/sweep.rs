@@ -931,7 +931,7 @@ impl Plan {
             job,
             &self.scenes[run.scene],
             &self.views[run.scene],
-            self.archs[run.point].as_ref(),
+            crate::job::Model::new(self.archs[run.point].as_ref()),
             reference,
         )?;
         out.report.scene.source = self.spec.scenes[run.scene].clone();

@@ -24,8 +24,7 @@ use lembo_sim::datapath::Datapath;
 use lembo_sim::discoid::blend::BlendMode;
 use lembo_sim::lembo::tessellate::Tessellation;
 use lembo_sim::pipeline::discoid::run_discoid_timed;
-use lembo_sim::pipeline::{run_timed, CycleReport, SimOptions};
-use lembo_sim::raster::triangle::TriangleSource;
+use lembo_sim::pipeline::{run_timed, CycleReport, SimOptions, Source};
 use lembo_sim::raster::Counts;
 use lembo_sim::scene::Scene;
 use proptest::prelude::*;
@@ -89,7 +88,9 @@ fn run_with(scene: &Scene, a: &ArchConfig, triangles: bool, options: &SimOptions
         };
     }
     let tess = triangles.then(|| Tessellation::new(scene, 2));
-    let source = tess.as_ref().map(|t| t as &dyn TriangleSource);
+    let source = tess
+        .as_ref()
+        .map_or(Source::Lembos, |t| Source::Triangles(t));
     match run_timed(scene, &view, 0.5, Datapath::F32, a, source, options) {
         Ok(t) => digest(&t.cycles, &t.counts),
         Err(e) => format!("error: {e}"),

@@ -9,7 +9,7 @@ use lembo_sim::camera::View;
 use lembo_sim::config::ArchConfig;
 use lembo_sim::datapath::Datapath;
 use lembo_sim::discoid::blend::BlendMode;
-use lembo_sim::job::{render_reference, run_path, Mode, PathRun, PrimitivePath, RenderJob};
+use lembo_sim::job::{render_reference, run_path, Mode, Model, PathRun, PrimitivePath, RenderJob};
 use lembo_sim::reference::oracle::ReferenceImage;
 use lembo_sim::scene::Scene;
 use serde_json::Value;
@@ -134,7 +134,7 @@ fn run_scene(file: &str, expect: &Value) {
             Ok(scene) => {
                 let view = View::new(&scene.camera, scene.viewport);
                 let j = job(PrimitivePath::Lembo, Datapath::F32, k, Mode::Functional);
-                match run_path(&j, &scene, &view, None, None) {
+                match run_path(&j, &scene, &view, Model::Functional, None) {
                     Ok(_) => panic!("{file}: rendered, expected a refusal with {needle:?}"),
                     Err(e) => e.to_string(),
                 }
@@ -157,7 +157,7 @@ fn run_scene(file: &str, expect: &Value) {
             ] {
                 let mut j = job(PrimitivePath::Lembo, datapath, k, Mode::Functional);
                 j.blend = blend;
-                let run = run_path(&j, &scene, &view, None, None)
+                let run = run_path(&j, &scene, &view, Model::Functional, None)
                     .unwrap_or_else(|e| panic!("{file}: {e}"));
                 let b = run.report.blend.as_ref().expect("blend section");
                 let bound = num(d, key).unwrap_or_else(|| panic!("{file}: {key}")) as u64;
@@ -171,7 +171,7 @@ fn run_scene(file: &str, expect: &Value) {
             }
         }
         let j = job(PrimitivePath::Lembo, Datapath::F32, k, Mode::Timed);
-        let run = run_path(&j, &scene, &view, Some(&baseline), None)
+        let run = run_path(&j, &scene, &view, Model::Timed(&baseline), None)
             .unwrap_or_else(|e| panic!("{file} timed: {e}"));
         assert!(run.report.cycles.is_some(), "{file}: timed run has cycles");
         return;
@@ -188,16 +188,28 @@ fn run_scene(file: &str, expect: &Value) {
         for datapath in [Datapath::F32, Datapath::F64] {
             let what = format!("{file} {key} {}", datapath.name());
             let j = job(path, datapath, k, Mode::Functional);
-            let run = run_path(&j, &scene, &view, None, Some((&reference, wall)))
-                .unwrap_or_else(|e| panic!("{what}: {e}"));
+            let run = run_path(
+                &j,
+                &scene,
+                &view,
+                Model::Functional,
+                Some((&reference, wall)),
+            )
+            .unwrap_or_else(|e| panic!("{what}: {e}"));
             check_bounds(&what, &run, &reference, k, bounds);
         }
         // Timed on the baseline: run_path also checks the timed image against the
         // functional one bit for bit.
         let what = format!("{file} {key} f32 timed");
         let j = job(path, Datapath::F32, k, Mode::Timed);
-        let run = run_path(&j, &scene, &view, Some(&baseline), Some((&reference, wall)))
-            .unwrap_or_else(|e| panic!("{what}: {e}"));
+        let run = run_path(
+            &j,
+            &scene,
+            &view,
+            Model::Timed(&baseline),
+            Some((&reference, wall)),
+        )
+        .unwrap_or_else(|e| panic!("{what}: {e}"));
         assert!(run.report.cycles.is_some(), "{what}: cycles");
         check_bounds(&what, &run, &reference, k, bounds);
     }

@@ -15,7 +15,7 @@ use lembo_sim::job::{measure_frame, render_reference, PrimitivePath};
 use lembo_sim::lembo::tessellate::{Tessellation, Triangle};
 use lembo_sim::lembo::Lembo;
 use lembo_sim::pipeline::SimOptions;
-use lembo_sim::pipeline::{run_timed, UnitKind};
+use lembo_sim::pipeline::{run_timed, Source, UnitKind};
 use lembo_sim::raster::triangle::{
     render_triangles, setup, ScreenTriangle, TriangleFragment, TriangleSink, TriangleSource,
 };
@@ -313,7 +313,7 @@ fn timed_near_clipping_draws_the_functional_image_and_charges_its_pieces() {
                     0.5,
                     Datapath::F32,
                     &a,
-                    Some(&t),
+                    Source::Triangles(&t),
                     &SimOptions::default(),
                 )
                 .expect("timed run");

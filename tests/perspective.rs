@@ -4,7 +4,7 @@
 use lembo_sim::camera::View;
 use lembo_sim::datapath::{Datapath, Real};
 use lembo_sim::discoid::blend::BlendMode;
-use lembo_sim::job::{render_reference, run_path, Mode, PrimitivePath, RenderJob};
+use lembo_sim::job::{render_reference, run_path, Mode, Model, PrimitivePath, RenderJob};
 use lembo_sim::raster::fragment::FragmentSink;
 use lembo_sim::raster::setup::ScreenLembo;
 use lembo_sim::raster::subsegmenter::Subsegment;
@@ -54,7 +54,7 @@ fn measure(scene: &Scene, runs: &[(f64, PerspectiveTol, Datapath)]) -> Vec<(Accu
                 &job(k, tol, datapath),
                 scene,
                 &view,
-                None,
+                Model::Functional,
                 Some((&reference, wall)),
             )
             .unwrap();

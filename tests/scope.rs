@@ -9,7 +9,7 @@ use lembo_sim::discoid::blend::BlendMode;
 use lembo_sim::lembo::tessellate::Tessellation;
 use lembo_sim::pipeline::discoid::run_discoid_timed;
 use lembo_sim::pipeline::SimOptions;
-use lembo_sim::pipeline::{run_timed, TimedFrame, UnitKind};
+use lembo_sim::pipeline::{run_timed, Source, TimedFrame, UnitKind};
 use lembo_sim::scene::Scene;
 use std::path::Path;
 
@@ -22,9 +22,7 @@ fn timed(s: &Scene, tess: Option<u32>) -> TimedFrame {
     let view = View::new(&s.camera, s.viewport);
     let t = tess.map(|n| Tessellation::new(s, n));
     let a = ArchConfig::default();
-    let source = t
-        .as_ref()
-        .map(|t| t as &dyn lembo_sim::raster::triangle::TriangleSource);
+    let source = t.as_ref().map_or(Source::Lembos, |t| Source::Triangles(t));
     run_timed(
         s,
         &view,

@@ -6,7 +6,7 @@ use lembo_sim::camera::View;
 use lembo_sim::config::ArchConfig;
 use lembo_sim::datapath::Datapath;
 use lembo_sim::pipeline::SimOptions;
-use lembo_sim::pipeline::{run_timed, TimedFrame};
+use lembo_sim::pipeline::{run_timed, Source, TimedFrame};
 use lembo_sim::raster::render_functional;
 use lembo_sim::scene::Scene;
 use proptest::prelude::*;
@@ -19,7 +19,16 @@ use scenes::trace as scene;
 
 fn timed(scene: &Scene, arch: &ArchConfig, options: &SimOptions) -> TimedFrame {
     let view = View::new(&scene.camera, scene.viewport);
-    run_timed(scene, &view, 0.5, Datapath::F32, arch, None, options).expect("timed run")
+    run_timed(
+        scene,
+        &view,
+        0.5,
+        Datapath::F32,
+        arch,
+        Source::Lembos,
+        options,
+    )
+    .expect("timed run")
 }
 
 fn arch(name: &str) -> ArchConfig {

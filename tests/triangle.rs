@@ -9,7 +9,7 @@ use lembo_sim::datapath::{Datapath, Real};
 use lembo_sim::job::{measure_frame, render_reference, PrimitivePath};
 use lembo_sim::lembo::tessellate::Tessellation;
 use lembo_sim::pipeline::SimOptions;
-use lembo_sim::pipeline::{run_timed, TimedFrame, UnitKind};
+use lembo_sim::pipeline::{run_timed, Source, TimedFrame, UnitKind};
 use lembo_sim::raster::triangle::{setup, TriangleSource};
 use lembo_sim::raster::{render_functional_triangles, Frame};
 use lembo_sim::scene::Scene;
@@ -37,7 +37,7 @@ fn timed(scene: &Scene, n: u32, arch: &ArchConfig, datapath: Datapath) -> TimedF
         0.5,
         datapath,
         arch,
-        Some(&t),
+        Source::Triangles(&t),
         &SimOptions::default(),
     )
     .expect("timed run")

@@ -14,7 +14,7 @@
 //! bytes per fragment (one read of the accumulation target) and a 4-byte colour write per
 //! pixel; the pass takes the longer of the two.
 
-use super::{run_in, CycleReport, DiscoidPass, UnitCycles, UnitInstance, UnitKind};
+use super::{run_in, CycleReport, DiscoidPass, Source, UnitCycles, UnitInstance, UnitKind};
 use crate::camera::View;
 use crate::config::ArchConfig;
 use crate::datapath::{Datapath, Real};
@@ -23,7 +23,6 @@ use crate::discoid::render::{
     check_scene, resolve, BlendReport, DiscoidTable, DiscoidTarget, Pass,
 };
 use crate::error::{Error, Result};
-use crate::raster::triangle::TriangleSource;
 use crate::raster::{Counts, Tolerance};
 use crate::rop::rop::FragmentShader;
 use crate::rop::shade::to_u8;
@@ -81,14 +80,18 @@ fn passes<R: Real>(
             "the timed passes draw either curved or planar discoids in one scene (use --mode functional for both)",
         ));
     }
-    let triangles: Option<&dyn TriangleSource> = planar.then_some(&table.planar as _);
+    let source = if planar {
+        Source::Triangles(&table.planar)
+    } else {
+        Source::Lembos
+    };
     let pass = |pass: Pass, depth: &[f32], winner: &[u32]| {
         run_in::<R>(
             scene,
             view,
             tol,
             arch,
-            triangles,
+            source,
             Some(DiscoidPass {
                 pass,
                 table: &table,

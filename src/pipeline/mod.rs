@@ -118,8 +118,8 @@ pub struct Shared<'a, R> {
     /// Screen-space lembos by id, each whole or as the pieces Setup split it into, filled by
     /// Setup before it sends their ids downstream (empty in the triangle path).
     pub lembos: Vec<OnceLock<Vec<ScreenLembo<R>>>>,
-    /// The triangles of the triangle path; None in the lembo path.
-    pub triangles: Option<&'a dyn TriangleSource>,
+    /// What this run draws; the triangle path's units read their triangles from it.
+    pub source: Source<'a>,
     pub tiles: RopTiles,
     /// The discoid pass the ROPs run; None for ordinary rendering.
     pub discoid: Option<DiscoidPass<'a, R>>,
@@ -180,21 +180,31 @@ impl Finished {
         }
     }
 }
-/// Renders `scene` on the timed pipeline of `arch`: the lembo path, or with a
-/// triangle source (a tessellation) the triangle path.
+/// What the timed pipeline draws.
+#[derive(Clone, Copy)]
+pub enum Source<'a> {
+    /// The scene's lembos, on the lembo path (Figure 5).
+    Lembos,
+    /// Triangles (a tessellation of the scene, or a discoid atlas's planar quads), on the
+    /// triangle path.
+    Triangles(&'a dyn TriangleSource),
+}
+
+/// Renders `scene` on the timed pipeline of `arch`: its lembos on the lembo path, or a
+/// triangle source (a tessellation) on the triangle path.
 pub fn run_timed(
     scene: &Scene,
     view: &View,
     tol: impl Into<Tolerance>,
     datapath: Datapath,
     arch: &ArchConfig,
-    triangles: Option<&dyn TriangleSource>,
+    source: Source,
     options: &SimOptions,
 ) -> Result<TimedFrame> {
     let tol = tol.into();
     match datapath {
-        Datapath::F32 => run_in::<f32>(scene, view, tol, arch, triangles, None, options),
-        Datapath::F64 => run_in::<f64>(scene, view, tol, arch, triangles, None, options),
+        Datapath::F32 => run_in::<f32>(scene, view, tol, arch, source, None, options),
+        Datapath::F64 => run_in::<f64>(scene, view, tol, arch, source, None, options),
     }
 }
 
@@ -592,7 +602,7 @@ fn run_in<R: Real>(
     view: &View,
     tol: Tolerance,
     arch: &ArchConfig,
-    triangles: Option<&dyn TriangleSource>,
+    source: Source,
     discoid: Option<DiscoidPass<R>>,
     options: &SimOptions,
 ) -> Result<TimedFrame> {
@@ -601,11 +611,11 @@ fn run_in<R: Real>(
     let n_lembos = scene.lembo_count();
     let mut fb = FrameBuffer::new(vp.width, vp.height, background, false);
     // Model only what the scene requires: no primitives, no units.
-    let path = match triangles {
-        Some(t) if t.chunks() == 0 => None,
-        None if n_lembos == 0 => None,
-        None => Some(Path::Lembo),
-        Some(_) => Some(Path::Triangle),
+    let path = match source {
+        Source::Triangles(t) if t.chunks() == 0 => None,
+        Source::Lembos if n_lembos == 0 => None,
+        Source::Lembos => Some(Path::Lembo),
+        Source::Triangles(_) => Some(Path::Triangle),
     };
     let Some(path) = path else {
         return Ok(TimedFrame {
@@ -639,7 +649,7 @@ fn run_in<R: Real>(
             Path::Lembo => (0..n_lembos).map(|_| OnceLock::new()).collect(),
             Path::Triangle => Vec::new(),
         },
-        triangles,
+        source,
         tiles: RopTiles::new(vp.width, vp.height, arch.rop.tile_px, arch.rop.count),
         discoid,
     };
@@ -660,72 +670,9 @@ fn run_in<R: Real>(
             }
             .run(None)
         } else {
-            let board = Board::new(threads, thread.clone());
-            let outcome = std::thread::scope(|s| {
-                let handles: Vec<_> = (0..threads)
-                    .map(|me| {
-                        let (planned, units, thread, board) = (&planned, &units, &thread, &board);
-                        let (bars, shared, frame) = (&bars, &shared, &frame);
-                        std::thread::Builder::new()
-                            .name(format!("lembo-sim host {me}"))
-                            .spawn_scoped(s, move || {
-                                let _guard = AbortOnPanic(board);
-                                let mut b = Builder::new(
-                                    planned,
-                                    units,
-                                    thread,
-                                    me,
-                                    options.perturb,
-                                    &board.signals,
-                                );
-                                let futures = build(&mut b, bars, shared, frame, trace);
-                                let global =
-                                    (0..units.len()).filter(|&g| thread[g] == me).collect();
-                                let r = HostThread {
-                                    core: b.core.clone(),
-                                    futures,
-                                    global,
-                                    remotes: b.remotes,
-                                }
-                                .run(Some((board, me)));
-                                if r.is_err() {
-                                    board.abort();
-                                }
-                                r
-                            })
-                    })
-                    .collect();
-                let mut all = Vec::new();
-                let mut waiting = Vec::new();
-                let mut failure = None;
-                for h in handles {
-                    match h
-                        .map_err(|e| Error::Internal(format!("cannot start a host thread: {e}")))?
-                        .join()
-                    {
-                        Err(_) => {
-                            failure = Some(Error::Internal(
-                                "a host thread of the timed model panicked".into(),
-                            ))
-                        }
-                        Ok(Ok((done, _))) => all.extend(done),
-                        Ok(Err(Stop::Deadlock(w))) => waiting.extend(w),
-                        Ok(Err(Stop::Aborted)) => {}
-                    }
-                }
-                if let Some(e) = failure {
-                    return Err(e);
-                }
-                if board.deadlocked() {
-                    waiting.sort();
-                    return Ok(Err(Stop::Deadlock(waiting)));
-                }
-                if all.len() != units.len() {
-                    return Err(Error::Internal("a unit stopped without a result".into()));
-                }
-                Ok(Ok((all, board.recoveries())))
-            })?;
-            outcome
+            run_threads(
+                &planned, &units, &thread, options, &bars, &shared, &frame, trace, threads,
+            )?
         }
     };
     let (mut results, recoveries) = match results {
@@ -741,6 +688,87 @@ fn run_in<R: Real>(
     let mut frame = finish(arch, fb, units, results, options, trace_cap)?;
     frame.recoveries = recoveries;
     Ok(frame)
+}
+
+/// The units' results of a run over several host threads, one scoped OS thread each; a
+/// panic or a failure on one aborts the others.
+#[allow(clippy::too_many_arguments)]
+fn run_threads<'a, R: Real>(
+    planned: &[(UnitInstance, u64)],
+    units: &[UnitInstance],
+    thread: &[usize],
+    options: &SimOptions,
+    bars: &Bars<R>,
+    shared: &'a Shared<'a, R>,
+    frame: &'a SharedFrame<'a>,
+    trace: Option<usize>,
+    threads: usize,
+) -> Result<std::result::Result<(Vec<(usize, Finished)>, Recoveries), Stop>> {
+    let board = Board::new(threads, thread.to_vec());
+    let outcome = std::thread::scope(|s| {
+        let handles: Vec<_> = (0..threads)
+            .map(|me| {
+                let (planned, units, thread, board) = (&planned, &units, &thread, &board);
+                let (bars, shared, frame) = (&bars, &shared, &frame);
+                std::thread::Builder::new()
+                    .name(format!("lembo-sim host {me}"))
+                    .spawn_scoped(s, move || {
+                        let _guard = AbortOnPanic(board);
+                        let mut b = Builder::new(
+                            planned,
+                            units,
+                            thread,
+                            me,
+                            options.perturb,
+                            &board.signals,
+                        );
+                        let futures = build(&mut b, bars, shared, frame, trace);
+                        let global = (0..units.len()).filter(|&g| thread[g] == me).collect();
+                        let r = HostThread {
+                            core: b.core.clone(),
+                            futures,
+                            global,
+                            remotes: b.remotes,
+                        }
+                        .run(Some((board, me)));
+                        if r.is_err() {
+                            board.abort();
+                        }
+                        r
+                    })
+            })
+            .collect();
+        let mut all = Vec::new();
+        let mut waiting = Vec::new();
+        let mut failure = None;
+        for h in handles {
+            match h
+                .map_err(|e| Error::Internal(format!("cannot start a host thread: {e}")))?
+                .join()
+            {
+                Err(_) => {
+                    failure = Some(Error::Internal(
+                        "a host thread of the timed model panicked".into(),
+                    ))
+                }
+                Ok(Ok((done, _))) => all.extend(done),
+                Ok(Err(Stop::Deadlock(w))) => waiting.extend(w),
+                Ok(Err(Stop::Aborted)) => {}
+            }
+        }
+        if let Some(e) = failure {
+            return Err(e);
+        }
+        if board.deadlocked() {
+            waiting.sort();
+            return Ok(Err(Stop::Deadlock(waiting)));
+        }
+        if all.len() != units.len() {
+            return Err(Error::Internal("a unit stopped without a result".into()));
+        }
+        Ok(Ok((all, board.recoveries())))
+    })?;
+    Ok(outcome)
 }
 
 /// The frame's cycle report, counts and timeline from every unit's result.

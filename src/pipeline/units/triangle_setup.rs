@@ -18,7 +18,7 @@
 
 use crate::datapath::Real;
 use crate::pipeline::runtime::Ctx;
-use crate::pipeline::{Finished, Shared};
+use crate::pipeline::{Finished, Shared, Source};
 use crate::raster::triangle::{setup, ScreenTriangle};
 use crate::raster::Counts;
 use std::sync::Arc;
@@ -29,9 +29,9 @@ pub async fn run<R: Real>(
 ) -> Finished {
     let per_triangle = sh.arch.triangle_setup.cycles_per_triangle;
     let per_piece = sh.arch.triangle_setup.cycles_per_clipped_piece;
-    let source = sh
-        .triangles
-        .expect("the triangle path is elaborated with a triangle source");
+    let Source::Triangles(source) = sh.source else {
+        unreachable!("the triangle path is elaborated with a triangle source")
+    };
     let mut counts = Counts::default();
     let (mut triangles, mut pieces) = (Vec::new(), Vec::new());
     let mut next = 0;

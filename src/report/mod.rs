@@ -1,5 +1,6 @@
-//! The run report (DESIGN.md §7): `report.json` for tools, `report.txt` for people. The files
-//! are written by [`crate::output`].
+//! The run report (DESIGN.md §7): `report.json` for tools (this module's types, serialised
+//! as they are), `report.txt` and the command's summary lines for people ([`text`], the one
+//! place a report is put into words). The files are written by [`crate::output`].
 
 use crate::config::ArchConfig;
 use crate::discoid::render::BlendReport;
@@ -7,10 +8,8 @@ use crate::pipeline::{CycleReport, UnitInstance};
 use crate::raster::Counts;
 use crate::reference::metrics::Accuracy;
 use serde::Serialize;
-use std::fmt::Write as _;
 
-/// Bytes in a mebibyte, for report.txt.
-const MIB: f64 = (1u64 << 20) as f64;
+pub mod text;
 
 /// Version of the `report.json` layout; bumped when a field changes meaning or moves.
 pub const SCHEMA_VERSION: u32 = 5;
@@ -180,182 +179,6 @@ pub fn peak_rss_bytes() -> Option<u64> {
         .parse::<u64>()
         .ok()?;
     Some(kib * 1024)
-}
-
-impl Report {
-    /// The human-readable `report.txt`.
-    pub fn to_text(&self) -> String {
-        let mut t = String::new();
-        let s = &self.scene;
-        let _ = writeln!(t, "lembo-sim report (schema {})", self.schema_version);
-        let _ = writeln!(
-            t,
-            "scene     {} ({}), {}x{} px, {} lembos",
-            s.name, s.source, s.width, s.height, s.lembos
-        );
-        for o in &s.objects {
-            let _ = writeln!(t, "          - {o}");
-        }
-        let st = &self.settings;
-        let _ = writeln!(
-            t,
-            "settings  mode {}, path {}, {}, datapath {}, reference {}{}",
-            st.mode,
-            st.path,
-            match (st.k_px, st.tess) {
-                (Some(k), _) => format!("k = {k} px"),
-                (None, Some(n)) => format!("tessellation {n} ({} triangles per lembo)", n * n),
-                (None, None) => String::new(),
-            },
-            st.datapath,
-            if st.reference { "yes" } else { "no" },
-            if st.reference && st.supersample > 1 {
-                format!(" ({0}x{0} samples)", st.supersample)
-            } else {
-                String::new()
-            }
-        );
-        let p = &self.primitives;
-        let _ = writeln!(
-            t,
-            "primitives {} {}s, {} vertices, {} bytes{}",
-            p.count,
-            p.kind,
-            p.vertices,
-            p.bytes,
-            p.quad_efficiency
-                .map(|q| format!(", quad efficiency {:.1} %", 100.0 * q))
-                .unwrap_or_default()
-        );
-        let _ = writeln!(t, "\ncounts (functional model)");
-        if let Ok(serde_json::Value::Object(map)) = serde_json::to_value(self.counts) {
-            // Only the counters of the path that ran.
-            let triangle = st.path == "triangle";
-            for (k, v) in map {
-                let of_triangles = k.starts_with("triangles") || k == "quads";
-                let of_lembos = !of_triangles
-                    && !matches!(
-                        k.as_str(),
-                        "fragments" | "fragments_passed_depth" | "pixels_covered"
-                    );
-                if (triangle && of_lembos) || (!triangle && of_triangles) {
-                    continue;
-                }
-                let _ = writeln!(t, "  {k:<28} {v}");
-            }
-        }
-        match &self.cycles {
-            Some(c) => {
-                let _ = writeln!(
-                    t,
-                    "\ncycles    {} total at {} MHz = {} ({})",
-                    c.total,
-                    c.clock_mhz,
-                    c.fps
-                        .map(|f| format!("{f:.1} frames/s"))
-                        .unwrap_or_else(|| "empty frame".into()),
-                    self.arch
-                        .as_ref()
-                        .map(|a| format!("architecture {}", a.name))
-                        .unwrap_or_default()
-                );
-                if let Some(b) = &c.bottleneck {
-                    let _ = writeln!(t, "bottleneck {b} (most busy cycles)");
-                }
-                let _ = writeln!(
-                    t,
-                    "  {:<22} {:>10} {:>6} {:>10} {:>6} {:>10} {:>6} {:>9} {:>9} {:>5}",
-                    "unit", "busy", "%", "starved", "%", "blocked", "%", "in", "out", "fifo"
-                );
-                let pct = |x: u64| 100.0 * x as f64 / c.total.max(1) as f64;
-                for u in &c.units {
-                    let _ = writeln!(
-                        t,
-                        "  {:<22} {:>10} {:>6.1} {:>10} {:>6.1} {:>10} {:>6.1} {:>9} {:>9} {:>5}",
-                        u.name,
-                        u.busy,
-                        pct(u.busy),
-                        u.starved,
-                        pct(u.starved),
-                        u.blocked,
-                        pct(u.blocked),
-                        u.items_in,
-                        u.items_out,
-                        u.max_fifo_occupancy
-                    );
-                }
-            }
-            None => {
-                let _ = writeln!(t, "\ncycles    n/a (functional mode)");
-            }
-        }
-        if let Some(b) = &self.blend {
-            let _ = writeln!(
-                t,
-                "\nblend     {} ({} bytes per fragment), threshold {} world units",
-                b.mode, b.bytes_per_fragment, b.threshold
-            );
-            if let Ok(serde_json::Value::Object(map)) = serde_json::to_value(b) {
-                for (k, v) in map {
-                    if !matches!(k.as_str(), "mode" | "bytes_per_fragment" | "threshold") {
-                        let _ = writeln!(t, "  {k:<28} {v}");
-                    }
-                }
-            }
-        }
-        let m = &self.memory;
-        let _ = writeln!(
-            t,
-            "\nmemory    {} bytes: frame buffer {}, accumulation {}, primitives {}; FIFOs {}",
-            m.total_bytes,
-            m.framebuffer_bytes,
-            m.accumulation_bytes,
-            m.primitive_bytes,
-            m.fifo_entries
-                .map(|e| format!("{e} entries"))
-                .unwrap_or_else(|| "n/a (functional mode)".into())
-        );
-        match &self.accuracy {
-            Some(a) => {
-                let _ = writeln!(t, "\naccuracy against the exact reference");
-                for (k, v) in a.lines() {
-                    let _ = writeln!(t, "  {k:<26} {v}");
-                }
-            }
-            None => {
-                let _ = writeln!(t, "\naccuracy  n/a (run with --reference)");
-            }
-        }
-        let h = &self.host;
-        let _ = writeln!(
-            t,
-            "\nhost      render {:.3} s, {:.1} M fragments/s{}{}{}",
-            h.wall_seconds,
-            h.fragments_per_second / 1e6,
-            h.simulated_cycles_per_second
-                .map(|c| format!(
-                    ", {:.1} M simulated cycles/s on {} host thread{}",
-                    c / 1e6,
-                    h.host_threads.unwrap_or(1),
-                    if h.host_threads == Some(1) { "" } else { "s" }
-                ))
-                .unwrap_or_default(),
-            h.reference_wall_seconds
-                .map(|r| format!(", reference {r:.3} s"))
-                .unwrap_or_default(),
-            h.metrics_wall_seconds
-                .map(|m| format!(" (metrics {m:.3} s)"))
-                .unwrap_or_default()
-        );
-        if let Some(rss) = h.peak_rss_bytes {
-            let _ = writeln!(
-                t,
-                "          peak resident memory {:.1} MiB",
-                rss as f64 / MIB
-            );
-        }
-        t
-    }
 }
 
 /// PNG bytes of an RGB image.

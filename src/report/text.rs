@@ -1,0 +1,335 @@
+//! A report in words: `report.txt` ([`Report::to_text`]) and the lines a command prints
+//! when it ends ([`Report::summary`]). Both read only the [`Report`], so what a person reads
+//! is what `report.json` says; each section of `report.txt` has its own writer below.
+
+use super::Report;
+use std::fmt::Write as _;
+
+/// Bytes in a mebibyte, for report.txt.
+const MIB: f64 = (1u64 << 20) as f64;
+
+impl Report {
+    /// The human-readable `report.txt`.
+    pub fn to_text(&self) -> String {
+        let mut t = String::new();
+        self.write_scene(&mut t);
+        self.write_counts(&mut t);
+        self.write_cycles(&mut t);
+        self.write_blend(&mut t);
+        self.write_memory(&mut t);
+        self.write_accuracy(&mut t);
+        self.write_host(&mut t);
+        t
+    }
+
+    /// The summary `render` prints: what was drawn, its cost on the model that ran, and
+    /// its accuracy when measured; one line each, without the final newline's file list.
+    pub fn summary(&self) -> String {
+        let mut t = String::new();
+        self.summarise_drawing(&mut t);
+        self.summarise_timing(&mut t);
+        self.summarise_accuracy(&mut t);
+        t
+    }
+
+    /// Title, scene, settings and primitives.
+    fn write_scene(&self, t: &mut String) {
+        let s = &self.scene;
+        let _ = writeln!(t, "lembo-sim report (schema {})", self.schema_version);
+        let _ = writeln!(
+            t,
+            "scene     {} ({}), {}x{} px, {} lembos",
+            s.name, s.source, s.width, s.height, s.lembos
+        );
+        for o in &s.objects {
+            let _ = writeln!(t, "          - {o}");
+        }
+        let st = &self.settings;
+        let _ = writeln!(
+            t,
+            "settings  mode {}, path {}, {}, datapath {}, reference {}{}",
+            st.mode,
+            st.path,
+            match (st.k_px, st.tess) {
+                (Some(k), _) => format!("k = {k} px"),
+                (None, Some(n)) => format!("tessellation {n} ({} triangles per lembo)", n * n),
+                (None, None) => String::new(),
+            },
+            st.datapath,
+            if st.reference { "yes" } else { "no" },
+            if st.reference && st.supersample > 1 {
+                format!(" ({0}x{0} samples)", st.supersample)
+            } else {
+                String::new()
+            }
+        );
+        let p = &self.primitives;
+        let _ = writeln!(
+            t,
+            "primitives {} {}s, {} vertices, {} bytes{}",
+            p.count,
+            p.kind,
+            p.vertices,
+            p.bytes,
+            p.quad_efficiency
+                .map(|q| format!(", quad efficiency {:.1} %", 100.0 * q))
+                .unwrap_or_default()
+        );
+    }
+
+    /// The counters of the path that ran.
+    fn write_counts(&self, t: &mut String) {
+        let _ = writeln!(t, "\ncounts (functional model)");
+        if let Ok(serde_json::Value::Object(map)) = serde_json::to_value(self.counts) {
+            let triangle = self.settings.path == "triangle";
+            for (k, v) in map {
+                let of_triangles = k.starts_with("triangles") || k == "quads";
+                let of_lembos = !of_triangles
+                    && !matches!(
+                        k.as_str(),
+                        "fragments" | "fragments_passed_depth" | "pixels_covered"
+                    );
+                if (triangle && of_lembos) || (!triangle && of_triangles) {
+                    continue;
+                }
+                let _ = writeln!(t, "  {k:<28} {v}");
+            }
+        }
+    }
+
+    /// The frame's cycles and each unit's busy, starved and blocked share.
+    fn write_cycles(&self, t: &mut String) {
+        let Some(c) = &self.cycles else {
+            let _ = writeln!(t, "\ncycles    n/a (functional mode)");
+            return;
+        };
+        let _ = writeln!(
+            t,
+            "\ncycles    {} total at {} MHz = {} ({})",
+            c.total,
+            c.clock_mhz,
+            c.fps
+                .map(|f| format!("{f:.1} frames/s"))
+                .unwrap_or_else(|| "empty frame".into()),
+            self.arch
+                .as_ref()
+                .map(|a| format!("architecture {}", a.name))
+                .unwrap_or_default()
+        );
+        if let Some(b) = &c.bottleneck {
+            let _ = writeln!(t, "bottleneck {b} (most busy cycles)");
+        }
+        let _ = writeln!(
+            t,
+            "  {:<22} {:>10} {:>6} {:>10} {:>6} {:>10} {:>6} {:>9} {:>9} {:>5}",
+            "unit", "busy", "%", "starved", "%", "blocked", "%", "in", "out", "fifo"
+        );
+        let pct = |x: u64| 100.0 * x as f64 / c.total.max(1) as f64;
+        for u in &c.units {
+            let _ = writeln!(
+                t,
+                "  {:<22} {:>10} {:>6.1} {:>10} {:>6.1} {:>10} {:>6.1} {:>9} {:>9} {:>5}",
+                u.name,
+                u.busy,
+                pct(u.busy),
+                u.starved,
+                pct(u.starved),
+                u.blocked,
+                pct(u.blocked),
+                u.items_in,
+                u.items_out,
+                u.max_fifo_occupancy
+            );
+        }
+    }
+
+    /// The blend units' counters, for a discoid scene.
+    fn write_blend(&self, t: &mut String) {
+        let Some(b) = &self.blend else { return };
+        let _ = writeln!(
+            t,
+            "\nblend     {} ({} bytes per fragment), threshold {} world units",
+            b.mode, b.bytes_per_fragment, b.threshold
+        );
+        if let Ok(serde_json::Value::Object(map)) = serde_json::to_value(b) {
+            for (k, v) in map {
+                if !matches!(k.as_str(), "mode" | "bytes_per_fragment" | "threshold") {
+                    let _ = writeln!(t, "  {k:<28} {v}");
+                }
+            }
+        }
+    }
+
+    /// The memory the unit holds.
+    fn write_memory(&self, t: &mut String) {
+        let m = &self.memory;
+        let _ = writeln!(
+            t,
+            "\nmemory    {} bytes: frame buffer {}, accumulation {}, primitives {}; FIFOs {}",
+            m.total_bytes,
+            m.framebuffer_bytes,
+            m.accumulation_bytes,
+            m.primitive_bytes,
+            m.fifo_entries
+                .map(|e| format!("{e} entries"))
+                .unwrap_or_else(|| "n/a (functional mode)".into())
+        );
+    }
+
+    /// The accuracy against the exact reference, when measured.
+    fn write_accuracy(&self, t: &mut String) {
+        match &self.accuracy {
+            Some(a) => {
+                let _ = writeln!(t, "\naccuracy against the exact reference");
+                for (k, v) in a.lines() {
+                    let _ = writeln!(t, "  {k:<26} {v}");
+                }
+            }
+            None => {
+                let _ = writeln!(t, "\naccuracy  n/a (run with --reference)");
+            }
+        }
+    }
+
+    /// What the simulation cost the host.
+    fn write_host(&self, t: &mut String) {
+        let h = &self.host;
+        let _ = writeln!(
+            t,
+            "\nhost      render {:.3} s, {:.1} M fragments/s{}{}{}",
+            h.wall_seconds,
+            h.fragments_per_second / 1e6,
+            h.simulated_cycles_per_second
+                .map(|c| format!(
+                    ", {:.1} M simulated cycles/s on {} host thread{}",
+                    c / 1e6,
+                    h.host_threads.unwrap_or(1),
+                    if h.host_threads == Some(1) { "" } else { "s" }
+                ))
+                .unwrap_or_default(),
+            h.reference_wall_seconds
+                .map(|r| format!(", reference {r:.3} s"))
+                .unwrap_or_default(),
+            h.metrics_wall_seconds
+                .map(|m| format!(" (metrics {m:.3} s)"))
+                .unwrap_or_default()
+        );
+        if let Some(rss) = h.peak_rss_bytes {
+            let _ = writeln!(
+                t,
+                "          peak resident memory {:.1} MiB",
+                rss as f64 / MIB
+            );
+        }
+    }
+
+    /// The summary's first line: what was drawn, by which path, and its counts.
+    fn summarise_drawing(&self, t: &mut String) {
+        let r = self;
+        let c = &r.counts;
+        if let Some(b) = &r.blend {
+            let _ = writeln!(
+                t,
+                "{}: {} discoids, {}x{} px, blend {} ({} bytes/fragment), threshold {}: {} fragments accumulated, {} beyond the threshold, {} beta = 0, {} back-facing, {} saturations; error max {:.4}, mean {:.5}{}",
+                r.scene.name,
+                r.primitives.count,
+                r.scene.width,
+                r.scene.height,
+                b.mode,
+                b.bytes_per_fragment,
+                b.threshold,
+                b.fragments_accumulated,
+                b.discarded_threshold,
+                b.discarded_beta_zero,
+                b.culled_backface,
+                b.saturations,
+                b.error_max,
+                b.error_mean,
+                b.holes.map(|h| format!(", {h} holes")).unwrap_or_default()
+            );
+            return;
+        }
+        let _ = match r.settings.k_px {
+            Some(k) => writeln!(
+                t,
+                "{}: {} lembos, {}x{} px, k = {} px, {}: {} scanlines, {} intervals, {} segments, {} subsegments, {} fragments ({} passed depth)",
+                r.scene.name,
+                r.scene.lembos,
+                r.scene.width,
+                r.scene.height,
+                k,
+                r.settings.datapath,
+                c.scanlines,
+                c.intervals,
+                c.segments,
+                c.subsegments,
+                c.fragments,
+                c.fragments_passed_depth
+            ),
+            None => writeln!(
+                t,
+                "{}: {} lembos as {} triangles (tessellation {}), {}x{} px, {}: {} culled, {} quads ({:.1} % efficiency), {} fragments ({} passed depth)",
+                r.scene.name,
+                r.scene.lembos,
+                c.triangles,
+                r.settings.tess.unwrap_or(1),
+                r.scene.width,
+                r.scene.height,
+                r.settings.datapath,
+                c.triangles_culled_behind_eye + c.triangles_culled_outside + c.triangles_degenerate,
+                c.quads,
+                100.0 * r.primitives.quad_efficiency.unwrap_or(0.0),
+                c.fragments,
+                c.fragments_passed_depth
+            ),
+        };
+    }
+
+    /// The summary's timing line: cycles on the architecture, or the functional model's
+    /// host speed.
+    fn summarise_timing(&self, t: &mut String) {
+        let r = self;
+        let _ = match &r.cycles {
+            Some(cy) => writeln!(
+                t,
+                "timed ({}): {} cycles = {} at {} MHz, bottleneck {}; host {:.3} s, {:.1} M simulated cycles/s",
+                r.arch.as_ref().map(|a| a.name.as_str()).unwrap_or("?"),
+                cy.total,
+                cy.fps
+                    .map(|f| format!("{f:.1} frames/s"))
+                    .unwrap_or_else(|| "empty frame".into()),
+                cy.clock_mhz,
+                cy.bottleneck.as_deref().unwrap_or("none"),
+                r.host.wall_seconds,
+                r.host.simulated_cycles_per_second.unwrap_or(0.0) / 1e6
+            ),
+            None => writeln!(
+                t,
+                "render {:.3} s ({:.1} M fragments/s, functional model, single thread)",
+                r.host.wall_seconds,
+                r.host.fragments_per_second / 1e6
+            ),
+        };
+    }
+
+    /// The summary's accuracy line, when the run was measured.
+    fn summarise_accuracy(&self, t: &mut String) {
+        let Some(a) = &self.accuracy else { return };
+        let _ = writeln!(
+            t,
+            "accuracy: PSNR {:.2} dB, coverage +{} / -{} px, silhouette max {:.3} px, cracks {}, double hits {}{}{}",
+            a.psnr_db,
+            a.coverage_false_positive,
+            a.coverage_false_negative,
+            a.silhouette_max_px,
+            a.crack_pixels,
+            a.double_hit_pixels,
+            a.see_through_px
+                .map(|n| format!(", see-through {n} px"))
+                .unwrap_or_default(),
+            a.max_scanline_deviation_px
+                .map(|d| format!(", max |y - y_j| {d:.4} px"))
+                .unwrap_or_default()
+        );
+    }
+}
