@@ -45,6 +45,7 @@ pub const COMPARE_SCHEMA_VERSION: u32 = 1;
 /// How the tessellation level is chosen.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Tess {
+    /// This level n (n² triangles per lembo).
     Level(u32),
     /// The smallest level matching the lembo path's silhouette error.
     Auto,
@@ -57,13 +58,17 @@ pub struct CompareJob {
     pub scene: Option<PathBuf>,
     /// Output directory; None for `out/<scene name>/compare/`.
     pub out: Option<PathBuf>,
+    /// Tolerance k of the lembo path \[pixels\].
     pub k: f64,
     /// Setup's perspective tolerance of the lembo path.
     pub perspective_tol: PerspectiveTol,
+    /// The triangle path's tessellation level, or how to choose it.
     pub tess: Tess,
+    /// Datapath precision of both paths.
     pub datapath: Datapath,
     /// Architecture file; None for the embedded baseline.
     pub arch: Option<PathBuf>,
+    /// Viewport override (width, height) \[pixels\].
     pub viewport: Option<(u32, u32)>,
     /// Reference samples per pixel side for reference.png.
     pub supersample: u32,
@@ -101,9 +106,13 @@ impl CompareJob {
 /// One level tried by `--tess auto`.
 #[derive(Clone, Debug, Serialize)]
 pub struct AutoStep {
+    /// The level n tried.
     pub tess: u32,
+    /// Triangles of the scene at that level.
     pub triangles: u64,
+    /// Its largest silhouette error against the reference \[pixels\].
     pub silhouette_max_px: f64,
+    /// Its mean silhouette error against the reference \[pixels\].
     pub silhouette_mean_px: f64,
 }
 
@@ -143,19 +152,27 @@ pub struct Ratios {
 /// `compare.json`.
 #[derive(Clone, Debug, Serialize)]
 pub struct CompareReport {
+    /// [`COMPARE_SCHEMA_VERSION`].
     pub schema_version: u32,
+    /// The triangle path's level and how it was chosen.
     pub tess: TessChoice,
+    /// Cycle and byte ratios of the two paths; null in functional mode or for an empty frame.
     pub ratios: Option<Ratios>,
+    /// The lembo path's report, as `render --reference` writes it.
     pub lembo: Report,
+    /// The triangle path's report, as `render --path triangle --reference` writes it.
     pub triangle: Report,
 }
 
 /// What a finished compare hands back for its summary.
 pub struct CompareOutput {
+    /// What `compare.json` holds.
     pub report: CompareReport,
     /// The table, as printed and written to compare.txt.
     pub table: String,
+    /// The folder the files were written to.
     pub dir: PathBuf,
+    /// The files written, by name.
     pub files: Vec<String>,
 }
 

@@ -24,6 +24,7 @@
 //! crossbar, and DRAM timing beyond a bandwidth-limited port.
 
 use crate::error::{read_text_file, Error, Result};
+use crate::pipeline::graph::{self, UnitKind, BOUNDARIES, LINK_KEYS};
 use crate::scene::parse_strict;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -308,7 +309,7 @@ pub struct FrameBufferConfig {
 }
 
 /// One FIFO between two units: a bounded queue with a transit latency (DESIGN.md §3).
-#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
 #[serde(default, deny_unknown_fields)]
 pub struct LinkConfig {
     /// Capacity \[items\]: a producer that has pushed `fifo_depth` items the consumer has not
@@ -320,7 +321,8 @@ pub struct LinkConfig {
 }
 
 impl LinkConfig {
-    const fn new(fifo_depth: u32, latency_cycles: u64) -> LinkConfig {
+    /// A link `fifo_depth` items deep with a transit time of `latency_cycles`.
+    pub const fn new(fifo_depth: u32, latency_cycles: u64) -> LinkConfig {
         LinkConfig {
             fifo_depth,
             latency_cycles,
@@ -334,21 +336,6 @@ impl Default for LinkConfig {
     fn default() -> LinkConfig {
         LinkConfig::new(4, 1)
     }
-}
-
-/// The file's shape of [`LinksConfig`]: every link and every field of it optional.
-#[derive(Deserialize, Default)]
-#[serde(default, deny_unknown_fields)]
-struct LinksSpec {
-    setup_to_minmax: LinkSpec,
-    minmax_to_interval_manager: LinkSpec,
-    interval_manager_to_segmenter: LinkSpec,
-    segmenter_to_subsegmenter: LinkSpec,
-    subsegmenter_to_rasterizer: LinkSpec,
-    rasterizer_to_rop: LinkSpec,
-    rop_to_framebuffer: LinkSpec,
-    triangle_setup_to_rasterizer: LinkSpec,
-    triangle_rasterizer_to_rop: LinkSpec,
 }
 
 /// The file's shape of one [`LinkConfig`]: a field left out keeps its boundary's default;
@@ -382,117 +369,104 @@ impl LinkSpec {
     }
 }
 
-impl From<LinksSpec> for LinksConfig {
-    fn from(spec: LinksSpec) -> LinksConfig {
-        let d = LinksConfig::default();
-        LinksConfig {
-            setup_to_minmax: spec.setup_to_minmax.over(d.setup_to_minmax),
-            minmax_to_interval_manager: spec
-                .minmax_to_interval_manager
-                .over(d.minmax_to_interval_manager),
-            interval_manager_to_segmenter: spec
-                .interval_manager_to_segmenter
-                .over(d.interval_manager_to_segmenter),
-            segmenter_to_subsegmenter: spec
-                .segmenter_to_subsegmenter
-                .over(d.segmenter_to_subsegmenter),
-            subsegmenter_to_rasterizer: spec
-                .subsegmenter_to_rasterizer
-                .over(d.subsegmenter_to_rasterizer),
-            rasterizer_to_rop: spec.rasterizer_to_rop.over(d.rasterizer_to_rop),
-            rop_to_framebuffer: spec.rop_to_framebuffer.over(d.rop_to_framebuffer),
-            triangle_setup_to_rasterizer: spec
-                .triangle_setup_to_rasterizer
-                .over(d.triangle_setup_to_rasterizer),
-            triangle_rasterizer_to_rop: spec
-                .triangle_rasterizer_to_rop
-                .over(d.triangle_rasterizer_to_rop),
-        }
-    }
-}
-
-/// One [`LinkConfig`] per stage boundary, in dataflow order; every link of the crossbar at
-/// that boundary shares it.
+/// One [`LinkConfig`] per boundary of the unit graph, in the order of
+/// [`graph::BOUNDARIES`], which names each and gives its default; every link of the
+/// crossbar at that boundary shares it.
 ///
-/// Read through `LinksSpec` so that a link given in part keeps its own boundary's defaults
-/// for the rest (`{"rasterizer_to_rop": {"fifo_depth": 32}}` keeps latency 2), not the
-/// generic [`LinkConfig::default`].
-#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
-#[serde(from = "LinksSpec")]
-pub struct LinksConfig {
-    /// Default depth 8, latency 1: an item is a whole projected lembo (twelve vectors), a
-    /// wide entry, so few are buffered; adjacent units on one die, one register stage.
-    pub setup_to_minmax: LinkConfig,
-    /// Default depth 8, latency 1: as `setup_to_minmax`, a lembo with its scanline range.
-    pub minmax_to_interval_manager: LinkConfig,
-    /// Default depth 32, latency 1: intervals are narrow (two roots and a scanline), and 32
-    /// absorb a lembo's burst of intervals against the segmenters' variable rate.
-    pub interval_manager_to_segmenter: LinkConfig,
-    /// Default depth 32, latency 1: narrow segments; the subsegmenter's work per segment
-    /// varies with curvature, so the FIFO smooths it.
-    pub segmenter_to_subsegmenter: LinkConfig,
-    /// Default depth 32, latency 1: narrow subsegments, one per rasterizer start.
-    pub subsegmenter_to_rasterizer: LinkConfig,
-    /// Default depth 64, latency 2: a full crossbar from every rasterizer to every ROP costs
-    /// one cycle of arbitration on top of the register stage; an item is a span of at most
-    /// one tile row, and GPU ROP input queues hold tens of such quads or spans.
-    pub rasterizer_to_rop: LinkConfig,
-    /// Default depth 32, latency 4: the request queue of the memory controller, and the
-    /// wires and arbitration to reach it from the ROPs. DRAM access latency itself is not
-    /// modelled.
-    pub rop_to_framebuffer: LinkConfig,
-    /// Default depth 32, latency 1: set-up triangles to the triangle rasterizers, as
-    /// `subsegmenter_to_rasterizer` in the lembo path.
-    pub triangle_setup_to_rasterizer: LinkConfig,
-    /// Default depth 64, latency 2: as `rasterizer_to_rop`; an item is a quad-row piece.
-    pub triangle_rasterizer_to_rop: LinkConfig,
-}
+/// In a file, `links` is an object keyed by the boundaries' names; a link given in part
+/// keeps its own boundary's defaults for the rest (`{"rasterizer_to_rop": {"fifo_depth":
+/// 32}}` keeps latency 2), not the generic [`LinkConfig::default`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct LinksConfig([LinkConfig; BOUNDARIES.len()]);
 
 impl LinksConfig {
-    /// Every link, mutable, in dataflow order (for tools and tests that set them all).
-    pub fn all_mut(&mut self) -> [&mut LinkConfig; 9] {
-        [
-            &mut self.setup_to_minmax,
-            &mut self.minmax_to_interval_manager,
-            &mut self.interval_manager_to_segmenter,
-            &mut self.segmenter_to_subsegmenter,
-            &mut self.subsegmenter_to_rasterizer,
-            &mut self.rasterizer_to_rop,
-            &mut self.rop_to_framebuffer,
-            &mut self.triangle_setup_to_rasterizer,
-            &mut self.triangle_rasterizer_to_rop,
-        ]
+    /// The link of the boundary from `from` to `to`.
+    ///
+    /// # Panics
+    /// When the graph has no such boundary.
+    pub fn get(&self, from: UnitKind, to: UnitKind) -> &LinkConfig {
+        &self.0[graph::boundary(from, to)]
     }
 
-    /// Every boundary's link with its field name, in dataflow order (the lembo path's, then
+    /// The link of the boundary from `from` to `to`, mutable.
+    ///
+    /// # Panics
+    /// When the graph has no such boundary.
+    pub fn get_mut(&mut self, from: UnitKind, to: UnitKind) -> &mut LinkConfig {
+        &mut self.0[graph::boundary(from, to)]
+    }
+
+    /// Every link, mutable, in dataflow order (for tools and tests that set them all).
+    pub fn all_mut(&mut self) -> [&mut LinkConfig; BOUNDARIES.len()] {
+        self.0.each_mut()
+    }
+
+    /// Every boundary's link with its name, in dataflow order (the lembo path's, then
     /// the triangle path's).
-    pub fn all(&self) -> [(&'static str, &LinkConfig); 9] {
-        [
-            ("setup_to_minmax", &self.setup_to_minmax),
-            (
-                "minmax_to_interval_manager",
-                &self.minmax_to_interval_manager,
-            ),
-            (
-                "interval_manager_to_segmenter",
-                &self.interval_manager_to_segmenter,
-            ),
-            ("segmenter_to_subsegmenter", &self.segmenter_to_subsegmenter),
-            (
-                "subsegmenter_to_rasterizer",
-                &self.subsegmenter_to_rasterizer,
-            ),
-            ("rasterizer_to_rop", &self.rasterizer_to_rop),
-            ("rop_to_framebuffer", &self.rop_to_framebuffer),
-            (
-                "triangle_setup_to_rasterizer",
-                &self.triangle_setup_to_rasterizer,
-            ),
-            (
-                "triangle_rasterizer_to_rop",
-                &self.triangle_rasterizer_to_rop,
-            ),
-        ]
+    pub fn all(&self) -> [(&'static str, &LinkConfig); BOUNDARIES.len()] {
+        let links = self.0.each_ref();
+        std::array::from_fn(|i| (LINK_KEYS[i], links[i]))
+    }
+}
+
+impl Default for LinksConfig {
+    fn default() -> LinksConfig {
+        LinksConfig(BOUNDARIES.map(|b| b.default))
+    }
+}
+
+impl Serialize for LinksConfig {
+    fn serialize<S: serde::Serializer>(
+        &self,
+        serializer: S,
+    ) -> std::result::Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut map = serializer.serialize_map(Some(self.0.len()))?;
+        for (key, link) in self.all() {
+            map.serialize_entry(key, link)?;
+        }
+        map.end()
+    }
+}
+
+impl<'de> Deserialize<'de> for LinksConfig {
+    fn deserialize<D: serde::Deserializer<'de>>(
+        deserializer: D,
+    ) -> std::result::Result<Self, D::Error> {
+        deserializer.deserialize_map(LinksVisitor)
+    }
+}
+
+/// Reads `links` as the derived form of a struct with one optional [`LinkSpec`] field per
+/// boundary would, with the same messages for an unknown or repeated name.
+struct LinksVisitor;
+
+impl<'de> serde::de::Visitor<'de> for LinksVisitor {
+    type Value = LinksConfig;
+
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str("struct LinksSpec")
+    }
+
+    fn visit_map<A: serde::de::MapAccess<'de>>(
+        self,
+        mut map: A,
+    ) -> std::result::Result<LinksConfig, A::Error> {
+        let mut given: [Option<LinkSpec>; BOUNDARIES.len()] = Default::default();
+        while let Some(key) = map.next_key::<String>()? {
+            let Some(i) = LINK_KEYS.iter().position(|k| *k == key) else {
+                return Err(serde::de::Error::unknown_field(&key, &LINK_KEYS));
+            };
+            if given[i].is_some() {
+                return Err(serde::de::Error::duplicate_field(LINK_KEYS[i]));
+            }
+            given[i] = Some(map.next_value()?);
+        }
+        let mut links = LinksConfig::default();
+        for (link, spec) in links.0.iter_mut().zip(given) {
+            *link = spec.unwrap_or_default().over(*link);
+        }
+        Ok(links)
     }
 }
 
@@ -613,22 +587,6 @@ impl Default for FrameBufferConfig {
             bytes_per_cycle: 64,
             bytes_per_fragment_tested: 4,
             bytes_per_fragment_written: 8,
-        }
-    }
-}
-
-impl Default for LinksConfig {
-    fn default() -> LinksConfig {
-        LinksConfig {
-            setup_to_minmax: LinkConfig::new(8, 1),
-            minmax_to_interval_manager: LinkConfig::new(8, 1),
-            interval_manager_to_segmenter: LinkConfig::new(32, 1),
-            segmenter_to_subsegmenter: LinkConfig::new(32, 1),
-            subsegmenter_to_rasterizer: LinkConfig::new(32, 1),
-            rasterizer_to_rop: LinkConfig::new(64, 2),
-            rop_to_framebuffer: LinkConfig::new(32, 4),
-            triangle_setup_to_rasterizer: LinkConfig::new(32, 1),
-            triangle_rasterizer_to_rop: LinkConfig::new(64, 2),
         }
     }
 }
@@ -1005,14 +963,12 @@ mod tests {
         let text = r#"{"links": {"rasterizer_to_rop": {"fifo_depth": 32},
                                  "rop_to_framebuffer": {"latency_cycles": 9}}}"#;
         let config = ArchConfig::from_json(text, "t.json").unwrap();
-        assert_eq!(
-            config.links,
-            LinksConfig {
-                rasterizer_to_rop: LinkConfig::new(32, 2),
-                rop_to_framebuffer: LinkConfig::new(32, 9),
-                ..LinksConfig::default()
-            }
-        );
+        assert_eq!(config.links, {
+            let mut links = LinksConfig::default();
+            *links.get_mut(UnitKind::FragmentRasterizer, UnitKind::Rop) = LinkConfig::new(32, 2);
+            *links.get_mut(UnitKind::Rop, UnitKind::FrameBuffer) = LinkConfig::new(32, 9);
+            links
+        });
         assert_parse_err(
             r#"{"links": {"setup_to_minmax": {"fifo_depth": null}}}"#,
             "links.setup_to_minmax.fifo_depth",

@@ -50,6 +50,7 @@ pub enum PrimitivePath {
 }
 
 impl PrimitivePath {
+    /// The path's name in reports and on the command line (`lembo`, `triangle`).
     pub fn name(self) -> &'static str {
         match self {
             PrimitivePath::Lembo => "lembo",
@@ -79,17 +80,21 @@ pub struct RenderJob {
     pub k: f64,
     /// Setup's perspective tolerance (`--perspective-tol`; lembo path only).
     pub perspective_tol: PerspectiveTol,
+    /// Datapath precision of the functional model and the units (`--datapath`).
     pub datapath: Datapath,
+    /// Whether the exact reference is rendered and the frame measured (`--reference`).
     pub reference: bool,
     /// Reference samples per pixel side.
     pub supersample: u32,
     /// Viewport override (width, height) \[pixels\].
     pub viewport: Option<(u32, u32)>,
+    /// Timed pipeline or functional model alone (`--mode`).
     pub mode: Mode,
     /// Architecture file; None for the embedded baseline. Timed mode only.
     pub arch: Option<PathBuf>,
     /// Where to write the Chrome trace-event timeline. Timed mode only.
     pub trace_out: Option<PathBuf>,
+    /// Which primitives the surfaces are drawn as (`--path`).
     pub path: PrimitivePath,
     /// Tessellation level n (n² triangles per lembo); None for the default, 1. Triangle
     /// path only.
@@ -248,8 +253,11 @@ pub fn check_triangle_budget(scene: &Scene, n: u32) -> Result<()> {
 
 /// What a finished render hands back to the caller for its summary.
 pub struct RenderOutput {
+    /// What `report.json` holds.
     pub report: Report,
+    /// The folder the files were written to.
     pub dir: PathBuf,
+    /// The files written, by name (the trace, when written elsewhere, is not listed).
     pub files: Vec<String>,
 }
 
@@ -459,7 +467,9 @@ pub fn run_path(
     })
 }
 
-/// A surface path's image with what each model contributed.
+/// A surface path's image with what each model contributed (one per run, so the variants'
+/// sizes do not matter).
+#[allow(clippy::large_enum_variant)]
 enum Drawn {
     /// The functional model alone (with its probe when the run is measured).
     Functional(raster::Frame),

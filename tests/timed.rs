@@ -6,7 +6,7 @@ use lembo_sim::camera::View;
 use lembo_sim::config::ArchConfig;
 use lembo_sim::datapath::Datapath;
 use lembo_sim::pipeline::SimOptions;
-use lembo_sim::pipeline::{run_timed, Source, TimedFrame};
+use lembo_sim::pipeline::{run_timed, Source, TimedFrame, UnitKind};
 use lembo_sim::raster::render_functional;
 use lembo_sim::scene::Scene;
 use proptest::prelude::*;
@@ -59,7 +59,9 @@ fn counts(a: &mut ArchConfig, ns: u32, nb: u32, nr: u32, np: u32) {
 fn matrix() -> Vec<ArchConfig> {
     let mut odd = with_depth(ArchConfig::default(), 7);
     counts(&mut odd, 3, 5, 2, 3);
-    odd.links.rasterizer_to_rop.fifo_depth = 2;
+    odd.links
+        .get_mut(UnitKind::FragmentRasterizer, UnitKind::Rop)
+        .fifo_depth = 2;
     let mut narrow_wide = with_depth(ArchConfig::default(), 1);
     counts(&mut narrow_wide, 1, 8, 1, 8);
     let mut wide_narrow = with_depth(ArchConfig::default(), 64);
@@ -239,19 +241,8 @@ fn random_architectures_all_terminate_with_the_same_image() {
                 a.interval_manager.cycles_per_scanline = c3;
                 a.rasterizer.latency_cycles = lat;
                 a.rop.tile_px = tile;
-                let l = &mut a.links;
-                for (c, (d, latency)) in [
-                    &mut l.setup_to_minmax,
-                    &mut l.minmax_to_interval_manager,
-                    &mut l.interval_manager_to_segmenter,
-                    &mut l.segmenter_to_subsegmenter,
-                    &mut l.subsegmenter_to_rasterizer,
-                    &mut l.rasterizer_to_rop,
-                    &mut l.rop_to_framebuffer,
-                ]
-                .into_iter()
-                .zip(links)
-                {
+                // The lembo path's seven links come first in the graph's order.
+                for (c, (d, latency)) in a.links.all_mut().into_iter().zip(links) {
                     c.fifo_depth = d;
                     c.latency_cycles = latency;
                 }

@@ -133,30 +133,114 @@ impl Path {
     }
 }
 
-/// Every boundary of both paths: producer kind, consumer kind and the link configuration
-/// of each of its links.
-pub fn boundaries(arch: &ArchConfig) -> [(UnitKind, UnitKind, &LinkConfig); 9] {
+/// One boundary of the graph: the crossbar of links from every instance of `from` to every
+/// instance of `to`.
+#[derive(Clone, Copy, Debug)]
+pub struct Boundary {
+    /// Its link's name in the architecture file's `links` and in reports.
+    pub key: &'static str,
+    /// The producing kind.
+    pub from: UnitKind,
+    /// The consuming kind.
+    pub to: UnitKind,
+    /// The link each of its crossbar's links has unless the architecture says otherwise.
+    pub default: LinkConfig,
+}
+
+/// Every boundary of both paths, in dataflow order (the lembo path's, then the triangle
+/// path's): the one place a link is named and given its defaults. Dispatch: every producer
+/// sends round-robin over its links, except into the ROPs, which are chosen by the screen
+/// tile of the item (`units::rop::RopTiles`); every consumer merges its inputs by
+/// (arrival, port) (DESIGN.md §3).
+pub const BOUNDARIES: [Boundary; 9] = {
     use UnitKind::*;
-    let l = &arch.links;
+    const fn b(
+        key: &'static str,
+        from: UnitKind,
+        to: UnitKind,
+        depth: u32,
+        latency: u64,
+    ) -> Boundary {
+        Boundary {
+            key,
+            from,
+            to,
+            default: LinkConfig::new(depth, latency),
+        }
+    }
     [
-        (Setup, MinMax, &l.setup_to_minmax),
-        (MinMax, IntervalManager, &l.minmax_to_interval_manager),
-        (IntervalManager, Segmenter, &l.interval_manager_to_segmenter),
-        (Segmenter, Subsegmenter, &l.segmenter_to_subsegmenter),
-        (
+        // Depth 8, latency 1: an item is a whole projected lembo (twelve vectors), a wide
+        // entry, so few are buffered; adjacent units on one die, one register stage.
+        b("setup_to_minmax", Setup, MinMax, 8, 1),
+        // Depth 8, latency 1: as setup_to_minmax, a lembo with its scanline range.
+        b("minmax_to_interval_manager", MinMax, IntervalManager, 8, 1),
+        // Depth 32, latency 1: intervals are narrow (two roots and a scanline), and 32
+        // absorb a lembo's burst of intervals against the segmenters' variable rate.
+        b(
+            "interval_manager_to_segmenter",
+            IntervalManager,
+            Segmenter,
+            32,
+            1,
+        ),
+        // Depth 32, latency 1: narrow segments; the subsegmenter's work per segment varies
+        // with curvature, so the FIFO smooths it.
+        b("segmenter_to_subsegmenter", Segmenter, Subsegmenter, 32, 1),
+        // Depth 32, latency 1: narrow subsegments, one per rasterizer start.
+        b(
+            "subsegmenter_to_rasterizer",
             Subsegmenter,
             FragmentRasterizer,
-            &l.subsegmenter_to_rasterizer,
+            32,
+            1,
         ),
-        (FragmentRasterizer, Rop, &l.rasterizer_to_rop),
-        (Rop, FrameBuffer, &l.rop_to_framebuffer),
-        (
+        // Depth 64, latency 2: a full crossbar from every rasterizer to every ROP costs one
+        // cycle of arbitration on top of the register stage; an item is a span of at most
+        // one tile row, and GPU ROP input queues hold tens of such quads or spans.
+        b("rasterizer_to_rop", FragmentRasterizer, Rop, 64, 2),
+        // Depth 32, latency 4: the request queue of the memory controller, and the wires
+        // and arbitration to reach it from the ROPs. DRAM access latency itself is not
+        // modelled.
+        b("rop_to_framebuffer", Rop, FrameBuffer, 32, 4),
+        // Depth 32, latency 1: set-up triangles to the triangle rasterizers, as
+        // subsegmenter_to_rasterizer in the lembo path.
+        b(
+            "triangle_setup_to_rasterizer",
             TriangleSetup,
             TriangleRasterizer,
-            &l.triangle_setup_to_rasterizer,
+            32,
+            1,
         ),
-        (TriangleRasterizer, Rop, &l.triangle_rasterizer_to_rop),
+        // Depth 64, latency 2: as rasterizer_to_rop; an item is a quad-row piece.
+        b("triangle_rasterizer_to_rop", TriangleRasterizer, Rop, 64, 2),
     ]
+};
+
+/// The links' names, in the order of [`BOUNDARIES`].
+pub const LINK_KEYS: [&str; BOUNDARIES.len()] = {
+    let mut keys = [""; BOUNDARIES.len()];
+    let mut i = 0;
+    while i < keys.len() {
+        keys[i] = BOUNDARIES[i].key;
+        i += 1;
+    }
+    keys
+};
+
+/// The index in [`BOUNDARIES`] of the boundary from `from` to `to`.
+///
+/// # Panics
+/// When the graph has no such boundary: a programming error, not an input one.
+pub fn boundary(from: UnitKind, to: UnitKind) -> usize {
+    BOUNDARIES
+        .iter()
+        .position(|b| (b.from, b.to) == (from, to))
+        .unwrap_or_else(|| panic!("the unit graph has no boundary {from:?} -> {to:?}"))
+}
+
+/// Every boundary of both paths with its link configuration in `arch`.
+pub fn boundaries(arch: &ArchConfig) -> impl Iterator<Item = (&Boundary, &LinkConfig)> {
+    BOUNDARIES.iter().zip(arch.links.all().map(|(_, l)| l))
 }
 
 /// One instantiated unit.
@@ -205,8 +289,7 @@ pub fn triangle_units(arch: &ArchConfig) -> Vec<UnitInstance> {
 pub fn fifo_entries(arch: &ArchConfig, units: &[UnitInstance]) -> u64 {
     let count = |kind: UnitKind| units.iter().filter(|u| u.kind == kind).count() as u64;
     boundaries(arch)
-        .iter()
-        .map(|(from, to, link)| count(*from) * count(*to) * link.fifo_depth as u64)
+        .map(|(b, link)| count(b.from) * count(b.to) * link.fifo_depth as u64)
         .sum()
 }
 
@@ -218,20 +301,24 @@ mod tests {
     /// graph is a chain of crossbars), and every boundary joins kinds of one path.
     #[test]
     fn graph_boundaries_chain_each_path() {
-        let arch = ArchConfig::default();
-        let b = boundaries(&arch);
         for path in [Path::Lembo, Path::Triangle] {
             for pair in path.kinds().windows(2) {
                 assert!(
-                    b.iter().any(|(f, t, _)| (*f, *t) == (pair[0], pair[1])),
+                    BOUNDARIES
+                        .iter()
+                        .any(|b| (b.from, b.to) == (pair[0], pair[1])),
                     "{pair:?}"
                 );
             }
         }
-        for (f, t, _) in b {
+        for b in BOUNDARIES {
             assert!([Path::Lembo, Path::Triangle]
                 .iter()
-                .any(|p| p.kinds().contains(&f) && p.kinds().contains(&t)));
+                .any(|p| p.kinds().contains(&b.from) && p.kinds().contains(&b.to)));
+            assert_eq!(
+                boundary(b.from, b.to),
+                LINK_KEYS.iter().position(|k| *k == b.key).unwrap()
+            );
         }
         assert!(KINDS.windows(2).all(|w| w[0] < w[1]));
     }

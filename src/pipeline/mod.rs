@@ -32,7 +32,7 @@ pub use graph::{fifo_entries, lembo_units, triangle_units, Path, UnitInstance, U
 pub use runtime::{Cycle, SimOptions};
 
 use crate::camera::View;
-use crate::config::{ArchConfig, LinkConfig};
+use crate::config::ArchConfig;
 use crate::datapath::{Datapath, Real};
 use crate::discoid::blend::BlendMode;
 use crate::discoid::render::{BlendReport, DiscoidTable, KeptFragment, Pass};
@@ -61,7 +61,9 @@ use units::subsegmenter::ScanSubsegment;
 /// The cycle accounting of one unit over the frame \[cycles\].
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct UnitCycles {
+    /// The instance's name (`Segmenter[2]`).
     pub name: String,
+    /// Its kind.
     pub kind: UnitKind,
     /// Cycles issuing ops.
     pub busy: u64,
@@ -83,20 +85,26 @@ pub struct CycleReport {
     /// Cycle at which the last unit finished: the last write through the frame-buffer
     /// port, or a later unit that produced nothing \[cycles\].
     pub total: u64,
+    /// The clock the frame rate is computed at \[MHz\].
     pub clock_mhz: f64,
     /// Frames per second at the clock; null for an empty frame.
     pub fps: Option<f64>,
     /// The unit with the most busy cycles (ties: the first in dataflow order); null when
     /// nothing was instantiated.
     pub bottleneck: Option<String>,
+    /// Every instantiated unit's accounting, in dataflow order.
     pub units: Vec<UnitCycles>,
 }
 
 /// What a timed run produced.
 pub struct TimedFrame {
+    /// The image, with depth and winner ids.
     pub framebuffer: FrameBuffer,
+    /// The functional counts, gathered from the units.
     pub counts: Counts,
+    /// The units the run instantiated, in dataflow order.
     pub units: Vec<UnitInstance>,
+    /// The frame's cycle accounting.
     pub cycles: CycleReport,
     /// Chrome trace-event JSON, when requested.
     pub trace: Option<String>,
@@ -108,18 +116,24 @@ pub struct TimedFrame {
 
 /// Read-only state the units share: the scene, the configuration and the lembo table.
 pub struct Shared<'a, R> {
+    /// The scene being drawn.
     pub scene: &'a Scene,
+    /// Its camera and viewport.
     pub view: &'a View,
+    /// The architecture the units' costs come from.
     pub arch: &'a ArchConfig,
+    /// Tolerance k in the datapath's precision \[pixels\].
     pub k: R,
     /// Setup's perspective tolerance \[pixels\]; None: the paper's Setup.
     pub perspective_tol: Option<f64>,
+    /// Background colour, 8 bits per channel.
     pub background: [u8; 3],
     /// Screen-space lembos by id, each whole or as the pieces Setup split it into, filled by
     /// Setup before it sends their ids downstream (empty in the triangle path).
     pub lembos: Vec<OnceLock<Vec<ScreenLembo<R>>>>,
     /// What this run draws; the triangle path's units read their triangles from it.
     pub source: Source<'a>,
+    /// Which ROP owns each screen tile.
     pub tiles: RopTiles,
     /// The discoid pass the ROPs run; None for ordinary rendering.
     pub discoid: Option<DiscoidPass<'a, R>>,
@@ -127,17 +141,22 @@ pub struct Shared<'a, R> {
 
 /// What the ROPs need for a discoid pass.
 pub struct DiscoidPass<'a, R> {
+    /// Which of the passes this run is.
     pub pass: Pass,
+    /// The discoids' texture coordinates and shading inputs by primitive id.
     pub table: &'a DiscoidTable<R>,
+    /// Precision of the blend units.
     pub mode: BlendMode,
-    /// [world units]
+    /// The accumulation threshold t \[world units\].
     pub threshold: f64,
     /// The depth pass's result, whole frame: depth and winner per pixel (accumulation pass).
     pub depth: &'a [f32],
+    /// The depth pass's winning primitive id per pixel.
     pub winner: &'a [u32],
 }
 
 impl<R> Shared<'_, R> {
+    /// The screen-space lembo (or piece) `id`, which Setup filled before sending the id.
     #[inline]
     pub fn lembo(&self, id: PieceId) -> &ScreenLembo<R> {
         &self.lembos[id.lembo as usize]
@@ -150,13 +169,17 @@ impl<R> Shared<'_, R> {
 /// kept whole).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct PieceId {
+    /// The lembo's id in the scene.
     pub lembo: u32,
+    /// The piece's index among those Setup split the lembo into.
     pub piece: u32,
 }
 
 /// What a unit hands back when it ends.
 pub struct Finished {
+    /// Its busy, starved and blocked cycles and item counts.
     pub stats: UnitStats,
+    /// Its timeline events, when traced.
     pub trace: Option<Recorder>,
     /// The unit's share of the functional counts.
     pub counts: Counts,
@@ -208,8 +231,9 @@ pub fn run_timed(
     }
 }
 
-/// The links of one boundary: producers `producers` to consumers `consumers` (global unit
-/// indices), with the channels of each link whose ends are on different host threads.
+/// The links of one boundary of [`graph::BOUNDARIES`]: producers `producers` to consumers
+/// `consumers` (global unit indices), each link configured as `arch.links` says for that
+/// boundary, with the channels of each link whose ends are on different host threads.
 struct Crossbar<T> {
     producers: Range<usize>,
     consumers: Range<usize>,
@@ -224,8 +248,9 @@ impl<T> Crossbar<T> {
         from: UnitKind,
         to: UnitKind,
         thread: &[usize],
-        c: &LinkConfig,
+        arch: &ArchConfig,
     ) -> Self {
+        let c = arch.links.get(from, to);
         let of = |kind: UnitKind| {
             let first = units.iter().position(|u| u.kind == kind).unwrap_or(0);
             first..first + units.iter().filter(|u| u.kind == kind).count()
@@ -379,57 +404,20 @@ enum Bars<R> {
 impl<R: Real> Bars<R> {
     fn new(path: Path, arch: &ArchConfig, units: &[UnitInstance], thread: &[usize]) -> Self {
         use UnitKind::*;
-        let l = &arch.links;
         match path {
             Path::Lembo => Bars::Lembo {
-                setup: Crossbar::new(units, Setup, MinMax, thread, &l.setup_to_minmax),
-                minmax: Crossbar::new(
-                    units,
-                    MinMax,
-                    IntervalManager,
-                    thread,
-                    &l.minmax_to_interval_manager,
-                ),
-                intervals: Crossbar::new(
-                    units,
-                    IntervalManager,
-                    Segmenter,
-                    thread,
-                    &l.interval_manager_to_segmenter,
-                ),
-                segments: Crossbar::new(
-                    units,
-                    Segmenter,
-                    Subsegmenter,
-                    thread,
-                    &l.segmenter_to_subsegmenter,
-                ),
-                subsegments: Crossbar::new(
-                    units,
-                    Subsegmenter,
-                    FragmentRasterizer,
-                    thread,
-                    &l.subsegmenter_to_rasterizer,
-                ),
-                spans: Crossbar::new(units, FragmentRasterizer, Rop, thread, &l.rasterizer_to_rop),
-                bursts: Crossbar::new(units, Rop, FrameBuffer, thread, &l.rop_to_framebuffer),
+                setup: Crossbar::new(units, Setup, MinMax, thread, arch),
+                minmax: Crossbar::new(units, MinMax, IntervalManager, thread, arch),
+                intervals: Crossbar::new(units, IntervalManager, Segmenter, thread, arch),
+                segments: Crossbar::new(units, Segmenter, Subsegmenter, thread, arch),
+                subsegments: Crossbar::new(units, Subsegmenter, FragmentRasterizer, thread, arch),
+                spans: Crossbar::new(units, FragmentRasterizer, Rop, thread, arch),
+                bursts: Crossbar::new(units, Rop, FrameBuffer, thread, arch),
             },
             Path::Triangle => Bars::Triangle {
-                triangles: Crossbar::new(
-                    units,
-                    TriangleSetup,
-                    TriangleRasterizer,
-                    thread,
-                    &l.triangle_setup_to_rasterizer,
-                ),
-                pieces: Crossbar::new(
-                    units,
-                    TriangleRasterizer,
-                    Rop,
-                    thread,
-                    &l.triangle_rasterizer_to_rop,
-                ),
-                bursts: Crossbar::new(units, Rop, FrameBuffer, thread, &l.rop_to_framebuffer),
+                triangles: Crossbar::new(units, TriangleSetup, TriangleRasterizer, thread, arch),
+                pieces: Crossbar::new(units, TriangleRasterizer, Rop, thread, arch),
+                bursts: Crossbar::new(units, Rop, FrameBuffer, thread, arch),
             },
         }
     }
@@ -657,7 +645,7 @@ fn run_in<R: Real>(
     let trace = options.trace.then_some(trace_cap);
     let bars = Bars::<R>::new(path, arch, &units, &thread);
 
-    let results: std::result::Result<(Vec<(usize, Finished)>, Recoveries), Stop> = {
+    let results: Outcome = {
         let frame = SharedFrame::new(&mut fb);
         if threads == 1 {
             let mut b = Builder::new(&planned, &units, &thread, 0, options.perturb, &[]);
@@ -690,6 +678,10 @@ fn run_in<R: Real>(
     Ok(frame)
 }
 
+/// How the executor left a run: every unit's result (by global index) with the recoveries
+/// it needed, or why it stopped.
+type Outcome = std::result::Result<(Vec<(usize, Finished)>, Recoveries), Stop>;
+
 /// The units' results of a run over several host threads, one scoped OS thread each; a
 /// panic or a failure on one aborts the others.
 #[allow(clippy::too_many_arguments)]
@@ -703,7 +695,7 @@ fn run_threads<'a, R: Real>(
     frame: &'a SharedFrame<'a>,
     trace: Option<usize>,
     threads: usize,
-) -> Result<std::result::Result<(Vec<(usize, Finished)>, Recoveries), Stop>> {
+) -> Result<Outcome> {
     let board = Board::new(threads, thread.to_vec());
     let outcome = std::thread::scope(|s| {
         let handles: Vec<_> = (0..threads)

@@ -17,8 +17,11 @@ pub const SCHEMA_VERSION: u32 = 5;
 /// Everything a run reports.
 #[derive(Clone, Debug, Serialize)]
 pub struct Report {
+    /// [`SCHEMA_VERSION`].
     pub schema_version: u32,
+    /// What was drawn.
     pub scene: SceneInfo,
+    /// How it was drawn.
     pub settings: Settings,
     /// What the path drew with, and how much primitive data that is.
     pub primitives: Primitives,
@@ -26,6 +29,7 @@ pub struct Report {
     pub arch: Option<ArchConfig>,
     /// The unit instances this scene required; empty in functional mode.
     pub units: Vec<UnitInstance>,
+    /// The functional model's counts of the path that ran (intervals, segments, fragments, ...).
     pub counts: Counts,
     /// Cycle accounting of the timed pipeline; null in functional mode.
     pub cycles: Option<CycleReport>,
@@ -35,17 +39,24 @@ pub struct Report {
     pub blend: Option<BlendReport>,
     /// The storage the simulated unit instantiates for this run.
     pub memory: Memory,
+    /// What the simulation cost the host (not deterministic).
     pub host: Host,
 }
 
+/// The scene a report is about.
 #[derive(Clone, Debug, Serialize)]
 pub struct SceneInfo {
+    /// The scene's name (its file's stem, or `default`).
     pub name: String,
     /// The scene file, or "(embedded default)".
     pub source: String,
+    /// Viewport width \[pixels\].
     pub width: u32,
+    /// Viewport height \[pixels\].
     pub height: u32,
+    /// Lembos in the scene (curved discoids included) \[primitives\].
     pub lembos: u64,
+    /// Each object's label with what it holds (`bunny (3674 lembos)`).
     pub objects: Vec<String>,
 }
 
