@@ -15,27 +15,40 @@
 //! Triangle path (the baseline): `Tessellator ─► TriangleSetup ─► TriangleRasterizer ─►` the
 //! same ROPs and frame buffer.
 //!
-//! - [`lembo`]: the model (Martinelli 2006 section 2): six-point construction, evaluation, edges
-//!   from vertex normals, meshes, the builtin shapes of Figures 6-8, the tessellator.
+//! Modules, from the model outwards:
+//! - [`lembo`]: the model (Martinelli 2006 section 2): six-point construction, evaluation,
+//!   edges from vertex normals, meshes, the builtin shapes of Figures 6-8, the tessellator.
 //! - [`raster`]: the functional extreme method (section 5), one module per stage, generic
-//!   over the datapath ([`datapath::Real`]: `f32` or `f64`); the triangle rasterizer.
-//! - [`pipeline`]: the timed pipeline (Figure 5 as actors on bounded channels with cycle
-//!   accounting), and the triangle path's timed units; [`config`] its architecture files.
+//!   over the datapath ([`datapath::Real`]: `f32` or `f64`); the triangle path's setup and
+//!   rasterizer.
+//! - [`discoid`]: the atlas of discoids (Piranda et al. 2006): beta textures, the blend
+//!   units' arithmetic per precision mode, the three passes in the functional model.
 //! - [`rop`]: depth test, per-fragment Phong (Piranda et al. 2006 equation 6), frame buffer.
-//! - [`reference`](mod@reference): the exact f64 ray-patch reference and the accuracy metrics.
+//! - [`pipeline`]: the timed model (Figure 5 as one resumable unit per instance on bounded
+//!   links with cycle accounting, run by a deterministic discrete-event executor), its unit
+//!   graph, and the triangle path's and discoid passes' timed units; [`config`] its
+//!   architecture files.
+//! - [`reference`](mod@reference): the exact f64 ray-patch reference and the accuracy
+//!   metrics.
 //! - [`scene`], [`camera`]: the JSON trace format and OpenGL-convention cameras.
-//! - [`datapath_study`]: f32 against f64 over seeded random lembos (issue 7), for
-//!   `examples/datapath_study.rs` and `tests/datapath.rs`.
-//! - [`job`], [`report`]: the `render` command's work and its `report.json` / `report.txt`;
-//!   [`output`]: every output file written whole or not at all, also under Ctrl-C;
-//!   [`compare`]: lembos against triangles against the exact surface; [`sweep`]: many
-//!   runs of a spec (`sim/sweeps/`) into `results.jsonl` and `results.csv`, resumable and
-//!   shardable.
-//!   [`compare`]: lembos against triangles against the exact surface; [`plot`]: a sweep's
-//!   SVG plots.
+//! - [`job`], [`report`]: the `render` command's work and its `report.json` /
+//!   `report.txt`; [`compare`]: lembos against triangles against the exact surface;
+//!   [`sweep`]: many runs of a spec (`sim/sweeps/`) into `results.jsonl` and `results.csv`,
+//!   resumable, shardable and locked against a second writer; [`plot`]: a sweep's SVG
+//!   plots.
+//! - [`output`]: every output file written whole or not at all, also under Ctrl-C;
+//!   [`error`]: every error a run can end with, and its exit status.
+//! - [`datapath`]: the `f32`/`f64` datapath; [`datapath_study`]: f32 against f64 over
+//!   seeded random lembos, for `examples/datapath_study.rs` and `tests/datapath.rs`.
+//!
+//! DESIGN.md (beside the crate) holds the design the code relies on: what a cycle means,
+//! the report contract, the bad-input policy and the accuracy metrics' definitions;
+//! ARCHITECTURE.md how the code meets it.
 //!
 //! The functional model knows nothing of cycles; the timed pipeline calls the same stage
 //! functions and adds only time.
+
+#![warn(missing_docs)]
 
 pub mod camera;
 pub mod compare;
