@@ -436,17 +436,18 @@ fn images(
 fn ratios(arch: Option<&ArchConfig>, lembo: &Report, triangle: &Report) -> Option<Ratios> {
     let (cl, ct) = (lembo.cycles.as_ref()?, triangle.cycles.as_ref()?);
     let (nl, nt) = (lembo.primitives.count, triangle.primitives.count);
-    if nl == 0 || nt == 0 || cl.total == 0 || ct.total == 0 {
+    let (cl_total, ct_total) = (cl.total.as_f64(), ct.total.as_f64());
+    if nl == 0 || nt == 0 || cl_total == 0.0 || ct_total == 0.0 {
         return None;
     }
-    let per_lembo = cl.total as f64 / nl as f64;
-    let per_triangle = ct.total as f64 / nt as f64;
+    let per_lembo = cl_total / nl as f64;
+    let per_triangle = ct_total / nt as f64;
     Some(Ratios {
         arch: arch.map(|a| a.name.clone()).unwrap_or_default(),
         cycles_per_lembo: per_lembo,
         cycles_per_triangle: per_triangle,
         lembo_cost_in_triangles: per_lembo / per_triangle,
-        triangle_over_lembo_cycles: ct.total as f64 / cl.total as f64,
+        triangle_over_lembo_cycles: ct_total / cl_total,
         triangle_over_lembo_bytes: triangle.primitives.bytes as f64
             / lembo.primitives.bytes.max(1) as f64,
     })

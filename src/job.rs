@@ -12,7 +12,7 @@ use crate::error::{Error, Result};
 use crate::lembo::tessellate::Tessellation;
 use crate::lembo::Lembo;
 use crate::output::write_paths;
-use crate::pipeline::{self, SimOptions, Source};
+use crate::pipeline::{self, Cycle, SimOptions, Source};
 use crate::raster;
 use crate::raster::{PerspectiveTol, Tolerance};
 use crate::reference::oracle::ReferenceImage;
@@ -716,7 +716,7 @@ fn sim_options(job: &RenderJob, arch: &ArchConfig, path: pipeline::Path) -> Resu
 fn host(
     wall: f64,
     fragments: u64,
-    timed: Option<(u64, u32)>,
+    timed: Option<(Cycle, u32)>,
     reference_wall: Option<f64>,
     metrics_wall: Option<f64>,
 ) -> Host {
@@ -727,7 +727,7 @@ fn host(
         } else {
             0.0
         },
-        simulated_cycles_per_second: timed.map(|(c, _)| c as f64 / wall.max(1e-9)),
+        simulated_cycles_per_second: timed.map(|(c, _)| c.as_f64() / wall.max(1e-9)),
         host_threads: timed.map(|(_, n)| n),
         reference_wall_seconds: reference_wall,
         metrics_wall_seconds: metrics_wall,

@@ -140,7 +140,7 @@ fn precision_modes_order_error_bytes_and_cycles() {
             .units
             .iter()
             .filter(|u| u.kind == UnitKind::Rop)
-            .map(|u| u.busy)
+            .map(|u| u.busy.0)
             .sum()
     };
     assert!(rop_busy(&run[2]) <= rop_busy(&run[0]));

@@ -330,7 +330,7 @@ fn timed_near_clipping_draws_the_functional_image_and_charges_its_pieces() {
                 let setup = &timed.cycles.units[0];
                 assert_eq!(setup.kind, UnitKind::TriangleSetup);
                 assert_eq!(
-                    setup.busy,
+                    setup.busy.0,
                     fc.triangles * a.triangle_setup.cycles_per_triangle + fan * per_piece,
                     "{what}"
                 );

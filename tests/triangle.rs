@@ -155,7 +155,7 @@ fn clipped_triangles_are_drawn_the_same_timed_and_functional_and_cost_their_piec
                     assert_eq!(setup.kind, UnitKind::TriangleSetup);
                     let per_triangle = a.triangle_setup.cycles_per_triangle;
                     assert_eq!(
-                        setup.busy,
+                        setup.busy.0,
                         f.counts.triangles * per_triangle + fan * per_piece,
                         "{what}"
                     );

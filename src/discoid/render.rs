@@ -36,6 +36,7 @@ use crate::datapath::{Datapath, Real};
 use crate::error::{Error, Result};
 use crate::lembo::tessellate::Triangle;
 use crate::lembo::{eval3, Quadratic};
+use crate::pipeline::Cycle;
 use crate::raster::fragment::FragmentSink;
 use crate::raster::setup::ScreenLembo;
 use crate::raster::subsegmenter::Subsegment;
@@ -81,9 +82,9 @@ pub struct BlendReport {
     pub holes: Option<u64>,
     /// Timed runs: the cycles of each pass (depth, accumulation, resolve); null in
     /// functional mode.
-    pub cycles_depth_pass: Option<u64>,
-    pub cycles_accumulation_pass: Option<u64>,
-    pub cycles_resolve_pass: Option<u64>,
+    pub cycles_depth_pass: Option<Cycle>,
+    pub cycles_accumulation_pass: Option<Cycle>,
+    pub cycles_resolve_pass: Option<Cycle>,
 }
 
 /// The scene's planar discoids as a triangle source: two triangles per discoid, after the

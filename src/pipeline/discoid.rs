@@ -14,7 +14,7 @@
 //! bytes per fragment (one read of the accumulation target) and a 4-byte colour write per
 //! pixel; the pass takes the longer of the two.
 
-use super::{run_in, CycleReport, DiscoidPass, Source, UnitCycles, UnitInstance, UnitKind};
+use super::{run_in, Cycle, CycleReport, DiscoidPass, Source, UnitCycles, UnitInstance, UnitKind};
 use crate::camera::View;
 use crate::config::ArchConfig;
 use crate::datapath::{Datapath, Real};
@@ -177,7 +177,7 @@ fn passes<R: Real>(
     let mut blend = target.report;
     blend.cycles_depth_pass = Some(c1.total);
     blend.cycles_accumulation_pass = Some(c2.total);
-    blend.cycles_resolve_pass = Some(resolve_total);
+    blend.cycles_resolve_pass = Some(Cycle(resolve_total));
     let mut counts = second.counts;
     counts.fragments_passed_depth = blend.fragments_accumulated;
     counts.pixels_covered = framebuffer.covered() as u64;
@@ -200,7 +200,7 @@ fn passes<R: Real>(
         cycles: CycleReport {
             total,
             clock_mhz: arch.clock_mhz,
-            fps: (total > 0).then(|| arch.clock_mhz * 1e6 / total as f64),
+            fps: (total > Cycle::ZERO).then(|| arch.clock_mhz * 1e6 / total.as_f64()),
             bottleneck,
             units,
         },

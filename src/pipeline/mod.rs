@@ -66,11 +66,11 @@ pub struct UnitCycles {
     /// Its kind.
     pub kind: UnitKind,
     /// Cycles issuing ops.
-    pub busy: u64,
+    pub busy: Cycle,
     /// Cycles waiting for an input to arrive (including after its last op).
-    pub starved: u64,
+    pub starved: Cycle,
     /// Cycles frozen because a FIFO downstream was full.
-    pub blocked: u64,
+    pub blocked: Cycle,
     /// Items popped from its input FIFOs \[items\].
     pub items_in: u64,
     /// Items pushed to its output FIFOs \[items\].
@@ -84,7 +84,7 @@ pub struct UnitCycles {
 pub struct CycleReport {
     /// Cycle at which the last unit finished: the last write through the frame-buffer
     /// port, or a later unit that produced nothing \[cycles\].
-    pub total: u64,
+    pub total: Cycle,
     /// The clock the frame rate is computed at \[MHz\].
     pub clock_mhz: f64,
     /// Frames per second at the clock; null for an empty frame.
@@ -611,7 +611,7 @@ fn run_in<R: Real>(
             counts: Counts::default(),
             units: Vec::new(),
             cycles: CycleReport {
-                total: 0,
+                total: Cycle::ZERO,
                 clock_mhz: arch.clock_mhz,
                 fps: None,
                 bottleneck: None,
@@ -810,9 +810,9 @@ fn finish(
         unit_cycles.push(UnitCycles {
             name: units[*u].name.clone(),
             kind: units[*u].kind,
-            busy: st.busy,
-            starved: st.starved + (total - st.end),
-            blocked: st.blocked,
+            busy: Cycle(st.busy),
+            starved: Cycle(st.starved + (total - st.end)),
+            blocked: Cycle(st.blocked),
             items_in: st.items_in,
             items_out: st.items_out,
             max_fifo_occupancy: st.max_fifo_occupancy,
@@ -840,9 +840,9 @@ fn finish(
         })
         .map(|u| u.name.clone());
     let cycles = CycleReport {
-        total: total.0,
+        total,
         clock_mhz: arch.clock_mhz,
-        fps: (total.0 > 0).then(|| arch.clock_mhz * 1e6 / total.0 as f64),
+        fps: (total > Cycle::ZERO).then(|| arch.clock_mhz * 1e6 / total.as_f64()),
         bottleneck,
         units: unit_cycles,
     };

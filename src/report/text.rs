@@ -3,6 +3,7 @@
 //! is what `report.json` says; each section of `report.txt` has its own writer below.
 
 use super::Report;
+use crate::pipeline::Cycle;
 use std::fmt::Write as _;
 
 /// Bytes in a mebibyte, for report.txt.
@@ -124,7 +125,7 @@ impl Report {
             "  {:<22} {:>10} {:>6} {:>10} {:>6} {:>10} {:>6} {:>9} {:>9} {:>5}",
             "unit", "busy", "%", "starved", "%", "blocked", "%", "in", "out", "fifo"
         );
-        let pct = |x: u64| 100.0 * x as f64 / c.total.max(1) as f64;
+        let pct = |x: Cycle| 100.0 * x.as_f64() / c.total.0.max(1) as f64;
         for u in &c.units {
             let _ = writeln!(
                 t,

@@ -1,10 +1,13 @@
 //! Simulated time: [`Cycle`] and the timestamped item [`Timed`].
 
+use serde::Serialize;
 use std::fmt;
 use std::ops::{Add, AddAssign, Sub};
 
-/// A point in simulated time, or a number of cycles [clock cycles].
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash)]
+/// A point in simulated time, or a number of cycles \[clock cycles\]. Reports carry it
+/// as a plain number (`serde(transparent)`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
+#[serde(transparent)]
 pub struct Cycle(pub u64);
 
 impl Cycle {
@@ -19,6 +22,14 @@ impl Add<u64> for Cycle {
     #[inline(always)]
     fn add(self, rhs: u64) -> Cycle {
         Cycle(self.0.saturating_add(rhs))
+    }
+}
+
+impl Add for Cycle {
+    type Output = Cycle;
+    #[inline(always)]
+    fn add(self, rhs: Cycle) -> Cycle {
+        self + rhs.0
     }
 }
 
@@ -37,9 +48,18 @@ impl Sub for Cycle {
     }
 }
 
+impl Cycle {
+    /// The number of cycles as a float, for rates and ratios.
+    #[inline]
+    pub fn as_f64(self) -> f64 {
+        self.0 as f64
+    }
+}
+
 impl fmt::Display for Cycle {
+    /// As the number, honouring width and alignment (report tables pad it).
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}", self.0)
+        fmt::Display::fmt(&self.0, f)
     }
 }
 
