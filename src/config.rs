@@ -441,6 +441,32 @@ impl<'de> Deserialize<'de> for LinksConfig {
 /// boundary would, with the same messages for an unknown or repeated name.
 struct LinksVisitor;
 
+/// A name in `links`, as its index in [`graph::BOUNDARIES`]; an unknown name is refused
+/// while the key is read, so that the error's path ends with it.
+struct LinkKey(usize);
+
+impl<'de> Deserialize<'de> for LinkKey {
+    fn deserialize<D: serde::Deserializer<'de>>(
+        deserializer: D,
+    ) -> std::result::Result<Self, D::Error> {
+        struct KeyVisitor;
+        impl serde::de::Visitor<'_> for KeyVisitor {
+            type Value = LinkKey;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("field identifier")
+            }
+            fn visit_str<E: serde::de::Error>(self, key: &str) -> std::result::Result<LinkKey, E> {
+                LINK_KEYS
+                    .iter()
+                    .position(|k| *k == key)
+                    .map(LinkKey)
+                    .ok_or_else(|| E::unknown_field(key, &LINK_KEYS))
+            }
+        }
+        deserializer.deserialize_identifier(KeyVisitor)
+    }
+}
+
 impl<'de> serde::de::Visitor<'de> for LinksVisitor {
     type Value = LinksConfig;
 
@@ -453,10 +479,7 @@ impl<'de> serde::de::Visitor<'de> for LinksVisitor {
         mut map: A,
     ) -> std::result::Result<LinksConfig, A::Error> {
         let mut given: [Option<LinkSpec>; BOUNDARIES.len()] = Default::default();
-        while let Some(key) = map.next_key::<String>()? {
-            let Some(i) = LINK_KEYS.iter().position(|k| *k == key) else {
-                return Err(serde::de::Error::unknown_field(&key, &LINK_KEYS));
-            };
+        while let Some(LinkKey(i)) = map.next_key()? {
             if given[i].is_some() {
                 return Err(serde::de::Error::duplicate_field(LINK_KEYS[i]));
             }
@@ -977,6 +1000,45 @@ mod tests {
             r#"{"links": {"setup_to_minmax": {"fifo_depth": -1}}}"#,
             "links.setup_to_minmax.fifo_depth",
         );
+    }
+
+    /// `links` is keyed by the graph's boundary names: an unknown or repeated name is
+    /// refused with its path, and what is written reads back the same, in the graph's order.
+    #[test]
+    fn config_links_follow_the_unit_graph() {
+        let message = assert_parse_err(r#"{"links": {"setup_to_rop": {}}}"#, "links.setup_to_rop");
+        assert!(
+            message.contains("unknown field `setup_to_rop`, expected one of `setup_to_minmax`"),
+            "{message}"
+        );
+        let message = assert_parse_err(
+            r#"{"links": {"rop_to_framebuffer": {}, "rop_to_framebuffer": {}}}"#,
+            "links",
+        );
+        assert!(
+            message.contains("duplicate field `rop_to_framebuffer`"),
+            "{message}"
+        );
+        let mut links = LinksConfig::default();
+        for (i, link) in links.all_mut().into_iter().enumerate() {
+            *link = LinkConfig::new(i as u32 + 1, 2 * i as u64 + 1);
+        }
+        let json = serde_json::to_string(&links).unwrap();
+        let at: Vec<usize> = LINK_KEYS
+            .iter()
+            .map(|k| json.find(&format!("\"{k}\":")).expect(k))
+            .collect();
+        assert!(at.windows(2).all(|w| w[0] < w[1]), "{json}");
+        let back: LinksConfig = serde_json::from_str(&json).unwrap();
+        assert_eq!(back, links);
+        for b in BOUNDARIES {
+            assert_eq!(
+                *LinksConfig::default().get(b.from, b.to),
+                b.default,
+                "{}",
+                b.key
+            );
+        }
     }
 
     #[test]
