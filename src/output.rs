@@ -53,6 +53,8 @@ struct Live {
     temps: Vec<PathBuf>,
     /// Directories created by writes not yet committed, outermost first.
     dirs: Vec<PathBuf>,
+    /// Folder locks this process holds (`sweep::FolderLock`), released by a signal too.
+    locks: Vec<PathBuf>,
 }
 
 /// The commit lock: held while a temporary is created and registered, while the renames
@@ -60,6 +62,7 @@ struct Live {
 static LIVE: Mutex<Live> = Mutex::new(Live {
     temps: Vec::new(),
     dirs: Vec::new(),
+    locks: Vec::new(),
 });
 
 /// One write at a time in this process, so two writes of the same name into one directory
@@ -86,8 +89,18 @@ fn temp_owner(file_name: &str) -> Option<u32> {
     pid.parse().ok()
 }
 
+/// Registers a lock file this process holds, so that a signal's exit removes it.
+pub fn register_lock(path: &Path) {
+    live().locks.push(path.to_path_buf());
+}
+
+/// Forgets a lock file this process released.
+pub fn unregister_lock(path: &Path) {
+    live().locks.retain(|l| l != path);
+}
+
 /// Whether process `pid` is alive; None where this cannot be told (no `/proc`).
-fn pid_alive(pid: u32) -> Option<bool> {
+pub fn pid_alive(pid: u32) -> Option<bool> {
     let proc = Path::new("/proc");
     if !proc.join("self").exists() {
         return None;
@@ -328,6 +341,9 @@ fn exit_removing_temporaries(signal: i32) -> ! {
         .count();
     for d in live.dirs.drain(..).rev() {
         let _ = std::fs::remove_dir(d);
+    }
+    for lock in live.locks.drain(..) {
+        let _ = std::fs::remove_file(lock);
     }
     eprintln!(
         "lembo-sim: interrupted by signal {signal}; removed {removed} temporary output files"

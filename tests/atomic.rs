@@ -261,3 +261,35 @@ fn after_sigkill_a_rerun_removes_the_leftovers_and_writes_complete_outputs() {
     let text = std::fs::read_to_string(dir.join("report.txt")).unwrap();
     assert!(text.starts_with("lembo-sim report"), "{text}");
 }
+
+/// SIGTERM to a sweep that holds its folder's lock removes the lock with the temporaries,
+/// so the next sweep need not judge a stale one.
+#[test]
+fn a_signalled_sweep_releases_its_folder_lock() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("out/sweep");
+    let spec = Path::new(env!("CARGO_MANIFEST_DIR")).join("sim/sweeps/smoke.json");
+    let mut child = start_held(
+        &[
+            "sweep",
+            spec.to_str().unwrap(),
+            "--out",
+            "out/sweep",
+            "--jobs",
+            "1",
+        ],
+        tmp.path(),
+    );
+    let pid = child.id();
+    // spec.json is the sweep's first write, after it took the lock.
+    wait_until(
+        "the sweep holds its lock and stages spec.json",
+        &mut child,
+        || dir.join(lembo_sim::sweep::LOCK_FILE).exists() && temp(&dir, "spec.json", pid).exists(),
+    );
+    signal(&child, "TERM");
+    let status = wait_exit(&mut child);
+    let stderr = stderr_of(child);
+    assert_eq!(status.code(), Some(143), "{stderr}");
+    assert!(files_in(&dir).is_empty(), "{:?}", files_in(&dir));
+}

@@ -376,3 +376,86 @@ fn host_threads_leave_sweep_results_unchanged() {
         "--host-threads",
     );
 }
+
+/// Every file in `dir` with its bytes, sorted by name.
+fn snapshot(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut files: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
+        .unwrap()
+        .flatten()
+        .map(|e| {
+            let bytes = std::fs::read(e.path()).unwrap_or_default();
+            (e.file_name().to_string_lossy().into_owned(), bytes)
+        })
+        .collect();
+    files.sort();
+    files
+}
+
+/// A second `sweep` or `sweep-merge` on a folder a live sweep writes is refused at once,
+/// naming that process, and changes nothing; the lock a killed sweep leaves is taken over
+/// by the next sweep, which finishes as if nothing had happened and releases it.
+#[test]
+fn a_folder_another_live_sweep_writes_is_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("locked");
+    let dir_s = dir.to_string_lossy().into_owned();
+    let lock = dir.join(lembo_sim::sweep::LOCK_FILE);
+    // The first sweep takes the lock, then waits before its first rename.
+    let mut first = Command::new(env!("CARGO_BIN_EXE_lembo-sim"))
+        .args([
+            "sweep",
+            smoke().to_str().unwrap(),
+            "--out",
+            &dir_s,
+            "--jobs",
+            "1",
+        ])
+        .env("LEMBO_HOLD_BEFORE_RENAME_SECS", "60")
+        .env_remove("LEMBO_SWEEP_STOP_AFTER")
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let t0 = std::time::Instant::now();
+    while !lock.exists() {
+        assert!(
+            t0.elapsed().as_secs() < 60,
+            "the first sweep never took its lock"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let before = snapshot(&dir);
+    let holder = format!("process {}", first.id());
+
+    let out = run_smoke(&dir, &[], &[]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("--out") && stderr.contains(&holder),
+        "{stderr}"
+    );
+    let merged = tmp.path().join("merged").to_string_lossy().into_owned();
+    let out = sweep(&["sweep-merge", "--out", &merged, &dir_s], &[], tmp.path());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("SHARD_DIR") && stderr.contains(&holder),
+        "{stderr}"
+    );
+    let out = sweep(&["sweep-merge", "--out", &dir_s, &dir_s], &[], tmp.path());
+    assert_eq!(out.status.code(), Some(2));
+    assert_eq!(snapshot(&dir), before, "a refused command changes nothing");
+
+    first.kill().unwrap(); // SIGKILL: the lock and a temporary stay behind
+    first.wait().unwrap();
+    assert!(lock.exists());
+    ok(&run_smoke(&dir, &[], &[]));
+    assert_eq!(&masked(&dir), reference_run());
+    assert!(!lock.exists(), "a finished sweep releases its lock");
+    let hidden: Vec<String> = snapshot(&dir)
+        .into_iter()
+        .map(|(n, _)| n)
+        .filter(|n| n.starts_with('.'))
+        .collect();
+    assert!(hidden.is_empty(), "{hidden:?}");
+}

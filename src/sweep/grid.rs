@@ -1,0 +1,438 @@
+//! Grid expansion: each block's or point's parameters parsed into canonical values
+//! (`Given`), checked against the render settings and the architecture's shape, and
+//! multiplied out into points (`Expander`).
+
+use super::*;
+
+use crate::config::ArchConfig;
+use crate::datapath::Datapath;
+use crate::discoid::blend::BlendMode;
+use crate::error::{Error, Result};
+use crate::job::{check_tess_range, Mode, PrimitivePath, K_RANGE};
+use crate::raster::PerspectiveTol;
+use serde_json::Value;
+use std::collections::{BTreeMap, BTreeSet};
+
+/// A parameter value as given: parsed, canonical, and where in the spec.
+#[derive(Clone)]
+pub(super) struct Given {
+    setting: Setting,
+    canonical: Value,
+    field: String,
+}
+
+/// Builds the points of a spec, block by block.
+pub(super) struct Expander<'a> {
+    pub(super) file: &'a str,
+    pub(super) scenes: &'a [String],
+    pub(super) mode: Mode,
+    /// `ArchConfig::default()` as JSON: the shape every architecture file has, against
+    /// which `arch.<field>` names and value types are checked.
+    pub(super) arch_shape: Value,
+    pub(super) points: Vec<Point>,
+    pub(super) by_params: BTreeMap<String, usize>,
+}
+
+impl Expander<'_> {
+    pub(super) fn block(&mut self, b: usize, block: &Params) -> Result<()> {
+        let origin = format!("grid[{b}]");
+        if block.0.is_empty() {
+            return Err(Error::invalid(
+                self.file,
+                &origin,
+                "{}",
+                "a grid block needs at least one parameter",
+            ));
+        }
+        let mut scenes = None;
+        // Each axis: the parameter's name and its values with their fields.
+        let mut axes: Vec<(String, Vec<Given>)> = Vec::new();
+        let mut size = 1usize;
+        for (name, list) in &block.0 {
+            let field = format!("{origin}.{name}");
+            let items = match list {
+                Value::Array(items) if items.is_empty() => {
+                    return Err(empty_list(self.file, &field))
+                }
+                Value::Array(items) => items,
+                other => {
+                    return Err(Error::Parse {
+                        file: self.file.into(),
+                        field,
+                        message: format!(
+                            "expected a list of values in a grid block, found {other}"
+                        ),
+                    })
+                }
+            };
+            if name == SCENES {
+                scenes = Some(self.scene_list(&field, items)?);
+                continue;
+            }
+            let mut values = Vec::new();
+            for (j, v) in items.iter().enumerate() {
+                let field = format!("{field}[{j}]");
+                let (setting, canonical) = self.setting(name, v, &field)?;
+                values.push(Given {
+                    setting,
+                    canonical,
+                    field,
+                });
+            }
+            size = size.saturating_mul(values.len());
+            if size > MAX_RUNS {
+                return Err(too_many(self.file, &origin, size));
+            }
+            axes.push((name.clone(), values));
+        }
+        let scenes = scenes.unwrap_or_else(|| (0..self.scenes.len()).collect());
+        // The odometer of the product: the last axis turns fastest.
+        let mut at = vec![0usize; axes.len()];
+        loop {
+            let chosen = axes
+                .iter()
+                .zip(&at)
+                .map(|((name, values), &i)| (name.clone(), values[i].clone()))
+                .collect();
+            self.add(&origin, chosen, &scenes)?;
+            let mut axis = axes.len();
+            loop {
+                if axis == 0 {
+                    return Ok(());
+                }
+                axis -= 1;
+                at[axis] += 1;
+                if at[axis] < axes[axis].1.len() {
+                    break;
+                }
+                at[axis] = 0;
+            }
+        }
+    }
+
+    pub(super) fn point(&mut self, p: usize, point: &Params) -> Result<()> {
+        let origin = format!("points[{p}]");
+        let mut scenes = None;
+        let mut chosen = Vec::new();
+        for (name, v) in &point.0 {
+            let field = format!("{origin}.{name}");
+            if name == SCENES {
+                let items = match v {
+                    Value::Array(items) if items.is_empty() => {
+                        return Err(empty_list(self.file, &field))
+                    }
+                    Value::Array(items) => items,
+                    other => {
+                        return Err(Error::Parse {
+                            file: self.file.into(),
+                            field,
+                            message: format!("expected a list of the spec's scenes, found {other}"),
+                        })
+                    }
+                };
+                scenes = Some(self.scene_list(&field, items)?);
+                continue;
+            }
+            let (setting, canonical) = self.setting(name, v, &field)?;
+            chosen.push((
+                name.clone(),
+                Given {
+                    setting,
+                    canonical,
+                    field,
+                },
+            ));
+        }
+        let scenes = scenes.unwrap_or_else(|| (0..self.scenes.len()).collect());
+        self.add(&origin, chosen, &scenes)
+    }
+
+    /// A `scenes` restriction: each must be one of the spec's scenes, as written there.
+    fn scene_list(&self, field: &str, items: &[Value]) -> Result<Vec<usize>> {
+        let mut out = BTreeSet::new();
+        for (j, item) in items.iter().enumerate() {
+            let field = format!("{field}[{j}]");
+            let found = item
+                .as_str()
+                .and_then(|s| self.scenes.iter().position(|t| t == s));
+            match found {
+                Some(i) => {
+                    out.insert(i);
+                }
+                None => {
+                    return Err(Error::invalid(
+                        self.file,
+                        field,
+                        item,
+                        format!(
+                            "must be one of the spec's scenes, as written there: {}",
+                            self.scenes.join(", ")
+                        ),
+                    ))
+                }
+            }
+        }
+        Ok(out.into_iter().collect())
+    }
+
+    /// Adds a point, or its scenes to an equal point already added; checks the settings
+    /// that do not depend on a scene.
+    fn add(&mut self, origin: &str, chosen: Vec<(String, Given)>, scenes: &[usize]) -> Result<()> {
+        let mut point = Point {
+            params: BTreeMap::new(),
+            scenes: scenes.to_vec(),
+            origin: origin.to_string(),
+            fields: BTreeMap::new(),
+            settings: Vec::new(),
+        };
+        for (name, given) in chosen {
+            point.params.insert(name.clone(), given.canonical);
+            point.fields.insert(name, given.field);
+            point.settings.push(given.setting);
+        }
+        self.check_combination(&point)?;
+        let k = key("", &point.params);
+        match self.by_params.get(&k) {
+            Some(&i) => {
+                let known = &mut self.points[i].scenes;
+                known.extend_from_slice(scenes);
+                known.sort_unstable();
+                known.dedup();
+            }
+            None => {
+                if self.points.len() >= MAX_RUNS {
+                    return Err(too_many(self.file, origin, self.points.len() + 1));
+                }
+                self.by_params.insert(k, self.points.len());
+                self.points.push(point);
+            }
+        }
+        Ok(())
+    }
+
+    fn check_combination(&self, point: &Point) -> Result<()> {
+        let triangle = point.path() == Some(PrimitivePath::Triangle);
+        let shown = Value::Object(point.params.clone().into_iter().collect());
+        for (name, needs, ok) in [
+            ("tess", "path triangle", triangle),
+            ("k", "path lembo (and curved discoids)", !triangle),
+            (
+                "perspective_tol",
+                "path lembo (and curved discoids)",
+                !triangle,
+            ),
+        ] {
+            if point.params.contains_key(name) && !ok {
+                return Err(Error::invalid(
+                    self.file,
+                    point.field(name),
+                    &shown,
+                    format!("`{name}` is only meaningful with {needs}"),
+                ));
+            }
+        }
+        if self.mode == Mode::Functional {
+            if let Some(name) = point.params.keys().find(|n| n.starts_with(ARCH)) {
+                return Err(Error::invalid(
+                    self.file,
+                    point.field(name),
+                    &point.params[name],
+                    "architecture fields are only meaningful with mode timed",
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Parses one parameter value; returns it and its canonical JSON.
+    fn setting(&self, name: &str, v: &Value, field: &str) -> Result<(Setting, Value)> {
+        let file = self.file;
+        let parse = |message: String| Error::Parse {
+            file: file.into(),
+            field: field.into(),
+            message,
+        };
+        let word = |choices: &[&str]| -> Result<String> {
+            match v.as_str() {
+                Some(s) if choices.contains(&s) => Ok(s.to_string()),
+                _ => Err(parse(format!(
+                    "expected one of {}, found {v}",
+                    choices.join(", ")
+                ))),
+            }
+        };
+        let number = || -> Result<f64> {
+            v.as_f64()
+                .ok_or_else(|| parse(format!("expected a number, found {v}")))
+        };
+        let setting = match name {
+            "path" => Setting::Path(match word(&["lembo", "triangle"])?.as_str() {
+                "lembo" => PrimitivePath::Lembo,
+                _ => PrimitivePath::Triangle,
+            }),
+            "k" => {
+                let k = number()?;
+                let (lo, hi) = K_RANGE;
+                if !(k >= lo && k <= hi) {
+                    return Err(Error::invalid(
+                        file,
+                        field,
+                        v,
+                        format!("k must be a number in [{lo}, {hi}] pixels"),
+                    ));
+                }
+                Setting::K(k)
+            }
+            "perspective_tol" => {
+                let tol = match (v.as_str(), v.as_f64()) {
+                    (Some("off"), _) => Ok(PerspectiveTol::Off),
+                    (_, Some(px)) => PerspectiveTol::px(px),
+                    _ => Err(format!("expected a number of pixels or \"off\", found {v}")),
+                };
+                Setting::PerspectiveTol(tol.map_err(|why| Error::invalid(file, field, v, why))?)
+            }
+            "tess" => {
+                let n = v
+                    .as_u64()
+                    .ok_or_else(|| parse(format!("expected a whole number, found {v}")))?;
+                let n = u32::try_from(n).unwrap_or(u32::MAX);
+                check_tess_range(n).map_err(|e| reword(e, file, field))?;
+                Setting::Tess(n)
+            }
+            "datapath" => Setting::Datapath(match word(&["f32", "f64"])?.as_str() {
+                "f32" => Datapath::F32,
+                _ => Datapath::F64,
+            }),
+            "blend" => {
+                let names: Vec<&str> = BlendMode::ALL.iter().map(|m| m.name()).collect();
+                let w = word(&names)?;
+                Setting::Blend(
+                    *BlendMode::ALL
+                        .iter()
+                        .find(|m| m.name() == w)
+                        .expect("one of the names"),
+                )
+            }
+            "threshold" => {
+                let t = number()?;
+                if !(t.is_finite() && t > 0.0) {
+                    return Err(Error::invalid(
+                        file,
+                        field,
+                        v,
+                        "must be a finite distance above 0 world units",
+                    ));
+                }
+                Setting::Threshold(t)
+            }
+            _ => match name.strip_prefix(ARCH) {
+                Some(path) => {
+                    let canonical = self.arch_value(path, v, field)?;
+                    return Ok((Setting::Arch(path.to_string(), v.clone()), canonical));
+                }
+                None => {
+                    return Err(parse(format!(
+                        "unknown parameter `{name}`; expected {}, `arch.<field>` or `scenes`",
+                        SETTINGS.join(", ")
+                    )))
+                }
+            },
+        };
+        let canonical = match &setting {
+            Setting::Path(p) => Value::from(p.name()),
+            Setting::K(x) | Setting::Threshold(x) => Value::from(*x),
+            Setting::PerspectiveTol(t) => match t {
+                PerspectiveTol::Px(px) => Value::from(*px),
+                _ => Value::from("off"),
+            },
+            Setting::Tess(n) => Value::from(*n),
+            Setting::Datapath(d) => Value::from(d.name()),
+            Setting::Blend(m) => Value::from(m.name()),
+            Setting::Arch(..) => unreachable!("returned above"),
+        };
+        Ok((setting, canonical))
+    }
+
+    /// Checks that `arch.<path>` names a field and `v` has its type; returns the value as
+    /// the architecture serialises it (400 for a clock becomes 400.0).
+    fn arch_value(&self, path: &str, v: &Value, field: &str) -> Result<Value> {
+        let mut shape = self.arch_shape.clone();
+        set_arch_field(&mut shape, path, v.clone()).map_err(|message| Error::Parse {
+            file: self.file.into(),
+            field: field.into(),
+            message,
+        })?;
+        let config: ArchConfig =
+            serde_path_to_error::deserialize(shape).map_err(|e| Error::Parse {
+                file: self.file.into(),
+                field: field.into(),
+                message: e.into_inner().to_string(),
+            })?;
+        let back = serde_json::to_value(config).expect("the architecture serialises");
+        Ok(arch_field(&back, path).cloned().unwrap_or(Value::Null))
+    }
+}
+
+/// Sets the field at `path` (dotted) of an architecture's JSON; the field must exist and
+/// not be a group of fields. The error says which part is unknown and what is there.
+pub(super) fn set_arch_field(
+    arch: &mut Value,
+    path: &str,
+    v: Value,
+) -> std::result::Result<(), String> {
+    let parts: Vec<&str> = path.split('.').collect();
+    let mut at = arch;
+    for (i, part) in parts.iter().enumerate() {
+        let here = parts[..i].join(".");
+        let Value::Object(map) = at else {
+            return Err(format!(
+                "unknown architecture field `{path}`: `{here}` has no fields"
+            ));
+        };
+        if !map.contains_key(*part) {
+            let known: Vec<&str> = map.keys().map(String::as_str).collect();
+            return Err(format!(
+                "unknown architecture field `{path}`; {} has: {}",
+                if here.is_empty() {
+                    "the architecture".to_string()
+                } else {
+                    format!("`{here}`")
+                },
+                known.join(", ")
+            ));
+        }
+        at = map.get_mut(*part).expect("checked");
+    }
+    if let Value::Object(map) = at {
+        let known: Vec<&str> = map.keys().map(String::as_str).collect();
+        return Err(format!(
+            "`{path}` is a group of fields; name one of them: {}",
+            known.join(", ")
+        ));
+    }
+    *at = v;
+    Ok(())
+}
+
+pub(super) fn arch_field<'a>(arch: &'a Value, path: &str) -> Option<&'a Value> {
+    path.split('.').try_fold(arch, |at, part| at.get(part))
+}
+
+/// The same error, said of another file and field (the spec's, for a check written for
+/// the command line or an architecture file).
+pub(super) fn reword(e: Error, file: &str, field: &str) -> Error {
+    match e {
+        Error::Invalid { value, reason, .. } => Error::Invalid {
+            file: file.into(),
+            field: field.into(),
+            value,
+            reason,
+        },
+        Error::Parse { message, .. } => Error::Parse {
+            file: file.into(),
+            field: field.into(),
+            message,
+        },
+        other => other,
+    }
+}

@@ -1,0 +1,134 @@
+//! `sweep-merge`: the shards' records unioned into what one unsharded sweep writes.
+
+use super::*;
+
+use crate::error::{read_text_file, Error, Result};
+use crate::job::COMMAND_LINE;
+use serde_json::Value;
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+// ---- sweep-merge ---------------------------------------------------------------------
+
+/// A merge request: the shards' directories and where the union goes.
+#[derive(Clone, Debug)]
+pub struct MergeJob {
+    pub out: PathBuf,
+    pub shards: Vec<PathBuf>,
+}
+
+#[derive(Debug)]
+pub struct MergeOutput {
+    pub dir: PathBuf,
+    pub name: String,
+    pub runs: usize,
+    pub files: Vec<String>,
+}
+
+/// Unions the shards' records into what an unsharded sweep writes. The shards must hold
+/// the same spec; a run found in two shards must have the same record but for host timing
+/// (`report.host`); every run of the spec must be found.
+pub fn run_merge(job: &MergeJob) -> Result<MergeOutput> {
+    if job.shards.is_empty() {
+        return Err(Error::invalid(
+            COMMAND_LINE,
+            "SHARD_DIR",
+            "none",
+            "name at least one shard directory",
+        ));
+    }
+    let mut spec: Option<(Spec, Vec<u8>)> = None;
+    let mut lines: BTreeMap<usize, (String, Value, String)> = BTreeMap::new();
+    for shard in &job.shards {
+        FolderLock::check_free(shard, "SHARD_DIR")?;
+        let spec_path = shard.join(SPEC_JSON);
+        let text = read_text_file(&spec_path)?;
+        let this = Spec::parse(&text, &spec_path.display().to_string())?;
+        match &spec {
+            None => spec = Some((this, text.into_bytes())),
+            Some((first, _)) if first.value != this.value => {
+                return Err(spec_difference(
+                    &this.file,
+                    &this.value,
+                    &first.value,
+                    &first.file,
+                ))
+            }
+            Some(_) => {}
+        }
+        let (spec, _) = spec.as_ref().expect("set above");
+
+        let path = shard.join(RESULTS_JSONL);
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(&path).map_err(|source| Error::Read {
+            path: path.clone(),
+            source,
+        })?;
+        for (n, raw) in text.split_inclusive('\n').enumerate() {
+            let field = format!("line {}", n + 1);
+            let Some(line) = raw.strip_suffix('\n') else {
+                return Err(Error::Parse {
+                    file,
+                    field,
+                    message: "no newline: the shard did not finish; run it again".into(),
+                });
+            };
+            let (index, key) = record_id(line).map_err(|message| Error::Parse {
+                file: file.clone(),
+                field: field.clone(),
+                message,
+            })?;
+            check_record(&file, n, index, &key, spec, Shard::ALL)?;
+            let mut masked: Value = serde_json::from_str(line).expect("parsed above");
+            if let Some(report) = masked.get_mut("report").and_then(Value::as_object_mut) {
+                report.remove("host");
+            }
+            match lines.get(&index) {
+                Some((_, other, from)) if *other != masked => {
+                    return Err(Error::invalid(
+                        file,
+                        field,
+                        key,
+                        format!(
+                            "differs from the record of the same run in {from} beyond host timing"
+                        ),
+                    ))
+                }
+                Some(_) => {}
+                None => {
+                    lines.insert(index, (line.to_string(), masked, file.clone()));
+                }
+            }
+        }
+    }
+    let (spec, spec_bytes) = spec.expect("at least one shard");
+    let missing: Vec<usize> = (0..spec.runs.len())
+        .filter(|i| !lines.contains_key(i))
+        .collect();
+    if !missing.is_empty() {
+        let shown: Vec<String> = missing.iter().take(8).map(|i| i.to_string()).collect();
+        return Err(Error::invalid(
+            COMMAND_LINE,
+            "SHARD_DIR",
+            format!(
+                "runs {}{}",
+                shown.join(", "),
+                if missing.len() > 8 { ", ..." } else { "" }
+            ),
+            format!(
+                "{} of the spec's {} runs are in no shard: did every shard finish?",
+                missing.len(),
+                spec.runs.len()
+            ),
+        ));
+    }
+    let lines: BTreeMap<usize, String> = lines.into_iter().map(|(i, (l, _, _))| (i, l)).collect();
+    let _lock = FolderLock::acquire(&job.out, "sweep-merge", "--out")?;
+    let files = write_final(&job.out, &spec_bytes, &lines)?;
+    Ok(MergeOutput {
+        dir: job.out.clone(),
+        name: spec.name,
+        runs: spec.runs.len(),
+        files,
+    })
+}

@@ -1,0 +1,380 @@
+//! `lembo-sim sweep` and `sweep-merge` (DESIGN.md §7, issue 6): many runs of one spec file,
+//! each a point of a parameter space on a scene, into one table.
+//!
+//! ```text
+//!  spec.json ─► Spec::parse (shape, parameter values, grid expansion, keys)
+//!            ─► Plan::load  (scenes, architectures, every run's RenderJob validated)
+//!            ─► references (one per scene, shared) ─► runs on a rayon pool of --jobs threads
+//!            ─► results.jsonl (one line per finished run, appended and flushed at once)
+//!            ─► when all are done: results.jsonl sorted, results.csv, spec.json, plots
+//! ```
+//!
+//! A spec (`sim/sweeps/README.md` documents the format) names scenes and a list of
+//! *points*: a grid block is the cartesian product of its parameters' value lists (the first
+//! parameter varies slowest), an explicit point gives one value per parameter, and the
+//! points are the union of the blocks and then the explicit points, in that order (a point
+//! met again adds its scenes to the first one's). Parameters are the render settings
+//! (`path`, `k`, `tess`, `datapath`, `blend`, `threshold`) and any architecture field as
+//! `arch.<dotted path>`; a block or point may restrict itself to some of the spec's scenes
+//! with `scenes`. Every (point, scene) pair is a *run*; runs are numbered point-major in
+//! that order, and each has a *key*: the scene as the spec writes it and the point's
+//! parameters, sorted, in canonical form (`../../traces/sphere24.json|k=0.5|path="lembo"`).
+//!
+//! Everything is validated before the first run starts: the spec's shape, every value,
+//! every combination, every scene and every point's architecture; a refused value names
+//! the spec file, its field path (`grid[1].arch.rop.count[0]`) and the value.
+//!
+//! Resumption: a run's record is appended to `results.jsonl` as soon as it finishes, and a
+//! sweep started again on the same directory skips the runs whose key is already there (a
+//! truncated last line, from a kill mid-write, is dropped). `spec.json` in the directory
+//! must then hold the same spec, and every record must belong to this spec and shard.
+//! Sharding (`--shard I/N`) keeps the runs whose index is I modulo N; `sweep-merge` unions
+//! the shards' records and writes what an unsharded run writes.
+//!
+//! Paths inside records (`report.scene.source`, `report.settings.arch_file`) are the
+//! spec's own strings, so records do not depend on the directory a sweep ran from.
+
+mod grid;
+mod lock;
+mod merge;
+mod plan;
+mod results;
+mod run;
+mod spec;
+
+use crate::error::{Error, Result};
+use crate::job::{COMMAND_LINE, MAX_HOST_THREADS};
+use grid::*;
+pub use lock::{FolderLock, LOCK_FILE};
+pub use merge::{run_merge, MergeJob, MergeOutput};
+pub use plan::Plan;
+pub use results::csv_bytes;
+use results::*;
+pub use run::run_sweep;
+use spec::*;
+pub use spec::{Point, Run, Spec};
+use std::fmt;
+use std::path::PathBuf;
+
+/// The most runs (points × scenes) a spec may expand to: beyond it a sweep takes days, and
+/// a typo in a grid should be refused rather than expanded.
+pub const MAX_RUNS: usize = 100_000;
+/// The most threads `--jobs` accepts; each run is one host thread (or `--host-threads`).
+pub const MAX_JOBS: usize = 256;
+/// Tolerance k of a point that sets none \[pixels\]: `render`'s default.
+pub const DEFAULT_K_PX: f64 = 0.5;
+/// The records file of a sweep directory.
+pub const RESULTS_JSONL: &str = "results.jsonl";
+/// The table of a sweep directory.
+pub const RESULTS_CSV: &str = "results.csv";
+/// The copy of the spec in a sweep directory.
+pub const SPEC_JSON: &str = "spec.json";
+
+/// The render settings a point can set, besides `arch.<field>`.
+const SETTINGS: [&str; 7] = [
+    "path",
+    "k",
+    "perspective_tol",
+    "tess",
+    "datapath",
+    "blend",
+    "threshold",
+];
+/// A block's or point's scene restriction: not a parameter.
+const SCENES: &str = "scenes";
+/// The prefix of architecture parameters.
+const ARCH: &str = "arch.";
+// ---- Running -------------------------------------------------------------------------
+
+/// `--shard I/N`: the runs whose index is I modulo N.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Shard {
+    pub index: u32,
+    pub count: u32,
+}
+
+impl Shard {
+    /// Every run.
+    pub const ALL: Shard = Shard { index: 0, count: 1 };
+
+    /// Checks N >= 1 and I < N.
+    pub fn new(index: u32, count: u32) -> Result<Shard> {
+        if count == 0 || index >= count {
+            return Err(Error::invalid(
+                COMMAND_LINE,
+                "--shard",
+                format!("{index}/{count}"),
+                "must be I/N with N >= 1 and I in 0..N",
+            ));
+        }
+        Ok(Shard { index, count })
+    }
+
+    pub fn keeps(self, index: usize) -> bool {
+        index % self.count as usize == self.index as usize
+    }
+}
+
+/// A sweep request, from the command line.
+#[derive(Clone, Debug)]
+pub struct SweepJob {
+    pub spec: PathBuf,
+    /// Output directory; None for `out/sweeps/<spec name>/`.
+    pub out: Option<PathBuf>,
+    /// Worker threads; None for the host's available parallelism.
+    pub jobs: Option<usize>,
+    pub shard: Shard,
+    /// Test hook: stop once this many records were appended (see [`SweepOutcome`]).
+    pub stop_after: Option<usize>,
+    /// Draw a progress bar on stderr (hidden anyway when stderr is not a terminal).
+    pub progress: bool,
+    /// Host threads of each timed run (`--host-threads`; results do not depend on it).
+    pub host_threads: u32,
+}
+
+/// What a sweep did.
+#[derive(Debug)]
+pub enum SweepOutcome {
+    /// Every run of the shard has a record; the final files are written.
+    Done(SweepOutput),
+    /// Stopped by `stop_after` with `appended` records added to `results.jsonl`; the
+    /// final files are not written.
+    Stopped { dir: PathBuf, appended: usize },
+}
+
+#[derive(Debug)]
+pub struct SweepOutput {
+    pub dir: PathBuf,
+    pub name: String,
+    /// Runs of this shard.
+    pub runs: usize,
+    /// Runs found done in `results.jsonl` and skipped.
+    pub skipped: usize,
+    /// Worker threads used.
+    pub jobs: usize,
+    /// Files written, in the directory.
+    pub files: Vec<String>,
+    pub wall_seconds: f64,
+}
+
+/// A sweep that failed: the error, and the run it happened in when it was a run's.
+#[derive(Debug)]
+pub struct SweepError {
+    /// Boxed so that results carrying a SweepError stay small.
+    pub error: Box<Error>,
+    /// `run 7 (key)` when a run failed; None for a refused spec or flag.
+    pub run: Option<String>,
+}
+
+impl SweepError {
+    pub fn exit_code(&self) -> u8 {
+        self.error.exit_code()
+    }
+}
+
+impl fmt::Display for SweepError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match &self.run {
+            Some(run) => write!(f, "{run}: {}", self.error),
+            None => write!(f, "{}", self.error),
+        }
+    }
+}
+
+impl From<Error> for SweepError {
+    fn from(error: Error) -> SweepError {
+        SweepError {
+            error: Box::new(error),
+            run: None,
+        }
+    }
+}
+
+impl SweepJob {
+    /// Checks the flags; errors name the flag and the value.
+    pub fn validate(&self) -> Result<()> {
+        if let Some(n) = self.jobs {
+            if !(1..=MAX_JOBS).contains(&n) {
+                return Err(Error::invalid(
+                    COMMAND_LINE,
+                    "--jobs",
+                    n,
+                    format!("must be 1 to {MAX_JOBS} threads"),
+                ));
+            }
+        }
+        Shard::new(self.shard.index, self.shard.count)?;
+        if !(1..=MAX_HOST_THREADS).contains(&self.host_threads) {
+            return Err(Error::invalid(
+                COMMAND_LINE,
+                "--host-threads",
+                self.host_threads,
+                format!("must be in 1..={MAX_HOST_THREADS} host threads"),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Runs a sweep: validates everything, then runs what `results.jsonl` does not hold yet.
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const BASE: &str = r#""name": "t", "scenes": ["a.json", "b.json"]"#;
+
+    fn spec(rest: &str) -> Result<Spec> {
+        Spec::parse(&format!("{{{BASE}, {rest}}}"), "s.json")
+    }
+
+    fn field_of(e: Error) -> String {
+        match e {
+            Error::Invalid { field, .. } | Error::Parse { field, .. } => field,
+            other => panic!("unexpected error {other}"),
+        }
+    }
+
+    #[test]
+    fn grid_is_a_product_with_the_first_parameter_slowest_then_points() {
+        let s = spec(
+            r#""grid": [{"tess": [1, 2], "path": ["triangle"]}, {"k": [2, 1]}],
+               "points": [{"k": 1}, {"k": 0.25, "scenes": ["b.json"]}]"#,
+        )
+        .unwrap();
+        let keys: Vec<&str> = s.runs.iter().map(|r| r.key.as_str()).collect();
+        assert_eq!(
+            keys,
+            [
+                r#"a.json|path="triangle"|tess=1"#,
+                r#"b.json|path="triangle"|tess=1"#,
+                r#"a.json|path="triangle"|tess=2"#,
+                r#"b.json|path="triangle"|tess=2"#,
+                "a.json|k=2.0",
+                "b.json|k=2.0",
+                // points[0] equals grid[1]'s second point: the union keeps it once.
+                "a.json|k=1.0",
+                "b.json|k=1.0",
+                "b.json|k=0.25",
+            ]
+        );
+        assert!(s.runs.iter().enumerate().all(|(i, r)| r.index == i));
+    }
+
+    #[test]
+    fn arch_values_are_canonical_and_unknown_fields_named() {
+        let s = spec(r#""points": [{"arch.clock_mhz": 400, "arch.segmenter.count": 4}]"#).unwrap();
+        assert_eq!(
+            s.points[0].params["arch.clock_mhz"],
+            serde_json::json!(400.0)
+        );
+        let e = spec(r#""points": [{"arch.segmenter.cnt": 4}]"#).unwrap_err();
+        assert!(e.to_string().contains("cycles_per_segment"), "{e}");
+        assert_eq!(field_of(e), "points[0].arch.segmenter.cnt");
+        let e = spec(r#""points": [{"arch.links": 4}]"#).unwrap_err();
+        assert!(e.to_string().contains("group of fields"), "{e}");
+        let e = spec(r#""grid": [{"arch.rop.count": [2, 1.5]}]"#).unwrap_err();
+        assert_eq!(field_of(e), "grid[0].arch.rop.count[1]");
+    }
+
+    #[test]
+    fn bad_values_and_combinations_name_their_field() {
+        for (rest, field) in [
+            (r#""grid": [{"k": []}]"#, "grid[0].k"),
+            (r#""grid": [{"k": [1, 100]}]"#, "grid[0].k[1]"),
+            (r#""grid": [{"k": 1}]"#, "grid[0].k"),
+            (r#""grid": [{}]"#, "grid[0]"),
+            (r#""grid": []"#, "grid"),
+            (
+                r#""points": [{"tess": 0, "path": "triangle"}]"#,
+                "points[0].tess",
+            ),
+            (r#""points": [{"tess": 2}]"#, "points[0].tess"),
+            (r#""points": [{"k": 1, "path": "triangle"}]"#, "points[0].k"),
+            (r#""points": [{"datapath": "f16"}]"#, "points[0].datapath"),
+            (r#""points": [{"threshold": -1}]"#, "points[0].threshold"),
+            (r#""points": [{"colour": 1}]"#, "points[0].colour"),
+            (
+                r#""points": [{"scenes": ["c.json"]}]"#,
+                "points[0].scenes[0]",
+            ),
+            (r#""points": [{}], "viewport": [0, 4]"#, "viewport[0]"),
+            (r#""points": [{}], "extra": 1"#, "extra"),
+        ] {
+            let e = spec(rest)
+                .err()
+                .unwrap_or_else(|| panic!("{rest} accepted"));
+            assert_eq!(field_of(e), field, "{rest}");
+        }
+        let e = Spec::parse(r#"{"name": "t", "scenes": [], "points": [{}]}"#, "s").unwrap_err();
+        assert_eq!(field_of(e), "scenes");
+    }
+
+    #[test]
+    fn huge_grids_are_refused_before_expansion() {
+        let list: Vec<String> = (1..=400).map(|i| i.to_string()).collect();
+        let l = list.join(", ");
+        let e = spec(&format!(
+            r#""grid": [{{"arch.clock_mhz": [{l}], "arch.setup.latency_cycles": [{l}]}}]"#
+        ))
+        .unwrap_err();
+        assert_eq!(field_of(e), "grid[0]");
+    }
+
+    #[test]
+    fn shards_partition_the_indices() {
+        assert!(Shard::new(2, 2).is_err());
+        assert!(Shard::new(0, 0).is_err());
+        let shards: Vec<Shard> = (0..3).map(|i| Shard::new(i, 3).unwrap()).collect();
+        for index in 0..20 {
+            assert_eq!(shards.iter().filter(|s| s.keeps(index)).count(), 1);
+        }
+    }
+
+    #[test]
+    fn units_sort_in_dataflow_order_and_by_instance() {
+        let mut names = [
+            "Rop[1]",
+            "Segmenter[10]",
+            "Setup",
+            "Segmenter[9]",
+            "FrameBuffer",
+        ]
+        .map(unit_order);
+        names.sort();
+        let names: Vec<&str> = names.iter().map(|(_, _, n)| n.as_str()).collect();
+        assert_eq!(
+            names,
+            [
+                "Setup",
+                "Segmenter[9]",
+                "Segmenter[10]",
+                "Rop[1]",
+                "FrameBuffer"
+            ]
+        );
+    }
+
+    #[test]
+    fn csv_leaves_absent_values_empty() {
+        let records = vec![
+            serde_json::json!({"index": 0, "scene": "s", "params": {"k": 1.0},
+                "report": {"cycles": {"total": 10, "fps": 5.0, "bottleneck": "Rop",
+                    "units": [{"name": "Rop", "busy": 5}]},
+                    "accuracy": null, "primitives": {"count": 2, "bytes": 8},
+                    "counts": {"fragments": 3, "lembo_pieces": 4}, "blend": null,
+                    "host": {"wall_seconds": 0.5}}}),
+            serde_json::json!({"index": 1, "scene": "s, \"quoted\"", "params": {"tess": 2},
+                "report": {"cycles": null, "accuracy": {"psnr_db": 40.0},
+                    "primitives": {"count": 2, "bytes": 8}, "counts": {"fragments": 3},
+                    "blend": null, "host": {"wall_seconds": 0.25}}}),
+        ];
+        let text = String::from_utf8(csv_bytes(&records).unwrap()).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(lines[0], "index,scene,k,tess,cycles_total,fps,bottleneck,util.Rop,acc.psnr_db,primitives,primitive_bytes,fragments,lembo_pieces,blend.error_mean,blend.error_max,wall_seconds");
+        assert_eq!(lines[1], "0,s,1.0,,10,5.0,Rop,0.5,,2,8,3,4,,,0.5");
+        assert_eq!(
+            lines[2],
+            "1,\"s, \"\"quoted\"\"\",,2,,,,,40.0,2,8,3,,,,0.25"
+        );
+    }
+}

@@ -1,0 +1,311 @@
+//! The validated plan: a spec with its scenes and architectures loaded and every run's
+//! `RenderJob` built and validated before the first run starts; a run's record.
+
+use super::*;
+
+use crate::camera::View;
+use crate::config::ArchConfig;
+use crate::datapath::Datapath;
+use crate::discoid::blend::BlendMode;
+use crate::discoid::render::check_scene;
+use crate::error::{parent_dir, read_text_file, Error, Result};
+use crate::job::{check_triangle_budget, run_path, Mode, PrimitivePath, RenderJob};
+use crate::raster::PerspectiveTol;
+use crate::reference::oracle::ReferenceImage;
+use crate::report::Report;
+use crate::scene::Scene;
+use serde::Serialize;
+use serde_json::Value;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+// ---- The validated plan --------------------------------------------------------------
+
+/// A spec with its scenes loaded and every run's job built and validated: nothing in it
+/// can be refused once a run starts, except what only a run can find (a patch beyond the
+/// segment cap).
+pub struct Plan {
+    pub spec: Spec,
+    pub scenes: Vec<Scene>,
+    pub(super) views: Vec<View>,
+    /// Each point's architecture; None in functional mode.
+    pub(super) archs: Vec<Option<ArchConfig>>,
+    /// Each run's job, by index.
+    pub(super) jobs: Vec<RenderJob>,
+}
+
+impl Plan {
+    /// Reads, parses, expands and validates a spec file; scenes and the base architecture
+    /// are relative to its directory.
+    pub fn load(path: &Path) -> Result<Plan> {
+        let text = read_text_file(path)?;
+        Plan::new(
+            Spec::parse(&text, &path.display().to_string())?,
+            parent_dir(path),
+        )
+    }
+
+    /// Validates an expanded spec whose relative paths start at `dir`.
+    pub fn new(spec: Spec, dir: &Path) -> Result<Plan> {
+        let file = spec.file.as_str();
+        let base = match (spec.mode, &spec.arch) {
+            (Mode::Functional, _) => None,
+            (Mode::Timed, Some(a)) => Some(ArchConfig::load(&dir.join(a))?),
+            (Mode::Timed, None) => Some(ArchConfig::baseline()),
+        };
+
+        let mut scenes: Vec<Scene> = Vec::new();
+        for (i, s) in spec.scenes.iter().enumerate() {
+            let mut scene = Scene::load(&dir.join(s))?;
+            if let Some(j) = scenes.iter().position(|t| t.name == scene.name) {
+                return Err(Error::invalid(
+                    file,
+                    format!("scenes[{i}]"),
+                    s,
+                    format!(
+                        "its scene name `{}` is also scenes[{j}]'s; results are labelled by scene name",
+                        scene.name
+                    ),
+                ));
+            }
+            if let Some((w, h)) = spec.viewport {
+                scene.set_viewport(w, h)?;
+            }
+            if scene.discoid_count() > 0 {
+                check_scene(&scene)?;
+                let planar = scene
+                    .objects
+                    .iter()
+                    .filter_map(|o| o.discoids.as_ref())
+                    .any(|d| !d.planar.is_empty());
+                if spec.mode == Mode::Timed && planar && scene.lembo_count() > 0 {
+                    return Err(Error::invalid(
+                        file,
+                        format!("scenes[{i}]"),
+                        s,
+                        "the timed passes draw either curved or planar discoids in one scene; use mode functional for both",
+                    ));
+                }
+            }
+            scenes.push(scene);
+        }
+        let views = scenes
+            .iter()
+            .map(|s| View::new(&s.camera, s.viewport))
+            .collect();
+
+        let mut archs = Vec::with_capacity(spec.points.len());
+        for point in &spec.points {
+            archs.push(match &base {
+                None => None,
+                Some(base) => Some(point_arch(file, base, point)?),
+            });
+        }
+
+        let mut jobs = Vec::with_capacity(spec.runs.len());
+        for run in &spec.runs {
+            let point = &spec.points[run.point];
+            let scene = &scenes[run.scene];
+            check_applies(&spec, point, scene, run.scene)?;
+            let job = render_job(&spec, point, scene, 1);
+            job.validate().map_err(|e| {
+                let field = match &e {
+                    Error::Invalid { field, .. } => field.trim_start_matches("--").to_string(),
+                    _ => String::new(),
+                };
+                reword(e, file, &point.field(&field))
+            })?;
+            if job.path == PrimitivePath::Triangle && scene.discoid_count() == 0 {
+                check_triangle_budget(scene, job.tess.unwrap_or(1))
+                    .map_err(|e| reword(e, file, &point.field("tess")))?;
+            }
+            jobs.push(job);
+        }
+        Ok(Plan {
+            spec,
+            scenes,
+            views,
+            archs,
+            jobs,
+        })
+    }
+
+    /// The runs of a shard, in index order.
+    pub fn shard_runs(&self, shard: Shard) -> Vec<&Run> {
+        self.spec
+            .runs
+            .iter()
+            .filter(|r| shard.keeps(r.index))
+            .collect()
+    }
+
+    /// Runs one run: its record, one JSON line without the newline.
+    pub(super) fn run(
+        &self,
+        run: &Run,
+        references: &[Option<(ReferenceImage, f64)>],
+    ) -> Result<String> {
+        let job = &self.jobs[run.index];
+        let reference = if job.reference {
+            references[run.scene].as_ref().map(|(r, w)| (r, *w))
+        } else {
+            None
+        };
+        let mut out = run_path(
+            job,
+            &self.scenes[run.scene],
+            &self.views[run.scene],
+            crate::job::Model::new(self.archs[run.point].as_ref()),
+            reference,
+        )?;
+        out.report.scene.source = self.spec.scenes[run.scene].clone();
+        let record = Record {
+            index: run.index,
+            key: &run.key,
+            scene: &self.scenes[run.scene].name,
+            params: &self.spec.points[run.point].params,
+            report: &out.report,
+        };
+        Ok(serde_json::to_string(&record).expect("a record serialises"))
+    }
+}
+
+/// A point's architecture: the base with the point's `arch.<field>` values, validated; an
+/// error names the spec field that set the refused value.
+pub(super) fn point_arch(file: &str, base: &ArchConfig, point: &Point) -> Result<ArchConfig> {
+    let mut value = serde_json::to_value(base).expect("the architecture serialises");
+    for (path, v) in point.arch_overrides() {
+        set_arch_field(&mut value, path, v.clone()).map_err(|message| Error::Parse {
+            file: file.into(),
+            field: point.field(&format!("{ARCH}{path}")),
+            message,
+        })?;
+    }
+    let blame = |arch_field: &str| {
+        // The override that set this field, or the point.
+        point
+            .arch_overrides()
+            .map(|(p, _)| p)
+            .find(|p| *p == arch_field || arch_field.starts_with(&format!("{p}.")))
+            .map(|p| point.field(&format!("{ARCH}{p}")))
+            .unwrap_or_else(|| point.origin.clone())
+    };
+    let arch: ArchConfig = serde_path_to_error::deserialize(value).map_err(|e| {
+        let field = blame(&e.path().to_string());
+        Error::Parse {
+            file: file.into(),
+            field,
+            message: e.into_inner().to_string(),
+        }
+    })?;
+    arch.validate(file).map_err(|e| {
+        let field = match &e {
+            Error::Invalid { field, .. } => blame(field),
+            _ => point.origin.clone(),
+        };
+        reword(e, file, &field)
+    })?;
+    Ok(arch)
+}
+
+/// Refuses settings that the scene would ignore, so that no two runs differ only in a
+/// parameter that had no effect.
+pub(super) fn check_applies(spec: &Spec, point: &Point, scene: &Scene, s: usize) -> Result<()> {
+    let discoids = scene.discoid_count() > 0;
+    let curved = scene.lembo_count() > 0;
+    let refuse = |name: &str, why: String| {
+        Err(Error::invalid(
+            &spec.file,
+            point.field(name),
+            &point.params[name],
+            format!(
+                "{why}; restrict the {} to other scenes with `scenes`",
+                if point.origin.starts_with("grid") {
+                    "block"
+                } else {
+                    "point"
+                }
+            ),
+        ))
+    };
+    let scene_name = format!("scenes[{s}] ({})", scene.name);
+    for name in point.params.keys() {
+        let applies = match name.as_str() {
+            "path" | "tess" => !discoids,
+            "k" | "perspective_tol" => curved,
+            "blend" | "threshold" => discoids,
+            _ => true,
+        };
+        if !applies {
+            return refuse(
+                name,
+                if discoids {
+                    format!(
+                        "does not apply to {scene_name}, a scene of {} discoids",
+                        if curved { "curved" } else { "planar" }
+                    )
+                } else {
+                    format!("does not apply to {scene_name}, which has no discoids")
+                },
+            );
+        }
+    }
+    Ok(())
+}
+
+/// The render job of a point on a scene.
+pub(super) fn render_job(
+    spec: &Spec,
+    point: &Point,
+    scene: &Scene,
+    host_threads: u32,
+) -> RenderJob {
+    let mut job = RenderJob {
+        scene: None,
+        out: None,
+        k: DEFAULT_K_PX,
+        perspective_tol: PerspectiveTol::FollowK,
+        datapath: Datapath::F32,
+        reference: spec.reference && scene.discoid_count() == 0,
+        supersample: 1,
+        viewport: spec.viewport,
+        mode: spec.mode,
+        // Shown in the report's settings only: the architecture itself is the point's.
+        arch: match spec.mode {
+            Mode::Timed => spec.arch.as_ref().map(PathBuf::from),
+            Mode::Functional => None,
+        },
+        trace_out: None,
+        path: PrimitivePath::Lembo,
+        tess: None,
+        blend: BlendMode::Rgba8,
+        threshold: None,
+        host_threads,
+    };
+    for s in &point.settings {
+        match s {
+            Setting::Path(p) => job.path = *p,
+            Setting::K(k) => job.k = *k,
+            Setting::PerspectiveTol(t) => job.perspective_tol = *t,
+            Setting::Tess(n) => job.tess = Some(*n),
+            Setting::Datapath(d) => job.datapath = *d,
+            Setting::Blend(m) => job.blend = *m,
+            Setting::Threshold(t) => job.threshold = Some(*t),
+            Setting::Arch(..) => {}
+        }
+    }
+    job
+}
+
+/// One line of `results.jsonl`.
+#[derive(Serialize)]
+pub(super) struct Record<'a> {
+    index: usize,
+    key: &'a str,
+    /// The scene's name.
+    scene: &'a str,
+    /// Every parameter the point sets, canonical.
+    params: &'a BTreeMap<String, Value>,
+    /// The run's full report.json.
+    report: &'a Report,
+}

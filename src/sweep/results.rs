@@ -1,0 +1,298 @@
+//! A sweep directory's files: `spec.json` and a partial `results.jsonl` read back to
+//! resume (each record checked against the spec and shard), and the finished set written
+//! at once: `results.jsonl` in index order, `results.csv` and the plots.
+
+use super::*;
+
+use crate::error::{Error, Result};
+use crate::output::write_files;
+use crate::pipeline::graph::KINDS;
+use serde::Deserialize;
+use serde_json::Value;
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::Path;
+
+/// A directory that holds results must hold this spec's.
+pub(super) fn check_same_spec(dir: &Path, spec: &Spec) -> Result<()> {
+    let path = dir.join(SPEC_JSON);
+    let text = match std::fs::read_to_string(&path) {
+        Ok(text) => text,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            if dir.join(RESULTS_JSONL).exists() {
+                return Err(Error::invalid(
+                    dir.display().to_string(),
+                    SPEC_JSON,
+                    "missing",
+                    "the directory holds results.jsonl but no spec.json, so its runs cannot be matched to this spec; use another --out",
+                ));
+            }
+            return Ok(());
+        }
+        Err(source) => return Err(Error::Read { path, source }),
+    };
+    let file = path.display().to_string();
+    let theirs: Value = serde_json::from_str(&text).map_err(|e| Error::Parse {
+        file: file.clone(),
+        field: String::new(),
+        message: e.to_string(),
+    })?;
+    if theirs != spec.value {
+        return Err(spec_difference(&file, &theirs, &spec.value, &spec.file));
+    }
+    Ok(())
+}
+
+/// Names the first top-level field where two specs differ.
+pub(super) fn spec_difference(file: &str, theirs: &Value, ours: &Value, our_file: &str) -> Error {
+    let empty = serde_json::Map::new();
+    let (a, b) = (
+        theirs.as_object().unwrap_or(&empty),
+        ours.as_object().unwrap_or(&empty),
+    );
+    let field = a
+        .keys()
+        .chain(b.keys())
+        .find(|k| a.get(*k) != b.get(*k))
+        .cloned()
+        .unwrap_or_default();
+    Error::invalid(
+        file,
+        &field,
+        a.get(&field).unwrap_or(&Value::Null),
+        format!(
+            "differs from {our_file}'s ({}): these are results of another spec; use another --out",
+            b.get(&field).unwrap_or(&Value::Null)
+        ),
+    )
+}
+
+/// The records already in `results.jsonl`, by index, and whether a truncated or
+/// unreadable last line was dropped. Each must be a run of this spec and shard.
+pub(super) fn read_partial(
+    path: &Path,
+    spec: &Spec,
+    shard: Shard,
+) -> Result<(BTreeMap<usize, String>, bool)> {
+    let text = match std::fs::read_to_string(path) {
+        Ok(t) => t,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok((BTreeMap::new(), false)),
+        Err(source) => {
+            return Err(Error::Read {
+                path: path.to_path_buf(),
+                source,
+            })
+        }
+    };
+    let file = path.display().to_string();
+    let mut lines = BTreeMap::new();
+    let mut dropped = false;
+    let all: Vec<&str> = text.split_inclusive('\n').collect();
+    for (n, raw) in all.iter().enumerate() {
+        let last = n + 1 == all.len();
+        let line = raw.strip_suffix('\n');
+        let parsed = line.and_then(|l| record_id(l).ok());
+        let Some((index, key)) = parsed else {
+            if last {
+                // A kill mid-write leaves a partial last line: the run is redone.
+                dropped = true;
+                continue;
+            }
+            let message = match line {
+                Some(l) => record_id(l).err().unwrap_or_default(),
+                None => "no newline".into(),
+            };
+            return Err(Error::Parse {
+                file,
+                field: format!("line {}", n + 1),
+                message,
+            });
+        };
+        let line = line.expect("parsed");
+        check_record(&file, n, index, &key, spec, shard)?;
+        if lines.insert(index, line.to_string()).is_some() {
+            return Err(Error::invalid(
+                file,
+                format!("line {}", n + 1),
+                index,
+                "a second record of the same run",
+            ));
+        }
+    }
+    Ok((lines, dropped))
+}
+
+/// A record's index and key.
+pub(super) fn record_id(line: &str) -> std::result::Result<(usize, String), String> {
+    #[derive(Deserialize)]
+    struct Id {
+        index: usize,
+        key: String,
+    }
+    serde_json::from_str::<Id>(line)
+        .map(|id| (id.index, id.key))
+        .map_err(|e| e.to_string())
+}
+
+/// A record read back must be run `index` of this spec, in this shard.
+pub(super) fn check_record(
+    file: &str,
+    n: usize,
+    index: usize,
+    key: &str,
+    spec: &Spec,
+    shard: Shard,
+) -> Result<()> {
+    let expected = spec.runs.get(index).map(|r| r.key.as_str());
+    let reason = if expected != Some(key) {
+        format!(
+            "is not run {index} of {} (whose key is {}): the records are another spec's",
+            spec.file,
+            expected.unwrap_or("absent")
+        )
+    } else if !shard.keeps(index) {
+        format!(
+            "run {index} is not in shard {}/{}: the records are another shard's; use another --out",
+            shard.index, shard.count
+        )
+    } else {
+        return Ok(());
+    };
+    Err(Error::invalid(file, format!("line {}", n + 1), key, reason))
+}
+
+/// Writes the finished directory as one atomic set: results.jsonl in index order,
+/// results.csv, spec.json and the plots.
+pub(super) fn write_final(
+    dir: &Path,
+    spec_text: &[u8],
+    lines: &BTreeMap<usize, String>,
+) -> Result<Vec<String>> {
+    let records: Vec<Value> = lines
+        .values()
+        .map(|l| serde_json::from_str(l).expect("every line was parsed or written as JSON"))
+        .collect();
+    // The plots are drawn first so that the records, the table and the plots are one
+    // atomic set.
+    let plots = crate::plot::plot_files(&records)?;
+    let mut files: Vec<(&str, Vec<u8>)> = vec![
+        (RESULTS_JSONL, joined(lines)),
+        (RESULTS_CSV, csv_bytes(&records)?),
+        (SPEC_JSON, spec_text.to_vec()),
+    ];
+    files.extend(plots.iter().map(|(name, svg)| (name.as_str(), svg.clone())));
+    write_files(dir, &files)?;
+    Ok(files.iter().map(|(name, _)| name.to_string()).collect())
+}
+
+// ---- results.csv ---------------------------------------------------------------------
+
+/// Sort key of a unit name: its kind in dataflow order, then its instance number
+/// (`Segmenter[10]` after `Segmenter[9]`).
+pub(super) fn unit_order(name: &str) -> (usize, u64, String) {
+    let (kind, instance) = match name.split_once('[') {
+        Some((k, rest)) => (k, rest.trim_end_matches(']').parse().unwrap_or(0)),
+        None => (name, 0),
+    };
+    let rank = KINDS
+        .iter()
+        .position(|k| k.name() == kind)
+        .unwrap_or(KINDS.len());
+    (rank, instance, name.to_string())
+}
+
+/// A CSV cell: strings bare, null and absent empty, numbers and booleans as JSON.
+pub(super) fn cell(v: Option<&Value>) -> String {
+    match v {
+        None | Some(Value::Null) => String::new(),
+        Some(Value::String(s)) => s.clone(),
+        Some(other) => other.to_string(),
+    }
+}
+
+/// `results.csv`: one row per record, columns as `sim/sweeps/README.md` lists them.
+pub fn csv_bytes(records: &[Value]) -> Result<Vec<u8>> {
+    let mut params = BTreeSet::new();
+    let mut units = BTreeSet::new();
+    let mut metrics = BTreeSet::new();
+    for r in records {
+        if let Some(p) = r["params"].as_object() {
+            params.extend(p.keys().cloned());
+        }
+        for u in r["report"]["cycles"]["units"]
+            .as_array()
+            .into_iter()
+            .flatten()
+        {
+            if let Some(name) = u["name"].as_str() {
+                units.insert(unit_order(name));
+            }
+        }
+        if let Some(a) = r["report"]["accuracy"].as_object() {
+            metrics.extend(a.keys().cloned());
+        }
+    }
+    let mut header: Vec<String> = vec!["index".into(), "scene".into()];
+    header.extend(params.iter().cloned());
+    header.extend(["cycles_total", "fps", "bottleneck"].map(String::from));
+    header.extend(units.iter().map(|(_, _, n)| format!("util.{n}")));
+    header.extend(metrics.iter().map(|m| format!("acc.{m}")));
+    header.extend(
+        [
+            "primitives",
+            "primitive_bytes",
+            "fragments",
+            "lembo_pieces",
+            "blend.error_mean",
+            "blend.error_max",
+            "wall_seconds",
+        ]
+        .map(String::from),
+    );
+
+    let mut w = csv::Writer::from_writer(Vec::new());
+    let csv_err = |e: csv::Error| Error::Internal(format!("results.csv: {e}"));
+    w.write_record(&header).map_err(csv_err)?;
+    for r in records {
+        let report = &r["report"];
+        let cycles = &report["cycles"];
+        let mut row = vec![cell(r.get("index")), cell(r.get("scene"))];
+        row.extend(params.iter().map(|p| cell(r["params"].get(p))));
+        row.push(cell(cycles.get("total")));
+        row.push(cell(cycles.get("fps")));
+        row.push(cell(cycles.get("bottleneck")));
+        let total = cycles["total"].as_u64();
+        let busy: BTreeMap<&str, u64> = cycles["units"]
+            .as_array()
+            .into_iter()
+            .flatten()
+            .filter_map(|u| Some((u["name"].as_str()?, u["busy"].as_u64()?)))
+            .collect();
+        for (_, _, name) in &units {
+            row.push(match (busy.get(name.as_str()), total) {
+                (Some(&b), Some(t)) if t > 0 => (b as f64 / t as f64).to_string(),
+                _ => String::new(),
+            });
+        }
+        row.extend(metrics.iter().map(|m| cell(report["accuracy"].get(m))));
+        row.push(cell(report["primitives"].get("count")));
+        row.push(cell(report["primitives"].get("bytes")));
+        row.push(cell(report["counts"].get("fragments")));
+        row.push(cell(report["counts"].get("lembo_pieces")));
+        row.push(cell(report["blend"].get("error_mean")));
+        row.push(cell(report["blend"].get("error_max")));
+        row.push(cell(report["host"].get("wall_seconds")));
+        w.write_record(&row).map_err(csv_err)?;
+    }
+    w.into_inner()
+        .map_err(|e| Error::Internal(format!("results.csv: {e}")))
+}
+
+/// Lines, each followed by a newline.
+pub(super) fn joined(lines: &BTreeMap<usize, String>) -> Vec<u8> {
+    let mut out = String::new();
+    for line in lines.values() {
+        out.push_str(line);
+        out.push('\n');
+    }
+    out.into_bytes()
+}

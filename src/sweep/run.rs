@@ -1,0 +1,215 @@
+//! Running a sweep: the rayon pool of `--jobs` workers, one reference per scene, each
+//! finished run appended to `results.jsonl` at once, resumption by key, the progress bar.
+
+use super::*;
+
+use crate::error::Error;
+use crate::job::{render_reference, PrimitivePath};
+use crate::output::write_files;
+use crate::reference::oracle::ReferenceImage;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use std::collections::BTreeMap;
+use std::io::Write as _;
+use std::path::Path;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::Mutex;
+use std::time::Instant;
+
+pub fn run_sweep(job: &SweepJob) -> std::result::Result<SweepOutcome, SweepError> {
+    let t0 = Instant::now();
+    job.validate()?;
+    let mut plan = Plan::load(&job.spec)?;
+    // At most as many host threads as a run has units (points may differ in unit counts).
+    for (run, rj) in plan.spec.runs.iter().zip(plan.jobs.iter_mut()) {
+        if let Some(arch) = &plan.archs[run.point] {
+            let scene = &plan.scenes[run.scene];
+            let path = if rj.path == PrimitivePath::Triangle
+                || (scene.discoid_count() > 0 && scene.lembo_count() == 0)
+            {
+                crate::pipeline::Path::Triangle
+            } else {
+                crate::pipeline::Path::Lembo
+            };
+            let units = crate::pipeline::graph::units(path, arch).len().max(1);
+            rj.host_threads = job.host_threads.min(units as u32);
+        }
+    }
+    let spec = &plan.spec;
+    let dir = job
+        .out
+        .clone()
+        .unwrap_or_else(|| Path::new("out").join("sweeps").join(&spec.name));
+    let jobs = job.jobs.unwrap_or_else(|| {
+        std::thread::available_parallelism()
+            .map(|n| n.get())
+            .unwrap_or(1)
+            .min(MAX_JOBS)
+    });
+    let runs = plan.shard_runs(job.shard);
+
+    // One writer per folder: a second sweep on it is refused before it reads anything.
+    let _lock = FolderLock::acquire(&dir, "sweep", "--out")?;
+    let results_path = dir.join(RESULTS_JSONL);
+    check_same_spec(&dir, spec)?;
+    let (mut lines, dropped) = read_partial(&results_path, spec, job.shard)?;
+    write_files(&dir, &[(SPEC_JSON, spec.text.clone().into_bytes())])?;
+    if dropped || !results_path.exists() {
+        write_files(&dir, &[(RESULTS_JSONL, joined(&lines))])?;
+    }
+    let skipped = runs.iter().filter(|r| lines.contains_key(&r.index)).count();
+    let pending: Vec<&Run> = runs
+        .iter()
+        .copied()
+        .filter(|r| !lines.contains_key(&r.index))
+        .collect();
+    if job.stop_after == Some(0) && !pending.is_empty() {
+        return Ok(SweepOutcome::Stopped { dir, appended: 0 });
+    }
+
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(jobs)
+        .thread_name(|i| format!("sweep-{i}"))
+        .build()
+        .map_err(|e| Error::Internal(format!("cannot start the sweep's threads: {e}")))?;
+    let bar = progress_bar(job.progress, pending.len());
+
+    // One exact reference per scene that a pending run measures against, computed before
+    // any run (each is itself parallel over rows on the pool).
+    let mut references: Vec<Option<(ReferenceImage, f64)>> = Vec::new();
+    for (s, scene) in plan.scenes.iter().enumerate() {
+        let needed = pending
+            .iter()
+            .any(|r| r.scene == s && plan.jobs[r.index].reference);
+        references.push(needed.then(|| {
+            bar.set_message(format!("reference of {}", scene.name));
+            pool.install(|| render_reference(scene, &plan.views[s], 1))
+        }));
+    }
+    bar.set_message("");
+
+    let file = std::fs::OpenOptions::new()
+        .append(true)
+        .open(&results_path)
+        .map_err(|source| Error::Write {
+            path: results_path.clone(),
+            source,
+        })?;
+    /// What the workers share, under one lock.
+    struct Progress<'a> {
+        file: std::fs::File,
+        lines: &'a mut BTreeMap<usize, String>,
+        appended: usize,
+        failure: Option<SweepError>,
+        stopped: bool,
+    }
+    let state = Mutex::new(Progress {
+        file,
+        lines: &mut lines,
+        appended: 0,
+        failure: None,
+        stopped: false,
+    });
+    let stop = AtomicBool::new(false);
+    let next = AtomicUsize::new(0);
+    // Workers take runs in index order; a finished run is appended under the lock, so
+    // records are whole lines and a stop leaves exactly `stop_after` of them.
+    let worker = || loop {
+        if stop.load(Ordering::Relaxed) {
+            return;
+        }
+        let Some(&run) = pending.get(next.fetch_add(1, Ordering::Relaxed)) else {
+            return;
+        };
+        let result = plan.run(run, &references);
+        let mut guard = state.lock().expect("no worker panics holding the lock");
+        let st = &mut *guard;
+        // After a stop no record is added (the hook promises exactly `stop_after`); after
+        // a failure the runs in flight are still recorded, so a rerun need not redo them.
+        if st.stopped {
+            return;
+        }
+        let line = match result {
+            Ok(line) => line,
+            Err(_) if st.failure.is_some() => return,
+            Err(error) => {
+                st.failure = Some(SweepError {
+                    error: Box::new(error),
+                    run: Some(format!("run {} ({})", run.index, run.key)),
+                });
+                stop.store(true, Ordering::Relaxed);
+                return;
+            }
+        };
+        let written = st
+            .file
+            .write_all(format!("{line}\n").as_bytes())
+            .and_then(|()| st.file.flush());
+        if let Err(source) = written {
+            st.failure.get_or_insert_with(|| {
+                Error::Write {
+                    path: results_path.clone(),
+                    source,
+                }
+                .into()
+            });
+            stop.store(true, Ordering::Relaxed);
+            return;
+        }
+        st.lines.insert(run.index, line);
+        st.appended += 1;
+        bar.inc(1);
+        if job.stop_after == Some(st.appended) {
+            st.stopped = true;
+            stop.store(true, Ordering::Relaxed);
+        }
+    };
+    pool.scope(|s| {
+        for _ in 0..jobs {
+            s.spawn(|_| worker());
+        }
+    });
+    bar.finish_and_clear();
+    let st = state.into_inner().expect("no worker panicked");
+    if let Some(failure) = st.failure {
+        return Err(failure);
+    }
+    if st.stopped && st.appended < pending.len() {
+        return Ok(SweepOutcome::Stopped {
+            dir,
+            appended: st.appended,
+        });
+    }
+    drop(st);
+
+    let files = write_final(&dir, spec.text.as_bytes(), &lines)?;
+    Ok(SweepOutcome::Done(SweepOutput {
+        dir,
+        name: spec.name.clone(),
+        runs: runs.len(),
+        skipped,
+        jobs,
+        files,
+        wall_seconds: t0.elapsed().as_secs_f64(),
+    }))
+}
+
+pub(super) fn progress_bar(show: bool, len: usize) -> ProgressBar {
+    let target = if show {
+        ProgressDrawTarget::stderr()
+    } else {
+        ProgressDrawTarget::hidden()
+    };
+    let bar = ProgressBar::with_draw_target(Some(len as u64), target);
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{elapsed_precise} [{wide_bar}] {pos}/{len} runs, ETA {eta_precise} {msg}",
+        )
+        .expect("the template is valid")
+        .progress_chars("=> "),
+    );
+    if show {
+        // The clock and ETA move while a long run or a reference is computed.
+        bar.enable_steady_tick(std::time::Duration::from_millis(500));
+    }
+    bar
+}
