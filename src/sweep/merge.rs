@@ -13,15 +13,22 @@ use std::path::PathBuf;
 /// A merge request: the shards' directories and where the union goes.
 #[derive(Clone, Debug)]
 pub struct MergeJob {
+    /// Where the union is written (`--out`).
     pub out: PathBuf,
+    /// The shards' folders, in the order given (the first holding a run wins).
     pub shards: Vec<PathBuf>,
 }
 
+/// A finished merge, for its summary.
 #[derive(Debug)]
 pub struct MergeOutput {
+    /// The folder written.
     pub dir: PathBuf,
+    /// The spec's name.
     pub name: String,
+    /// Runs of the spec, all merged.
     pub runs: usize,
+    /// The files written, by name.
     pub files: Vec<String>,
 }
 

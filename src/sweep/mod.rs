@@ -33,14 +33,22 @@
 //!
 //! Paths inside records (`report.scene.source`, `report.settings.arch_file`) are the
 //! spec's own strings, so records do not depend on the directory a sweep ran from.
+//!
+//! One writer per folder: a sweep (and a merge, into its `--out`) holds a [`FolderLock`]
+//! while it writes; see [`lock`].
+//!
+//! Layout: [`spec`] (the file's shape and `Spec::parse`), `grid` (expanding blocks and
+//! points), [`plan`] (`Plan::load`: everything validated before a run), [`run`] (the pool,
+//! appends, resumption), [`results`] (reading `results.jsonl` back, `results.csv`, the final
+//! set), [`merge`] (`sweep-merge`), [`lock`].
 
 mod grid;
-mod lock;
-mod merge;
-mod plan;
-mod results;
-mod run;
-mod spec;
+pub mod lock;
+pub mod merge;
+pub mod plan;
+pub mod results;
+pub mod run;
+pub mod spec;
 
 use crate::error::{Error, Result};
 use crate::job::{COMMAND_LINE, MAX_HOST_THREADS};
@@ -89,7 +97,9 @@ const ARCH: &str = "arch.";
 /// `--shard I/N`: the runs whose index is I modulo N.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Shard {
+    /// This shard's index I, in 0..N.
     pub index: u32,
+    /// The number of shards N.
     pub count: u32,
 }
 
@@ -110,6 +120,7 @@ impl Shard {
         Ok(Shard { index, count })
     }
 
+    /// Whether run `index` belongs to this shard.
     pub fn keeps(self, index: usize) -> bool {
         index % self.count as usize == self.index as usize
     }
@@ -118,11 +129,13 @@ impl Shard {
 /// A sweep request, from the command line.
 #[derive(Clone, Debug)]
 pub struct SweepJob {
+    /// The spec file.
     pub spec: PathBuf,
     /// Output directory; None for `out/sweeps/<spec name>/`.
     pub out: Option<PathBuf>,
     /// Worker threads; None for the host's available parallelism.
     pub jobs: Option<usize>,
+    /// Which runs this process does (`--shard`).
     pub shard: Shard,
     /// Test hook: stop once this many records were appended (see [`SweepOutcome`]).
     pub stop_after: Option<usize>,
@@ -139,12 +152,20 @@ pub enum SweepOutcome {
     Done(SweepOutput),
     /// Stopped by `stop_after` with `appended` records added to `results.jsonl`; the
     /// final files are not written.
-    Stopped { dir: PathBuf, appended: usize },
+    Stopped {
+        /// The sweep folder.
+        dir: PathBuf,
+        /// Records appended by this process.
+        appended: usize,
+    },
 }
 
+/// A finished sweep, for its summary.
 #[derive(Debug)]
 pub struct SweepOutput {
+    /// The sweep folder.
     pub dir: PathBuf,
+    /// The spec's name.
     pub name: String,
     /// Runs of this shard.
     pub runs: usize,
@@ -154,6 +175,7 @@ pub struct SweepOutput {
     pub jobs: usize,
     /// Files written, in the directory.
     pub files: Vec<String>,
+    /// Wall time of the whole sweep \[s\].
     pub wall_seconds: f64,
 }
 
@@ -167,6 +189,7 @@ pub struct SweepError {
 }
 
 impl SweepError {
+    /// The process's exit status for this failure (2 for bad input).
     pub fn exit_code(&self) -> u8 {
         self.error.exit_code()
     }
@@ -216,7 +239,6 @@ impl SweepJob {
     }
 }
 
-/// Runs a sweep: validates everything, then runs what `results.jsonl` does not hold yet.
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -25,7 +25,9 @@ use std::path::{Path, PathBuf};
 /// can be refused once a run starts, except what only a run can find (a patch beyond the
 /// segment cap).
 pub struct Plan {
+    /// The expanded spec.
     pub spec: Spec,
+    /// Its scenes, loaded, in the spec's order.
     pub scenes: Vec<Scene>,
     pub(super) views: Vec<View>,
     /// Each point's architecture; None in functional mode.

@@ -15,25 +15,12 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Mutex;
 use std::time::Instant;
 
+/// Runs a sweep: validates everything, then runs what `results.jsonl` does not hold yet.
 pub fn run_sweep(job: &SweepJob) -> std::result::Result<SweepOutcome, SweepError> {
     let t0 = Instant::now();
     job.validate()?;
     let mut plan = Plan::load(&job.spec)?;
-    // At most as many host threads as a run has units (points may differ in unit counts).
-    for (run, rj) in plan.spec.runs.iter().zip(plan.jobs.iter_mut()) {
-        if let Some(arch) = &plan.archs[run.point] {
-            let scene = &plan.scenes[run.scene];
-            let path = if rj.path == PrimitivePath::Triangle
-                || (scene.discoid_count() > 0 && scene.lembo_count() == 0)
-            {
-                crate::pipeline::Path::Triangle
-            } else {
-                crate::pipeline::Path::Lembo
-            };
-            let units = crate::pipeline::graph::units(path, arch).len().max(1);
-            rj.host_threads = job.host_threads.min(units as u32);
-        }
-    }
+    clamp_host_threads(&mut plan, job.host_threads);
     let spec = &plan.spec;
     let dir = job
         .out
@@ -73,8 +60,69 @@ pub fn run_sweep(job: &SweepJob) -> std::result::Result<SweepOutcome, SweepError
         .map_err(|e| Error::Internal(format!("cannot start the sweep's threads: {e}")))?;
     let bar = progress_bar(job.progress, pending.len());
 
-    // One exact reference per scene that a pending run measures against, computed before
-    // any run (each is itself parallel over rows on the pool).
+    let references = references(&plan, &pending, &pool, &bar);
+
+    let st = run_pending(
+        &plan,
+        &pending,
+        &references,
+        &results_path,
+        job.stop_after,
+        &pool,
+        jobs,
+        &bar,
+        &mut lines,
+    )?;
+    bar.finish_and_clear();
+    if let Some(failure) = st.failure {
+        return Err(failure);
+    }
+    if st.stopped && st.appended < pending.len() {
+        return Ok(SweepOutcome::Stopped {
+            dir,
+            appended: st.appended,
+        });
+    }
+
+    let files = write_final(&dir, spec.text.as_bytes(), &lines)?;
+    Ok(SweepOutcome::Done(SweepOutput {
+        dir,
+        name: spec.name.clone(),
+        runs: runs.len(),
+        skipped,
+        jobs,
+        files,
+        wall_seconds: t0.elapsed().as_secs_f64(),
+    }))
+}
+
+/// At most as many host threads per run as the run has units (points may differ in unit
+/// counts).
+fn clamp_host_threads(plan: &mut Plan, host_threads: u32) {
+    for (run, rj) in plan.spec.runs.iter().zip(plan.jobs.iter_mut()) {
+        if let Some(arch) = &plan.archs[run.point] {
+            let scene = &plan.scenes[run.scene];
+            let path = if rj.path == PrimitivePath::Triangle
+                || (scene.discoid_count() > 0 && scene.lembo_count() == 0)
+            {
+                crate::pipeline::Path::Triangle
+            } else {
+                crate::pipeline::Path::Lembo
+            };
+            let units = crate::pipeline::graph::units(path, arch).len().max(1);
+            rj.host_threads = host_threads.min(units as u32);
+        }
+    }
+}
+
+/// One exact reference per scene that a pending run measures against, computed before any
+/// run (each is itself parallel over rows on the pool).
+fn references(
+    plan: &Plan,
+    pending: &[&Run],
+    pool: &rayon::ThreadPool,
+    bar: &ProgressBar,
+) -> Vec<Option<(ReferenceImage, f64)>> {
     let mut references: Vec<Option<(ReferenceImage, f64)>> = Vec::new();
     for (s, scene) in plan.scenes.iter().enumerate() {
         let needed = pending
@@ -86,25 +134,42 @@ pub fn run_sweep(job: &SweepJob) -> std::result::Result<SweepOutcome, SweepError
         }));
     }
     bar.set_message("");
+    references
+}
 
+/// What the workers share, under one lock.
+struct Progress<'a> {
+    file: std::fs::File,
+    lines: &'a mut BTreeMap<usize, String>,
+    appended: usize,
+    failure: Option<SweepError>,
+    stopped: bool,
+}
+
+/// Runs `pending` on `jobs` workers of `pool`, appending each finished run's record to
+/// `results_path` and to `lines`; stops at the first failure or after `stop_after` records.
+#[allow(clippy::too_many_arguments)]
+fn run_pending<'a>(
+    plan: &Plan,
+    pending: &[&Run],
+    references: &[Option<(ReferenceImage, f64)>],
+    results_path: &Path,
+    stop_after: Option<usize>,
+    pool: &rayon::ThreadPool,
+    jobs: usize,
+    bar: &ProgressBar,
+    lines: &'a mut BTreeMap<usize, String>,
+) -> Result<Progress<'a>> {
     let file = std::fs::OpenOptions::new()
         .append(true)
-        .open(&results_path)
+        .open(results_path)
         .map_err(|source| Error::Write {
-            path: results_path.clone(),
+            path: results_path.to_path_buf(),
             source,
         })?;
-    /// What the workers share, under one lock.
-    struct Progress<'a> {
-        file: std::fs::File,
-        lines: &'a mut BTreeMap<usize, String>,
-        appended: usize,
-        failure: Option<SweepError>,
-        stopped: bool,
-    }
     let state = Mutex::new(Progress {
         file,
-        lines: &mut lines,
+        lines,
         appended: 0,
         failure: None,
         stopped: false,
@@ -120,7 +185,7 @@ pub fn run_sweep(job: &SweepJob) -> std::result::Result<SweepOutcome, SweepError
         let Some(&run) = pending.get(next.fetch_add(1, Ordering::Relaxed)) else {
             return;
         };
-        let result = plan.run(run, &references);
+        let result = plan.run(run, references);
         let mut guard = state.lock().expect("no worker panics holding the lock");
         let st = &mut *guard;
         // After a stop no record is added (the hook promises exactly `stop_after`); after
@@ -147,7 +212,7 @@ pub fn run_sweep(job: &SweepJob) -> std::result::Result<SweepOutcome, SweepError
         if let Err(source) = written {
             st.failure.get_or_insert_with(|| {
                 Error::Write {
-                    path: results_path.clone(),
+                    path: results_path.to_path_buf(),
                     source,
                 }
                 .into()
@@ -158,7 +223,7 @@ pub fn run_sweep(job: &SweepJob) -> std::result::Result<SweepOutcome, SweepError
         st.lines.insert(run.index, line);
         st.appended += 1;
         bar.inc(1);
-        if job.stop_after == Some(st.appended) {
+        if stop_after == Some(st.appended) {
             st.stopped = true;
             stop.store(true, Ordering::Relaxed);
         }
@@ -168,29 +233,12 @@ pub fn run_sweep(job: &SweepJob) -> std::result::Result<SweepOutcome, SweepError
             s.spawn(|_| worker());
         }
     });
-    bar.finish_and_clear();
-    let st = state.into_inner().expect("no worker panicked");
-    if let Some(failure) = st.failure {
-        return Err(failure);
-    }
-    if st.stopped && st.appended < pending.len() {
-        return Ok(SweepOutcome::Stopped {
-            dir,
-            appended: st.appended,
-        });
-    }
-    drop(st);
-
-    let files = write_final(&dir, spec.text.as_bytes(), &lines)?;
-    Ok(SweepOutcome::Done(SweepOutput {
-        dir,
-        name: spec.name.clone(),
-        runs: runs.len(),
-        skipped,
-        jobs,
-        files,
-        wall_seconds: t0.elapsed().as_secs_f64(),
-    }))
+    pool.scope(|s| {
+        for _ in 0..jobs {
+            s.spawn(|_| worker());
+        }
+    });
+    Ok(state.into_inner().expect("no worker panicked"))
 }
 
 pub(super) fn progress_bar(show: bool, len: usize) -> ProgressBar {

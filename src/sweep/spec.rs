@@ -1,6 +1,6 @@
 //! A sweep spec: the file's shape (`SpecFile`), the expanded spec (`Spec`: points, runs and
 //! their keys) and `Spec::parse`, which validates the shape and expands the grid with
-//! [`super::grid`].
+//! the `grid` module.
 
 use super::*;
 
@@ -136,7 +136,9 @@ impl Point {
 pub struct Run {
     /// Position in the sweep's fixed order (point-major, then the spec's scene order).
     pub index: usize,
+    /// Its point's index in `Spec::points`.
     pub point: usize,
+    /// Its scene's index in `Spec::scenes`.
     pub scene: usize,
     /// The scene as the spec writes it and the sorted parameters:
     /// `../../traces/sphere24.json|k=0.5|path="lembo"`.
@@ -153,16 +155,21 @@ pub struct Spec {
     pub text: String,
     /// The spec as JSON, to compare two specs regardless of layout.
     pub value: Value,
+    /// The spec's name: it names the default folder `out/sweeps/<name>/`.
     pub name: String,
     /// The scenes as the spec writes them (relative to its directory).
     pub scenes: Vec<String>,
+    /// Viewport override for every scene (width, height) \[pixels\].
     pub viewport: Option<(u32, u32)>,
+    /// Timed or functional, for every run.
     pub mode: Mode,
     /// Whether runs on scenes without discoids are measured against the exact reference.
     pub reference: bool,
     /// The base architecture as the spec writes it; None for the embedded baseline.
     pub arch: Option<String>,
+    /// The points, in expansion order.
     pub points: Vec<Point>,
+    /// Every (point, scene) pair, point-major.
     pub runs: Vec<Run>,
 }
 
