@@ -1,0 +1,168 @@
+//! Validation of one scene object (a builtin shape, inline lembos or an OBJ mesh): its
+//! world-space lembos and mesh, in range, with its crease angle.
+
+use super::*;
+use crate::error::{Error, Result};
+use crate::lembo::construct::{CollapsedTriangle, TriangleMesh};
+use crate::lembo::shapes::{builtin_mesh, BUILTIN_NAMES};
+use glam::DVec3;
+use std::path::Path;
+
+impl Check<'_> {
+    /// Validates object `i`. `radii` holds the radii of the discoids of the objects before
+    /// it and receives this object's (its length is the scene's discoid count so far).
+    pub(super) fn object(
+        &self,
+        i: usize,
+        o: &ObjectSpec,
+        base_dir: &Path,
+        radii: &mut Vec<f64>,
+    ) -> Result<SceneObject> {
+        let field = format!("objects[{i}]");
+        let color = self.color(&format!("{field}.color"), o.color.unwrap_or(DEFAULT_COLOR))?;
+        let transform = match &o.transform {
+            Some(t) => Some(self.transform(&format!("{field}.transform"), t)?),
+            None => None,
+        };
+        let crease = match o.crease_angle_deg {
+            Some(a) => Some(self.crease_angle(&field, a, o.mesh.is_some())?),
+            None => None,
+        };
+        let (label, lembos, mesh, discoids) = match (&o.builtin, &o.lembos, &o.mesh, &o.discoids) {
+            (Some(name), None, None, None) => {
+                let Some(mesh) = builtin_mesh(name) else {
+                    return Err(self.invalid(
+                        format!("{field}.builtin"),
+                        format!("{name:?}"),
+                        format!("unknown builtin shape; known: {}", BUILTIN_NAMES.join(", ")),
+                    ));
+                };
+                let mesh = transform_mesh(mesh, transform.as_ref());
+                self.mesh_in_range(&field, transform.is_some(), &mesh)?;
+                let mesh = mesh.welded();
+                // Only a transform can collapse a builtin's triangle (a scale so small that
+                // positions round together).
+                let lembos = mesh.to_lembos().map_err(|c| {
+                    self.invalid(
+                        format!("{field}.transform"),
+                        "(world-space geometry)",
+                        format!("builtin {name}: {c}"),
+                    )
+                })?;
+                (format!("builtin {name}"), lembos, Some(mesh), None)
+            }
+            (None, Some(specs), None, None) => {
+                if specs.is_empty() {
+                    return Err(self.invalid(
+                        format!("{field}.lembos"),
+                        "[]",
+                        "must hold at least one lembo",
+                    ));
+                }
+                let lembos = specs
+                    .iter()
+                    .enumerate()
+                    .map(|(j, l)| {
+                        self.inline_lembo(&format!("{field}.lembos[{j}]"), l, transform.as_ref())
+                    })
+                    .collect::<Result<Vec<_>>>()?;
+                ("inline lembos".to_string(), lembos, None, None)
+            }
+            (None, None, Some(path), None) => {
+                let mesh_field = format!("{field}.mesh");
+                let full = base_dir.join(path);
+                let mesh = load_obj(self.file, &mesh_field, &full)?;
+                let mesh = transform_mesh(mesh, transform.as_ref());
+                self.mesh_in_range(&field, transform.is_some(), &mesh)?;
+                let mesh = mesh.welded();
+                let collapsed = |c: CollapsedTriangle| Error::Mesh {
+                    file: self.file.to_string(),
+                    field: mesh_field.clone(),
+                    path: full.clone(),
+                    message: c.to_string(),
+                };
+                let mesh = match crease {
+                    Some(angle) => mesh.with_crease_angle(angle).map_err(collapsed)?,
+                    None => mesh,
+                };
+                let lembos = mesh.to_lembos().map_err(collapsed)?;
+                (format!("mesh {path}"), lembos, Some(mesh), None)
+            }
+            (None, None, None, Some(spec)) => {
+                let (label, lembos, set) =
+                    self.discoids(&field, spec, transform.as_ref(), base_dir, radii)?;
+                (label, lembos, None, Some(set))
+            }
+            _ => {
+                let value = given(&[
+                    ("builtin", o.builtin.is_some()),
+                    ("lembos", o.lembos.is_some()),
+                    ("mesh", o.mesh.is_some()),
+                    ("discoids", o.discoids.is_some()),
+                ]);
+                return Err(self.invalid(
+                    field,
+                    value,
+                    "an object needs exactly one of `builtin`, `lembos`, `mesh` or `discoids`",
+                ));
+            }
+        };
+        // Finite input can still be huge, or become so after the transform; refuse it here
+        // rather than let the rasterizer overflow.
+        if let Some(j) = lembos.iter().position(|l| !lembo_in_range(l)) {
+            return Err(self.out_of_range(&field, transform.is_some(), j));
+        }
+        Ok(SceneObject {
+            label,
+            color,
+            lembos,
+            mesh,
+            discoids,
+        })
+    }
+
+    /// The error for lembo `j` of the object at `field` being out of range.
+    fn out_of_range(&self, field: &str, transformed: bool, j: usize) -> Error {
+        let where_ = if transformed {
+            format!("{field}.transform")
+        } else {
+            field.to_string()
+        };
+        let reason = format!(
+            "lembo {j} of this object has a world coordinate or coefficient beyond \
+             {MAX_WORLD_COORDINATE:e} in magnitude (after the transform)"
+        );
+        self.invalid(where_, "(world-space geometry)", reason)
+    }
+
+    /// Refuses a mesh with a vertex beyond [`MAX_WORLD_COORDINATE`] before welding and
+    /// building lembos from it (as the lembo of its first triangle using the vertex).
+    fn mesh_in_range(&self, field: &str, transformed: bool, mesh: &TriangleMesh) -> Result<()> {
+        let small = |p: DVec3| p.is_finite() && p.abs().max_element() <= MAX_WORLD_COORDINATE;
+        match mesh
+            .triangles
+            .iter()
+            .position(|t| t.iter().any(|&i| !small(mesh.positions[i as usize])))
+        {
+            Some(j) => Err(self.out_of_range(field, transformed, j)),
+            None => Ok(()),
+        }
+    }
+
+    /// Validates the crease angle of the object at `field` (`mesh` objects only).
+    fn crease_angle(&self, field: &str, angle: f64, mesh: bool) -> Result<f64> {
+        let name = format!("{field}.crease_angle_deg");
+        if !mesh {
+            return Err(self.invalid(
+                name,
+                angle,
+                "applies to `mesh` objects only (it recomputes an OBJ mesh's normals)",
+            ));
+        }
+        let angle = self.finite(&name, angle)?;
+        if !(0.0..=180.0).contains(&angle) {
+            return Err(self.invalid(name, angle, "must be in [0, 180] degrees"));
+        }
+        Ok(angle)
+    }
+}
