@@ -1,0 +1,154 @@
+//! The triangle path's rasterizer: coverage by integer edge functions with the top-left
+//! rule, 2x2 quads, and each covered pixel's perspective-correct [`TriangleFragment`].
+
+use super::*;
+use crate::datapath::Real;
+use crate::raster::Counts;
+
+/// One fragment of a triangle: what the ROP needs to test and shade it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TriangleFragment<R> {
+    /// Window depth [0, 1].
+    pub z: R,
+    /// World-space normal, perspective-correct, not normalised.
+    pub normal: [R; 3],
+    /// World-space position, perspective-correct.
+    pub position: [R; 3],
+}
+
+impl<R: Real> ScreenTriangle<R> {
+    /// The three edge functions at pixel (i, j)'s centre.
+    #[inline(always)]
+    pub(super) fn edge_values(&self, i: u32, j: u32) -> [i64; 3] {
+        let (px, py) = pixel_centre(i, j);
+        self.edges.map(|e| e.at(px, py))
+    }
+
+    /// Whether pixel (i, j)'s centre is inside, by the top-left rule.
+    #[inline(always)]
+    pub fn covers(&self, i: u32, j: u32) -> bool {
+        let e = self.edge_values(i, j);
+        (0..3).all(|k| e[k] >= self.edges[k].min)
+    }
+
+    /// The fragment at pixel (i, j) (meaningful where [`Self::covers`]).
+    #[inline]
+    pub fn fragment(&self, i: u32, j: u32) -> TriangleFragment<R> {
+        let e = self.edge_values(i, j);
+        let area = R::of(self.area2 as f64);
+        let l = e.map(|v| R::of(v as f64) / area);
+        let z = l[0] * self.z[0] + l[1] * self.z[1] + l[2] * self.z[2];
+        // Perspective-correct: sum(l_k a_k / w_k) / sum(l_k / w_k), with a_k / w_k kept
+        // per vertex.
+        let sum = l[0] * self.inv_w[0] + l[1] * self.inv_w[1] + l[2] * self.inv_w[2];
+        let lerp = |v: &[[R; 3]; 3]| {
+            [0, 1, 2].map(|c| (l[0] * v[0][c] + l[1] * v[1][c] + l[2] * v[2][c]) / sum)
+        };
+        TriangleFragment {
+            z,
+            normal: lerp(&self.normal_w),
+            position: lerp(&self.position_w),
+        }
+    }
+
+    /// The covered pixels of row `j` as a half-open column range (empty when start >= end,
+    /// and for rows outside the bounding box). Coverage of a row is contiguous: each edge
+    /// function is linear along it, so each admits a half-line of columns.
+    #[inline]
+    pub fn row_span(&self, j: u32) -> (u32, u32) {
+        let [i0, i1, j0, j1] = self.bbox;
+        if j < j0 || j >= j1 {
+            return (i0, i0);
+        }
+        let mut a = i0;
+        while a < i1 && !self.covers(a, j) {
+            a += 1;
+        }
+        let mut b = a;
+        while b < i1 && self.covers(b, j) {
+            b += 1;
+        }
+        (a, b)
+    }
+
+    /// Calls `quad(qi, qj, rows, mask)` for every 2x2 quad (top-left pixel (qi, qj), both
+    /// even) with at least one covered pixel, row by row, left to right. `rows` are the
+    /// covered spans of rows qj and qj + 1 ([`Self::row_span`]); mask bit 0 is (qi, qj),
+    /// bit 1 (qi + 1, qj), bit 2 (qi, qj + 1), bit 3 (qi + 1, qj + 1).
+    pub fn quads(&self, mut quad: impl FnMut(u32, u32, &[(u32, u32); 2], u8)) {
+        let [_, _, j0, j1] = self.bbox;
+        let mut qj = j0 & !1;
+        while qj < j1 {
+            let rows = [self.row_span(qj), self.row_span(qj + 1)];
+            let live = rows.iter().filter(|r| r.0 < r.1);
+            let lo = live.clone().map(|r| r.0).min();
+            let hi = live.map(|r| r.1).max();
+            if let (Some(lo), Some(hi)) = (lo, hi) {
+                let mut qi = lo & !1;
+                while qi < hi {
+                    let mut mask = 0u8;
+                    for bit in 0..4u32 {
+                        let (a, b) = rows[(bit >> 1) as usize];
+                        let i = qi + (bit & 1);
+                        if a <= i && i < b {
+                            mask |= 1 << bit;
+                        }
+                    }
+                    if mask != 0 {
+                        quad(qi, qj, &rows, mask);
+                    }
+                    qi += 2;
+                }
+            }
+            qj += 2;
+        }
+    }
+}
+
+/// Quads (2x2, aligned to even columns) touched by the union of two row spans.
+pub fn quads_in(rows: &[(u32, u32); 2]) -> u64 {
+    let q = |(a, b): (u32, u32)| (a < b).then(|| (a / 2, (b - 1) / 2));
+    match (q(rows[0]), q(rows[1])) {
+        (None, None) => 0,
+        (Some((a, b)), None) | (None, Some((a, b))) => (b - a + 1) as u64,
+        (Some((a0, b0)), Some((a1, b1))) => {
+            if a1 > b0 + 1 || a0 > b1 + 1 {
+                (b0 - a0 + 1) as u64 + (b1 - a1 + 1) as u64
+            } else {
+                (b0.max(b1) - a0.min(a1) + 1) as u64
+            }
+        }
+    }
+}
+
+/// Receives triangle fragments: the ROP in a render, a probe in tests and accuracy runs.
+pub trait TriangleSink<R: Real> {
+    fn fragment(&mut self, t: &ScreenTriangle<R>, i: u32, j: u32, f: &TriangleFragment<R>);
+}
+
+/// Rasterizes one set-up triangle into `sink`, quad by quad.
+pub fn rasterize<R: Real, S: TriangleSink<R>>(
+    t: &ScreenTriangle<R>,
+    sink: &mut S,
+    counts: &mut Counts,
+) {
+    t.quads(|qi, qj, _, mask| {
+        counts.quads += 1;
+        for bit in 0..4 {
+            if mask & (1 << bit) != 0 {
+                let (i, j) = (qi + (bit & 1), qj + (bit >> 1));
+                sink.fragment(t, i, j, &t.fragment(i, j));
+                counts.fragments += 1;
+            }
+        }
+    });
+}
+
+/// Counts a culled triangle.
+pub(super) fn count_cull(cull: TriangleCull, counts: &mut Counts) {
+    match cull {
+        TriangleCull::BehindEye => counts.triangles_culled_behind_eye += 1,
+        TriangleCull::Outside => counts.triangles_culled_outside += 1,
+        TriangleCull::Degenerate => counts.triangles_degenerate += 1,
+    }
+}
