@@ -100,7 +100,23 @@ pub fn intervals<R: Real>(
     counts.edge_roots += xs.len() as u64;
 
     // The partition for this scanline: axis `a`, whether the domain is split, the saddle.
-    let (a, split, saddle) = match l.partition {
+    let (a, split, saddle) = scanline_partition(l, yj, k, xs, counts);
+    sort_crossings(l, a, split, xs);
+    pair_crossings(l, a, saddle, xs, out, counts);
+}
+
+/// The partition of scanline `yj` (DESIGN.md §2): the walk axis, whether the domain is
+/// split in two parts, and the saddle point when the conic degenerates there; an interior
+/// extremum's tips on the scanline are pushed to `xs` as virtual crossings.
+#[inline]
+fn scanline_partition<R: Real>(
+    l: &ScreenLembo<R>,
+    yj: R,
+    k: R,
+    xs: &mut Vec<Crossing<R>>,
+    counts: &mut Counts,
+) -> ([R; 2], bool, Option<[R; 2]>) {
+    match l.partition {
         Partition::Monotone { a } => (a, false, None),
         Partition::Valley { a } => (a, true, None),
         Partition::Central {
@@ -169,8 +185,13 @@ pub fn intervals<R: Real>(
                 (a, true, v_mode.then_some(centre))
             }
         }
-    };
+    }
+}
 
+/// Assigns parts to edge roots, computes walk keys and sorts the crossings by part, then
+/// key, exits first.
+#[inline]
+fn sort_crossings<R: Real>(l: &ScreenLembo<R>, a: [R; 2], split: bool, xs: &mut [Crossing<R>]) {
     // Assign parts to edge roots and compute walk keys. Ties put exits first: a curve that
     // touches an edge from inside leaves and re-enters there.
     for c in xs.iter_mut() {
@@ -190,7 +211,19 @@ pub fn intervals<R: Real>(
             )
             .then(p.entry.cmp(&q.entry))
     });
+}
 
+/// Pairs the sorted crossings into intervals (an entry with the next exit of its part),
+/// splitting at the saddle when there is one; counts unpaired roots.
+#[inline]
+fn pair_crossings<R: Real>(
+    l: &ScreenLembo<R>,
+    a: [R; 2],
+    saddle: Option<[R; 2]>,
+    xs: &mut [Crossing<R>],
+    out: &mut Vec<Interval<R>>,
+    counts: &mut Counts,
+) {
     let mut pending: Option<(i8, CurvePoint<R>)> = None;
     for n in 0..xs.len() {
         // An exit and an entry at the same place: exit first when an interval is open (the
@@ -258,7 +291,6 @@ pub fn intervals<R: Real>(
         counts.unpaired_roots += 1;
     }
 }
-
 /// When exactly one edge root lies at the tip `uv` (within rounding: the ellipse's tip is on
 /// a domain edge), removes it and returns whether it was an entry. Rounding would otherwise
 /// put it on either side of the partition line, with a walk key one ulp from the tip's,

@@ -215,156 +215,201 @@ pub fn outline_distances(
     pixels: &[Misplaced],
     coverage: &dyn ReferenceCoverage,
 ) -> Vec<f64> {
-    let grid = Grid { covered, w, h };
-    // Which edges and saddle cells the searches read, each computed once.
-    let (mut edges, mut saddles) = (Vec::new(), Vec::new());
-    for m in pixels.iter().filter(|m| m.bound <= CONTOUR_BOUND_PX) {
-        grid.candidate_cells(m.index, m.bound, |a, b| {
-            let (mixed, saddle) = grid.cell_kind(a, b);
-            if !mixed {
-                return;
-            }
-            for (key, p, q) in cell_edges(a, b, w) {
-                if covered[p] != covered[q] {
-                    edges.push(key);
+    let outline = Outline::new(Grid { covered, w, h }, pixels, coverage);
+    pixels.par_iter().map(|m| outline.distance(m)).collect()
+}
+
+/// The outline crossings the searches read: every mixed cell edge near a misplaced pixel,
+/// bisected once, and every saddle cell's centre sample.
+struct Outline<'a> {
+    grid: Grid<'a>,
+    coverage: &'a dyn ReferenceCoverage,
+    /// The edges crossed, sorted, and where along each the outline crosses (0 to 1).
+    edges: Vec<EdgeKey>,
+    crossings: Vec<f64>,
+    /// The saddle cells (by top-left pixel), sorted, and whether each one's centre is
+    /// covered.
+    saddles: Vec<u64>,
+    saddle_centres: Vec<bool>,
+}
+
+impl<'a> Outline<'a> {
+    /// Collects and bisects the edges and saddles the pixels within
+    /// [`CONTOUR_BOUND_PX`] read.
+    fn new(grid: Grid<'a>, pixels: &[Misplaced], coverage: &'a dyn ReferenceCoverage) -> Self {
+        let (covered, w) = (grid.covered, grid.w);
+        let (mut edges, mut saddles) = (Vec::new(), Vec::new());
+        for m in pixels.iter().filter(|m| m.bound <= CONTOUR_BOUND_PX) {
+            grid.candidate_cells(m.index, m.bound, |a, b| {
+                let (mixed, saddle) = grid.cell_kind(a, b);
+                if !mixed {
+                    return;
                 }
-            }
-            if saddle {
-                saddles.push((b * w + a) as u64);
-            }
-        });
+                for (key, p, q) in cell_edges(a, b, w) {
+                    if covered[p] != covered[q] {
+                        edges.push(key);
+                    }
+                }
+                if saddle {
+                    saddles.push((b * w + a) as u64);
+                }
+            });
+        }
+        edges.sort_unstable();
+        edges.dedup();
+        saddles.sort_unstable();
+        saddles.dedup();
+        let crossings: Vec<f64> = edges
+            .par_iter()
+            .map(|&key| {
+                let p = (key / 2) as usize;
+                let q = if key.is_multiple_of(2) { p + 1 } else { p + w };
+                bisect(coverage, grid.centre(p), grid.centre(q), covered[p])
+            })
+            .collect();
+        let saddle_centres: Vec<bool> = saddles
+            .par_iter()
+            .map(|&k| {
+                let c = grid.centre(k as usize) + DVec2::splat(0.5);
+                coverage.covered(c.x, c.y)
+            })
+            .collect();
+        Outline {
+            grid,
+            coverage,
+            edges,
+            crossings,
+            saddles,
+            saddle_centres,
+        }
     }
-    edges.sort_unstable();
-    edges.dedup();
-    saddles.sort_unstable();
-    saddles.dedup();
-    let crossings: Vec<f64> = edges
-        .par_iter()
-        .map(|&key| {
-            let p = (key / 2) as usize;
-            let q = if key.is_multiple_of(2) { p + 1 } else { p + w };
-            bisect(coverage, grid.centre(p), grid.centre(q), covered[p])
-        })
-        .collect();
-    let saddle_centres: Vec<bool> = saddles
-        .par_iter()
-        .map(|&k| {
-            let c = grid.centre(k as usize) + DVec2::splat(0.5);
-            coverage.covered(c.x, c.y)
-        })
-        .collect();
-    let crossing = |key: EdgeKey| -> DVec2 {
-        let t = crossings[edges.binary_search(&key).expect("edge collected")];
+
+    /// Where the outline crosses edge `key`.
+    fn crossing(&self, key: EdgeKey) -> DVec2 {
+        let t = self.crossings[self.edges.binary_search(&key).expect("edge collected")];
         let p = (key / 2) as usize;
         let step = if key.is_multiple_of(2) {
             DVec2::X
         } else {
             DVec2::Y
         };
-        grid.centre(p) + t * step
-    };
+        self.grid.centre(p) + t * step
+    }
 
-    pixels
-        .par_iter()
-        .map(|m| {
-            if m.bound > CONTOUR_BOUND_PX {
-                return m.bound;
+    /// The distance from misplaced pixel `m`'s centre to the outline.
+    fn distance(&self, m: &Misplaced) -> f64 {
+        if m.bound > CONTOUR_BOUND_PX {
+            return m.bound;
+        }
+        let c = self.grid.centre(m.index);
+        let (best, nearest_crossing) = self.nearest_segment(m, c);
+        let Some((contour, foot)) = best else {
+            return m.bound;
+        };
+        if m.bound > RAY_BOUND_PX {
+            return contour.min(m.bound);
+        }
+        self.along_rays(c, self.grid.covered[m.index], foot, nearest_crossing)
+            .min(m.bound)
+    }
+
+    /// The nearest point of the outline's segments (marching squares over the cells within
+    /// `m`'s bound) with its distance from `c`, and the distance to the nearest crossing.
+    fn nearest_segment(&self, m: &Misplaced, c: DVec2) -> (Option<(f64, DVec2)>, f64) {
+        let (grid, covered) = (&self.grid, self.grid.covered);
+        let mut best: Option<(f64, DVec2)> = None;
+        // The nearest crossing: a point of the outline itself.
+        let mut nearest_crossing = f64::INFINITY;
+        let mut keep = |(d, q): (f64, DVec2), ends: [DVec2; 2]| {
+            if best.is_none_or(|(b, _)| d < b) {
+                best = Some((d, q));
             }
-            let c = grid.centre(m.index);
-            let mine = covered[m.index];
-            let mut best: Option<(f64, DVec2)> = None;
-            // The nearest crossing: a point of the outline itself.
-            let mut nearest_crossing = f64::INFINITY;
-            let mut keep = |(d, q): (f64, DVec2), ends: [DVec2; 2]| {
-                if best.is_none_or(|(b, _)| d < b) {
-                    best = Some((d, q));
-                }
-                for e in ends {
-                    nearest_crossing = nearest_crossing.min((e - c).length());
-                }
-            };
-            grid.candidate_cells(m.index, m.bound, |a, b| {
-                let (mixed, saddle) = grid.cell_kind(a, b);
-                if !mixed {
-                    return;
-                }
-                let sides = cell_edges(a, b, w);
-                if saddle {
-                    let k = (b * w + a) as u64;
-                    let centre = saddle_centres[saddles.binary_search(&k).expect("saddle")];
-                    let [top, right, bottom, left] = sides.map(|(key, _, _)| crossing(key));
-                    // The centre agrees with the top-left corner: the top-right and
-                    // bottom-left corners are cut off; otherwise the other two.
-                    let pairs = if centre == covered[sides[0].1] {
-                        [(top, right), (bottom, left)]
-                    } else {
-                        [(top, left), (bottom, right)]
-                    };
-                    for (p, q) in pairs {
-                        keep(to_segment(c, p, q), [p, q]);
-                    }
+            for e in ends {
+                nearest_crossing = nearest_crossing.min((e - c).length());
+            }
+        };
+        grid.candidate_cells(m.index, m.bound, |a, b| {
+            let (mixed, saddle) = grid.cell_kind(a, b);
+            if !mixed {
+                return;
+            }
+            let sides = cell_edges(a, b, grid.w);
+            if saddle {
+                let k = (b * grid.w + a) as u64;
+                let centre = self.saddle_centres[self.saddles.binary_search(&k).expect("saddle")];
+                let [top, right, bottom, left] = sides.map(|(key, _, _)| self.crossing(key));
+                // The centre agrees with the top-left corner: the top-right and
+                // bottom-left corners are cut off; otherwise the other two.
+                let pairs = if centre == covered[sides[0].1] {
+                    [(top, right), (bottom, left)]
                 } else {
-                    let mut ends = sides
-                        .iter()
-                        .filter(|(_, p, q)| covered[*p] != covered[*q])
-                        .map(|(key, _, _)| crossing(*key));
-                    if let (Some(p), Some(q)) = (ends.next(), ends.next()) {
-                        keep(to_segment(c, p, q), [p, q]);
-                    }
+                    [(top, left), (bottom, right)]
+                };
+                for (p, q) in pairs {
+                    keep(to_segment(c, p, q), [p, q]);
                 }
-            });
-            let Some((contour, foot)) = best else {
-                return m.bound;
-            };
-            if m.bound > RAY_BOUND_PX {
-                return contour.min(m.bound);
-            }
-            let along = foot - c;
-            let len = along.length();
-            if len == 0.0 {
-                return nearest_crossing.min(m.bound);
-            }
-            // A crossing of the outline along the ray from c in direction `dir`,
-            // searched within `reach` (clipped to the viewport), if the ray's end there lies
-            // on the other side.
-            let crossing_along = |dir: DVec2, reach: f64| -> Option<f64> {
-                let mut reach = reach;
-                for (p, d, size) in [(c.x, dir.x, w as f64), (c.y, dir.y, h as f64)] {
-                    if d > 0.0 {
-                        reach = reach.min((size - p) / d);
-                    } else if d < 0.0 {
-                        reach = reach.min(-p / d);
-                    }
-                }
-                let end = c + reach * dir;
-                (coverage.covered(end.x, end.y) != mine)
-                    .then(|| reach * bisect(coverage, c, end, mine))
-            };
-            let dir = along / len;
-            let Some(r0) = crossing_along(dir, len + 0.5) else {
-                return nearest_crossing.min(m.bound);
-            };
-            // The contour's normal is the outline's at the chord's middle, not at the foot:
-            // the distance along rays turned by ±ANGLE_STEP, and at the vertex of the
-            // parabola through the three, finds the nearest direction.
-            let turned = |a: f64| DVec2::from_angle(a).rotate(dir);
-            let mut best = r0.min(nearest_crossing);
-            if let (Some(rm), Some(rp)) = (
-                crossing_along(turned(-ANGLE_STEP), r0 + 0.5),
-                crossing_along(turned(ANGLE_STEP), r0 + 0.5),
-            ) {
-                best = best.min(rm).min(rp);
-                let curvature = rm - 2.0 * r0 + rp;
-                if curvature > 0.0 {
-                    let vertex = (0.5 * (rm - rp) / curvature).clamp(-2.0, 2.0) * ANGLE_STEP;
-                    if let Some(r) = crossing_along(turned(vertex), r0 + 0.5) {
-                        best = best.min(r);
-                    }
+            } else {
+                let mut ends = sides
+                    .iter()
+                    .filter(|(_, p, q)| covered[*p] != covered[*q])
+                    .map(|(key, _, _)| self.crossing(*key));
+                if let (Some(p), Some(q)) = (ends.next(), ends.next()) {
+                    keep(to_segment(c, p, q), [p, q]);
                 }
             }
-            best.min(m.bound)
-        })
-        .collect()
+        });
+        (best, nearest_crossing)
+    }
+
+    /// The distance from `c` (covered: `mine`) to the outline along the ray towards the
+    /// segments' nearest point `foot` and rays turned about it, no farther than the
+    /// nearest crossing.
+    fn along_rays(&self, c: DVec2, mine: bool, foot: DVec2, nearest_crossing: f64) -> f64 {
+        let (w, h, coverage) = (self.grid.w, self.grid.h, self.coverage);
+        let along = foot - c;
+        let len = along.length();
+        if len == 0.0 {
+            return nearest_crossing;
+        }
+        // A crossing of the outline along the ray from c in direction `dir`,
+        // searched within `reach` (clipped to the viewport), if the ray's end there lies
+        // on the other side.
+        let crossing_along = |dir: DVec2, reach: f64| -> Option<f64> {
+            let mut reach = reach;
+            for (p, d, size) in [(c.x, dir.x, w as f64), (c.y, dir.y, h as f64)] {
+                if d > 0.0 {
+                    reach = reach.min((size - p) / d);
+                } else if d < 0.0 {
+                    reach = reach.min(-p / d);
+                }
+            }
+            let end = c + reach * dir;
+            (coverage.covered(end.x, end.y) != mine).then(|| reach * bisect(coverage, c, end, mine))
+        };
+        let dir = along / len;
+        let Some(r0) = crossing_along(dir, len + 0.5) else {
+            return nearest_crossing;
+        };
+        // The contour's normal is the outline's at the chord's middle, not at the foot:
+        // the distance along rays turned by ±ANGLE_STEP, and at the vertex of the
+        // parabola through the three, finds the nearest direction.
+        let turned = |a: f64| DVec2::from_angle(a).rotate(dir);
+        let mut best = r0.min(nearest_crossing);
+        if let (Some(rm), Some(rp)) = (
+            crossing_along(turned(-ANGLE_STEP), r0 + 0.5),
+            crossing_along(turned(ANGLE_STEP), r0 + 0.5),
+        ) {
+            best = best.min(rm).min(rp);
+            let curvature = rm - 2.0 * r0 + rp;
+            if curvature > 0.0 {
+                let vertex = (0.5 * (rm - rp) / curvature).clamp(-2.0, 2.0) * ANGLE_STEP;
+                if let Some(r) = crossing_along(turned(vertex), r0 + 0.5) {
+                    best = best.min(r);
+                }
+            }
+        }
+        best
+    }
 }
 
 #[cfg(test)]
