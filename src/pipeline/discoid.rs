@@ -15,7 +15,7 @@
 //! pixel; the pass takes the longer of the two.
 
 use super::{run_in, Cycle, CycleReport, DiscoidPass, Source, UnitCycles, UnitInstance, UnitKind};
-use crate::camera::View;
+use crate::camera::{View, Viewport};
 use crate::config::ArchConfig;
 use crate::datapath::{Datapath, Real};
 use crate::discoid::blend::BlendMode;
@@ -123,49 +123,10 @@ fn passes<R: Real>(
     let background = scene.background.map(to_u8::<f64>);
     let framebuffer = resolve(&mut target, &table, &shader, background, vp.height);
 
-    // The resolve pass: per-ROP pixel work against the port's bytes.
-    let tiles = RopTiles::new(vp.width, vp.height, arch.rop.tile_px, arch.rop.count);
-    let mut owned = vec![0u64; arch.rop.count as usize];
-    for j in 0..vp.height {
-        for i in 0..vp.width {
-            owned[tiles.owner(i, j).0] += 1;
-        }
-    }
-    let rop_busy: Vec<u64> = owned
-        .iter()
-        .map(|p| p.div_ceil(arch.rop.fragments_per_cycle))
-        .collect();
-    let bytes = vp.pixels() as u64 * (mode.bytes_per_fragment() / 2 + 4);
-    let port_busy = bytes.div_ceil(arch.framebuffer.bytes_per_cycle);
+    let (rop_busy, port_busy) = resolve_cost(arch, vp, mode);
     let resolve_total = rop_busy.iter().copied().max().unwrap_or(0).max(port_busy);
-
     let (c1, c2) = (first.cycles, second.cycles);
-    let mut rop_index = 0;
-    let units: Vec<UnitCycles> = c1
-        .units
-        .iter()
-        .zip(&c2.units)
-        .map(|(a, b)| {
-            let busy = match a.kind {
-                UnitKind::Rop => {
-                    rop_index += 1;
-                    rop_busy[rop_index - 1]
-                }
-                UnitKind::FrameBuffer => port_busy,
-                _ => 0,
-            };
-            UnitCycles {
-                name: a.name.clone(),
-                kind: a.kind,
-                busy: a.busy + b.busy + busy,
-                starved: a.starved + b.starved + (resolve_total - busy),
-                blocked: a.blocked + b.blocked,
-                items_in: a.items_in + b.items_in,
-                items_out: a.items_out + b.items_out,
-                max_fifo_occupancy: a.max_fifo_occupancy.max(b.max_fifo_occupancy),
-            }
-        })
-        .collect();
+    let units = merged_units(&c1, &c2, &rop_busy, port_busy, resolve_total);
     let total = c1.total + c2.total + resolve_total;
     let bottleneck = units
         .iter()
@@ -206,4 +167,60 @@ fn passes<R: Real>(
         },
         blend,
     })
+}
+
+/// The resolve pass's busy cycles: each ROP's (its tiles' pixels at its fragment rate)
+/// and the frame-buffer port's (every pixel's accumulation read and colour write).
+fn resolve_cost(arch: &ArchConfig, vp: Viewport, mode: BlendMode) -> (Vec<u64>, u64) {
+    let tiles = RopTiles::new(vp.width, vp.height, arch.rop.tile_px, arch.rop.count);
+    let mut owned = vec![0u64; arch.rop.count as usize];
+    for j in 0..vp.height {
+        for i in 0..vp.width {
+            owned[tiles.owner(i, j).0] += 1;
+        }
+    }
+    let rop_busy: Vec<u64> = owned
+        .iter()
+        .map(|p| p.div_ceil(arch.rop.fragments_per_cycle))
+        .collect();
+    let bytes = vp.pixels() as u64 * (mode.bytes_per_fragment() / 2 + 4);
+    let port_busy = bytes.div_ceil(arch.framebuffer.bytes_per_cycle);
+    (rop_busy, port_busy)
+}
+
+/// Each unit's accounting over the three passes: the depth and accumulation passes' sums,
+/// plus the resolve pass, in which the ROPs and the port are busy for their share and
+/// every unit starves the rest of `resolve_total`.
+fn merged_units(
+    c1: &CycleReport,
+    c2: &CycleReport,
+    rop_busy: &[u64],
+    port_busy: u64,
+    resolve_total: u64,
+) -> Vec<UnitCycles> {
+    let mut rop_index = 0;
+    c1.units
+        .iter()
+        .zip(&c2.units)
+        .map(|(a, b)| {
+            let busy = match a.kind {
+                UnitKind::Rop => {
+                    rop_index += 1;
+                    rop_busy[rop_index - 1]
+                }
+                UnitKind::FrameBuffer => port_busy,
+                _ => 0,
+            };
+            UnitCycles {
+                name: a.name.clone(),
+                kind: a.kind,
+                busy: a.busy + b.busy + busy,
+                starved: a.starved + b.starved + (resolve_total - busy),
+                blocked: a.blocked + b.blocked,
+                items_in: a.items_in + b.items_in,
+                items_out: a.items_out + b.items_out,
+                max_fifo_occupancy: a.max_fifo_occupancy.max(b.max_fifo_occupancy),
+            }
+        })
+        .collect()
 }
