@@ -13,7 +13,7 @@
 //! `lembo_sim::datapath_study`.
 
 use clap::Parser;
-use lembo_sim::datapath_study::{self, Family, Settings, FAMILIES};
+use lembo_sim::datapath_study::{self, Family, StudySettings, FAMILIES};
 use serde::Serialize;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -48,7 +48,7 @@ struct Args {
 
 #[derive(Serialize)]
 struct Output<'a> {
-    settings: &'a Settings,
+    settings: &'a StudySettings,
     families: Vec<(&'static str, &'static str)>,
     /// Wall time of the whole study [seconds], and the threads it ran on.
     wall_seconds: f64,
@@ -93,7 +93,7 @@ fn main() -> ExitCode {
         eprintln!("error: --k: {k} is outside 1e-4..=64 px (the renderer's range)");
         return ExitCode::from(2);
     }
-    let settings = Settings {
+    let settings = StudySettings {
         cases_per_family: args.lembos,
         seed: args.seed,
         ks: args.k.clone(),
@@ -108,7 +108,7 @@ fn main() -> ExitCode {
     }
 }
 
-fn run(settings: &Settings, args: &Args) -> Result<(), Box<dyn std::error::Error>> {
+fn run(settings: &StudySettings, args: &Args) -> Result<(), Box<dyn std::error::Error>> {
     let t = Instant::now();
     let results = datapath_study::run(settings);
     let wall_seconds = t.elapsed().as_secs_f64();

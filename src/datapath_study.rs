@@ -34,6 +34,7 @@ use crate::datapath::Datapath;
 use crate::job::{measure_frame, render_reference, PrimitivePath};
 use crate::lembo::Lembo;
 use crate::raster::render_functional;
+use crate::rop::FrameBuffer;
 use crate::scene::Scene;
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
@@ -384,33 +385,7 @@ pub fn case(family: Family, seed: u64, index: u32) -> Case {
             let points = pair.lembo_points(|p| p + centre + offset);
             (ortho_camera(offset), points, z)
         }
-        Family::Large => {
-            let q = Quad {
-                size: shape.log_range(1e3, 1e6),
-                thickness: shape.range(0.3, 0.8),
-                bend: shape.range(0.0, 0.25),
-                z_amplitude: 5.0,
-                warp: 0.0,
-            };
-            let pair = Pair::draw(&q, &mut shape);
-            // A random point of the first lembo lands on a random point of the viewport.
-            let [first, _] = pair.lembo_points(|p| p);
-            let lembo = Lembo::new(first, [z; 6]);
-            let (a, b) = (place.unit(), place.unit());
-            let (u, v) = if a + b > 1.0 {
-                (1.0 - a, 1.0 - b)
-            } else {
-                (a, b)
-            };
-            let on = lembo.position_at(u, v);
-            let at = DVec3::new(place.range(-110.0, 110.0), place.range(-110.0, 110.0), 0.0);
-            let shift = DVec3::new(at.x - on.x, at.y - on.y, 0.0);
-            (
-                ortho_camera(DVec3::ZERO),
-                pair.lembo_points(|p| p + shift),
-                z,
-            )
-        }
+        Family::Large => large_case(&mut shape, &mut place),
         Family::NearlyFlat => {
             let q = Quad {
                 size: shape.log_range(10.0, 200.0),
@@ -427,74 +402,8 @@ pub fn case(family: Family, seed: u64, index: u32) -> Case {
                 z,
             )
         }
-        Family::NearlyDegenerate => {
-            let size = shape.log_range(20.0, 200.0);
-            let q = if index.is_multiple_of(2) {
-                let thickness = shape.log_range(1e-4, 10f64.powf(-1.5));
-                Quad {
-                    size,
-                    thickness,
-                    bend: thickness,
-                    z_amplitude: 5.0,
-                    warp: shape.range(0.0, 0.2),
-                }
-            } else {
-                Quad {
-                    size,
-                    thickness: shape.log_range(1e-10, 1e-3),
-                    bend: shape.range(0.0, 0.25),
-                    z_amplitude: 5.0,
-                    warp: 0.0,
-                }
-            };
-            let pair = Pair::draw(&q, &mut shape);
-            let centre = DVec3::new(place.range(-80.0, 80.0), place.range(-80.0, 80.0), 0.0);
-            (
-                ortho_camera(DVec3::ZERO),
-                pair.lembo_points(|p| p + centre),
-                z,
-            )
-        }
-        Family::SteepPerspective => {
-            let size = shape.log_range(5.0, 20.0);
-            let q = Quad {
-                size,
-                thickness: shape.range(0.3, 0.8),
-                bend: shape.range(0.0, 0.25),
-                z_amplitude: 0.1 * size,
-                warp: 0.0,
-            };
-            let pair = Pair::draw(&q, &mut shape);
-            let points = pair.lembo_points(|p| p);
-            let radius = points
-                .iter()
-                .flatten()
-                .map(|p| p.length())
-                .fold(0.0, f64::max);
-            let target = (0.2 * size * place.disc()).extend(0.0);
-            let azimuth = place.range(0.0, std::f64::consts::TAU);
-            let elevation = place.range(1.0, 15.0).to_radians();
-            let distance = radius * place.range(1.5, 4.0);
-            let eye = target
-                + distance
-                    * DVec3::new(
-                        elevation.cos() * azimuth.cos(),
-                        elevation.cos() * azimuth.sin(),
-                        elevation.sin(),
-                    );
-            let camera = json!({
-                "eye": eye.to_array(),
-                "target": target.to_array(),
-                "up": [0, 0, 1],
-                "projection": {
-                    "kind": "perspective",
-                    "fovy_deg": place.range(30.0, 70.0),
-                    "near": 0.01 * distance,
-                    "far": 4.0 * distance,
-                }
-            });
-            (camera, points, z)
-        }
+        Family::NearlyDegenerate => nearly_degenerate_case(index, &mut shape, &mut place),
+        Family::SteepPerspective => steep_perspective_case(&mut shape, &mut place),
     };
     Case {
         family,
@@ -502,6 +411,122 @@ pub fn case(family: Family, seed: u64, index: u32) -> Case {
         seed,
         scene_json: scene_json(family, index, camera, lembos, &mut shade, up),
     }
+}
+
+/// A large lembo pair (10³ to 10⁶ world units) with a random point of the first on a random
+/// point of the viewport.
+fn large_case(
+    shape: &mut SplitMix64,
+    place: &mut SplitMix64,
+) -> (serde_json::Value, [[DVec3; 6]; 2], DVec3) {
+    let z = DVec3::Z;
+    let q = Quad {
+        size: shape.log_range(1e3, 1e6),
+        thickness: shape.range(0.3, 0.8),
+        bend: shape.range(0.0, 0.25),
+        z_amplitude: 5.0,
+        warp: 0.0,
+    };
+    let pair = Pair::draw(&q, shape);
+    // A random point of the first lembo lands on a random point of the viewport.
+    let [first, _] = pair.lembo_points(|p| p);
+    let lembo = Lembo::new(first, [z; 6]);
+    let (a, b) = (place.unit(), place.unit());
+    let (u, v) = if a + b > 1.0 {
+        (1.0 - a, 1.0 - b)
+    } else {
+        (a, b)
+    };
+    let on = lembo.position_at(u, v);
+    let at = DVec3::new(place.range(-110.0, 110.0), place.range(-110.0, 110.0), 0.0);
+    let shift = DVec3::new(at.x - on.x, at.y - on.y, 0.0);
+    (
+        ortho_camera(DVec3::ZERO),
+        pair.lembo_points(|p| p + shift),
+        z,
+    )
+}
+
+/// A sliver pair: even cases thin and bent as much as they are thick, with warp; odd cases
+/// thin down to 10⁻¹⁰.
+fn nearly_degenerate_case(
+    index: u32,
+    shape: &mut SplitMix64,
+    place: &mut SplitMix64,
+) -> (serde_json::Value, [[DVec3; 6]; 2], DVec3) {
+    let z = DVec3::Z;
+    let size = shape.log_range(20.0, 200.0);
+    let q = if index.is_multiple_of(2) {
+        let thickness = shape.log_range(1e-4, 10f64.powf(-1.5));
+        Quad {
+            size,
+            thickness,
+            bend: thickness,
+            z_amplitude: 5.0,
+            warp: shape.range(0.0, 0.2),
+        }
+    } else {
+        Quad {
+            size,
+            thickness: shape.log_range(1e-10, 1e-3),
+            bend: shape.range(0.0, 0.25),
+            z_amplitude: 5.0,
+            warp: 0.0,
+        }
+    };
+    let pair = Pair::draw(&q, shape);
+    let centre = DVec3::new(place.range(-80.0, 80.0), place.range(-80.0, 80.0), 0.0);
+    (
+        ortho_camera(DVec3::ZERO),
+        pair.lembo_points(|p| p + centre),
+        z,
+    )
+}
+
+/// A pair seen in perspective from 1° to 15° above its plane, 1.5 to 4 radii away.
+fn steep_perspective_case(
+    shape: &mut SplitMix64,
+    place: &mut SplitMix64,
+) -> (serde_json::Value, [[DVec3; 6]; 2], DVec3) {
+    let z = DVec3::Z;
+    let size = shape.log_range(5.0, 20.0);
+    let q = Quad {
+        size,
+        thickness: shape.range(0.3, 0.8),
+        bend: shape.range(0.0, 0.25),
+        z_amplitude: 0.1 * size,
+        warp: 0.0,
+    };
+    let pair = Pair::draw(&q, shape);
+    let points = pair.lembo_points(|p| p);
+    let radius = points
+        .iter()
+        .flatten()
+        .map(|p| p.length())
+        .fold(0.0, f64::max);
+    let target = (0.2 * size * place.disc()).extend(0.0);
+    let azimuth = place.range(0.0, std::f64::consts::TAU);
+    let elevation = place.range(1.0, 15.0).to_radians();
+    let distance = radius * place.range(1.5, 4.0);
+    let eye = target
+        + distance
+            * DVec3::new(
+                elevation.cos() * azimuth.cos(),
+                elevation.cos() * azimuth.sin(),
+                elevation.sin(),
+            );
+    let camera = json!({
+        "eye": eye.to_array(),
+        "target": target.to_array(),
+        "up": [0, 0, 1],
+        "projection": {
+            "kind": "perspective",
+            "fovy_deg": place.range(30.0, 70.0),
+            "near": 0.01 * distance,
+            "far": 4.0 * distance,
+        }
+    });
+    (camera, points, z)
 }
 
 /// What one render of a case measured.
@@ -570,11 +595,10 @@ fn panic_message(p: Box<dyn std::any::Any + Send>) -> String {
     }
 }
 
-/// Renders one case against the exact reference in both datapaths at every k. A refused
-/// scene, a renderer error or a panic is recorded in the measurements' `status`, not
-/// propagated: the study goes on and reports it.
-pub fn measure_case(case: &Case, ks: &[f64]) -> CaseResult {
-    let blank = |datapath: Datapath, k: f64, status: String| Measurement {
+/// A measurement of `case` at `datapath` and `k` with every figure zero: what a run that
+/// could not measure records, with its `status`.
+fn blank(case: &Case, datapath: Datapath, k: f64, status: String) -> Measurement {
+    Measurement {
         family: case.family,
         index: case.index,
         seed: case.seed,
@@ -598,7 +622,39 @@ pub fn measure_case(case: &Case, ks: &[f64]) -> CaseResult {
         double_hit_pixels: 0,
         psnr_db: 0.0,
         render_seconds: 0.0,
-    };
+    }
+}
+
+/// Against the f64 render's winners and colours: the pixels won by another primitive,
+/// and the largest channel difference where the same primitive won; (0, 0) without one.
+fn diff_vs_f64(fb: &FrameBuffer, f64_image: Option<&(Vec<u32>, Vec<[u8; 3]>)>) -> (u64, u64) {
+    match f64_image {
+        Some((winner64, color64)) => {
+            let same = |i: &usize| fb.primitive[*i] == winner64[*i];
+            let n = fb.primitive.len();
+            (
+                (0..n).filter(|i| !same(i)).count() as u64,
+                (0..n)
+                    .filter(same)
+                    .flat_map(|i| {
+                        fb.color[i]
+                            .iter()
+                            .zip(color64[i])
+                            .map(|(a, b)| a.abs_diff(b) as u64)
+                    })
+                    .max()
+                    .unwrap_or(0),
+            )
+        }
+        None => (0, 0),
+    }
+}
+
+/// Renders one case against the exact reference in both datapaths at every k. A refused
+/// scene, a renderer error or a panic is recorded in the measurements' `status`, not
+/// propagated: the study goes on and reports it.
+pub fn measure_case(case: &Case, ks: &[f64]) -> CaseResult {
+    let blank = |datapath: Datapath, k: f64, status: String| blank(case, datapath, k, status);
     let all = |status: String| -> Vec<Measurement> {
         [Datapath::F64, Datapath::F32]
             .into_iter()
@@ -662,26 +718,7 @@ pub fn measure_case(case: &Case, ks: &[f64]) -> CaseResult {
             let probe = frame.probe.unwrap_or_default();
             let a = measure_frame(&scene, &view, &frame, &reference, PrimitivePath::Lembo, 1);
             let fb = &frame.framebuffer;
-            let (winner_diff, shade_diff) = match &f64_image {
-                Some((winner64, color64)) => {
-                    let same = |i: &usize| fb.primitive[*i] == winner64[*i];
-                    let n = fb.primitive.len();
-                    (
-                        (0..n).filter(|i| !same(i)).count() as u64,
-                        (0..n)
-                            .filter(same)
-                            .flat_map(|i| {
-                                fb.color[i]
-                                    .iter()
-                                    .zip(color64[i])
-                                    .map(|(a, b)| a.abs_diff(b) as u64)
-                            })
-                            .max()
-                            .unwrap_or(0),
-                    )
-                }
-                None => (0, 0),
-            };
+            let (winner_diff, shade_diff) = diff_vs_f64(fb, f64_image.as_ref());
             if datapath == Datapath::F64 {
                 f64_image = Some((fb.primitive.clone(), fb.color.clone()));
             }
@@ -722,7 +759,7 @@ pub fn measure_case(case: &Case, ks: &[f64]) -> CaseResult {
 
 /// What a study run draws and measures.
 #[derive(Clone, Debug, Serialize)]
-pub struct Settings {
+pub struct StudySettings {
     /// Cases (pairs of lembos) per family.
     pub cases_per_family: u32,
     pub seed: u64,
@@ -733,7 +770,7 @@ pub struct Settings {
 
 /// Draws and measures every case of `settings`, in parallel on rayon's pool; the results are
 /// in (family, index) order whatever the thread count.
-pub fn run(settings: &Settings) -> Vec<CaseResult> {
+pub fn run(settings: &StudySettings) -> Vec<CaseResult> {
     let cases: Vec<Case> = settings
         .families
         .iter()
@@ -793,7 +830,7 @@ fn median(sorted: &[f64]) -> Option<f64> {
 
 /// Aggregates the measurements per family, datapath and k, in the settings' order (family,
 /// then k, then f32 before f64).
-pub fn summarise(settings: &Settings, results: &[CaseResult]) -> Vec<Summary> {
+pub fn summarise(settings: &StudySettings, results: &[CaseResult]) -> Vec<Summary> {
     let mut out = Vec::new();
     for &family in &settings.families {
         for &k in &settings.ks {
@@ -873,7 +910,7 @@ pub struct ExtentSummary {
 
 /// f32's slack by half decade of the largest screen coordinate, over the orthographic families
 /// (the perspective one is left out: its violations are the segmenter's, not f32's).
-pub fn by_extent(settings: &Settings, results: &[CaseResult]) -> Vec<ExtentSummary> {
+pub fn by_extent(settings: &StudySettings, results: &[CaseResult]) -> Vec<ExtentSummary> {
     let ortho = |m: &&Measurement| m.family != Family::SteepPerspective && m.status == "ok";
     let bin = |m: &Measurement| (2.0 * m.max_screen_coordinate_px.max(1.0).log10()).floor() as i32;
     let all: Vec<&Measurement> = results

@@ -15,7 +15,7 @@
 
 use lembo_sim::camera::View;
 use lembo_sim::datapath::Datapath;
-use lembo_sim::datapath_study::{run, summarise, CaseResult, Family, Settings, FAMILIES};
+use lembo_sim::datapath_study::{run, summarise, CaseResult, Family, StudySettings, FAMILIES};
 use lembo_sim::raster::{render_functional, Tolerance};
 use lembo_sim::scene::Scene;
 use std::path::Path;
@@ -139,8 +139,8 @@ fn bounds(family: Family) -> &'static Bounds {
         .expect("every family has bounds")
 }
 
-fn study() -> (Settings, Vec<CaseResult>) {
-    let settings = Settings {
+fn study() -> (StudySettings, Vec<CaseResult>) {
+    let settings = StudySettings {
         cases_per_family: CASES,
         seed: SEED,
         ks: KS.to_vec(),
