@@ -21,6 +21,7 @@ pub struct Viewport {
 }
 
 impl Viewport {
+    /// Pixels in the viewport.
     pub fn pixels(&self) -> usize {
         self.width as usize * self.height as usize
     }
@@ -60,21 +61,26 @@ pub struct Camera {
     pub target: [f64; 3],
     /// Up direction (need not be unit length or orthogonal to the view direction).
     pub up: [f64; 3],
+    /// Perspective or orthographic, with its planes.
     pub projection: Projection,
 }
 
 /// A camera resolved against a viewport: matrices and the viewport transform.
 #[derive(Clone, Copy, Debug)]
 pub struct View {
+    /// The image the camera renders into.
     pub viewport: Viewport,
+    /// The eye's world position.
     pub eye: DVec3,
     /// World to clip.
     pub view_proj: DMat4,
     /// Clip to world.
     pub inv_view_proj: DMat4,
+    /// Whether the projection is orthographic (rays are parallel).
     pub orthographic: bool,
     /// Near and far plane distances [world units].
     pub near: f64,
+    /// Far plane distance \[world units\].
     pub far: f64,
 }
 
@@ -92,6 +98,7 @@ pub struct ScreenPoint {
 }
 
 impl View {
+    /// The view of `camera` on `viewport`: OpenGL's look-at and projection matrices.
     pub fn new(camera: &Camera, viewport: Viewport) -> View {
         let eye = DVec3::from_array(camera.eye);
         let view = DMat4::look_at_rh(

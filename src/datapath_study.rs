@@ -152,10 +152,12 @@ impl Family {
 pub struct SplitMix64(u64);
 
 impl SplitMix64 {
+    /// A generator started at `seed`.
     pub fn new(seed: u64) -> Self {
         SplitMix64(seed)
     }
 
+    /// The next 64 random bits.
     pub fn next_u64(&mut self) -> u64 {
         self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
         let mut z = self.0;
@@ -207,7 +209,9 @@ fn stream(seed: u64, family: Family, index: u32, what: u64) -> SplitMix64 {
 /// One random case: a scene of two lembos sharing a curved edge.
 #[derive(Clone, Debug)]
 pub struct Case {
+    /// The case's family.
     pub family: Family,
+    /// Its index within the family.
     pub index: u32,
     /// The study seed it was drawn with.
     pub seed: u64,
@@ -532,9 +536,13 @@ fn steep_perspective_case(
 /// What one render of a case measured.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Measurement {
+    /// The case's family.
     pub family: Family,
+    /// Its index within the family.
     pub index: u32,
+    /// The study seed it was drawn from.
     pub seed: u64,
+    /// The datapath rendered in.
     pub datapath: Datapath,
     /// The segmenter's k \[pixels\].
     pub k_px: f64,
@@ -543,6 +551,7 @@ pub struct Measurement {
     pub status: String,
     /// Lembos culled (behind the eye, outside, degenerate) of the case's two.
     pub lembos_culled: u64,
+    /// Fragments generated.
     pub fragments: u64,
     /// The probe's largest |y(u, v) − (j + 0.5)| over the fragments \[pixels\]; 0 without
     /// fragments.
@@ -554,7 +563,9 @@ pub struct Measurement {
     /// Largest |x| or |y| of the case's projected points \[pixels\]: the magnitude of the
     /// screen coordinates the datapath works with.
     pub max_screen_coordinate_px: f64,
+    /// Pixels covered by the render and not the reference \[pixels\].
     pub false_positive_px: u64,
+    /// Pixels covered by the reference and not the render \[pixels\].
     pub false_negative_px: u64,
     /// False positives over `max(reference_covered_px, 1)`.
     pub false_positive_frac: f64,
@@ -566,9 +577,13 @@ pub struct Measurement {
     /// Largest difference of a colour channel from the f64 render's at the same k, over
     /// the pixels with the same winner: the shading's share of f32 [0-255] (0 for f64).
     pub shade_diff_vs_f64_max: u64,
+    /// Domain-edge roots the interval manager could not pair (0 when sound).
     pub unpaired_roots: u64,
+    /// Holes inside the reference's coverage (the accuracy metric) \[pixels\].
     pub crack_pixels: u64,
+    /// Pixels written twice along the pair's shared edge \[pixels\].
     pub double_hit_pixels: u64,
+    /// PSNR against the reference \[dB\].
     pub psnr_db: f64,
     /// Wall time of the render with the probe \[seconds\] (host-dependent).
     pub render_seconds: f64,
@@ -577,7 +592,9 @@ pub struct Measurement {
 /// What a run of the study measured, case by case.
 #[derive(Clone, Debug, Serialize)]
 pub struct CaseResult {
+    /// The case's family.
     pub family: Family,
+    /// Its index within the family.
     pub index: u32,
     /// Wall time of the exact reference \[seconds\] (host-dependent).
     pub reference_seconds: f64,
@@ -762,9 +779,11 @@ pub fn measure_case(case: &Case, ks: &[f64]) -> CaseResult {
 pub struct StudySettings {
     /// Cases (pairs of lembos) per family.
     pub cases_per_family: u32,
+    /// The study seed: the same seed draws the same cases.
     pub seed: u64,
     /// The segmenter's k values \[pixels\].
     pub ks: Vec<f64>,
+    /// The families drawn, in report order.
     pub families: Vec<Family>,
 }
 
@@ -785,9 +804,13 @@ pub fn run(settings: &StudySettings) -> Vec<CaseResult> {
 /// The aggregate of one family, datapath and k.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Summary {
+    /// The family summarised.
     pub family: Family,
+    /// The datapath.
     pub datapath: Datapath,
+    /// The tolerance k \[pixels\].
     pub k_px: f64,
+    /// Cases measured.
     pub cases: u64,
     /// Cases whose render gave an error or panicked.
     pub failures: u64,
@@ -796,24 +819,32 @@ pub struct Summary {
     /// Median and largest `max_scanline_deviation_px − k` \[pixels\]; None when nothing
     /// was drawn.
     pub slack_median_px: Option<f64>,
+    /// Largest `slack_px` over the cases \[pixels\]; None without fragments.
     pub slack_max_px: Option<f64>,
     /// Fraction of the drawn cases whose slack is at most [`HOLD_TOLERANCE_PX`].
     pub holds_frac: f64,
     /// Over the cases rendered without failure.
     pub false_positive_frac_mean: f64,
+    /// Largest `false_positive_frac`.
     pub false_positive_frac_max: f64,
+    /// Mean `false_negative_frac`.
     pub false_negative_frac_mean: f64,
+    /// Largest `false_negative_frac`.
     pub false_negative_frac_max: f64,
     /// Largest and mean pixels whose winning lembo differs from f64's (0 for f64).
     pub winner_diff_vs_f64_px_max: u64,
+    /// Mean `winner_diff_vs_f64_px` \[pixels\].
     pub winner_diff_vs_f64_px_mean: f64,
     /// Largest colour channel difference from f64 over pixels with the same winner [0-255]
     /// (0 for f64).
     pub shade_diff_vs_f64_max: u64,
+    /// Unpaired roots over the cases.
     pub unpaired_roots: u64,
     /// Cases with at least one unpaired root.
     pub cases_with_unpaired_roots: u64,
+    /// Crack pixels over the cases \[pixels\].
     pub crack_pixels: u64,
+    /// Double hits over the cases \[pixels\].
     pub double_hit_pixels: u64,
     /// Sum of the renders' wall times \[seconds\] (host-dependent).
     pub render_seconds: f64,
@@ -896,7 +927,9 @@ pub fn summarise(settings: &StudySettings, results: &[CaseResult]) -> Vec<Summar
 pub struct ExtentSummary {
     /// The bin: largest screen coordinate in [lo_px, hi_px) \[pixels\], hi_px = √10 lo_px.
     pub lo_px: f64,
+    /// Upper end of the screen-extent bucket \[pixels\].
     pub hi_px: f64,
+    /// The tolerance k \[pixels\].
     pub k_px: f64,
     /// Drawn f32 cases in the bin.
     pub drawn: u64,

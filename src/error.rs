@@ -9,47 +9,68 @@ use std::path::PathBuf;
 pub enum Error {
     /// A file could not be read. Fatal; input error.
     Read {
+        /// The file.
         path: PathBuf,
+        /// Why the system refused.
         source: std::io::Error,
     },
     /// A scene or configuration file is not valid JSON, has an unknown field or a value of
     /// the wrong type. `field` is the path to the value (`objects[2].mesh`), or empty when
     /// the JSON does not parse at all. Input error.
     Parse {
+        /// The file (or `command line`) the value came from.
         file: String,
+        /// The path to the offending value, empty when the JSON does not parse at all.
         field: String,
+        /// The parser's message.
         message: String,
     },
     /// A value parsed but is outside what the simulator accepts. Input error.
     Invalid {
+        /// The file (or `command line`) the value came from.
         file: String,
+        /// The path to the value (`objects[1].transform.scale`) or the flag.
         field: String,
+        /// The value as given.
         value: String,
+        /// What is accepted instead.
         reason: String,
     },
     /// A mesh file named by a scene could not be loaded or holds bad data. Input error.
     Mesh {
+        /// The scene file naming the mesh.
         file: String,
+        /// The field that names it.
         field: String,
+        /// The mesh or point-cloud file.
         path: PathBuf,
+        /// What is wrong with it.
         message: String,
     },
     /// A patch needs more segments than the stated cap on one scanline interval (DESIGN.md §8):
     /// refused instead of running out of memory or time. Input error.
     SegmentCap {
+        /// The lembo's index in the scene.
         lembo: usize,
+        /// The scanline whose interval needed more.
         scanline: u32,
+        /// The cap on segments per interval.
         cap: usize,
     },
     /// An output file could not be written. Not an input error (exit status 1).
     Write {
+        /// The output file.
         path: PathBuf,
+        /// Why the system refused.
         source: std::io::Error,
     },
     /// The timed pipeline stopped moving: every unit waits and none holds an item it could
     /// take. `waiting` names each unit and what it waits for. A simulator bug or a
     /// mis-wired graph, not bad input (exit status 1).
-    Deadlock { waiting: Vec<String> },
+    Deadlock {
+        /// Each waiting unit and what it waits for.
+        waiting: Vec<String>,
+    },
     /// A simulator fault (a host thread of the timed model panicked or could not start, or a
     /// merge took items out of order). Exit status 1.
     Internal(String),
@@ -143,6 +164,7 @@ impl std::error::Error for Error {
     }
 }
 
+/// The result of anything that can fail on input or output.
 pub type Result<T> = std::result::Result<T, Error>;
 
 /// The largest scene, architecture or sweep-spec file read \[bytes\].

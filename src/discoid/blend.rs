@@ -70,6 +70,7 @@ impl BlendMode {
     /// Every mode, from the paper's to the most precise.
     pub const ALL: [BlendMode; 3] = [BlendMode::Rgba8, BlendMode::F16, BlendMode::F32];
 
+    /// The mode's name in reports and on the command line.
     pub fn name(self) -> &'static str {
         match self {
             BlendMode::Rgba8 => "rgba8",
@@ -198,6 +199,7 @@ pub struct ExactAccum {
 }
 
 impl ExactAccum {
+    /// Adds fragment `f` to the sums, in f64.
     pub fn add(&mut self, f: BlendInput) {
         self.sum_beta += f.beta;
         self.sum_diffuse += f.beta * f.diffuse;

@@ -31,6 +31,7 @@ pub enum BetaShape {
 }
 
 impl BetaShape {
+    /// The shape's name in scene files and reports.
     pub fn name(self) -> &'static str {
         match self {
             BetaShape::Disk => "disk",
@@ -91,6 +92,7 @@ impl Discoid {
 /// The discoids of one scene object.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DiscoidSet {
+    /// The beta texture every discoid of the object carries.
     pub beta: BetaShape,
     /// Planar discoids (drawn as squares through the triangle path).
     pub planar: Vec<Discoid>,

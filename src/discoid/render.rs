@@ -83,7 +83,9 @@ pub struct BlendReport {
     /// Timed runs: the cycles of each pass (depth, accumulation, resolve); null in
     /// functional mode.
     pub cycles_depth_pass: Option<Cycle>,
+    /// The accumulation pass's frame cycles; null in functional mode.
     pub cycles_accumulation_pass: Option<Cycle>,
+    /// The resolve pass's cycles; null in functional mode.
     pub cycles_resolve_pass: Option<Cycle>,
 }
 
@@ -92,10 +94,12 @@ pub struct BlendReport {
 pub struct PlanarDiscoids {
     /// Discoid, material colour and beta shape, in scene order.
     pub items: Vec<(Discoid, [f64; 3], BetaShape)>,
+    /// The primitive id of the first planar discoid (after the curved discoids' lembos).
     pub first_id: u32,
 }
 
 impl PlanarDiscoids {
+    /// The planar discoids of `scene`'s objects, in scene order.
     pub fn new(scene: &Scene) -> Self {
         let items = scene
             .objects
@@ -145,6 +149,7 @@ impl TriangleSource for PlanarDiscoids {
 
 /// What the ROP blend units know of every discoid, by primitive id.
 pub struct DiscoidTable<R> {
+    /// The planar discoids (surfels included).
     pub planar: PlanarDiscoids,
     /// Per lembo id: the texture-coordinate quadratics (s, t) and the beta shape of a
     /// curved discoid; None for a lembo that is not one.
@@ -166,6 +171,7 @@ fn shape_index(s: BetaShape) -> usize {
 }
 
 impl<R: Real> DiscoidTable<R> {
+    /// The table of `scene`'s discoids in the datapath's precision.
     pub fn new(scene: &Scene) -> Self {
         let mut curved = Vec::with_capacity(scene.lembo_count());
         let mut lembo_color = Vec::with_capacity(scene.lembo_count());
@@ -249,14 +255,18 @@ impl<R: Real> DiscoidTable<R> {
 /// Which pass the ROPs run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Pass {
+    /// The depth pass: nearest depth per pixel, no blending.
     Depth,
+    /// The accumulation pass: the kept fragments' sums of equation (5).
     Accumulate,
 }
 
 /// The per-pixel state of the discoid passes and their counters; the ROP side of one
 /// frame, whichever unit feeds it.
 pub struct DiscoidTarget {
+    /// Frame width \[pixels\].
     pub width: u32,
+    /// Precision of the blend units.
     pub mode: BlendMode,
     /// World units, along the view direction.
     pub threshold: f64,
@@ -264,10 +274,13 @@ pub struct DiscoidTarget {
     pub depth: Vec<f32>,
     /// The primitive that won the depth pass, for the resolve's colour.
     pub winner: Vec<u32>,
+    /// The blend units' sums per pixel, in the mode's precision.
     pub accum: Vec<Accum>,
+    /// The same sums in f64, to measure the mode's error.
     pub exact: Vec<ExactAccum>,
     /// Fragments kept by the accumulation pass, blended in order at its end.
     pub kept: Vec<KeptFragment>,
+    /// The passes' counters and the blend error.
     pub report: BlendReport,
 }
 
@@ -275,13 +288,18 @@ pub struct DiscoidTarget {
 /// order within a primitive) and what it blends.
 #[derive(Clone, Copy, Debug)]
 pub struct KeptFragment {
+    /// Pixel index, row-major.
     pub idx: u32,
+    /// Primitive id.
     pub id: u32,
+    /// Texture coordinates as f64 bits (an exact sort key within a primitive).
     pub st: [u64; 2],
+    /// What the fragment adds to the pixel's sums.
     pub input: BlendInput,
 }
 
 impl DiscoidTarget {
+    /// An empty target of `width` x `height` pixels: depth 1, no winner, zero sums.
     pub fn new(width: u32, height: u32, mode: BlendMode, threshold: f64) -> Self {
         let n = width as usize * height as usize;
         DiscoidTarget {
@@ -322,13 +340,17 @@ impl DiscoidTarget {
 
 /// One discoid fragment as the ROP sees it.
 pub struct DiscoidFragment<R> {
+    /// Primitive id.
     pub id: u32,
+    /// Window depth [0, 1].
     pub z: R,
     /// World-space normal (not necessarily unit) and position.
     pub normal: [R; 3],
+    /// World-space position.
     pub position: [R; 3],
     /// Texture coordinates and the discoid's shape.
     pub st: [f64; 2],
+    /// The discoid's beta shape.
     pub shape: BetaShape,
 }
 
@@ -344,6 +366,7 @@ pub struct Evaluated<R> {
     pub z: f32,
     /// Unit normal and unit direction to the eye.
     pub normal: [R; 3],
+    /// Unit direction to the eye.
     pub to_eye: [R; 3],
 }
 
@@ -569,8 +592,11 @@ pub fn count_holes(fb: &FrameBuffer, reach: u32) -> u64 {
 
 /// A discoid frame: the image, the counts of the paths that drew it, and the blend report.
 pub struct DiscoidFrame {
+    /// The resolved image.
     pub framebuffer: FrameBuffer,
+    /// The counts of the path that drew the discoids (the accumulation pass's).
     pub counts: Counts,
+    /// The passes' counters and the blend error.
     pub blend: BlendReport,
 }
 

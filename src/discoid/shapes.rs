@@ -59,6 +59,7 @@ pub const SPHERE20_CORNER_ANGLE_DEG: f64 = 62.0;
 /// Curved discoids: lembos with texture coordinates at their six reference points.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CurvedDiscoids {
+    /// The lembos carrying the discoids, in world space.
     pub lembos: Vec<Lembo>,
     /// Texture coordinates (s, t) at A, B, C, D, E, F of each lembo, in the same order.
     pub texcoords: Vec<[[f64; 2]; 6]>,
@@ -152,13 +153,25 @@ fn icosahedron() -> ([DVec3; 12], [[usize; 3]; 20]) {
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum MeshDiscoidError {
     /// The vertex has a zero normal.
-    ZeroNormal { vertex: usize },
+    ZeroNormal {
+        /// The vertex's index.
+        vertex: usize,
+    },
     /// The two ends of an edge have opposite normals: its midpoint has none.
-    OppositeNormals { vertices: [usize; 2] },
+    OppositeNormals {
+        /// The edge's two vertices.
+        vertices: [usize; 2],
+    },
     /// The vertex belongs to no triangle, so no edge gives it a radius.
-    UnusedVertex { vertex: usize },
+    UnusedVertex {
+        /// The vertex's index.
+        vertex: usize,
+    },
     /// Every edge at the vertex has zero length.
-    ZeroRadius { vertex: usize },
+    ZeroRadius {
+        /// The vertex's index.
+        vertex: usize,
+    },
 }
 
 impl fmt::Display for MeshDiscoidError {

@@ -70,6 +70,7 @@ impl BetaTexture {
         }
     }
 
+    /// The shape this texture samples.
     pub fn shape(&self) -> BetaShape {
         self.shape
     }

@@ -116,8 +116,11 @@ pub const WELD_RELATIVE: f64 = 1e-9;
 /// them so the surface stays closed.
 #[derive(Clone, Debug, Default)]
 pub struct TriangleMesh {
+    /// Vertex positions.
     pub positions: Vec<DVec3>,
+    /// Vertex normals, one per position.
     pub normals: Vec<DVec3>,
+    /// Triangles as three vertex indices.
     pub triangles: Vec<[u32; 3]>,
 }
 

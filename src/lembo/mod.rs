@@ -38,11 +38,17 @@ pub const REFERENCE_UV: [(f64, f64); 6] = [
 /// A scalar quadratic `a u² + b v² + c uv + d u + e v + f` in the paper's coefficient names.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Quadratic<R> {
+    /// Coefficient of u².
     pub a: R,
+    /// Coefficient of v².
     pub b: R,
+    /// Coefficient of uv.
     pub c: R,
+    /// Coefficient of u.
     pub d: R,
+    /// Coefficient of v.
     pub e: R,
+    /// The constant term.
     pub f: R,
 }
 
@@ -66,6 +72,7 @@ impl<R: Real> Quadratic<R> {
         REFERENCE_UV.map(|(u, v)| self.eval(R::of(u), R::of(v)))
     }
 
+    /// The value at (u, v).
     #[inline(always)]
     pub fn eval(&self, u: R, v: R) -> R {
         // Horner form: (a u + c v + d) u + (b v + e) v + f.

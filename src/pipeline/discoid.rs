@@ -34,10 +34,15 @@ use super::SimOptions;
 
 /// What the timed discoid passes produced.
 pub struct DiscoidTimed {
+    /// The resolved image.
     pub framebuffer: FrameBuffer,
+    /// The accumulation pass's counts, with the fragments blended as passed depth.
     pub counts: Counts,
+    /// The units instantiated, the blend units included.
     pub units: Vec<UnitInstance>,
+    /// The three passes' accounting, per unit and in total.
     pub cycles: CycleReport,
+    /// The passes' counters, cycles and the blend error.
     pub blend: BlendReport,
 }
 

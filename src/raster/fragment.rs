@@ -36,11 +36,17 @@ pub trait FragmentSink<R: Real> {
 /// rasterizer splits it at ROP tiles and gets bit-identical values).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Span<R> {
+    /// First pixel column.
     pub i0: u32,
+    /// One past the last pixel column.
     pub i1: u32,
+    /// Domain u at the centre of pixel i0.
     pub u: R,
+    /// Domain v at the centre of pixel i0.
     pub v: R,
+    /// Increment of u per pixel.
     pub dudx: R,
+    /// Increment of v per pixel.
     pub dvdx: R,
 }
 
@@ -66,10 +72,12 @@ impl<R: Real> Span<R> {
         }
     }
 
+    /// Fragments in the span.
     pub fn len(&self) -> u32 {
         self.i1 - self.i0
     }
 
+    /// Whether the span holds no fragment.
     pub fn is_empty(&self) -> bool {
         self.i1 <= self.i0
     }

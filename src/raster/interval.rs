@@ -34,7 +34,9 @@ use crate::datapath::Real;
 /// so shared edges agree bit for bit).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CurvePoint<R> {
+    /// The point in the lembo's domain.
     pub uv: V2<R>,
+    /// Its screen x \[pixels\].
     pub x: R,
     /// The domain edge (0: AB, 1: BC, 2: CA) the point was found on, or [`INTERIOR`].
     pub edge: u8,
@@ -46,7 +48,9 @@ pub const INTERIOR: u8 = 3;
 /// One piece of the curve Y = y_j inside the domain, from `start` to `end` in walking order.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Interval<R> {
+    /// Where the walk starts.
     pub start: CurvePoint<R>,
+    /// Where it ends.
     pub end: CurvePoint<R>,
     /// Walk key direction: `tau · p` increases strictly along the curve from start to end.
     pub tau: V2<R>,
@@ -59,7 +63,9 @@ pub struct Interval<R> {
 /// A root of the curve on the domain boundary (or a virtual one on the partition line).
 #[derive(Clone, Copy, Debug)]
 pub struct Crossing<R> {
+    /// Where the curve crosses.
     pub p: CurvePoint<R>,
+    /// Whether the walk enters the domain (or its part) here, rather than leaves.
     pub entry: bool,
     /// Part of the domain (+1 or -1) the crossing belongs to.
     pub part: i8,

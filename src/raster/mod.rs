@@ -168,11 +168,13 @@ pub struct Counts {
     pub unpaired_roots: u64,
     /// Intervals split at a saddle crossing.
     pub saddle_splits: u64,
+    /// Segments (chords of midpoint error k) produced.
     pub segments: u64,
     /// Segments clamped to their interval end (the last of each walk, flat curves).
     pub segments_clamped: u64,
     /// Extra splits of a walk's clamped last chord whose midpoint error exceeded k.
     pub segments_refined: u64,
+    /// Subsegments (pieces along which x is linear) produced.
     pub subsegments: u64,
     /// Segments split at a fold of x(t).
     pub folds: u64,
@@ -363,7 +365,9 @@ fn render_lembo<R: Real, S: FragmentSink<R>>(
 
 /// A rendered frame and what it took.
 pub struct Frame {
+    /// The image, depth and winners.
     pub framebuffer: FrameBuffer,
+    /// What the stages produced.
     pub counts: Counts,
     /// Fragment-level measurements, when requested.
     pub probe: Option<probe::ProbeReport>,

@@ -30,10 +30,13 @@ use std::collections::HashMap;
 /// What the probe measured.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ProbeReport {
+    /// The paper's guarantee: largest \|y(u, v) - (j + 0.5)\| over the fragments \[pixels\].
     pub max_scanline_deviation_px: f64,
     /// Largest distance of a fragment's (u, v) outside the domain (0 if all inside).
     pub max_domain_excess: f64,
+    /// Pixels written by more than one primitive along a shared edge \[pixels\].
     pub double_hit_pixels: u64,
+    /// Fragments measured.
     pub fragments: u64,
 }
 
@@ -67,6 +70,8 @@ const EMPTY: Slot = Slot {
     ends: [NO_END; 2],
 };
 
+/// A fragment sink that measures each fragment (the scanline deviation, the domain excess,
+/// double hits on shared edges) and forwards it to the sink it wraps.
 pub struct Probe<'a, S> {
     inner: &'a mut S,
     width: u32,
@@ -78,6 +83,7 @@ pub struct Probe<'a, S> {
 }
 
 impl<'a, S> Probe<'a, S> {
+    /// A probe over `scene` on viewport `vp`, forwarding every fragment to `inner`.
     pub fn new(scene: &Scene, vp: Viewport, inner: &'a mut S) -> Self {
         Probe {
             inner,
@@ -89,6 +95,7 @@ impl<'a, S> Probe<'a, S> {
         }
     }
 
+    /// What was measured so far.
     pub fn report(&self) -> ProbeReport {
         ProbeReport {
             double_hit_pixels: self.double.iter().filter(|&&d| d).count() as u64,

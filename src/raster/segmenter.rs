@@ -30,7 +30,9 @@ use crate::datapath::Real;
 /// One chord of the curve, from `p0` to `p1` in walking order.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Segment<R> {
+    /// The chord's start.
     pub p0: CurvePoint<R>,
+    /// Its end.
     pub p1: CurvePoint<R>,
 }
 

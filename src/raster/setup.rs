@@ -54,7 +54,10 @@ pub fn edge_uv<R: Real>(e: usize, t: R) -> V2<R> {
 #[derive(Clone, Copy, Debug)]
 pub enum Partition<R> {
     /// `a·∇Y > 0` on the whole domain: one part, no split.
-    Monotone { a: V2<R> },
+    Monotone {
+        /// The walk axis.
+        a: V2<R>,
+    },
     /// `∇Y` vanishes at an isolated point of the domain (an interior extremum if `det > 0`,
     /// a saddle if `det < 0`): the domain is split by the line `a·∇Y = 0`, with `a` chosen per
     /// scanline for saddles (the transverse axis of the hyperbola).
@@ -70,7 +73,10 @@ pub enum Partition<R> {
     },
     /// The Hessian is (nearly) singular and `∇Y` vanishes along a line through the domain
     /// (a valley): level curves are near-parallel lines on either side of it.
-    Valley { a: V2<R> },
+    Valley {
+        /// The walk axis, across the valley.
+        a: V2<R>,
+    },
 }
 
 /// A lembo ready for the scan-line stages, in datapath precision.
@@ -80,7 +86,9 @@ pub struct ScreenLembo<R> {
     pub id: u32,
     /// Screen x \[pixels\], y \[pixels\] and depth [0, 1] as quadratics in (u, v).
     pub x: Quadratic<R>,
+    /// Screen y \[pixels\].
     pub y: Quadratic<R>,
+    /// Window depth.
     pub z: Quadratic<R>,
     /// World-space normal function (normalise per fragment).
     pub normal: Quadratic3<R>,
@@ -95,6 +103,7 @@ pub struct ScreenLembo<R> {
     pub vertex_y: [R; 3],
     /// Hessian of y: (y_uu, y_uv, y_vv).
     pub hessian: (R, R, R),
+    /// How the domain is split for walking its level curves.
     pub partition: Partition<R>,
     /// For a piece of a lembo Setup split ([`setup_pieces`]): its corners A, B, C in the
     /// lembo's domain, so that (u, v) on the piece is `A + u (B - A) + v (C - A)` on the

@@ -20,7 +20,9 @@ use crate::datapath::Real;
 /// order (not sorted by x).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Subsegment<R> {
+    /// The subsegment's start, in walking order.
     pub a: CurvePoint<R>,
+    /// Its end.
     pub b: CurvePoint<R>,
 }
 

@@ -2,13 +2,16 @@
 
 use crate::datapath::Real;
 
+/// A (u, v) pair.
 pub type V2<R> = [R; 2];
 
+/// The dot product.
 #[inline(always)]
 pub fn dot<R: Real>(a: V2<R>, b: V2<R>) -> R {
     a[0] * b[0] + a[1] * b[1]
 }
 
+/// The Euclidean length, without overflow (`hypot`).
 #[inline(always)]
 pub fn norm<R: Real>(a: V2<R>) -> R {
     a[0].hypot(a[1])

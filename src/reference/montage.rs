@@ -38,6 +38,7 @@ const TEXT: Rgb<u8> = Rgb([255, 255, 255]);
 pub struct Panel<'a> {
     /// Text above the image; `'\n'` starts a new line, and an empty label takes no line.
     pub label: &'a str,
+    /// The image.
     pub image: &'a RgbImage,
 }
 

@@ -85,13 +85,16 @@ pub struct ReferenceHit {
     pub lembo: u32,
     /// Domain coordinates of the hit.
     pub u: f64,
+    /// Domain v of the hit.
     pub v: f64,
 }
 
 /// The reference image, row 0 at the top.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ReferenceImage {
+    /// Width \[pixels\].
     pub width: u32,
+    /// Height \[pixels\].
     pub height: u32,
     /// Sub-samples per pixel side `s` (1 = the pixel centre only).
     pub supersample: u32,
@@ -129,7 +132,9 @@ fn rgb_image(width: u32, height: u32, color: &[[u8; 3]]) -> image::RgbImage {
 pub struct ReferenceInput<'a> {
     /// Each lembo with its linear RGB colour in [0, 1]; the index is the lembo id.
     pub lembos: &'a [(&'a Lembo, [f64; 3])],
+    /// The camera and viewport.
     pub view: &'a View,
+    /// The light and material terms.
     pub light: &'a Light,
     /// Linear RGB in [0, 1] where nothing is hit.
     pub background: [f64; 3],

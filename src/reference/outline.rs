@@ -81,7 +81,9 @@ impl ReferenceCoverage for Tracer<'_> {
 /// other reference state \[pixels\].
 #[derive(Clone, Copy, Debug)]
 pub struct Misplaced {
+    /// The pixel's index, row-major.
     pub index: usize,
+    /// The distance `D` \[pixels\].
     pub bound: f64,
 }
 

@@ -19,7 +19,9 @@ pub fn depth_test(z: f32, id: u32, depth: f32, primitive: u32) -> bool {
 /// Colour, depth and winner id per pixel, row 0 at the top.
 #[derive(Clone, Debug)]
 pub struct FrameBuffer {
+    /// Width \[pixels\].
     pub width: u32,
+    /// Height \[pixels\].
     pub height: u32,
     /// RGB8 per pixel.
     pub color: Vec<[u8; 3]>,
@@ -43,6 +45,7 @@ impl FrameBuffer {
         width as u64 * height as u64 * Self::BYTES_PER_PIXEL
     }
 
+    /// A cleared frame: the background colour, depth 1, no winner; normals kept when asked (the accuracy metrics read them).
     pub fn new(width: u32, height: u32, background: [u8; 3], keep_normals: bool) -> Self {
         let n = width as usize * height as usize;
         FrameBuffer {
@@ -55,6 +58,7 @@ impl FrameBuffer {
         }
     }
 
+    /// The index of pixel (i, j) in the per-pixel vectors, row-major.
     #[inline(always)]
     pub fn index(&self, i: u32, j: u32) -> usize {
         j as usize * self.width as usize + i as usize

@@ -23,6 +23,7 @@ pub struct FragmentShader<R> {
 }
 
 impl<R: Real> FragmentShader<R> {
+    /// The shader of `light` for `view` (a constant direction to the eye when orthographic).
     pub fn new(light: &Light, view: &View) -> Self {
         let to_eye = view
             .orthographic
@@ -66,11 +67,14 @@ impl<R: Real> FragmentShader<R> {
         }
     }
 
+    /// The light and material terms.
     pub fn shader(&self) -> &Shader<R> {
         &self.shader
     }
 }
 
+/// The ROP of the functional model: depth test, Phong shading and the frame-buffer write,
+/// as a fragment sink for both paths.
 pub struct Rop<'a, R> {
     fb: &'a mut FrameBuffer,
     shader: FragmentShader<R>,
@@ -79,6 +83,7 @@ pub struct Rop<'a, R> {
 }
 
 impl<'a, R: Real> Rop<'a, R> {
+    /// A ROP writing into `fb`, shading with `light` for `view`.
     pub fn new(fb: &'a mut FrameBuffer, light: &Light, view: &View) -> Self {
         Rop {
             fb,

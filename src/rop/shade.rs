@@ -42,9 +42,13 @@ impl Default for Light {
 pub struct Shader<R> {
     /// Unit direction towards the light.
     pub l: [R; 3],
+    /// Ambient term.
     pub ka: R,
+    /// Diffuse term.
     pub kd: R,
+    /// Specular term.
     pub ks: R,
+    /// Shininess exponent.
     pub shininess: R,
     /// The shininess as an integer when it is one (repeated multiplication, as a hardware
     /// exponent unit would do, instead of exp/log).
@@ -52,6 +56,7 @@ pub struct Shader<R> {
 }
 
 impl<R: Real> Shader<R> {
+    /// The terms of `light` in the datapath's precision.
     pub fn new(light: &Light) -> Self {
         let d = glam::DVec3::from_array(light.direction_to_light).normalize_or_zero();
         Shader {

@@ -19,7 +19,7 @@
 //! `serde_path_to_error` tracked, refused values become [`Error::Invalid`], and mesh files
 //! and point-cloud files that cannot be loaded or hold bad numbers become [`Error::Mesh`].
 //!
-//! Layout: [`format`] (the file's shape), [`validate`] (the scene-wide checks and the walk
+//! Layout: [`format`](mod@format) (the file's shape), [`validate`] (the scene-wide checks and the walk
 //! over the objects), [`objects`] (builtin, inline and mesh objects), [`discoids`] (an
 //! object's discoids), [`mesh`] (transforms and OBJ files), [`pointcloud`] (PLY surfels).
 //!

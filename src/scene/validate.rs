@@ -1,4 +1,4 @@
-//! Validation of a parsed scene file into a [`Scene`]: [`Check`] names the file in every
+//! Validation of a parsed scene file into a [`Scene`]: `Check` names the file in every
 //! error; this file holds the scene-wide checks (viewport, name, camera, projection, light,
 //! transforms, inline lembos) and `SceneSpec::validate`, which walks the objects.
 

@@ -13,7 +13,9 @@ use std::fmt::Write as _;
 /// What a unit was doing over an event.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum State {
+    /// Issuing operations.
     Busy,
+    /// Frozen on a full FIFO downstream.
     Blocked,
 }
 
@@ -37,6 +39,7 @@ pub struct Recorder {
 }
 
 impl Recorder {
+    /// An empty recorder that keeps at most `cap` events (at least 2).
     pub fn new(cap: usize) -> Self {
         Recorder {
             events: Vec::new(),
@@ -83,10 +86,13 @@ impl Recorder {
         }
     }
 
+    /// The recorded events: (start, end, state) in cycles, merged to the quantum.
     pub fn events(&self) -> &[(u64, u64, State)] {
         &self.events
     }
 
+    /// Same-state events closer than this were merged \[cycles\]; doubled each time the
+    /// cap was reached.
     pub fn quantum(&self) -> u64 {
         self.quantum
     }
@@ -94,8 +100,11 @@ impl Recorder {
 
 /// One unit's track in the file.
 pub struct Track<'a> {
+    /// The unit instance's name.
     pub name: &'a str,
+    /// Its kind's name (the track's group).
     pub kind: &'a str,
+    /// Its events.
     pub recorder: &'a Recorder,
 }
 

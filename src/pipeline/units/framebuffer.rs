@@ -12,6 +12,7 @@ use crate::pipeline::runtime::{ceil_div, Ctx};
 use crate::pipeline::Finished;
 use crate::raster::Counts;
 
+/// The frame-buffer port's body: every write burst through the port at its byte rate.
 pub async fn run(mut ctx: Ctx<WriteBurst, ()>, cfg: &FrameBufferConfig) -> Finished {
     while let Some(WriteBurst { bytes }) = ctx.next_input().await {
         ctx.work(ceil_div(bytes, cfg.bytes_per_cycle).max(1));

@@ -21,11 +21,15 @@ use crate::raster::Counts;
 /// One interval of scanline `j` of lembo `id`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ScanInterval<R> {
+    /// The lembo piece.
     pub id: PieceId,
+    /// The scanline.
     pub j: u32,
+    /// The piece of the curve Y = y_j to walk.
     pub interval: Interval<R>,
 }
 
+/// The IntervalManager's body: per lembo piece, per scanline of its range, the intervals, dispatched round-robin to the segmenters.
 pub async fn run<R: Real>(
     mut ctx: Ctx<ScanlineRange, ScanInterval<R>>,
     sh: &Shared<'_, R>,

@@ -16,11 +16,15 @@ use crate::raster::{minmax, Counts};
 /// The scanlines j0..=j1 of lembo `id`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ScanlineRange {
+    /// The lembo piece.
     pub id: PieceId,
+    /// The first scanline it covers.
     pub j0: u32,
+    /// The last scanline it covers.
     pub j1: u32,
 }
 
+/// The MinMax finder's body: per lembo piece, its scanline range (or a cull).
 pub async fn run<R: Real>(mut ctx: Ctx<LemboReady, ScanlineRange>, sh: &Shared<'_, R>) -> Finished {
     let cost = sh.arch.minmax.cycles_per_lembo;
     let mut counts = Counts::default();

@@ -23,11 +23,15 @@ use crate::raster::Counts;
 /// Fragments of lembo `id` on scanline `j` inside one ROP tile.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FragmentSpan<R> {
+    /// The lembo piece.
     pub id: PieceId,
+    /// The scanline.
     pub j: u32,
+    /// The pixels of one subsegment inside one ROP tile.
     pub span: Span<R>,
 }
 
+/// A FragmentRasterizer's body: per subsegment, its fragments in spans, one per ROP tile crossed.
 pub async fn run<R: Real>(
     mut ctx: Ctx<ScanSubsegment<R>, RopItem<R>>,
     sh: &Shared<'_, R>,

@@ -189,13 +189,16 @@ impl<'a, 'f> RopPixels<'a, 'f> {
 /// What a ROP takes: fragments of a lembo or of a triangle inside one of its tiles.
 #[derive(Clone, Debug, PartialEq)]
 pub enum RopItem<R> {
+    /// A lembo's span of fragments.
     Lembo(FragmentSpan<R>),
+    /// A triangle's piece of two rows.
     Triangle(TrianglePiece<R>),
 }
 
 /// Frame-buffer traffic of one span \[bytes\].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct WriteBurst {
+    /// Bytes moved: depth reads, colour and depth writes \[bytes\].
     pub bytes: u64,
 }
 

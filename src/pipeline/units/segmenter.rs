@@ -21,11 +21,15 @@ use crate::raster::{Counts, DEFAULT_SEGMENT_CAP};
 /// One chord of scanline `j` of lembo `id`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ScanSegment<R> {
+    /// The lembo piece.
     pub id: PieceId,
+    /// The scanline.
     pub j: u32,
+    /// The chord of midpoint error k.
     pub segment: Segment<R>,
 }
 
+/// A Segmenter's body: per interval, its segments, dispatched round-robin to the subsegmenters.
 pub async fn run<R: Real>(
     mut ctx: Ctx<ScanInterval<R>, ScanSegment<R>>,
     sh: &Shared<'_, R>,

@@ -26,9 +26,11 @@ use crate::raster::Counts;
 /// A lembo whose screen-space form is in the lembo table.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct LemboReady {
+    /// The lembo piece, whose screen form Setup put in the shared table.
     pub id: PieceId,
 }
 
+/// Setup's body: every lembo of the scene in order, projected (and split or clipped) into the shared table.
 pub async fn run<R: Real>(mut ctx: Ctx<(), LemboReady>, sh: &Shared<'_, R>) -> Finished {
     let cost = sh.arch.setup.cycles_per_lembo;
     let mut counts = Counts::default();

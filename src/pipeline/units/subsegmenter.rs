@@ -17,11 +17,15 @@ use crate::raster::Counts;
 /// One subsegment of scanline `j` of lembo `id`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ScanSubsegment<R> {
+    /// The lembo piece.
     pub id: PieceId,
+    /// The scanline.
     pub j: u32,
+    /// The piece of the chord along which x is linear.
     pub subsegment: Subsegment<R>,
 }
 
+/// A Subsegmenter's body: per segment, its subsegments, dispatched round-robin to the rasterizers.
 pub async fn run<R: Real>(
     mut ctx: Ctx<ScanSegment<R>, ScanSubsegment<R>>,
     sh: &Shared<'_, R>,

@@ -25,8 +25,11 @@ use std::sync::Arc;
 /// `rows[r]` is the half-open column range of row j + r (empty when start >= end).
 #[derive(Clone, Debug, PartialEq)]
 pub struct TrianglePiece<R> {
+    /// The set-up triangle.
     pub tri: Arc<ScreenTriangle<R>>,
+    /// The first of the two rows (even).
     pub j: u32,
+    /// Each row's half-open column range.
     pub rows: [(u32, u32); 2],
 }
 
@@ -39,6 +42,7 @@ impl<R> TrianglePiece<R> {
             .sum()
     }
 
+    /// Whether the piece holds no fragment.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
@@ -54,6 +58,7 @@ fn clip((a, b): (u32, u32), lo: u32, hi: u32) -> (u32, u32) {
     }
 }
 
+/// A TriangleRasterizer's body: per triangle, its quads in two-row pieces, one per ROP tile crossed.
 pub async fn run<R: Real>(
     mut ctx: Ctx<Arc<ScreenTriangle<R>>, RopItem<R>>,
     sh: &Shared<'_, R>,

@@ -46,7 +46,7 @@
 //!   so two triangles sharing an edge cut it at the same points, bit for bit. A triangle
 //!   inside the depth range and the guard band takes the unclipped path unchanged.
 //!
-//! Layout: [`setup`] (projection, clipping, snapping, fans, edge functions), [`rasterize`]
+//! Layout: [`setup`](mod@setup) (projection, clipping, snapping, fans, edge functions), [`rasterize`](mod@rasterize)
 //! (coverage, quads, fragments), [`probe`] (measurements); this module the sources of
 //! triangles and [`render_triangles`].
 //!

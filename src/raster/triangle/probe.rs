@@ -20,6 +20,7 @@ pub struct TriangleProbe<'a, S> {
 }
 
 impl<'a, S> TriangleProbe<'a, S> {
+    /// A probe over a frame `width` pixels wide, forwarding every fragment to `inner`.
     pub fn new(width: u32, inner: &'a mut S) -> Self {
         TriangleProbe {
             inner,

@@ -123,6 +123,7 @@ pub fn quads_in(rows: &[(u32, u32); 2]) -> u64 {
 
 /// Receives triangle fragments: the ROP in a render, a probe in tests and accuracy runs.
 pub trait TriangleSink<R: Real> {
+    /// Takes fragment `f` of triangle `t` at pixel (i, j).
     fn fragment(&mut self, t: &ScreenTriangle<R>, i: u32, j: u32, f: &TriangleFragment<R>);
 }
 

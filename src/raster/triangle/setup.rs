@@ -18,8 +18,11 @@ pub const GUARD_BAND_PX: f64 = 32767.0;
 /// One edge function `E(X, Y) = a X + b Y + c` in sub-pixel units, positive inside.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct EdgeFunction {
+    /// Coefficient of X.
     pub a: i64,
+    /// Coefficient of Y.
     pub b: i64,
+    /// The constant term.
     pub c: i64,
     /// The smallest value that counts as inside: 0 on a top or left edge, 1 otherwise.
     pub min: i64,
@@ -70,9 +73,10 @@ pub struct ScreenTriangle<R> {
     /// Global id (tessellation order), also the depth-test tie breaker; the pieces of a
     /// clipped triangle keep their parent's (they never cover a pixel twice).
     pub id: u32,
-    /// Snapped vertex positions [1/256 pixel], counter-clockwise on screen as seen with y
+    /// Snapped vertex x \[1/256 pixel\]; the vertices are counter-clockwise on screen as seen with y
     /// down (edge functions positive inside).
     pub x: [i64; 3],
+    /// Snapped vertex y \[1/256 pixel\].
     pub y: [i64; 3],
     /// Edge function `k` is the edge opposite vertex `k`.
     pub edges: [EdgeFunction; 3],
@@ -529,9 +533,13 @@ pub(super) fn make_convex(x: &[i64], y: &[i64], order: &mut [usize], mut n: usiz
 /// What a vertex carries into the rasterizer besides its snapped position.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Vertex<R> {
+    /// Window depth.
     pub z: R,
+    /// 1/w, for perspective-correct interpolation.
     pub inv_w: R,
+    /// World normal over w.
     pub normal_w: [R; 3],
+    /// World position over w.
     pub position_w: [R; 3],
 }
 
