@@ -1,5 +1,5 @@
-//! The extreme method against its guarantees (Martinelli 2006 section 5, DESIGN.md §2 and §6), end to
-//! end through `render_functional`:
+//! The extreme method against its guarantees (Martinelli 2006 section 5, DESIGN.md §2 and §6), end
+//! to end through `render_functional`:
 //! - random lembos: every fragment within k of its scanline and inside the domain, every
 //!   edge root paired, and coverage equal to the exact reference outside a band of k + 1.5
 //!   pixels around the reference silhouette (seeded property tests; a fragment of a sliver

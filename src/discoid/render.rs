@@ -566,7 +566,8 @@ pub fn resolve<R: Real>(
 }
 
 /// Uncovered pixels with a covered pixel within `reach` pixels to their left, right, top
-/// and bottom: holes inside the silhouette (the hole detection of Pfister et al. 2000, on the image).
+/// and bottom: holes inside the silhouette (the hole detection of Pfister et al. 2000, on the
+/// image).
 pub fn count_holes(fb: &FrameBuffer, reach: u32) -> u64 {
     let (w, h) = (fb.width as i64, fb.height as i64);
     let covered = |i: i64, j: i64| {

@@ -1,6 +1,6 @@
-//! The Tessellator of the triangle path (DESIGN.md §2 and §5; Martinelli 2006 section 3's fixed-step
-//! subdivision): each lembo becomes n² triangles, uniform in the domain, with their vertices
-//! on the true patch and their normals from the lembo's normal function.
+//! The Tessellator of the triangle path (DESIGN.md §2 and §5; Martinelli 2006 section 3's
+//! fixed-step subdivision): each lembo becomes n² triangles, uniform in the domain, with their
+//! vertices on the true patch and their normals from the lembo's normal function.
 //!
 //! ```text
 //!   v                      lattice points (a, b), a + b <= n, at (u, v) = (a/n, b/n);

@@ -1,8 +1,8 @@
-//! The timed discoid passes (Piranda et al. 2006, DESIGN.md §4): the depth pass and the accumulation
-//! pass each run the whole pipeline (the lembo path for curved discoids, the triangle path
-//! for planar ones) with the ROPs in that pass's mode, one after the other as a GPU runs
-//! render passes; the resolve pass reads every pixel's accumulation target and writes its
-//! colour. The frame's cycles are the three passes' sums.
+//! The timed discoid passes (Piranda et al. 2006, DESIGN.md §4): the depth pass and the
+//! accumulation pass each run the whole pipeline (the lembo path for curved discoids, the triangle
+//! path for planar ones) with the ROPs in that pass's mode, one after the other as a GPU runs
+//! render passes; the resolve pass reads every pixel's accumulation target and writes its colour.
+//! The frame's cycles are the three passes' sums.
 //!
 //! The accumulation pass's ROPs keep the fragments they accept and the blend is applied in
 //! primitive order at the pass's end ([`DiscoidTarget::blend_in_order`]), as GPU ROPs blend

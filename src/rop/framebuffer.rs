@@ -45,7 +45,8 @@ impl FrameBuffer {
         width as u64 * height as u64 * Self::BYTES_PER_PIXEL
     }
 
-    /// A cleared frame: the background colour, depth 1, no winner; normals kept when asked (the accuracy metrics read them).
+    /// A cleared frame: the background colour, depth 1, no winner; normals kept when asked (the
+    /// accuracy metrics read them).
     pub fn new(width: u32, height: u32, background: [u8; 3], keep_normals: bool) -> Self {
         let n = width as usize * height as usize;
         FrameBuffer {

@@ -1,4 +1,5 @@
-//! Per-fragment Phong shading, Piranda et al. 2006 equation (6): `L = Ka + Kd cos(alpha) + Ks cos^N(gamma)`.
+//! Per-fragment Phong shading, Piranda et al. 2006 equation (6): `L = Ka + Kd cos(alpha) + Ks
+//! cos^N(gamma)`.
 //!
 //! `alpha` is the angle between the unit normal and the direction to the light, `gamma` the
 //! angle between the light reflected about the normal and the direction to the eye. The

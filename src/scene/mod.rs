@@ -4,13 +4,13 @@
 //! A scene file holds a name, a viewport, a camera, a light, a background colour, a
 //! discoid blending threshold and a list of objects. Each object is a builtin shape (paper
 //! 001 Figures 6-8), inline lembos (six points and six normals each), a triangle mesh in an
-//! OBJ file, or discoids (Piranda et al. 2006; DESIGN.md §4), with a material colour and a similarity
-//! transform. Builtins, inline lembos and meshes end up as world-space lembos; builtins and
-//! meshes also keep their world-space triangle mesh for the triangle path. Discoid objects
-//! end up as a [`DiscoidSet`]: planar discoids given inline, placed at the vertices of an
-//! OBJ mesh, or read as surfels from a PLY point cloud (Pfister et al. 2000); or the curved discoids of
-//! `sphere20` (Piranda et al. 2006 Figure 10), whose lembos also go into the object's lembos so that
-//! the lembo path draws them.
+//! OBJ file, or discoids (Piranda et al. 2006; DESIGN.md §4), with a material colour and a
+//! similarity transform. Builtins, inline lembos and meshes end up as world-space lembos; builtins
+//! and meshes also keep their world-space triangle mesh for the triangle path. Discoid objects end
+//! up as a [`DiscoidSet`]: planar discoids given inline, placed at the vertices of an OBJ mesh, or
+//! read as surfels from a PLY point cloud (Pfister et al. 2000); or the curved discoids of
+//! `sphere20` (Piranda et al. 2006 Figure 10), whose lembos also go into the object's lembos so
+//! that the lembo path draws them.
 //!
 //! The file is read into private `*Spec` structs (serde, `deny_unknown_fields`) and then
 //! validated field by field. Every error names the file, the field path in one style
@@ -19,8 +19,8 @@
 //! `serde_path_to_error` tracked, refused values become [`Error::Invalid`], and mesh files
 //! and point-cloud files that cannot be loaded or hold bad numbers become [`Error::Mesh`].
 //!
-//! Layout: [`format`](mod@format) (the file's shape), [`validate`] (the scene-wide checks and the walk
-//! over the objects), [`objects`] (builtin, inline and mesh objects), [`discoids`] (an
+//! Layout: [`format`](mod@format) (the file's shape), [`validate`] (the scene-wide checks and the
+//! walk over the objects), [`objects`] (builtin, inline and mesh objects), [`discoids`] (an
 //! object's discoids), [`mesh`] (transforms and OBJ files), [`pointcloud`] (PLY surfels).
 //!
 //! Not modelled here: triangles as scene objects, point clouds in formats other than PLY,

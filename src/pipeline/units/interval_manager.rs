@@ -29,7 +29,8 @@ pub struct ScanInterval<R> {
     pub interval: Interval<R>,
 }
 
-/// The IntervalManager's body: per lembo piece, per scanline of its range, the intervals, dispatched round-robin to the segmenters.
+/// The IntervalManager's body: per lembo piece, per scanline of its range, the intervals,
+/// dispatched round-robin to the segmenters.
 pub async fn run<R: Real>(
     mut ctx: Ctx<ScanlineRange, ScanInterval<R>>,
     sh: &Shared<'_, R>,

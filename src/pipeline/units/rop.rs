@@ -1,12 +1,12 @@
-//! Rop (DESIGN.md §2 and §3; Piranda et al. 2006 section 4 for the ROP's place): the depth test and the
-//! frame-buffer write, Np units screen-interleaved by tiles.
+//! Rop (DESIGN.md §2 and §3; Piranda et al. 2006 section 4 for the ROP's place): the depth test and
+//! the frame-buffer write, Np units screen-interleaved by tiles.
 //!
 //! Input: [`RopItem`]s from every rasterizer, merged by (arrival, port): lembo
 //! [`FragmentSpan`]s, or [`TrianglePiece`]s in the triangle path. For each fragment: its
 //! depth (from the lembo's depth quadratic, or the triangle's plane), the depth test on
 //! (z, id) (the winner does not depend on arrival order), and for a fragment that passes,
-//! Phong shading (Piranda et al. 2006 equation 6) and the write. Output: one [`WriteBurst`] per item
-//! to the frame-buffer memory port: depth reads for every fragment tested, colour and depth
+//! Phong shading (Piranda et al. 2006 equation 6) and the write. Output: one [`WriteBurst`] per
+//! item to the frame-buffer memory port: depth reads for every fragment tested, colour and depth
 //! writes for every fragment that passed.
 //!
 //! Storage: each ROP owns the pixels of its tiles ([`RopTiles`]) and writes them in place

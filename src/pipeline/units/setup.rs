@@ -30,7 +30,8 @@ pub struct LemboReady {
     pub id: PieceId,
 }
 
-/// Setup's body: every lembo of the scene in order, projected (and split or clipped) into the shared table.
+/// Setup's body: every lembo of the scene in order, projected (and split or clipped) into the
+/// shared table.
 pub async fn run<R: Real>(mut ctx: Ctx<(), LemboReady>, sh: &Shared<'_, R>) -> Finished {
     let cost = sh.arch.setup.cycles_per_lembo;
     let mut counts = Counts::default();

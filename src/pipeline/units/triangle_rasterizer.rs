@@ -58,7 +58,8 @@ fn clip((a, b): (u32, u32), lo: u32, hi: u32) -> (u32, u32) {
     }
 }
 
-/// A TriangleRasterizer's body: per triangle, its quads in two-row pieces, one per ROP tile crossed.
+/// A TriangleRasterizer's body: per triangle, its quads in two-row pieces, one per ROP tile
+/// crossed.
 pub async fn run<R: Real>(
     mut ctx: Ctx<Arc<ScreenTriangle<R>>, RopItem<R>>,
     sh: &Shared<'_, R>,

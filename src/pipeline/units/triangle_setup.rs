@@ -23,7 +23,8 @@ use crate::raster::triangle::{setup, ScreenTriangle};
 use crate::raster::Counts;
 use std::sync::Arc;
 
-/// TriangleSetup's body: every triangle of the source in order, set up (clipped and fanned where needed).
+/// TriangleSetup's body: every triangle of the source in order, set up (clipped and fanned where
+/// needed).
 pub async fn run<R: Real>(
     mut ctx: Ctx<(), Arc<ScreenTriangle<R>>>,
     sh: &Shared<'_, R>,

@@ -46,9 +46,9 @@
 //!   so two triangles sharing an edge cut it at the same points, bit for bit. A triangle
 //!   inside the depth range and the guard band takes the unclipped path unchanged.
 //!
-//! Layout: [`setup`](mod@setup) (projection, clipping, snapping, fans, edge functions), [`rasterize`](mod@rasterize)
-//! (coverage, quads, fragments), [`probe`] (measurements); this module the sources of
-//! triangles and [`render_triangles`].
+//! Layout: [`setup`](mod@setup) (projection, clipping, snapping, fans, edge functions),
+//! [`rasterize`](mod@rasterize) (coverage, quads, fragments), [`probe`] (measurements); this module
+//! the sources of triangles and [`render_triangles`].
 //!
 //! Not modelled: back-face culling (the lembo path has none either; both paths shade
 //! two-sided). The lembo path's counterpart of near-plane clipping is Setup's near-plane

@@ -73,8 +73,8 @@ pub struct ScreenTriangle<R> {
     /// Global id (tessellation order), also the depth-test tie breaker; the pieces of a
     /// clipped triangle keep their parent's (they never cover a pixel twice).
     pub id: u32,
-    /// Snapped vertex x \[1/256 pixel\]; the vertices are counter-clockwise on screen as seen with y
-    /// down (edge functions positive inside).
+    /// Snapped vertex x \[1/256 pixel\]; the vertices are counter-clockwise on screen as seen with
+    /// y down (edge functions positive inside).
     pub x: [i64; 3],
     /// Snapped vertex y \[1/256 pixel\].
     pub y: [i64; 3],
