@@ -2,8 +2,8 @@
 //! [`Scene`] that nothing downstream re-checks.
 //!
 //! A scene file holds a name, a viewport, a camera, a light, a background colour, a
-//! discoid blending threshold and a list of objects. Each object is a builtin shape (paper
-//! 001 Figures 6-8), inline lembos (six points and six normals each), a triangle mesh in an
+//! discoid blending threshold and a list of objects. Each object is a builtin shape (Martinelli
+//! 2006 Figures 6-8), inline lembos (six points and six normals each), a triangle mesh in an
 //! OBJ file, or discoids (Piranda et al. 2006; DESIGN.md §4), with a material colour and a
 //! similarity transform. Builtins, inline lembos and meshes end up as world-space lembos; builtins
 //! and meshes also keep their world-space triangle mesh for the triangle path. Discoid objects end
@@ -62,8 +62,9 @@ pub const MAX_WORLD_COORDINATE: f64 = 1e12;
 /// The most discoids a scene may hold, over all its objects: far beyond the paper's scenes
 /// (8,800 and 2 x 7,176 discoids), it bounds the memory and time of a run.
 pub const MAX_DISCOIDS: usize = 1_000_000;
-/// The default blending threshold as a fraction of the scene's median discoid radius (paper
-/// 000: the threshold "must be chosen much smaller than the dimension of the discoids").
+/// The default blending threshold as a fraction of the scene's median discoid radius
+/// (Piranda et al. 2006: the threshold "must be chosen much smaller than the dimension of the
+/// discoids").
 pub const DEFAULT_THRESHOLD_PER_RADIUS: f64 = 0.25;
 
 /// The embedded default scene (`lembo-sim` with no arguments renders it).
