@@ -386,9 +386,7 @@ pub fn run_path(
         }
         return run_discoids(job, scene, view, model);
     }
-    let t0 = Instant::now();
-    let drawn = draw(job, scene, view, model, &route, reference.is_some())?;
-    let wall = t0.elapsed().as_secs_f64();
+    let (drawn, wall) = draw(job, scene, view, model, &route, reference.is_some())?;
     let measured = match (reference, drawn.probed()) {
         (Some(reference), Some(frame)) => Some(measure(job, scene, view, &route, frame, reference)),
         _ => None,
@@ -498,8 +496,9 @@ impl Drawn {
     }
 }
 
-/// Draws a lembo or triangle `route` on `model`; with `analyse`, the functional model also
-/// runs with its probe (timed runs check their image against it).
+/// Draws a lembo or triangle `route` on `model`, with the wall time of that render alone
+/// \[seconds\]; with `analyse`, the functional model also runs with its probe (a timed run
+/// checks its image against it), outside the time taken.
 fn draw(
     job: &RenderJob,
     scene: &Scene,
@@ -507,7 +506,7 @@ fn draw(
     model: Model,
     route: &Route,
     analyse: bool,
-) -> Result<Drawn> {
+) -> Result<(Drawn, f64)> {
     let functional = |analyse: bool| -> Result<raster::Frame> {
         match route {
             Route::Triangles(t) => Ok(raster::render_functional_triangles(
@@ -521,7 +520,11 @@ fn draw(
         }
     };
     let arch = match model {
-        Model::Functional => return Ok(Drawn::Functional(functional(analyse)?)),
+        Model::Functional => {
+            let t0 = Instant::now();
+            let frame = functional(analyse)?;
+            return Ok((Drawn::Functional(frame), t0.elapsed().as_secs_f64()));
+        }
         Model::Timed(arch) => arch,
     };
     let (path, source) = match route {
@@ -529,6 +532,7 @@ fn draw(
         _ => (pipeline::Path::Lembo, Source::Lembos),
     };
     let options = sim_options(job, arch, path)?;
+    let t0 = Instant::now();
     let timed = pipeline::run_timed(
         scene,
         view,
@@ -538,6 +542,7 @@ fn draw(
         source,
         &options,
     )?;
+    let wall = t0.elapsed().as_secs_f64();
     let probed = if analyse {
         let frame = functional(true)?;
         if timed.framebuffer.color != frame.framebuffer.color {
@@ -549,7 +554,7 @@ fn draw(
     } else {
         None
     };
-    Ok(Drawn::Timed { timed, probed })
+    Ok((Drawn::Timed { timed, probed }, wall))
 }
 
 /// A measured run's accuracy, error map and the wall time the measuring took.
