@@ -1,7 +1,14 @@
 //! Validation of an object's discoids (Piranda et al. 2006): inline, at a mesh's vertices,
 //! builtin curved discoids, or surfels from a point cloud (Pfister et al. 2000).
 
-use super::*;
+use super::{
+    format::{DiscoidItemSpec, DiscoidSource, DiscoidsSpec},
+    given,
+    mesh::{load_obj, Transform},
+    pointcloud::load_surfels,
+    validate::{discoid_in_range, unit, Check, Vec3Value},
+    MAX_DISCOIDS, MAX_WORLD_COORDINATE,
+};
 use crate::discoid::shapes::{builtin_discoids, discoids_from_mesh, BUILTIN_DISCOID_NAMES};
 use crate::discoid::{BetaShape, Discoid, DiscoidSet};
 use crate::error::{Error, Result};
@@ -30,7 +37,7 @@ impl Check<'_> {
         };
         let before = radii.len();
         let (label, lembos, source) = match source {
-            Source::Items(items) => {
+            DiscoidSource::Items(items) => {
                 let source = format!("{field}.items");
                 if items.is_empty() {
                     return Err(self.invalid(source, "[]", "must hold at least one discoid"));
@@ -43,7 +50,7 @@ impl Check<'_> {
                     .collect::<Result<Vec<_>>>()?;
                 ("inline discoids".to_string(), Vec::new(), source)
             }
-            Source::FromMesh(path) => {
+            DiscoidSource::FromMesh(path) => {
                 let source = format!("{field}.from_mesh");
                 let subdivide = self.subdivide(&field, spec.subdivide)?;
                 let radius_scale = self.radius_scale(&field, spec.radius_scale)?;
@@ -64,7 +71,7 @@ impl Check<'_> {
                 );
                 (label, Vec::new(), source)
             }
-            Source::Builtin(name) => {
+            DiscoidSource::Builtin(name) => {
                 let source = format!("{field}.builtin");
                 let Some(curved) = builtin_discoids(name) else {
                     return Err(self.invalid(
@@ -95,7 +102,7 @@ impl Check<'_> {
                 radii.extend(curved.radii.iter().map(|r| r * scale));
                 (format!("builtin discoids {name}"), lembos, source)
             }
-            Source::Surfels(path) => {
+            DiscoidSource::Surfels(path) => {
                 let source = format!("{field}.surfels");
                 set.planar = load_surfels(self.file, &source, &base_dir.join(path), before)?;
                 set.surfels = true;
@@ -113,12 +120,12 @@ impl Check<'_> {
         &self,
         field: &str,
         spec: &'s DiscoidsSpec,
-    ) -> Result<Source<'s>> {
+    ) -> Result<DiscoidSource<'s>> {
         let source = match (&spec.items, &spec.from_mesh, &spec.builtin, &spec.surfels) {
-            (Some(items), None, None, None) => Source::Items(items),
-            (None, Some(path), None, None) => Source::FromMesh(path),
-            (None, None, Some(name), None) => Source::Builtin(name),
-            (None, None, None, Some(path)) => Source::Surfels(path),
+            (Some(items), None, None, None) => DiscoidSource::Items(items),
+            (None, Some(path), None, None) => DiscoidSource::FromMesh(path),
+            (None, None, Some(name), None) => DiscoidSource::Builtin(name),
+            (None, None, None, Some(path)) => DiscoidSource::Surfels(path),
             _ => {
                 let value = given(&[
                     ("items", spec.items.is_some()),
@@ -133,7 +140,7 @@ impl Check<'_> {
                 ));
             }
         };
-        if !matches!(source, Source::FromMesh(_)) {
+        if !matches!(source, DiscoidSource::FromMesh(_)) {
             if let Some(n) = spec.subdivide {
                 return Err(self.invalid(
                     format!("{field}.subdivide"),

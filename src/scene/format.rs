@@ -118,7 +118,7 @@ pub(super) struct DiscoidItemSpec {
 }
 
 /// The one source of an object's discoids.
-pub(super) enum Source<'a> {
+pub(super) enum DiscoidSource<'a> {
     Items(&'a [DiscoidItemSpec]),
     FromMesh(&'a str),
     Builtin(&'a str),

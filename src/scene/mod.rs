@@ -39,11 +39,9 @@ use crate::error::{parent_dir, read_text_file, Error, Result};
 use crate::lembo::construct::TriangleMesh;
 use crate::lembo::Lembo;
 use crate::rop::shade::Light;
-use format::*;
-use mesh::*;
-use pointcloud::*;
+use format::SceneSpec;
 use std::path::{Path, PathBuf};
-use validate::*;
+use validate::Check;
 
 /// The viewport of a scene file without one \[pixels\].
 pub const DEFAULT_VIEWPORT: Viewport = Viewport {
@@ -234,6 +232,9 @@ pub(crate) fn parse_error(file: &str, e: serde_path_to_error::Error<serde_json::
 
 #[cfg(test)]
 mod tests {
+    use super::mesh::load_obj;
+    use super::pointcloud::SURFEL_PROPERTIES;
+    use super::validate::median;
     use super::*;
     use crate::camera::Projection;
     use crate::discoid::shapes::discoids_from_mesh;

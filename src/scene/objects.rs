@@ -1,7 +1,13 @@
 //! Validation of one scene object (a builtin shape, inline lembos or an OBJ mesh): its
 //! world-space lembos and mesh, in range, with its crease angle.
 
-use super::*;
+use super::{
+    format::ObjectSpec,
+    given,
+    mesh::{load_obj, transform_mesh},
+    validate::{lembo_in_range, Check},
+    SceneObject, DEFAULT_COLOR, MAX_WORLD_COORDINATE,
+};
 use crate::error::{Error, Result};
 use crate::lembo::construct::{CollapsedTriangle, TriangleMesh};
 use crate::lembo::shapes::{builtin_mesh, BUILTIN_NAMES};

@@ -1,7 +1,7 @@
 //! Surfels from a PLY point cloud (position, normal, radius per vertex), bounded and
 //! checked vertex by vertex.
 
-use super::*;
+use super::{validate::unit, MAX_DISCOIDS};
 use crate::discoid::Discoid;
 use crate::error::{read_input, Error, Result, MAX_DATA_INPUT_BYTES};
 use glam::DVec3;

@@ -2,7 +2,14 @@
 //! error; this file holds the scene-wide checks (viewport, name, camera, projection, light,
 //! transforms, inline lembos) and `SceneSpec::validate`, which walks the objects.
 
-use super::*;
+use super::{
+    format::{
+        CameraSpec, LemboSpec, LightSpec, ProjectionKind, ProjectionSpec, SceneSpec, TransformSpec,
+    },
+    mesh::Transform,
+    Scene, DEFAULT_BACKGROUND, DEFAULT_THRESHOLD_PER_RADIUS, DEFAULT_VIEWPORT,
+    MAX_WORLD_COORDINATE,
+};
 use crate::camera::{Camera, Projection, Viewport, MAX_VIEWPORT_SIDE};
 use crate::discoid::Discoid;
 use crate::error::{Error, Result};

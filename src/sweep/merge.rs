@@ -1,7 +1,11 @@
 //! `sweep-merge`: the shards' records unioned into what one unsharded sweep writes.
 
-use super::*;
-
+use super::{
+    lock::FolderLock,
+    results::{check_record, record_id, spec_difference, write_final},
+    spec::Spec,
+    Shard, RESULTS_JSONL, SPEC_JSON,
+};
 use crate::error::{read_text_file, Error, Result};
 use crate::job::COMMAND_LINE;
 use serde_json::Value;

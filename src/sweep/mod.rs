@@ -52,14 +52,11 @@ pub mod spec;
 
 use crate::error::{Error, Result};
 use crate::job::{COMMAND_LINE, MAX_HOST_THREADS};
-use grid::*;
 pub use lock::{FolderLock, LOCK_FILE};
 pub use merge::{run_merge, MergeJob, MergeOutput};
 pub use plan::Plan;
 pub use results::csv_bytes;
-use results::*;
 pub use run::run_sweep;
-use spec::*;
 pub use spec::{Point, Run, Spec};
 use std::fmt;
 use std::path::PathBuf;
@@ -241,6 +238,7 @@ impl SweepJob {
 
 #[cfg(test)]
 mod tests {
+    use super::results::unit_order;
     use super::*;
 
     const BASE: &str = r#""name": "t", "scenes": ["a.json", "b.json"]"#;

@@ -1,8 +1,11 @@
 //! The validated plan: a spec with its scenes and architectures loaded and every run's
 //! `RenderJob` built and validated before the first run starts; a run's record.
 
-use super::*;
-
+use super::{
+    grid::{reword, set_arch_field},
+    spec::{Point, Run, Setting, Spec},
+    Shard, ARCH, DEFAULT_K_PX,
+};
 use crate::camera::View;
 use crate::config::ArchConfig;
 use crate::datapath::Datapath;

@@ -2,8 +2,7 @@
 //! resume (each record checked against the spec and shard), and the finished set written
 //! at once: `results.jsonl` in index order, `results.csv` and the plots.
 
-use super::*;
-
+use super::{spec::Spec, Shard, RESULTS_CSV, RESULTS_JSONL, SPEC_JSON};
 use crate::error::{Error, Result};
 use crate::output::write_files;
 use crate::pipeline::graph::KINDS;

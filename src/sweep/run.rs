@@ -1,9 +1,14 @@
 //! Running a sweep: the rayon pool of `--jobs` workers, one reference per scene, each
 //! finished run appended to `results.jsonl` at once, resumption by key, the progress bar.
 
-use super::*;
-
-use crate::error::Error;
+use super::{
+    lock::FolderLock,
+    plan::Plan,
+    results::{check_same_spec, joined, read_partial, write_final},
+    spec::Run,
+    SweepError, SweepJob, SweepOutcome, SweepOutput, MAX_JOBS, RESULTS_JSONL, SPEC_JSON,
+};
+use crate::error::{Error, Result};
 use crate::job::{render_reference, PrimitivePath};
 use crate::output::write_files;
 use crate::reference::oracle::ReferenceImage;

@@ -2,8 +2,7 @@
 //! their keys) and `Spec::parse`, which validates the shape and expands the grid with
 //! the `grid` module.
 
-use super::*;
-
+use super::{grid::Expander, MAX_RUNS};
 use crate::camera::MAX_VIEWPORT_SIDE;
 use crate::config::ArchConfig;
 use crate::datapath::Datapath;

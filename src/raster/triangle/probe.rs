@@ -1,7 +1,10 @@
 //! [`TriangleProbe`]: fragment-level measurements of the triangle path, forwarded to the
 //! sink it wraps.
 
-use super::*;
+use super::{
+    rasterize::{TriangleFragment, TriangleSink},
+    setup::ScreenTriangle,
+};
 use crate::datapath::Real;
 
 /// A triangle sink that counts double hits on shared edges, then forwards each fragment.

@@ -1,7 +1,7 @@
 //! The triangle path's rasterizer: coverage by integer edge functions with the top-left
 //! rule, 2x2 quads, and each covered pixel's perspective-correct [`TriangleFragment`].
 
-use super::*;
+use super::setup::{pixel_centre, ScreenTriangle, TriangleCull};
 use crate::datapath::Real;
 use crate::raster::Counts;
 

@@ -2,7 +2,7 @@
 //! (Sutherland-Hodgman on the world triangle), 16.8 snapping, fans, and the edge functions
 //! of a [`ScreenTriangle`].
 
-use super::*;
+use super::rasterize::count_cull;
 use crate::camera::{ScreenPoint, View, Viewport};
 use crate::datapath::Real;
 use crate::raster::Counts;
