@@ -139,6 +139,7 @@ impl View {
 
     /// Projects a world point to the viewport (no clipping; check `w` for points behind).
     pub fn project(&self, p: DVec3) -> ScreenPoint {
+        crate::cost::counted::count_projection();
         let c = self.view_proj * p.extend(1.0);
         let inv_w = 1.0 / c.w;
         let (nx, ny, nz) = (c.x * inv_w, c.y * inv_w, c.z * inv_w);

@@ -5,6 +5,8 @@
 //! (to separate the method's own error from rounding). The reference renderer does not use
 //! this trait: it is always `f64`.
 
+use crate::cost::counted::Op;
+use crate::pipeline::graph::UnitKind;
 use num_traits::Float;
 use std::fmt::Debug;
 
@@ -16,6 +18,15 @@ pub trait Real: Float + Debug + Default + Send + Sync + 'static {
     fn of(x: f64) -> Self;
     /// Widens to `f64` exactly.
     fn f64(self) -> f64;
+    /// Charges the operations that follow to the unit kind `kind` (a counting datapath,
+    /// [`crate::cost::counted::Counted`], keeps per-kind counts; for `f32` and `f64` this is
+    /// nothing).
+    #[inline(always)]
+    fn charge(_kind: UnitKind) {}
+    /// Counts `n` operations `op` done beside the datapath words, in fixed point (the
+    /// triangle path's edge functions); nothing for `f32` and `f64`.
+    #[inline(always)]
+    fn count_beside(_op: Op, _n: u64) {}
 }
 
 impl Real for f32 {

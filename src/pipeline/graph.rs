@@ -145,6 +145,10 @@ pub struct Boundary {
     pub to: UnitKind,
     /// The link each of its crossbar's links has unless the architecture says otherwise.
     pub default: LinkConfig,
+    /// Datapath words an item takes in its FIFO (32 bits each in f32, 64 in f64), for the
+    /// FIFOs' area and energy (DESIGN.md §12): the fields the consumer reads, counted from
+    /// the item's type.
+    pub item_words: u32,
 }
 
 /// Every boundary of both paths, in dataflow order (the lembo path's, then the triangle
@@ -160,20 +164,32 @@ pub const BOUNDARIES: [Boundary; 9] = {
         to: UnitKind,
         depth: u32,
         latency: u64,
+        item_words: u32,
     ) -> Boundary {
         Boundary {
             key,
             from,
             to,
             default: LinkConfig::new(depth, latency),
+            item_words,
         }
     }
     [
         // Depth 8, latency 1: an item is a whole projected lembo (twelve vectors), a wide
         // entry, so few are buffered; adjacent units on one die, one register stage.
-        b("setup_to_minmax", Setup, MinMax, 8, 1),
+        // Item: the screen lembo, x, y, z and the normal as six-coefficient quadratics (36
+        // words), its colour (3) and id (1): 40 words.
+        b("setup_to_minmax", Setup, MinMax, 8, 1, 40),
         // Depth 8, latency 1: as setup_to_minmax, a lembo with its scanline range.
-        b("minmax_to_interval_manager", MinMax, IntervalManager, 8, 1),
+        // Item: the screen lembo (40) with its first and last scanline (2).
+        b(
+            "minmax_to_interval_manager",
+            MinMax,
+            IntervalManager,
+            8,
+            1,
+            42,
+        ),
         // Depth 32, latency 1: intervals are narrow (two roots and a scanline), and 32
         // absorb a lembo's burst of intervals against the segmenters' variable rate.
         b(
@@ -182,10 +198,20 @@ pub const BOUNDARIES: [Boundary; 9] = {
             Segmenter,
             32,
             1,
+            // Item: two roots (u, v), the walk direction (2), the scanline and lembo id.
+            8,
         ),
         // Depth 32, latency 1: narrow segments; the subsegmenter's work per segment varies
         // with curvature, so the FIFO smooths it.
-        b("segmenter_to_subsegmenter", Segmenter, Subsegmenter, 32, 1),
+        // Item: a chord's two domain points (4), its scanline and lembo id.
+        b(
+            "segmenter_to_subsegmenter",
+            Segmenter,
+            Subsegmenter,
+            32,
+            1,
+            6,
+        ),
         // Depth 32, latency 1: narrow subsegments, one per rasterizer start.
         b(
             "subsegmenter_to_rasterizer",
@@ -193,15 +219,19 @@ pub const BOUNDARIES: [Boundary; 9] = {
             FragmentRasterizer,
             32,
             1,
+            // Item: two domain points (4), their screen x (2), scanline and lembo id.
+            8,
         ),
         // Depth 64, latency 2: a full crossbar from every rasterizer to every ROP costs one
         // cycle of arbitration on top of the register stage; an item is a span of at most
         // one tile row, and GPU ROP input queues hold tens of such quads or spans.
-        b("rasterizer_to_rop", FragmentRasterizer, Rop, 64, 2),
+        // Item: a fragment's pixel (2), domain point (2), depth and lembo id.
+        b("rasterizer_to_rop", FragmentRasterizer, Rop, 64, 2, 6),
         // Depth 32, latency 4: the request queue of the memory controller, and the wires
         // and arbitration to reach it from the ROPs. DRAM access latency itself is not
         // modelled.
-        b("rop_to_framebuffer", Rop, FrameBuffer, 32, 4),
+        // Item: a write request, address and colour with depth.
+        b("rop_to_framebuffer", Rop, FrameBuffer, 32, 4, 3),
         // Depth 32, latency 1: set-up triangles to the triangle rasterizers, as
         // subsegmenter_to_rasterizer in the lembo path.
         b(
@@ -210,9 +240,20 @@ pub const BOUNDARIES: [Boundary; 9] = {
             TriangleRasterizer,
             32,
             1,
+            // Item: the set-up triangle: edge functions (12), depths and 1/w (6), normals
+            // and positions over w (18), bounding box (4), area and id.
+            42,
         ),
         // Depth 64, latency 2: as rasterizer_to_rop; an item is a quad-row piece.
-        b("triangle_rasterizer_to_rop", TriangleRasterizer, Rop, 64, 2),
+        // Item: a fragment's pixel (2), depth, normal (3), position (3) and triangle id.
+        b(
+            "triangle_rasterizer_to_rop",
+            TriangleRasterizer,
+            Rop,
+            64,
+            2,
+            10,
+        ),
     ]
 };
 

@@ -23,6 +23,7 @@ pub mod v2;
 use crate::camera::View;
 use crate::datapath::{Datapath, Real};
 use crate::error::{Error, Result};
+use crate::pipeline::graph::UnitKind;
 use crate::rop::{FrameBuffer, Rop};
 use crate::scene::Scene;
 use fragment::FragmentSink;
@@ -289,6 +290,7 @@ pub fn render_lembos<R: Real, S: FragmentSink<R>>(
     for (id, (lembo, color)) in scene.lembos().enumerate() {
         counts.lembos += 1;
         pieces.clear();
+        R::charge(UnitKind::Setup);
         match setup::setup_pieces::<R>(id as u32, lembo, color, view, tol.perspective, &mut pieces)
         {
             Ok(split) => counts.add_split(split, pieces.len()),
@@ -334,6 +336,7 @@ fn render_lembo<R: Real, S: FragmentSink<R>>(
     b: &mut Buffers<R>,
 ) -> Result<()> {
     let (width, height) = (view.viewport.width, view.viewport.height);
+    R::charge(UnitKind::MinMax);
     let Some((j0, j1)) = minmax::scanlines(l, height) else {
         counts.lembos_culled_outside += 1;
         return Ok(());
@@ -341,9 +344,11 @@ fn render_lembo<R: Real, S: FragmentSink<R>>(
     for j in j0..=j1 {
         counts.scanlines += 1;
         b.intervals.clear();
+        R::charge(UnitKind::IntervalManager);
         interval::intervals(l, j, k, &mut b.scratch, &mut b.intervals, counts);
         for iv in &b.intervals {
             b.segments.clear();
+            R::charge(UnitKind::Segmenter);
             segmenter::segments(l, j, k, iv, segment_cap, &mut b.segments, counts).map_err(
                 |_| Error::SegmentCap {
                     lembo: l.id as usize,
@@ -353,8 +358,10 @@ fn render_lembo<R: Real, S: FragmentSink<R>>(
             )?;
             for seg in &b.segments {
                 b.subsegments.clear();
+                R::charge(UnitKind::Subsegmenter);
                 subsegmenter::subsegments(l, seg, k, &mut b.subsegments, counts);
                 for sub in &b.subsegments {
+                    R::charge(UnitKind::FragmentRasterizer);
                     fragment::rasterize(l, j, sub, width, sink, counts);
                 }
             }
@@ -409,7 +416,7 @@ pub fn render_functional_triangles(
 
 /// A frame drawn by `draw` into a ROP over a fresh frame buffer (keeping normals when
 /// analysing); `draw` returns the probe's report when it measured one.
-fn frame_with<R: Real>(
+pub(crate) fn frame_with<R: Real>(
     scene: &Scene,
     view: &View,
     analyse: bool,

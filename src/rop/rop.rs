@@ -4,6 +4,7 @@
 use super::framebuffer::FrameBuffer;
 use super::shade::{to_u8, Light, Shader};
 use crate::camera::View;
+use crate::cost::counted::Op;
 use crate::datapath::Real;
 use crate::lembo::eval3;
 use crate::raster::fragment::FragmentSink;
@@ -117,6 +118,8 @@ impl<R: Real> Rop<'_, R> {
     ) {
         let idx = self.fb.index(i, j);
         let zf = z.f64() as f32;
+        // The depth test's compare (on the stored f32 depth, beside the datapath).
+        R::count_beside(Op::Cmp, 1);
         if !self.fb.passes(idx, zf, id) {
             return;
         }

@@ -62,6 +62,7 @@ use super::Counts;
 use crate::camera::View;
 use crate::datapath::Real;
 use crate::lembo::tessellate::{Tessellation, Triangle};
+use crate::pipeline::graph::UnitKind;
 pub use probe::*;
 pub use rasterize::*;
 pub use setup::*;
@@ -112,8 +113,10 @@ pub fn render_triangles<R: Real, S: TriangleSink<R>>(
         source.chunk(c, &mut triangles);
         for (k, t) in triangles.iter().enumerate() {
             let id = source.id(c, k);
+            R::charge(UnitKind::TriangleSetup);
             setup::<R>(id, &t.positions, &t.normals, t.color, view, &mut pieces).count(counts);
             for st in &pieces {
+                R::charge(UnitKind::TriangleRasterizer);
                 rasterize(st, sink, counts);
             }
         }

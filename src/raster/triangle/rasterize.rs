@@ -2,6 +2,7 @@
 //! rule, 2x2 quads, and each covered pixel's perspective-correct [`TriangleFragment`].
 
 use super::setup::{pixel_centre, ScreenTriangle, TriangleCull};
+use crate::cost::counted::Op;
 use crate::datapath::Real;
 use crate::raster::Counts;
 
@@ -20,6 +21,9 @@ impl<R: Real> ScreenTriangle<R> {
     /// The three edge functions at pixel (i, j)'s centre.
     #[inline(always)]
     pub(super) fn edge_values(&self, i: u32, j: u32) -> [i64; 3] {
+        // Three edge functions a x + b y + c.
+        R::count_beside(Op::IntMul, 6);
+        R::count_beside(Op::IntAdd, 6);
         let (px, py) = pixel_centre(i, j);
         self.edges.map(|e| e.at(px, py))
     }
@@ -28,6 +32,7 @@ impl<R: Real> ScreenTriangle<R> {
     #[inline(always)]
     pub fn covers(&self, i: u32, j: u32) -> bool {
         let e = self.edge_values(i, j);
+        R::count_beside(Op::IntAdd, 3);
         (0..3).all(|k| e[k] >= self.edges[k].min)
     }
 

@@ -4,6 +4,7 @@
 
 use super::rasterize::count_cull;
 use crate::camera::{ScreenPoint, View, Viewport};
+use crate::cost::counted::Op;
 use crate::datapath::Real;
 use crate::raster::Counts;
 use glam::{DVec3, DVec4};
@@ -175,6 +176,10 @@ pub fn setup<R: Real>(
     // The near and far planes: a triangle wholly beyond one is culled, one crossing either
     // is clipped to both before anything is projected.
     let depth = depth_planes(view);
+    // Two planes against three vertices: a 4-dot product and a compare each.
+    R::count_beside(Op::Mul, 24);
+    R::count_beside(Op::Add, 18);
+    R::count_beside(Op::Cmp, 6);
     let d = depth.map(|q| positions.map(|p| q.dot(p.extend(1.0))));
     if d[0].iter().all(|&d| d < 0.0) {
         return SetupOutcome::culled(TriangleCull::BehindEye);
@@ -217,6 +222,8 @@ pub fn setup<R: Real>(
 /// A vertex's attributes for the rasterizer, from its projection `s`, world position `p` and
 /// world normal `n`.
 pub(super) fn vertex<R: Real>(view: &View, s: &ScreenPoint, p: DVec3, n: DVec3) -> Vertex<R> {
+    R::count_beside(Op::Div, 1);
+    R::count_beside(Op::Mul, 6);
     let inv_w = if view.orthographic { 1.0 } else { 1.0 / s.w };
     let r3 = |v: DVec3| [R::of(v.x * inv_w), R::of(v.y * inv_w), R::of(v.z * inv_w)];
     Vertex {
@@ -554,6 +561,10 @@ impl<R: Real> ScreenTriangle<R> {
         color: [R; 3],
         viewport: Viewport,
     ) -> Result<Self, TriangleCull> {
+        // The doubled area (2 multiplies, 5 adds), the three edge functions (2 multiplies and
+        // 3 adds each, a compare for the top-left rule) and the bounding box (8 compares).
+        R::count_beside(Op::IntMul, 2 + 6);
+        R::count_beside(Op::IntAdd, 5 + 12 + 8);
         let mut area2 = (x[1] - x[0]) * (y[2] - y[0]) - (y[1] - y[0]) * (x[2] - x[0]);
         if area2 == 0 {
             return Err(TriangleCull::Degenerate);

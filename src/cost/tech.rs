@@ -1,0 +1,277 @@
+//! The technology file (`sim/tech/*.json`, `--tech FILE`): energy per operation \[pJ\] and
+//! area per functional unit \[µm²\] for the f32, f64 and fixed-point datapaths, SRAM per bit
+//! and per access, DRAM energy per byte. Every figure is required (no defaults: a cost
+//! nobody wrote down is not a cost), finite and not negative; each group carries a `note`
+//! citing its source, and the file a `source` (DESIGN.md §12).
+
+use super::counted::Op;
+use crate::datapath::Datapath;
+use crate::error::{read_text_file, Error, Result};
+use crate::scene::parse_strict;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// The embedded default, `sim/tech/45nm.json`.
+pub const DEFAULT_TECH_JSON: &str = include_str!("../../sim/tech/45nm.json");
+
+/// One floating-point datapath's functional units.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)] // each field is named by its operation and unit
+pub struct FloatUnits {
+    pub add_pj: f64,
+    pub mul_pj: f64,
+    pub div_pj: f64,
+    pub sqrt_pj: f64,
+    pub cmp_pj: f64,
+    pub round_pj: f64,
+    pub add_um2: f64,
+    pub mul_um2: f64,
+    pub div_um2: f64,
+    pub sqrt_um2: f64,
+    pub cmp_um2: f64,
+    pub round_um2: f64,
+    /// Where the figures come from.
+    pub note: String,
+}
+
+/// The fixed-point units beside the datapath (32-bit).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct IntUnits {
+    pub add_pj: f64,
+    pub mul_pj: f64,
+    pub add_um2: f64,
+    pub mul_um2: f64,
+    /// Where the figures come from.
+    pub note: String,
+}
+
+/// On-die SRAM: the FIFOs.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Sram {
+    /// Energy of reading or writing 64 bits \[pJ\].
+    pub access_pj_per_64_bits: f64,
+    /// Area per stored bit, array overhead included \[µm²\].
+    pub area_um2_per_bit: f64,
+    /// Where the figures come from.
+    pub note: String,
+}
+
+/// Off-chip DRAM: the frame buffer.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Dram {
+    /// Energy per byte read or written \[pJ\].
+    pub pj_per_byte: f64,
+    /// Where the figure comes from.
+    pub note: String,
+}
+
+/// Static power.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Leakage {
+    /// Leakage power per mm² of modelled area \[mW/mm²\] (0: not modelled).
+    pub mw_per_mm2: f64,
+    /// Where the figure comes from, or why it is 0.
+    pub note: String,
+}
+
+/// A technology file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Tech {
+    /// Its name in reports (`45nm`).
+    pub name: String,
+    /// The process node \[nm\].
+    pub node_nm: f64,
+    /// The file's sources.
+    pub source: String,
+    /// Units of the f32 datapath.
+    pub f32: FloatUnits,
+    /// Units of the f64 datapath.
+    pub f64: FloatUnits,
+    /// Fixed-point units.
+    pub int32: IntUnits,
+    /// FIFO storage.
+    pub sram: Sram,
+    /// Frame-buffer memory.
+    pub dram: Dram,
+    /// Static power.
+    pub leakage: Leakage,
+}
+
+impl Tech {
+    /// The embedded `sim/tech/45nm.json`.
+    pub fn default_45nm() -> Tech {
+        // Part of the binary and checked by a unit test: failing is a build defect.
+        Tech::from_json(DEFAULT_TECH_JSON, "sim/tech/45nm.json (embedded)")
+            .expect("the embedded technology file is valid")
+    }
+
+    /// Reads, parses and validates a technology file.
+    pub fn load(path: &Path) -> Result<Tech> {
+        let text = read_text_file(path)?;
+        Tech::from_json(&text, &path.display().to_string())
+    }
+
+    /// Parses and validates technology JSON; `file` names it in errors.
+    pub fn from_json(text: &str, file: &str) -> Result<Tech> {
+        let tech: Tech = parse_strict(text, file)?;
+        tech.validate(file)?;
+        Ok(tech)
+    }
+
+    fn validate(&self, file: &str) -> Result<()> {
+        if self.name.is_empty() || self.name.chars().count() > 64 {
+            return Err(Error::invalid(
+                file,
+                "name",
+                format!("{:?}", self.name),
+                "must be 1 to 64 characters long",
+            ));
+        }
+        let positive = |field: &str, x: f64| -> Result<()> {
+            if x.is_finite() && x > 0.0 {
+                Ok(())
+            } else {
+                Err(Error::invalid(
+                    file,
+                    field,
+                    x,
+                    "must be a finite number above 0",
+                ))
+            }
+        };
+        positive("node_nm", self.node_nm)?;
+        for (group, f) in [("f32", &self.f32), ("f64", &self.f64)] {
+            for (name, x) in f.figures() {
+                positive(&format!("{group}.{name}"), x)?;
+            }
+        }
+        let i = &self.int32;
+        for (name, x) in [
+            ("add_pj", i.add_pj),
+            ("mul_pj", i.mul_pj),
+            ("add_um2", i.add_um2),
+            ("mul_um2", i.mul_um2),
+        ] {
+            positive(&format!("int32.{name}"), x)?;
+        }
+        positive(
+            "sram.access_pj_per_64_bits",
+            self.sram.access_pj_per_64_bits,
+        )?;
+        positive("sram.area_um2_per_bit", self.sram.area_um2_per_bit)?;
+        positive("dram.pj_per_byte", self.dram.pj_per_byte)?;
+        let leak = self.leakage.mw_per_mm2;
+        if !(leak.is_finite() && leak >= 0.0) {
+            return Err(Error::invalid(
+                file,
+                "leakage.mw_per_mm2",
+                leak,
+                "must be a finite number, 0 or above",
+            ));
+        }
+        Ok(())
+    }
+
+    /// The floating-point units of `datapath`.
+    pub fn float(&self, datapath: Datapath) -> &FloatUnits {
+        match datapath {
+            Datapath::F32 => &self.f32,
+            Datapath::F64 => &self.f64,
+        }
+    }
+
+    /// Energy \[pJ\] and area \[µm²\] of one operation of class `op` in `datapath`; `Other`
+    /// (a transcendental, never used by the model) is costed as a divide.
+    pub fn op(&self, datapath: Datapath, op: Op) -> (f64, f64) {
+        let f = self.float(datapath);
+        match op {
+            Op::Add => (f.add_pj, f.add_um2),
+            Op::Mul => (f.mul_pj, f.mul_um2),
+            Op::Div | Op::Other => (f.div_pj, f.div_um2),
+            Op::Sqrt => (f.sqrt_pj, f.sqrt_um2),
+            Op::Cmp => (f.cmp_pj, f.cmp_um2),
+            Op::Round => (f.round_pj, f.round_um2),
+            Op::IntAdd => (self.int32.add_pj, self.int32.add_um2),
+            Op::IntMul => (self.int32.mul_pj, self.int32.mul_um2),
+        }
+    }
+}
+
+impl FloatUnits {
+    fn figures(&self) -> [(&'static str, f64); 12] {
+        [
+            ("add_pj", self.add_pj),
+            ("mul_pj", self.mul_pj),
+            ("div_pj", self.div_pj),
+            ("sqrt_pj", self.sqrt_pj),
+            ("cmp_pj", self.cmp_pj),
+            ("round_pj", self.round_pj),
+            ("add_um2", self.add_um2),
+            ("mul_um2", self.mul_um2),
+            ("div_um2", self.div_um2),
+            ("sqrt_um2", self.sqrt_um2),
+            ("cmp_um2", self.cmp_um2),
+            ("round_um2", self.round_um2),
+        ]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_embedded_file_is_valid_and_holds_horowitz_figures() {
+        let t = Tech::default_45nm();
+        assert_eq!(t.name, "45nm");
+        assert_eq!(t.op(Datapath::F32, Op::Add), (0.9, 4184.0));
+        assert_eq!(t.op(Datapath::F32, Op::Mul), (3.7, 7700.0));
+        assert_eq!(t.op(Datapath::F32, Op::IntAdd), (0.1, 137.0));
+        assert_eq!(t.sram.access_pj_per_64_bits, 10.0);
+    }
+
+    fn refused(edit: impl Fn(&mut serde_json::Value)) -> Error {
+        let mut v: serde_json::Value = serde_json::from_str(DEFAULT_TECH_JSON).unwrap();
+        edit(&mut v);
+        Tech::from_json(&v.to_string(), "t.json").unwrap_err()
+    }
+
+    #[test]
+    fn a_missing_negative_or_non_finite_figure_is_refused_naming_its_field() {
+        let e = refused(|v| {
+            v["f32"].as_object_mut().unwrap().remove("mul_pj");
+        });
+        assert!(
+            matches!(&e, Error::Parse { field, message, .. }
+            if field == "f32" && message.contains("mul_pj")),
+            "{e}"
+        );
+        let e = refused(|v| v["f64"]["sqrt_um2"] = (-1.0).into());
+        assert!(
+            matches!(&e, Error::Invalid { field, .. } if field == "f64.sqrt_um2"),
+            "{e}"
+        );
+        let e = refused(|v| v["dram"]["pj_per_byte"] = 0.0.into());
+        assert!(
+            matches!(&e, Error::Invalid { field, .. } if field == "dram.pj_per_byte"),
+            "{e}"
+        );
+        let e = refused(|v| v["leakage"]["mw_per_mm2"] = (-0.5).into());
+        assert!(matches!(&e, Error::Invalid { field, .. } if field == "leakage.mw_per_mm2"));
+        // JSON has no NaN or infinity: 1e999 overflows the parser, refused as a parse error.
+        let mut text = DEFAULT_TECH_JSON.replace("\"add_pj\": 0.9", "\"add_pj\": 1e999");
+        assert!(Tech::from_json(&text, "t.json").is_err());
+        text = DEFAULT_TECH_JSON.replace("\"node_nm\": 45", "\"node_nm\": 45, \"extra\": 1");
+        assert!(matches!(
+            Tech::from_json(&text, "t.json"),
+            Err(Error::Parse { .. })
+        ));
+    }
+}
