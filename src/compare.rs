@@ -68,6 +68,8 @@ pub struct CompareJob {
     pub datapath: Datapath,
     /// Architecture file; None for the embedded baseline.
     pub arch: Option<PathBuf>,
+    /// Technology file; None for the embedded `sim/tech/45nm.json`.
+    pub tech: Option<PathBuf>,
     /// Viewport override (width, height) \[pixels\].
     pub viewport: Option<(u32, u32)>,
     /// Reference samples per pixel side for reference.png.
@@ -94,6 +96,7 @@ impl CompareJob {
             mode: Mode::Timed,
             arch: self.arch.clone(),
             trace_out: None,
+            tech: self.tech.clone(),
             path,
             tess,
             blend: BlendMode::Rgba8,
@@ -503,6 +506,16 @@ pub fn table(r: &CompareReport) -> String {
             .as_ref()
             .and_then(|c| c.bottleneck.clone())
             .unwrap_or_else(|| "-".into())
+    });
+    both(&mut t, "area mm2", &|r| {
+        r.cost
+            .as_ref()
+            .map_or_else(|| "-".into(), |c| format!("{:.3}", c.area_mm2))
+    });
+    both(&mut t, "energy uJ/frame", &|r| {
+        r.cost
+            .as_ref()
+            .map_or_else(|| "-".into(), |c| format!("{:.1}", c.energy_pj * 1e-6))
     });
     both(&mut t, "fragments", &|r| r.counts.fragments.to_string());
     row(

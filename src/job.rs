@@ -6,13 +6,14 @@
 
 use crate::camera::{View, MAX_VIEWPORT_SIDE};
 use crate::config::ArchConfig;
+use crate::cost::{self, model::CostReport, tech::Tech};
 use crate::datapath::Datapath;
 use crate::discoid::{self, blend::BlendMode};
 use crate::error::{Error, Result};
 use crate::lembo::tessellate::Tessellation;
 use crate::lembo::Lembo;
 use crate::output::write_paths;
-use crate::pipeline::{self, Cycle, SimOptions, Source};
+use crate::pipeline::{self, Cycle, CycleReport, SimOptions, Source};
 use crate::raster;
 use crate::raster::{PerspectiveTol, Tolerance};
 use crate::reference::oracle::ReferenceImage;
@@ -94,6 +95,9 @@ pub struct RenderJob {
     pub arch: Option<PathBuf>,
     /// Where to write the Chrome trace-event timeline. Timed mode only.
     pub trace_out: Option<PathBuf>,
+    /// Technology file pricing the unit's area and energy (`--tech`); None for the
+    /// embedded `sim/tech/45nm.json`. Timed mode only.
+    pub tech: Option<PathBuf>,
     /// Which primitives the surfaces are drawn as (`--path`).
     pub path: PrimitivePath,
     /// Tessellation level n (n² triangles per lembo); None for the default, 1. Triangle
@@ -204,6 +208,7 @@ impl RenderJob {
             for (flag, set) in [
                 ("--arch", self.arch.is_some()),
                 ("--trace-out", self.trace_out.is_some()),
+                ("--tech", self.tech.is_some()),
                 ("--host-threads", self.host_threads != 1),
             ] {
                 if set {
@@ -216,7 +221,16 @@ impl RenderJob {
                 }
             }
         }
+        self.tech()?;
         Ok(())
+    }
+
+    /// The technology file pricing a timed run's cost: `--tech`, or the embedded 45 nm one.
+    pub fn tech(&self) -> Result<Tech> {
+        match &self.tech {
+            Some(path) => Tech::load(path),
+            None => Ok(Tech::default_45nm()),
+        }
     }
 }
 
@@ -420,6 +434,19 @@ pub fn run_path(
             timed.trace,
         ),
     };
+    let cost = match (model, &cycles) {
+        (Model::Timed(arch), Some(cycles)) => Some(cost_of(
+            job,
+            scene,
+            view,
+            &route,
+            arch,
+            cycles,
+            &counts,
+            &framebuffer,
+        )?),
+        _ => None,
+    };
     let memory = Memory::new(
         FrameBuffer::stored_bytes(scene.viewport.width, scene.viewport.height),
         0,
@@ -452,6 +479,7 @@ pub fn run_path(
             measured.as_ref().map(|m| m.metrics_wall),
         ),
         cycles,
+        cost,
         arch: model.arch().cloned(),
         accuracy: measured.as_ref().map(|m| m.accuracy.clone()),
         blend: None,
@@ -463,6 +491,41 @@ pub fn run_path(
         error_map: measured.map(|m| m.error_map),
         trace,
     })
+}
+
+/// The cost of a timed lembo or triangle frame (DESIGN.md §12): the functional model runs
+/// again in a counting datapath for the operations of each kind (its image must equal the
+/// timed one, so counting cannot have changed what was drawn), priced with the timed run's
+/// busy cycles and items and the bytes through the frame-buffer port.
+#[allow(clippy::too_many_arguments)]
+fn cost_of(
+    job: &RenderJob,
+    scene: &Scene,
+    view: &View,
+    route: &Route,
+    arch: &ArchConfig,
+    cycles: &CycleReport,
+    counts: &raster::Counts,
+    timed: &FrameBuffer,
+) -> Result<CostReport> {
+    let (frame, ops) = match route {
+        Route::Triangles(t) => cost::triangle_ops(scene, view, t, job.datapath),
+        _ => cost::lembo_ops(scene, view, job.tolerance(), job.datapath)?,
+    };
+    if frame.framebuffer.color != timed.color {
+        return Err(Error::Internal(
+            "the counting run's image differs from the timed one".into(),
+        ));
+    }
+    let fb = &arch.framebuffer;
+    let framebuffer_bytes = counts.fragments * fb.bytes_per_fragment_tested
+        + counts.fragments_passed_depth * fb.bytes_per_fragment_written;
+    let work = cost::model::Work {
+        ops: &ops,
+        cycles,
+        framebuffer_bytes,
+    };
+    Ok(cost::model::cost(&job.tech()?, arch, job.datapath, &work))
 }
 
 /// A surface path's image with what each model contributed (one per run, so the variants'
@@ -823,6 +886,7 @@ fn run_discoids(job: &RenderJob, scene: &Scene, view: &View, model: Model) -> Re
         units,
         counts,
         cycles: cycles.clone(),
+        cost: None,
         arch: model.arch().cloned(),
         accuracy: None,
         blend: Some(blend),

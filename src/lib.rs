@@ -53,6 +53,7 @@
 pub mod camera;
 pub mod compare;
 pub mod config;
+pub mod cost;
 pub mod datapath;
 pub mod datapath_study;
 pub mod discoid;

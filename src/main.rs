@@ -185,6 +185,11 @@ struct RenderArgs {
     /// chrome://tracing); coarsened beyond a fixed number of events.
     #[arg(long, value_name = "FILE")]
     trace_out: Option<PathBuf>,
+    /// Technology file pricing area and energy (JSON, see sim/tech/README.md): energy per
+    /// operation, area per functional unit, SRAM and DRAM, each figure with its source
+    /// [default: the embedded sim/tech/45nm.json]. Timed mode only.
+    #[arg(long, value_name = "FILE")]
+    tech: Option<PathBuf>,
     /// Override the scene's viewport, e.g. 1024x1024.
     #[arg(long, value_name = "WxH", value_parser = parse_viewport)]
     viewport: Option<(u32, u32)>,
@@ -247,6 +252,11 @@ struct CompareArgs {
     /// Architecture configuration shared by both paths [default: the embedded baseline].
     #[arg(long, value_name = "FILE")]
     arch: Option<PathBuf>,
+    /// Technology file pricing area and energy (JSON, see sim/tech/README.md): energy per
+    /// operation, area per functional unit, SRAM and DRAM, each figure with its source
+    /// [default: the embedded sim/tech/45nm.json].
+    #[arg(long, value_name = "FILE")]
+    tech: Option<PathBuf>,
     /// Reference samples per pixel side for reference.png (metrics use pixel centres).
     #[arg(long, value_name = "N", default_value_t = 1)]
     supersample: u32,
@@ -304,6 +314,7 @@ fn default_render() -> RenderArgs {
         mode: Mode::Timed,
         arch: None,
         trace_out: None,
+        tech: None,
         viewport: None,
         path: PathArg::Lembo,
         tess: None,
@@ -419,6 +430,7 @@ fn compare(args: CompareArgs) -> ExitCode {
         tess: args.tess,
         datapath: datapath(args.datapath),
         arch: args.arch,
+        tech: args.tech,
         viewport: args.viewport,
         supersample: args.supersample,
         host_threads: args.host_threads,
@@ -449,6 +461,7 @@ fn render(args: RenderArgs) -> ExitCode {
         },
         arch: args.arch,
         trace_out: args.trace_out,
+        tech: args.tech,
         path: match args.path {
             PathArg::Lembo => PrimitivePath::Lembo,
             PathArg::Triangle => PrimitivePath::Triangle,

@@ -46,6 +46,7 @@ fn job(path: PrimitivePath, datapath: Datapath, k: f64, mode: Mode) -> RenderJob
         mode,
         arch: None,
         trace_out: None,
+        tech: None,
         path,
         tess: (path == PrimitivePath::Triangle).then_some(TESS),
         blend: BlendMode::Rgba8,

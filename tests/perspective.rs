@@ -35,6 +35,7 @@ fn job(k: f64, perspective_tol: PerspectiveTol, datapath: Datapath) -> RenderJob
         mode: Mode::Functional,
         arch: None,
         trace_out: None,
+        tech: None,
         path: PrimitivePath::Lembo,
         tess: None,
         blend: BlendMode::Rgba8,

@@ -163,6 +163,7 @@ fn render_reports_see_through_in_both_reports() {
         mode: Mode::Functional,
         arch: None,
         trace_out: None,
+        tech: None,
         path: PrimitivePath::Lembo,
         tess: None,
         blend: BlendMode::Rgba8,

@@ -3,6 +3,7 @@
 //! place a report is put into words). The files are written by [`crate::output`].
 
 use crate::config::ArchConfig;
+use crate::cost::model::CostReport;
 use crate::discoid::render::BlendReport;
 use crate::pipeline::{CycleReport, UnitInstance};
 use crate::raster::Counts;
@@ -12,7 +13,7 @@ use serde::Serialize;
 pub mod text;
 
 /// Version of the `report.json` layout; bumped when a field changes meaning or moves.
-pub const SCHEMA_VERSION: u32 = 5;
+pub const SCHEMA_VERSION: u32 = 6;
 
 /// Everything a run reports.
 #[derive(Clone, Debug, Serialize)]
@@ -33,6 +34,9 @@ pub struct Report {
     pub counts: Counts,
     /// Cycle accounting of the timed pipeline; null in functional mode.
     pub cycles: Option<CycleReport>,
+    /// Area and energy of the instantiated units for this frame (DESIGN.md §12); null in
+    /// functional mode and for discoid scenes.
+    pub cost: Option<CostReport>,
     /// Accuracy against the exact reference; null without `--reference`.
     pub accuracy: Option<Accuracy>,
     /// The discoid blend units' counters and error; null for scenes without discoids.

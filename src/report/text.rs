@@ -3,6 +3,7 @@
 //! is what `report.json` says; each section of `report.txt` has its own writer below.
 
 use super::Report;
+use crate::cost::counted::OPS;
 use crate::pipeline::Cycle;
 use std::fmt::Write as _;
 
@@ -16,6 +17,7 @@ impl Report {
         self.write_scene(&mut t);
         self.write_counts(&mut t);
         self.write_cycles(&mut t);
+        self.write_cost(&mut t);
         self.write_blend(&mut t);
         self.write_memory(&mut t);
         self.write_accuracy(&mut t);
@@ -29,6 +31,7 @@ impl Report {
         let mut t = String::new();
         self.summarise_drawing(&mut t);
         self.summarise_timing(&mut t);
+        self.summarise_cost(&mut t);
         self.summarise_accuracy(&mut t);
         t
     }
@@ -140,6 +143,62 @@ impl Report {
                 u.items_in,
                 u.items_out,
                 u.max_fifo_occupancy
+            );
+        }
+    }
+
+    /// The unit's area and energy, instance by instance (DESIGN.md §12).
+    fn write_cost(&self, t: &mut String) {
+        let Some(c) = &self.cost else {
+            let why = if self.cycles.is_none() {
+                "functional mode"
+            } else {
+                "discoid scene"
+            };
+            let _ = writeln!(
+                t,
+                "
+cost      n/a ({why})"
+            );
+            return;
+        };
+        let _ = writeln!(
+            t,
+            "
+cost      {:.3} mm2, {:.1} uJ this frame{} (technology {}; {} frame-buffer bytes as DRAM)",
+            c.area_mm2,
+            c.energy_pj * 1e-6,
+            c.power_mw
+                .map(|p| format!(" = {p:.0} mW at the clock"))
+                .unwrap_or_default(),
+            c.tech,
+            c.framebuffer_bytes
+        );
+        let _ = writeln!(
+            t,
+            "  {:<22} {:>9} {:>9} {:>10} {:>9}  functional units",
+            "unit", "mm2", "fifo mm2", "uJ", "fifo uJ"
+        );
+        for u in &c.units {
+            let fus: Vec<String> = OPS
+                .iter()
+                .zip(u.functional_units.to_array())
+                .filter(|(_, n)| *n > 0)
+                .map(|(op, n)| format!("{n} {}", op.name()))
+                .collect();
+            let _ = writeln!(
+                t,
+                "  {:<22} {:>9.4} {:>9.4} {:>10.3} {:>9.3}  {}",
+                u.name,
+                u.area_mm2,
+                u.fifo_area_mm2,
+                u.energy_pj * 1e-6,
+                u.fifo_energy_pj * 1e-6,
+                if fus.is_empty() {
+                    "-".to_string()
+                } else {
+                    fus.join(", ")
+                }
             );
         }
     }
@@ -311,6 +370,22 @@ impl Report {
                 r.host.fragments_per_second / 1e6
             ),
         };
+    }
+
+    /// The summary's cost line, for a timed surface run.
+    fn summarise_cost(&self, t: &mut String) {
+        if let Some(c) = &self.cost {
+            let _ = writeln!(
+                t,
+                "cost ({}): {:.3} mm2, {:.1} uJ a frame{}",
+                c.tech,
+                c.area_mm2,
+                c.energy_pj * 1e-6,
+                c.power_mw
+                    .map(|p| format!(", {p:.0} mW"))
+                    .unwrap_or_default()
+            );
+        }
     }
 
     /// The summary's accuracy line, when the run was measured.

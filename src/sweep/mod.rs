@@ -380,6 +380,7 @@ mod tests {
             serde_json::json!({"index": 0, "scene": "s", "params": {"k": 1.0},
                 "report": {"cycles": {"total": 10, "fps": 5.0, "bottleneck": "Rop",
                     "units": [{"name": "Rop", "busy": 5}]},
+                    "cost": {"area_mm2": 1.5, "energy_pj": 20.0},
                     "accuracy": null, "primitives": {"count": 2, "bytes": 8},
                     "counts": {"fragments": 3, "lembo_pieces": 4}, "blend": null,
                     "host": {"wall_seconds": 0.5}}}),
@@ -390,11 +391,11 @@ mod tests {
         ];
         let text = String::from_utf8(csv_bytes(&records).unwrap()).unwrap();
         let lines: Vec<&str> = text.lines().collect();
-        assert_eq!(lines[0], "index,scene,k,tess,cycles_total,fps,bottleneck,util.Rop,acc.psnr_db,primitives,primitive_bytes,fragments,lembo_pieces,blend.error_mean,blend.error_max,wall_seconds");
-        assert_eq!(lines[1], "0,s,1.0,,10,5.0,Rop,0.5,,2,8,3,4,,,0.5");
+        assert_eq!(lines[0], "index,scene,k,tess,cycles_total,fps,bottleneck,area_mm2,energy_pj,util.Rop,acc.psnr_db,primitives,primitive_bytes,fragments,lembo_pieces,blend.error_mean,blend.error_max,wall_seconds");
+        assert_eq!(lines[1], "0,s,1.0,,10,5.0,Rop,1.5,20.0,0.5,,2,8,3,4,,,0.5");
         assert_eq!(
             lines[2],
-            "1,\"s, \"\"quoted\"\"\",,2,,,,,40.0,2,8,3,,,,0.25"
+            "1,\"s, \"\"quoted\"\"\",,2,,,,,,,40.0,2,8,3,,,,0.25"
         );
     }
 }

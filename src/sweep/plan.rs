@@ -281,6 +281,7 @@ pub(super) fn render_job(
             Mode::Functional => None,
         },
         trace_out: None,
+        tech: None,
         path: PrimitivePath::Lembo,
         tess: None,
         blend: BlendMode::Rgba8,

@@ -232,7 +232,7 @@ pub fn csv_bytes(records: &[Value]) -> Result<Vec<u8>> {
     }
     let mut header: Vec<String> = vec!["index".into(), "scene".into()];
     header.extend(params.iter().cloned());
-    header.extend(["cycles_total", "fps", "bottleneck"].map(String::from));
+    header.extend(["cycles_total", "fps", "bottleneck", "area_mm2", "energy_pj"].map(String::from));
     header.extend(units.iter().map(|(_, _, n)| format!("util.{n}")));
     header.extend(metrics.iter().map(|m| format!("acc.{m}")));
     header.extend(
@@ -259,6 +259,8 @@ pub fn csv_bytes(records: &[Value]) -> Result<Vec<u8>> {
         row.push(cell(cycles.get("total")));
         row.push(cell(cycles.get("fps")));
         row.push(cell(cycles.get("bottleneck")));
+        row.push(cell(report["cost"].get("area_mm2")));
+        row.push(cell(report["cost"].get("energy_pj")));
         let total = cycles["total"].as_u64();
         let busy: BTreeMap<&str, u64> = cycles["units"]
             .as_array()

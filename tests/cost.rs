@@ -1,0 +1,172 @@
+//! The cost model: counting changes no pixel, the counts are the ones a hand-worked lembo
+//! gives, and a timed report prices every unit it instantiates.
+
+mod common;
+
+use common::*;
+use lembo_sim::camera::View;
+use lembo_sim::cost::counted::{Op, OPS};
+use lembo_sim::cost::{lembo_ops, triangle_ops};
+use lembo_sim::datapath::Datapath;
+use lembo_sim::lembo::tessellate::Tessellation;
+use lembo_sim::pipeline::graph::{UnitKind, KINDS};
+use lembo_sim::raster::{render_functional, render_functional_triangles};
+use lembo_sim::scene::Scene;
+
+fn scenes() -> Vec<Scene> {
+    [
+        "traces/sphere24.json",
+        "traces/bunny.json",
+        "traces/near_camera.json",
+    ]
+    .iter()
+    .map(|p| Scene::load(std::path::Path::new(p)).expect(p))
+    .collect()
+}
+
+/// The counting datapath does the same IEEE operations: every pixel, depth and winner of
+/// both paths, in both precisions, equals the plain run's.
+#[test]
+fn counting_changes_no_pixel() {
+    for scene in scenes() {
+        let view = View::new(&scene.camera, scene.viewport);
+        for dp in [Datapath::F32, Datapath::F64] {
+            let plain = render_functional(&scene, &view, 0.5, dp, false).unwrap();
+            let (counted, ops) = lembo_ops(&scene, &view, 0.5, dp).unwrap();
+            assert!(
+                plain.framebuffer.color == counted.framebuffer.color,
+                "{}",
+                scene.name
+            );
+            assert!(plain.framebuffer.depth == counted.framebuffer.depth);
+            assert_eq!(plain.counts, counted.counts);
+            assert!(ops.get(UnitKind::Segmenter, Op::Mul) > 0);
+            assert_eq!(ops.get(UnitKind::Setup, Op::Other), 0);
+            let tess = Tessellation::new(&scene, 2);
+            let plain = render_functional_triangles(&scene, &view, &tess, dp, false);
+            let (counted, ops) = triangle_ops(&scene, &view, &tess, dp);
+            assert!(plain.framebuffer.color == counted.framebuffer.color);
+            assert!(ops.get(UnitKind::TriangleRasterizer, Op::IntMul) > 0);
+        }
+    }
+}
+
+fn temp_dir(name: &str) -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("lembo-cost-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn report(dir: &std::path::Path) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap()
+}
+
+/// A timed report prices every unit it instantiates, and the parts add up: the total area
+/// and energy are the units' sums, a FIFO's share is within its unit's, and the frame
+/// buffer's energy is its bytes at the DRAM figure.
+#[test]
+fn a_timed_report_prices_every_unit() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    for path in ["lembo", "triangle"] {
+        let out = temp_dir(path);
+        let o = run(
+            &[
+                "render",
+                "traces/sphere24.json",
+                "--path",
+                path,
+                "--out",
+                out.to_str().unwrap(),
+            ],
+            std::path::Path::new(root),
+        );
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let r = report(&out);
+        let cost = &r["cost"];
+        let units = cost["units"].as_array().unwrap();
+        assert_eq!(units.len(), r["cycles"]["units"].as_array().unwrap().len());
+        let area: f64 = units.iter().map(|u| u["area_mm2"].as_f64().unwrap()).sum();
+        let energy: f64 = units.iter().map(|u| u["energy_pj"].as_f64().unwrap()).sum();
+        assert!((area - cost["area_mm2"].as_f64().unwrap()).abs() < 1e-9);
+        assert!((energy - cost["energy_pj"].as_f64().unwrap()).abs() < 1e-6 * energy);
+        for u in units {
+            assert!(u["fifo_area_mm2"].as_f64().unwrap() <= u["area_mm2"].as_f64().unwrap());
+            assert!(u["energy_pj"].as_f64().unwrap() > 0.0, "{u}");
+        }
+        let fb = units.iter().find(|u| u["name"] == "FrameBuffer").unwrap();
+        let dram = cost["framebuffer_bytes"].as_f64().unwrap() * 244.0;
+        let fifo = fb["fifo_energy_pj"].as_f64().unwrap();
+        assert!((fb["energy_pj"].as_f64().unwrap() - fifo - dram).abs() < 1e-6 * dram);
+        assert!(std::fs::read_to_string(out.join("report.txt"))
+            .unwrap()
+            .contains("\ncost      "));
+        let _ = std::fs::remove_dir_all(&out);
+    }
+}
+
+/// Every kind of the lembo path is charged something, and nothing is charged to kinds the
+/// path does not have.
+#[test]
+fn operations_are_charged_to_the_kinds_that_do_them() {
+    let scene = Scene::load(std::path::Path::new("traces/bunny.json")).unwrap();
+    let view = View::new(&scene.camera, scene.viewport);
+    let (_, ops) = lembo_ops(&scene, &view, 0.5, Datapath::F32).unwrap();
+    for kind in KINDS {
+        let total: u64 = ops.of(kind).iter().sum();
+        let expected = !matches!(
+            kind,
+            UnitKind::TriangleSetup
+                | UnitKind::TriangleRasterizer
+                | UnitKind::BlendUnit
+                | UnitKind::FrameBuffer
+        );
+        assert_eq!(total > 0, expected, "{kind:?}: {:?}", ops.of(kind));
+        assert_eq!(ops.get(kind, Op::Other), 0);
+        assert_eq!(ops.get(kind, Op::IntMul), 0);
+    }
+    assert_eq!(OPS.len(), 9);
+}
+
+/// A technology file with a bad figure is refused naming the field, exit 2, nothing
+/// written; `--tech` in functional mode is refused as `--arch` is.
+#[test]
+fn a_bad_technology_file_is_refused_naming_the_field() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dir = temp_dir("bad");
+    let text = std::fs::read_to_string(root.join("sim/tech/45nm.json")).unwrap();
+    let bad = dir.join("bad.json");
+    std::fs::write(&bad, text.replace("\"mul_pj\": 3.7", "\"mul_pj\": -3.7")).unwrap();
+    let out = dir.join("out");
+    let o = run(
+        &[
+            "render",
+            "traces/sphere24.json",
+            "--tech",
+            bad.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        root,
+    );
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("f32.mul_pj"), "{err}");
+    assert!(files_in(&out).is_empty());
+    let o = run(
+        &[
+            "render",
+            "traces/sphere24.json",
+            "--mode",
+            "functional",
+            "--tech",
+            "sim/tech/45nm.json",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        root,
+    );
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--tech"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
