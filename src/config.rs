@@ -105,10 +105,14 @@ pub struct SetupConfig {
 }
 
 /// MinMax: the lembo's screen-space y range, the cull test and the clip of the scanline
-/// range to the viewport. One instance. Item: one lembo.
+/// range to the viewport. Replicable; Setup deals whole lembos (pieces) among instances
+/// round-robin. Item: one lembo.
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
 #[serde(default, deny_unknown_fields)]
 pub struct MinMaxConfig {
+    /// Number of instances. Default 1, Martinelli's Figure 5: at 2 cycles a lembo against
+    /// the interval manager's 3 a scanline, one MinMax keeps up.
+    pub count: u32,
     /// Cycles from accepting a lembo to its scanline range being ready \[cycles\]. Default 8:
     /// the stationary point of each quadratic domain edge needs a divide (about 5 stages),
     /// then a compare tree over the candidates and the clip (about 3).
@@ -120,11 +124,17 @@ pub struct MinMaxConfig {
 }
 
 /// IntervalManager: for each scanline y_j of a lembo, the roots of the three domain edges
-/// with Y = y_j, paired into intervals of the parameter domain. One instance. Items: one
-/// scanline, and one interval emitted.
+/// with Y = y_j, paired into intervals of the parameter domain. Replicable; MinMax deals
+/// whole lembos (pieces, with all their scanlines) among instances round-robin, so an
+/// instance walks a lembo's scanlines in order. Items: one scanline, and one interval
+/// emitted.
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
 #[serde(default, deny_unknown_fields)]
 pub struct IntervalManagerConfig {
+    /// Number of instances. Default 1, Figure 5's single interval manager (on scenes of
+    /// small lembos it is the bottleneck whatever k is: raise it to see what a replicated
+    /// front end buys).
+    pub count: u32,
     /// Cycles from issuing a scanline to its intervals being ready \[cycles\]. Default 12: a
     /// pipelined quadratic solver, a square root (about 8 stages) and a divide overlapped
     /// with it, then the sort and pairing of the roots (about 4).
@@ -526,6 +536,7 @@ impl Default for SetupConfig {
 impl Default for MinMaxConfig {
     fn default() -> MinMaxConfig {
         MinMaxConfig {
+            count: 1,
             latency_cycles: 8,
             cycles_per_lembo: 2,
         }
@@ -535,6 +546,7 @@ impl Default for MinMaxConfig {
 impl Default for IntervalManagerConfig {
     fn default() -> IntervalManagerConfig {
         IntervalManagerConfig {
+            count: 1,
             latency_cycles: 12,
             cycles_per_scanline: 3,
             cycles_per_interval: 1,
@@ -641,15 +653,17 @@ impl ArchConfig {
     /// stages, and the frame-buffer port.
     pub fn units(&self) -> u32 {
         // Saturating so that an unvalidated configuration cannot overflow; a validated one
-        // is at most 4 + 4 * MAX_UNIT_COUNT.
+        // is at most 2 + 6 * MAX_UNIT_COUNT.
         [
+            self.minmax.count,
+            self.interval_manager.count,
             self.segmenter.count,
             self.subsegmenter.count,
             self.rasterizer.count,
             self.rop.count,
         ]
         .into_iter()
-        .fold(3 + 1, u32::saturating_add)
+        .fold(1 + 1, u32::saturating_add)
     }
 
     /// Checks every value against what the simulator accepts; the first refused value is
@@ -680,10 +694,12 @@ impl ArchConfig {
         check.cycles("setup.cycles_per_lembo", setup.cycles_per_lembo)?;
 
         let minmax = &self.minmax;
+        check.count("minmax.count", minmax.count)?;
         check.cycles("minmax.latency_cycles", minmax.latency_cycles)?;
         check.cycles("minmax.cycles_per_lembo", minmax.cycles_per_lembo)?;
 
         let im = &self.interval_manager;
+        check.count("interval_manager.count", im.count)?;
         check.cycles("interval_manager.latency_cycles", im.latency_cycles)?;
         check.cycles(
             "interval_manager.cycles_per_scanline",

@@ -257,3 +257,49 @@ fn random_architectures_all_terminate_with_the_same_image() {
         )
         .unwrap();
 }
+
+/// A replicated front end (MinMax and IntervalManager counts above 1) draws the same pixels
+/// as the functional model, deals whole lembos round-robin (each instance takes every n-th
+/// piece, so their item counts differ by at most one), names its instances `Kind[i]`, and
+/// on a scene bound by the single interval manager (the bunny) takes fewer cycles.
+#[test]
+fn a_replicated_front_end_deals_whole_lembos_and_draws_the_same_pixels() {
+    let bunny = scene("bunny.json", None);
+    let view = View::new(&bunny.camera, bunny.viewport);
+    let functional = render_functional(&bunny, &view, 0.5, Datapath::F32, false).unwrap();
+    let options = SimOptions::default();
+    let mut last = u64::MAX;
+    for n in [1, 2, 4] {
+        let mut a = ArchConfig::default();
+        a.minmax.count = n.min(2);
+        a.interval_manager.count = n;
+        let t = timed(&bunny, &a, &options);
+        assert!(
+            t.framebuffer.color == functional.framebuffer.color,
+            "n = {n}"
+        );
+        let ims: Vec<_> = t
+            .cycles
+            .units
+            .iter()
+            .filter(|u| u.kind == UnitKind::IntervalManager)
+            .collect();
+        assert_eq!(ims.len() as u32, n);
+        let names: Vec<&str> = ims.iter().map(|u| u.name.as_str()).collect();
+        if n == 1 {
+            assert_eq!(names, ["IntervalManager"]);
+        } else {
+            assert_eq!(names[1], "IntervalManager[1]");
+        }
+        let (lo, hi) = ims.iter().fold((u64::MAX, 0), |(lo, hi), u| {
+            (lo.min(u.items_in), hi.max(u.items_in))
+        });
+        assert!(hi - lo <= 1, "n = {n}: {lo}..{hi}");
+        assert!(
+            t.cycles.total.0 < last,
+            "n = {n}: {} cycles",
+            t.cycles.total
+        );
+        last = t.cycles.total.0;
+    }
+}

@@ -71,7 +71,9 @@ impl UnitKind {
         }
     }
 
-    /// Whether the architecture replicates this kind (its instances are named `Kind[i]`).
+    /// Whether the architecture replicates this kind from the start (its instances are
+    /// named `Kind[i]` even when single). MinMax and the IntervalManager are replicable too
+    /// but named `Kind[i]` only when there is more than one.
     pub fn replicated(self) -> bool {
         matches!(
             self,
@@ -88,8 +90,11 @@ impl UnitKind {
     pub fn in_arch(self, arch: &ArchConfig) -> (u32, u64) {
         match self {
             UnitKind::Setup => (1, arch.setup.latency_cycles),
-            UnitKind::MinMax => (1, arch.minmax.latency_cycles),
-            UnitKind::IntervalManager => (1, arch.interval_manager.latency_cycles),
+            UnitKind::MinMax => (arch.minmax.count, arch.minmax.latency_cycles),
+            UnitKind::IntervalManager => (
+                arch.interval_manager.count,
+                arch.interval_manager.latency_cycles,
+            ),
             UnitKind::Segmenter => (arch.segmenter.count, arch.segmenter.latency_cycles),
             UnitKind::Subsegmenter => (arch.subsegmenter.count, arch.subsegmenter.latency_cycles),
             UnitKind::FragmentRasterizer => (arch.rasterizer.count, arch.rasterizer.latency_cycles),
@@ -299,7 +304,9 @@ pub fn units(path: Path, arch: &ArchConfig) -> Vec<(UnitInstance, u64)> {
     for &kind in path.kinds() {
         let (n, latency) = kind.in_arch(arch);
         for i in 0..n {
-            let name = if kind.replicated() {
+            // A replicable front-end unit keeps its plain name while single, as in
+            // Figure 5 (and in every report before it could be replicated).
+            let name = if kind.replicated() || n > 1 {
                 format!("{}[{i}]", kind.name())
             } else {
                 kind.name().to_string()

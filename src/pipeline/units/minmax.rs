@@ -28,10 +28,16 @@ pub struct ScanlineRange {
 pub async fn run<R: Real>(mut ctx: Ctx<LemboReady, ScanlineRange>, sh: &Shared<'_, R>) -> Finished {
     let cost = sh.arch.minmax.cycles_per_lembo;
     let mut counts = Counts::default();
+    // Whole lembos (pieces) to the interval managers, round-robin.
+    let mut next_port = 0;
     while let Some(LemboReady { id }) = ctx.next_input().await {
         let l = sh.lembo(id);
         match minmax::scanlines(l, sh.view.viewport.height) {
-            Some((j0, j1)) => ctx.emit(cost, 0, ScanlineRange { id, j0, j1 }).await,
+            Some((j0, j1)) => {
+                ctx.emit(cost, next_port, ScanlineRange { id, j0, j1 })
+                    .await;
+                next_port = ctx.next_port(next_port);
+            }
             None => {
                 counts.lembos_culled_outside += 1;
                 ctx.work(cost);

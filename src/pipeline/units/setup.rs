@@ -36,6 +36,8 @@ pub async fn run<R: Real>(mut ctx: Ctx<(), LemboReady>, sh: &Shared<'_, R>) -> F
     let cost = sh.arch.setup.cycles_per_lembo;
     let mut counts = Counts::default();
     let mut pieces = Vec::new();
+    // Pieces to the MinMax units, round-robin.
+    let mut next_port = 0;
     for (id, (lembo, color)) in sh.scene.lembos().enumerate() {
         counts.lembos += 1;
         match setup_pieces::<R>(
@@ -59,7 +61,8 @@ pub async fn run<R: Real>(mut ctx: Ctx<(), LemboReady>, sh: &Shared<'_, R>) -> F
                         lembo: id as u32,
                         piece: piece as u32,
                     };
-                    ctx.emit(owed.max(1), 0, LemboReady { id }).await;
+                    ctx.emit(owed.max(1), next_port, LemboReady { id }).await;
+                    next_port = ctx.next_port(next_port);
                     owed = 0;
                 }
                 if n == 0 {
