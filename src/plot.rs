@@ -7,7 +7,8 @@
 //!
 //! | file | x | y | series |
 //! |---|---|---|---|
-//! | `tradeoff_<scene>.svg` | frame time \[cycles\], log | RMS colour error [0-255], log | one per path, and the Pareto front |
+//! | `tradeoff_<scene>.svg` | frame time \[cycles\], log | RMS colour error [0-255], log | one per path, and the Pareto front (with an area budget: each path's front within it, larger units grey) |
+//! | `error_vs_energy_<scene>.svg` | energy of the frame \[pJ\], log | RMS colour error [0-255], log | as `tradeoff` |
 //! | `cycles_vs_k_<scene>.svg` | k \[px\], log | frame time \[cycles\] | one per combination of the other varying parameters run at two k or more (lembo path) |
 //! | `cycles_vs_units_<scene>.svg` | unit instances | frame time \[cycles\] | one per varying `arch.*.count`, the other parameters at their most common value |
 //! | `utilisation_<scene>.svg` | share of the frame time [%] | unit | busy / starved / blocked bars at the most and the fewest cycles |
@@ -34,8 +35,8 @@ use std::path::Path;
 /// records support), scene by scene in name order. All files appear together or none
 /// ([`crate::output::write_files`]); with nothing to plot, nothing is written and `dir` is not
 /// created. Records that are not sweep points (no `report.settings.path`) are skipped.
-pub fn write_plots(dir: &Path, records: &[Value]) -> Result<Vec<String>> {
-    let files = plot_files(records)?;
+pub fn write_plots(dir: &Path, records: &[Value], budget: Option<f64>) -> Result<Vec<String>> {
+    let files = plot_files(records, budget)?;
     if !files.is_empty() {
         let named: Vec<(&str, Vec<u8>)> = files
             .iter()
@@ -46,8 +47,9 @@ pub fn write_plots(dir: &Path, records: &[Value]) -> Result<Vec<String>> {
     Ok(files.into_iter().map(|(name, _)| name).collect())
 }
 
-/// The plots [`write_plots`] writes, as (file name, SVG bytes), without writing them.
-pub fn plot_files(records: &[Value]) -> Result<Vec<(String, Vec<u8>)>> {
+/// The plots [`write_plots`] writes, as (file name, SVG bytes), without writing them;
+/// `budget` is the sweep's `area_budget_mm2`.
+pub fn plot_files(records: &[Value], budget: Option<f64>) -> Result<Vec<(String, Vec<u8>)>> {
     let mut scenes: BTreeMap<String, Vec<Point>> = BTreeMap::new();
     for p in records.iter().filter_map(Point::from_record) {
         scenes.entry(p.scene.clone()).or_default().push(p);
@@ -57,7 +59,14 @@ pub fn plot_files(records: &[Value]) -> Result<Vec<(String, Vec<u8>)>> {
     for (scene, points) in &scenes {
         let stem = unique_stem(scene, &mut stems);
         let plots = [
-            ("tradeoff", tradeoff(scene, points)),
+            (
+                "tradeoff",
+                error_against(scene, points, Against::Cycles, budget),
+            ),
+            (
+                "error_vs_energy",
+                error_against(scene, points, Against::Energy, budget),
+            ),
             ("cycles_vs_k", cycles_vs_k(scene, points)),
             ("cycles_vs_units", cycles_vs_units(scene, points)),
             ("utilisation", utilisation(scene, points)),
@@ -122,6 +131,10 @@ struct Point {
     units: Vec<UnitTime>,
     /// RMS colour error 255·10^(−PSNR/20) [0-255]; `None` without a reference.
     rms_error: Option<f64>,
+    /// The frame's energy \[pJ\]; `None` without a cost section.
+    energy_pj: Option<f64>,
+    /// The unit's area \[mm²\]; `None` without a cost section.
+    area_mm2: Option<f64>,
 }
 
 /// One unit's cycle accounting; busy + starved + blocked = the frame's cycles.
@@ -180,6 +193,8 @@ impl Point {
             cycles: cycles.filter(|&c| c > 0),
             units,
             rms_error,
+            energy_pj: report.pointer("/cost/energy_pj").and_then(Value::as_f64),
+            area_mm2: report.pointer("/cost/area_mm2").and_then(Value::as_f64),
         })
     }
 
@@ -231,6 +246,8 @@ const PALETTE: [RGBColor; 8] = [
     RGBColor(188, 189, 34),
     RGBColor(23, 190, 207),
 ];
+/// Points over a sweep's area budget.
+const OVER_BUDGET: RGBColor = RGBColor(190, 190, 190);
 const BUSY: RGBColor = RGBColor(44, 160, 44);
 const STARVED: RGBColor = RGBColor(199, 199, 199);
 const BLOCKED: RGBColor = RGBColor(214, 39, 40);
@@ -354,31 +371,69 @@ fn log_axis(range: Range<f64>) -> WithKeyPoints<LogCoord<f64>> {
         .with_light_points(light)
 }
 
-/// Plot 1: image error against cycles, per path, with the Pareto front over all paths.
-fn tradeoff(scene: &str, points: &[Point]) -> Plot {
+/// What an error plot puts on its x axis.
+#[derive(Clone, Copy)]
+enum Against {
+    /// Simulated frame time.
+    Cycles,
+    /// The frame's energy (report.json `cost`).
+    Energy,
+}
+
+impl Against {
+    fn x(self, p: &Point) -> Option<f64> {
+        match self {
+            Against::Cycles => p.cycles.map(|c| c as f64),
+            Against::Energy => p.energy_pj.filter(|e| *e > 0.0),
+        }
+    }
+}
+
+/// Plot 1: image error against cycles (`Against::Cycles`, `tradeoff_*`) or energy
+/// (`error_vs_energy_*`), one series per path. Without an area budget, the Pareto front over
+/// both paths is circled; with one, points whose unit is larger are drawn grey and left
+/// out, and each path gets its own front among the configurations within the budget.
+fn error_against(scene: &str, points: &[Point], against: Against, budget: Option<f64>) -> Plot {
     let pts: Vec<(&Point, (f64, f64))> = points
         .iter()
-        .filter_map(|p| Some((p, (p.cycles? as f64, p.rms_error?))))
+        .filter_map(|p| Some((p, (against.x(p)?, p.rms_error?))))
         .collect();
     if pts.is_empty() {
         return None;
     }
     let xy: Vec<(f64, f64)> = pts.iter().map(|&(_, xy)| xy).collect();
-    let front = pareto_front(&xy);
+    let within = |p: &Point| match (budget, p.area_mm2) {
+        (None, _) => true,
+        (Some(b), Some(a)) => a <= b,
+        (Some(_), None) => false,
+    };
     let mut by_path: BTreeMap<&str, Vec<usize>> = BTreeMap::new();
     for (i, (p, _)) in pts.iter().enumerate() {
         by_path.entry(p.path.as_str()).or_default().push(i);
     }
-    let style = |path: &str, s: usize| match path {
-        "lembo" => (LEMBO, Mark::Dot),
-        "triangle" => (TRIANGLE, Mark::Triangle),
-        _ => (PALETTE[s % PALETTE.len()], MARKS[(s + 2) % MARKS.len()]),
+    // The fronts: one over both paths, or one per path within the budget.
+    let front_of = |members: &[usize]| -> Vec<usize> {
+        let kept: Vec<usize> = members
+            .iter()
+            .copied()
+            .filter(|&i| within(pts[i].0))
+            .collect();
+        let sub: Vec<(f64, f64)> = kept.iter().map(|&i| xy[i]).collect();
+        pareto_front(&sub).into_iter().map(|j| kept[j]).collect()
+    };
+    let fronts: Vec<(RGBColor, Vec<usize>)> = match budget {
+        None => vec![(BLACK, front_of(&(0..pts.len()).collect::<Vec<_>>()))],
+        Some(_) => by_path
+            .iter()
+            .enumerate()
+            .map(|(s, (path, members))| (path_style(path, s).0, front_of(members)))
+            .collect(),
     };
     let mut entries: Vec<Entry> = by_path
         .keys()
         .enumerate()
         .map(|(s, path)| {
-            let (color, mark) = style(path, s);
+            let (color, mark) = path_style(path, s);
             Entry {
                 mark: Some(mark),
                 line: false,
@@ -392,18 +447,50 @@ fn tradeoff(scene: &str, points: &[Point]) -> Plot {
             }
         })
         .collect();
-    entries.push(Entry {
-        mark: Some(Mark::Ring),
-        line: true,
-        color: BLACK,
-        label: "Pareto front over both paths (circled): no other point has both fewer cycles and less error".into(),
-        note: None,
-    });
-    let title = format!("{scene}: image error against cycles");
+    let measure = match against {
+        Against::Cycles => "cycles",
+        Against::Energy => "energy",
+    };
+    match budget {
+        None => entries.push(Entry {
+            mark: Some(Mark::Ring),
+            line: true,
+            color: BLACK,
+            label: format!("Pareto front over both paths (circled): no other point has both less {measure} and less error"),
+            note: None,
+        }),
+        Some(b) => {
+            entries.push(Entry {
+                mark: Some(Mark::Ring),
+                line: true,
+                color: BLACK,
+                label: format!("each path's Pareto front (circled) among configurations of at most {} mm²", fmt_num(b)),
+                note: None,
+            });
+            entries.push(Entry {
+                mark: Some(Mark::Dot),
+                line: false,
+                color: OVER_BUDGET,
+                label: format!("over the area budget of {} mm² (report.json cost.area_mm2)", fmt_num(b)),
+                note: None,
+            });
+        }
+    }
+    let title = match budget {
+        None => format!("{scene}: image error against {measure}"),
+        Some(b) => format!(
+            "{scene}: image error against {measure}, units within {} mm²",
+            fmt_num(b)
+        ),
+    };
+    let x_desc = match against {
+        Against::Cycles => "simulated frame time [cycles], log scale",
+        Against::Energy => "energy of the frame [pJ] (report.json cost), log scale",
+    };
     svg(plot_size(&entries), |root| {
         let (plot, legend) = root.split_vertically(CHART_HEIGHT);
         let mut chart = ChartBuilder::on(&plot)
-            .caption(&title, (FONT, 22))
+            .caption(&title, (FONT, 20))
             .margin(20)
             .x_label_area_size(50)
             .y_label_area_size(80)
@@ -413,7 +500,7 @@ fn tradeoff(scene: &str, points: &[Point]) -> Plot {
             )?;
         chart
             .configure_mesh()
-            .x_desc("simulated frame time [cycles], log scale")
+            .x_desc(x_desc)
             .y_desc("RMS colour error 255*10^(-PSNR/20) [0-255], log scale")
             .x_label_formatter(&|v| fmt_num(*v))
             .y_label_formatter(&|v| fmt_num(*v))
@@ -421,29 +508,32 @@ fn tradeoff(scene: &str, points: &[Point]) -> Plot {
             .axis_desc_style((FONT, 15))
             .draw()?;
 
-        // The front first, so the series' points are drawn over it.
-        let mut step = Vec::new();
-        for (j, &i) in front.iter().enumerate() {
-            step.push(xy[i]);
-            if let Some(&next) = front.get(j + 1) {
-                step.push((xy[next].0, xy[i].1));
+        // The fronts first, so the series' points are drawn over them.
+        for (color, front) in &fronts {
+            let mut step = Vec::new();
+            for (j, &i) in front.iter().enumerate() {
+                step.push(xy[i]);
+                if let Some(&next) = front.get(j + 1) {
+                    step.push((xy[next].0, xy[i].1));
+                }
             }
-        }
-        chart.draw_series(LineSeries::new(step, BLACK.stroke_width(1)))?;
-        for &i in &front {
-            root.draw(&Circle::new(
-                chart.backend_coord(&xy[i]),
-                9,
-                BLACK.stroke_width(2),
-            ))?;
+            chart.draw_series(LineSeries::new(step, color.stroke_width(1)))?;
+            for &i in front {
+                root.draw(&Circle::new(
+                    chart.backend_coord(&xy[i]),
+                    9,
+                    color.stroke_width(2),
+                ))?;
+            }
         }
         // A label once per text and place: a level repeated at nearly the same point (the
         // same k on two datapaths) would only smear.
         let mut labelled: Vec<(String, (i32, i32))> = Vec::new();
         for (s, (path, members)) in by_path.iter().enumerate() {
-            let (color, mark) = style(path, s);
+            let (color, mark) = path_style(path, s);
             for &i in members {
                 let at = chart.backend_coord(&xy[i]);
+                let color = if within(pts[i].0) { color } else { OVER_BUDGET };
                 draw_mark(root, at, mark, color)?;
                 let label = pts[i].0.level();
                 let near = |&(ref l, (x, y)): &(String, (i32, i32))| {
@@ -461,6 +551,15 @@ fn tradeoff(scene: &str, points: &[Point]) -> Plot {
         }
         draw_legend(&legend, &entries)
     })
+}
+
+/// A path's colour and marker in the error plots (`s`: its rank among the paths drawn).
+fn path_style(path: &str, s: usize) -> (RGBColor, Mark) {
+    match path {
+        "lembo" => (LEMBO, Mark::Dot),
+        "triangle" => (TRIANGLE, Mark::Triangle),
+        _ => (PALETTE[s % PALETTE.len()], MARKS[(s + 2) % MARKS.len()]),
+    }
 }
 
 /// Plot 2: cycles against k on the lembo path, one series per combination of the other
@@ -1061,9 +1160,62 @@ mod tests {
     }
 
     #[test]
+    fn an_area_budget_greys_larger_units_and_draws_a_front_per_path() {
+        // Error falls with k and n; area grows with the interval managers and rasterizers.
+        let mut records = Vec::new();
+        for (i, (path, level, area)) in [
+            ("lembo", 1.0, 4.0),
+            ("lembo", 0.5, 5.0),
+            ("lembo", 0.25, 9.0),
+            ("triangle", 4.0, 3.0),
+            ("triangle", 8.0, 5.5),
+            ("triangle", 16.0, 12.0),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let params = if path == "lembo" {
+                json!({"path": path, "k": level})
+            } else {
+                json!({"path": path, "tess": level as u64})
+            };
+            let mut r = record(
+                i as u64,
+                params,
+                Some(1000 + 100 * i as u64),
+                Some(30.0 + 2.0 * i as f64),
+            );
+            r["report"]["cost"] = json!({"area_mm2": area, "energy_pj": 1e6 * (1.0 + i as f64)});
+            records.push(r);
+        }
+        let files = plot_files(&records, Some(6.0)).unwrap();
+        let names: Vec<&str> = files.iter().map(|(n, _)| n.as_str()).collect();
+        assert!(names.contains(&"error_vs_energy_sphere24.svg"), "{names:?}");
+        for (name, svg) in &files {
+            if !(name.starts_with("tradeoff") || name.starts_with("error_vs_energy")) {
+                continue;
+            }
+            let svg = String::from_utf8(svg.clone()).unwrap();
+            assert!(has(&svg, "units within 6 mm²"), "{name}");
+            assert!(has(&svg, "over the area budget of 6 mm²"), "{name}");
+            assert!(
+                has(&svg, "each path&apos;s Pareto front") || has(&svg, "each path's Pareto front"),
+                "{name}"
+            );
+            // The two larger units are drawn grey.
+            assert!(svg.matches("#BEBEBE").count() >= 2, "{name}");
+        }
+        // Without a budget no point is grey and the front spans both paths.
+        let files = plot_files(&records, None).unwrap();
+        let svg = String::from_utf8(files[0].1.clone()).unwrap();
+        assert!(has(&svg, "Pareto front over both paths"));
+        assert!(!svg.contains("#BEBEBE"));
+    }
+
+    #[test]
     fn write_plots_draws_every_plot_a_timed_sweep_with_reference_supports() {
         let dir = tempfile::tempdir().unwrap();
-        let names = write_plots(dir.path(), &sweep()).unwrap();
+        let names = write_plots(dir.path(), &sweep(), None).unwrap();
         assert_eq!(
             names,
             [
@@ -1130,7 +1282,7 @@ mod tests {
             .collect();
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join("plots");
-        assert!(write_plots(&out, &records).unwrap().is_empty());
+        assert!(write_plots(&out, &records, None).unwrap().is_empty());
         assert!(!out.exists());
     }
 
@@ -1142,7 +1294,7 @@ mod tests {
             .map(|(i, &(k, c))| record(i as u64, json!({"path": "lembo", "k": k}), Some(c), None))
             .collect();
         let dir = tempfile::tempdir().unwrap();
-        let names = write_plots(dir.path(), &records).unwrap();
+        let names = write_plots(dir.path(), &records, None).unwrap();
         assert_eq!(
             names,
             ["cycles_vs_k_sphere24.svg", "utilisation_sphere24.svg"]
@@ -1159,7 +1311,7 @@ mod tests {
             json!({"report": {"settings": {}}}),
         ];
         let dir = tempfile::tempdir().unwrap();
-        assert!(write_plots(dir.path(), &records).unwrap().is_empty());
+        assert!(write_plots(dir.path(), &records, None).unwrap().is_empty());
     }
 
     #[test]
@@ -1178,7 +1330,7 @@ mod tests {
             Some(40.0),
         );
         let dir = tempfile::tempdir().unwrap();
-        let names = write_plots(dir.path(), &[a, b]).unwrap();
+        let names = write_plots(dir.path(), &[a, b], None).unwrap();
         assert_eq!(
             names,
             [

@@ -128,6 +128,30 @@ fn operations_are_charged_to_the_kinds_that_do_them() {
     assert_eq!(OPS.len(), 9);
 }
 
+/// Every shipped technology file is valid, and a newer node costs less area and energy
+/// for the same frame.
+#[test]
+fn every_shipped_technology_file_loads() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut names = Vec::new();
+    for entry in std::fs::read_dir(root.join("sim/tech")).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "json") {
+            let t = lembo_sim::cost::tech::Tech::load(&path).unwrap();
+            names.push(t.name);
+        }
+    }
+    names.sort();
+    assert_eq!(names, ["45nm", "7nm"]);
+    let t45 = lembo_sim::cost::tech::Tech::default_45nm();
+    let t7 = lembo_sim::cost::tech::Tech::load(&root.join("sim/tech/7nm.json")).unwrap();
+    for op in OPS {
+        let (e45, a45) = t45.op(Datapath::F32, op);
+        let (e7, a7) = t7.op(Datapath::F32, op);
+        assert!(e7 < e45 && a7 < a45, "{op:?}");
+    }
+}
+
 /// A technology file with a bad figure is refused naming the field, exit 2, nothing
 /// written; `--tech` in functional mode is refused as `--arch` is.
 #[test]

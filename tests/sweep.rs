@@ -280,6 +280,10 @@ fn bad_specs_are_refused_before_any_run() {
             "field `grid[1].arch.rop.count[1]` = 0",
         ),
         (
+            r#""grid": [{"arch.interval_manager.count": [2, 65]}]"#,
+            "field `grid[0].arch.interval_manager.count[1]` = 65",
+        ),
+        (
             r#""points": [{"arch.links.rasterizer_to_rop.fifo_depth": 0}]"#,
             "field `points[0].arch.links.rasterizer_to_rop.fifo_depth` = 0",
         ),
@@ -359,7 +363,14 @@ fn every_committed_spec_is_valid() {
     names.sort();
     assert_eq!(
         names,
-        ["perspective", "precision", "smoke", "tradeoff", "units"]
+        [
+            "equal_area",
+            "perspective",
+            "precision",
+            "smoke",
+            "tradeoff",
+            "units"
+        ]
     );
 }
 

@@ -281,6 +281,22 @@ mod tests {
     }
 
     #[test]
+    fn an_area_budget_is_a_positive_area_of_a_timed_sweep() {
+        let s = spec(r#""area_budget_mm2": 6.5, "points": [{}]"#).unwrap();
+        assert_eq!(s.area_budget_mm2, Some(6.5));
+        for bad in ["0", "-1", "1e999"] {
+            let e = spec(&format!(r#""area_budget_mm2": {bad}, "points": [{{}}]"#)).unwrap_err();
+            assert_eq!(field_of(e), "area_budget_mm2", "{bad}");
+        }
+        let e = spec(r#""mode": "functional", "area_budget_mm2": 6, "points": [{}]"#).unwrap_err();
+        assert!(e.to_string().contains("mode timed"), "{e}");
+        assert_eq!(field_of(e), "area_budget_mm2");
+        // The interval managers and MinMax units are architecture counts like any other.
+        let s = spec(r#""grid": [{"arch.interval_manager.count": [1, 2, 4]}]"#).unwrap();
+        assert_eq!(s.points.len(), 3);
+    }
+
+    #[test]
     fn arch_values_are_canonical_and_unknown_fields_named() {
         let s = spec(r#""points": [{"arch.clock_mhz": 400, "arch.segmenter.count": 4}]"#).unwrap();
         assert_eq!(

@@ -172,7 +172,12 @@ pub(super) fn write_final(
         .collect();
     // The plots are drawn first so that the records, the table and the plots are one
     // atomic set.
-    let plots = crate::plot::plot_files(&records)?;
+    // The budget as the spec states it (parsed and checked before any run; sweep-merge
+    // reads the shards' spec).
+    let budget = serde_json::from_slice::<Value>(spec_text)
+        .ok()
+        .and_then(|v| v.get("area_budget_mm2").and_then(Value::as_f64));
+    let plots = crate::plot::plot_files(&records, budget)?;
     let mut files: Vec<(&str, Vec<u8>)> = vec![
         (RESULTS_JSONL, joined(lines)),
         (RESULTS_CSV, csv_bytes(&records)?),

@@ -29,6 +29,7 @@ pub(super) struct SpecFile {
     mode: ModeSpec,
     reference: Option<bool>,
     arch: Option<String>,
+    area_budget_mm2: Option<f64>,
     grid: Option<Vec<Params>>,
     points: Option<Vec<Params>>,
 }
@@ -166,6 +167,9 @@ pub struct Spec {
     pub reference: bool,
     /// The base architecture as the spec writes it; None for the embedded baseline.
     pub arch: Option<String>,
+    /// The area budget the plots hold the configurations to (report.json `cost.area_mm2`)
+    /// \[mm²\]; None for no budget.
+    pub area_budget_mm2: Option<f64>,
     /// The points, in expansion order.
     pub points: Vec<Point>,
     /// Every (point, scene) pair, point-major.
@@ -209,6 +213,25 @@ impl Spec {
                 f.arch.as_deref().unwrap_or_default(),
                 "only meaningful with mode timed",
             ));
+        }
+
+        if let Some(b) = f.area_budget_mm2 {
+            if mode == Mode::Functional {
+                return Err(Error::invalid(
+                    file,
+                    "area_budget_mm2",
+                    b,
+                    "only meaningful with mode timed (a functional run has no cost)",
+                ));
+            }
+            if !(b.is_finite() && b > 0.0) {
+                return Err(Error::invalid(
+                    file,
+                    "area_budget_mm2",
+                    b,
+                    "must be a finite area above 0 mm2",
+                ));
+            }
         }
 
         let mut ex = Expander {
@@ -263,6 +286,7 @@ impl Spec {
             mode,
             reference: f.reference.unwrap_or(true),
             arch: f.arch,
+            area_budget_mm2: f.area_budget_mm2,
             points: ex.points,
             runs,
             scenes: f.scenes,
