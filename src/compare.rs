@@ -21,8 +21,8 @@ use crate::datapath::Datapath;
 use crate::discoid::blend::BlendMode;
 use crate::error::{Error, Result};
 use crate::job::{
-    self, check_tess_range, check_triangle_budget, load_arch, render_reference, run_path, Mode,
-    Model, PathRun, PrimitivePath, RenderJob, MAX_TRIANGLES,
+    self, check_tess_range, check_triangle_budget, load_arch, render_reference, run_path, Given,
+    Mode, Model, PathRun, PrimitivePath, RenderJob, MAX_TRIANGLES,
 };
 use crate::lembo::tessellate::Tessellation;
 use crate::output::write_files;
@@ -102,6 +102,7 @@ impl CompareJob {
             blend: BlendMode::Rgba8,
             threshold: None,
             host_threads: self.host_threads,
+            given: Given::default(),
         }
     }
 }

@@ -110,6 +110,24 @@ pub struct RenderJob {
     /// Host threads the timed model's units are partitioned over (`--host-threads`, >= 1;
     /// no simulated result depends on it).
     pub host_threads: u32,
+    /// Which settings with a default the user gave, so that one that does not apply to the
+    /// scene is refused instead of ignored.
+    pub given: Given,
+}
+
+/// Which of `render`'s defaulted settings were given on the command line (`tess` and
+/// `threshold` are options and say so themselves). A setting given where it does not apply
+/// is refused, naming it and why (DESIGN.md §8), as a sweep refuses such a parameter.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Given {
+    /// `--k`.
+    pub k: bool,
+    /// `--perspective-tol`.
+    pub perspective_tol: bool,
+    /// `--path`.
+    pub path: bool,
+    /// `--blend`.
+    pub blend: bool,
 }
 
 /// Most host threads a timed run may use (`--host-threads`).
@@ -351,6 +369,7 @@ pub enum Route<'s> {
 impl<'s> Route<'s> {
     /// The route of `job` on `scene`; a tessellation must stay within [`MAX_TRIANGLES`].
     pub fn new(job: &RenderJob, scene: &'s Scene) -> Result<Self> {
+        check_applies(job, scene)?;
         if scene.discoid_count() > 0 {
             return Ok(Route::Discoids);
         }
@@ -363,6 +382,83 @@ impl<'s> Route<'s> {
             }
         })
     }
+}
+
+/// Refuses a setting the user gave that does not apply to `scene` or to the path: the
+/// discoid settings on a scene without discoids, the path and tessellation on a discoid
+/// scene, k and the perspective tolerance where no lembo is drawn.
+fn check_applies(job: &RenderJob, scene: &Scene) -> Result<()> {
+    let discoids = scene.discoid_count();
+    let curved = scene.lembo_count() > 0;
+    let lembos_drawn = if discoids > 0 {
+        curved
+    } else {
+        job.path == PrimitivePath::Lembo
+    };
+    let on_scene = if discoids > 0 {
+        format!(
+            "does not apply to {}, a scene of {discoids} {} discoids",
+            scene.name,
+            if curved { "curved" } else { "planar" }
+        )
+    } else {
+        format!("does not apply to {}, which has no discoids", scene.name)
+    };
+    let no_lembos = if discoids > 0 {
+        on_scene.clone()
+    } else {
+        "does not apply to the triangle path (it has no tolerance k)".to_string()
+    };
+    let given: [(&str, bool, String, bool, &String); 6] = [
+        (
+            "--path",
+            job.given.path,
+            job.path.name().into(),
+            discoids == 0,
+            &on_scene,
+        ),
+        (
+            "--tess",
+            job.tess.is_some(),
+            job.tess.unwrap_or_default().to_string(),
+            discoids == 0,
+            &on_scene,
+        ),
+        (
+            "--blend",
+            job.given.blend,
+            job.blend.name().into(),
+            discoids > 0,
+            &on_scene,
+        ),
+        (
+            "--threshold",
+            job.threshold.is_some(),
+            job.threshold.unwrap_or_default().to_string(),
+            discoids > 0,
+            &on_scene,
+        ),
+        (
+            "--k",
+            job.given.k,
+            job.k.to_string(),
+            lembos_drawn,
+            &no_lembos,
+        ),
+        (
+            "--perspective-tol",
+            job.given.perspective_tol,
+            "given".into(),
+            lembos_drawn,
+            &no_lembos,
+        ),
+    ];
+    for (flag, set, value, applies, why) in given {
+        if set && !applies {
+            return Err(Error::invalid(COMMAND_LINE, flag, value, why.as_str()));
+        }
+    }
+    Ok(())
 }
 
 /// One path's run on a loaded scene: what `render` writes, and what `compare` puts side by

@@ -4,9 +4,11 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use lembo_sim::compare::{run_compare, CompareJob, Tess};
 use lembo_sim::datapath::Datapath;
 use lembo_sim::discoid::blend::BlendMode;
-use lembo_sim::job::{self, run_render, PrimitivePath, RenderJob};
+use lembo_sim::job::{self, run_render, Given, PrimitivePath, RenderJob};
 use lembo_sim::raster::PerspectiveTol;
-use lembo_sim::sweep::{run_merge, run_sweep, MergeJob, Shard, SweepJob, SweepOutcome};
+use lembo_sim::sweep::{
+    run_merge, run_sweep, MergeJob, Shard, SweepJob, SweepOutcome, DEFAULT_K_PX,
+};
 use std::io::Write as _;
 use std::path::PathBuf;
 
@@ -146,14 +148,10 @@ struct RenderArgs {
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
     /// Tolerance k of the extreme method: the largest |y(u,v) - y_j| along a scanline's
-    /// curve and the largest x error of a subsegment, in pixels, in [0.0001, 64].
-    #[arg(
-        long,
-        value_name = "PX",
-        default_value_t = 0.5,
-        allow_negative_numbers = true
-    )]
-    k: f64,
+    /// curve and the largest x error of a subsegment, in pixels, in [0.0001, 64]; refused
+    /// where no lembo is drawn [default: 0.5].
+    #[arg(long, value_name = "PX", allow_negative_numbers = true)]
+    k: Option<f64>,
     /// Setup's perspective tolerance \[pixels\], or `off`: Setup splits a lembo until its
     /// rebuilt screen quadratics are within this distance of the true perspective projection,
     /// and splits and clips lembos at the near plane. `off` is the paper's Setup (six
@@ -193,13 +191,15 @@ struct RenderArgs {
     /// Override the scene's viewport, e.g. 1024x1024.
     #[arg(long, value_name = "WxH", value_parser = parse_viewport)]
     viewport: Option<(u32, u32)>,
-    /// Which primitives draw the scene's surfaces.
-    #[arg(long, value_enum, default_value = "lembo")]
-    path: PathArg,
+    /// Which primitives draw the scene's surfaces; refused on a discoid scene [default:
+    /// lembo].
+    #[arg(long, value_enum)]
+    path: Option<PathArg>,
     /// Precision of the discoid blend units in the ROP (scenes with discoids): rgba8 is the
-    /// paper's Table 1 packing in one 8-bit target; f16 and f32 are float targets.
-    #[arg(long, value_enum, default_value = "rgba8")]
-    blend: BlendArg,
+    /// paper's Table 1 packing in one 8-bit target; f16 and f32 are float targets. Refused
+    /// on a scene without discoids [default: rgba8].
+    #[arg(long, value_enum)]
+    blend: Option<BlendArg>,
     /// Discoid threshold t [world units]: fragments farther than t behind the depth pass's
     /// surface are not blended [default: the scene's discoid_threshold].
     #[arg(long, value_name = "T", allow_negative_numbers = true)]
@@ -306,7 +306,7 @@ fn default_render() -> RenderArgs {
     RenderArgs {
         scene: None,
         out: None,
-        k: 0.5,
+        k: None,
         perspective_tol: None,
         datapath: DatapathArg::F32,
         reference: false,
@@ -316,9 +316,9 @@ fn default_render() -> RenderArgs {
         trace_out: None,
         tech: None,
         viewport: None,
-        path: PathArg::Lembo,
+        path: None,
         tess: None,
-        blend: BlendArg::Rgba8,
+        blend: None,
         threshold: None,
         host_threads: 1,
     }
@@ -446,10 +446,16 @@ fn compare(args: CompareArgs) -> ExitCode {
 }
 
 fn render(args: RenderArgs) -> ExitCode {
+    let given = Given {
+        k: args.k.is_some(),
+        perspective_tol: args.perspective_tol.is_some(),
+        path: args.path.is_some(),
+        blend: args.blend.is_some(),
+    };
     let job = RenderJob {
         scene: args.scene,
         out: args.out,
-        k: args.k,
+        k: args.k.unwrap_or(DEFAULT_K_PX),
         perspective_tol: args.perspective_tol.unwrap_or_default(),
         datapath: datapath(args.datapath),
         reference: args.reference,
@@ -462,18 +468,19 @@ fn render(args: RenderArgs) -> ExitCode {
         arch: args.arch,
         trace_out: args.trace_out,
         tech: args.tech,
-        path: match args.path {
+        path: match args.path.unwrap_or(PathArg::Lembo) {
             PathArg::Lembo => PrimitivePath::Lembo,
             PathArg::Triangle => PrimitivePath::Triangle,
         },
         tess: args.tess,
-        blend: match args.blend {
+        blend: match args.blend.unwrap_or(BlendArg::Rgba8) {
             BlendArg::Rgba8 => BlendMode::Rgba8,
             BlendArg::F16 => BlendMode::F16,
             BlendArg::F32 => BlendMode::F32,
         },
         threshold: args.threshold,
         host_threads: args.host_threads,
+        given,
     };
     match run_render(&job) {
         Ok(out) => {

@@ -744,6 +744,90 @@ fn bad_discoid_flags_are_refused() {
     assert_refused(&["render", s, "--reference", "--out", "o"], "--reference");
 }
 
+/// One rule for settings that do not apply (DESIGN.md §8): refused naming the flag and
+/// why, exit 2, nothing written; as a sweep refuses such a parameter.
+#[test]
+fn flags_that_do_not_apply_are_refused_naming_why() {
+    let path = |name: &str| manifest().join("traces").join(name);
+    let (bunny, planar, curved) = (
+        path("bunny.json"),
+        path("bunny_discoids.json"),
+        path("discoid_sphere20.json"),
+    );
+    let (b, p, c) = (
+        bunny.to_str().unwrap(),
+        planar.to_str().unwrap(),
+        curved.to_str().unwrap(),
+    );
+    for (args, flag, why) in [
+        (
+            vec![b, "--blend", "f16"],
+            "--blend",
+            "which has no discoids",
+        ),
+        (
+            vec![b, "--threshold", "0.1"],
+            "--threshold",
+            "which has no discoids",
+        ),
+        (vec![p, "--path", "triangle"], "--path", "planar discoids"),
+        (vec![p, "--path", "lembo"], "--path", "planar discoids"),
+        (
+            vec![c, "--path", "triangle", "--tess", "2"],
+            "--path",
+            "curved discoids",
+        ),
+        (vec![p, "--k", "0.3"], "--k", "planar discoids"),
+        (
+            vec![b, "--path", "triangle", "--k", "0.3"],
+            "--k",
+            "triangle path",
+        ),
+        (
+            vec![b, "--path", "triangle", "--perspective-tol", "off"],
+            "--perspective-tol",
+            "triangle path",
+        ),
+    ] {
+        let mut full = vec!["render"];
+        full.extend(args);
+        full.extend(["--out", "o"]);
+        assert_refused(&full, &format!("field `{flag}`"));
+        assert_refused(&full, why);
+    }
+    // Where they apply they are taken: k on curved discoids, the path on a surface scene.
+    let dir = tempfile::tempdir().unwrap();
+    for args in [
+        vec![
+            "render",
+            c,
+            "--k",
+            "0.3",
+            "--mode",
+            "functional",
+            "--out",
+            "o1",
+        ],
+        vec![
+            "render",
+            b,
+            "--path",
+            "lembo",
+            "--mode",
+            "functional",
+            "--out",
+            "o2",
+        ],
+    ] {
+        let out = run(&args, dir.path());
+        assert!(
+            out.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+}
+
 #[cfg(unix)]
 #[test]
 fn endless_input_files_are_refused_not_read_forever() {

@@ -41,6 +41,7 @@ fn job(k: f64, perspective_tol: PerspectiveTol, datapath: Datapath) -> RenderJob
         blend: BlendMode::Rgba8,
         threshold: None,
         host_threads: 1,
+        given: Default::default(),
     }
 }
 

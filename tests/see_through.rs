@@ -169,6 +169,7 @@ fn render_reports_see_through_in_both_reports() {
         blend: BlendMode::Rgba8,
         threshold: None,
         host_threads: 1,
+        given: Default::default(),
     };
     let out = run_render(&job).unwrap();
     let accuracy = out.report.accuracy.as_ref().unwrap();

@@ -12,7 +12,7 @@ use crate::datapath::Datapath;
 use crate::discoid::blend::BlendMode;
 use crate::discoid::render::check_scene;
 use crate::error::{parent_dir, read_text_file, Error, Result};
-use crate::job::{check_triangle_budget, run_path, Mode, PrimitivePath, RenderJob};
+use crate::job::{check_triangle_budget, run_path, Given, Mode, PrimitivePath, RenderJob};
 use crate::raster::PerspectiveTol;
 use crate::reference::oracle::ReferenceImage;
 use crate::report::Report;
@@ -287,6 +287,7 @@ pub(super) fn render_job(
         blend: BlendMode::Rgba8,
         threshold: None,
         host_threads,
+        given: Given::default(),
     };
     for s in &point.settings {
         match s {
