@@ -40,7 +40,7 @@ use std::path::{Path, PathBuf};
 /// The largest level `--tess auto` tries.
 pub const MAX_AUTO_TESS: u32 = 64;
 /// Version of the `compare.json` layout.
-pub const COMPARE_SCHEMA_VERSION: u32 = 1;
+pub const COMPARE_SCHEMA_VERSION: u32 = 2;
 
 /// How the tessellation level is chosen.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -144,9 +144,15 @@ pub struct Ratios {
     pub cycles_per_lembo: f64,
     /// Frame cycles per triangle \[cycles\].
     pub cycles_per_triangle: f64,
-    /// cycles_per_lembo / cycles_per_triangle: how many triangles one lembo costs, for the
-    /// same surface, hence the same screen area (the paper claims 2-3).
-    pub lembo_cost_in_triangles: f64,
+    /// cycles_per_lembo / cycles_per_triangle: a ratio per primitive. It is the paper's
+    /// "a lembo costs 2-3 triangles" only at tessellation 1, where a triangle spans its
+    /// lembo's corners; at level n a lembo's surface is n² triangles.
+    pub lembo_over_triangle_cycles_per_primitive: f64,
+    /// Frame cycles per covered pixel of the lembo path \[cycles\]; null when none is
+    /// covered.
+    pub lembo_cycles_per_covered_pixel: Option<f64>,
+    /// Frame cycles per covered pixel of the triangle path \[cycles\].
+    pub triangle_cycles_per_covered_pixel: Option<f64>,
     /// Triangle frame cycles over lembo frame cycles.
     pub triangle_over_lembo_cycles: f64,
     /// Triangle primitive bytes over lembo primitive bytes.
@@ -437,6 +443,11 @@ fn images(
     ]
 }
 
+/// Frame cycles over the pixels a report's frame covered.
+fn per_pixel(cycles: f64, r: &Report) -> Option<f64> {
+    (r.counts.pixels_covered > 0).then(|| cycles / r.counts.pixels_covered as f64)
+}
+
 fn ratios(arch: Option<&ArchConfig>, lembo: &Report, triangle: &Report) -> Option<Ratios> {
     let (cl, ct) = (lembo.cycles.as_ref()?, triangle.cycles.as_ref()?);
     let (nl, nt) = (lembo.primitives.count, triangle.primitives.count);
@@ -450,7 +461,9 @@ fn ratios(arch: Option<&ArchConfig>, lembo: &Report, triangle: &Report) -> Optio
         arch: arch.map(|a| a.name.clone()).unwrap_or_default(),
         cycles_per_lembo: per_lembo,
         cycles_per_triangle: per_triangle,
-        lembo_cost_in_triangles: per_lembo / per_triangle,
+        lembo_over_triangle_cycles_per_primitive: per_lembo / per_triangle,
+        lembo_cycles_per_covered_pixel: per_pixel(cl_total, lembo),
+        triangle_cycles_per_covered_pixel: per_pixel(ct_total, triangle),
         triangle_over_lembo_cycles: ct_total / cl_total,
         triangle_over_lembo_bytes: triangle.primitives.bytes as f64
             / lembo.primitives.bytes.max(1) as f64,
@@ -497,7 +510,7 @@ pub fn table(r: &CompareReport) -> String {
     both(&mut t, "primitive bytes", &|r| {
         r.primitives.bytes.to_string()
     });
-    both(&mut t, "cycles", &|r| {
+    both(&mut t, "cycles per frame", &|r| {
         r.cycles
             .as_ref()
             .map_or_else(|| "-".into(), |c| c.total.to_string())
@@ -534,14 +547,30 @@ pub fn table(r: &CompareReport) -> String {
         }
     }
     if let Some(x) = &r.ratios {
+        let pixel = |c: Option<f64>| c.map_or_else(|| "-".into(), |c| format!("{c:.3}"));
+        row(
+            &mut t,
+            "cycles per primitive",
+            format!("{:.1}", x.cycles_per_lembo),
+            format!("{:.2}", x.cycles_per_triangle),
+        );
+        row(
+            &mut t,
+            "cycles per covered pixel",
+            pixel(x.lembo_cycles_per_covered_pixel),
+            pixel(x.triangle_cycles_per_covered_pixel),
+        );
         let _ = writeln!(
             t,
-            "one lembo costs {:.2} triangles ({:.1} cycles per lembo, {:.2} per triangle); triangle/lembo cycles {:.2}, bytes {:.2}",
-            x.lembo_cost_in_triangles,
-            x.cycles_per_lembo,
-            x.cycles_per_triangle,
+            "triangle/lembo: cycles per frame {:.2}, primitive bytes {:.2}; lembo/triangle cycles per primitive {:.2} ({})",
             x.triangle_over_lembo_cycles,
-            x.triangle_over_lembo_bytes
+            x.triangle_over_lembo_bytes,
+            x.lembo_over_triangle_cycles_per_primitive,
+            if r.tess.level == 1 {
+                "at n = 1 a triangle spans its lembo's corners: the paper's \"a lembo costs 2-3 triangles\" compares this".to_string()
+            } else {
+                format!("per primitive, not per surface: at n = {} a lembo's surface is {} triangles", r.tess.level, r.tess.level * r.tess.level)
+            }
         );
     }
     if r.tess.auto {

@@ -596,7 +596,18 @@ fn compare_writes_every_file_and_both_reports() {
             <= target
     );
     assert!(c["triangle"]["accuracy"]["max_scanline_deviation_px"].is_null());
-    assert!(c["ratios"]["lembo_cost_in_triangles"].as_f64().unwrap() > 0.0);
+    assert!(
+        c["ratios"]["lembo_over_triangle_cycles_per_primitive"]
+            .as_f64()
+            .unwrap()
+            > 0.0
+    );
+    assert!(
+        c["ratios"]["lembo_cycles_per_covered_pixel"]
+            .as_f64()
+            .unwrap()
+            > 0.0
+    );
     let montage = image::open(dir.path().join("c/montage.png")).unwrap();
     assert!(montage.width() >= 5 * 160 && montage.height() > 160);
 }

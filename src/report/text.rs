@@ -83,7 +83,12 @@ impl Report {
 
     /// The counters of the path that ran.
     fn write_counts(&self, t: &mut String) {
-        let _ = writeln!(t, "\ncounts (functional model)");
+        let heading = if self.cycles.is_some() {
+            "counts (timed pipeline, summed over its units: the same as the functional model's except fragments_passed_depth, the depth tests passed in the order the ROPs met the fragments)"
+        } else {
+            "counts (functional model)"
+        };
+        let _ = writeln!(t, "\n{heading}");
         if let Ok(serde_json::Value::Object(map)) = serde_json::to_value(self.counts) {
             let triangle = self.settings.path == "triangle";
             for (k, v) in map {
