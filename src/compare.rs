@@ -70,6 +70,8 @@ pub struct CompareJob {
     pub arch: Option<PathBuf>,
     /// Technology file; None for the embedded `sim/tech/45nm.json`.
     pub tech: Option<PathBuf>,
+    /// Run even when the memory estimate exceeds the memory available.
+    pub no_memory_check: bool,
     /// Viewport override (width, height) \[pixels\].
     pub viewport: Option<(u32, u32)>,
     /// Reference samples per pixel side for reference.png.
@@ -103,6 +105,7 @@ impl CompareJob {
             threshold: None,
             host_threads: self.host_threads,
             given: Given::default(),
+            no_memory_check: self.no_memory_check,
         }
     }
 }
@@ -262,6 +265,9 @@ fn auto_level(
     }
 }
 
+/// A path's image and error map kept until the end of a compare \[bytes per pixel\].
+const BYTES_PER_PIXEL_IMAGES: f64 = 6.0;
+
 /// Runs a compare to completion: nothing is written unless everything succeeded.
 pub fn run_compare(job: &CompareJob) -> Result<CompareOutput> {
     let lembo_job = job.render_job(PrimitivePath::Lembo, None);
@@ -270,6 +276,8 @@ pub fn run_compare(job: &CompareJob) -> Result<CompareOutput> {
         check_tess_range(n)?;
     }
     let scene = job::load_scene(&lembo_job)?;
+    // Both paths' images and error maps are kept beside the reference's.
+    job::check_memory(&lembo_job, &scene, 2.0 * BYTES_PER_PIXEL_IMAGES)?;
     if let Tess::Level(n) = job.tess {
         check_triangle_budget(&scene, n)?;
     }

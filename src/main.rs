@@ -214,6 +214,10 @@ struct RenderArgs {
     /// the run instantiates.
     #[arg(long, value_name = "N", default_value_t = 1)]
     host_threads: u32,
+    /// Run even when the memory estimate for this viewport is above the memory the machine
+    /// has available (a run that large is refused before it starts otherwise).
+    #[arg(long)]
+    no_memory_check: bool,
 }
 
 #[derive(Args)]
@@ -267,6 +271,10 @@ struct CompareArgs {
     /// most the unit count of the smaller path (the triangle path's).
     #[arg(long, value_name = "N", default_value_t = 1)]
     host_threads: u32,
+    /// Run even when the memory estimate for this viewport is above the memory the machine
+    /// has available (a run that large is refused before it starts otherwise).
+    #[arg(long)]
+    no_memory_check: bool,
 }
 
 fn parse_perspective_tol(s: &str) -> Result<PerspectiveTol, String> {
@@ -321,6 +329,7 @@ fn default_render() -> RenderArgs {
         blend: None,
         threshold: None,
         host_threads: 1,
+        no_memory_check: false,
     }
 }
 
@@ -431,6 +440,7 @@ fn compare(args: CompareArgs) -> ExitCode {
         datapath: datapath(args.datapath),
         arch: args.arch,
         tech: args.tech,
+        no_memory_check: args.no_memory_check,
         viewport: args.viewport,
         supersample: args.supersample,
         host_threads: args.host_threads,
@@ -481,6 +491,7 @@ fn render(args: RenderArgs) -> ExitCode {
         threshold: args.threshold,
         host_threads: args.host_threads,
         given,
+        no_memory_check: args.no_memory_check,
     };
     match run_render(&job) {
         Ok(out) => {

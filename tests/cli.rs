@@ -858,3 +858,38 @@ fn endless_input_files_are_refused_not_read_forever() {
         "larger than",
     );
 }
+
+/// A render estimated to need more memory than the machine has is refused before it starts,
+/// naming `--viewport` and the estimate (a 16384x16384 frame with its reference needs about
+/// 50 GiB); below that, the estimate is printed before a large run.
+#[test]
+fn a_run_larger_than_memory_is_refused_before_it_starts() {
+    let available = std::fs::read_to_string("/proc/meminfo")
+        .ok()
+        .and_then(|t| {
+            let line = t
+                .lines()
+                .find(|l| l.starts_with("MemAvailable:"))?
+                .to_string();
+            line.split_whitespace().nth(1)?.parse::<f64>().ok()
+        })
+        .map(|kib| kib * 1024.0);
+    match available {
+        Some(bytes) if bytes < 40e9 => {
+            let bunny = manifest().join("traces/bunny.json");
+            let args = [
+                "render",
+                bunny.to_str().unwrap(),
+                "--viewport",
+                "16384x16384",
+                "--reference",
+                "--out",
+                "o",
+            ];
+            assert_refused(&args, "field `--viewport` = 16384x16384");
+            assert_refused(&args, "GiB (estimate)");
+            assert_refused(&args, "--no-memory-check");
+        }
+        _ => eprintln!("skipped: this machine has 40 GB or more available (or no /proc/meminfo)"),
+    }
+}

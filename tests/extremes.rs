@@ -53,6 +53,7 @@ fn job(path: PrimitivePath, datapath: Datapath, k: f64, mode: Mode) -> RenderJob
         threshold: None,
         host_threads: 1,
         given: Default::default(),
+        no_memory_check: false,
     }
 }
 

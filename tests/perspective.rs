@@ -42,6 +42,7 @@ fn job(k: f64, perspective_tol: PerspectiveTol, datapath: Datapath) -> RenderJob
         threshold: None,
         host_threads: 1,
         given: Default::default(),
+        no_memory_check: false,
     }
 }
 

@@ -170,6 +170,7 @@ fn render_reports_see_through_in_both_reports() {
         threshold: None,
         host_threads: 1,
         given: Default::default(),
+        no_memory_check: false,
     };
     let out = run_render(&job).unwrap();
     let accuracy = out.report.accuracy.as_ref().unwrap();

@@ -288,6 +288,7 @@ pub(super) fn render_job(
         threshold: None,
         host_threads,
         given: Given::default(),
+        no_memory_check: false,
     };
     for s in &point.settings {
         match s {
