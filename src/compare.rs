@@ -25,7 +25,7 @@ use crate::job::{
     Mode, Model, PathRun, PrimitivePath, RenderJob, MAX_TRIANGLES,
 };
 use crate::lembo::tessellate::Tessellation;
-use crate::output::write_files;
+use crate::output::{check_out_dir, write_set};
 use crate::raster;
 use crate::raster::PerspectiveTol;
 use crate::reference::metrics::Accuracy;
@@ -272,6 +272,9 @@ const BYTES_PER_PIXEL_IMAGES: f64 = 6.0;
 pub fn run_compare(job: &CompareJob) -> Result<CompareOutput> {
     let lembo_job = job.render_job(PrimitivePath::Lembo, None);
     lembo_job.validate()?;
+    if let Some(dir) = &job.out {
+        check_out_dir("--out", dir)?;
+    }
     if let Tess::Level(n) = job.tess {
         check_tess_range(n)?;
     }
@@ -336,7 +339,7 @@ pub fn run_compare(job: &CompareJob) -> Result<CompareOutput> {
         .out
         .clone()
         .unwrap_or_else(|| Path::new("out").join(&scene.name).join("compare"));
-    write_files(&dir, &files)?;
+    write_set(&dir, "compare", &files, &[])?;
     Ok(CompareOutput {
         report,
         table,

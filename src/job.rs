@@ -12,7 +12,7 @@ use crate::discoid::{self, blend::BlendMode};
 use crate::error::{Error, Result};
 use crate::lembo::tessellate::Tessellation;
 use crate::lembo::Lembo;
-use crate::output::write_paths;
+use crate::output::{check_out_dir, check_out_file, write_set};
 use crate::pipeline::{self, Cycle, CycleReport, SimOptions, Source};
 use crate::raster;
 use crate::raster::{PerspectiveTol, Tolerance};
@@ -194,7 +194,11 @@ impl RenderJob {
                 format!("must be in 1..={MAX_HOST_THREADS} host threads"),
             ));
         }
+        if let Some(dir) = &self.out {
+            check_out_dir("--out", dir)?;
+        }
         if let Some(path) = &self.trace_out {
+            check_out_file("--trace-out", path)?;
             if path.file_name().is_none() {
                 return Err(Error::invalid(
                     COMMAND_LINE,
@@ -1121,16 +1125,13 @@ pub fn run_render(job: &RenderJob) -> Result<RenderOutput> {
         .out
         .clone()
         .unwrap_or_else(|| Path::new("out").join(&scene.name));
-    // The timeline, beside the other outputs or where --trace-out says, is part of the same
-    // atomic set: a trace that cannot be written leaves no image or report either.
-    let mut paths: Vec<(PathBuf, &[u8])> = files
-        .iter()
-        .map(|(name, bytes)| (dir.join(name), bytes.as_slice()))
-        .collect();
+    // The timeline, where --trace-out says, is part of the same atomic set: a trace that
+    // cannot be written leaves no image or report either.
+    let mut elsewhere: Vec<(PathBuf, &[u8])> = Vec::new();
     if let (Some(path), Some(trace)) = (&job.trace_out, &run.trace) {
-        paths.push((path.clone(), trace.as_bytes()));
+        elsewhere.push((path.clone(), trace.as_bytes()));
     }
-    write_paths(&paths)?;
+    write_set(&dir, "render", &files, &elsewhere)?;
     Ok(RenderOutput {
         report,
         dir,

@@ -125,6 +125,95 @@ fn remove_stale_temporaries(dir: &Path) {
     }
 }
 
+/// The file in an output folder that lists the set of files the last run wrote there.
+pub const MANIFEST: &str = "manifest.json";
+
+/// Writes a run's set of outputs: `files` into `dir` with [`MANIFEST`] listing them, and
+/// `elsewhere` (a trace written where `--trace-out` says), as one atomic set; then removes
+/// from `dir` the files of the set this one replaces (the previous manifest's names that
+/// this set does not have), so that a folder holds exactly one run's files. Files the
+/// manifest never listed (the user's own) are left alone.
+pub fn write_set(
+    dir: &Path,
+    command: &str,
+    files: &[(&str, Vec<u8>)],
+    elsewhere: &[(PathBuf, &[u8])],
+) -> Result<()> {
+    let previous = previous_set(dir);
+    let names: Vec<&str> = files.iter().map(|(n, _)| *n).chain([MANIFEST]).collect();
+    let manifest = serde_json::to_vec_pretty(&serde_json::json!({
+        "command": command,
+        "files": names,
+    }))
+    .expect("the manifest serialises");
+    let mut paths: Vec<(PathBuf, &[u8])> = files
+        .iter()
+        .map(|(name, bytes)| (dir.join(name), bytes.as_slice()))
+        .collect();
+    paths.push((dir.join(MANIFEST), manifest.as_slice()));
+    paths.extend(elsewhere.iter().map(|(p, b)| (p.clone(), *b)));
+    write_paths(&paths)?;
+    for old in previous.iter().filter(|o| !names.contains(&o.as_str())) {
+        // Best effort: a file that cannot be removed stays, and the manifest no longer
+        // claims it.
+        let _ = std::fs::remove_file(dir.join(old));
+    }
+    Ok(())
+}
+
+/// The names the previous run's manifest in `dir` lists: plain file names only (a
+/// manifest is not trusted to name anything outside its folder).
+fn previous_set(dir: &Path) -> Vec<String> {
+    let Ok(text) = std::fs::read_to_string(dir.join(MANIFEST)) else {
+        return Vec::new();
+    };
+    let Ok(value) = serde_json::from_str::<serde_json::Value>(&text) else {
+        return Vec::new();
+    };
+    value["files"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .filter_map(|v| v.as_str())
+        .filter(|n| {
+            !n.is_empty()
+                && *n != "."
+                && *n != ".."
+                && !n.contains(['/', '\\'])
+                && Path::new(n).file_name().is_some()
+        })
+        .map(str::to_string)
+        .collect()
+}
+
+/// Refuses an output folder flag (`--out`) naming an existing file (exit 2), before any
+/// work.
+pub fn check_out_dir(flag: &str, dir: &Path) -> Result<()> {
+    if dir.exists() && !dir.is_dir() {
+        return Err(Error::invalid(
+            crate::job::COMMAND_LINE,
+            flag,
+            dir.display(),
+            "names an existing file; it must name a folder (created when missing)",
+        ));
+    }
+    Ok(())
+}
+
+/// Refuses an output file flag (`--trace-out`) naming an existing folder (exit 2), before
+/// any work.
+pub fn check_out_file(flag: &str, file: &Path) -> Result<()> {
+    if file.is_dir() {
+        return Err(Error::invalid(
+            crate::job::COMMAND_LINE,
+            flag,
+            file.display(),
+            "names an existing folder; it must name a file",
+        ));
+    }
+    Ok(())
+}
+
 /// Writes every `(name, bytes)` into `dir` as one atomic set (see the module doc).
 pub fn write_files(dir: &Path, files: &[(&str, Vec<u8>)]) -> Result<()> {
     let paths: Vec<(PathBuf, &[u8])> = files
@@ -146,6 +235,14 @@ pub fn write_paths(files: &[(PathBuf, &[u8])]) -> Result<()> {
         })?;
         let dir = parent_dir(path).to_path_buf();
         targets.push((dir, name.to_string_lossy().into_owned(), path.clone()));
+    }
+    // A target that is a folder would fail its rename after others were renamed: refused
+    // before anything is written.
+    if let Some((_, _, path)) = targets.iter().find(|(_, _, p)| p.is_dir()) {
+        return Err(Error::Write {
+            path: path.clone(),
+            source: std::io::Error::new(std::io::ErrorKind::IsADirectory, "is a folder"),
+        });
     }
     let mut staged = Staged::default();
     let mut dirs: Vec<PathBuf> = Vec::new();

@@ -86,7 +86,7 @@ fn temp(dir: &Path, name: &str, pid: u32) -> PathBuf {
     dir.join(format!(".{name}.{pid}.tmp"))
 }
 
-const OUTPUTS: [&str; 3] = ["image.png", "report.json", "report.txt"];
+const OUTPUTS: [&str; 4] = ["image.png", "manifest.json", "report.json", "report.txt"];
 
 fn stderr_of(child: Child) -> String {
     String::from_utf8_lossy(&child.wait_with_output().unwrap().stderr).into_owned()
@@ -168,16 +168,16 @@ fn sigint_and_sigterm_after_the_temporaries_are_written_remove_them() {
             .collect();
         let mut child = start_held(&["render", "--out", "out/run"], tmp.path());
         let pid = child.id();
-        // report.txt is the last file written before the wait.
+        // manifest.json is the last file written before the wait.
         wait_until("every temporary is written", &mut child, || {
-            temp(&dir, "report.txt", pid).exists()
+            temp(&dir, "manifest.json", pid).exists()
         });
         signal(&child, sig);
         let status = wait_exit(&mut child);
         let stderr = stderr_of(child);
         assert_eq!(status.code(), Some(code), "SIG{sig}: {stderr}");
         assert!(
-            stderr.contains("removed 3 temporary output files"),
+            stderr.contains("removed 4 temporary output files"),
             "{stderr}"
         );
         if earlier {
@@ -231,7 +231,7 @@ fn after_sigkill_a_rerun_removes_the_leftovers_and_writes_complete_outputs() {
     let mut child = start_held(&["render", "--out", "o"], tmp.path());
     let pid = child.id();
     wait_until("every temporary is written", &mut child, || {
-        temp(&dir, "report.txt", pid).exists()
+        temp(&dir, "manifest.json", pid).exists()
     });
     signal(&child, "KILL");
     assert_eq!(wait_exit(&mut child).code(), None, "killed by a signal");

@@ -49,7 +49,7 @@ fn bare_command_renders_the_default_scene_into_out_default() {
     );
     assert_eq!(
         files_in(&dir.path().join("out/default")),
-        ["image.png", "report.json", "report.txt"]
+        ["image.png", "manifest.json", "report.json", "report.txt"]
     );
     let report: serde_json::Value =
         serde_json::from_slice(&std::fs::read(dir.path().join("out/default/report.json")).unwrap())
@@ -104,6 +104,7 @@ fn reference_run_writes_the_accuracy_names_and_images() {
         [
             "error.png",
             "image.png",
+            "manifest.json",
             "reference.png",
             "report.json",
             "report.txt"
@@ -545,6 +546,7 @@ fn compare_writes_every_file_and_both_reports() {
             "compare.txt",
             "lembo.png",
             "lembo_error.png",
+            "manifest.json",
             "montage.png",
             "reference.png",
             "triangle.png",
@@ -891,5 +893,89 @@ fn a_run_larger_than_memory_is_refused_before_it_starts() {
             assert_refused(&args, "--no-memory-check");
         }
         _ => eprintln!("skipped: this machine has 40 GB or more available (or no /proc/meminfo)"),
+    }
+}
+
+/// One run, one set (DESIGN.md §7): a folder holds exactly the files of the last run that
+/// wrote it, listed in its manifest.json; a run that writes fewer files removes the ones
+/// of the set it replaces, and leaves files no run wrote.
+#[test]
+fn an_output_folder_holds_one_runs_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let sphere = manifest().join("traces/sphere24.json");
+    let s = sphere.to_str().unwrap();
+    let render = |extra: &[&str]| {
+        let mut args = vec!["render", s, "--viewport", "64x64", "--out", "o"];
+        args.extend(extra);
+        let out = run(&args, dir.path());
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    };
+    let o = dir.path().join("o");
+    render(&["--reference"]);
+    std::fs::write(o.join("notes.txt"), "mine").unwrap();
+    let with_reference = [
+        "error.png",
+        "image.png",
+        "manifest.json",
+        "notes.txt",
+        "reference.png",
+        "report.json",
+        "report.txt",
+    ];
+    assert_eq!(files_in(&o), with_reference);
+    render(&["--mode", "functional"]);
+    assert_eq!(
+        files_in(&o),
+        [
+            "image.png",
+            "manifest.json",
+            "notes.txt",
+            "report.json",
+            "report.txt"
+        ]
+    );
+    let m: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(o.join("manifest.json")).unwrap()).unwrap();
+    assert_eq!(m["command"], "render");
+    assert_eq!(
+        m["files"],
+        serde_json::json!(["image.png", "report.json", "report.txt", "manifest.json"])
+    );
+}
+
+/// Output paths that cannot be written are usage errors, refused before any work (exit
+/// 2), naming the flag: a folder flag naming a file, a file flag naming a folder.
+#[test]
+fn output_paths_of_the_wrong_kind_are_refused_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("file"), "x").unwrap();
+    std::fs::create_dir(dir.path().join("folder")).unwrap();
+    let smoke = manifest().join("sim/sweeps/smoke.json");
+    for (args, flag) in [
+        (vec!["render", "--out", "file"], "--out"),
+        (
+            vec!["render", "--out", "o", "--trace-out", "folder"],
+            "--trace-out",
+        ),
+        (vec!["compare", "--out", "file"], "--out"),
+        (
+            vec!["sweep", smoke.to_str().unwrap(), "--out", "file"],
+            "--out",
+        ),
+        (vec!["sweep-merge", "--out", "file", "folder"], "--out"),
+    ] {
+        let out = run(&args, dir.path());
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(
+            stderr.contains(&format!("field `{flag}`")),
+            "{args:?}: {stderr}"
+        );
+        assert_eq!(files_in(dir.path()), ["file", "folder"], "{args:?}");
+        assert!(files_in(&dir.path().join("folder")).is_empty());
     }
 }

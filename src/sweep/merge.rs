@@ -48,6 +48,7 @@ pub fn run_merge(job: &MergeJob) -> Result<MergeOutput> {
             "name at least one shard directory",
         ));
     }
+    crate::output::check_out_dir("--out", &job.out)?;
     let mut spec: Option<(Spec, Vec<u8>)> = None;
     let mut lines: BTreeMap<usize, (String, Value, String)> = BTreeMap::new();
     for shard in &job.shards {

@@ -224,6 +224,9 @@ impl SweepJob {
             }
         }
         Shard::new(self.shard.index, self.shard.count)?;
+        if let Some(dir) = &self.out {
+            crate::output::check_out_dir("--out", dir)?;
+        }
         if !(1..=MAX_HOST_THREADS).contains(&self.host_threads) {
             return Err(Error::invalid(
                 COMMAND_LINE,
