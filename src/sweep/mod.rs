@@ -394,6 +394,29 @@ mod tests {
     }
 
     #[test]
+    fn csv_writes_the_value_a_run_used_where_its_point_left_the_default() {
+        let records = vec![
+            serde_json::json!({"index": 0, "scene": "s", "params": {"path": "lembo", "k": 1.0},
+                "report": {"settings": {"path": "lembo", "k_px": 1.0, "tess": null,
+                    "datapath": "f32"}, "arch": {"rop": {"count": 4}}, "blend": null}}),
+            serde_json::json!({"index": 1, "scene": "s",
+                "params": {"path": "triangle", "arch.rop.count": 2},
+                "report": {"settings": {"path": "triangle", "k_px": null, "tess": 1,
+                    "datapath": "f32"}, "arch": {"rop": {"count": 2}}, "blend": null}}),
+        ];
+        let text = String::from_utf8(csv_bytes(&records).unwrap()).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        assert!(
+            lines[0].starts_with("index,scene,arch.rop.count,k,path,"),
+            "{}",
+            lines[0]
+        );
+        // The lembo run used 4 ROPs by default; the triangle run has no k to report.
+        assert!(lines[1].starts_with("0,s,4,1.0,lembo,"), "{}", lines[1]);
+        assert!(lines[2].starts_with("1,s,2,,triangle,"), "{}", lines[2]);
+    }
+
+    #[test]
     fn csv_leaves_absent_values_empty() {
         let records = vec![
             serde_json::json!({"index": 0, "scene": "s", "params": {"k": 1.0},

@@ -213,6 +213,23 @@ pub(super) fn cell(v: Option<&Value>) -> String {
     }
 }
 
+/// The value a run used for parameter `name` that its point did not set (the default), as
+/// its report echoes it; None where the parameter does not apply to the run (k on the
+/// triangle path) or the report does not say.
+fn used<'a>(report: &'a Value, name: &str) -> Option<&'a Value> {
+    let pointer = match name {
+        "path" => "/settings/path".to_string(),
+        "k" => "/settings/k_px".to_string(),
+        "perspective_tol" => "/settings/perspective_tol".to_string(),
+        "tess" => "/settings/tess".to_string(),
+        "datapath" => "/settings/datapath".to_string(),
+        "blend" => "/blend/mode".to_string(),
+        "threshold" => "/blend/threshold".to_string(),
+        arch => format!("/arch/{}", arch.strip_prefix("arch.")?.replace('.', "/")),
+    };
+    report.pointer(&pointer).filter(|v| !v.is_null())
+}
+
 /// `results.csv`: one row per record, columns as `sim/sweeps/README.md` lists them.
 pub fn csv_bytes(records: &[Value]) -> Result<Vec<u8>> {
     let mut params = BTreeSet::new();
@@ -260,7 +277,11 @@ pub fn csv_bytes(records: &[Value]) -> Result<Vec<u8>> {
         let report = &r["report"];
         let cycles = &report["cycles"];
         let mut row = vec![cell(r.get("index")), cell(r.get("scene"))];
-        row.extend(params.iter().map(|p| cell(r["params"].get(p))));
+        row.extend(
+            params
+                .iter()
+                .map(|p| cell(r["params"].get(p).or_else(|| used(report, p)))),
+        );
         row.push(cell(cycles.get("total")));
         row.push(cell(cycles.get("fps")));
         row.push(cell(cycles.get("bottleneck")));
