@@ -1,12 +1,14 @@
 //! The error image (`error.png`): where and how much a render differs from the reference.
 //!
-//! Each pixel shows the largest channel difference (0-255) through an "inferno"-like ramp,
-//! black for no difference through purple, red and orange to pale yellow at 255. Coverage
-//! disagreements are flat colours outside the ramp, so silhouette errors stand out:
-//! cyan where the render covers a pixel the reference does not (false positive), bright
-//! green where it misses one (false negative). A legend strip of [`legend_height`] pixels
-//! below the image shows the ramp with its ticks and the two swatches, in a built-in 5 x 7
-//! pixel font.
+//! Each pixel shows the largest channel difference (0-255 levels) through an
+//! "inferno"-like ramp on a logarithmic scale: black for no difference, then one ramp stop
+//! per doubling (1, 3, 7, 15, 31, 63, 127 and 255 levels) through purple, red and orange to
+//! pale yellow, so a 1-level error is a visible purple, not a black a linear scale would
+//! give it. Coverage disagreements are flat colours outside the ramp, so silhouette errors
+//! stand out: cyan where the render covers a pixel the reference does not (false positive,
+//! FP), bright green where it misses one (false negative, FN). A legend strip of
+//! [`legend_height`] pixels below the image shows the ramp with its ticks in levels and the
+//! two swatches, in a built-in 5 x 7 pixel font.
 
 use super::oracle::ReferenceImage;
 use crate::rop::framebuffer::{FrameBuffer, NO_PRIMITIVE};
@@ -22,11 +24,12 @@ const LEGEND_BACKGROUND: [u8; 3] = [24, 24, 24];
 const LEGEND_TEXT: [u8; 3] = [230, 230, 230];
 const LEGEND_FRAME: [u8; 3] = [128, 128, 128];
 
-/// Ramp stops at 0, 1/8, ..., 1 of the error range, after matplotlib's "inferno" with the
-/// first stop pure black.
+/// Ramp stops at errors of 0, 1, 3, 7, ..., 255 levels (2^k - 1 for stop k), after
+/// matplotlib's "inferno" with the first stop pure black and the second brightened to
+/// inferno's 0.2, so that one level reads against black.
 const RAMP: [[u8; 3]; 9] = [
     [0, 0, 0],
-    [40, 11, 84],
+    [87, 16, 110],
     [101, 21, 110],
     [159, 42, 99],
     [212, 72, 66],
@@ -75,9 +78,21 @@ pub fn error_heatmap(render: &FrameBuffer, reference: &ReferenceImage) -> RgbIma
     img
 }
 
-/// The ramp colour of a difference 0-255, interpolated linearly between stops.
+/// Where an error of `levels` (0-255, fractional on the legend) sits on the ramp, 0 to 1:
+/// log2(1 + levels) / 8.
+fn scale(levels: f64) -> f64 {
+    (1.0 + levels).log2() / (RAMP.len() - 1) as f64
+}
+
+/// The ramp colour of a difference 0-255 levels, on the logarithmic scale, interpolated
+/// linearly between stops.
 pub fn ramp(diff: u8) -> [u8; 3] {
-    let x = diff as f64 / 255.0 * (RAMP.len() - 1) as f64;
+    ramp_at(scale(diff as f64))
+}
+
+/// The ramp colour at position `t` in [0, 1].
+fn ramp_at(t: f64) -> [u8; 3] {
+    let x = t.clamp(0.0, 1.0) * (RAMP.len() - 1) as f64;
     let k = (x.floor() as usize).min(RAMP.len() - 2);
     let f = x - k as f64;
     let (a, b) = (RAMP[k], RAMP[k + 1]);
@@ -118,8 +133,14 @@ fn draw_legend(img: &mut RgbImage, top: u32) {
     }
     let span = (ramp_x1 - ramp_x0 - 1) as f64;
     for x in ramp_x0..ramp_x1 {
-        let diff = ((x - ramp_x0) as f64 / span * 255.0).round() as u8;
-        fill(img, x, bar_y0, x + 1, bar_y1, ramp(diff));
+        fill(
+            img,
+            x,
+            bar_y0,
+            x + 1,
+            bar_y1,
+            ramp_at((x - ramp_x0) as f64 / span),
+        );
     }
     fill(
         img,
@@ -140,10 +161,11 @@ fn draw_legend(img: &mut RgbImage, top: u32) {
     fill(img, ramp_x0 - 1, bar_y0, ramp_x0, bar_y1, LEGEND_FRAME);
     fill(img, ramp_x1, bar_y0, ramp_x1 + 1, bar_y1, LEGEND_FRAME);
 
-    // Ends first so they always appear, then the middle, then the quarters.
+    // Ends first so they always appear, then 1 (the smallest error), the middle and the
+    // rest, each where it fits: the ticks are in levels, on the logarithmic scale.
     let mut drawn: Vec<(i64, i64)> = Vec::new();
-    for value in [0u32, 255, 128, 64, 192] {
-        let tick = ramp_x0 + (value as f64 / 255.0 * span).round() as i64;
+    for value in [0u32, 255, 1, 15, 3, 63, 7, 31, 127] {
+        let tick = ramp_x0 + (scale(value as f64) * span).round() as i64;
         let label = value.to_string();
         let width = text_width(&label);
         let x = match value {
@@ -300,9 +322,14 @@ mod tests {
     fn ramp_runs_from_black_to_pale_yellow_through_its_stops() {
         assert_eq!(ramp(0), [0, 0, 0]);
         assert_eq!(ramp(255), RAMP[8]);
-        assert_eq!(ramp(128), [213, 73, 65]);
-        // Brightness never decreases along the ramp.
+        // One stop per doubling: 2^k - 1 levels land on stop k.
+        for k in 0..9u32 {
+            assert_eq!(ramp(((1u32 << k) - 1) as u8), RAMP[k as usize], "stop {k}");
+        }
+        // A 1-level error is far from black: a person sees it.
         let luma = |c: [u8; 3]| 0.2126 * c[0] as f64 + 0.7152 * c[1] as f64 + 0.0722 * c[2] as f64;
+        assert!(luma(ramp(1)) > 30.0, "{}", luma(ramp(1)));
+        // Brightness never decreases along the ramp.
         assert!((0..255u8).all(|d| luma(ramp(d + 1)) >= luma(ramp(d)) - 1.0));
     }
 
@@ -337,8 +364,16 @@ mod tests {
             };
             let at_least = glyph_pixels("0255FPFN");
             assert!(text >= at_least, "width {w}: {text} < {at_least}");
+            // The doublings when wide: 0 1 3 7 15 31 63 255, and 127 at 512.
             if w >= 200 {
-                assert!(text >= glyph_pixels("064128192255FPFN"), "width {w}");
+                let labels = ["0", "1", "3", "7", "15", "31", "63", "255", "FP", "FN"].concat();
+                assert!(text >= glyph_pixels(&labels), "width {w}");
+            }
+            if w >= 512 {
+                let labels = [
+                    "0", "1", "3", "7", "15", "31", "63", "127", "255", "FP", "FN",
+                ];
+                assert!(text >= glyph_pixels(&labels.concat()), "width {w}");
             }
         }
         // Tiny images still get a legend without panicking.
