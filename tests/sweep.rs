@@ -471,3 +471,85 @@ fn a_folder_another_live_sweep_writes_is_refused() {
         .collect();
     assert!(hidden.is_empty(), "{hidden:?}");
 }
+
+/// README's cluster recipes, run for real in a folder laid out as the repository (the smoke
+/// spec under the recipes' spec name): its GNU parallel line over 8 shards, and its Slurm
+/// script as 3 array tasks followed by its merge line, each give exactly the unsharded
+/// sweep. GNU parallel comes from the distribution's packages (`.ci/run` installs it).
+#[test]
+fn the_readme_cluster_recipes_give_the_unsharded_sweep() {
+    let readme = std::fs::read_to_string(manifest().join("README.md")).unwrap();
+    let parallel_line = readme
+        .lines()
+        .find(|l| l.starts_with("parallel -j"))
+        .expect("README has a GNU parallel recipe");
+    let merge_line = readme
+        .lines()
+        .find(|l| l.starts_with("lembo-sim sweep-merge"))
+        .expect("README has the merge after the Slurm array");
+    let slurm: String = {
+        let start = readme
+            .find("#!/bin/bash")
+            .expect("README has a Slurm script");
+        let end = start + readme[start..].find("```").unwrap();
+        readme[start..end].to_string()
+    };
+    // The Slurm script names its shard from the array and writes where the merge reads.
+    assert!(slurm.contains("--shard \"$SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT\""));
+    assert!(slurm.contains("--out \"out/sweeps/tradeoff-shards/$SLURM_ARRAY_TASK_ID\""));
+    assert!(merge_line.ends_with("out/sweeps/tradeoff-shards/*"));
+
+    let has_parallel = Command::new("parallel").arg("--version").output().is_ok();
+    if !has_parallel {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "GNU parallel is missing; .ci/run installs it"
+        );
+        eprintln!("skipped: GNU parallel is not installed (apt-get install parallel)");
+        return;
+    }
+    let tmp = tempfile::tempdir().unwrap();
+    std::fs::create_dir_all(tmp.path().join("sim/sweeps")).unwrap();
+    std::fs::copy(smoke(), tmp.path().join("sim/sweeps/tradeoff.json")).unwrap();
+    std::os::unix::fs::symlink(manifest().join("traces"), tmp.path().join("traces")).unwrap();
+    let bin_dir = Path::new(env!("CARGO_BIN_EXE_lembo-sim"))
+        .parent()
+        .unwrap()
+        .to_path_buf();
+    let path = format!(
+        "{}:{}",
+        bin_dir.display(),
+        std::env::var("PATH").unwrap_or_default()
+    );
+    let bash = |script: &str, envs: &[(&str, String)]| {
+        let mut cmd = Command::new("bash");
+        cmd.arg("-c")
+            .arg(script)
+            .current_dir(tmp.path())
+            .env("PATH", &path)
+            .env_remove("LEMBO_SWEEP_STOP_AFTER");
+        for (k, v) in envs {
+            cmd.env(k, v);
+        }
+        let out = cmd.output().unwrap();
+        ok(&out);
+    };
+    let merged = tmp.path().join("out/sweeps/tradeoff");
+
+    bash(parallel_line, &[]);
+    assert_eq!(&masked(&merged), reference_run(), "GNU parallel, 8 shards");
+
+    std::fs::remove_dir_all(tmp.path().join("out")).unwrap();
+    for task in 0..3 {
+        bash(
+            &slurm,
+            &[
+                ("SLURM_ARRAY_TASK_ID", task.to_string()),
+                ("SLURM_ARRAY_TASK_COUNT", "3".into()),
+                ("SLURM_CPUS_PER_TASK", "1".into()),
+            ],
+        );
+    }
+    bash(merge_line, &[]);
+    assert_eq!(&masked(&merged), reference_run(), "Slurm, 3 array tasks");
+}
