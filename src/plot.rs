@@ -131,6 +131,8 @@ struct Point {
     units: Vec<UnitTime>,
     /// RMS colour error 255·10^(−PSNR/20) [0-255]; `None` without a reference.
     rms_error: Option<f64>,
+    /// The run's report, for the value of a parameter its point left at the default.
+    report: Value,
     /// The frame's energy \[pJ\]; `None` without a cost section.
     energy_pj: Option<f64>,
     /// The unit's area \[mm²\]; `None` without a cost section.
@@ -193,6 +195,7 @@ impl Point {
             cycles: cycles.filter(|&c| c > 0),
             units,
             rms_error,
+            report: report.clone(),
             energy_pj: report.pointer("/cost/energy_pj").and_then(Value::as_f64),
             area_mm2: report.pointer("/cost/area_mm2").and_then(Value::as_f64),
         })
@@ -207,8 +210,14 @@ impl Point {
         }
     }
 
+    /// The point's value of parameter `key`, or the value its run used by default (as its
+    /// report echoes it); null where the parameter does not apply.
     fn param(&self, key: &str) -> &Value {
-        self.params.get(key).unwrap_or(&Value::Null)
+        static NULL: Value = Value::Null;
+        self.params
+            .get(key)
+            .or_else(|| crate::sweep::results::used(&self.report, key))
+            .unwrap_or(&NULL)
     }
 }
 
@@ -713,6 +722,10 @@ fn cycles_vs_units(scene: &str, points: &[Point]) -> Plot {
             .filter_map(|p| Some((p.param(key).as_i64()?, p.cycles? as f64)))
             .collect();
         line.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
+        // A count that took one value where the others are held says nothing: no series.
+        if line.windows(2).all(|w| w[0].0 == w[1].0) {
+            continue;
+        }
         let entry = Entry {
             mark: Some(MARKS[s % MARKS.len()]),
             line: true,
@@ -728,6 +741,9 @@ fn cycles_vs_units(scene: &str, points: &[Point]) -> Plot {
             }),
         };
         series.push((entry, line));
+    }
+    if series.is_empty() {
+        return None;
     }
     let (entries, lines): (Vec<Entry>, Vec<Vec<(i64, f64)>>) = series.into_iter().unzip();
     let all = || lines.iter().flatten();
@@ -1157,6 +1173,47 @@ mod tests {
             "{name}"
         );
         svg
+    }
+
+    #[test]
+    fn no_empty_plot_a_count_changed_only_with_another_gets_none() {
+        // The default run, and one point changing two counts at once: neither count has a
+        // second value where the other is held, so there is nothing to plot (the smoke
+        // spec's case); defaults come from the reports' architecture echo.
+        let arch = |seg: u64, rop: u64| json!({"segmenter": {"count": seg}, "rop": {"count": rop}});
+        let mut a = record(0, json!({"path": "lembo", "k": 0.5}), Some(1000), None);
+        a["report"]["arch"] = arch(2, 4);
+        let mut b = record(
+            1,
+            json!({"path": "lembo", "k": 0.5, "arch.segmenter.count": 4, "arch.rop.count": 8}),
+            Some(800),
+            None,
+        );
+        b["report"]["arch"] = arch(4, 8);
+        let names: Vec<String> = plot_files(&[a.clone(), b], None)
+            .unwrap()
+            .into_iter()
+            .map(|(n, _)| n)
+            .collect();
+        assert!(
+            !names.iter().any(|n| n.starts_with("cycles_vs_units")),
+            "{names:?}"
+        );
+        // One count changed alone is drawn, its default read from the echo.
+        let mut c = record(
+            2,
+            json!({"path": "lembo", "k": 0.5, "arch.rop.count": 8}),
+            Some(900),
+            None,
+        );
+        c["report"]["arch"] = arch(2, 8);
+        let files = plot_files(&[a, c], None).unwrap();
+        let (_, svg) = files
+            .iter()
+            .find(|(n, _)| n.starts_with("cycles_vs_units"))
+            .expect("a plot of arch.rop.count");
+        let svg = String::from_utf8(svg.clone()).unwrap();
+        assert!(has(&svg, "arch.rop.count"));
     }
 
     #[test]

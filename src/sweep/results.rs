@@ -216,7 +216,7 @@ pub(super) fn cell(v: Option<&Value>) -> String {
 /// The value a run used for parameter `name` that its point did not set (the default), as
 /// its report echoes it; None where the parameter does not apply to the run (k on the
 /// triangle path) or the report does not say.
-fn used<'a>(report: &'a Value, name: &str) -> Option<&'a Value> {
+pub(crate) fn used<'a>(report: &'a Value, name: &str) -> Option<&'a Value> {
     let pointer = match name {
         "path" => "/settings/path".to_string(),
         "k" => "/settings/k_px".to_string(),
