@@ -10,7 +10,8 @@
 //! | `tradeoff_<scene>.svg` | frame time \[cycles\], log | RMS colour error [0-255], log | one per path, and the Pareto front (with an area budget: each path's front within it, larger units grey) |
 //! | `error_vs_energy_<scene>.svg` | energy of the frame \[pJ\], log | RMS colour error [0-255], log | as `tradeoff` |
 //! | `cycles_vs_k_<scene>.svg` | k \[px\], log | frame time \[cycles\] | one per combination of the other varying parameters run at two k or more (lembo path) |
-//! | `cycles_vs_units_<scene>.svg` | unit instances | frame time \[cycles\] | one per varying `arch.*.count`, the other parameters at their most common value |
+//! | `cycles_vs_units_<scene>.svg` | unit instances | frame time \[cycles\] | one per varying `arch.*.count`, the other parameters at their most common value (a parameter a point leaves at its default counts as the value its run used) |
+//! | `cycles_vs_fifo_depth_<scene>.svg` | FIFO depth \[entries\], log | frame time \[cycles\] | one per varying `arch.links.*.fifo_depth`, as above |
 //! | `utilisation_<scene>.svg` | share of the frame time [%] | unit | busy / starved / blocked bars at the most and the fewest cycles |
 //!
 //! A record whose report has no cycles (functional mode) takes part in no plot, and one
@@ -23,6 +24,7 @@
 
 use crate::error::{Error, Result};
 use plotters::coord::combinators::WithKeyPoints;
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
@@ -68,7 +70,14 @@ pub fn plot_files(records: &[Value], budget: Option<f64>) -> Result<Vec<(String,
                 error_against(scene, points, Against::Energy, budget),
             ),
             ("cycles_vs_k", cycles_vs_k(scene, points)),
-            ("cycles_vs_units", cycles_vs_units(scene, points)),
+            (
+                "cycles_vs_units",
+                cycles_vs_arch(scene, points, ArchAxis::Counts),
+            ),
+            (
+                "cycles_vs_fifo_depth",
+                cycles_vs_arch(scene, points, ArchAxis::FifoDepths),
+            ),
             ("utilisation", utilisation(scene, points)),
         ];
         for (kind, plot) in plots {
@@ -689,21 +698,38 @@ fn cycles_vs_k(scene: &str, points: &[Point]) -> Plot {
     })
 }
 
-/// Plot 3: cycles against each varying `arch.*.count`, the other parameters held at their
-/// most common value.
-fn cycles_vs_units(scene: &str, points: &[Point]) -> Plot {
+/// An architecture field a plot puts on its x axis: unit counts or FIFO depths.
+#[derive(Clone, Copy)]
+enum ArchAxis {
+    /// `arch.*.count`.
+    Counts,
+    /// `arch.links.*.fifo_depth`.
+    FifoDepths,
+}
+
+impl ArchAxis {
+    fn matches(self, key: &str) -> bool {
+        key.starts_with("arch.")
+            && match self {
+                ArchAxis::Counts => key.ends_with(".count"),
+                ArchAxis::FifoDepths => key.ends_with(".fifo_depth"),
+            }
+    }
+}
+
+/// One series per varying field of `axis`, the other parameters held at their most common
+/// value: (legend entry, points (field value, cycles) in ascending value). A field that
+/// takes one value where the others are held says nothing and gets no series.
+fn held_series(points: &[Point], axis: ArchAxis) -> Vec<(Entry, Vec<(f64, f64)>)> {
     let pts: Vec<&Point> = points.iter().filter(|p| p.cycles.is_some()).collect();
     let keys = varying(&pts);
-    let counts: Vec<&String> = keys
+    let fields: Vec<&String> = keys
         .iter()
-        .filter(|k| k.starts_with("arch.") && k.ends_with(".count"))
+        .filter(|k| axis.matches(k))
         .filter(|k| pts.iter().any(|p| p.param(k).as_i64().is_some()))
         .collect();
-    if counts.is_empty() {
-        return None;
-    }
-    let mut series: Vec<(Entry, Vec<(i64, f64)>)> = Vec::new();
-    for (s, &key) in counts.iter().enumerate() {
+    let mut series = Vec::new();
+    for (s, &key) in fields.iter().enumerate() {
         let mut held = pts.clone();
         // The path first: k and tess are null on the other path, so they are fixed after it.
         let mut others: Vec<&String> = keys.iter().filter(|k| *k != key).collect();
@@ -717,12 +743,11 @@ fn cycles_vs_units(scene: &str, points: &[Point]) -> Plot {
                 fixed.push(format!("{other}={}", fmt_value(&value)));
             }
         }
-        let mut line: Vec<(i64, f64)> = held
+        let mut line: Vec<(f64, f64)> = held
             .iter()
-            .filter_map(|p| Some((p.param(key).as_i64()?, p.cycles? as f64)))
+            .filter_map(|p| Some((p.param(key).as_i64()? as f64, p.cycles? as f64)))
             .collect();
-        line.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
-        // A count that took one value where the others are held says nothing: no series.
+        line.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
         if line.windows(2).all(|w| w[0].0 == w[1].0) {
             continue;
         }
@@ -742,40 +767,91 @@ fn cycles_vs_units(scene: &str, points: &[Point]) -> Plot {
         };
         series.push((entry, line));
     }
+    series
+}
+
+/// The mesh of a plot of cycles against an architecture field described by `x_desc`.
+fn cycles_mesh<'a, X>(
+    chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, RangedCoordf64>>,
+    x_desc: &str,
+) -> DrawResult
+where
+    X: Ranged<ValueType = f64> + plotters::coord::ranged1d::ValueFormatter<f64>,
+{
+    chart
+        .configure_mesh()
+        .x_desc(x_desc)
+        .y_desc("simulated frame time [cycles]")
+        .x_label_formatter(&|v| fmt_num(*v))
+        .y_label_formatter(&|v| fmt_num(*v))
+        .label_style((FONT, 13))
+        .axis_desc_style((FONT, 15))
+        .draw()?;
+    Ok(())
+}
+
+/// Draws each entry's line and marks into `chart`.
+fn draw_lines<'a, X>(
+    root: &Area,
+    chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, RangedCoordf64>>,
+    entries: &[Entry],
+    lines: &[Vec<(f64, f64)>],
+) -> DrawResult
+where
+    X: Ranged<ValueType = f64>,
+{
+    for (entry, line) in entries.iter().zip(lines) {
+        chart.draw_series(LineSeries::new(
+            line.iter().copied(),
+            entry.color.stroke_width(2),
+        ))?;
+        if let Some(mark) = entry.mark {
+            for p in line {
+                draw_mark(root, chart.backend_coord(p), mark, entry.color)?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Plot 3: cycles against unit counts (`ArchAxis::Counts`, linear x) or FIFO depths
+/// (`ArchAxis::FifoDepths`, log x), one series per varying field, the other parameters at
+/// their most common value. No series, no plot.
+fn cycles_vs_arch(scene: &str, points: &[Point], axis: ArchAxis) -> Plot {
+    let series = held_series(points, axis);
     if series.is_empty() {
         return None;
     }
-    let (entries, lines): (Vec<Entry>, Vec<Vec<(i64, f64)>>) = series.into_iter().unzip();
+    let (entries, lines): (Vec<Entry>, Vec<Vec<(f64, f64)>>) = series.into_iter().unzip();
     let all = || lines.iter().flatten();
-    let x_lo = all().map(|p| p.0).min().unwrap_or(1);
-    let x_hi = all().map(|p| p.0).max().unwrap_or(1);
+    let x_lo = all().map(|p| p.0).fold(f64::INFINITY, f64::min);
+    let x_hi = all().map(|p| p.0).fold(f64::NEG_INFINITY, f64::max);
     let y_max = all().map(|p| p.1).fold(1.0, f64::max);
-    let title = format!("{scene}: cycles against unit counts");
+    let (what, x_desc) = match axis {
+        ArchAxis::Counts => ("unit counts", "unit instances [count]"),
+        ArchAxis::FifoDepths => ("FIFO depths", "FIFO depth [entries], log scale"),
+    };
+    let title = format!("{scene}: cycles against {what}");
     svg(plot_size(&entries), |root| {
         let (plot, legend) = root.split_vertically(CHART_HEIGHT);
-        let mut chart = ChartBuilder::on(&plot)
+        let mut builder = ChartBuilder::on(&plot);
+        builder
             .caption(&title, (FONT, 22))
             .margin(20)
             .x_label_area_size(50)
-            .y_label_area_size(80)
-            .build_cartesian_2d(x_lo - 1..x_hi + 1, 0.0..y_max * 1.1)?;
-        chart
-            .configure_mesh()
-            .x_desc("unit instances [count]")
-            .y_desc("simulated frame time [cycles]")
-            .y_label_formatter(&|v| fmt_num(*v))
-            .label_style((FONT, 13))
-            .axis_desc_style((FONT, 15))
-            .draw()?;
-        for (entry, line) in entries.iter().zip(&lines) {
-            chart.draw_series(LineSeries::new(
-                line.iter().copied(),
-                entry.color.stroke_width(2),
-            ))?;
-            if let Some(mark) = entry.mark {
-                for p in line {
-                    draw_mark(root, chart.backend_coord(p), mark, entry.color)?;
-                }
+            .y_label_area_size(80);
+        match axis {
+            ArchAxis::Counts => {
+                let mut chart =
+                    builder.build_cartesian_2d(x_lo - 1.0..x_hi + 1.0, 0.0..y_max * 1.1)?;
+                cycles_mesh(&mut chart, x_desc)?;
+                draw_lines(root, &mut chart, &entries, &lines)?;
+            }
+            ArchAxis::FifoDepths => {
+                let mut chart = builder
+                    .build_cartesian_2d(log_axis(x_lo * 0.8..x_hi * 1.25), 0.0..y_max * 1.1)?;
+                cycles_mesh(&mut chart, x_desc)?;
+                draw_lines(root, &mut chart, &entries, &lines)?;
             }
         }
         draw_legend(&legend, &entries)
@@ -1214,6 +1290,46 @@ mod tests {
             .expect("a plot of arch.rop.count");
         let svg = String::from_utf8(svg.clone()).unwrap();
         assert!(has(&svg, "arch.rop.count"));
+    }
+
+    #[test]
+    fn fifo_depths_get_their_own_plot() {
+        let key = "arch.links.rasterizer_to_rop.fifo_depth";
+        let records: Vec<Value> = [1u64, 4, 16, 64]
+            .iter()
+            .enumerate()
+            .map(|(i, &d)| {
+                record(
+                    i as u64,
+                    json!({"path": "lembo", "k": 0.5, key: d}),
+                    Some(2000 - 10 * d),
+                    None,
+                )
+            })
+            .collect();
+        let files = plot_files(&records, None).unwrap();
+        let names: Vec<&str> = files.iter().map(|(n, _)| n.as_str()).collect();
+        assert!(
+            names.contains(&"cycles_vs_fifo_depth_sphere24.svg"),
+            "{names:?}"
+        );
+        assert!(
+            !names.iter().any(|n| n.starts_with("cycles_vs_units")),
+            "{names:?}"
+        );
+        let svg = &files
+            .iter()
+            .find(|(n, _)| n.starts_with("cycles_vs_fifo"))
+            .unwrap()
+            .1;
+        let svg = String::from_utf8(svg.clone()).unwrap();
+        for text in [
+            "sphere24: cycles against FIFO depths",
+            "FIFO depth [entries], log scale",
+            key,
+        ] {
+            assert!(has(&svg, text), "lacks {text:?}");
+        }
     }
 
     #[test]
