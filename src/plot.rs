@@ -516,15 +516,11 @@ fn error_against(scene: &str, points: &[Point], against: Against, budget: Option
                 log_axis(log_range(xy.iter().map(|p| p.0))),
                 log_axis(log_range(xy.iter().map(|p| p.1))),
             )?;
-        chart
-            .configure_mesh()
-            .x_desc(x_desc)
-            .y_desc("RMS colour error 255*10^(-PSNR/20) [0-255], log scale")
-            .x_label_formatter(&|v| fmt_num(*v))
-            .y_label_formatter(&|v| fmt_num(*v))
-            .label_style((FONT, 13))
-            .axis_desc_style((FONT, 15))
-            .draw()?;
+        mesh(
+            &mut chart,
+            x_desc,
+            "RMS colour error 255*10^(-PSNR/20) [0-255], log scale",
+        )?;
 
         // The fronts first, so the series' points are drawn over them.
         for (color, front) in &fronts {
@@ -770,18 +766,23 @@ fn held_series(points: &[Point], axis: ArchAxis) -> Vec<(Entry, Vec<(f64, f64)>)
     series
 }
 
-/// The mesh of a plot of cycles against an architecture field described by `x_desc`.
-fn cycles_mesh<'a, X>(
-    chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, RangedCoordf64>>,
+/// The y axis of the plots of cycles.
+const CYCLES: &str = "simulated frame time [cycles]";
+
+/// Draws the mesh of `chart` with its axis descriptions, numbers in [`fmt_num`].
+fn mesh<'a, X, Y>(
+    chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>,
     x_desc: &str,
+    y_desc: &str,
 ) -> DrawResult
 where
     X: Ranged<ValueType = f64> + plotters::coord::ranged1d::ValueFormatter<f64>,
+    Y: Ranged<ValueType = f64> + plotters::coord::ranged1d::ValueFormatter<f64>,
 {
     chart
         .configure_mesh()
         .x_desc(x_desc)
-        .y_desc("simulated frame time [cycles]")
+        .y_desc(y_desc)
         .x_label_formatter(&|v| fmt_num(*v))
         .y_label_formatter(&|v| fmt_num(*v))
         .label_style((FONT, 13))
@@ -844,13 +845,13 @@ fn cycles_vs_arch(scene: &str, points: &[Point], axis: ArchAxis) -> Plot {
             ArchAxis::Counts => {
                 let mut chart =
                     builder.build_cartesian_2d(x_lo - 1.0..x_hi + 1.0, 0.0..y_max * 1.1)?;
-                cycles_mesh(&mut chart, x_desc)?;
+                mesh(&mut chart, x_desc, CYCLES)?;
                 draw_lines(root, &mut chart, &entries, &lines)?;
             }
             ArchAxis::FifoDepths => {
                 let mut chart = builder
                     .build_cartesian_2d(log_axis(x_lo * 0.8..x_hi * 1.25), 0.0..y_max * 1.1)?;
-                cycles_mesh(&mut chart, x_desc)?;
+                mesh(&mut chart, x_desc, CYCLES)?;
                 draw_lines(root, &mut chart, &entries, &lines)?;
             }
         }
