@@ -907,10 +907,13 @@ fn utilisation(scene: &str, points: &[Point]) -> Plot {
             rest = below;
             let total = p.cycles.unwrap_or(1).max(1) as f64;
             let n = p.units.len() as i32;
-            let caption = format!(
-                "{group}: {} ({} cycles)",
-                describe(p, &varying),
-                fmt_int(p.cycles.unwrap_or(0))
+            let caption = fit(
+                format!(
+                    "{group}: {} ({} cycles)",
+                    describe_apart(p, &pts, &varying),
+                    fmt_int(p.cycles.unwrap_or(0))
+                ),
+                CAPTION_CHARS,
             );
             let mut chart = ChartBuilder::on(&area)
                 .caption(caption, (FONT, 16))
@@ -1000,6 +1003,33 @@ fn assignment(p: &Point, keys: &[String]) -> String {
 }
 
 /// A point for a caption: its path and level, the other varying parameters and its index.
+/// The most characters a 16-point caption holds across a plot.
+const CAPTION_CHARS: usize = 100;
+
+/// `text`, cut at a comma and ended with ", …" when longer than `chars`.
+fn fit(text: String, chars: usize) -> String {
+    if text.chars().count() <= chars {
+        return text;
+    }
+    let cut: String = text.chars().take(chars.saturating_sub(3)).collect();
+    match cut.rfind(", ") {
+        Some(i) => format!("{}, …", &cut[..i]),
+        None => format!("{cut}…"),
+    }
+}
+
+/// `p` by what sets it apart: its path and level, and the varying parameters whose value
+/// differs from their most common one among `pts` (the one a one-at-a-time sweep varies).
+fn describe_apart(p: &Point, pts: &[&Point], varying: &[String]) -> String {
+    let apart: Vec<String> = varying
+        .iter()
+        .filter(|k| !matches!(k.as_str(), "path" | "k" | "tess"))
+        .filter(|k| p.param(k) != &most_common(pts, k))
+        .cloned()
+        .collect();
+    describe(p, &apart)
+}
+
 fn describe(p: &Point, varying: &[String]) -> String {
     let others: Vec<String> = varying
         .iter()
@@ -1291,6 +1321,54 @@ mod tests {
             .expect("a plot of arch.rop.count");
         let svg = String::from_utf8(svg.clone()).unwrap();
         assert!(has(&svg, "arch.rop.count"));
+    }
+
+    #[test]
+    fn utilisation_captions_name_what_sets_a_point_apart_and_fit() {
+        // A one-at-a-time sweep: the base, then one count changed per point.
+        let arch = |seg: u64, rop: u64| json!({"segmenter": {"count": seg}, "rop": {"count": rop}});
+        let mut base = record(0, json!({"path": "lembo", "k": 0.5}), Some(1000), None);
+        base["report"]["arch"] = arch(2, 4);
+        let mut slow = record(
+            1,
+            json!({"path": "lembo", "k": 0.5, "arch.segmenter.count": 1}),
+            Some(3000),
+            None,
+        );
+        slow["report"]["arch"] = arch(1, 4);
+        let mut fast = record(
+            2,
+            json!({"path": "lembo", "k": 0.5, "arch.rop.count": 8}),
+            Some(500),
+            None,
+        );
+        fast["report"]["arch"] = arch(2, 8);
+        let files = plot_files(&[base, slow, fast], None).unwrap();
+        let svg = &files
+            .iter()
+            .find(|(n, _)| n.starts_with("utilisation"))
+            .unwrap()
+            .1;
+        let svg = String::from_utf8(svg.clone()).unwrap();
+        assert!(has(
+            &svg,
+            "most cycles: lembo path, k=0.5, arch.segmenter.count=1, point 1"
+        ));
+        assert!(has(
+            &svg,
+            "fewest cycles: lembo path, k=0.5, arch.rop.count=8, point 2"
+        ));
+        // Long captions are cut at a comma.
+        let long = (0..40)
+            .map(|i| format!("p{i}=1"))
+            .collect::<Vec<_>>()
+            .join(", ");
+        let cut = fit(long, CAPTION_CHARS);
+        assert!(
+            cut.chars().count() <= CAPTION_CHARS && cut.ends_with(", …"),
+            "{cut}"
+        );
+        assert_eq!(fit("short".into(), CAPTION_CHARS), "short");
     }
 
     #[test]
