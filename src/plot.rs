@@ -272,7 +272,7 @@ const BLOCKED: RGBColor = RGBColor(214, 39, 40);
 
 /// A series' point marker. Series differ in shape as well as colour, so one drawn over
 /// another (equal cycles in f32 and f64, say) still shows.
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, PartialEq, Eq)]
 enum Mark {
     Dot,
     Ring,
@@ -447,24 +447,57 @@ fn error_against(scene: &str, points: &[Point], against: Against, budget: Option
             .map(|(s, (path, members))| (path_style(path, s).0, front_of(members)))
             .collect(),
     };
-    let mut entries: Vec<Entry> = by_path
-        .keys()
-        .enumerate()
-        .map(|(s, path)| {
-            let (color, mark) = path_style(path, s);
-            Entry {
-                mark: Some(mark),
-                line: false,
-                color,
-                label: match *path {
-                    "lembo" => "lembo path, labelled with k, the chord error [px]".into(),
-                    "triangle" => "triangle path, labelled with n (n² triangles per lembo)".into(),
-                    other => format!("{other} path"),
-                },
-                note: None,
-            }
-        })
+    // Series: a path, split by the datapath and blend mode where they vary, so points that
+    // differ only in those (and often coincide) keep apart by their marker.
+    let all: Vec<&Point> = pts.iter().map(|(p, _)| *p).collect();
+    let variant_keys: Vec<String> = varying(&all)
+        .into_iter()
+        .filter(|k| k == "datapath" || k == "blend")
         .collect();
+    let mut series: BTreeMap<(String, String), Vec<usize>> = BTreeMap::new();
+    for (i, (p, _)) in pts.iter().enumerate() {
+        let variant = assignment(p, &variant_keys);
+        series.entry((p.path.clone(), variant)).or_default().push(i);
+    }
+    let paths: Vec<&str> = by_path.keys().copied().collect();
+    let style_of = |path: &str, variant_rank: usize| {
+        let s = paths.iter().position(|p| *p == path).unwrap_or(0);
+        let (color, mark) = path_style(path, s);
+        let marks: Vec<Mark> = std::iter::once(mark)
+            .chain(MARKS.iter().copied().filter(|m| *m != mark))
+            .collect();
+        (color, marks[variant_rank % marks.len()])
+    };
+    let mut styles: Vec<(RGBColor, Mark)> = Vec::new();
+    let mut entries: Vec<Entry> = Vec::new();
+    let mut rank: BTreeMap<&str, usize> = BTreeMap::new();
+    for (path, variant) in series.keys() {
+        let r = rank.entry(path.as_str()).or_default();
+        let (color, mark) = style_of(path, *r);
+        *r += 1;
+        styles.push((color, mark));
+        let what = match path.as_str() {
+            "lembo" => "lembo path".to_string(),
+            "triangle" => "triangle path".to_string(),
+            other => format!("{other} path"),
+        };
+        let levels = match path.as_str() {
+            "lembo" => ", labelled with k, the chord error [px]",
+            "triangle" => ", labelled with n (n² triangles per lembo)",
+            _ => "",
+        };
+        entries.push(Entry {
+            mark: Some(mark),
+            line: false,
+            color,
+            label: if variant.is_empty() {
+                format!("{what}{levels}")
+            } else {
+                format!("{what}, {variant}{levels}")
+            },
+            note: None,
+        });
+    }
     let measure = match against {
         Against::Cycles => "cycles",
         Against::Energy => "energy",
@@ -542,29 +575,60 @@ fn error_against(scene: &str, points: &[Point], against: Against, budget: Option
         }
         // A label once per text and place: a level repeated at nearly the same point (the
         // same k on two datapaths) would only smear.
-        let mut labelled: Vec<(String, (i32, i32))> = Vec::new();
-        for (s, (path, members)) in by_path.iter().enumerate() {
-            let (color, mark) = path_style(path, s);
+        // Marks first, then labels placed where they cover no other label.
+        let mut labels = Labels::default();
+        let mut pending = Vec::new();
+        for (members, &(color, mark)) in series.values().zip(&styles) {
             for &i in members {
                 let at = chart.backend_coord(&xy[i]);
                 let color = if within(pts[i].0) { color } else { OVER_BUDGET };
                 draw_mark(root, at, mark, color)?;
-                let label = pts[i].0.level();
-                let near = |&(ref l, (x, y)): &(String, (i32, i32))| {
-                    *l == label && (x - at.0).abs() < 12 && (y - at.1).abs() < 12
-                };
-                if !labelled.iter().any(near) {
-                    root.draw(&Text::new(
-                        label.clone(),
-                        (at.0 + 7, at.1 - 16),
-                        (FONT, 12).into_font().color(&color),
-                    ))?;
-                    labelled.push((label, at));
-                }
+                pending.push((pts[i].0.level(), at, color));
+            }
+        }
+        for (label, at, color) in pending {
+            if let Some(pos) = labels.place(&label, at) {
+                root.draw(&Text::new(label, pos, (FONT, 12).into_font().color(&color)))?;
             }
         }
         draw_legend(&legend, &entries)
     })
+}
+
+/// Labels placed beside their points so that no two overlap: each tries the four corners
+/// around its point and is left out when all four are taken or the same text is already
+/// near (the same level on two datapaths).
+#[derive(Default)]
+struct Labels {
+    /// Placed labels: text, point, and box (x0, y0, x1, y1) in pixels.
+    placed: Vec<(String, (i32, i32), [i32; 4])>,
+}
+
+impl Labels {
+    /// Where to draw `text` for the point at `at`, if anywhere.
+    fn place(&mut self, text: &str, at: (i32, i32)) -> Option<(i32, i32)> {
+        if self
+            .placed
+            .iter()
+            .any(|(t, (x, y), _)| t == text && (x - at.0).abs() < 12 && (y - at.1).abs() < 12)
+        {
+            return None;
+        }
+        // 12-point text: about 7 px a character, 12 px high.
+        let (w, h) = (7 * text.chars().count() as i32, 12);
+        for (dx, dy) in [(7, -16), (7, 4), (-7 - w, -16), (-7 - w, 4)] {
+            let (x, y) = (at.0 + dx, at.1 + dy);
+            let rect = [x, y, x + w, y + h];
+            let free = self.placed.iter().all(|(_, _, r)| {
+                rect[2] <= r[0] || r[2] <= rect[0] || rect[3] <= r[1] || r[3] <= rect[1]
+            });
+            if free {
+                self.placed.push((text.to_string(), at, rect));
+                return Some((x, y));
+            }
+        }
+        None
+    }
 }
 
 /// A path's colour and marker in the error plots (`s`: its rank among the paths drawn).
@@ -1369,6 +1433,38 @@ mod tests {
             "{cut}"
         );
         assert_eq!(fit("short".into(), CAPTION_CHARS), "short");
+    }
+
+    #[test]
+    fn series_differing_in_datapath_have_their_own_marker_and_labels_do_not_overlap() {
+        let records: Vec<Value> = [("f32", 0.5), ("f64", 0.5), ("f32", 2.0), ("f64", 2.0)]
+            .iter()
+            .enumerate()
+            .map(|(i, &(dp, k))| {
+                let mut r = record(
+                    i as u64,
+                    json!({"path": "lembo", "k": k, "datapath": dp}),
+                    Some(1000),
+                    Some(40.0),
+                );
+                r["report"]["settings"]["datapath"] = json!(dp);
+                r
+            })
+            .collect();
+        let files = plot_files(&records, None).unwrap();
+        let svg = String::from_utf8(files[0].1.clone()).unwrap();
+        assert!(has(&svg, "lembo path, datapath=f32"), "f32 series");
+        assert!(has(&svg, "lembo path, datapath=f64"), "f64 series");
+        // Labels: nearby points take free corners; the same text on the same spot once.
+        let mut labels = Labels::default();
+        let a = labels.place("k=2", (100, 100)).unwrap();
+        let b = labels.place("k=0.5", (102, 101)).unwrap();
+        assert_ne!(a, b);
+        assert!(labels.place("k=2", (101, 100)).is_none());
+        let boxes: Vec<[i32; 4]> = labels.placed.iter().map(|(_, _, r)| *r).collect();
+        let overlap =
+            |r: [i32; 4], q: [i32; 4]| r[0] < q[2] && q[0] < r[2] && r[1] < q[3] && q[1] < r[3];
+        assert!(!overlap(boxes[0], boxes[1]));
     }
 
     #[test]
