@@ -2,7 +2,7 @@
 //! seed, every family, both datapaths, k = 0.25 and 1 px, against the exact reference
 //! (`lembo_sim::datapath_study`, which `examples/datapath_study.rs` runs in full). It
 //! asserts what a user of the f32 datapath relies on, with the bounds measured by the full
-//! study (README, "f32 against f64 over random lembos") and some headroom:
+//! study (RESULTS.md, "f32 against f64 over random lembos") and some headroom:
 //! - no family fails (no error, no panic);
 //! - f64 keeps the guarantee `max_scanline_deviation_px <= k` within 1e-9 px on the
 //!   ordinary families, f32 within [`F32_SLACK_ORDINARY_PX`];

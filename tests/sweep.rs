@@ -472,13 +472,13 @@ fn a_folder_another_live_sweep_writes_is_refused() {
     assert!(hidden.is_empty(), "{hidden:?}");
 }
 
-/// README's cluster recipes, run for real in a folder laid out as the repository (the smoke
+/// The cluster recipes of `sim/sweeps/README.md`, run for real in a folder laid out as the repository (the smoke
 /// spec under the recipes' spec name): its GNU parallel line over 8 shards, and its Slurm
 /// script as 3 array tasks followed by its merge line, each give exactly the unsharded
 /// sweep. GNU parallel comes from the distribution's packages (`.ci/run` installs it).
 #[test]
 fn the_readme_cluster_recipes_give_the_unsharded_sweep() {
-    let readme = std::fs::read_to_string(manifest().join("README.md")).unwrap();
+    let readme = std::fs::read_to_string(manifest().join("sim/sweeps/README.md")).unwrap();
     let parallel_line = readme
         .lines()
         .find(|l| l.starts_with("parallel -j"))
