@@ -482,18 +482,17 @@ fn the_readme_cluster_recipes_give_the_unsharded_sweep() {
     let parallel_line = readme
         .lines()
         .find(|l| l.starts_with("parallel -j"))
-        .expect("README has a GNU parallel recipe");
-    let merge_line = readme
+        .expect("sim/sweeps/README.md has a GNU parallel recipe");
+    let start = readme
+        .find("#!/bin/bash")
+        .expect("sim/sweeps/README.md has a Slurm script");
+    let end = start + readme[start..].find("```").unwrap();
+    let slurm = readme[start..end].to_string();
+    // The merge that follows the Slurm array.
+    let merge_line = readme[end..]
         .lines()
         .find(|l| l.starts_with("lembo-sim sweep-merge"))
-        .expect("README has the merge after the Slurm array");
-    let slurm: String = {
-        let start = readme
-            .find("#!/bin/bash")
-            .expect("README has a Slurm script");
-        let end = start + readme[start..].find("```").unwrap();
-        readme[start..end].to_string()
-    };
+        .expect("sim/sweeps/README.md has the merge after the Slurm array");
     // The Slurm script names its shard from the array and writes where the merge reads.
     assert!(slurm.contains("--shard \"$SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT\""));
     assert!(slurm.contains("--out \"out/sweeps/tradeoff-shards/$SLURM_ARRAY_TASK_ID\""));
