@@ -153,7 +153,16 @@ pub fn write_set(
     paths.push((dir.join(MANIFEST), manifest.as_slice()));
     paths.extend(elsewhere.iter().map(|(p, b)| (p.clone(), *b)));
     write_paths(&paths)?;
-    for old in previous.iter().filter(|o| !names.contains(&o.as_str())) {
+    // What this set wrote elsewhere may land in `dir` under an old name: never removed.
+    let written_here = |name: &str| {
+        elsewhere
+            .iter()
+            .any(|(p, _)| parent_dir(p) == dir && p.file_name() == Some(name.as_ref()))
+    };
+    for old in previous
+        .iter()
+        .filter(|o| !names.contains(&o.as_str()) && !written_here(o))
+    {
         // Best effort: a file that cannot be removed stays, and the manifest no longer
         // claims it.
         let _ = std::fs::remove_file(dir.join(old));

@@ -945,6 +945,15 @@ fn an_output_folder_holds_one_runs_files() {
         m["files"],
         serde_json::json!(["image.png", "report.json", "report.txt", "manifest.json"])
     );
+    // A trace written into the folder under a name of the replaced set is this run's: kept.
+    render(&["--reference"]);
+    render(&["--trace-out", "o/reference.png"]);
+    let trace = std::fs::read_to_string(o.join("reference.png")).unwrap();
+    assert!(
+        trace.contains("traceEvents"),
+        "the trace, not the old image"
+    );
+    assert!(!o.join("error.png").exists());
 }
 
 /// Output paths that cannot be written are usage errors, refused before any work (exit
