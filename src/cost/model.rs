@@ -13,7 +13,7 @@
 //! A kind's operations are shared among its instances in proportion to the items each
 //! took in.
 
-use super::counted::{Op, OpTable, OPS};
+use super::counted::{OpTable, OPS};
 use super::tech::Tech;
 use crate::config::ArchConfig;
 use crate::datapath::Datapath;
@@ -201,9 +201,4 @@ pub fn cost(tech: &Tech, arch: &ArchConfig, datapath: Datapath, work: &Work) -> 
             })
             .collect(),
     }
-}
-
-/// The count of one class in a kind's [`OpCounts`].
-pub fn count_of(ops: &OpCounts, op: Op) -> u64 {
-    ops.to_array()[op as usize]
 }
