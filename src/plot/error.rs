@@ -1,0 +1,270 @@
+//! Plot 1: image error against cycles or energy, per path, with Pareto fronts (over both
+//! paths, or per path within a sweep's area budget), and the placement of the points'
+//! level labels.
+
+use super::{
+    assignment, draw_legend, draw_mark, fmt_num, log_axis, log_range, mesh, pareto_front,
+    plot_size, svg, varying, Entry, Mark, Plot, Point, CHART_HEIGHT, FONT, LEMBO, MARKS, PALETTE,
+    TRIANGLE,
+};
+use plotters::prelude::*;
+use std::collections::BTreeMap;
+
+/// Points over a sweep's area budget.
+const OVER_BUDGET: RGBColor = RGBColor(190, 190, 190);
+
+/// What an error plot puts on its x axis.
+#[derive(Clone, Copy)]
+pub(super) enum Against {
+    /// Simulated frame time.
+    Cycles,
+    /// The frame's energy (report.json `cost`).
+    Energy,
+}
+
+impl Against {
+    fn x(self, p: &Point) -> Option<f64> {
+        match self {
+            Against::Cycles => p.cycles.map(|c| c as f64),
+            Against::Energy => p.energy_pj.filter(|e| *e > 0.0),
+        }
+    }
+}
+
+/// Plot 1: image error against cycles (`Against::Cycles`, `tradeoff_*`) or energy
+/// (`error_vs_energy_*`), one series per path. Without an area budget, the Pareto front over
+/// both paths is circled; with one, points whose unit is larger are drawn grey and left
+/// out, and each path gets its own front among the configurations within the budget.
+pub(super) fn error_against(
+    scene: &str,
+    points: &[Point],
+    against: Against,
+    budget: Option<f64>,
+) -> Plot {
+    let pts: Vec<(&Point, (f64, f64))> = points
+        .iter()
+        .filter_map(|p| Some((p, (against.x(p)?, p.rms_error?))))
+        .collect();
+    if pts.is_empty() {
+        return None;
+    }
+    let xy: Vec<(f64, f64)> = pts.iter().map(|&(_, xy)| xy).collect();
+    let within = |p: &Point| match (budget, p.area_mm2) {
+        (None, _) => true,
+        (Some(b), Some(a)) => a <= b,
+        (Some(_), None) => false,
+    };
+    let mut by_path: BTreeMap<&str, Vec<usize>> = BTreeMap::new();
+    for (i, (p, _)) in pts.iter().enumerate() {
+        by_path.entry(p.path.as_str()).or_default().push(i);
+    }
+    // The fronts: one over both paths, or one per path within the budget.
+    let front_of = |members: &[usize]| -> Vec<usize> {
+        let kept: Vec<usize> = members
+            .iter()
+            .copied()
+            .filter(|&i| within(pts[i].0))
+            .collect();
+        let sub: Vec<(f64, f64)> = kept.iter().map(|&i| xy[i]).collect();
+        pareto_front(&sub).into_iter().map(|j| kept[j]).collect()
+    };
+    let fronts: Vec<(RGBColor, Vec<usize>)> = match budget {
+        None => vec![(BLACK, front_of(&(0..pts.len()).collect::<Vec<_>>()))],
+        Some(_) => by_path
+            .iter()
+            .enumerate()
+            .map(|(s, (path, members))| (path_style(path, s).0, front_of(members)))
+            .collect(),
+    };
+    // Series: a path, split by the datapath and blend mode where they vary, so points that
+    // differ only in those (and often coincide) keep apart by their marker.
+    let all: Vec<&Point> = pts.iter().map(|(p, _)| *p).collect();
+    let variant_keys: Vec<String> = varying(&all)
+        .into_iter()
+        .filter(|k| k == "datapath" || k == "blend")
+        .collect();
+    let mut series: BTreeMap<(String, String), Vec<usize>> = BTreeMap::new();
+    for (i, (p, _)) in pts.iter().enumerate() {
+        let variant = assignment(p, &variant_keys);
+        series.entry((p.path.clone(), variant)).or_default().push(i);
+    }
+    let paths: Vec<&str> = by_path.keys().copied().collect();
+    let style_of = |path: &str, variant_rank: usize| {
+        let s = paths.iter().position(|p| *p == path).unwrap_or(0);
+        let (color, mark) = path_style(path, s);
+        let marks: Vec<Mark> = std::iter::once(mark)
+            .chain(MARKS.iter().copied().filter(|m| *m != mark))
+            .collect();
+        (color, marks[variant_rank % marks.len()])
+    };
+    let mut styles: Vec<(RGBColor, Mark)> = Vec::new();
+    let mut entries: Vec<Entry> = Vec::new();
+    let mut rank: BTreeMap<&str, usize> = BTreeMap::new();
+    for (path, variant) in series.keys() {
+        let r = rank.entry(path.as_str()).or_default();
+        let (color, mark) = style_of(path, *r);
+        *r += 1;
+        styles.push((color, mark));
+        let what = match path.as_str() {
+            "lembo" => "lembo path".to_string(),
+            "triangle" => "triangle path".to_string(),
+            other => format!("{other} path"),
+        };
+        let levels = match path.as_str() {
+            "lembo" => ", labelled with k, the chord error [px]",
+            "triangle" => ", labelled with n (n² triangles per lembo)",
+            _ => "",
+        };
+        entries.push(Entry {
+            mark: Some(mark),
+            line: false,
+            color,
+            label: if variant.is_empty() {
+                format!("{what}{levels}")
+            } else {
+                format!("{what}, {variant}{levels}")
+            },
+            note: None,
+        });
+    }
+    let measure = match against {
+        Against::Cycles => "cycles",
+        Against::Energy => "energy",
+    };
+    match budget {
+        None => entries.push(Entry {
+            mark: Some(Mark::Ring),
+            line: true,
+            color: BLACK,
+            label: format!("Pareto front over both paths (circled): no other point has both less {measure} and less error"),
+            note: None,
+        }),
+        Some(b) => {
+            entries.push(Entry {
+                mark: Some(Mark::Ring),
+                line: true,
+                color: BLACK,
+                label: format!("each path's Pareto front (circled) among configurations of at most {} mm²", fmt_num(b)),
+                note: None,
+            });
+            entries.push(Entry {
+                mark: Some(Mark::Dot),
+                line: false,
+                color: OVER_BUDGET,
+                label: format!("over the area budget of {} mm² (report.json cost.area_mm2)", fmt_num(b)),
+                note: None,
+            });
+        }
+    }
+    let title = match budget {
+        None => format!("{scene}: image error against {measure}"),
+        Some(b) => format!(
+            "{scene}: image error against {measure}, units within {} mm²",
+            fmt_num(b)
+        ),
+    };
+    let x_desc = match against {
+        Against::Cycles => "simulated frame time [cycles], log scale",
+        Against::Energy => "energy of the frame [pJ] (report.json cost), log scale",
+    };
+    svg(plot_size(&entries), |root| {
+        let (plot, legend) = root.split_vertically(CHART_HEIGHT);
+        let mut chart = ChartBuilder::on(&plot)
+            .caption(&title, (FONT, 20))
+            .margin(20)
+            .x_label_area_size(50)
+            .y_label_area_size(80)
+            .build_cartesian_2d(
+                log_axis(log_range(xy.iter().map(|p| p.0))),
+                log_axis(log_range(xy.iter().map(|p| p.1))),
+            )?;
+        mesh(
+            &mut chart,
+            x_desc,
+            "RMS colour error 255*10^(-PSNR/20) [0-255], log scale",
+        )?;
+
+        // The fronts first, so the series' points are drawn over them.
+        for (color, front) in &fronts {
+            let mut step = Vec::new();
+            for (j, &i) in front.iter().enumerate() {
+                step.push(xy[i]);
+                if let Some(&next) = front.get(j + 1) {
+                    step.push((xy[next].0, xy[i].1));
+                }
+            }
+            chart.draw_series(LineSeries::new(step, color.stroke_width(1)))?;
+            for &i in front {
+                root.draw(&Circle::new(
+                    chart.backend_coord(&xy[i]),
+                    9,
+                    color.stroke_width(2),
+                ))?;
+            }
+        }
+        // A label once per text and place: a level repeated at nearly the same point (the
+        // same k on two datapaths) would only smear.
+        // Marks first, then labels placed where they cover no other label.
+        let mut labels = Labels::default();
+        let mut pending = Vec::new();
+        for (members, &(color, mark)) in series.values().zip(&styles) {
+            for &i in members {
+                let at = chart.backend_coord(&xy[i]);
+                let color = if within(pts[i].0) { color } else { OVER_BUDGET };
+                draw_mark(root, at, mark, color)?;
+                pending.push((pts[i].0.level(), at, color));
+            }
+        }
+        for (label, at, color) in pending {
+            if let Some(pos) = labels.place(&label, at) {
+                root.draw(&Text::new(label, pos, (FONT, 12).into_font().color(&color)))?;
+            }
+        }
+        draw_legend(&legend, &entries)
+    })
+}
+
+/// Labels placed beside their points so that no two overlap: each tries the four corners
+/// around its point and is left out when all four are taken or the same text is already
+/// near (the same level on two datapaths).
+#[derive(Default)]
+pub(super) struct Labels {
+    /// Placed labels: text, point, and box (x0, y0, x1, y1) in pixels.
+    pub(super) placed: Vec<(String, (i32, i32), [i32; 4])>,
+}
+
+impl Labels {
+    /// Where to draw `text` for the point at `at`, if anywhere.
+    pub(super) fn place(&mut self, text: &str, at: (i32, i32)) -> Option<(i32, i32)> {
+        if self
+            .placed
+            .iter()
+            .any(|(t, (x, y), _)| t == text && (x - at.0).abs() < 12 && (y - at.1).abs() < 12)
+        {
+            return None;
+        }
+        // 12-point text: about 7 px a character, 12 px high.
+        let (w, h) = (7 * text.chars().count() as i32, 12);
+        for (dx, dy) in [(7, -16), (7, 4), (-7 - w, -16), (-7 - w, 4)] {
+            let (x, y) = (at.0 + dx, at.1 + dy);
+            let rect = [x, y, x + w, y + h];
+            let free = self.placed.iter().all(|(_, _, r)| {
+                rect[2] <= r[0] || r[2] <= rect[0] || rect[3] <= r[1] || r[3] <= rect[1]
+            });
+            if free {
+                self.placed.push((text.to_string(), at, rect));
+                return Some((x, y));
+            }
+        }
+        None
+    }
+}
+
+/// A path's colour and marker in the error plots (`s`: its rank among the paths drawn).
+fn path_style(path: &str, s: usize) -> (RGBColor, Mark) {
+    match path {
+        "lembo" => (LEMBO, Mark::Dot),
+        "triangle" => (TRIANGLE, Mark::Triangle),
+        _ => (PALETTE[s % PALETTE.len()], MARKS[(s + 2) % MARKS.len()]),
+    }
+}
