@@ -31,7 +31,7 @@ use crate::raster::PerspectiveTol;
 use crate::reference::metrics::Accuracy;
 use crate::reference::montage::{montage, Panel};
 use crate::reference::oracle::ReferenceImage;
-use crate::report::{png_bytes, Report};
+use crate::report::{html, png_bytes, Report};
 use crate::scene::Scene;
 use serde::Serialize;
 use std::fmt::Write as _;
@@ -451,6 +451,7 @@ fn images(
             serde_json::to_vec_pretty(&report).expect("the report serialises"),
         ),
         ("compare.txt", table.as_bytes().to_vec()),
+        (html::REPORT_HTML, page(report).into_bytes()),
     ]
 }
 
@@ -481,13 +482,22 @@ fn ratios(arch: Option<&ArchConfig>, lembo: &Report, triangle: &Report) -> Optio
     })
 }
 
+/// The side-by-side comparison, once, for compare.txt and report.html: a title, rows of
+/// (name, lembo, triangle) and notes below.
+pub struct Table {
+    /// What was compared, on which architecture, at which k and tessellation.
+    pub title: String,
+    /// One row per quantity: its name, the lembo path's value and the triangle path's.
+    pub rows: Vec<[String; 3]>,
+    /// Lines under the rows: the ratios and, for `--tess auto`, the levels tried.
+    pub notes: Vec<String>,
+}
+
 /// The side-by-side table: primitives, vertices, bytes, cycles, fragments, then every
 /// accuracy metric, per path.
-pub fn table(r: &CompareReport) -> String {
-    let mut t = String::new();
+pub fn rows(r: &CompareReport) -> Table {
     let (l, tr) = (&r.lembo, &r.triangle);
-    let _ = writeln!(
-        t,
+    let title = format!(
         "compare {} ({}x{} px), architecture {}, k = {} px, tessellation {}{}",
         l.scene.name,
         l.scene.width,
@@ -508,71 +518,63 @@ pub fn table(r: &CompareReport) -> String {
             ),
         }
     );
-    let _ = writeln!(t, "{:<28} {:>18} {:>18}", "", "lembo", "triangle");
-    let row = |t: &mut String, name: &str, a: String, b: String| {
-        let _ = writeln!(t, "{name:<28} {a:>18} {b:>18}");
-    };
+    let mut rows: Vec<[String; 3]> = Vec::new();
     // A row with one value per report.
-    let both = |t: &mut String, name: &str, value: &dyn Fn(&Report) -> String| {
-        row(t, name, value(l), value(tr))
+    let mut both = |name: &str, value: &dyn Fn(&Report) -> String| {
+        rows.push([name.to_string(), value(l), value(tr)])
     };
-    both(&mut t, "primitives", &|r| r.primitives.count.to_string());
-    both(&mut t, "vertices", &|r| r.primitives.vertices.to_string());
-    both(&mut t, "primitive bytes", &|r| {
-        r.primitives.bytes.to_string()
-    });
-    both(&mut t, "cycles per frame", &|r| {
+    both("primitives", &|r| r.primitives.count.to_string());
+    both("vertices", &|r| r.primitives.vertices.to_string());
+    both("primitive bytes", &|r| r.primitives.bytes.to_string());
+    both("cycles per frame", &|r| {
         r.cycles
             .as_ref()
             .map_or_else(|| "-".into(), |c| c.total.to_string())
     });
-    both(&mut t, "bottleneck", &|r| {
+    both("bottleneck", &|r| {
         r.cycles
             .as_ref()
             .and_then(|c| c.bottleneck.clone())
             .unwrap_or_else(|| "-".into())
     });
-    both(&mut t, "area mm2", &|r| {
+    both("area mm2", &|r| {
         r.cost
             .as_ref()
             .map_or_else(|| "-".into(), |c| format!("{:.3}", c.area_mm2))
     });
-    both(&mut t, "energy uJ/frame", &|r| {
+    both("energy uJ/frame", &|r| {
         r.cost
             .as_ref()
             .map_or_else(|| "-".into(), |c| format!("{:.1}", c.energy_pj * 1e-6))
     });
-    both(&mut t, "fragments", &|r| r.counts.fragments.to_string());
-    row(
-        &mut t,
-        "quad efficiency",
+    both("fragments", &|r| r.counts.fragments.to_string());
+    rows.push([
+        "quad efficiency".to_string(),
         "-".into(),
         tr.primitives
             .quad_efficiency
             .map(|q| format!("{:.1} %", 100.0 * q))
             .unwrap_or_else(|| "-".into()),
-    );
+    ]);
     if let (Some(a), Some(b)) = (&l.accuracy, &tr.accuracy) {
         for ((name, va), (_, vb)) in a.lines().into_iter().zip(b.lines()) {
-            row(&mut t, &name, va, vb);
+            rows.push([name, va, vb]);
         }
     }
+    let mut notes = Vec::new();
     if let Some(x) = &r.ratios {
         let pixel = |c: Option<f64>| c.map_or_else(|| "-".into(), |c| format!("{c:.3}"));
-        row(
-            &mut t,
-            "cycles per primitive",
+        rows.push([
+            "cycles per primitive".to_string(),
             format!("{:.1}", x.cycles_per_lembo),
             format!("{:.2}", x.cycles_per_triangle),
-        );
-        row(
-            &mut t,
-            "cycles per covered pixel",
+        ]);
+        rows.push([
+            "cycles per covered pixel".to_string(),
             pixel(x.lembo_cycles_per_covered_pixel),
             pixel(x.triangle_cycles_per_covered_pixel),
-        );
-        let _ = writeln!(
-            t,
+        ]);
+        notes.push(format!(
             "triangle/lembo: cycles per frame {:.2}, primitive bytes {:.2}; lembo/triangle cycles per primitive {:.2} ({})",
             x.triangle_over_lembo_cycles,
             x.triangle_over_lembo_bytes,
@@ -582,7 +584,7 @@ pub fn table(r: &CompareReport) -> String {
             } else {
                 format!("per primitive, not per surface: at n = {} a lembo's surface is {} triangles", r.tess.level, r.tess.level * r.tess.level)
             }
-        );
+        ));
     }
     if r.tess.auto {
         let tried: Vec<String> = r
@@ -591,7 +593,63 @@ pub fn table(r: &CompareReport) -> String {
             .iter()
             .map(|s| format!("n={} {:.3} px", s.tess, s.silhouette_max_px))
             .collect();
-        let _ = writeln!(t, "auto tried: {}", tried.join(", "));
+        notes.push(format!("auto tried: {}", tried.join(", ")));
+    }
+    Table { title, rows, notes }
+}
+
+/// The table as compare.txt and the command print it.
+pub fn table(r: &CompareReport) -> String {
+    let Table { title, rows, notes } = rows(r);
+    let mut t = String::new();
+    let _ = writeln!(t, "{title}");
+    let _ = writeln!(t, "{:<28} {:>18} {:>18}", "", "lembo", "triangle");
+    for [name, a, b] in rows {
+        let _ = writeln!(t, "{name:<28} {a:>18} {b:>18}");
+    }
+    for note in notes {
+        let _ = writeln!(t, "{note}");
     }
     t
+}
+
+/// The compare's `report.html`: the five images, the table, and each path's report.
+fn page(r: &CompareReport) -> String {
+    let Table { title, rows, notes } = rows(r);
+    let figures: String = [
+        ("lembo.png", "lembo path".to_string()),
+        (
+            "triangle.png",
+            format!("triangle path, tessellation {}", r.tess.level),
+        ),
+        ("reference.png", "exact reference".to_string()),
+        (
+            "lembo_error.png",
+            format!("lembo {}", html::ERROR_MAP_CAPTION),
+        ),
+        (
+            "triangle_error.png",
+            format!("triangle {}", html::ERROR_MAP_CAPTION),
+        ),
+    ]
+    .iter()
+    .map(|(file, caption)| html::figure(file, caption, false))
+    .collect();
+    let rows: Vec<Vec<String>> = rows.into_iter().map(Vec::from).collect();
+    let notes: String = notes.iter().map(|n| html::para(n)).collect();
+    let body = html::section("Images", &figures)
+        + &html::section(
+            "Side by side",
+            &(html::table(&["", "lembo", "triangle"], &rows) + &notes),
+        )
+        + &html::section("Lembo path", &html::report_sections(&r.lembo, None, 3))
+        + &html::section(
+            "Triangle path",
+            &html::report_sections(&r.triangle, None, 3),
+        );
+    html::page(
+        &format!("lembo-sim compare: {}", r.lembo.scene.name),
+        &title,
+        &body,
+    )
 }

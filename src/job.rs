@@ -18,6 +18,7 @@ use crate::raster;
 use crate::raster::{PerspectiveTol, Tolerance};
 use crate::reference::oracle::ReferenceImage;
 use crate::reference::{heatmap, metrics, oracle, see_through, Accuracy};
+use crate::report::html::{self, REPORT_HTML};
 use crate::report::{
     peak_rss_bytes, png_bytes, Host, Memory, PerspectiveSetting, Primitives, Report, SceneInfo,
     Settings, SCHEMA_VERSION,
@@ -300,35 +301,47 @@ fn memory_available() -> Option<f64> {
 /// naming `--viewport` and the estimate; `--no-memory-check` runs it anyway. A run estimated
 /// at over 1 GiB says so on standard error before it starts.
 pub fn check_memory(job: &RenderJob, scene: &Scene, extra_per_pixel: f64) -> Result<()> {
+    let size = format!("{}x{}", scene.viewport.width, scene.viewport.height);
+    check_available(
+        memory_estimate(job, scene, extra_per_pixel),
+        job.no_memory_check,
+        ("--viewport", &size),
+        &format!("{size} px: this run"),
+        "render a smaller viewport",
+    )
+}
+
+/// Refuses work estimated at `need` bytes when the system has less available, naming
+/// `flag` = value (`(flag, value)`) with `advice`, unless `insist` (`--no-memory-check`);
+/// `what` needs it, as the note above 1 GiB says.
+pub fn check_available(
+    need: f64,
+    insist: bool,
+    (flag, value): (&str, &str),
+    what: &str,
+    advice: &str,
+) -> Result<()> {
     const GIB: f64 = (1u64 << 30) as f64;
-    let need = memory_estimate(job, scene, extra_per_pixel);
     let have = memory_available();
     if need > GIB {
         eprintln!(
-            "lembo-sim: {}x{} px: this run needs about {:.1} GiB of memory (estimate{})",
-            scene.viewport.width,
-            scene.viewport.height,
+            "lembo-sim: {what} needs about {:.1} GiB of memory (estimate{})",
             need / GIB,
             have.map(|h| format!("; {:.1} GiB available", h / GIB))
                 .unwrap_or_default()
         );
     }
-    if job.no_memory_check {
-        return Ok(());
-    }
     match have {
-        Some(have) if need > have => {
-            Err(Error::invalid(
-                COMMAND_LINE,
-                "--viewport",
-                format!("{}x{}", scene.viewport.width, scene.viewport.height),
-                format!(
-                    "this run would need about {:.1} GiB (estimate), more than the {:.1} GiB of memory available; render a smaller viewport, or pass --no-memory-check to run anyway",
-                    need / GIB,
-                    have / GIB
-                ),
-            ))
-        }
+        Some(have) if need > have && !insist => Err(Error::invalid(
+            COMMAND_LINE,
+            flag,
+            value,
+            format!(
+                "{what} would need about {:.1} GiB (estimate), more than the {:.1} GiB of memory available; {advice}, or pass --no-memory-check to run anyway",
+                need / GIB,
+                have / GIB
+            ),
+        )),
         _ => Ok(()),
     }
 }
@@ -1084,6 +1097,34 @@ fn run_discoids(job: &RenderJob, scene: &Scene, view: &View, model: Model) -> Re
     })
 }
 
+/// The render's `report.html`: its images with what they show, and the report.
+fn render_page(
+    report: &Report,
+    files: &[(&str, Vec<u8>)],
+    trace: Option<&PathBuf>,
+    dir: &Path,
+) -> String {
+    let images: Vec<(&str, String)> = files
+        .iter()
+        .filter(|(name, _)| name.ends_with(".png"))
+        .map(|(name, _)| {
+            let caption = match *name {
+                "image.png" => format!(
+                    "{} path, as the simulated unit drew it",
+                    report.settings.path
+                ),
+                "reference.png" => {
+                    "exact reference: each sample's ray against the true lembos, in f64".to_string()
+                }
+                _ => html::ERROR_MAP_CAPTION.to_string(),
+            };
+            (*name, caption)
+        })
+        .collect();
+    let trace = trace.map(|t| html::link_from(dir, t));
+    html::render_page(report, &images, trace.as_deref())
+}
+
 /// Runs a render job to completion: nothing is written unless everything succeeded.
 pub fn run_render(job: &RenderJob) -> Result<RenderOutput> {
     job.validate()?;
@@ -1131,6 +1172,8 @@ pub fn run_render(job: &RenderJob) -> Result<RenderOutput> {
     if let (Some(path), Some(trace)) = (&job.trace_out, &run.trace) {
         elsewhere.push((path.clone(), trace.as_bytes()));
     }
+    let page = render_page(&report, &files, elsewhere.first().map(|(p, _)| p), &dir);
+    files.push((REPORT_HTML, page.into_bytes()));
     write_set(&dir, "render", &files, &elsewhere)?;
     Ok(RenderOutput {
         report,

@@ -76,6 +76,10 @@ struct SweepArgs {
     /// count; `--jobs` runs already fill the cores, so 1 is usually best.
     #[arg(long, value_name = "N", default_value_t = 1)]
     host_threads: u32,
+    /// Run even when the runs at once (--jobs) are estimated to need more memory than the
+    /// machine has available.
+    #[arg(long)]
+    no_memory_check: bool,
 }
 
 #[derive(Args)]
@@ -379,6 +383,7 @@ fn sweep(args: SweepArgs) -> ExitCode {
         stop_after,
         progress: true,
         host_threads: args.host_threads,
+        no_memory_check: args.no_memory_check,
     };
     match run_sweep(&job) {
         Ok(SweepOutcome::Done(out)) => {

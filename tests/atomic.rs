@@ -86,7 +86,13 @@ fn temp(dir: &Path, name: &str, pid: u32) -> PathBuf {
     dir.join(format!(".{name}.{pid}.tmp"))
 }
 
-const OUTPUTS: [&str; 4] = ["image.png", "manifest.json", "report.json", "report.txt"];
+const OUTPUTS: [&str; 5] = [
+    "image.png",
+    "manifest.json",
+    "report.html",
+    "report.json",
+    "report.txt",
+];
 
 fn stderr_of(child: Child) -> String {
     String::from_utf8_lossy(&child.wait_with_output().unwrap().stderr).into_owned()
@@ -177,7 +183,7 @@ fn sigint_and_sigterm_after_the_temporaries_are_written_remove_them() {
         let stderr = stderr_of(child);
         assert_eq!(status.code(), Some(code), "SIG{sig}: {stderr}");
         assert!(
-            stderr.contains("removed 4 temporary output files"),
+            stderr.contains("removed 5 temporary output files"),
             "{stderr}"
         );
         if earlier {

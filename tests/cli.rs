@@ -49,7 +49,13 @@ fn bare_command_renders_the_default_scene_into_out_default() {
     );
     assert_eq!(
         files_in(&dir.path().join("out/default")),
-        ["image.png", "manifest.json", "report.json", "report.txt"]
+        [
+            "image.png",
+            "manifest.json",
+            "report.html",
+            "report.json",
+            "report.txt"
+        ]
     );
     let report: serde_json::Value =
         serde_json::from_slice(&std::fs::read(dir.path().join("out/default/report.json")).unwrap())
@@ -106,6 +112,7 @@ fn reference_run_writes_the_accuracy_names_and_images() {
             "image.png",
             "manifest.json",
             "reference.png",
+            "report.html",
             "report.json",
             "report.txt"
         ]
@@ -549,6 +556,7 @@ fn compare_writes_every_file_and_both_reports() {
             "manifest.json",
             "montage.png",
             "reference.png",
+            "report.html",
             "triangle.png",
             "triangle_error.png"
         ]
@@ -923,6 +931,7 @@ fn an_output_folder_holds_one_runs_files() {
         "manifest.json",
         "notes.txt",
         "reference.png",
+        "report.html",
         "report.json",
         "report.txt",
     ];
@@ -934,6 +943,7 @@ fn an_output_folder_holds_one_runs_files() {
             "image.png",
             "manifest.json",
             "notes.txt",
+            "report.html",
             "report.json",
             "report.txt"
         ]
@@ -943,7 +953,13 @@ fn an_output_folder_holds_one_runs_files() {
     assert_eq!(m["command"], "render");
     assert_eq!(
         m["files"],
-        serde_json::json!(["image.png", "report.json", "report.txt", "manifest.json"])
+        serde_json::json!([
+            "image.png",
+            "report.json",
+            "report.txt",
+            "report.html",
+            "manifest.json"
+        ])
     );
     // A trace written into the folder under a name of the replaced set is this run's: kept.
     render(&["--reference"]);

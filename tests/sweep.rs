@@ -552,3 +552,33 @@ fn the_readme_cluster_recipes_give_the_unsharded_sweep() {
     bash(merge_line, &[]);
     assert_eq!(&masked(&merged), reference_run(), "Slurm, 3 array tasks");
 }
+
+/// Runs that together would need more memory than the machine has are refused before any
+/// run, naming `--jobs` and the estimate (two 16384x16384 runs with their reference need
+/// about 100 GiB); `--no-memory-check` is the way to insist.
+#[test]
+fn runs_at_once_larger_than_memory_are_refused_before_any_run() {
+    let available = std::fs::read_to_string("/proc/meminfo")
+        .ok()
+        .and_then(|t| {
+            let line = t
+                .lines()
+                .find(|l| l.starts_with("MemAvailable:"))?
+                .to_string();
+            line.split_whitespace().nth(1)?.parse::<f64>().ok()
+        })
+        .map(|kib| kib * 1024.0);
+    let Some(bytes) = available.filter(|b| *b < 90e9) else {
+        eprintln!("skipped: this machine may have the memory for the runs");
+        return;
+    };
+    let scene = manifest().join("traces/sphere24.json");
+    let spec = format!(
+        r#"{{"name": "big", "scenes": [{:?}], "viewport": [16384, 16384], "grid": [{{"k": [1, 0.5]}}]}}"#,
+        scene.to_string_lossy()
+    );
+    assert_refused(&spec, &["--jobs", "2"], "field `--jobs` = 2");
+    assert_refused(&spec, &["--jobs", "2"], "GiB (estimate)");
+    assert_refused(&spec, &["--jobs", "2"], "--no-memory-check");
+    eprintln!("{:.1} GiB available", bytes / (1u64 << 30) as f64);
+}

@@ -10,6 +10,7 @@ use crate::raster::Counts;
 use crate::reference::metrics::Accuracy;
 use serde::Serialize;
 
+pub mod html;
 pub mod text;
 
 /// Version of the `report.json` layout; bumped when a field changes meaning or moves.

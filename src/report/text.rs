@@ -4,11 +4,27 @@
 
 use super::Report;
 use crate::cost::counted::OPS;
+use crate::cost::model::OpCounts;
 use crate::pipeline::Cycle;
 use std::fmt::Write as _;
 
 /// Bytes in a mebibyte, for report.txt.
 const MIB: f64 = (1u64 << 20) as f64;
+
+/// A unit's functional units as words ("2 add, 1 mul"), or "-" for none.
+pub(crate) fn functional_units(counts: &OpCounts) -> String {
+    let fus: Vec<String> = OPS
+        .iter()
+        .zip(counts.to_array())
+        .filter(|(_, n)| *n > 0)
+        .map(|(op, n)| format!("{n} {}", op.name()))
+        .collect();
+    if fus.is_empty() {
+        "-".to_string()
+    } else {
+        fus.join(", ")
+    }
+}
 
 impl Report {
     /// The human-readable `report.txt`.
@@ -185,12 +201,6 @@ cost      {:.3} mm2, {:.1} uJ this frame{} (technology {}; {} frame-buffer bytes
             "unit", "mm2", "fifo mm2", "uJ", "fifo uJ"
         );
         for u in &c.units {
-            let fus: Vec<String> = OPS
-                .iter()
-                .zip(u.functional_units.to_array())
-                .filter(|(_, n)| *n > 0)
-                .map(|(op, n)| format!("{n} {}", op.name()))
-                .collect();
             let _ = writeln!(
                 t,
                 "  {:<22} {:>9.4} {:>9.4} {:>10.3} {:>9.3}  {}",
@@ -199,11 +209,7 @@ cost      {:.3} mm2, {:.1} uJ this frame{} (technology {}; {} frame-buffer bytes
                 u.fifo_area_mm2,
                 u.energy_pj * 1e-6,
                 u.fifo_energy_pj * 1e-6,
-                if fus.is_empty() {
-                    "-".to_string()
-                } else {
-                    fus.join(", ")
-                }
+                functional_units(&u.functional_units)
             );
         }
     }

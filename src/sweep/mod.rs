@@ -140,6 +140,9 @@ pub struct SweepJob {
     pub progress: bool,
     /// Host threads of each timed run (`--host-threads`; results do not depend on it).
     pub host_threads: u32,
+    /// Run even when the runs at once are estimated to need more memory than is available
+    /// (`--no-memory-check`).
+    pub no_memory_check: bool,
 }
 
 /// What a sweep did.

@@ -12,7 +12,10 @@ use crate::datapath::Datapath;
 use crate::discoid::blend::BlendMode;
 use crate::discoid::render::check_scene;
 use crate::error::{parent_dir, read_text_file, Error, Result};
-use crate::job::{check_triangle_budget, run_path, Given, Mode, PrimitivePath, RenderJob};
+use crate::job::{
+    check_available, check_triangle_budget, memory_estimate, run_path, Given, Mode, PrimitivePath,
+    RenderJob,
+};
 use crate::raster::PerspectiveTol;
 use crate::reference::oracle::ReferenceImage;
 use crate::report::Report;
@@ -133,6 +136,39 @@ impl Plan {
             archs,
             jobs,
         })
+    }
+
+    /// Refuses, before any run, runs that at `jobs` at once are estimated to need more
+    /// memory than is available: the `jobs` largest estimates together, each with its own
+    /// reference where it has one (DESIGN.md §8), unless `insist`.
+    pub fn check_memory(&self, runs: &[&Run], jobs: usize, insist: bool) -> Result<()> {
+        let mut estimates: Vec<(f64, usize)> = runs
+            .iter()
+            .map(|r| {
+                let scene = &self.scenes[r.scene];
+                (memory_estimate(&self.jobs[r.index], scene, 0.0), r.scene)
+            })
+            .collect();
+        estimates.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let at_once = &estimates[..jobs.min(estimates.len())];
+        let Some(&(_, largest)) = at_once.first() else {
+            return Ok(());
+        };
+        let need: f64 = at_once.iter().map(|(e, _)| e).sum();
+        let v = self.scenes[largest].viewport;
+        check_available(
+            need,
+            insist,
+            ("--jobs", &jobs.to_string()),
+            &format!(
+                "{} runs at once (the largest {} at {}x{} px)",
+                at_once.len(),
+                self.spec.scenes[largest],
+                v.width,
+                v.height
+            ),
+            "lower --jobs or the spec's viewports",
+        )
     }
 
     /// The runs of a shard, in index order.

@@ -6,6 +6,7 @@ use super::{spec::Spec, Shard, RESULTS_CSV, RESULTS_JSONL, SPEC_JSON};
 use crate::error::{Error, Result};
 use crate::output::write_files;
 use crate::pipeline::graph::KINDS;
+use crate::report::html::{self, REPORT_HTML};
 use serde::Deserialize;
 use serde_json::Value;
 use std::collections::{BTreeMap, BTreeSet};
@@ -160,7 +161,7 @@ pub(super) fn check_record(
 }
 
 /// Writes the finished directory as one atomic set: results.jsonl in index order,
-/// results.csv, spec.json and the plots.
+/// results.csv, spec.json, the plots and report.html.
 pub(super) fn write_final(
     dir: &Path,
     spec_text: &[u8],
@@ -184,8 +185,65 @@ pub(super) fn write_final(
         (SPEC_JSON, spec_text.to_vec()),
     ];
     files.extend(plots.iter().map(|(name, svg)| (name.as_str(), svg.clone())));
+    let page = page(spec_text, records.len(), &files)?;
+    files.push((REPORT_HTML, page.into_bytes()));
     write_files(dir, &files)?;
     Ok(files.iter().map(|(name, _)| name.to_string()).collect())
+}
+
+/// The sweep's `report.html`: what was swept, every plot, and results.csv as a table.
+fn page(spec_text: &[u8], runs: usize, files: &[(&str, Vec<u8>)]) -> Result<String> {
+    let spec: Value = serde_json::from_slice(spec_text).unwrap_or(Value::Null);
+    let name = spec["name"].as_str().unwrap_or("sweep");
+    let plots: String = files
+        .iter()
+        .filter(|(file, _)| file.ends_with(".svg"))
+        .map(|(file, _)| html::figure(file, file, true))
+        .collect();
+    let csv = files
+        .iter()
+        .find(|(file, _)| *file == RESULTS_CSV)
+        .map(|(_, bytes)| bytes.as_slice())
+        .unwrap_or_default();
+    let mut reader = csv::ReaderBuilder::new().from_reader(csv);
+    let csv_err = |e: csv::Error| Error::Internal(format!("results.csv: {e}"));
+    let head: Vec<String> = reader
+        .headers()
+        .map_err(csv_err)?
+        .iter()
+        .map(str::to_string)
+        .collect();
+    let rows = reader
+        .records()
+        .map(|r| r.map(|r| r.iter().map(str::to_string).collect::<Vec<_>>()))
+        .collect::<std::result::Result<Vec<_>, _>>()
+        .map_err(csv_err)?;
+    let head: Vec<&str> = head.iter().map(String::as_str).collect();
+    let body = html::section(
+        "Plots",
+        &if plots.is_empty() {
+            html::para("No parameter varied over more than one value, so there is nothing to plot.")
+        } else {
+            plots
+        },
+    ) + &html::section(
+        "Results",
+        &(html::para(&format!(
+            "One row per run, as {RESULTS_CSV} holds it (results.jsonl has each run's whole report; \
+             the columns are explained in sim/sweeps/README.md)."
+        )) + &html::table(&head, &rows)),
+    ) + &html::section(
+        "Spec",
+        &format!(
+            "<pre>{}</pre>\n",
+            html::escape(&String::from_utf8_lossy(spec_text))
+        ),
+    );
+    Ok(html::page(
+        &format!("lembo-sim sweep: {name}"),
+        &format!("{runs} runs"),
+        &body,
+    ))
 }
 
 // ---- results.csv ---------------------------------------------------------------------

@@ -38,6 +38,7 @@ pub fn run_sweep(job: &SweepJob) -> std::result::Result<SweepOutcome, SweepError
             .min(MAX_JOBS)
     });
     let runs = plan.shard_runs(job.shard);
+    plan.check_memory(&runs, jobs, job.no_memory_check)?;
 
     // One writer per folder: a second sweep on it is refused before it reads anything.
     let _lock = FolderLock::acquire(&dir, "sweep", "--out")?;
