@@ -279,7 +279,7 @@ pub fn memory_estimate(job: &RenderJob, scene: &Scene, extra_per_pixel: f64) -> 
         Mode::Functional => BYTES_PER_PIXEL_FUNCTIONAL,
         Mode::Timed => BYTES_PER_PIXEL_TIMED,
     } + extra_per_pixel;
-    if job.reference && scene.discoid_count() == 0 {
+    if job.reference {
         per_pixel += BYTES_PER_PIXEL_REFERENCE;
     }
     if scene.discoid_count() > 0 {
@@ -399,10 +399,34 @@ pub fn load_scene(job: &RenderJob) -> Result<Scene> {
     Ok(scene)
 }
 
-/// The exact reference of `scene` (its lembo surfaces), with the wall time it took.
+/// The scene whose lembos the exact reference of `scene` renders: the scene itself, or for
+/// a discoid scene the surface its discoids stand for (`discoid::surface`); a discoid
+/// scene that does not say what surface that is has `--reference` refused naming why.
+pub fn reference_scene(scene: &Scene) -> Result<std::borrow::Cow<'_, Scene>> {
+    if scene.discoid_count() == 0 {
+        return Ok(std::borrow::Cow::Borrowed(scene));
+    }
+    discoid::surface::surface_scene(scene)
+        .map(std::borrow::Cow::Owned)
+        .map_err(|why| {
+            Error::invalid(
+                COMMAND_LINE,
+                "--reference",
+                "given",
+                format!(
+                    "the reference of a discoid scene is the surface its discoids stand for: {why}"
+                ),
+            )
+        })
+}
+
+/// The exact reference of `scene` (its lembo surfaces, or the surface its discoids stand
+/// for: [`reference_scene`], which the caller checked), with the wall time it took.
 pub fn render_reference(scene: &Scene, view: &View, supersample: u32) -> (ReferenceImage, f64) {
     let t = Instant::now();
-    let lembos: Vec<_> = scene.lembos().collect();
+    // Callers check a discoid scene's surface with `reference_scene` first.
+    let surface = reference_scene(scene).expect("a discoid scene's surface is checked first");
+    let lembos: Vec<_> = surface.lembos().collect();
     let reference = oracle::render_reference(&oracle::ReferenceInput {
         lembos: &lembos,
         view,
@@ -483,6 +507,9 @@ impl<'s> Route<'s> {
 /// scene, k and the perspective tolerance where no lembo is drawn.
 fn check_applies(job: &RenderJob, scene: &Scene) -> Result<()> {
     let discoids = scene.discoid_count();
+    if job.reference && discoids > 0 {
+        reference_scene(scene)?;
+    }
     let curved = scene.lembo_count() > 0;
     let lembos_drawn = if discoids > 0 {
         curved
@@ -580,15 +607,7 @@ pub fn run_path(
 ) -> Result<PathRun> {
     let route = Route::new(job, scene)?;
     if let Route::Discoids = route {
-        if reference.is_some() {
-            return Err(Error::invalid(
-                COMMAND_LINE,
-                "--reference",
-                "given",
-                "the exact reference renders lembo surfaces; a discoid scene's error is measured against an f64 accumulation of its fragments (report.json blend)",
-            ));
-        }
-        return run_discoids(job, scene, view, model);
+        return run_discoids(job, scene, view, model, reference);
     }
     let (drawn, wall) = draw(job, scene, view, model, &route, reference.is_some())?;
     let measured = match (reference, drawn.probed()) {
@@ -1000,7 +1019,13 @@ pub const CURVED_DISCOID_BYTES: u64 = LEMBO_BYTES + 6 * 2 * 4;
 
 /// A discoid scene's three passes (Piranda et al. 2006): timed on `arch`, or functional. With both,
 /// the timed image is checked against the functional one.
-fn run_discoids(job: &RenderJob, scene: &Scene, view: &View, model: Model) -> Result<PathRun> {
+fn run_discoids(
+    job: &RenderJob,
+    scene: &Scene,
+    view: &View,
+    model: Model,
+    reference: Option<(&ReferenceImage, f64)>,
+) -> Result<PathRun> {
     let threshold = job.threshold.unwrap_or(scene.discoid_threshold);
     let t0 = Instant::now();
     let (framebuffer, counts, blend, units, cycles) = match model {
@@ -1038,6 +1063,17 @@ fn run_discoids(job: &RenderJob, scene: &Scene, view: &View, model: Model) -> Re
         }
     };
     let wall = t0.elapsed().as_secs_f64();
+    let measured = match reference {
+        Some(reference) => Some(measure_discoids(
+            job,
+            scene,
+            view,
+            threshold,
+            &framebuffer,
+            reference,
+        )?),
+        None => None,
+    };
     let (planar, curved) = scene
         .objects
         .iter()
@@ -1078,22 +1114,60 @@ fn run_discoids(job: &RenderJob, scene: &Scene, view: &View, model: Model) -> Re
         cycles: cycles.clone(),
         cost: None,
         arch: model.arch().cloned(),
-        accuracy: None,
+        accuracy: measured.as_ref().map(|m| m.accuracy.clone()),
         blend: Some(blend),
         memory,
         host: host(
             wall,
             counts.fragments,
             cycles.map(|c| (c.total, job.host_threads)),
-            None,
-            None,
+            measured.as_ref().map(|m| m.reference_wall),
+            measured.as_ref().map(|m| m.metrics_wall),
         ),
     };
     Ok(PathRun {
         report,
         framebuffer,
-        error_map: None,
+        error_map: measured.map(|m| m.error_map),
         trace: None,
+    })
+}
+
+/// A discoid image measured against the surface its discoids stand for: the functional
+/// passes drawn again keeping the depth winners' normals (their image must be the one
+/// measured, bit for bit), then the metrics against the reference of [`reference_scene`].
+fn measure_discoids(
+    job: &RenderJob,
+    scene: &Scene,
+    view: &View,
+    threshold: f64,
+    image: &FrameBuffer,
+    (reference, wall): (&ReferenceImage, f64),
+) -> Result<Measured> {
+    let t1 = Instant::now();
+    let with_normals = discoid::render::render_discoids(
+        scene,
+        view,
+        job.tolerance(),
+        job.datapath,
+        (job.blend, threshold),
+        true,
+    )?
+    .framebuffer;
+    if with_normals.color != image.color {
+        return Err(Error::Internal(
+            "the discoid image drawn again for the metrics differs from the one measured".into(),
+        ));
+    }
+    let surface = reference_scene(scene)?;
+    let tracer = oracle::Tracer::new(surface.lembos().map(|(l, _)| l), view);
+    let accuracy = metrics::measure(&with_normals, reference, &tracer, 0, None, None);
+    let metrics_wall = t1.elapsed().as_secs_f64();
+    Ok(Measured {
+        accuracy,
+        error_map: heatmap::error_heatmap(image, reference),
+        reference_wall: wall + metrics_wall,
+        metrics_wall,
     })
 }
 
@@ -1134,6 +1208,9 @@ pub fn run_render(job: &RenderJob) -> Result<RenderOutput> {
     let arch = load_arch(job)?;
     if job.path == PrimitivePath::Triangle {
         check_triangle_budget(&scene, job.tess.unwrap_or(1))?;
+    }
+    if job.reference {
+        reference_scene(&scene)?;
     }
     let reference = job
         .reference

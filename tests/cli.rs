@@ -762,7 +762,18 @@ fn bad_discoid_flags_are_refused() {
         "--threshold",
     );
     assert_refused(&["render", s, "--blend", "f8", "--out", "o"], "--blend");
-    assert_refused(&["render", s, "--reference", "--out", "o"], "--reference");
+    // The reference of a discoid scene is the surface it stands for: inline discoids
+    // without a `surface` have none.
+    let sheets = manifest().join("traces/discoid_threshold.json");
+    let args = [
+        "render",
+        sheets.to_str().unwrap(),
+        "--reference",
+        "--out",
+        "o",
+    ];
+    assert_refused(&args, "field `--reference`");
+    assert_refused(&args, "does not say what surface its discoids stand for");
 }
 
 /// One rule for settings that do not apply (DESIGN.md §8): refused naming the flag and

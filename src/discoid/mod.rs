@@ -16,6 +16,7 @@ use serde::{Deserialize, Serialize};
 pub mod blend;
 pub mod render;
 pub mod shapes;
+pub mod surface;
 pub mod texture;
 
 /// The gray-level texture a discoid carries (Piranda et al. 2006 Figure 5, and a gaussian).
@@ -99,8 +100,27 @@ pub struct DiscoidSet {
     /// Curved discoids: texture coordinates (s, t) at the six reference points of each of
     /// the object's lembos, in the same order as `SceneObject::lembos`.
     pub lembo_texcoords: Vec<[[f64; 2]; 6]>,
-    /// The planar discoids are surfels of a point cloud (holes are counted).
+    /// The planar discoids are surfels of a point cloud.
     pub surfels: bool,
+    /// The surface the discoids stand for, in world space, which `--reference` renders
+    /// exactly; None where the scene does not say (inline discoids, surfels without a
+    /// `surface`).
+    pub surface: Option<DiscoidSurface>,
+}
+
+/// The surface an atlas of discoids stands for.
+#[derive(Clone, Debug, PartialEq)]
+pub enum DiscoidSurface {
+    /// A sphere (the builtin curved discoids).
+    Sphere {
+        /// Centre [world units].
+        center: DVec3,
+        /// Radius [world units].
+        radius: f64,
+    },
+    /// A triangle mesh with vertex normals (the mesh discoids were placed on): its flat
+    /// triangles, shaded with the vertex normals linearly interpolated (Phong).
+    Mesh(crate::lembo::construct::TriangleMesh),
 }
 
 #[cfg(test)]

@@ -77,8 +77,8 @@ pub struct BlendReport {
     pub error_mean: f64,
     /// The threshold t used [world units].
     pub threshold: f64,
-    /// Surfel scenes: uncovered pixels with covered pixels within 3 px to their left,
-    /// right, top and bottom (holes inside the silhouette); null otherwise.
+    /// Uncovered pixels with covered pixels within 3 px to their left, right, top and
+    /// bottom (holes inside the silhouette, [`count_holes`]), for every kind of discoid.
     pub holes: Option<u64>,
     /// Timed runs: the cycles of each pass (depth, accumulation, resolve); null in
     /// functional mode.
@@ -280,6 +280,9 @@ pub struct DiscoidTarget {
     pub exact: Vec<ExactAccum>,
     /// Fragments kept by the accumulation pass, blended in order at its end.
     pub kept: Vec<KeptFragment>,
+    /// The depth pass winner's unit normal per pixel, kept only when accuracy is measured
+    /// against the surface (the metrics', not the unit's).
+    pub normal: Option<Vec<[f32; 3]>>,
     /// The passes' counters and the blend error.
     pub report: BlendReport,
 }
@@ -311,6 +314,7 @@ impl DiscoidTarget {
             accum: vec![Accum::default(); n],
             exact: vec![ExactAccum::default(); n],
             kept: Vec::new(),
+            normal: None,
             report: BlendReport {
                 mode: mode.name().to_string(),
                 bytes_per_fragment: mode.bytes_per_fragment(),
@@ -447,6 +451,9 @@ pub fn process<R: Real>(
             if depth_pass_wins(&e, f.id, depth, winner) {
                 target.depth[idx] = e.z;
                 target.winner[idx] = f.id;
+                if let Some(normals) = target.normal.as_mut() {
+                    normals[idx] = e.normal.map(|c| c.f64() as f32);
+                }
             }
         }
         Pass::Accumulate => {
@@ -532,7 +539,7 @@ pub fn resolve<R: Real>(
     height: u32,
 ) -> FrameBuffer {
     let width = target.width;
-    let mut fb = FrameBuffer::new(width, height, background, false);
+    let mut fb = FrameBuffer::new(width, height, background, target.normal.is_some());
     let s = shader.shader();
     let luminance = |d: f64, g: f64| {
         s.ka.f64()
@@ -551,6 +558,9 @@ pub fn resolve<R: Real>(
         let color = table.color(target.winner[idx]).map(R::of);
         let c = s.combine(R::of(d), R::of(g), color);
         fb.write(idx, target.depth[idx], target.winner[idx], c.map(to_u8));
+        if let (Some(out), Some(normals)) = (fb.normal.as_mut(), target.normal.as_ref()) {
+            out[idx] = normals[idx];
+        }
         if let Some((ed, eg)) = target.exact[idx].resolve() {
             let e = (luminance(d, g) - luminance(ed, eg)).abs();
             max = max.max(e);
@@ -561,13 +571,18 @@ pub fn resolve<R: Real>(
     let r = &mut target.report;
     r.error_max = max;
     r.error_mean = if n > 0 { sum / n as f64 } else { 0.0 };
-    r.holes = table.surfels.then(|| count_holes(&fb, 3));
+    r.holes = Some(count_holes(&fb, HOLE_REACH));
     fb
 }
 
+/// How far [`count_holes`] looks for covered pixels around an uncovered one \[pixels\].
+pub const HOLE_REACH: u32 = 3;
+
 /// Uncovered pixels with a covered pixel within `reach` pixels to their left, right, top
 /// and bottom: holes inside the silhouette (the hole detection of Pfister et al. 2000, on the
-/// image).
+/// image). A pixel the depth pass covered but whose every fragment the accumulation pass
+/// discarded is uncovered too (the resolve leaves it the background). The one definition
+/// of holes for every kind of discoid (planar, curved, surfels).
 pub fn count_holes(fb: &FrameBuffer, reach: u32) -> u64 {
     let (w, h) = (fb.width as i64, fb.height as i64);
     let covered = |i: i64, j: i64| {
@@ -629,10 +644,22 @@ pub fn render_discoids_functional(
     mode: BlendMode,
     threshold: f64,
 ) -> Result<DiscoidFrame> {
-    let tol = tol.into();
+    render_discoids(scene, view, tol.into(), datapath, (mode, threshold), false)
+}
+
+/// [`render_discoids_functional`], keeping in the frame buffer the depth pass winner's
+/// normal at each pixel when `keep_normals` (for the accuracy metrics); the same image.
+pub fn render_discoids(
+    scene: &Scene,
+    view: &View,
+    tol: Tolerance,
+    datapath: Datapath,
+    (mode, threshold): (BlendMode, f64),
+    keep_normals: bool,
+) -> Result<DiscoidFrame> {
     match datapath {
-        Datapath::F32 => passes::<f32>(scene, view, tol, mode, threshold),
-        Datapath::F64 => passes::<f64>(scene, view, tol, mode, threshold),
+        Datapath::F32 => passes::<f32>(scene, view, tol, mode, threshold, keep_normals),
+        Datapath::F64 => passes::<f64>(scene, view, tol, mode, threshold, keep_normals),
     }
 }
 
@@ -642,12 +669,16 @@ fn passes<R: Real>(
     tol: Tolerance,
     mode: BlendMode,
     threshold: f64,
+    keep_normals: bool,
 ) -> Result<DiscoidFrame> {
     check_scene(scene)?;
     let vp = view.viewport;
     let table = DiscoidTable::<R>::new(scene);
     let shader = FragmentShader::<R>::new(&scene.light, view);
     let mut target = DiscoidTarget::new(vp.width, vp.height, mode, threshold);
+    if keep_normals {
+        target.normal = Some(vec![[0.0; 3]; vp.width as usize * vp.height as usize]);
+    }
     let mut counts = Counts::default();
     for pass in [Pass::Depth, Pass::Accumulate] {
         let mut sink = Sink {

@@ -56,6 +56,18 @@ pub const SPHERE20_RADIUS: f64 = 0.65;
 /// The angle between a `sphere20` lembo's corners and its face centre \[degrees\].
 pub const SPHERE20_CORNER_ANGLE_DEG: f64 = 62.0;
 
+/// How often each `sphere20` discoid's spherical triangle is split into four: it is drawn
+/// as 4^levels lembos, so that it lies within [`SPHERE20_MAX_SAG`] of the sphere.
+pub const SPHERE20_LEVELS: u32 = 3;
+
+/// The largest distance of a `sphere20` discoid's lembos from the unit sphere inside the
+/// discoid's disk, at [`SPHERE20_LEVELS`] (tested) \[world units, unit sphere\].
+pub const SPHERE20_MAX_SAG: f64 = 1e-3;
+
+/// How often the icosahedron's faces are split for the sphere the exact reference of the
+/// builtin discoids renders ([`sphere_lembos`]).
+pub const SPHERE_REFERENCE_LEVELS: u32 = 5;
+
 /// Curved discoids: lembos with texture coordinates at their six reference points.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CurvedDiscoids {
@@ -76,37 +88,87 @@ pub fn builtin_discoids(name: &str) -> Option<CurvedDiscoids> {
     }
 }
 
-/// The paper's Figure 10: the unit sphere covered by 20 curved discoids (module doc).
+/// The paper's Figure 10: the unit sphere covered by 20 curved discoids (module doc), each
+/// drawn as `4^SPHERE20_LEVELS` lembos.
 pub fn sphere20() -> CurvedDiscoids {
+    sphere20_at(SPHERE20_LEVELS)
+}
+
+/// `sphere20` with each discoid's spherical triangle split `levels` times (0: one lembo
+/// per discoid, the construction before the split, kept for its tests and the figures of
+/// the module doc).
+pub fn sphere20_at(levels: u32) -> CurvedDiscoids {
     let (vertices, faces) = icosahedron();
     let (sin_rho, cos_rho) = SPHERE20_CORNER_ANGLE_DEG.to_radians().sin_cos();
+    let per_discoid = 4usize.pow(levels);
     let mut out = CurvedDiscoids {
-        lembos: Vec::with_capacity(20),
-        texcoords: Vec::with_capacity(20),
-        radii: vec![SPHERE20_RADIUS; 20],
+        lembos: Vec::with_capacity(20 * per_discoid),
+        texcoords: Vec::with_capacity(20 * per_discoid),
+        radii: vec![SPHERE20_RADIUS; 20 * per_discoid],
     };
     for face in faces {
         let c = face.iter().map(|&i| vertices[i]).sum::<DVec3>().normalize();
         // Turn each vertex away from c, in its own direction, to the corner angle.
         let corner = |p: DVec3| cos_rho * c + sin_rho * (p - p.dot(c) * c).normalize();
-        let [a, b, cc] = face.map(|i| corner(vertices[i]));
-        let points = [
-            a,
-            b,
-            cc,
-            (a + b).normalize(),
-            (a + cc).normalize(),
-            (b + cc).normalize(),
-        ];
         let disk = Discoid {
             center: c,
             normal: c,
             radius: SPHERE20_RADIUS,
         };
-        out.lembos.push(Lembo::new(points, points));
-        out.texcoords.push(points.map(|p| disk.texcoord(p)));
+        for tri in split_spherical(face.map(|i| corner(vertices[i])), levels) {
+            let points = spherical_lembo_points(tri);
+            out.lembos.push(Lembo::new(points, points));
+            out.texcoords.push(points.map(|p| disk.texcoord(p)));
+        }
     }
     out
+}
+
+/// The six reference points of the lembo over the spherical triangle (a, b, c) of the unit
+/// sphere: its corners and its edges' great-circle midpoints, in lembo order.
+fn spherical_lembo_points([a, b, c]: [DVec3; 3]) -> [DVec3; 6] {
+    [
+        a,
+        b,
+        c,
+        (a + b).normalize(),
+        (a + c).normalize(),
+        (b + c).normalize(),
+    ]
+}
+
+/// The spherical triangle (a, b, c) of the unit sphere split `levels` times into four by its
+/// edges' great-circle midpoints, counter-clockwise as given; neighbours share their
+/// edges' midpoints exactly.
+pub fn split_spherical(tri: [DVec3; 3], levels: u32) -> Vec<[DVec3; 3]> {
+    let mut tris = vec![tri];
+    for _ in 0..levels {
+        tris = tris
+            .into_iter()
+            .flat_map(|[a, b, c]| {
+                // IEEE addition commutes: both triangles at an edge get the same midpoint.
+                let mid = |p: DVec3, q: DVec3| (p + q).normalize();
+                let (ab, bc, ca) = (mid(a, b), mid(b, c), mid(c, a));
+                [[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]
+            })
+            .collect();
+    }
+    tris
+}
+
+/// The unit sphere as `20 * 4^levels` lembos over the split faces of the icosahedron, with
+/// normals equal to the positions: for the exact reference of the builtin discoids'
+/// sphere ([`SPHERE_REFERENCE_LEVELS`] is within 1e-6 of it; tested).
+pub fn sphere_lembos(levels: u32) -> Vec<Lembo> {
+    let (vertices, faces) = icosahedron();
+    faces
+        .iter()
+        .flat_map(|f| split_spherical(f.map(|i| vertices[i]), levels))
+        .map(|tri| {
+            let points = spherical_lembo_points(tri);
+            Lembo::new(points, points)
+        })
+        .collect()
 }
 
 /// The texture coordinates of a curved discoid at domain point (u, v): the quadratic
@@ -417,7 +479,7 @@ mod tests {
     #[test]
     fn sphere20_lembos_contain_their_disks() {
         // beta = 0 on every edge of every lembo (the texture rim is at distance 0.5).
-        let s = sphere20();
+        let s = sphere20_at(0);
         let n = 400;
         let mut nearest = f64::INFINITY;
         for st in &s.texcoords {
@@ -433,7 +495,7 @@ mod tests {
 
     #[test]
     fn sphere20_texcoords_are_centred_on_the_face_centre() {
-        let s = sphere20();
+        let s = sphere20_at(0);
         for ((l, st), c) in s.lembos.iter().zip(&s.texcoords).zip(face_centres()) {
             let disk = Discoid {
                 center: c,
@@ -460,7 +522,7 @@ mod tests {
 
     #[test]
     fn sphere20_sag_and_overlap_gap_are_as_documented() {
-        let s = sphere20();
+        let s = sphere20_at(0);
         // Inside each disk the lembo stays within [0.815, 0.982] of the centre.
         let n = 60;
         for (l, st) in s.lembos.iter().zip(&s.texcoords) {
@@ -474,8 +536,8 @@ mod tests {
                 }
             }
         }
-        // Overlapping discoids lie at most 0.17 apart along a ray: below the 0.2 threshold
-        // of traces/discoid_sphere20.json.
+        // Overlapping discoids lie at most 0.17 apart along a ray: more than the default
+        // threshold (0.25 R = 0.16), so the one-lembo discoids needed 0.2.
         let mut gap = 0f64;
         for q in sphere_sample(2_000) {
             let radii: Vec<f64> = s
@@ -493,6 +555,81 @@ mod tests {
             gap = gap.max(hi - lo);
         }
         assert!(gap > 0.1 && gap < 0.17, "{gap}");
+    }
+
+    /// The largest |r - 1| of `lembos` (with texture coordinates `st`, restricted to the
+    /// inside of their disks when given), over a grid of 20 steps a side.
+    fn sag(lembos: &[Lembo], st: Option<&[[[f64; 2]; 6]]>) -> f64 {
+        let n = 20;
+        let mut worst = 0f64;
+        for (k, l) in lembos.iter().enumerate() {
+            for i in 0..=n {
+                for j in 0..=(n - i) {
+                    let (u, v) = (i as f64 / n as f64, j as f64 / n as f64);
+                    if st.is_some_and(|st| from_centre(lembo_texcoord(&st[k], u, v)) >= 0.5) {
+                        continue;
+                    }
+                    worst = worst.max((l.position_at(u, v).length() - 1.0).abs());
+                }
+            }
+        }
+        worst
+    }
+
+    #[test]
+    fn sphere20_split_discoids_fit_the_sphere() {
+        let s = sphere20();
+        assert_eq!(s.lembos.len(), 20 * 4usize.pow(SPHERE20_LEVELS));
+        let worst = sag(&s.lembos, Some(&s.texcoords));
+        assert!(worst <= SPHERE20_MAX_SAG, "{worst}");
+        // One level fewer would not do: the bound is what the level buys.
+        let coarser = sphere20_at(SPHERE20_LEVELS - 1);
+        assert!(sag(&coarser.lembos, Some(&coarser.texcoords)) > SPHERE20_MAX_SAG);
+        // Overlapping discoids now lie within twice the sag along a ray, far below the
+        // default threshold.
+        let mut gap = 0f64;
+        for q in sphere_sample(300) {
+            let radii: Vec<f64> = s
+                .lembos
+                .iter()
+                .zip(&s.texcoords)
+                .filter_map(|(l, st)| {
+                    let (u, v) = crossing(l, q)?;
+                    (from_centre(lembo_texcoord(st, u, v)) < 0.5)
+                        .then(|| l.position_at(u, v).length())
+                })
+                .collect();
+            assert!(!radii.is_empty(), "{q} is in no drawn discoid");
+            let lo = radii.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = radii.iter().copied().fold(0.0, f64::max);
+            gap = gap.max(hi - lo);
+        }
+        assert!(gap <= 2.0 * SPHERE20_MAX_SAG, "{gap}");
+        // Every sub-lembo of a discoid carries that discoid's texture coordinates: where a
+        // sub-lembo's point is a corner of the whole discoid's triangle, it has the
+        // coordinates the one-lembo discoid has there.
+        let whole = sphere20_at(0);
+        assert_eq!(whole.lembos.len(), 20);
+        let per = 4usize.pow(SPHERE20_LEVELS);
+        let mut matched = 0;
+        for (k, (l, st)) in s.lembos.iter().zip(&s.texcoords).enumerate() {
+            let g = k / per;
+            for (p, t) in l.points.iter().zip(st) {
+                if let Some(c) = whole.lembos[g].points[..3].iter().position(|q| q == p) {
+                    assert_eq!(*t, whole.texcoords[g][c]);
+                    matched += 1;
+                }
+            }
+        }
+        assert_eq!(matched, 20 * 3, "each discoid's three corners, once each");
+    }
+
+    #[test]
+    fn the_reference_sphere_is_within_a_millionth_of_the_unit_sphere() {
+        let lembos = sphere_lembos(SPHERE_REFERENCE_LEVELS);
+        assert_eq!(lembos.len(), 20 * 4usize.pow(SPHERE_REFERENCE_LEVELS));
+        let worst = sag(&lembos, None);
+        assert!(worst < 1e-6, "{worst}");
     }
 
     fn square() -> TriangleMesh {

@@ -114,7 +114,7 @@ pub const WELD_RELATIVE: f64 = 1e-9;
 /// An indexed triangle mesh with one normal per vertex. Vertices at the same position with
 /// different normals (split vertices) make hard edges; [`TriangleMesh::to_lembos`] welds
 /// them so the surface stays closed.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct TriangleMesh {
     /// Vertex positions.
     pub positions: Vec<DVec3>,

@@ -4,13 +4,13 @@
 use super::{
     format::{DiscoidItemSpec, DiscoidSource, DiscoidsSpec},
     given,
-    mesh::{load_obj, Transform},
+    mesh::{load_obj, transform_mesh, Transform},
     pointcloud::load_surfels,
     validate::{discoid_in_range, unit, Check, Vec3Value},
     MAX_DISCOIDS, MAX_WORLD_COORDINATE,
 };
 use crate::discoid::shapes::{builtin_discoids, discoids_from_mesh, BUILTIN_DISCOID_NAMES};
-use crate::discoid::{BetaShape, Discoid, DiscoidSet};
+use crate::discoid::{BetaShape, Discoid, DiscoidSet, DiscoidSurface};
 use crate::error::{Error, Result};
 use crate::lembo::Lembo;
 use std::path::Path;
@@ -34,6 +34,7 @@ impl Check<'_> {
             planar: Vec::new(),
             lembo_texcoords: Vec::new(),
             surfels: false,
+            surface: None,
         };
         let before = radii.len();
         let (label, lembos, source) = match source {
@@ -56,6 +57,14 @@ impl Check<'_> {
                 let radius_scale = self.radius_scale(&field, spec.radius_scale)?;
                 let file = base_dir.join(path);
                 let mesh = load_obj(self.file, &source, &file)?;
+                if spec.surface.is_some() {
+                    return Err(self.invalid(
+                        format!("{field}.surface"),
+                        "(given)",
+                        "`from_mesh` discoids stand for their own mesh; `surface` is for `items` and `surfels`",
+                    ));
+                }
+                set.surface = Some(DiscoidSurface::Mesh(transform_mesh(mesh.clone(), t)));
                 set.planar = discoids_from_mesh(&mesh, subdivide, radius_scale).map_err(|e| {
                     Error::Mesh {
                         file: self.file.to_string(),
@@ -97,8 +106,19 @@ impl Check<'_> {
                         .collect(),
                     None => curved.lembos,
                 };
+                if spec.surface.is_some() {
+                    return Err(self.invalid(
+                        format!("{field}.surface"),
+                        "(given)",
+                        "builtin discoids stand for their own shape; `surface` is for `items` and `surfels`",
+                    ));
+                }
                 set.lembo_texcoords = curved.texcoords;
                 let scale = t.map_or(1.0, |t| t.scale);
+                set.surface = Some(DiscoidSurface::Sphere {
+                    center: t.map_or(glam::DVec3::ZERO, |t| t.point(glam::DVec3::ZERO)),
+                    radius: scale,
+                });
                 radii.extend(curved.radii.iter().map(|r| r * scale));
                 (format!("builtin discoids {name}"), lembos, source)
             }
@@ -109,6 +129,11 @@ impl Check<'_> {
                 (format!("surfels {path}"), Vec::new(), source)
             }
         };
+        if let (Some(path), None) = (&spec.surface, &set.surface) {
+            let source = format!("{field}.surface");
+            let mesh = load_obj(self.file, &source, &base_dir.join(path))?;
+            set.surface = Some(DiscoidSurface::Mesh(transform_mesh(mesh, t)));
+        }
         self.place_planar(object, source, &mut set.planar, t)?;
         radii.extend(set.planar.iter().map(|d| d.radius));
         Ok((label, lembos, set))

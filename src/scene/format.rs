@@ -107,6 +107,9 @@ pub(super) struct DiscoidsSpec {
     pub(super) builtin: Option<String>,
     pub(super) surfels: Option<String>,
     pub(super) beta: Option<BetaShape>,
+    /// The mesh (OBJ) the discoids stand for, with `items` or `surfels`; `from_mesh` and
+    /// `builtin` imply theirs.
+    pub(super) surface: Option<String>,
 }
 
 #[derive(Deserialize)]

@@ -883,7 +883,7 @@ mod tests {
     fn committed_discoid_traces_load_with_their_counts() {
         // (file, discoids, lembos, threshold or None for the default)
         for (file, discoids, lembos, threshold) in [
-            ("discoid_sphere20", 20, 20, Some(0.2)),
+            ("discoid_sphere20", 1280, 1280, Some(0.25 * 0.65)),
             ("discoid_threshold", 17 * 17 + 25 * 25, 0, Some(0.025)),
             ("bunny_discoids", 1839 + 5511, 0, None),
             ("surfels_bunny", 1839, 0, None),
@@ -914,11 +914,17 @@ mod tests {
 
     #[test]
     fn sphere20_scene_threshold_exceeds_the_overlap_gap() {
-        // The lembos of overlapping discoids lie up to 0.17 apart (discoid::shapes): the
-        // scene's threshold must blend them, and stay far below the sphere's diameter.
+        // The lembos of overlapping discoids lie within twice SPHERE20_MAX_SAG of each
+        // other (discoid::shapes): the default threshold, a quarter of the discoids'
+        // radius, blends them and stays far below the sphere's diameter.
+        use crate::discoid::shapes::{SPHERE20_LEVELS, SPHERE20_MAX_SAG, SPHERE20_RADIUS};
         let scene = Scene::load(&traces().join("discoid_sphere20.json")).unwrap();
-        assert!(scene.discoid_threshold > 0.17 && scene.discoid_threshold < 0.5);
-        assert_eq!(discoid_set(&scene, 0).lembo_texcoords.len(), 20);
+        assert_eq!(scene.discoid_threshold, 0.25 * SPHERE20_RADIUS);
+        assert!(scene.discoid_threshold > 100.0 * SPHERE20_MAX_SAG);
+        assert_eq!(
+            discoid_set(&scene, 0).lembo_texcoords.len(),
+            20 * 4usize.pow(SPHERE20_LEVELS)
+        );
     }
 
     #[test]
@@ -1327,7 +1333,8 @@ mod tests {
         assert_eq!(o.label, "builtin discoids sphere20");
         assert_eq!(o.color, [0.1, 0.2, 0.3]);
         let set = discoid_set(&scene, 0);
-        assert_eq!((o.lembos.len(), set.lembo_texcoords.len()), (20, 20));
+        let n = 20 * 4usize.pow(crate::discoid::shapes::SPHERE20_LEVELS);
+        assert_eq!((o.lembos.len(), set.lembo_texcoords.len()), (n, n));
         assert!(set.planar.is_empty() && set.beta == BetaShape::Gaussian);
         let plain = crate::discoid::shapes::sphere20();
         assert_eq!(set.lembo_texcoords, plain.texcoords);
@@ -1335,7 +1342,7 @@ mod tests {
             assert_eq!(l.points[0], p.points[0] + DVec3::X);
             assert_eq!(l.normals[0], p.normals[0]);
         }
-        assert_eq!(scene.lembo_count(), 20);
-        assert_eq!(scene.discoid_count(), 20);
+        assert_eq!(scene.lembo_count(), n);
+        assert_eq!(scene.discoid_count(), n);
     }
 }

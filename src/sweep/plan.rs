@@ -307,7 +307,8 @@ pub(super) fn render_job(
         k: DEFAULT_K_PX,
         perspective_tol: PerspectiveTol::FollowK,
         datapath: Datapath::F32,
-        reference: spec.reference && scene.discoid_count() == 0,
+        // A discoid scene is measured against the surface it stands for, where it says.
+        reference: spec.reference && crate::job::reference_scene(scene).is_ok(),
         supersample: 1,
         viewport: spec.viewport,
         mode: spec.mode,
