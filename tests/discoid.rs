@@ -300,7 +300,7 @@ fn mesh_discoids_and_surfels_are_measured_against_their_mesh() {
     for scene in [
         "traces/bunny_discoids.json",
         "traces/surfels_bunny.json",
-        "traces/surfels_bunny_gaussian.json",
+        "traces/surfels_bunny_ewa.json",
     ] {
         let r = measured(scene, &["--viewport", "192x192", "--mode", "functional"]);
         let psnr = r["accuracy"]["psnr_db"].as_f64().unwrap();

@@ -29,6 +29,10 @@ pub enum BetaShape {
     Star,
     /// exp(-r²/2σ²) with σ = 1/3 of the radius, cut to 0 at the rim.
     Gaussian,
+    /// Planar discoids and surfels only: the gaussian as EWA splatting resamples it
+    /// (Zwicker et al. 2001): the tangent-plane gaussian mapped to the screen and
+    /// convolved with a one-pixel low-pass filter ([`render::EwaKernel`]).
+    Ewa,
 }
 
 impl BetaShape {
@@ -38,6 +42,7 @@ impl BetaShape {
             BetaShape::Disk => "disk",
             BetaShape::Star => "star",
             BetaShape::Gaussian => "gaussian",
+            BetaShape::Ewa => "ewa",
         }
     }
 }

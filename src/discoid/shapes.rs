@@ -28,10 +28,16 @@
 //!   lembo's edges the interpolated texture coordinates stay at least 0.527 from (0.5, 0.5)
 //!   (the rim is at 0.5), so beta is 0 along every edge.
 //!
-//! A quadratic patch this large sags below the sphere: inside its disk the lembo's distance
-//! from the centre is in [0.815, 0.982], and where disks overlap, the overlapping lembos lie
-//! up to about 0.167 apart along the ray from the sphere's centre. A blending threshold must exceed
-//! that gap (`traces/discoid_sphere20.json` uses 0.2); all three figures are tested below.
+//! A quadratic patch this large sags below the sphere: inside its disk the one lembo's
+//! distance from the centre is in [0.815, 0.982], and where disks overlap, the overlapping
+//! lembos lie up to about 0.167 apart along the ray from the sphere's centre, more than the
+//! default threshold (0.25 R = 0.1625): seams and dark spots where the threshold cut them.
+//! So each discoid is drawn as [`SPHERE20_LEVELS`] = 3 splits of its spherical triangle by
+//! great-circle midpoints ([`split_spherical`]): 64 lembos whose points all lie on the
+//! sphere and carry the disk's texture coordinates, within [`SPHERE20_MAX_SAG`] = 0.001 of
+//! the sphere inside the disk (two splits give 0.003), so overlapping discoids lie within
+//! 0.002 of each other and the default threshold blends them. [`sphere20_at`]`(0)` is the
+//! one-lembo construction; the figures of both are tested below.
 //!
 //! ## Planar discoids from a mesh
 //!

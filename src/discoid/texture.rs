@@ -32,8 +32,9 @@ use std::f64::consts::PI;
 /// The side of the textures the renderers use, in texels.
 pub const TEXTURE_SIZE: u32 = 64;
 
-/// The gaussian's standard deviation, in units of the discoid's radius.
-const GAUSSIAN_SIGMA: f64 = 1.0 / 3.0;
+/// The gaussian's standard deviation, in units of the discoid's radius (also the EWA
+/// kernel's in the tangent plane).
+pub const GAUSSIAN_SIGMA: f64 = 1.0 / 3.0;
 /// The star's valleys' radius, in units of the discoid's radius (its tips are at 1).
 const STAR_INNER_RADIUS: f64 = 0.45;
 /// The star's number of points.
@@ -144,8 +145,12 @@ fn shape_beta(shape: BetaShape, s: f64, t: f64) -> f64 {
                 0.0
             }
         }
-        BetaShape::Gaussian if r < 1.0 => (-r * r / (2.0 * GAUSSIAN_SIGMA * GAUSSIAN_SIGMA)).exp(),
-        BetaShape::Disk | BetaShape::Gaussian => 0.0,
+        // The EWA kernel's texture is its tangent-plane profile (the renderer evaluates the
+        // kernel itself, render::EwaKernel).
+        BetaShape::Gaussian | BetaShape::Ewa if r < 1.0 => {
+            (-r * r / (2.0 * GAUSSIAN_SIGMA * GAUSSIAN_SIGMA)).exp()
+        }
+        BetaShape::Disk | BetaShape::Gaussian | BetaShape::Ewa => 0.0,
     }
 }
 

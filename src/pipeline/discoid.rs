@@ -75,7 +75,7 @@ fn passes<R: Real>(
     options: &SimOptions,
 ) -> Result<DiscoidTimed> {
     check_scene(scene)?;
-    let table = DiscoidTable::<R>::new(scene);
+    let table = DiscoidTable::<R>::new(scene, view);
     let (curved, planar) = (scene.lembo_count() > 0, !table.planar.items.is_empty());
     if curved && planar {
         return Err(Error::invalid(

@@ -82,6 +82,13 @@ impl Check<'_> {
             }
             DiscoidSource::Builtin(name) => {
                 let source = format!("{field}.builtin");
+                if set.beta == BetaShape::Ewa {
+                    return Err(self.invalid(
+                        format!("{field}.beta"),
+                        "\"ewa\"",
+                        "the EWA kernel is set up per planar discoid (its centre's projection); curved discoids take disk, star or gaussian",
+                    ));
+                }
                 let Some(curved) = builtin_discoids(name) else {
                     return Err(self.invalid(
                         source,

@@ -1323,6 +1323,26 @@ mod tests {
     }
 
     #[test]
+    fn the_ewa_beta_is_refused_on_curved_discoids_and_a_surface_beside_its_own() {
+        let e = with_object(r#"{"discoids": {"builtin": "sphere20", "beta": "ewa"}}"#)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("objects[0].discoids.beta"), "{e}");
+        let e =
+            with_object(r#"{"discoids": {"builtin": "sphere20", "surface": "meshes/bunny.obj"}}"#)
+                .unwrap_err()
+                .to_string();
+        assert!(e.contains("objects[0].discoids.surface"), "{e}");
+        let ok = with_object(
+            r#"{"discoids": {"items": [{"center": [0, 0, 0], "normal": [0, 0, 1], "radius": 0.5}],
+                "beta": "ewa"}}"#,
+        )
+        .unwrap();
+        assert_eq!(discoid_set(&ok, 0).beta, BetaShape::Ewa);
+        assert_eq!(discoid_set(&ok, 0).surface, None);
+    }
+
+    #[test]
     fn sphere20_object_puts_its_lembos_in_the_lembo_path() {
         let scene = with_object(
             r#"{"discoids": {"builtin": "sphere20", "beta": "gaussian"}, "color": [0.1, 0.2, 0.3],
