@@ -1,7 +1,8 @@
 //! Criterion benchmarks: the functional model on whole scenes by viewport size, the
 //! per-scanline stages on their own, and the timed pipeline against the functional model
 //! on the same frame (the issue 3 figure: timed wall / functional wall), and the triangle
-//! path, functional and timed, the discoid passes, and what off-screen primitives and a
+//! path, functional and timed, a functional frame on several host threads, the discoid
+//! passes, and what off-screen primitives and a
 //! lembo far larger than the view cost. Setup (scene loading, projection) stays outside the timed
 //! closures.
 
@@ -379,8 +380,46 @@ fn scope_and_extremes(c: &mut Criterion) {
     g.finish();
 }
 
+/// One functional frame on 1, 2 and 4 host threads (`--threads`, `raster::parallel`): the
+/// bunny at 1024x1024 on both paths; the frames are identical.
+fn frame_threads(c: &mut Criterion) {
+    let mut g = c.benchmark_group("frame_threads");
+    g.sample_size(10);
+    let s = scenes::trace("bunny.json", Some(1024));
+    let view = View::new(&s.camera, s.viewport);
+    let tol = raster::PerspectiveTol::FollowK.with_k(0.5);
+    let t = Tessellation::new(&s, 1);
+    for threads in [1u32, 2, 4] {
+        for (path, source) in [
+            ("lembo", None),
+            ("triangle", Some(&t as &dyn triangle::TriangleSource)),
+        ] {
+            g.bench_with_input(
+                BenchmarkId::new(format!("{path}/bunny/1024"), threads),
+                &threads,
+                |b, &n| {
+                    b.iter(|| {
+                        raster::render_functional_on(
+                            &s,
+                            &view,
+                            tol,
+                            source,
+                            Datapath::F32,
+                            false,
+                            n,
+                        )
+                        .unwrap()
+                    })
+                },
+            );
+        }
+    }
+    g.finish();
+}
+
 criterion_group!(
     benches,
+    frame_threads,
     scope_and_extremes,
     scenes,
     stages,

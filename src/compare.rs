@@ -104,6 +104,9 @@ impl CompareJob {
             blend: BlendMode::Rgba8,
             threshold: None,
             host_threads: self.host_threads,
+            // Both paths are measured, so their functional frames are the analysed ones,
+            // drawn on one thread.
+            threads: None,
             given: Given::default(),
             no_memory_check: self.no_memory_check,
         }

@@ -111,6 +111,9 @@ pub struct RenderJob {
     /// Host threads the timed model's units are partitioned over (`--host-threads`, >= 1;
     /// no simulated result depends on it).
     pub host_threads: u32,
+    /// Host threads a functional frame is drawn on (`--threads`, >= 1); None for the
+    /// machine's cores. No pixel or count depends on it (`raster::parallel`).
+    pub threads: Option<u32>,
     /// Which settings with a default the user gave, so that one that does not apply to the
     /// scene is refused instead of ignored.
     pub given: Given,
@@ -137,7 +140,23 @@ pub struct Given {
 /// Most host threads a timed run may use (`--host-threads`).
 pub const MAX_HOST_THREADS: u32 = 1024;
 
+/// Most host threads a functional frame may be drawn on (`--threads`).
+pub const MAX_THREADS: u32 = 256;
+
+/// The machine's cores, as the default of `--threads` (at most [`MAX_THREADS`]).
+pub fn machine_threads() -> u32 {
+    std::thread::available_parallelism()
+        .map(|n| n.get() as u32)
+        .unwrap_or(1)
+        .min(MAX_THREADS)
+}
+
 impl RenderJob {
+    /// The host threads a functional frame is drawn on: `--threads`, or the machine's cores.
+    pub fn threads(&self) -> u32 {
+        self.threads.unwrap_or_else(machine_threads)
+    }
+
     /// The lembo path's tolerances: k and Setup's perspective tolerance.
     pub fn tolerance(&self) -> Tolerance {
         self.perspective_tol.with_k(self.k)
@@ -194,6 +213,24 @@ impl RenderJob {
                 self.host_threads,
                 format!("must be in 1..={MAX_HOST_THREADS} host threads"),
             ));
+        }
+        if let Some(n) = self.threads {
+            if !(1..=MAX_THREADS).contains(&n) {
+                return Err(Error::invalid(
+                    COMMAND_LINE,
+                    "--threads",
+                    n,
+                    format!("must be in 1..={MAX_THREADS} host threads"),
+                ));
+            }
+            if self.mode == Mode::Timed {
+                return Err(Error::invalid(
+                    COMMAND_LINE,
+                    "--threads",
+                    n,
+                    "only meaningful with --mode functional (a timed run's units take --host-threads)",
+                ));
+            }
         }
         if let Some(dir) = &self.out {
             check_out_dir("--out", dir)?;
@@ -680,13 +717,20 @@ pub fn run_path(
         primitives,
         units,
         counts,
-        host: host(
-            wall,
-            counts.fragments,
-            cycles.as_ref().map(|c| (c.total, job.host_threads)),
-            measured.as_ref().map(|m| m.reference_wall),
-            measured.as_ref().map(|m| m.metrics_wall),
-        ),
+        host: {
+            let mut h = host(
+                wall,
+                counts.fragments,
+                cycles.as_ref().map(|c| (c.total, job.host_threads)),
+                measured.as_ref().map(|m| m.reference_wall),
+                measured.as_ref().map(|m| m.metrics_wall),
+            );
+            if cycles.is_none() {
+                // The functional frame's threads: the analysed frame is drawn on one.
+                h.host_threads = Some(if measured.is_some() { 1 } else { job.threads() });
+            }
+            h
+        },
         cycles,
         cost,
         arch: model.arch().cloned(),
@@ -780,16 +824,19 @@ fn draw(
     analyse: bool,
 ) -> Result<(Drawn, f64)> {
     let functional = |analyse: bool| -> Result<raster::Frame> {
-        match route {
-            Route::Triangles(t) => Ok(raster::render_functional_triangles(
-                scene,
-                view,
-                t,
-                job.datapath,
-                analyse,
-            )),
-            _ => raster::render_functional(scene, view, job.tolerance(), job.datapath, analyse),
-        }
+        let triangles = match route {
+            Route::Triangles(t) => Some(t as &dyn raster::triangle::TriangleSource),
+            _ => None,
+        };
+        raster::render_functional_on(
+            scene,
+            view,
+            job.tolerance(),
+            triangles,
+            job.datapath,
+            analyse,
+            job.threads(),
+        )
     };
     let arch = match model {
         Model::Functional => {

@@ -218,6 +218,11 @@ struct RenderArgs {
     /// the run instantiates.
     #[arg(long, value_name = "N", default_value_t = 1)]
     host_threads: u32,
+    /// Host threads a functional frame (--mode functional) is drawn on, in bands of rows.
+    /// The image, depth and every count are identical for every N; the frame measured
+    /// against the reference (--reference) is drawn on one. [default: the machine's cores]
+    #[arg(long, value_name = "N")]
+    threads: Option<u32>,
     /// Run even when the memory estimate for this viewport is above the memory the machine
     /// has available (a run that large is refused before it starts otherwise).
     #[arg(long)]
@@ -333,6 +338,7 @@ fn default_render() -> RenderArgs {
         blend: None,
         threshold: None,
         host_threads: 1,
+        threads: None,
         no_memory_check: false,
     }
 }
@@ -495,6 +501,7 @@ fn render(args: RenderArgs) -> ExitCode {
         },
         threshold: args.threshold,
         host_threads: args.host_threads,
+        threads: args.threads,
         given,
         no_memory_check: args.no_memory_check,
     };

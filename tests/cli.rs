@@ -270,6 +270,55 @@ fn functional_mode_refuses_timed_only_flags() {
     );
 }
 
+/// `--threads` draws a functional frame; 0, more than the cap, or a timed run (whose units
+/// take `--host-threads`) are refused by name; any count writes the same image and counts.
+#[test]
+fn threads_draw_the_same_functional_frame() {
+    assert_refused(
+        &["render", "--mode", "functional", "--threads", "0"],
+        "field `--threads` = 0",
+    );
+    assert_refused(
+        &["render", "--mode", "functional", "--threads", "257"],
+        "field `--threads` = 257",
+    );
+    assert_refused(
+        &["render", "--threads", "2"],
+        "only meaningful with --mode functional",
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let s = scene_file(dir.path(), "s.json", GOOD);
+    let mut seen = Vec::new();
+    for threads in ["1", "2", "5"] {
+        let out_dir = dir.path().join(format!("t{threads}"));
+        let out = run(
+            &[
+                "render",
+                &s,
+                "--mode",
+                "functional",
+                "--threads",
+                threads,
+                "--out",
+                out_dir.to_str().unwrap(),
+            ],
+            dir.path(),
+        );
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let r: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out_dir.join("report.json")).unwrap()).unwrap();
+        seen.push((
+            std::fs::read(out_dir.join("image.png")).unwrap(),
+            r["counts"].clone(),
+        ));
+    }
+    assert!(seen.windows(2).all(|w| w[0] == w[1]));
+}
+
 /// `--host-threads` 0 and more threads than units are refused by name; any valid count
 /// gives the same report (cycles, counts) and image, and report.json says how many ran.
 #[test]

@@ -52,6 +52,7 @@ fn job(path: PrimitivePath, datapath: Datapath, k: f64, mode: Mode) -> RenderJob
         blend: BlendMode::Rgba8,
         threshold: None,
         host_threads: 1,
+        threads: None,
         given: Default::default(),
         no_memory_check: false,
     }

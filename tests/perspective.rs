@@ -41,6 +41,7 @@ fn job(k: f64, perspective_tol: PerspectiveTol, datapath: Datapath) -> RenderJob
         blend: BlendMode::Rgba8,
         threshold: None,
         host_threads: 1,
+        threads: None,
         given: Default::default(),
         no_memory_check: false,
     }

@@ -169,6 +169,7 @@ fn render_reports_see_through_in_both_reports() {
         blend: BlendMode::Rgba8,
         threshold: None,
         host_threads: 1,
+        threads: None,
         given: Default::default(),
         no_memory_check: false,
     };

@@ -12,6 +12,7 @@
 pub mod fragment;
 pub mod interval;
 pub mod minmax;
+pub mod parallel;
 pub mod probe;
 pub mod refine;
 pub mod segmenter;
@@ -342,28 +343,46 @@ fn render_lembo<R: Real, S: FragmentSink<R>>(
         return Ok(());
     };
     for j in j0..=j1 {
-        counts.scanlines += 1;
-        b.intervals.clear();
-        R::charge(UnitKind::IntervalManager);
-        interval::intervals(l, j, k, &mut b.scratch, &mut b.intervals, counts);
-        for iv in &b.intervals {
-            b.segments.clear();
-            R::charge(UnitKind::Segmenter);
-            segmenter::segments(l, j, k, iv, segment_cap, &mut b.segments, counts).map_err(
-                |_| Error::SegmentCap {
-                    lembo: l.id as usize,
-                    scanline: j,
-                    cap: segment_cap,
-                },
-            )?;
-            for seg in &b.segments {
-                b.subsegments.clear();
-                R::charge(UnitKind::Subsegmenter);
-                subsegmenter::subsegments(l, seg, k, &mut b.subsegments, counts);
-                for sub in &b.subsegments {
-                    R::charge(UnitKind::FragmentRasterizer);
-                    fragment::rasterize(l, j, sub, width, sink, counts);
-                }
+        scanline(l, j, width, k, segment_cap, sink, counts, b)?;
+    }
+    Ok(())
+}
+
+/// The scan-line stages after minmax (interval manager to fragment) for scanline `j` of one
+/// set-up lembo or piece. Scanline j's fragments are all in row j.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn scanline<R: Real, S: FragmentSink<R>>(
+    l: &setup::ScreenLembo<R>,
+    j: u32,
+    width: u32,
+    k: R,
+    segment_cap: usize,
+    sink: &mut S,
+    counts: &mut Counts,
+    b: &mut Buffers<R>,
+) -> Result<()> {
+    counts.scanlines += 1;
+    b.intervals.clear();
+    R::charge(UnitKind::IntervalManager);
+    interval::intervals(l, j, k, &mut b.scratch, &mut b.intervals, counts);
+    for iv in &b.intervals {
+        b.segments.clear();
+        R::charge(UnitKind::Segmenter);
+        segmenter::segments(l, j, k, iv, segment_cap, &mut b.segments, counts).map_err(|_| {
+            Error::SegmentCap {
+                lembo: l.id as usize,
+                scanline: j,
+                cap: segment_cap,
+            }
+        })?;
+        for seg in &b.segments {
+            b.subsegments.clear();
+            R::charge(UnitKind::Subsegmenter);
+            subsegmenter::subsegments(l, seg, k, &mut b.subsegments, counts);
+            for sub in &b.subsegments {
+                R::charge(UnitKind::FragmentRasterizer);
+                fragment::rasterize(l, j, sub, width, sink, counts);
             }
         }
     }
@@ -395,6 +414,38 @@ pub fn render_functional(
     match datapath {
         Datapath::F32 => render_in::<f32>(scene, view, tol, analyse),
         Datapath::F64 => render_in::<f64>(scene, view, tol, analyse),
+    }
+}
+
+/// [`render_functional`] or [`render_functional_triangles`] (with `triangles`) on `threads`
+/// host threads: the same frame, bit for bit, for every count ([`parallel`]). The analysed
+/// frame is drawn on one thread whatever `threads` says.
+pub fn render_functional_on(
+    scene: &Scene,
+    view: &View,
+    tol: Tolerance,
+    triangles: Option<&dyn TriangleSource>,
+    datapath: Datapath,
+    analyse: bool,
+    threads: u32,
+) -> Result<Frame> {
+    if analyse || threads <= 1 {
+        return match triangles {
+            Some(t) => Ok(render_functional_triangles(
+                scene, view, t, datapath, analyse,
+            )),
+            None => render_functional(scene, view, tol, datapath, analyse),
+        };
+    }
+    match (triangles, datapath) {
+        (Some(t), Datapath::F32) => {
+            parallel::render_triangles_in_bands::<f32>(scene, view, t, threads)
+        }
+        (Some(t), Datapath::F64) => {
+            parallel::render_triangles_in_bands::<f64>(scene, view, t, threads)
+        }
+        (None, Datapath::F32) => parallel::render_lembos_in_bands::<f32>(scene, view, tol, threads),
+        (None, Datapath::F64) => parallel::render_lembos_in_bands::<f64>(scene, view, tol, threads),
     }
 }
 

@@ -376,9 +376,13 @@ cost      {:.3} mm2, {:.1} uJ this frame{} (technology {}; {} frame-buffer bytes
             ),
             None => writeln!(
                 t,
-                "render {:.3} s ({:.1} M fragments/s, functional model, single thread)",
+                "render {:.3} s ({:.1} M fragments/s, functional model, {})",
                 r.host.wall_seconds,
-                r.host.fragments_per_second / 1e6
+                r.host.fragments_per_second / 1e6,
+                match r.host.host_threads {
+                    Some(1) | None => "1 host thread".to_string(),
+                    Some(n) => format!("{n} host threads"),
+                }
             ),
         };
     }

@@ -65,6 +65,74 @@ impl FrameBuffer {
         j as usize * self.width as usize + i as usize
     }
 
+    /// A frame of `width` x `height` whose pixels are all zero (not a cleared frame): for
+    /// [`Self::bands_mut`], whose bands each clear their own rows, on their own threads.
+    /// Zeroed memory is mapped lazily, so nothing is touched here.
+    pub fn zeroed(width: u32, height: u32) -> Self {
+        let n = width as usize * height as usize;
+        FrameBuffer {
+            width,
+            height,
+            color: vec![[0; 3]; n],
+            depth: vec![0.0; n],
+            primitive: vec![0; n],
+            normal: None,
+        }
+    }
+
+    /// All the rows, to write through a ROP.
+    pub fn rows_mut(&mut self) -> FrameRows<'_> {
+        FrameRows {
+            width: self.width,
+            color: &mut self.color,
+            depth: &mut self.depth,
+            primitive: &mut self.primitive,
+            normal: self.normal.as_deref_mut(),
+        }
+    }
+
+    /// The rows of each band `lo..hi`, for bands that follow one another from row 0 to the
+    /// last (`raster::parallel`), to write on separate threads.
+    pub fn bands_mut(&mut self, bands: &[(u32, u32)]) -> Vec<FrameRows<'_>> {
+        let width = self.width;
+        let (mut color, mut depth, mut primitive) = (
+            self.color.as_mut_slice(),
+            self.depth.as_mut_slice(),
+            self.primitive.as_mut_slice(),
+        );
+        let mut normal = self.normal.as_deref_mut();
+        let mut out = Vec::with_capacity(bands.len());
+        let mut row = 0;
+        for &(lo, hi) in bands {
+            assert_eq!(lo, row, "bands follow one another");
+            let n = (hi - lo) as usize * width as usize;
+            let (c, rest) = std::mem::take(&mut color).split_at_mut(n);
+            color = rest;
+            let (d, rest) = std::mem::take(&mut depth).split_at_mut(n);
+            depth = rest;
+            let (p, rest) = std::mem::take(&mut primitive).split_at_mut(n);
+            primitive = rest;
+            let nm = match normal.take() {
+                Some(all) => {
+                    let (a, rest) = all.split_at_mut(n);
+                    normal = Some(rest);
+                    Some(a)
+                }
+                None => None,
+            };
+            out.push(FrameRows {
+                width,
+                color: c,
+                depth: d,
+                primitive: p,
+                normal: nm,
+            });
+            row = hi;
+        }
+        assert_eq!(row, self.height, "bands cover the frame");
+        out
+    }
+
     /// The depth test: whether a fragment (z, id) beats what pixel `idx` holds.
     /// Fragments outside the depth range [0, 1] are clipped.
     #[inline(always)]
@@ -92,6 +160,58 @@ impl FrameBuffer {
     pub fn to_image(&self) -> image::RgbImage {
         let raw: Vec<u8> = self.color.iter().flatten().copied().collect();
         image::RgbImage::from_raw(self.width, self.height, raw).expect("buffer matches its size")
+    }
+}
+
+/// Rows of a frame buffer, written by one ROP: the whole frame, or one band of it.
+pub struct FrameRows<'a> {
+    width: u32,
+    color: &'a mut [[u8; 3]],
+    depth: &'a mut [f32],
+    primitive: &'a mut [u32],
+    normal: Option<&'a mut [[f32; 3]]>,
+}
+
+impl FrameRows<'_> {
+    /// The index of pixel (i, j) of these rows (j counted from their first).
+    #[inline(always)]
+    pub fn index(&self, i: u32, j: u32) -> usize {
+        j as usize * self.width as usize + i as usize
+    }
+
+    /// [`FrameBuffer::passes`] on these rows.
+    #[inline(always)]
+    pub fn passes(&self, idx: usize, z: f32, id: u32) -> bool {
+        depth_test(z, id, self.depth[idx], self.primitive[idx])
+    }
+
+    /// [`FrameBuffer::write`] on these rows, with the fragment's normal where normals are
+    /// kept.
+    #[inline(always)]
+    pub fn write(
+        &mut self,
+        idx: usize,
+        z: f32,
+        id: u32,
+        rgb: [u8; 3],
+        normal: impl FnOnce() -> [f32; 3],
+    ) {
+        self.depth[idx] = z;
+        self.primitive[idx] = id;
+        self.color[idx] = rgb;
+        if let Some(normals) = self.normal.as_deref_mut() {
+            normals[idx] = normal();
+        }
+    }
+
+    /// Clears these rows as [`FrameBuffer::new`] clears a frame.
+    pub fn clear(&mut self, background: [u8; 3]) {
+        self.color.fill(background);
+        self.depth.fill(1.0);
+        self.primitive.fill(NO_PRIMITIVE);
+        if let Some(n) = self.normal.as_deref_mut() {
+            n.fill([0.0; 3]);
+        }
     }
 }
 

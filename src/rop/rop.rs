@@ -1,7 +1,7 @@
 //! The ROP as a fragment sink: depth test, then shading of the fragments that pass (early
 //! depth test: shading a fragment that loses cannot change the image), then the write.
 
-use super::framebuffer::FrameBuffer;
+use super::framebuffer::{FrameBuffer, FrameRows};
 use super::shade::{to_u8, Light, Shader};
 use crate::camera::View;
 use crate::cost::counted::Op;
@@ -77,19 +77,28 @@ impl<R: Real> FragmentShader<R> {
 /// The ROP of the functional model: depth test, Phong shading and the frame-buffer write,
 /// as a fragment sink for both paths.
 pub struct Rop<'a, R> {
-    fb: &'a mut FrameBuffer,
+    fb: FrameRows<'a>,
     shader: FragmentShader<R>,
     /// Fragments that passed the depth test.
     pub passed: u64,
+    /// The frame row that `fb`'s row 0 holds (a band of a frame drawn on several threads).
+    row0: u32,
 }
 
 impl<'a, R: Real> Rop<'a, R> {
     /// A ROP writing into `fb`, shading with `light` for `view`.
     pub fn new(fb: &'a mut FrameBuffer, light: &Light, view: &View) -> Self {
+        Rop::band(fb.rows_mut(), light, view, 0)
+    }
+
+    /// A ROP writing `rows`, whose first row is frame row `row0` (`raster::parallel`'s
+    /// bands).
+    pub fn band(rows: FrameRows<'a>, light: &Light, view: &View, row0: u32) -> Self {
         Rop {
-            fb,
+            fb: rows,
             shader: FragmentShader::new(light, view),
             passed: 0,
+            row0,
         }
     }
 }
@@ -116,7 +125,7 @@ impl<R: Real> Rop<'_, R> {
         z: R,
         shade: impl FnOnce(&FragmentShader<R>) -> ([u8; 3], [R; 3]),
     ) {
-        let idx = self.fb.index(i, j);
+        let idx = self.fb.index(i, j - self.row0);
         let zf = z.f64() as f32;
         // The depth test's compare (on the stored f32 depth, beside the datapath).
         R::count_beside(Op::Cmp, 1);
@@ -125,10 +134,8 @@ impl<R: Real> Rop<'_, R> {
         }
         self.passed += 1;
         let (rgb, n) = shade(&self.shader);
-        self.fb.write(idx, zf, id, rgb);
-        if let Some(normals) = self.fb.normal.as_mut() {
-            normals[idx] = n.map(|c| c.f64() as f32);
-        }
+        self.fb
+            .write(idx, zf, id, rgb, || n.map(|c| c.f64() as f32));
     }
 }
 

@@ -324,6 +324,8 @@ pub(super) fn render_job(
         blend: BlendMode::Rgba8,
         threshold: None,
         host_threads,
+        // The runs at once (--jobs) fill the cores: one thread a frame.
+        threads: (spec.mode == Mode::Functional).then_some(1),
         given: Given::default(),
         no_memory_check: false,
     };

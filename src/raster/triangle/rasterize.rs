@@ -80,10 +80,25 @@ impl<R: Real> ScreenTriangle<R> {
     /// even) with at least one covered pixel, row by row, left to right. `rows` are the
     /// covered spans of rows qj and qj + 1 ([`Self::row_span`]); mask bit 0 is (qi, qj),
     /// bit 1 (qi + 1, qj), bit 2 (qi, qj + 1), bit 3 (qi + 1, qj + 1).
-    pub fn quads(&self, mut quad: impl FnMut(u32, u32, &[(u32, u32); 2], u8)) {
+    pub fn quads(&self, quad: impl FnMut(u32, u32, &[(u32, u32); 2], u8)) {
+        self.quads_in_rows(0, u32::MAX, quad)
+    }
+
+    /// [`Self::quads`] for the quads whose top row is in `lo..hi` (`lo` even), in the same
+    /// order: a band of rows of the frame.
+    pub fn quads_in_rows(
+        &self,
+        lo: u32,
+        hi: u32,
+        mut quad: impl FnMut(u32, u32, &[(u32, u32); 2], u8),
+    ) {
+        debug_assert!(
+            lo.is_multiple_of(2),
+            "bands start on even rows, as quads do"
+        );
         let [_, _, j0, j1] = self.bbox;
-        let mut qj = j0 & !1;
-        while qj < j1 {
+        let mut qj = (j0 & !1).max(lo);
+        while qj < j1.min(hi) {
             let rows = [self.row_span(qj), self.row_span(qj + 1)];
             let live = rows.iter().filter(|r| r.0 < r.1);
             let lo = live.clone().map(|r| r.0).min();
@@ -138,7 +153,18 @@ pub fn rasterize<R: Real, S: TriangleSink<R>>(
     sink: &mut S,
     counts: &mut Counts,
 ) {
-    t.quads(|qi, qj, _, mask| {
+    rasterize_rows(t, 0, u32::MAX, sink, counts)
+}
+
+/// [`rasterize`] for the quads whose top row is in `lo..hi` (`lo` even).
+pub fn rasterize_rows<R: Real, S: TriangleSink<R>>(
+    t: &ScreenTriangle<R>,
+    lo: u32,
+    hi: u32,
+    sink: &mut S,
+    counts: &mut Counts,
+) {
+    t.quads_in_rows(lo, hi, |qi, qj, _, mask| {
         counts.quads += 1;
         for bit in 0..4 {
             if mask & (1 << bit) != 0 {

@@ -1,0 +1,270 @@
+//! One functional frame on several host threads (`--threads N`), bit-identical to the
+//! single-threaded render for every N.
+//!
+//! The frame's rows are cut into bands of an even number of rows (so no 2x2 quad straddles
+//! two), more bands than threads so that rayon can balance uneven ones. Setup runs once, in
+//! primitive order, keeping every set-up piece with its rows (lembos: minmax's scanline range;
+//! triangles: the bounding box); then each band walks the same pieces in the same order
+//! through the scan-line stages of its own rows only, into its own rows of the frame buffer
+//! (`FrameBuffer::bands_mut`, `Rop::band`), which its thread also clears. Every stage after setup works on one scanline (one row pair for a quad)
+//! and a pixel is only ever written by fragments of its own row, so each pixel meets the
+//! same fragments in the same order as in the single-threaded render: the same depth tests,
+//! the same shading, the same winner. The counts are setup's plus the sum of the bands'
+//! (each counts only its rows), and equal the single-threaded ones; the first error (a
+//! segment cap) is the smallest (piece, scanline) any band met, the one the single-threaded
+//! walk meets first.
+//!
+//! The analysed frame (`--reference`, with the fragment probe) and the counting runs of the
+//! cost model stay single-threaded.
+
+use super::setup::{setup_pieces, ScreenLembo};
+use super::triangle::{rasterize_rows, setup as setup_triangle, ScreenTriangle, TriangleSource};
+use super::{minmax, scanline, Buffers, Counts, Frame, Tolerance, DEFAULT_SEGMENT_CAP};
+use crate::camera::View;
+use crate::datapath::Real;
+use crate::error::{Error, Result};
+use crate::rop::framebuffer::FrameRows;
+use crate::rop::{FrameBuffer, Rop};
+use crate::scene::Scene;
+use rayon::prelude::*;
+
+/// Bands per thread: enough for rayon to even out bands of unequal work.
+const BANDS_PER_THREAD: u32 = 8;
+
+/// The bands of a frame `height` rows high for `threads` threads: half-open row ranges,
+/// each starting on an even row, in order, covering every row.
+pub fn bands(height: u32, threads: u32) -> Vec<(u32, u32)> {
+    let pairs = height.div_ceil(2).max(1);
+    let count = (threads.max(1) * BANDS_PER_THREAD).min(pairs);
+    (0..count)
+        .map(|b| {
+            let lo = 2 * (pairs * b / count);
+            let hi = (2 * (pairs * (b + 1) / count)).min(height);
+            (lo, hi)
+        })
+        .filter(|(lo, hi)| lo < hi)
+        .collect()
+}
+
+/// Primitives per setup task.
+const SETUP_CHUNK: usize = 64;
+
+/// A set-up lembo piece with its first and last scanline (minmax).
+type Piece<R> = (ScreenLembo<R>, u32, u32);
+
+/// The pieces of the scene's lembos after setup and minmax, in order, with their rows; set
+/// up in chunks on the current rayon pool, joined in order.
+fn lembo_pieces<R: Real>(
+    scene: &Scene,
+    view: &View,
+    tol: Tolerance,
+    counts: &mut Counts,
+) -> Vec<Piece<R>> {
+    let lembos: Vec<_> = scene.lembos().collect();
+    let chunks: Vec<(Vec<Piece<R>>, Counts)> = lembos
+        .par_chunks(SETUP_CHUNK)
+        .enumerate()
+        .map(|(c, chunk)| {
+            let (mut out, mut counts) = (Vec::new(), Counts::default());
+            let mut pieces = Vec::new();
+            for (k, (lembo, color)) in chunk.iter().enumerate() {
+                let id = (c * SETUP_CHUNK + k) as u32;
+                counts.lembos += 1;
+                pieces.clear();
+                match setup_pieces::<R>(id, lembo, *color, view, tol.perspective, &mut pieces) {
+                    Ok(split) => counts.add_split(split, pieces.len()),
+                    Err(cull) => {
+                        counts.add_cull(cull);
+                        continue;
+                    }
+                }
+                for l in pieces.drain(..) {
+                    match minmax::scanlines(&l, view.viewport.height) {
+                        Some((j0, j1)) => out.push((l, j0, j1)),
+                        None => counts.lembos_culled_outside += 1,
+                    }
+                }
+            }
+            (out, counts)
+        })
+        .collect();
+    let mut out = Vec::new();
+    for (pieces, c) in chunks {
+        out.extend(pieces);
+        *counts += c;
+    }
+    out
+}
+
+/// The set-up pieces of a triangle source, in order; set up in chunks of the source on the
+/// current rayon pool, joined in order.
+fn triangle_pieces<R: Real>(
+    source: &dyn TriangleSource,
+    view: &View,
+    counts: &mut Counts,
+) -> Vec<ScreenTriangle<R>> {
+    let chunks: Vec<(Vec<ScreenTriangle<R>>, Counts)> = (0..source.chunks())
+        .into_par_iter()
+        .map(|c| {
+            let (mut out, mut counts) = (Vec::new(), Counts::default());
+            let (mut triangles, mut set_up) = (Vec::new(), Vec::new());
+            source.chunk(c, &mut triangles);
+            for (k, t) in triangles.iter().enumerate() {
+                let id = source.id(c, k);
+                setup_triangle::<R>(id, &t.positions, &t.normals, t.color, view, &mut set_up)
+                    .count(&mut counts);
+                out.append(&mut set_up);
+            }
+            (out, counts)
+        })
+        .collect();
+    let mut out = Vec::new();
+    for (pieces, c) in chunks {
+        out.extend(pieces);
+        *counts += c;
+    }
+    out
+}
+
+/// What one band drew: its counts and its passed depth tests; or the first error it met
+/// with the (piece, scanline) it met it at.
+type Band = std::result::Result<(Counts, u64), ((usize, u32), Error)>;
+
+/// Runs `draw(lo, hi, rows)` for every band of the frame on the current rayon pool (of
+/// `threads` threads), each into its own rows of one frame buffer (cleared by the band's
+/// thread), and adds the bands' counts to setup's `counts`.
+fn in_bands(
+    scene: &Scene,
+    view: &View,
+    threads: u32,
+    mut counts: Counts,
+    draw: impl Fn(u32, u32, FrameRows<'_>) -> Band + Sync,
+) -> Result<Frame> {
+    let vp = view.viewport;
+    let background = scene.background.map(crate::rop::shade::to_u8::<f64>);
+    let bands = bands(vp.height, threads);
+    let mut framebuffer = FrameBuffer::zeroed(vp.width, vp.height);
+    let drawn: Vec<Band> = framebuffer
+        .bands_mut(&bands)
+        .into_par_iter()
+        .zip(bands.par_iter())
+        .map(|(mut rows, &(lo, hi))| {
+            rows.clear(background);
+            draw(lo, hi, rows)
+        })
+        .collect();
+    let mut first_error: Option<((usize, u32), Error)> = None;
+    let mut passed = 0;
+    for band in drawn {
+        match band {
+            Ok((c, p)) => {
+                counts += c;
+                passed += p;
+            }
+            Err((at, e)) => {
+                if first_error.as_ref().is_none_or(|(first, _)| at < *first) {
+                    first_error = Some((at, e));
+                }
+            }
+        }
+    }
+    if let Some((_, e)) = first_error {
+        return Err(e);
+    }
+    counts.fragments_passed_depth = passed;
+    counts.pixels_covered = framebuffer.covered() as u64;
+    Ok(Frame {
+        framebuffer,
+        counts,
+        probe: None,
+    })
+}
+
+/// A rayon pool of `threads` threads for one frame.
+fn pool(threads: u32) -> Result<rayon::ThreadPool> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads as usize)
+        .thread_name(|i| format!("frame-{i}"))
+        .build()
+        .map_err(|e| Error::Internal(format!("cannot start the frame's threads: {e}")))
+}
+
+/// The lembo path's functional frame on `threads` threads (module doc).
+pub fn render_lembos_in_bands<R: Real>(
+    scene: &Scene,
+    view: &View,
+    tol: Tolerance,
+    threads: u32,
+) -> Result<Frame> {
+    pool(threads)?.install(|| {
+        let mut counts = Counts::default();
+        let pieces = lembo_pieces::<R>(scene, view, tol, &mut counts);
+        let k = R::of(tol.k);
+        let width = view.viewport.width;
+        in_bands(scene, view, threads, counts, |lo, hi, rows| {
+            let mut rop = Rop::<R>::band(rows, &scene.light, view, lo);
+            let mut c = Counts::default();
+            let mut buffers = Buffers::default();
+            for (n, (l, j0, j1)) in pieces.iter().enumerate() {
+                for j in (*j0).max(lo)..=(*j1).min(hi - 1) {
+                    scanline(
+                        l,
+                        j,
+                        width,
+                        k,
+                        DEFAULT_SEGMENT_CAP,
+                        &mut rop,
+                        &mut c,
+                        &mut buffers,
+                    )
+                    .map_err(|e| ((n, j), e))?;
+                }
+            }
+            Ok((c, rop.passed))
+        })
+    })
+}
+
+/// The triangle path's functional frame on `threads` threads (module doc).
+pub fn render_triangles_in_bands<R: Real>(
+    scene: &Scene,
+    view: &View,
+    source: &dyn TriangleSource,
+    threads: u32,
+) -> Result<Frame> {
+    pool(threads)?.install(|| {
+        let mut counts = Counts::default();
+        let pieces = triangle_pieces::<R>(source, view, &mut counts);
+        in_bands(scene, view, threads, counts, |lo, hi, rows| {
+            let mut rop = Rop::<R>::band(rows, &scene.light, view, lo);
+            let mut c = Counts::default();
+            for t in &pieces {
+                let [_, _, j0, j1] = t.bbox;
+                if j1 > lo && j0 < hi {
+                    rasterize_rows(t, lo, hi, &mut rop, &mut c);
+                }
+            }
+            Ok((c, rop.passed))
+        })
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bands_cover_every_row_once_from_even_rows() {
+        for height in [1, 2, 3, 7, 64, 511, 512, 1024] {
+            for threads in [1, 2, 3, 16] {
+                let b = bands(height, threads);
+                assert_eq!(b[0].0, 0);
+                assert_eq!(b.last().unwrap().1, height);
+                for w in b.windows(2) {
+                    assert_eq!(w[0].1, w[1].0);
+                }
+                assert!(b.iter().all(|(lo, hi)| lo % 2 == 0 && lo < hi));
+            }
+        }
+    }
+}
