@@ -282,6 +282,14 @@ pub fn run_compare(job: &CompareJob) -> Result<CompareOutput> {
         check_tess_range(n)?;
     }
     let scene = job::load_scene(&lembo_job)?;
+    if scene.discoid_count() > 0 {
+        return Err(Error::invalid(
+            scene.source_name(),
+            "objects",
+            format!("{} discoids", scene.discoid_count()),
+            "compare draws a surface scene on the lembo and the triangle path; a discoid scene has neither (render it, with --reference to measure it against its surface)",
+        ));
+    }
     // Both paths' images and error maps are kept beside the reference's.
     job::check_memory(&lembo_job, &scene, 2.0 * BYTES_PER_PIXEL_IMAGES)?;
     if let Tess::Level(n) = job.tess {

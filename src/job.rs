@@ -457,13 +457,11 @@ pub fn reference_scene(scene: &Scene) -> Result<std::borrow::Cow<'_, Scene>> {
         })
 }
 
-/// The exact reference of `scene` (its lembo surfaces, or the surface its discoids stand
-/// for: [`reference_scene`], which the caller checked), with the wall time it took.
+/// The exact reference of `scene`'s lembo surfaces, with the wall time it took; for a
+/// discoid scene, pass its [`reference_scene`].
 pub fn render_reference(scene: &Scene, view: &View, supersample: u32) -> (ReferenceImage, f64) {
     let t = Instant::now();
-    // Callers check a discoid scene's surface with `reference_scene` first.
-    let surface = reference_scene(scene).expect("a discoid scene's surface is checked first");
-    let lembos: Vec<_> = surface.lembos().collect();
+    let lembos: Vec<_> = scene.lembos().collect();
     let reference = oracle::render_reference(&oracle::ReferenceInput {
         lembos: &lembos,
         view,
@@ -1256,12 +1254,14 @@ pub fn run_render(job: &RenderJob) -> Result<RenderOutput> {
     if job.path == PrimitivePath::Triangle {
         check_triangle_budget(&scene, job.tess.unwrap_or(1))?;
     }
-    if job.reference {
-        reference_scene(&scene)?;
-    }
-    let reference = job
-        .reference
-        .then(|| render_reference(&scene, &view, job.supersample));
+    let reference = match job.reference {
+        true => Some(render_reference(
+            reference_scene(&scene)?.as_ref(),
+            &view,
+            job.supersample,
+        )),
+        false => None,
+    };
     let run = run_path(
         job,
         &scene,

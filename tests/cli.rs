@@ -823,6 +823,11 @@ fn bad_discoid_flags_are_refused() {
     ];
     assert_refused(&args, "field `--reference`");
     assert_refused(&args, "does not say what surface its discoids stand for");
+    // compare draws both surface paths; a discoid scene has neither.
+    assert_refused(
+        &["compare", s, "--out", "o"],
+        "field `objects` = 1280 discoids",
+    );
 }
 
 /// One rule for settings that do not apply (DESIGN.md §8): refused naming the flag and

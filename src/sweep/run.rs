@@ -136,7 +136,9 @@ fn references(
             .any(|r| r.scene == s && plan.jobs[r.index].reference);
         references.push(needed.then(|| {
             bar.set_message(format!("reference of {}", scene.name));
-            pool.install(|| render_reference(scene, &plan.views[s], 1))
+            // The plan measures a discoid scene only where it says what surface it stands for.
+            let surface = crate::job::reference_scene(scene).expect("checked by the plan");
+            pool.install(|| render_reference(surface.as_ref(), &plan.views[s], 1))
         }));
     }
     bar.set_message("");
