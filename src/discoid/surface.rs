@@ -8,10 +8,10 @@
 //!   normals are the means of their ends'), so the reference is the flat mesh shaded with
 //!   interpolated vertex normals, exactly.
 //! - A **sphere** (the builtin curved discoids) becomes [`sphere_lembos`] at
-//!   [`SPHERE_REFERENCE_LEVELS`]: 20 480 lembos within 1e-6 of the radius of the true
-//!   sphere (tested in `discoid::shapes`), a thousandth of a pixel on any viewport the
-//!   scene format allows below 1000 radii across; the normals are the sphere's exactly at
-//!   the reference points.
+//!   [`SPHERE_REFERENCE_LEVELS`]: 20 480 lembos within a millionth of the radius of the true
+//!   sphere (tested in `discoid::shapes`), under 0.01 px even for a sphere as wide as the
+//!   largest viewport (16 384 px); the normals are the sphere's exactly at the reference
+//!   points.
 
 use super::shapes::{sphere_lembos, SPHERE_REFERENCE_LEVELS};
 use super::DiscoidSurface;

@@ -6,10 +6,10 @@
 //! primitive order, keeping every set-up piece with its rows (lembos: minmax's scanline range;
 //! triangles: the bounding box); then each band walks the same pieces in the same order
 //! through the scan-line stages of its own rows only, into its own rows of the frame buffer
-//! (`FrameBuffer::bands_mut`, `Rop::band`), which its thread also clears. Every stage after setup works on one scanline (one row pair for a quad)
-//! and a pixel is only ever written by fragments of its own row, so each pixel meets the
-//! same fragments in the same order as in the single-threaded render: the same depth tests,
-//! the same shading, the same winner. The counts are setup's plus the sum of the bands'
+//! (`FrameBuffer::bands_mut`, `Rop::band`), which its thread also clears. Every stage after
+//! setup works on one scanline (one row pair for a quad) and a pixel is only ever written by
+//! fragments of its own row, so each pixel meets the same fragments in the same order as in
+//! the single-threaded render: the same depth tests, the same shading, the same winner. The counts are setup's plus the sum of the bands'
 //! (each counts only its rows), and equal the single-threaded ones; the first error (a
 //! segment cap) is the smallest (piece, scanline) any band met, the one the single-threaded
 //! walk meets first.

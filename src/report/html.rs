@@ -187,9 +187,9 @@ pub fn unit_bars(c: &CycleReport) -> String {
     t
 }
 
-/// The sections on one run, from its report's report to the page's sections on it: counts, cycles with unit
-/// bars, cost, blend, memory, accuracy, host, and the settings and architecture echo;
-/// headings at `level`.
+/// The page's sections on one run, from its report: accuracy, cycles with the unit bars,
+/// cost, blend, counts, memory, the trace link, the settings and architecture echo, and
+/// the host; headings at `level`.
 pub fn report_sections(r: &Report, trace: Option<&str>, level: u8) -> String {
     let section = |heading: &str, content: &str| section_at(level, heading, content);
     let mut body = String::new();
