@@ -46,7 +46,7 @@ pub fn bands(height: u32, threads: u32) -> Vec<(u32, u32)> {
         .collect()
 }
 
-/// Primitives per setup task.
+/// Most primitives per setup task.
 const SETUP_CHUNK: usize = 64;
 
 /// A set-up lembo piece with its first and last scanline (minmax).
@@ -61,14 +61,20 @@ fn lembo_pieces<R: Real>(
     counts: &mut Counts,
 ) -> Vec<Piece<R>> {
     let lembos: Vec<_> = scene.lembos().collect();
+    // Up to SETUP_CHUNK lembos a task, fewer where there are few (a lembo's setup may split
+    // it into many pieces), so that every thread gets some.
+    let size = lembos
+        .len()
+        .div_ceil(rayon::current_num_threads() * BANDS_PER_THREAD as usize)
+        .clamp(1, SETUP_CHUNK);
     let chunks: Vec<(Vec<Piece<R>>, Counts)> = lembos
-        .par_chunks(SETUP_CHUNK)
+        .par_chunks(size)
         .enumerate()
         .map(|(c, chunk)| {
             let (mut out, mut counts) = (Vec::new(), Counts::default());
             let mut pieces = Vec::new();
             for (k, (lembo, color)) in chunk.iter().enumerate() {
-                let id = (c * SETUP_CHUNK + k) as u32;
+                let id = (c * size + k) as u32;
                 counts.lembos += 1;
                 pieces.clear();
                 match setup_pieces::<R>(id, lembo, *color, view, tol.perspective, &mut pieces) {
@@ -103,17 +109,23 @@ fn triangle_pieces<R: Real>(
     view: &View,
     counts: &mut Counts,
 ) -> Vec<ScreenTriangle<R>> {
-    let chunks: Vec<(Vec<ScreenTriangle<R>>, Counts)> = (0..source.chunks())
+    // A task takes a run of the source's chunks (a chunk may be one lembo's few triangles),
+    // so its buffers are reused across them.
+    let per_task = SETUP_CHUNK.div_ceil(source.per_chunk().max(1) as usize);
+    let tasks = source.chunks().div_ceil(per_task);
+    let chunks: Vec<(Vec<ScreenTriangle<R>>, Counts)> = (0..tasks)
         .into_par_iter()
-        .map(|c| {
+        .map(|task| {
             let (mut out, mut counts) = (Vec::new(), Counts::default());
             let (mut triangles, mut set_up) = (Vec::new(), Vec::new());
-            source.chunk(c, &mut triangles);
-            for (k, t) in triangles.iter().enumerate() {
-                let id = source.id(c, k);
-                setup_triangle::<R>(id, &t.positions, &t.normals, t.color, view, &mut set_up)
-                    .count(&mut counts);
-                out.append(&mut set_up);
+            for c in task * per_task..((task + 1) * per_task).min(source.chunks()) {
+                source.chunk(c, &mut triangles);
+                for (k, t) in triangles.iter().enumerate() {
+                    let id = source.id(c, k);
+                    setup_triangle::<R>(id, &t.positions, &t.normals, t.color, view, &mut set_up)
+                        .count(&mut counts);
+                    out.append(&mut set_up);
+                }
             }
             (out, counts)
         })
