@@ -939,16 +939,7 @@ fn endless_input_files_are_refused_not_read_forever() {
 /// 50 GiB); below that, the estimate is printed before a large run.
 #[test]
 fn a_run_larger_than_memory_is_refused_before_it_starts() {
-    let available = std::fs::read_to_string("/proc/meminfo")
-        .ok()
-        .and_then(|t| {
-            let line = t
-                .lines()
-                .find(|l| l.starts_with("MemAvailable:"))?
-                .to_string();
-            line.split_whitespace().nth(1)?.parse::<f64>().ok()
-        })
-        .map(|kib| kib * 1024.0);
+    let available = common::memory_available();
     match available {
         Some(bytes) if bytes < 40e9 => {
             let bunny = manifest().join("traces/bunny.json");

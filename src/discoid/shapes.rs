@@ -546,21 +546,25 @@ mod tests {
         // threshold (0.25 R = 0.16), so the one-lembo discoids needed 0.2.
         let mut gap = 0f64;
         for q in sphere_sample(2_000) {
-            let radii: Vec<f64> = s
-                .lembos
-                .iter()
-                .zip(&s.texcoords)
-                .filter_map(|(l, st)| {
-                    let (u, v) = crossing(l, q)?;
-                    (from_centre(lembo_texcoord(st, u, v)) < 0.5)
-                        .then(|| l.position_at(u, v).length())
-                })
-                .collect();
+            let radii = drawn_radii(&s, q);
             let lo = radii.iter().copied().fold(f64::INFINITY, f64::min);
             let hi = radii.iter().copied().fold(0.0, f64::max);
             gap = gap.max(hi - lo);
         }
         assert!(gap > 0.1 && gap < 0.17, "{gap}");
+    }
+
+    /// The distances from the centre at which the ray from the centre through `q` meets
+    /// the drawn part (inside the disk) of each discoid of `s` it crosses.
+    fn drawn_radii(s: &CurvedDiscoids, q: DVec3) -> Vec<f64> {
+        s.lembos
+            .iter()
+            .zip(&s.texcoords)
+            .filter_map(|(l, st)| {
+                let (u, v) = crossing(l, q)?;
+                (from_centre(lembo_texcoord(st, u, v)) < 0.5).then(|| l.position_at(u, v).length())
+            })
+            .collect()
     }
 
     /// The largest |r - 1| of `lembos` (with texture coordinates `st`, restricted to the
@@ -595,16 +599,7 @@ mod tests {
         // default threshold.
         let mut gap = 0f64;
         for q in sphere_sample(300) {
-            let radii: Vec<f64> = s
-                .lembos
-                .iter()
-                .zip(&s.texcoords)
-                .filter_map(|(l, st)| {
-                    let (u, v) = crossing(l, q)?;
-                    (from_centre(lembo_texcoord(st, u, v)) < 0.5)
-                        .then(|| l.position_at(u, v).length())
-                })
-                .collect();
+            let radii = drawn_radii(&s, q);
             assert!(!radii.is_empty(), "{q} is in no drawn discoid");
             let lo = radii.iter().copied().fold(f64::INFINITY, f64::min);
             let hi = radii.iter().copied().fold(0.0, f64::max);

@@ -47,26 +47,37 @@ pub fn surface_lembos(surface: &DiscoidSurface) -> Vec<Lembo> {
     }
 }
 
+/// Whether every discoid object of `scene` says what surface it stands for; Err names the
+/// first that does not. Builds nothing: what a check before any work needs.
+pub fn check_surfaces(scene: &Scene) -> Result<(), String> {
+    match scene
+        .objects
+        .iter()
+        .enumerate()
+        .find(|(_, o)| o.discoids.as_ref().is_some_and(|d| d.surface.is_none()))
+    {
+        Some((k, o)) => Err(format!(
+            "objects[{k}] ({}) does not say what surface its discoids stand for: give it a \
+             `surface` mesh, or use `from_mesh` or a builtin",
+            o.label
+        )),
+        None => Ok(()),
+    }
+}
+
 /// The scene the exact reference of a discoid scene renders: every discoid object replaced
-/// by its surface's lembos, in its colour. Err names the first object whose discoids do
-/// not say what surface they stand for.
+/// by its surface's lembos, in its colour. Err as [`check_surfaces`].
 pub fn surface_scene(scene: &Scene) -> Result<Scene, String> {
+    check_surfaces(scene)?;
     let mut out = scene.clone();
-    for (k, o) in out.objects.iter_mut().enumerate() {
-        let Some(set) = o.discoids.take() else {
+    for o in out.objects.iter_mut() {
+        let Some(surface) = o.discoids.take().and_then(|set| set.surface) else {
             continue;
-        };
-        let Some(surface) = &set.surface else {
-            return Err(format!(
-                "objects[{k}] ({}) does not say what surface its discoids stand for: give it a \
-                 `surface` mesh, or use `from_mesh` or a builtin",
-                o.label
-            ));
         };
         *o = SceneObject {
             label: format!("surface of {}", o.label),
             color: o.color,
-            lembos: surface_lembos(surface),
+            lembos: surface_lembos(&surface),
             mesh: None,
             discoids: None,
         };

@@ -96,6 +96,13 @@ pub struct CycleReport {
     pub units: Vec<UnitCycles>,
 }
 
+impl CycleReport {
+    /// `cycles` as a percentage of the frame's total (0 for an empty frame's).
+    pub fn percent(&self, cycles: Cycle) -> f64 {
+        100.0 * cycles.as_f64() / self.total.0.max(1) as f64
+    }
+}
+
 /// What a timed run produced.
 pub struct TimedFrame {
     /// The image, with depth and winner ids.

@@ -24,6 +24,7 @@ pub mod v2;
 use crate::camera::View;
 use crate::datapath::{Datapath, Real};
 use crate::error::{Error, Result};
+use crate::lembo::Lembo;
 use crate::pipeline::graph::UnitKind;
 use crate::rop::{FrameBuffer, Rop};
 use crate::scene::Scene;
@@ -289,22 +290,46 @@ pub fn render_lembos<R: Real, S: FragmentSink<R>>(
     let mut buffers = Buffers::default();
     let mut pieces = Vec::new();
     for (id, (lembo, color)) in scene.lembos().enumerate() {
-        counts.lembos += 1;
-        pieces.clear();
-        R::charge(UnitKind::Setup);
-        match setup::setup_pieces::<R>(id as u32, lembo, color, view, tol.perspective, &mut pieces)
-        {
-            Ok(split) => counts.add_split(split, pieces.len()),
-            Err(cull) => {
-                counts.add_cull(cull);
-                continue;
-            }
-        }
+        set_up(id as u32, lembo, color, view, tol, &mut pieces, counts);
         for l in &pieces {
             render_lembo(l, view, k, segment_cap, sink, counts, &mut buffers)?;
         }
     }
     Ok(())
+}
+
+/// Setup of lembo `id` into `pieces` (cleared first; none when it is culled), counted.
+fn set_up<R: Real>(
+    id: u32,
+    lembo: &Lembo,
+    color: [f64; 3],
+    view: &View,
+    tol: Tolerance,
+    pieces: &mut Vec<setup::ScreenLembo<R>>,
+    counts: &mut Counts,
+) {
+    counts.lembos += 1;
+    pieces.clear();
+    R::charge(UnitKind::Setup);
+    match setup::setup_pieces::<R>(id, lembo, color, view, tol.perspective, pieces) {
+        Ok(split) => counts.add_split(split, pieces.len()),
+        Err(cull) => counts.add_cull(cull),
+    }
+}
+
+/// Minmax of a set-up piece: its first and last scanline, or None (counted) when it
+/// crosses none of the viewport's.
+fn scanline_range<R: Real>(
+    l: &setup::ScreenLembo<R>,
+    height: u32,
+    counts: &mut Counts,
+) -> Option<(u32, u32)> {
+    R::charge(UnitKind::MinMax);
+    let range = minmax::scanlines(l, height);
+    if range.is_none() {
+        counts.lembos_culled_outside += 1;
+    }
+    range
 }
 
 /// The reused buffers of the scan-line stages.
@@ -337,9 +362,7 @@ fn render_lembo<R: Real, S: FragmentSink<R>>(
     b: &mut Buffers<R>,
 ) -> Result<()> {
     let (width, height) = (view.viewport.width, view.viewport.height);
-    R::charge(UnitKind::MinMax);
-    let Some((j0, j1)) = minmax::scanlines(l, height) else {
-        counts.lembos_culled_outside += 1;
+    let Some((j0, j1)) = scanline_range(l, height, counts) else {
         return Ok(());
     };
     for j in j0..=j1 {

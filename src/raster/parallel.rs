@@ -17,9 +17,11 @@
 //! The analysed frame (`--reference`, with the fragment probe) and the counting runs of the
 //! cost model stay single-threaded.
 
-use super::setup::{setup_pieces, ScreenLembo};
+use super::setup::ScreenLembo;
 use super::triangle::{rasterize_rows, setup as setup_triangle, ScreenTriangle, TriangleSource};
-use super::{minmax, scanline, Buffers, Counts, Frame, Tolerance, DEFAULT_SEGMENT_CAP};
+use super::{
+    scanline, scanline_range, set_up, Buffers, Counts, Frame, Tolerance, DEFAULT_SEGMENT_CAP,
+};
 use crate::camera::View;
 use crate::datapath::Real;
 use crate::error::{Error, Result};
@@ -75,27 +77,23 @@ fn lembo_pieces<R: Real>(
             let mut pieces = Vec::new();
             for (k, (lembo, color)) in chunk.iter().enumerate() {
                 let id = (c * size + k) as u32;
-                counts.lembos += 1;
-                pieces.clear();
-                match setup_pieces::<R>(id, lembo, *color, view, tol.perspective, &mut pieces) {
-                    Ok(split) => counts.add_split(split, pieces.len()),
-                    Err(cull) => {
-                        counts.add_cull(cull);
-                        continue;
-                    }
-                }
+                set_up(id, lembo, *color, view, tol, &mut pieces, &mut counts);
                 for l in pieces.drain(..) {
-                    match minmax::scanlines(&l, view.viewport.height) {
-                        Some((j0, j1)) => out.push((l, j0, j1)),
-                        None => counts.lembos_culled_outside += 1,
+                    if let Some((j0, j1)) = scanline_range(&l, view.viewport.height, &mut counts) {
+                        out.push((l, j0, j1));
                     }
                 }
             }
             (out, counts)
         })
         .collect();
-    let mut out = Vec::new();
-    for (pieces, c) in chunks {
+    join_in_order(chunks, counts)
+}
+
+/// The setup tasks' pieces joined in task order, their counts added to `counts`.
+fn join_in_order<T>(tasks: Vec<(Vec<T>, Counts)>, counts: &mut Counts) -> Vec<T> {
+    let mut out = Vec::with_capacity(tasks.iter().map(|(p, _)| p.len()).sum());
+    for (pieces, c) in tasks {
         out.extend(pieces);
         *counts += c;
     }
@@ -130,12 +128,7 @@ fn triangle_pieces<R: Real>(
             (out, counts)
         })
         .collect();
-    let mut out = Vec::new();
-    for (pieces, c) in chunks {
-        out.extend(pieces);
-        *counts += c;
-    }
-    out
+    join_in_order(chunks, counts)
 }
 
 /// What one band drew: its counts and its passed depth tests; or the first error it met

@@ -146,8 +146,7 @@ fn pre_json(value: &impl serde::Serialize) -> String {
 /// Each unit's busy, starved and blocked cycles as a stacked bar over the frame's cycles,
 /// with the numbers beside it (DESIGN.md §2 defines the three).
 pub fn unit_bars(c: &CycleReport) -> String {
-    let total = c.total.0.max(1) as f64;
-    let pct = |x: Cycle| 100.0 * x.as_f64() / total;
+    let pct = |x: Cycle| c.percent(x);
     let mut t = String::from(
         "<p class=\"key\">of the frame's cycles:<span class=\"busy\"></span>busy\
          <span class=\"starved\"></span>starved (waiting for input)\

@@ -149,7 +149,7 @@ impl Report {
             "  {:<22} {:>10} {:>6} {:>10} {:>6} {:>10} {:>6} {:>9} {:>9} {:>5}",
             "unit", "busy", "%", "starved", "%", "blocked", "%", "in", "out", "fifo"
         );
-        let pct = |x: Cycle| 100.0 * x.as_f64() / c.total.0.max(1) as f64;
+        let pct = |x: Cycle| c.percent(x);
         for u in &c.units {
             let _ = writeln!(
                 t,

@@ -308,7 +308,7 @@ pub(super) fn render_job(
         perspective_tol: PerspectiveTol::FollowK,
         datapath: Datapath::F32,
         // A discoid scene is measured against the surface it stands for, where it says.
-        reference: spec.reference && crate::job::reference_scene(scene).is_ok(),
+        reference: spec.reference && crate::job::check_reference_scene(scene).is_ok(),
         supersample: 1,
         viewport: spec.viewport,
         mode: spec.mode,

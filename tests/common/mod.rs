@@ -1,4 +1,6 @@
 //! Helpers shared by the tests that run the `lembo-sim` binary as a user would.
+// Each test crate includes this module and uses part of it.
+#![allow(dead_code)]
 
 use std::path::Path;
 use std::process::{Command, Output};
@@ -27,4 +29,13 @@ pub fn files_in(dir: &Path) -> Vec<String> {
     };
     v.sort();
     v
+}
+
+/// The memory the system can give a new allocation (`MemAvailable` of /proc/meminfo)
+/// \[bytes\]; None where it cannot be read.
+pub fn memory_available() -> Option<f64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024.0)
 }

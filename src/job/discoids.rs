@@ -1,0 +1,177 @@
+//! A discoid scene's render (DESIGN.md §4): the three passes, timed or functional, their
+//! report, and with `--reference` the blended image measured against the surface the
+//! discoids stand for.
+
+use super::{
+    host, reference_scene, scene_info, settings, sim_options, Measured, Model, PathRun, RenderJob,
+    LEMBO_BYTES,
+};
+use crate::camera::View;
+use crate::discoid;
+use crate::error::{Error, Result};
+use crate::pipeline;
+use crate::reference::oracle::ReferenceImage;
+use crate::reference::{heatmap, metrics, oracle};
+use crate::report::{Memory, Primitives, Report, SCHEMA_VERSION};
+use crate::rop::FrameBuffer;
+use crate::scene::Scene;
+use std::time::Instant;
+
+/// Bytes of a planar discoid: centre, normal and radius in f32.
+pub const PLANAR_DISCOID_BYTES: u64 = 7 * 4;
+/// Bytes of a curved discoid: a lembo and six texture-coordinate pairs in f32.
+pub const CURVED_DISCOID_BYTES: u64 = LEMBO_BYTES + 6 * 2 * 4;
+
+/// A discoid scene's three passes (Piranda et al. 2006): timed on `arch`, or functional. With both,
+/// the timed image is checked against the functional one.
+pub(super) fn run_discoids(
+    job: &RenderJob,
+    scene: &Scene,
+    view: &View,
+    model: Model,
+    reference: Option<(&ReferenceImage, f64)>,
+) -> Result<PathRun> {
+    let threshold = job.threshold.unwrap_or(scene.discoid_threshold);
+    let t0 = Instant::now();
+    let (framebuffer, counts, blend, units, cycles) = match model {
+        Model::Timed(arch) => {
+            let t = pipeline::discoid::run_discoid_timed(
+                scene,
+                view,
+                job.tolerance(),
+                job.datapath,
+                arch,
+                job.blend,
+                threshold,
+                &sim_options(
+                    job,
+                    arch,
+                    if scene.lembo_count() > 0 {
+                        pipeline::Path::Lembo
+                    } else {
+                        pipeline::Path::Triangle
+                    },
+                )?,
+            )?;
+            (t.framebuffer, t.counts, t.blend, t.units, Some(t.cycles))
+        }
+        Model::Functional => {
+            let f = discoid::render::render_discoids_functional(
+                scene,
+                view,
+                job.tolerance(),
+                job.datapath,
+                job.blend,
+                threshold,
+            )?;
+            (f.framebuffer, f.counts, f.blend, Vec::new(), None)
+        }
+    };
+    let wall = t0.elapsed().as_secs_f64();
+    let measured = match reference {
+        Some(reference) => Some(measure_discoids(
+            job,
+            scene,
+            view,
+            threshold,
+            &framebuffer,
+            reference,
+        )?),
+        None => None,
+    };
+    let (planar, curved) = scene
+        .objects
+        .iter()
+        .filter_map(|o| o.discoids.as_ref())
+        .fold((0u64, 0u64), |(p, c), d| {
+            (
+                p + d.planar.len() as u64,
+                c + d.lembo_texcoords.len() as u64,
+            )
+        });
+    let primitive_bytes = PLANAR_DISCOID_BYTES * planar + CURVED_DISCOID_BYTES * curved;
+    let memory = Memory::new(
+        FrameBuffer::stored_bytes(scene.viewport.width, scene.viewport.height),
+        blend.accumulation_buffer_bytes,
+        primitive_bytes,
+        model.arch().map(|a| pipeline::fifo_entries(a, &units)),
+    );
+    let report = Report {
+        schema_version: SCHEMA_VERSION,
+        scene: scene_info(scene),
+        settings: settings(
+            job,
+            model,
+            "discoid",
+            (curved > 0).then_some(job.k),
+            None,
+            false,
+        ),
+        primitives: Primitives {
+            kind: "discoid".into(),
+            count: planar + curved,
+            vertices: 4 * planar + 6 * curved,
+            bytes: primitive_bytes,
+            quad_efficiency: counts.quad_efficiency(),
+        },
+        units,
+        counts,
+        cycles: cycles.clone(),
+        cost: None,
+        arch: model.arch().cloned(),
+        accuracy: measured.as_ref().map(|m| m.accuracy.clone()),
+        blend: Some(blend),
+        memory,
+        host: host(
+            wall,
+            counts.fragments,
+            cycles.map(|c| (c.total, job.host_threads)),
+            measured.as_ref().map(|m| m.reference_wall),
+            measured.as_ref().map(|m| m.metrics_wall),
+        ),
+    };
+    Ok(PathRun {
+        report,
+        framebuffer,
+        error_map: measured.map(|m| m.error_map),
+        trace: None,
+    })
+}
+
+/// A discoid image measured against the surface its discoids stand for: the functional
+/// passes drawn again keeping the depth winners' normals (their image must be the one
+/// measured, bit for bit), then the metrics against the reference of [`reference_scene`].
+fn measure_discoids(
+    job: &RenderJob,
+    scene: &Scene,
+    view: &View,
+    threshold: f64,
+    image: &FrameBuffer,
+    (reference, wall): (&ReferenceImage, f64),
+) -> Result<Measured> {
+    let t1 = Instant::now();
+    let with_normals = discoid::render::render_discoids(
+        scene,
+        view,
+        job.tolerance(),
+        job.datapath,
+        (job.blend, threshold),
+        true,
+    )?
+    .framebuffer;
+    if with_normals.color != image.color {
+        return Err(Error::Internal(
+            "the discoid image drawn again for the metrics differs from the one measured".into(),
+        ));
+    }
+    let surface = reference_scene(scene)?;
+    let tracer = oracle::Tracer::new(surface.lembos().map(|(l, _)| l), view);
+    let accuracy = metrics::measure(&with_normals, reference, &tracer, 0, None, None);
+    let metrics_wall = t1.elapsed().as_secs_f64();
+    Ok(Measured {
+        accuracy,
+        error_map: heatmap::error_heatmap(image, reference),
+        reference_wall: wall + metrics_wall,
+        metrics_wall,
+    })
+}
