@@ -14,6 +14,10 @@ use std::fmt::Debug;
 pub trait Real: Float + Debug + Default + Send + Sync + 'static {
     /// Name used in reports and on the command line.
     const NAME: &'static str;
+    /// Whether this word counts its operations ([`crate::cost::counted::Counted`]): code
+    /// that would do extra arithmetic for speed (the ROP's shading in lanes, which computes
+    /// both sides of a branch) does the formula as written instead.
+    const COUNTS_OPERATIONS: bool = false;
     /// Converts from `f64`, rounding to nearest.
     fn of(x: f64) -> Self;
     /// Widens to `f64` exactly.

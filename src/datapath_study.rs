@@ -737,7 +737,7 @@ pub fn measure_case(case: &Case, ks: &[f64]) -> CaseResult {
             let fb = &frame.framebuffer;
             let (winner_diff, shade_diff) = diff_vs_f64(fb, f64_image.as_ref());
             if datapath == Datapath::F64 {
-                f64_image = Some((fb.primitive.clone(), fb.color.clone()));
+                f64_image = Some((fb.primitive.to_vec(), fb.color.to_vec()));
             }
             let c = &frame.counts;
             let denominator = covered.max(1) as f64;

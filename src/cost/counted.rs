@@ -169,6 +169,7 @@ impl<R: Real> PartialEq for Counted<R> {
 
 impl<R: Real> Real for Counted<R> {
     const NAME: &'static str = R::NAME;
+    const COUNTS_OPERATIONS: bool = true;
     #[inline(always)]
     fn of(x: f64) -> Self {
         Counted(R::of(x))

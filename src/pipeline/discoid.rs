@@ -114,8 +114,8 @@ fn passes<R: Real>(
 
     let vp = view.viewport;
     let mut target = DiscoidTarget::new(vp.width, vp.height, mode, threshold);
-    target.depth = depth;
-    target.winner = winner;
+    target.depth = depth.into();
+    target.winner = winner.into();
     if let Some((pending, counters)) = second.discoid {
         target.kept = pending;
         let r = &mut target.report;

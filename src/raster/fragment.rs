@@ -28,6 +28,30 @@ pub trait FragmentSink<R: Real> {
         v: R,
         z: R,
     );
+
+    /// The fragments of `span`, subsegment `sub`'s pixels on scanline j, in the order of
+    /// [`Span::walk`]. The default hands them to [`Self::fragment`] one by one with their
+    /// depth ([`fragments`]); the ROP takes the run whole to shade in lanes.
+    #[inline]
+    fn span(&mut self, l: &ScreenLembo<R>, sub: &Subsegment<R>, j: u32, span: &Span<R>) {
+        fragments(l, sub, j, span, self);
+    }
+}
+
+/// Hands the fragments of `span` on scanline j to `sink` one by one, each with its depth
+/// z(u, v) from the lembo's depth quadratic.
+#[inline]
+pub fn fragments<R: Real, S: FragmentSink<R> + ?Sized>(
+    l: &ScreenLembo<R>,
+    sub: &Subsegment<R>,
+    j: u32,
+    span: &Span<R>,
+    sink: &mut S,
+) {
+    span.walk(|i, u, v| {
+        let z = l.z.eval(u, v);
+        sink.fragment(l, sub, i, j, u, v, z);
+    });
 }
 
 /// The pixel run of one subsegment on its scanline: pixels [i0, i1), with (u, v) at the
@@ -130,10 +154,7 @@ pub fn rasterize<R: Real, S: FragmentSink<R>>(
     let Some(span) = span(sub, width) else {
         return;
     };
-    span.walk(|i, u, v| {
-        let z = l.z.eval(u, v);
-        sink.fragment(l, sub, i, j, u, v, z);
-    });
+    sink.span(l, sub, j, &span);
     counts.fragments += span.len() as u64;
 }
 

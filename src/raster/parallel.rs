@@ -225,7 +225,7 @@ pub fn render_lembos_in_bands<R: Real>(
                     .map_err(|e| ((n, j), e))?;
                 }
             }
-            Ok((c, rop.passed))
+            Ok((c, rop.finish()))
         })
     })
 }
@@ -249,7 +249,7 @@ pub fn render_triangles_in_bands<R: Real>(
                     rasterize_rows(t, lo, hi, &mut rop, &mut c);
                 }
             }
-            Ok((c, rop.passed))
+            Ok((c, rop.finish()))
         })
     })
 }

@@ -5,6 +5,8 @@
 //! give the same image. Depth is stored as `f32` whatever the datapath, as a depth buffer
 //! would hold it. The normal buffer exists only when accuracy is measured.
 
+use super::plane::Plane;
+
 /// No primitive has written this pixel.
 pub const NO_PRIMITIVE: u32 = u32::MAX;
 
@@ -24,13 +26,13 @@ pub struct FrameBuffer {
     /// Height \[pixels\].
     pub height: u32,
     /// RGB8 per pixel.
-    pub color: Vec<[u8; 3]>,
+    pub color: Plane<[u8; 3]>,
     /// Depth in [0, 1] per pixel; 1 where nothing was drawn.
-    pub depth: Vec<f32>,
+    pub depth: Plane<f32>,
     /// Id of the primitive whose fragment won, or [`NO_PRIMITIVE`].
-    pub primitive: Vec<u32>,
+    pub primitive: Plane<u32>,
     /// Unit normal of the winning fragment, kept only when accuracy is measured.
-    pub normal: Option<Vec<[f32; 3]>>,
+    pub normal: Option<Plane<[f32; 3]>>,
 }
 
 impl FrameBuffer {
@@ -52,10 +54,10 @@ impl FrameBuffer {
         FrameBuffer {
             width,
             height,
-            color: vec![background; n],
-            depth: vec![1.0; n],
-            primitive: vec![NO_PRIMITIVE; n],
-            normal: keep_normals.then(|| vec![[0.0; 3]; n]),
+            color: Plane::filled(n, background),
+            depth: Plane::filled(n, 1.0),
+            primitive: Plane::filled(n, NO_PRIMITIVE),
+            normal: keep_normals.then(|| Plane::filled(n, [0.0; 3])),
         }
     }
 
@@ -67,15 +69,16 @@ impl FrameBuffer {
 
     /// A frame of `width` x `height` whose pixels are all zero (not a cleared frame): for
     /// [`Self::bands_mut`], whose bands each clear their own rows, on their own threads.
-    /// Zeroed memory is mapped lazily, so nothing is touched here.
+    /// A large frame's zeroed planes are mapped lazily ([`Plane::zeroed`]), so nothing is
+    /// touched here.
     pub fn zeroed(width: u32, height: u32) -> Self {
         let n = width as usize * height as usize;
         FrameBuffer {
             width,
             height,
-            color: vec![[0; 3]; n],
-            depth: vec![0.0; n],
-            primitive: vec![0; n],
+            color: Plane::zeroed(n),
+            depth: Plane::zeroed(n),
+            primitive: Plane::zeroed(n),
             normal: None,
         }
     }
@@ -96,9 +99,9 @@ impl FrameBuffer {
     pub fn bands_mut(&mut self, bands: &[(u32, u32)]) -> Vec<FrameRows<'_>> {
         let width = self.width;
         let (mut color, mut depth, mut primitive) = (
-            self.color.as_mut_slice(),
-            self.depth.as_mut_slice(),
-            self.primitive.as_mut_slice(),
+            &mut self.color[..],
+            &mut self.depth[..],
+            &mut self.primitive[..],
         );
         let mut normal = self.normal.as_deref_mut();
         let mut out = Vec::with_capacity(bands.len());
@@ -196,8 +199,22 @@ impl FrameRows<'_> {
         rgb: [u8; 3],
         normal: impl FnOnce() -> [f32; 3],
     ) {
+        self.write_depth(idx, z, id);
+        self.write_color(idx, rgb, normal);
+    }
+
+    /// The depth and winner of a fragment that passed, written before its colour
+    /// ([`Self::write_color`]) when the ROP shades fragments in batches.
+    #[inline(always)]
+    pub fn write_depth(&mut self, idx: usize, z: f32, id: u32) {
         self.depth[idx] = z;
         self.primitive[idx] = id;
+    }
+
+    /// The colour of a fragment whose depth [`Self::write_depth`] wrote, with its normal
+    /// where normals are kept.
+    #[inline(always)]
+    pub fn write_color(&mut self, idx: usize, rgb: [u8; 3], normal: impl FnOnce() -> [f32; 3]) {
         self.color[idx] = rgb;
         if let Some(normals) = self.normal.as_deref_mut() {
             normals[idx] = normal();

@@ -1,5 +1,7 @@
 //! The ROP: depth test, shading of the fragments that pass, and the frame buffer.
 pub mod framebuffer;
+pub mod lanes;
+pub mod plane;
 #[allow(clippy::module_inception)]
 pub mod rop;
 pub mod shade;

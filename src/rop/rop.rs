@@ -1,13 +1,21 @@
 //! The ROP as a fragment sink: depth test, then shading of the fragments that pass (early
 //! depth test: shading a fragment that loses cannot change the image), then the write.
+//!
+//! On plain `f32`/`f64` the fragments of one primitive that pass are held back, up to
+//! [`BATCH`] of them, and shaded together in lanes ([`super::lanes`]): their depth and winner
+//! are written at the test, their colour when the batch is shaded, in arrival order, so a
+//! pixel two fragments of one primitive reach ends with the later one's colour as before.
+//! A batch is shaded when it is full, when a fragment of another primitive (or another piece
+//! of a split lembo) arrives, before a fragment is shaded alone, and at [`Rop::finish`].
 
 use super::framebuffer::{FrameBuffer, FrameRows};
+use super::lanes::{self, three, Lanes, LANES};
 use super::shade::{to_u8, Light, Shader};
 use crate::camera::View;
 use crate::cost::counted::Op;
 use crate::datapath::Real;
-use crate::lembo::eval3;
-use crate::raster::fragment::FragmentSink;
+use crate::lembo::{eval3, Quadratic3};
+use crate::raster::fragment::{self, FragmentSink, Span};
 use crate::raster::setup::ScreenLembo;
 use crate::raster::subsegmenter::Subsegment;
 use crate::raster::triangle::{ScreenTriangle, TriangleFragment, TriangleSink};
@@ -72,17 +80,90 @@ impl<R: Real> FragmentShader<R> {
     pub fn shader(&self) -> &Shader<R> {
         &self.shader
     }
+
+    /// The direction to the eye when it is the same everywhere (orthographic views).
+    #[inline(always)]
+    pub(super) fn to_eye_constant(&self) -> Option<[R; 3]> {
+        self.to_eye
+    }
+
+    /// The eye position \[world units\].
+    #[inline(always)]
+    pub(super) fn eye(&self) -> [R; 3] {
+        self.eye
+    }
+}
+
+/// Fragments a ROP holds back to shade together, at most.
+pub const BATCH: usize = 64;
+
+/// What the fragments of a batch are shaded with.
+#[derive(Clone, Copy)]
+enum Surface<R> {
+    /// A lembo, or a piece of one Setup split (its domain corners tell pieces apart): the
+    /// fragments hold (u, v), and their normal and position come from its quadratics.
+    Lembo {
+        id: u32,
+        domain: Option<[[f64; 2]; 3]>,
+        normal: Quadratic3<R>,
+        position: Quadratic3<R>,
+        color: [R; 3],
+    },
+    /// A triangle (or a piece of one clipped, with its id and colour): the fragments hold
+    /// their interpolated normal and position.
+    Triangle { id: u32, color: [R; 3] },
+}
+
+/// Fragments of one primitive that passed the depth test and wait to be shaded.
+struct Batch<R> {
+    of: Option<Surface<R>>,
+    len: usize,
+    /// Frame-buffer index of each fragment.
+    idx: [usize; BATCH],
+    /// Per fragment: (u, v) in rows 0 and 1 for a lembo; for a triangle, the normal in rows
+    /// 0 to 2 and the position in rows 3 to 5.
+    values: [[R; BATCH]; 6],
+}
+
+impl<R: Real> Batch<R> {
+    fn holds_lembo(&self, l: &ScreenLembo<R>) -> bool {
+        matches!(self.of, Some(Surface::Lembo { id, domain, .. }) if id == l.id && domain == l.domain)
+    }
+
+    fn holds_triangle(&self, t: &ScreenTriangle<R>) -> bool {
+        matches!(self.of, Some(Surface::Triangle { id, .. }) if id == t.id)
+    }
+
+    /// Takes a fragment at `idx` with its values; whether the batch is now full.
+    #[inline(always)]
+    fn push<const N: usize>(&mut self, idx: usize, values: [R; N]) -> bool {
+        self.idx[self.len] = idx;
+        for (row, x) in values.into_iter().enumerate() {
+            self.values[row][self.len] = x;
+        }
+        self.len += 1;
+        self.len == BATCH
+    }
+
+    /// Lane k of row `row` for the fragments from `first` on (lanes past the last fragment
+    /// repeat it; their results are not written).
+    #[inline(always)]
+    fn lanes(&self, row: usize, first: usize) -> Lanes<R> {
+        let last = self.len - 1;
+        lanes::lanes(|k| self.values[row][(first + k).min(last)])
+    }
 }
 
 /// The ROP of the functional model: depth test, Phong shading and the frame-buffer write,
 /// as a fragment sink for both paths.
-pub struct Rop<'a, R> {
+pub struct Rop<'a, R: Real> {
     fb: FrameRows<'a>,
     shader: FragmentShader<R>,
     /// Fragments that passed the depth test.
     pub passed: u64,
     /// The frame row that `fb`'s row 0 holds (a band of a frame drawn on several threads).
     row0: u32,
+    batch: Box<Batch<R>>,
 }
 
 impl<'a, R: Real> Rop<'a, R> {
@@ -99,7 +180,109 @@ impl<'a, R: Real> Rop<'a, R> {
             shader: FragmentShader::new(light, view),
             passed: 0,
             row0,
+            batch: Box::new(Batch {
+                of: None,
+                len: 0,
+                idx: [0; BATCH],
+                values: [[R::zero(); BATCH]; 6],
+            }),
         }
+    }
+
+    /// Shades what is held back and returns the fragments that passed the depth test.
+    pub fn finish(mut self) -> u64 {
+        self.flush();
+        self.passed
+    }
+
+    /// Shades and writes the batch.
+    fn flush(&mut self) {
+        if self.batch.len == 0 {
+            return;
+        }
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2, checked just above. (No fused multiply-add is
+            // enabled, and Rust does not contract without it: the same IEEE operations.)
+            unsafe { self.flush_avx2() };
+            return;
+        }
+        self.flush_lanes();
+    }
+
+    /// [`Self::flush_lanes`] compiled for AVX2: eight `f32` lanes in one register.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn flush_avx2(&mut self) {
+        self.flush_lanes();
+    }
+
+    #[inline(always)]
+    fn flush_lanes(&mut self) {
+        let b = &*self.batch;
+        let Some(surface) = b.of else {
+            return;
+        };
+        for first in (0..b.len).step_by(LANES) {
+            let (normal, position, color) = match &surface {
+                Surface::Lembo {
+                    normal,
+                    position,
+                    color,
+                    ..
+                } => {
+                    let (u, v) = (b.lanes(0, first), b.lanes(1, first));
+                    let p = match self.shader.to_eye_constant() {
+                        Some(_) => [[R::zero(); LANES]; 3],
+                        None => lanes::eval3(position, &u, &v),
+                    };
+                    (lanes::eval3(normal, &u, &v), p, *color)
+                }
+                Surface::Triangle { color, .. } => (
+                    three(|row| b.lanes(row, first)),
+                    three(|row| b.lanes(3 + row, first)),
+                    *color,
+                ),
+            };
+            let (rgb, unit) = self.shader.shade_lanes(&normal, &position, color);
+            for k in 0..LANES.min(b.len - first) {
+                self.fb.write_color(b.idx[first + k], rgb[k], || {
+                    three(|c| unit[c][k].f64() as f32)
+                });
+            }
+        }
+        self.batch.len = 0;
+    }
+
+    /// Starts a batch of `surface` unless the batch already holds its fragments.
+    #[inline(always)]
+    fn begin(&mut self, holds: bool, surface: impl FnOnce() -> Surface<R>) {
+        if !holds {
+            self.flush();
+            self.batch.of = Some(surface());
+        }
+    }
+
+    /// The depth test of a fragment of primitive `id` at pixel (i, j); a fragment that
+    /// passes has its depth and winner written and joins the batch with `values`.
+    #[inline(always)]
+    fn test<const N: usize>(&mut self, id: u32, i: u32, j: u32, z: R, values: [R; N]) {
+        let idx = self.fb.index(i, j - self.row0);
+        let zf = z.f64() as f32;
+        if self.fb.passes(idx, zf, id) {
+            self.passed += 1;
+            self.fb.write_depth(idx, zf, id);
+            if self.batch.push(idx, values) {
+                self.flush();
+            }
+        }
+    }
+}
+
+impl<R: Real> Drop for Rop<'_, R> {
+    /// What is held back is shaded even if [`Rop::finish`] is not called.
+    fn drop(&mut self) {
+        self.flush();
     }
 }
 
@@ -115,7 +298,8 @@ pub fn normalize<R: Real>(v: [R; 3]) -> [R; 3] {
 }
 
 impl<R: Real> Rop<'_, R> {
-    /// Depth test, shading and write of one fragment of primitive `id`.
+    /// Depth test, shading and write of one fragment of primitive `id`, shaded alone (for
+    /// a counting datapath, and fragments handed over one by one).
     #[inline(always)]
     fn write(
         &mut self,
@@ -125,6 +309,7 @@ impl<R: Real> Rop<'_, R> {
         z: R,
         shade: impl FnOnce(&FragmentShader<R>) -> ([u8; 3], [R; 3]),
     ) {
+        self.flush();
         let idx = self.fb.index(i, j - self.row0);
         let zf = z.f64() as f32;
         // The depth test's compare (on the stored f32 depth, beside the datapath).
@@ -142,9 +327,18 @@ impl<R: Real> Rop<'_, R> {
 impl<R: Real> TriangleSink<R> for Rop<'_, R> {
     #[inline]
     fn fragment(&mut self, t: &ScreenTriangle<R>, i: u32, j: u32, f: &TriangleFragment<R>) {
-        self.write(t.id, i, j, f.z, |s| {
-            s.shade_at(f.normal, f.position, t.color)
+        if R::COUNTS_OPERATIONS {
+            return self.write(t.id, i, j, f.z, |s| {
+                s.shade_at(f.normal, f.position, t.color)
+            });
+        }
+        let holds = self.batch.holds_triangle(t);
+        self.begin(holds, || Surface::Triangle {
+            id: t.id,
+            color: t.color,
         });
+        let (n, p) = (f.normal, f.position);
+        self.test(t.id, i, j, f.z, [n[0], n[1], n[2], p[0], p[1], p[2]]);
     }
 }
 
@@ -161,5 +355,21 @@ impl<R: Real> FragmentSink<R> for Rop<'_, R> {
         z: R,
     ) {
         self.write(l.id, i, j, z, |s| s.shade(l, u, v));
+    }
+
+    #[inline]
+    fn span(&mut self, l: &ScreenLembo<R>, sub: &Subsegment<R>, j: u32, span: &Span<R>) {
+        if R::COUNTS_OPERATIONS {
+            return fragment::fragments(l, sub, j, span, self);
+        }
+        let holds = self.batch.holds_lembo(l);
+        self.begin(holds, || Surface::Lembo {
+            id: l.id,
+            domain: l.domain,
+            normal: l.normal,
+            position: l.position,
+            color: l.color,
+        });
+        span.walk(|i, u, v| self.test(l.id, i, j, l.z.eval(u, v), [u, v]));
     }
 }

@@ -71,6 +71,12 @@ impl<R: Real> Shader<R> {
         }
     }
 
+    /// The shininess as an integer, when it is one.
+    #[inline(always)]
+    pub(super) fn shininess_int(&self) -> Option<i32> {
+        self.shininess_int
+    }
+
     /// Linear RGB in [0, 1] for a unit normal `n`, unit direction to the eye `v` and a
     /// material colour.
     #[inline]

@@ -1,0 +1,310 @@
+//! The ROP's shading in lanes: [`LANES`] fragments of one primitive shaded together, by the
+//! same IEEE operations in the same order as [`FragmentShader::shade_at`] does them one at a
+//! time, so the compiler can hold the lanes in SIMD registers and every colour stays bit for
+//! bit what the scalar shader gives (the tests below compare lane by lane).
+//!
+//! What changes is only the control flow: each branch of the scalar shader becomes a select
+//! between both of its sides, computed for every lane (a discarded side has no effect on
+//! plain `f32`/`f64` arithmetic), and `powi` is the same square-and-multiply sequence that
+//! the runtime's `__powisf2`/`__powidf2` runs, written out so it can run in lanes. No
+//! operation is fused (Rust never contracts `a * b + c` into a fused multiply-add).
+//!
+//! A counting datapath ([`crate::cost::counted::Counted`]) never comes here: selects would
+//! count both sides of every branch, so the ROP shades its fragments one at a time and the
+//! counts stay those of the formula as written.
+
+use super::rop::FragmentShader;
+use super::shade::{to_u8, Shader};
+use crate::datapath::Real;
+use crate::lembo::Quadratic3;
+
+/// Fragments shaded together.
+pub const LANES: usize = 8;
+
+/// One value per lane.
+pub type Lanes<R> = [R; LANES];
+
+/// A vector per lane, as three lanes of coordinates.
+pub type Lanes3<R> = [Lanes<R>; 3];
+
+/// `[f(0), f(1), ...]` for every lane. (Loops, not `array::map` or `array::from_fn`: those
+/// are not always inlined, and a call out of the AVX2 batch leaves its registers.)
+#[inline(always)]
+pub fn lanes<T: Copy + Default>(mut f: impl FnMut(usize) -> T) -> [T; LANES] {
+    let mut out = [T::default(); LANES];
+    for (k, x) in out.iter_mut().enumerate() {
+        *x = f(k);
+    }
+    out
+}
+
+/// `[f(0), f(1), f(2)]`: the three coordinates of a vector.
+#[inline(always)]
+pub fn three<T>(mut f: impl FnMut(usize) -> T) -> [T; 3] {
+    [f(0), f(1), f(2)]
+}
+
+/// `if c { a } else { b }` in every lane.
+#[inline(always)]
+fn select<R: Copy + Default>(c: &[bool; LANES], a: &Lanes<R>, b: &Lanes<R>) -> Lanes<R> {
+    lanes(|k| if c[k] { a[k] } else { b[k] })
+}
+
+/// `a · b` per lane, summed in the scalar shader's order.
+#[inline(always)]
+fn dot<R: Real>(a: &Lanes3<R>, b: &Lanes3<R>) -> Lanes<R> {
+    lanes(|k| a[0][k] * b[0][k] + a[1][k] * b[1][k] + a[2][k] * b[2][k])
+}
+
+/// `a · c` per lane for a vector `c` shared by every lane.
+#[inline(always)]
+fn dot_with<R: Real>(a: &Lanes3<R>, c: [R; 3]) -> Lanes<R> {
+    lanes(|k| a[0][k] * c[0] + a[1][k] * c[1] + a[2][k] * c[2])
+}
+
+/// [`super::rop::normalize`] per lane.
+#[inline(always)]
+pub fn normalize<R: Real>(v: &Lanes3<R>) -> Lanes3<R> {
+    let n = lanes(|k| (v[0][k] * v[0][k] + v[1][k] * v[1][k] + v[2][k] * v[2][k]).sqrt());
+    let positive = lanes(|k| n[k] > R::zero());
+    let zero = [R::zero(); LANES];
+    three(|c| select(&positive, &lanes(|k| v[c][k] / n[k]), &zero))
+}
+
+/// `x.powi(n)` per lane, bit for bit: the runtime's `powi` (compiler-builtins, as libgcc)
+/// multiplies the powers x, x², x⁴, ... that the bits of |n| select, lowest first, into an
+/// accumulator that starts at 1, and takes the reciprocal for n < 0.
+#[inline(always)]
+pub fn powi<R: Real>(x: &Lanes<R>, n: i32) -> Lanes<R> {
+    let mut power = *x;
+    let mut acc = [R::one(); LANES];
+    let mut bits = n.unsigned_abs();
+    loop {
+        if bits & 1 != 0 {
+            acc = lanes(|k| acc[k] * power[k]);
+        }
+        bits >>= 1;
+        if bits == 0 {
+            break;
+        }
+        power = lanes(|k| power[k] * power[k]);
+    }
+    if n < 0 {
+        lanes(|k| R::one() / acc[k])
+    } else {
+        acc
+    }
+}
+
+/// [`crate::lembo::eval3`] per lane.
+#[inline(always)]
+pub fn eval3<R: Real>(q: &Quadratic3<R>, u: &Lanes<R>, v: &Lanes<R>) -> Lanes3<R> {
+    three(|c| lanes(|k| q[c].eval(u[k], v[k])))
+}
+
+impl<R: Real> Shader<R> {
+    /// [`Shader::terms`] per lane.
+    #[inline(always)]
+    pub fn terms_lanes(&self, n: &Lanes3<R>, v: &Lanes3<R>) -> (Lanes<R>, Lanes<R>) {
+        let zero = [R::zero(); LANES];
+        let nv = dot(n, v);
+        let back = lanes(|k| nv[k] < R::zero());
+        let n = three(|c| select(&back, &lanes(|k| -n[c][k]), &n[c]));
+        let nl = dot_with(&n, self.l);
+        let cos_a = lanes(|k| nl[k].max(R::zero()));
+        let two = R::of(2.0);
+        let r = three(|c| lanes(|k| two * nl[k] * n[c][k] - self.l[c]));
+        let rv = dot(&r, v);
+        let cos_g = lanes(|k| rv[k].max(R::zero()));
+        let lit = lanes(|k| cos_g[k] > R::zero() && nl[k] > R::zero());
+        let power = match self.shininess_int() {
+            Some(n) => powi(&cos_g, n),
+            None => lanes(|k| cos_g[k].powf(self.shininess)),
+        };
+        (cos_a, select(&lit, &power, &zero))
+    }
+
+    /// [`Shader::combine`] per lane, quantised to 8 bits as the ROP writes it.
+    #[inline(always)]
+    pub fn combine_lanes(
+        &self,
+        cos_a: &Lanes<R>,
+        cos_g_n: &Lanes<R>,
+        color: [R; 3],
+    ) -> [[u8; 3]; LANES] {
+        let spec = if self.ks > R::zero() {
+            lanes(|k| self.ks * cos_g_n[k])
+        } else {
+            [R::zero(); LANES]
+        };
+        let diffuse = lanes(|k| self.ka + self.kd * cos_a[k]);
+        lanes(|k| three(|c| to_u8(color[c] * diffuse[k] + spec[k])))
+    }
+}
+
+impl<R: Real> FragmentShader<R> {
+    /// [`FragmentShader::shade_at`] per lane: the colours of `LANES` surface points with
+    /// normals `normal` at world `position` (unused for orthographic views), and the unit
+    /// normals they were shaded with.
+    #[inline(always)]
+    pub fn shade_lanes(
+        &self,
+        normal: &Lanes3<R>,
+        position: &Lanes3<R>,
+        color: [R; 3],
+    ) -> ([[u8; 3]; LANES], Lanes3<R>) {
+        let n = normalize(normal);
+        let to_eye = match self.to_eye_constant() {
+            Some(d) => three(|c| [d[c]; LANES]),
+            None => {
+                let eye = self.eye();
+                normalize(&three(|c| lanes(|k| eye[c] - position[c][k])))
+            }
+        };
+        let s = self.shader();
+        let (cos_a, cos_g_n) = s.terms_lanes(&n, &to_eye);
+        (s.combine_lanes(&cos_a, &cos_g_n, color), n)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::{Camera, Projection, View, Viewport};
+    use crate::rop::shade::Light;
+    use proptest::prelude::RngExt;
+    use proptest::test_runner::{RngAlgorithm, TestRng};
+
+    fn rng(seed: u8) -> TestRng {
+        TestRng::from_seed(RngAlgorithm::ChaCha, &[seed; 32])
+    }
+
+    fn view(projection: Projection) -> View {
+        let camera = Camera {
+            eye: [1.0, 2.0, 5.0],
+            target: [0.0; 3],
+            up: [0.0, 1.0, 0.0],
+            projection,
+        };
+        View::new(
+            &camera,
+            Viewport {
+                width: 64,
+                height: 64,
+            },
+        )
+    }
+
+    /// A value that reaches the corners the shader's branches turn on: zero (both signs),
+    /// tiny, huge and ordinary values of either sign.
+    fn value(rng: &mut impl RngExt) -> f64 {
+        match rng.random_range(0..10) {
+            0 => 0.0,
+            1 => -0.0,
+            2 => rng.random_range(-1e-30..1e-30),
+            3 => rng.random_range(-1e30..1e30),
+            _ => rng.random_range(-2.0..2.0),
+        }
+    }
+
+    /// [`FragmentShader::shade_lanes`] compiled for AVX2, as the ROP runs it there.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn shade_lanes_avx2<R: Real>(
+        shader: &FragmentShader<R>,
+        normal: &Lanes3<R>,
+        position: &Lanes3<R>,
+        color: [R; 3],
+    ) -> ([[u8; 3]; LANES], Lanes3<R>) {
+        shader.shade_lanes(normal, position, color)
+    }
+
+    fn check<R: Real>(light: &Light, view: &View, rng: &mut impl RngExt) {
+        #[cfg(target_arch = "x86_64")]
+        let avx2 = std::arch::is_x86_feature_detected!("avx2");
+        let shader = FragmentShader::<R>::new(light, view);
+        let color = [0.9, 0.45, 0.1].map(R::of);
+        for _ in 0..4000 {
+            let normal: Lanes3<R> = [0; 3].map(|_| lanes(|_| R::of(value(rng))));
+            let position: Lanes3<R> = [0; 3].map(|_| lanes(|_| R::of(rng.random_range(-3.0..3.0))));
+            let (rgb, n) = shader.shade_lanes(&normal, &position, color);
+            #[cfg(target_arch = "x86_64")]
+            if avx2 {
+                // SAFETY: the CPU has AVX2, checked above.
+                let wide = unsafe { shade_lanes_avx2(&shader, &normal, &position, color) };
+                assert_eq!(wide.0, rgb);
+                assert_eq!(
+                    wide.1.map(|c| c.map(|x| x.f64().to_bits())),
+                    n.map(|c| c.map(|x| x.f64().to_bits()))
+                );
+            }
+            for k in 0..LANES {
+                let (want_rgb, want_n) = shader.shade_at(
+                    [normal[0][k], normal[1][k], normal[2][k]],
+                    [position[0][k], position[1][k], position[2][k]],
+                    color,
+                );
+                assert_eq!(rgb[k], want_rgb, "lane {k} of {normal:?}");
+                let got_n = [n[0][k], n[1][k], n[2][k]];
+                assert_eq!(
+                    got_n.map(|c| c.f64().to_bits()),
+                    want_n.map(|c| c.f64().to_bits()),
+                    "lane {k}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn lanes_shade_bit_for_bit_as_the_scalar_shader() {
+        let mut rng = rng(18);
+        let perspective = view(Projection::Perspective {
+            fovy_deg: 60.0,
+            near: 1.0,
+            far: 10.0,
+        });
+        let orthographic = view(Projection::Orthographic {
+            height: 4.0,
+            near: 1.0,
+            far: 10.0,
+        });
+        assert!(orthographic.orthographic && !perspective.orthographic);
+        let lights = [
+            Light::default(),
+            Light {
+                shininess: 7.0,
+                ..Light::default()
+            },
+            Light {
+                shininess: 2.5,
+                ks: 0.0,
+                ..Light::default()
+            },
+            Light {
+                shininess: 0.0,
+                ka: 0.0,
+                ..Light::default()
+            },
+        ];
+        for light in &lights {
+            for view in [&perspective, &orthographic] {
+                check::<f32>(light, view, &mut rng);
+                check::<f64>(light, view, &mut rng);
+            }
+        }
+    }
+
+    #[test]
+    fn powi_in_lanes_is_the_runtime_powi_bit_for_bit() {
+        let mut rng = rng(24);
+        for n in (-40..=40).chain([127, 255, 1000, 1024, -1024]) {
+            let x: Lanes<f32> = lanes(|_| rng.random_range(0.0f32..1.5));
+            let y: Lanes<f64> = lanes(|_| rng.random_range(0.0f64..1.5));
+            let (px, py) = (powi(&x, n), powi(&y, n));
+            for k in 0..LANES {
+                assert_eq!(px[k].to_bits(), x[k].powi(n).to_bits(), "{}^{n}", x[k]);
+                assert_eq!(py[k].to_bits(), y[k].powi(n).to_bits(), "{}^{n}", y[k]);
+            }
+        }
+    }
+}
