@@ -1,6 +1,9 @@
 //! `--threads N` (raster::parallel): a functional frame drawn on N host threads is the
 //! single-threaded frame bit for bit (colour, depth, winner ids) with the same counts, on
-//! every surface scene shipped and the extremes, both paths and both datapaths.
+//! every surface scene shipped and the extremes, both paths and both datapaths. And the
+//! ROP's shading in batches of lanes (`rop::lanes`) gives the frame that shading one
+//! fragment at a time gives (the probed run of `--reference` hands the ROP its fragments one
+//! by one).
 
 use lembo_sim::camera::View;
 use lembo_sim::datapath::Datapath;
@@ -9,7 +12,9 @@ use lembo_sim::raster::{render_functional_on, Frame, PerspectiveTol};
 use lembo_sim::scene::Scene;
 use std::path::Path;
 
-fn scenes() -> Vec<Scene> {
+/// Every surface scene, at 203 x 157 (odd sizes: bands of unequal height, a last band of
+/// one row) or at its own viewport.
+fn scenes(small: bool) -> Vec<Scene> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("traces");
     let mut files: Vec<_> = std::fs::read_dir(&root)
         .unwrap()
@@ -24,8 +29,9 @@ fn scenes() -> Vec<Scene> {
         .map(|f| Scene::load(f).unwrap_or_else(|e| panic!("{e}")))
         .filter(|s| s.discoid_count() == 0)
         .map(|mut s| {
-            // Odd sizes: bands of unequal height, a last band of one row.
-            s.set_viewport(203, 157).unwrap();
+            if small {
+                s.set_viewport(203, 157).unwrap();
+            }
             s
         })
         .collect()
@@ -50,7 +56,7 @@ fn same(a: &Frame, b: &Frame, what: &str) {
 
 #[test]
 fn every_thread_count_draws_the_single_threaded_frame() {
-    let scenes = scenes();
+    let scenes = scenes(true);
     assert!(scenes.len() > 15, "the shipped scenes and the extremes");
     for scene in &scenes {
         let view = View::new(&scene.camera, scene.viewport);
@@ -71,6 +77,34 @@ fn every_thread_count_draws_the_single_threaded_frame() {
                     );
                     same(&one, &draw(n), &what);
                 }
+            }
+        }
+    }
+}
+
+#[test]
+fn shading_in_batches_draws_what_shading_one_fragment_at_a_time_draws() {
+    // At their own viewports: at 203 x 157 no piece of a clipped triangle covers a pixel.
+    for scene in &scenes(false) {
+        let view = View::new(&scene.camera, scene.viewport);
+        let tol = PerspectiveTol::FollowK.with_k(0.5);
+        // Level 1: large triangles, which the near plane clips into pieces that cover
+        // pixels (inside_mesh.json).
+        let tess = [1, 2].map(|n| Tessellation::new(scene, n));
+        for datapath in [Datapath::F32, Datapath::F64] {
+            for source in [None, Some(&tess[0] as _), Some(&tess[1] as _)] {
+                let triangles = source.is_some();
+                let draw = |one_by_one| {
+                    render_functional_on(scene, &view, tol, source, datapath, one_by_one, 1)
+                        .unwrap_or_else(|e| panic!("{}: {e}", scene.name))
+                };
+                let (batched, alone) = (draw(false), draw(true));
+                let what = format!("{} {datapath:?} triangles={triangles}", scene.name);
+                assert!(alone.probe.is_some(), "{what}: the probed run");
+                let mut alone = alone;
+                alone.framebuffer.normal = None;
+                alone.probe = None;
+                same(&batched, &alone, &what);
             }
         }
     }

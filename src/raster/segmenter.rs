@@ -152,13 +152,28 @@ fn last_chords<R: Real>(
         ];
         (l.y.eval(m[0], m[1]) - yj).abs() > k + slack
     };
-    // Depth-first, in walk order: (chord end, depth) still to close from `p`.
+    // Nearly always the clamped chord is within k: it is the walk's last segment, and the
+    // stack below (a kilobyte to set up) is not needed.
+    let far = too_far(&p, &iv.end);
+    if !far {
+        if out.len() - first >= cap {
+            return Err(CapExceeded);
+        }
+        out.push(Segment { p0: p, p1: iv.end });
+        counts.segments += 1;
+        return Ok(());
+    }
+    // Depth-first, in walk order: (chord end, depth) still to close from `p`. The first
+    // chord's test is the one just made.
+    let mut known_far = Some(far);
     let mut todo = [(iv.end, 0u32); 48];
     let mut n = 1;
     let mut p = p;
     while n > 0 {
         let (e, depth) = todo[n - 1];
-        let split = if depth + 1 < todo.len() as u32 && too_far(&p, &e) {
+        let split = if depth + 1 < todo.len() as u32
+            && known_far.take().unwrap_or_else(|| too_far(&p, &e))
+        {
             let key = (dot(iv.tau, p.uv) + dot(iv.tau, e.uv)) * R::of(0.5);
             curve_at_key(l, yj, iv.tau, key).filter(|q| {
                 let qk = dot(iv.tau, *q);

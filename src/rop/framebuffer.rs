@@ -182,6 +182,23 @@ impl FrameRows<'_> {
         j as usize * self.width as usize + i as usize
     }
 
+    /// Asks the cache for the depth and winner of pixel (i, j) (if these rows hold it),
+    /// which a depth test will soon read: a drawn primitive's next row of pixels starts a
+    /// new 4 KiB row of each plane, where the hardware prefetcher does not follow.
+    #[inline(always)]
+    pub fn prefetch(&self, i: u32, j: u32) {
+        let idx = self.index(i, j);
+        #[cfg(target_arch = "x86_64")]
+        if idx < self.depth.len() {
+            use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+            // SAFETY: a prefetch is a hint; it reads nothing and the addresses are in bounds.
+            unsafe {
+                _mm_prefetch::<_MM_HINT_T0>(self.depth.as_ptr().add(idx) as *const i8);
+                _mm_prefetch::<_MM_HINT_T0>(self.primitive.as_ptr().add(idx) as *const i8);
+            }
+        }
+    }
+
     /// [`FrameBuffer::passes`] on these rows.
     #[inline(always)]
     pub fn passes(&self, idx: usize, z: f32, id: u32) -> bool {

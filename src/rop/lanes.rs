@@ -96,6 +96,14 @@ pub fn powi<R: Real>(x: &Lanes<R>, n: i32) -> Lanes<R> {
     }
 }
 
+/// [`crate::raster::triangle::ScreenTriangle::fragment_at`] per lane: the attribute `v`
+/// (one vector per vertex, divided by its w) at weights `l`, perspective-correct.
+#[inline(always)]
+pub fn interpolate<R: Real>(v: &[[R; 3]; 3], l: &Lanes3<R>, inv_w: [R; 3]) -> Lanes3<R> {
+    let sum = dot_with(l, inv_w);
+    three(|c| lanes(|k| (l[0][k] * v[0][c] + l[1][k] * v[1][c] + l[2][k] * v[2][c]) / sum[k]))
+}
+
 /// [`crate::lembo::eval3`] per lane.
 #[inline(always)]
 pub fn eval3<R: Real>(q: &Quadratic3<R>, u: &Lanes<R>, v: &Lanes<R>) -> Lanes3<R> {

@@ -109,9 +109,18 @@ enum Surface<R> {
         position: Quadratic3<R>,
         color: [R; 3],
     },
-    /// A triangle (or a piece of one clipped, with its id and colour): the fragments hold
-    /// their interpolated normal and position.
-    Triangle { id: u32, color: [R; 3] },
+    /// A triangle, or a piece of one clipped (its parent's id; its own vertices tell pieces
+    /// apart): the fragments hold their barycentric weights, and their normal and position
+    /// are interpolated from its vertices'.
+    Triangle {
+        id: u32,
+        x: [i64; 3],
+        y: [i64; 3],
+        inv_w: [R; 3],
+        normal_w: [[R; 3]; 3],
+        position_w: [[R; 3]; 3],
+        color: [R; 3],
+    },
 }
 
 /// Fragments of one primitive that passed the depth test and wait to be shaded.
@@ -120,9 +129,8 @@ struct Batch<R> {
     len: usize,
     /// Frame-buffer index of each fragment.
     idx: [usize; BATCH],
-    /// Per fragment: (u, v) in rows 0 and 1 for a lembo; for a triangle, the normal in rows
-    /// 0 to 2 and the position in rows 3 to 5.
-    values: [[R; BATCH]; 6],
+    /// Per fragment: (u, v) in rows 0 and 1 for a lembo, the three weights for a triangle.
+    values: [[R; BATCH]; 3],
 }
 
 impl<R: Real> Batch<R> {
@@ -131,7 +139,7 @@ impl<R: Real> Batch<R> {
     }
 
     fn holds_triangle(&self, t: &ScreenTriangle<R>) -> bool {
-        matches!(self.of, Some(Surface::Triangle { id, .. }) if id == t.id)
+        matches!(self.of, Some(Surface::Triangle { id, x, y, .. }) if id == t.id && x == t.x && y == t.y)
     }
 
     /// Takes a fragment at `idx` with its values; whether the batch is now full.
@@ -184,7 +192,7 @@ impl<'a, R: Real> Rop<'a, R> {
                 of: None,
                 len: 0,
                 idx: [0; BATCH],
-                values: [[R::zero(); BATCH]; 6],
+                values: [[R::zero(); BATCH]; 3],
             }),
         }
     }
@@ -238,11 +246,20 @@ impl<'a, R: Real> Rop<'a, R> {
                     };
                     (lanes::eval3(normal, &u, &v), p, *color)
                 }
-                Surface::Triangle { color, .. } => (
-                    three(|row| b.lanes(row, first)),
-                    three(|row| b.lanes(3 + row, first)),
-                    *color,
-                ),
+                Surface::Triangle {
+                    inv_w,
+                    normal_w,
+                    position_w,
+                    color,
+                    ..
+                } => {
+                    let l = three(|row| b.lanes(row, first));
+                    let p = match self.shader.to_eye_constant() {
+                        Some(_) => [[R::zero(); LANES]; 3],
+                        None => lanes::interpolate(position_w, &l, *inv_w),
+                    };
+                    (lanes::interpolate(normal_w, &l, *inv_w), p, *color)
+                }
             };
             let (rgb, unit) = self.shader.shade_lanes(&normal, &position, color);
             for k in 0..LANES.min(b.len - first) {
@@ -327,18 +344,28 @@ impl<R: Real> Rop<'_, R> {
 impl<R: Real> TriangleSink<R> for Rop<'_, R> {
     #[inline]
     fn fragment(&mut self, t: &ScreenTriangle<R>, i: u32, j: u32, f: &TriangleFragment<R>) {
+        self.write(t.id, i, j, f.z, |s| {
+            s.shade_at(f.normal, f.position, t.color)
+        });
+    }
+
+    #[inline]
+    fn covered(&mut self, t: &ScreenTriangle<R>, i: u32, j: u32, l: [R; 3], z: R) {
         if R::COUNTS_OPERATIONS {
-            return self.write(t.id, i, j, f.z, |s| {
-                s.shade_at(f.normal, f.position, t.color)
-            });
+            let f = t.fragment_at(l, z);
+            return TriangleSink::fragment(self, t, i, j, &f);
         }
         let holds = self.batch.holds_triangle(t);
         self.begin(holds, || Surface::Triangle {
             id: t.id,
+            x: t.x,
+            y: t.y,
+            inv_w: t.inv_w,
+            normal_w: t.normal_w,
+            position_w: t.position_w,
             color: t.color,
         });
-        let (n, p) = (f.normal, f.position);
-        self.test(t.id, i, j, f.z, [n[0], n[1], n[2], p[0], p[1], p[2]]);
+        self.test(t.id, i, j, z, l);
     }
 }
 
@@ -370,6 +397,7 @@ impl<R: Real> FragmentSink<R> for Rop<'_, R> {
             position: l.position,
             color: l.color,
         });
+        self.fb.prefetch(span.i0, j + 1 - self.row0);
         span.walk(|i, u, v| self.test(l.id, i, j, l.z.eval(u, v), [u, v]));
     }
 }

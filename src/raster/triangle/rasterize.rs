@@ -39,12 +39,25 @@ impl<R: Real> ScreenTriangle<R> {
     /// The fragment at pixel (i, j) (meaningful where [`Self::covers`]).
     #[inline]
     pub fn fragment(&self, i: u32, j: u32) -> TriangleFragment<R> {
+        let (l, z) = self.weights(i, j);
+        self.fragment_at(l, z)
+    }
+
+    /// The barycentric weights of pixel (i, j)'s centre and the depth there.
+    #[inline(always)]
+    pub fn weights(&self, i: u32, j: u32) -> ([R; 3], R) {
         let e = self.edge_values(i, j);
         let area = R::of(self.area2 as f64);
-        let l = e.map(|v| R::of(v as f64) / area);
+        let l = [0, 1, 2].map(|k| R::of(e[k] as f64) / area);
         let z = l[0] * self.z[0] + l[1] * self.z[1] + l[2] * self.z[2];
-        // Perspective-correct: sum(l_k a_k / w_k) / sum(l_k / w_k), with a_k / w_k kept
-        // per vertex.
+        (l, z)
+    }
+
+    /// The fragment of weights `l` and depth `z` ([`Self::weights`]): its normal and
+    /// position, perspective-correct, sum(l_k a_k / w_k) / sum(l_k / w_k) with a_k / w_k
+    /// kept per vertex.
+    #[inline(always)]
+    pub fn fragment_at(&self, l: [R; 3], z: R) -> TriangleFragment<R> {
         let sum = l[0] * self.inv_w[0] + l[1] * self.inv_w[1] + l[2] * self.inv_w[2];
         let lerp = |v: &[[R; 3]; 3]| {
             [0, 1, 2].map(|c| (l[0] * v[0][c] + l[1] * v[1][c] + l[2] * v[2][c]) / sum)
@@ -145,6 +158,17 @@ pub fn quads_in(rows: &[(u32, u32); 2]) -> u64 {
 pub trait TriangleSink<R: Real> {
     /// Takes fragment `f` of triangle `t` at pixel (i, j).
     fn fragment(&mut self, t: &ScreenTriangle<R>, i: u32, j: u32, f: &TriangleFragment<R>);
+
+    /// Takes the covered pixel (i, j) of triangle `t` with its weights and depth
+    /// ([`ScreenTriangle::weights`]). The default works out the fragment's normal and
+    /// position ([`ScreenTriangle::fragment_at`]) and hands it to [`Self::fragment`]; the
+    /// ROP tests the depth first and works them out, in lanes, only for the fragments
+    /// that pass.
+    #[inline]
+    fn covered(&mut self, t: &ScreenTriangle<R>, i: u32, j: u32, l: [R; 3], z: R) {
+        let f = t.fragment_at(l, z);
+        self.fragment(t, i, j, &f);
+    }
 }
 
 /// Rasterizes one set-up triangle into `sink`, quad by quad.
@@ -169,7 +193,8 @@ pub fn rasterize_rows<R: Real, S: TriangleSink<R>>(
         for bit in 0..4 {
             if mask & (1 << bit) != 0 {
                 let (i, j) = (qi + (bit & 1), qj + (bit >> 1));
-                sink.fragment(t, i, j, &t.fragment(i, j));
+                let (l, z) = t.weights(i, j);
+                sink.covered(t, i, j, l, z);
                 counts.fragments += 1;
             }
         }
