@@ -179,6 +179,43 @@ mod tests {
         }
     }
 
+    /// The closed-form row span (plain datapaths) finds the columns the pixel-by-pixel
+    /// walk (counting datapaths) finds, on random triangles large and small, slivers, and
+    /// triangles reaching past the viewport.
+    #[test]
+    fn row_span_in_closed_form_is_the_pixel_walk() {
+        use proptest::prelude::RngExt;
+        use proptest::test_runner::{RngAlgorithm, TestRng};
+        let mut rng = TestRng::from_seed(RngAlgorithm::ChaCha, &[3; 32]);
+        let mut tested = 0;
+        for n in 0..4000 {
+            let reach = [300, 4_000, 40_000][n % 3];
+            let p = [0; 3].map(|_| {
+                (
+                    rng.random_range(-reach..VP.width as i64 * SUBPIXEL + reach),
+                    rng.random_range(-reach..VP.height as i64 * SUBPIXEL + reach),
+                )
+            });
+            let Some(t) = tri(n as u32, p).or_else(|| tri(n as u32, [p[0], p[2], p[1]])) else {
+                continue;
+            };
+            tested += 1;
+            for j in 0..VP.height + 2 {
+                let walked = t.row_span_by_pixels(j);
+                let closed = t.row_span(j);
+                let empty = |r: (u32, u32)| r.0 >= r.1;
+                assert!(
+                    closed == walked || (empty(closed) && empty(walked)),
+                    "{p:?} row {j}: {closed:?} against {walked:?}"
+                );
+                if !empty(walked) {
+                    assert_eq!(closed, walked, "{p:?} row {j}");
+                }
+            }
+        }
+        assert!(tested > 3000, "{tested} triangles set up");
+    }
+
     /// Pixel centre (i, j) in sub-pixel units.
     fn c(i: i64, j: i64) -> (i64, i64) {
         (i * SUBPIXEL + SUBPIXEL / 2, j * SUBPIXEL + SUBPIXEL / 2)

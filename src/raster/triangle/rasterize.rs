@@ -1,7 +1,7 @@
 //! The triangle path's rasterizer: coverage by integer edge functions with the top-left
 //! rule, 2x2 quads, and each covered pixel's perspective-correct [`TriangleFragment`].
 
-use super::setup::{pixel_centre, ScreenTriangle, TriangleCull};
+use super::setup::{pixel_centre, ScreenTriangle, TriangleCull, SUBPIXEL};
 use crate::cost::counted::Op;
 use crate::datapath::Real;
 use crate::raster::Counts;
@@ -25,7 +25,8 @@ impl<R: Real> ScreenTriangle<R> {
         R::count_beside(Op::IntMul, 6);
         R::count_beside(Op::IntAdd, 6);
         let (px, py) = pixel_centre(i, j);
-        self.edges.map(|e| e.at(px, py))
+        let [e0, e1, e2] = &self.edges;
+        [e0.at(px, py), e1.at(px, py), e2.at(px, py)]
     }
 
     /// Whether pixel (i, j)'s centre is inside, by the top-left rule.
@@ -48,7 +49,11 @@ impl<R: Real> ScreenTriangle<R> {
     pub fn weights(&self, i: u32, j: u32) -> ([R; 3], R) {
         let e = self.edge_values(i, j);
         let area = R::of(self.area2 as f64);
-        let l = [0, 1, 2].map(|k| R::of(e[k] as f64) / area);
+        let l = [
+            R::of(e[0] as f64) / area,
+            R::of(e[1] as f64) / area,
+            R::of(e[2] as f64) / area,
+        ];
         let z = l[0] * self.z[0] + l[1] * self.z[1] + l[2] * self.z[2];
         (l, z)
     }
@@ -60,7 +65,8 @@ impl<R: Real> ScreenTriangle<R> {
     pub fn fragment_at(&self, l: [R; 3], z: R) -> TriangleFragment<R> {
         let sum = l[0] * self.inv_w[0] + l[1] * self.inv_w[1] + l[2] * self.inv_w[2];
         let lerp = |v: &[[R; 3]; 3]| {
-            [0, 1, 2].map(|c| (l[0] * v[0][c] + l[1] * v[1][c] + l[2] * v[2][c]) / sum)
+            let at = |c: usize| (l[0] * v[0][c] + l[1] * v[1][c] + l[2] * v[2][c]) / sum;
+            [at(0), at(1), at(2)]
         };
         TriangleFragment {
             z,
@@ -74,6 +80,39 @@ impl<R: Real> ScreenTriangle<R> {
     /// function is linear along it, so each admits a half-line of columns.
     #[inline]
     pub fn row_span(&self, j: u32) -> (u32, u32) {
+        let [i0, i1, j0, j1] = self.bbox;
+        if j < j0 || j >= j1 {
+            return (i0, i0);
+        }
+        if R::COUNTS_OPERATIONS {
+            return self.row_span_by_pixels(j);
+        }
+        // Each edge's half-line of columns, in exact integer arithmetic: E(i) = A i + B
+        // with A = 256 a, B = a 128 + b y + c, covered where E(i) >= min.
+        let (_, py) = pixel_centre(0, j);
+        let (mut lo, mut hi) = (i0 as i64, i1 as i64);
+        for e in &self.edges {
+            let (a, b) = (e.a * SUBPIXEL, e.a * (SUBPIXEL / 2) + e.b * py + e.c);
+            let need = e.min - b;
+            match a.cmp(&0) {
+                // i >= ceil(need / a)
+                std::cmp::Ordering::Greater => lo = lo.max(-(-need).div_euclid(a)),
+                // i <= floor(-need / -a)
+                std::cmp::Ordering::Less => hi = hi.min((-need).div_euclid(-a) + 1),
+                std::cmp::Ordering::Equal if need > 0 => return (i1, i1),
+                std::cmp::Ordering::Equal => {}
+            }
+        }
+        if lo >= hi {
+            return (i1, i1);
+        }
+        (lo as u32, hi as u32)
+    }
+
+    /// [`Self::row_span`] found pixel by pixel, testing each from the bounding box's left
+    /// until the first covered one and on to the first uncovered one: the edge-function
+    /// work a counting datapath counts (the closed form above finds the same columns).
+    pub fn row_span_by_pixels(&self, j: u32) -> (u32, u32) {
         let [i0, i1, j0, j1] = self.bbox;
         if j < j0 || j >= j1 {
             return (i0, i0);
