@@ -207,7 +207,7 @@ fn sort_crossings<R: Real>(l: &ScreenLembo<R>, a: [R; 2], split: bool, xs: &mut 
         }
         c.key = dot(part_tau(a, c.part), c.p.uv);
     }
-    xs.sort_by(|p, q| {
+    let order = |p: &Crossing<R>, q: &Crossing<R>| {
         p.part
             .cmp(&q.part)
             .then(
@@ -216,7 +216,15 @@ fn sort_crossings<R: Real>(l: &ScreenLembo<R>, a: [R; 2], split: bool, xs: &mut 
                     .unwrap_or(std::cmp::Ordering::Equal),
             )
             .then(p.entry.cmp(&q.entry))
-    });
+    };
+    // Most scanlines of a small lembo cross two edges: the stable sort of two, inline.
+    if let [p, q] = xs {
+        if order(q, p).is_lt() {
+            std::mem::swap(p, q);
+        }
+    } else {
+        xs.sort_by(order);
+    }
 }
 
 /// Pairs the sorted crossings into intervals (an entry with the next exit of its part),
@@ -230,7 +238,8 @@ fn pair_crossings<R: Real>(
     out: &mut Vec<Interval<R>>,
     counts: &mut Counts,
 ) {
-    let mut pending: Option<(i8, CurvePoint<R>)> = None;
+    // The open interval's part and the index of its entry in `xs`.
+    let mut pending: Option<(i8, usize)> = None;
     for n in 0..xs.len() {
         // An exit and an entry at the same place: exit first when an interval is open (the
         // curve touches an edge from inside: it leaves and re-enters there), entry first
@@ -255,10 +264,11 @@ fn pair_crossings<R: Real>(
             if pending.is_some() {
                 counts.unpaired_roots += 1;
             }
-            pending = Some((c.part, c.p));
+            pending = Some((c.part, n));
         } else {
             match pending.take() {
                 Some((part, start)) if part == c.part => {
+                    let start = xs[start].p;
                     let tau = part_tau(a, part);
                     match saddle {
                         Some(centre) => {
@@ -368,33 +378,26 @@ pub fn edge_crossings<R: Real>(
     let ax = two * c.x[0] + two * c.x[2] - four * c.x[1];
     // Lembo-order sign at the edge start decides the type of the first crossing.
     let start_above = if c.reversed { s1 } else { s0 };
-    let mut pts = [(
-        R::zero(),
-        CurvePoint {
-            uv: [R::zero(); 2],
-            x: R::zero(),
-            edge: e as u8,
-        },
-    ); 2];
-    for (i, &t) in roots[..n].iter().enumerate() {
+    // The crossing at edge parameter t (canonical order), with its parameter in lembo order.
+    let point = |t: R| {
         let tl = if c.reversed { R::one() - t } else { t };
-        pts[i] = (
-            tl,
-            CurvePoint {
-                uv: edge_uv(e, tl),
-                x: c.x[0] + t * (bx + t * ax),
-                edge: e as u8,
-            },
-        );
+        let p = CurvePoint {
+            uv: edge_uv(e, tl),
+            x: c.x[0] + t * (bx + t * ax),
+            edge: e as u8,
+        };
+        (tl, p)
+    };
+    // Crossings alternate: the first, in lembo order, leaves the start's side.
+    let (t0, p0) = point(roots[0]);
+    if n == 1 {
+        push(p0, start_above);
+        return;
     }
-    if n == 2 && pts[1].0 < pts[0].0 {
-        pts.swap(0, 1);
-    }
-    for (i, (_, p)) in pts[..n].iter().enumerate() {
-        // Crossings alternate: the first leaves the start's side.
-        let entry = start_above == (i % 2 == 0);
-        push(*p, entry);
-    }
+    let (t1, p1) = point(roots[1]);
+    let (first, second) = if t1 < t0 { (p1, p0) } else { (p0, p1) };
+    push(first, start_above);
+    push(second, !start_above);
 }
 
 /// Both roots of A t² + B t + C by the numerically stable formula (no cancellation between
