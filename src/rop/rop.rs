@@ -18,7 +18,9 @@ use crate::lembo::{eval3, Quadratic3};
 use crate::raster::fragment::{self, FragmentSink, Span};
 use crate::raster::setup::ScreenLembo;
 use crate::raster::subsegmenter::Subsegment;
-use crate::raster::triangle::{ScreenTriangle, TriangleFragment, TriangleSink};
+use crate::raster::triangle::{
+    inv_w_at, perspective_lerp, ScreenTriangle, TriangleFragment, TriangleSink,
+};
 
 /// Per-fragment shading (Piranda et al. 2006 equation 6) from the lembo's normal and position
 /// functions; shared by the functional ROP and the timed ROP units so both give the same
@@ -231,8 +233,9 @@ impl<'a, R: Real> Rop<'a, R> {
         let Some(surface) = b.of else {
             return;
         };
+        let ortho = self.shader.to_eye_constant().is_some();
         for first in (0..b.len).step_by(LANES) {
-            let (normal, position, color) = match &surface {
+            let (rgb, unit) = match &surface {
                 Surface::Lembo {
                     normal,
                     position,
@@ -240,11 +243,14 @@ impl<'a, R: Real> Rop<'a, R> {
                     ..
                 } => {
                     let (u, v) = (b.lanes(0, first), b.lanes(1, first));
-                    let p = match self.shader.to_eye_constant() {
-                        Some(_) => [[R::zero(); LANES]; 3],
-                        None => lanes::eval3(position, &u, &v),
+                    let at = |k: usize| {
+                        let p = match ortho {
+                            true => [R::zero(); 3],
+                            false => eval3(position, u[k], v[k]),
+                        };
+                        (eval3(normal, u[k], v[k]), p)
                     };
-                    (lanes::eval3(normal, &u, &v), p, *color)
+                    self.shader.shade_lanes(at, *color)
                 }
                 Surface::Triangle {
                     inv_w,
@@ -254,14 +260,18 @@ impl<'a, R: Real> Rop<'a, R> {
                     ..
                 } => {
                     let l = three(|row| b.lanes(row, first));
-                    let p = match self.shader.to_eye_constant() {
-                        Some(_) => [[R::zero(); LANES]; 3],
-                        None => lanes::interpolate(position_w, &l, *inv_w),
+                    let at = |k: usize| {
+                        let l = [l[0][k], l[1][k], l[2][k]];
+                        let sum = inv_w_at(l, *inv_w);
+                        let p = match ortho {
+                            true => [R::zero(); 3],
+                            false => perspective_lerp(l, sum, position_w),
+                        };
+                        (perspective_lerp(l, sum, normal_w), p)
                     };
-                    (lanes::interpolate(normal_w, &l, *inv_w), p, *color)
+                    self.shader.shade_lanes(at, *color)
                 }
             };
-            let (rgb, unit) = self.shader.shade_lanes(&normal, &position, color);
             for k in 0..LANES.min(b.len - first) {
                 self.fb.write_color(b.idx[first + k], rgb[k], || {
                     three(|c| unit[c][k].f64() as f32)

@@ -63,15 +63,11 @@ impl<R: Real> ScreenTriangle<R> {
     /// kept per vertex.
     #[inline(always)]
     pub fn fragment_at(&self, l: [R; 3], z: R) -> TriangleFragment<R> {
-        let sum = l[0] * self.inv_w[0] + l[1] * self.inv_w[1] + l[2] * self.inv_w[2];
-        let lerp = |v: &[[R; 3]; 3]| {
-            let at = |c: usize| (l[0] * v[0][c] + l[1] * v[1][c] + l[2] * v[2][c]) / sum;
-            [at(0), at(1), at(2)]
-        };
+        let sum = inv_w_at(l, self.inv_w);
         TriangleFragment {
             z,
-            normal: lerp(&self.normal_w),
-            position: lerp(&self.position_w),
+            normal: perspective_lerp(l, sum, &self.normal_w),
+            position: perspective_lerp(l, sum, &self.position_w),
         }
     }
 
@@ -175,6 +171,20 @@ impl<R: Real> ScreenTriangle<R> {
             qj += 2;
         }
     }
+}
+
+/// 1/w at weights `l`: sum(l_k / w_k), from the vertices' 1/w.
+#[inline(always)]
+pub fn inv_w_at<R: Real>(l: [R; 3], inv_w: [R; 3]) -> R {
+    l[0] * inv_w[0] + l[1] * inv_w[1] + l[2] * inv_w[2]
+}
+
+/// An attribute at weights `l`, perspective-correct: sum(l_k a_k / w_k) / `inv_w`, from the
+/// vertices' a_k / w_k and 1/w there ([`inv_w_at`]).
+#[inline(always)]
+pub fn perspective_lerp<R: Real>(l: [R; 3], inv_w: R, a_w: &[[R; 3]; 3]) -> [R; 3] {
+    let at = |c: usize| (l[0] * a_w[0][c] + l[1] * a_w[1][c] + l[2] * a_w[2][c]) / inv_w;
+    [at(0), at(1), at(2)]
 }
 
 /// Quads (2x2, aligned to even columns) touched by the union of two row spans.
