@@ -227,6 +227,9 @@ impl<'a, R: Real> Rop<'a, R> {
         self.flush_lanes();
     }
 
+    /// Shades the batch `LANES` fragments at a time (a last, partial group repeats its last
+    /// fragment in the spare lanes, whose results are not written) and writes the colours
+    /// in arrival order.
     #[inline(always)]
     fn flush_lanes(&mut self) {
         let b = &*self.batch;
