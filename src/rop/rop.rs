@@ -125,8 +125,9 @@ enum Surface<R> {
     },
 }
 
-/// Fragments of one primitive that passed the depth test and wait to be shaded.
-struct Batch<R> {
+/// Fragments of one primitive that passed the depth test and wait to be shaded: the
+/// functional [`Rop`]'s and each timed ROP unit's.
+pub struct Batch<R> {
     of: Option<Surface<R>>,
     len: usize,
     /// Frame-buffer index of each fragment.
@@ -136,6 +137,145 @@ struct Batch<R> {
 }
 
 impl<R: Real> Batch<R> {
+    /// An empty batch.
+    pub fn new() -> Box<Self> {
+        Box::new(Batch {
+            of: None,
+            len: 0,
+            idx: [0; BATCH],
+            values: [[R::zero(); BATCH]; 3],
+        })
+    }
+
+    /// Makes the batch hold fragments of lembo `l` (or its piece), shading what it held of
+    /// another primitive first.
+    #[inline(always)]
+    pub fn begin_lembo(
+        &mut self,
+        l: &ScreenLembo<R>,
+        shader: &FragmentShader<R>,
+        write: impl FnMut(usize, [u8; 3], [R; 3]),
+    ) {
+        if !self.holds_lembo(l) {
+            self.flush(shader, write);
+            self.of = Some(Surface::Lembo {
+                id: l.id,
+                domain: l.domain,
+                normal: l.normal,
+                position: l.position,
+                color: l.color,
+            });
+        }
+    }
+
+    /// Makes the batch hold fragments of triangle `t` (or its piece), shading what it held
+    /// of another primitive first.
+    #[inline(always)]
+    pub fn begin_triangle(
+        &mut self,
+        t: &ScreenTriangle<R>,
+        shader: &FragmentShader<R>,
+        write: impl FnMut(usize, [u8; 3], [R; 3]),
+    ) {
+        if !self.holds_triangle(t) {
+            self.flush(shader, write);
+            self.of = Some(Surface::Triangle {
+                id: t.id,
+                x: t.x,
+                y: t.y,
+                inv_w: t.inv_w,
+                normal_w: t.normal_w,
+                position_w: t.position_w,
+                color: t.color,
+            });
+        }
+    }
+
+    /// Shades the fragments held and hands each to `write` (frame-buffer index, colour and
+    /// the unit normal it was shaded with), in arrival order.
+    pub fn flush(&mut self, shader: &FragmentShader<R>, write: impl FnMut(usize, [u8; 3], [R; 3])) {
+        if self.len == 0 {
+            return;
+        }
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2, checked just above. (No fused multiply-add is
+            // enabled, and Rust does not contract without it: the same IEEE operations.)
+            unsafe { self.flush_avx2(shader, write) };
+            return;
+        }
+        self.flush_lanes(shader, write);
+    }
+
+    /// [`Self::flush_lanes`] compiled for AVX2: eight `f32` lanes in one register.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn flush_avx2(
+        &mut self,
+        shader: &FragmentShader<R>,
+        write: impl FnMut(usize, [u8; 3], [R; 3]),
+    ) {
+        self.flush_lanes(shader, write);
+    }
+
+    /// Shades the batch `LANES` fragments at a time (a last, partial group repeats its last
+    /// fragment in the spare lanes, whose results are not written) and hands the colours to
+    /// `write` in arrival order.
+    #[inline(always)]
+    fn flush_lanes(
+        &mut self,
+        shader: &FragmentShader<R>,
+        mut write: impl FnMut(usize, [u8; 3], [R; 3]),
+    ) {
+        let Some(surface) = self.of else {
+            return;
+        };
+        let ortho = shader.to_eye_constant().is_some();
+        for first in (0..self.len).step_by(LANES) {
+            let (rgb, unit) = match &surface {
+                Surface::Lembo {
+                    normal,
+                    position,
+                    color,
+                    ..
+                } => {
+                    let (u, v) = (self.lanes(0, first), self.lanes(1, first));
+                    let at = |k: usize| {
+                        let p = match ortho {
+                            true => [R::zero(); 3],
+                            false => eval3(position, u[k], v[k]),
+                        };
+                        (eval3(normal, u[k], v[k]), p)
+                    };
+                    shader.shade_lanes(at, *color)
+                }
+                Surface::Triangle {
+                    inv_w,
+                    normal_w,
+                    position_w,
+                    color,
+                    ..
+                } => {
+                    let l = three(|row| self.lanes(row, first));
+                    let at = |k: usize| {
+                        let l = [l[0][k], l[1][k], l[2][k]];
+                        let sum = inv_w_at(l, *inv_w);
+                        let p = match ortho {
+                            true => [R::zero(); 3],
+                            false => perspective_lerp(l, sum, position_w),
+                        };
+                        (perspective_lerp(l, sum, normal_w), p)
+                    };
+                    shader.shade_lanes(at, *color)
+                }
+            };
+            for k in 0..LANES.min(self.len - first) {
+                write(self.idx[first + k], rgb[k], three(|c| unit[c][k]));
+            }
+        }
+        self.len = 0;
+    }
+
     fn holds_lembo(&self, l: &ScreenLembo<R>) -> bool {
         matches!(self.of, Some(Surface::Lembo { id, domain, .. }) if id == l.id && domain == l.domain)
     }
@@ -144,9 +284,10 @@ impl<R: Real> Batch<R> {
         matches!(self.of, Some(Surface::Triangle { id, x, y, .. }) if id == t.id && x == t.x && y == t.y)
     }
 
-    /// Takes a fragment at `idx` with its values; whether the batch is now full.
+    /// Takes a fragment at `idx` with its values (for a lembo (u, v), for a triangle its
+    /// three weights); whether the batch is now full.
     #[inline(always)]
-    fn push<const N: usize>(&mut self, idx: usize, values: [R; N]) -> bool {
+    pub fn push<const N: usize>(&mut self, idx: usize, values: [R; N]) -> bool {
         self.idx[self.len] = idx;
         for (row, x) in values.into_iter().enumerate() {
             self.values[row][self.len] = x;
@@ -190,12 +331,7 @@ impl<'a, R: Real> Rop<'a, R> {
             shader: FragmentShader::new(light, view),
             passed: 0,
             row0,
-            batch: Box::new(Batch {
-                of: None,
-                len: 0,
-                idx: [0; BATCH],
-                values: [[R::zero(); BATCH]; 3],
-            }),
+            batch: Batch::new(),
         }
     }
 
@@ -207,90 +343,7 @@ impl<'a, R: Real> Rop<'a, R> {
 
     /// Shades and writes the batch.
     fn flush(&mut self) {
-        if self.batch.len == 0 {
-            return;
-        }
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has AVX2, checked just above. (No fused multiply-add is
-            // enabled, and Rust does not contract without it: the same IEEE operations.)
-            unsafe { self.flush_avx2() };
-            return;
-        }
-        self.flush_lanes();
-    }
-
-    /// [`Self::flush_lanes`] compiled for AVX2: eight `f32` lanes in one register.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    unsafe fn flush_avx2(&mut self) {
-        self.flush_lanes();
-    }
-
-    /// Shades the batch `LANES` fragments at a time (a last, partial group repeats its last
-    /// fragment in the spare lanes, whose results are not written) and writes the colours
-    /// in arrival order.
-    #[inline(always)]
-    fn flush_lanes(&mut self) {
-        let b = &*self.batch;
-        let Some(surface) = b.of else {
-            return;
-        };
-        let ortho = self.shader.to_eye_constant().is_some();
-        for first in (0..b.len).step_by(LANES) {
-            let (rgb, unit) = match &surface {
-                Surface::Lembo {
-                    normal,
-                    position,
-                    color,
-                    ..
-                } => {
-                    let (u, v) = (b.lanes(0, first), b.lanes(1, first));
-                    let at = |k: usize| {
-                        let p = match ortho {
-                            true => [R::zero(); 3],
-                            false => eval3(position, u[k], v[k]),
-                        };
-                        (eval3(normal, u[k], v[k]), p)
-                    };
-                    self.shader.shade_lanes(at, *color)
-                }
-                Surface::Triangle {
-                    inv_w,
-                    normal_w,
-                    position_w,
-                    color,
-                    ..
-                } => {
-                    let l = three(|row| b.lanes(row, first));
-                    let at = |k: usize| {
-                        let l = [l[0][k], l[1][k], l[2][k]];
-                        let sum = inv_w_at(l, *inv_w);
-                        let p = match ortho {
-                            true => [R::zero(); 3],
-                            false => perspective_lerp(l, sum, position_w),
-                        };
-                        (perspective_lerp(l, sum, normal_w), p)
-                    };
-                    self.shader.shade_lanes(at, *color)
-                }
-            };
-            for k in 0..LANES.min(b.len - first) {
-                self.fb.write_color(b.idx[first + k], rgb[k], || {
-                    three(|c| unit[c][k].f64() as f32)
-                });
-            }
-        }
-        self.batch.len = 0;
-    }
-
-    /// Starts a batch of `surface` unless the batch already holds its fragments.
-    #[inline(always)]
-    fn begin(&mut self, holds: bool, surface: impl FnOnce() -> Surface<R>) {
-        if !holds {
-            self.flush();
-            self.batch.of = Some(surface());
-        }
+        self.batch.flush(&self.shader, into_rows(&mut self.fb));
     }
 
     /// The depth test of a fragment of primitive `id` at pixel (i, j); a fragment that
@@ -307,6 +360,14 @@ impl<'a, R: Real> Rop<'a, R> {
             }
         }
     }
+}
+
+/// Where a batch's colours go in the functional model: the frame rows `fb` (with the unit
+/// normals, where normals are kept).
+fn into_rows<'b, 'a: 'b, R: Real>(
+    fb: &'b mut FrameRows<'a>,
+) -> impl FnMut(usize, [u8; 3], [R; 3]) + use<'a, 'b, R> {
+    move |idx, rgb, unit| fb.write_color(idx, rgb, || unit.map(|c| c.f64() as f32))
 }
 
 impl<R: Real> Drop for Rop<'_, R> {
@@ -368,16 +429,8 @@ impl<R: Real> TriangleSink<R> for Rop<'_, R> {
             let f = t.fragment_at(l, z);
             return TriangleSink::fragment(self, t, i, j, &f);
         }
-        let holds = self.batch.holds_triangle(t);
-        self.begin(holds, || Surface::Triangle {
-            id: t.id,
-            x: t.x,
-            y: t.y,
-            inv_w: t.inv_w,
-            normal_w: t.normal_w,
-            position_w: t.position_w,
-            color: t.color,
-        });
+        self.batch
+            .begin_triangle(t, &self.shader, into_rows(&mut self.fb));
         self.test(t.id, i, j, z, l);
     }
 }
@@ -402,14 +455,8 @@ impl<R: Real> FragmentSink<R> for Rop<'_, R> {
         if R::COUNTS_OPERATIONS {
             return fragment::fragments(l, sub, j, span, self);
         }
-        let holds = self.batch.holds_lembo(l);
-        self.begin(holds, || Surface::Lembo {
-            id: l.id,
-            domain: l.domain,
-            normal: l.normal,
-            position: l.position,
-            color: l.color,
-        });
+        self.batch
+            .begin_lembo(l, &self.shader, into_rows(&mut self.fb));
         self.fb.prefetch(span.i0, j + 1 - self.row0);
         span.walk(|i, u, v| self.test(l.id, i, j, l.z.eval(u, v), [u, v]));
     }

@@ -28,7 +28,7 @@ use crate::pipeline::runtime::{ceil_div, Ctx};
 use crate::pipeline::{DiscoidPass, Finished, Shared};
 use crate::raster::Counts;
 use crate::rop::framebuffer::depth_test;
-use crate::rop::rop::FragmentShader;
+use crate::rop::rop::{Batch, FragmentShader};
 use crate::rop::FrameBuffer;
 
 /// Screen interleaving: tile (tx, ty) of `tile_px` x `tile_px` pixels belongs to ROP
@@ -166,24 +166,29 @@ impl<'a, 'f> RopPixels<'a, 'f> {
         }
     }
 
-    /// The depth test and write of fragment (z, id) at pixel index `idx`; `shade` gives
-    /// the colour of a fragment that passes.
+    /// The depth test of fragment (z, id) at pixel index `idx`, and its depth and winner
+    /// written when it passes; whether it passed.
     #[inline(always)]
-    fn test_and_write(
-        &mut self,
-        idx: usize,
-        z: f32,
-        id: u32,
-        shade: impl FnOnce() -> [u8; 3],
-    ) -> bool {
-        if !depth_test(z, id, self.depth(idx), self.primitive(idx)) {
-            return false;
+    fn test_depth(&mut self, idx: usize, z: f32, id: u32) -> bool {
+        let pass = depth_test(z, id, self.depth(idx), self.primitive(idx));
+        if pass {
+            self.set_depth(idx, z, id);
         }
-        self.set_depth(idx, z, id);
-        // SAFETY: as for `depth`.
-        unsafe { *self.frame.color.add(idx) = shade() };
-        true
+        pass
     }
+
+    #[inline(always)]
+    fn set_color(&mut self, idx: usize, rgb: [u8; 3]) {
+        // SAFETY: as for `depth`; `&mut self` keeps one writer per ROP.
+        unsafe { *self.frame.color.add(idx) = rgb };
+    }
+}
+
+/// Where a batch's colours go: this ROP's pixels.
+fn into<'b, 'a: 'b, 'f: 'a, R>(
+    pixels: &'b mut RopPixels<'a, 'f>,
+) -> impl FnMut(usize, [u8; 3], [R; 3]) + use<'a, 'b, 'f, R> {
+    move |idx, rgb, _| pixels.set_color(idx, rgb)
 }
 
 /// What a ROP takes: fragments of a lembo or of a triangle inside one of its tiles.
@@ -263,28 +268,47 @@ pub async fn run<R: Real>(
     let mut pixels = RopPixels::new(frame, &sh.tiles, rop, sh.view.viewport.width);
     let shader = FragmentShader::<R>::new(&sh.scene.light, sh.view);
     let mut kept = (Vec::new(), BlendReport::default());
+    // The fragments that passed, shaded in lanes as the functional ROP shades them
+    // (`rop::Batch`): colours are written in arrival order, and a pixel is only ever this
+    // ROP's, so the frame is the functional one.
+    let mut batch = Batch::<R>::new();
     while let Some(item) = ctx.next_input().await {
         let mut passed = 0u64;
-        let n = match item {
-            RopItem::Lembo(FragmentSpan { id, j, span }) => {
+        let n = match (item, &sh.discoid) {
+            (RopItem::Lembo(FragmentSpan { id, j, span }), None) => {
+                let l = sh.lembo(id);
+                let row = pixels.row(span.i0, span.i1, j);
+                batch.begin_lembo(l, &shader, into(&mut pixels));
+                span.walk(|i, u, v| {
+                    let idx = row + i as usize;
+                    let z = l.z.eval(u, v);
+                    if pixels.test_depth(idx, z.f64() as f32, l.id) {
+                        passed += 1;
+                        if batch.push(idx, [u, v]) {
+                            batch.flush(&shader, into(&mut pixels));
+                        }
+                    }
+                });
+                span.len() as u64
+            }
+            (RopItem::Lembo(FragmentSpan { id, j, span }), Some(dp)) => {
                 let l = sh.lembo(id);
                 let row = pixels.row(span.i0, span.i1, j);
                 span.walk(|i, u, v| {
                     let idx = row + i as usize;
                     let z = l.z.eval(u, v);
-                    let wins = match &sh.discoid {
-                        None => pixels
-                            .test_and_write(idx, z.f64() as f32, l.id, || shader.shade(l, u, v).0),
-                        Some(dp) => dp.table.lembo_fragment(l, u, v, z).is_some_and(|f| {
-                            discoid_fragment(dp, sh, &shader, &mut pixels, &mut kept, idx, &f)
-                        }),
-                    };
+                    let wins = dp.table.lembo_fragment(l, u, v, z).is_some_and(|f| {
+                        discoid_fragment(dp, sh, &shader, &mut pixels, &mut kept, idx, &f)
+                    });
                     passed += wins as u64;
                 });
                 span.len() as u64
             }
-            RopItem::Triangle(piece) => {
+            (RopItem::Triangle(piece), discoid) => {
                 let t = &*piece.tri;
+                if discoid.is_none() {
+                    batch.begin_triangle(t, &shader, into(&mut pixels));
+                }
                 for (r, &(a, b)) in piece.rows.iter().enumerate() {
                     let j = piece.j + r as u32;
                     if a >= b {
@@ -292,14 +316,18 @@ pub async fn run<R: Real>(
                     }
                     let row = pixels.row(a, b, j);
                     for i in a..b {
-                        let f = t.fragment(i, j);
                         let idx = row + i as usize;
-                        let wins = match &sh.discoid {
-                            None => pixels.test_and_write(idx, f.z.f64() as f32, t.id, || {
-                                shader.shade_at(f.normal, f.position, t.color).0
-                            }),
+                        let wins = match discoid {
+                            None => {
+                                let (l, z) = t.weights(i, j);
+                                let pass = pixels.test_depth(idx, z.f64() as f32, t.id);
+                                if pass && batch.push(idx, l) {
+                                    batch.flush(&shader, into(&mut pixels));
+                                }
+                                pass
+                            }
                             Some(dp) => {
-                                let df = dp.table.planar_fragment(t, &f);
+                                let df = dp.table.planar_fragment(t, &t.fragment(i, j));
                                 discoid_fragment(dp, sh, &shader, &mut pixels, &mut kept, idx, &df)
                             }
                         };
@@ -329,6 +357,7 @@ pub async fn run<R: Real>(
         )
         .await;
     }
+    batch.flush(&shader, into(&mut pixels));
     let mut finished = Finished::new(ctx, counts);
     if matches!(
         &sh.discoid,
