@@ -156,16 +156,14 @@ impl<R: Real> Batch<R> {
         shader: &FragmentShader<R>,
         write: impl FnMut(usize, [u8; 3], [R; 3]),
     ) {
-        if !self.holds_lembo(l) {
-            self.flush(shader, write);
-            self.of = Some(Surface::Lembo {
-                id: l.id,
-                domain: l.domain,
-                normal: l.normal,
-                position: l.position,
-                color: l.color,
-            });
-        }
+        let holds = self.holds_lembo(l);
+        self.begin(holds, shader, write, || Surface::Lembo {
+            id: l.id,
+            domain: l.domain,
+            normal: l.normal,
+            position: l.position,
+            color: l.color,
+        });
     }
 
     /// Makes the batch hold fragments of triangle `t` (or its piece), shading what it held
@@ -177,17 +175,31 @@ impl<R: Real> Batch<R> {
         shader: &FragmentShader<R>,
         write: impl FnMut(usize, [u8; 3], [R; 3]),
     ) {
-        if !self.holds_triangle(t) {
+        let holds = self.holds_triangle(t);
+        self.begin(holds, shader, write, || Surface::Triangle {
+            id: t.id,
+            x: t.x,
+            y: t.y,
+            inv_w: t.inv_w,
+            normal_w: t.normal_w,
+            position_w: t.position_w,
+            color: t.color,
+        });
+    }
+
+    /// Unless the batch `holds` the primitive's fragments already, shades what it holds and
+    /// starts holding `surface`'s.
+    #[inline(always)]
+    fn begin(
+        &mut self,
+        holds: bool,
+        shader: &FragmentShader<R>,
+        write: impl FnMut(usize, [u8; 3], [R; 3]),
+        surface: impl FnOnce() -> Surface<R>,
+    ) {
+        if !holds {
             self.flush(shader, write);
-            self.of = Some(Surface::Triangle {
-                id: t.id,
-                x: t.x,
-                y: t.y,
-                inv_w: t.inv_w,
-                normal_w: t.normal_w,
-                position_w: t.position_w,
-                color: t.color,
-            });
+            self.of = Some(surface());
         }
     }
 
