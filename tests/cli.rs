@@ -272,6 +272,23 @@ fn functional_mode_refuses_timed_only_flags() {
 
 /// `--threads` draws a functional frame; 0, more than the cap, or a timed run (whose units
 /// take `--host-threads`) are refused by name; any count writes the same image and counts.
+/// Renders scene file `scene` with `args` into `dir/out`, which must succeed; its
+/// report.json and image.png.
+fn render_into(dir: &Path, scene: &str, out: &str, args: &[&str]) -> (serde_json::Value, Vec<u8>) {
+    let out_dir = dir.join(out);
+    let mut all = vec!["render", scene, "--out", out_dir.to_str().unwrap()];
+    all.extend_from_slice(args);
+    let run = run(&all, dir);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let report = std::fs::read(out_dir.join("report.json")).unwrap();
+    let image = std::fs::read(out_dir.join("image.png")).unwrap();
+    (serde_json::from_slice(&report).unwrap(), image)
+}
+
 #[test]
 fn threads_draw_the_same_functional_frame() {
     assert_refused(
@@ -290,31 +307,9 @@ fn threads_draw_the_same_functional_frame() {
     let s = scene_file(dir.path(), "s.json", GOOD);
     let mut seen = Vec::new();
     for threads in ["1", "2", "5"] {
-        let out_dir = dir.path().join(format!("t{threads}"));
-        let out = run(
-            &[
-                "render",
-                &s,
-                "--mode",
-                "functional",
-                "--threads",
-                threads,
-                "--out",
-                out_dir.to_str().unwrap(),
-            ],
-            dir.path(),
-        );
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let r: serde_json::Value =
-            serde_json::from_slice(&std::fs::read(out_dir.join("report.json")).unwrap()).unwrap();
-        seen.push((
-            std::fs::read(out_dir.join("image.png")).unwrap(),
-            r["counts"].clone(),
-        ));
+        let args = ["--mode", "functional", "--threads", threads];
+        let (r, image) = render_into(dir.path(), &s, &format!("t{threads}"), &args);
+        seen.push((image, r["counts"].clone()));
     }
     assert!(seen.windows(2).all(|w| w[0] == w[1]));
 }
@@ -332,27 +327,9 @@ fn host_threads_change_nothing_simulated() {
     let s = scene_file(dir.path(), "s.json", GOOD);
     let mut reports = Vec::new();
     for threads in ["1", "3", "16"] {
-        let out_dir = dir.path().join(format!("out{threads}"));
-        let out = run(
-            &[
-                "render",
-                &s,
-                "--host-threads",
-                threads,
-                "--out",
-                out_dir.to_str().unwrap(),
-            ],
-            dir.path(),
-        );
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let r: serde_json::Value =
-            serde_json::from_slice(&std::fs::read(out_dir.join("report.json")).unwrap()).unwrap();
+        let args = ["--host-threads", threads];
+        let (r, image) = render_into(dir.path(), &s, &format!("out{threads}"), &args);
         assert_eq!(r["host"]["host_threads"], threads.parse::<u32>().unwrap());
-        let image = std::fs::read(out_dir.join("image.png")).unwrap();
         reports.push((r["cycles"].clone(), r["counts"].clone(), image));
     }
     assert!(reports.windows(2).all(|w| w[0] == w[1]));

@@ -34,6 +34,26 @@ pub use discoids::{CURVED_DISCOID_BYTES, PLANAR_DISCOID_BYTES};
 
 /// Where command-line errors say they come from.
 pub const COMMAND_LINE: &str = "command line";
+
+/// Checks a count given on the command line: `value` of `flag` must be in 1..=`max`
+/// (`unit` says of what); the error names the flag.
+pub fn check_count<T: Copy + PartialOrd + From<u8> + std::fmt::Display>(
+    flag: &str,
+    value: T,
+    max: T,
+    unit: &str,
+) -> Result<()> {
+    if (T::from(1)..=max).contains(&value) {
+        Ok(())
+    } else {
+        Err(Error::invalid(
+            COMMAND_LINE,
+            flag,
+            value,
+            format!("must be in 1..={max} {unit}"),
+        ))
+    }
+}
 /// Accepted range of the tolerance k \[pixels\] (DESIGN.md §8).
 pub const K_RANGE: (f64, f64) = (1e-4, 64.0);
 /// Largest accepted reference supersampling factor (samples per pixel side).
@@ -190,43 +210,25 @@ impl RenderJob {
                 format!("k must be a number in [{lo}, {hi}] pixels"),
             ));
         }
-        if !(1..=MAX_SUPERSAMPLE).contains(&self.supersample) {
-            return Err(Error::invalid(
-                COMMAND_LINE,
-                "--supersample",
-                self.supersample,
-                format!("must be in 1..={MAX_SUPERSAMPLE} samples per pixel side"),
-            ));
-        }
+        check_count(
+            "--supersample",
+            self.supersample,
+            MAX_SUPERSAMPLE,
+            "samples per pixel side",
+        )?;
         if let Some((w, h)) = self.viewport {
             for (name, v) in [("--viewport width", w), ("--viewport height", h)] {
-                if !(1..=MAX_VIEWPORT_SIDE).contains(&v) {
-                    return Err(Error::invalid(
-                        COMMAND_LINE,
-                        name,
-                        v,
-                        format!("must be in 1..={MAX_VIEWPORT_SIDE} pixels"),
-                    ));
-                }
+                check_count(name, v, MAX_VIEWPORT_SIDE, "pixels")?;
             }
         }
-        if !(1..=MAX_HOST_THREADS).contains(&self.host_threads) {
-            return Err(Error::invalid(
-                COMMAND_LINE,
-                "--host-threads",
-                self.host_threads,
-                format!("must be in 1..={MAX_HOST_THREADS} host threads"),
-            ));
-        }
+        check_count(
+            "--host-threads",
+            self.host_threads,
+            MAX_HOST_THREADS,
+            "host threads",
+        )?;
         if let Some(n) = self.threads {
-            if !(1..=MAX_THREADS).contains(&n) {
-                return Err(Error::invalid(
-                    COMMAND_LINE,
-                    "--threads",
-                    n,
-                    format!("must be in 1..={MAX_THREADS} host threads"),
-                ));
-            }
+            check_count("--threads", n, MAX_THREADS, "host threads")?;
             if self.mode == Mode::Timed {
                 return Err(Error::invalid(
                     COMMAND_LINE,

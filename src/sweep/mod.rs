@@ -51,7 +51,7 @@ pub mod run;
 pub mod spec;
 
 use crate::error::{Error, Result};
-use crate::job::{COMMAND_LINE, MAX_HOST_THREADS};
+use crate::job::{check_count, COMMAND_LINE, MAX_HOST_THREADS};
 pub use lock::{FolderLock, LOCK_FILE};
 pub use merge::{run_merge, MergeJob, MergeOutput};
 pub use plan::Plan;
@@ -217,27 +217,18 @@ impl SweepJob {
     /// Checks the flags; errors name the flag and the value.
     pub fn validate(&self) -> Result<()> {
         if let Some(n) = self.jobs {
-            if !(1..=MAX_JOBS).contains(&n) {
-                return Err(Error::invalid(
-                    COMMAND_LINE,
-                    "--jobs",
-                    n,
-                    format!("must be 1 to {MAX_JOBS} threads"),
-                ));
-            }
+            check_count("--jobs", n, MAX_JOBS, "threads")?;
         }
         Shard::new(self.shard.index, self.shard.count)?;
         if let Some(dir) = &self.out {
             crate::output::check_out_dir("--out", dir)?;
         }
-        if !(1..=MAX_HOST_THREADS).contains(&self.host_threads) {
-            return Err(Error::invalid(
-                COMMAND_LINE,
-                "--host-threads",
-                self.host_threads,
-                format!("must be in 1..={MAX_HOST_THREADS} host threads"),
-            ));
-        }
+        check_count(
+            "--host-threads",
+            self.host_threads,
+            MAX_HOST_THREADS,
+            "host threads",
+        )?;
         Ok(())
     }
 }
