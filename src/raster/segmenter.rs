@@ -154,14 +154,18 @@ fn last_chords<R: Real>(
     };
     // Nearly always the clamped chord is within k: it is the walk's last segment, and the
     // stack below (a kilobyte to set up) is not needed.
-    let far = too_far(&p, &iv.end);
-    if !far {
+    // A chord of the walk, unless the interval has had `cap` already.
+    let chord = |out: &mut Vec<Segment<R>>, counts: &mut Counts, p0, p1| {
         if out.len() - first >= cap {
             return Err(CapExceeded);
         }
-        out.push(Segment { p0: p, p1: iv.end });
+        out.push(Segment { p0, p1 });
         counts.segments += 1;
-        return Ok(());
+        Ok(())
+    };
+    let far = too_far(&p, &iv.end);
+    if !far {
+        return chord(out, counts, p, iv.end);
     }
     // Depth-first, in walk order: (chord end, depth) still to close from `p`. The first
     // chord's test is the one just made.
@@ -200,11 +204,7 @@ fn last_chords<R: Real>(
                 counts.segments_refined += 1;
             }
             None => {
-                if out.len() - first >= cap {
-                    return Err(CapExceeded);
-                }
-                out.push(Segment { p0: p, p1: e });
-                counts.segments += 1;
+                chord(out, counts, p, e)?;
                 p = e;
                 n -= 1;
             }
