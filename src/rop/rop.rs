@@ -19,7 +19,7 @@ use crate::raster::fragment::{self, FragmentSink, Span};
 use crate::raster::setup::ScreenLembo;
 use crate::raster::subsegmenter::Subsegment;
 use crate::raster::triangle::{
-    inv_w_at, perspective_lerp, ScreenTriangle, TriangleFragment, TriangleSink,
+    inv_w_at, perspective_lerp, ScreenTriangle, TriangleFragment, TriangleSink, WEIGHT_LANES,
 };
 
 /// Per-fragment shading (Piranda et al. 2006 equation 6) from the lembo's normal and position
@@ -444,6 +444,28 @@ impl<R: Real> TriangleSink<R> for Rop<'_, R> {
         self.batch
             .begin_triangle(t, &self.shader, into_rows(&mut self.fb));
         self.test(t.id, i, j, z, l);
+    }
+
+    /// The row's weights and depths [`WEIGHT_LANES`] pixels at a time (the same values as
+    /// pixel by pixel), then the depth test of each pixel in turn.
+    #[inline]
+    fn row(&mut self, t: &ScreenTriangle<R>, j: u32, a: u32, b: u32) {
+        if R::COUNTS_OPERATIONS {
+            for i in a..b {
+                let (l, z) = t.weights(i, j);
+                self.covered(t, i, j, l, z);
+            }
+            return;
+        }
+        self.batch
+            .begin_triangle(t, &self.shader, into_rows(&mut self.fb));
+        let edges = t.row_edges(j);
+        for i in (a..b).step_by(WEIGHT_LANES) {
+            let (l, z) = t.weights_lanes(&edges, i);
+            for k in 0..WEIGHT_LANES.min((b - i) as usize) {
+                self.test(t.id, i + k as u32, j, z[k], [l[0][k], l[1][k], l[2][k]]);
+            }
+        }
     }
 }
 

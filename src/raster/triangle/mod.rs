@@ -11,9 +11,10 @@
 //!   implementations: a top edge is horizontal with the triangle below it, a left edge has
 //!   the triangle to its right). Two triangles sharing an edge therefore never both cover,
 //!   nor both miss, a pixel centre on it.
-//! - **Quads**: the rasterizer walks the bounding box in 2x2 pixel quads aligned to even
-//!   coordinates, as GPUs shade; a quad with at least one covered pixel is emitted with its
-//!   4-bit mask.
+//! - **Quads**: the rasterizer works in pairs of rows (even, odd), as GPUs shade 2x2 pixel
+//!   quads aligned to even coordinates; it counts the quads with at least one covered pixel
+//!   (the timed rasterizer's unit of work) and hands each row's covered span of columns,
+//!   found in closed form from the edge functions, to the sink.
 //! - **Fragments**: barycentrics are the three edge functions at the pixel centre over twice
 //!   the area. Window depth is interpolated linearly in screen space, which is exact for a
 //!   plane under perspective (z_ndc is affine in screen x and y); the normal and the world

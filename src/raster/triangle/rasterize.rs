@@ -124,53 +124,58 @@ impl<R: Real> ScreenTriangle<R> {
         (a, b)
     }
 
-    /// Calls `quad(qi, qj, rows, mask)` for every 2x2 quad (top-left pixel (qi, qj), both
-    /// even) with at least one covered pixel, row by row, left to right. `rows` are the
-    /// covered spans of rows qj and qj + 1 ([`Self::row_span`]); mask bit 0 is (qi, qj),
-    /// bit 1 (qi + 1, qj), bit 2 (qi, qj + 1), bit 3 (qi + 1, qj + 1).
-    pub fn quads(&self, quad: impl FnMut(u32, u32, &[(u32, u32); 2], u8)) {
-        self.quads_in_rows(0, u32::MAX, quad)
-    }
-
-    /// [`Self::quads`] for the quads whose top row is in `lo..hi` (`lo` even), in the same
-    /// order: a band of rows of the frame.
-    pub fn quads_in_rows(
-        &self,
-        lo: u32,
-        hi: u32,
-        mut quad: impl FnMut(u32, u32, &[(u32, u32); 2], u8),
-    ) {
-        debug_assert!(
-            lo.is_multiple_of(2),
-            "bands start on even rows, as quads do"
-        );
-        let [_, _, j0, j1] = self.bbox;
-        let mut qj = (j0 & !1).max(lo);
-        while qj < j1.min(hi) {
-            let rows = [self.row_span(qj), self.row_span(qj + 1)];
-            let live = rows.iter().filter(|r| r.0 < r.1);
-            let lo = live.clone().map(|r| r.0).min();
-            let hi = live.map(|r| r.1).max();
-            if let (Some(lo), Some(hi)) = (lo, hi) {
-                let mut qi = lo & !1;
-                while qi < hi {
-                    let mut mask = 0u8;
-                    for bit in 0..4u32 {
-                        let (a, b) = rows[(bit >> 1) as usize];
-                        let i = qi + (bit & 1);
-                        if a <= i && i < b {
-                            mask |= 1 << bit;
-                        }
-                    }
-                    if mask != 0 {
-                        quad(qi, qj, &rows, mask);
-                    }
-                    qi += 2;
-                }
-            }
-            qj += 2;
+    /// Row `j`'s exact edge functions as `E_k(i) = a_k i + b_k` over its columns i, in
+    /// `f64`, for [`Self::weights_lanes`].
+    #[inline(always)]
+    pub fn row_edges(&self, j: u32) -> RowEdges<R> {
+        let (_, py) = pixel_centre(0, j);
+        RowEdges {
+            a: self.edges.map(|e| (e.a * SUBPIXEL) as f64),
+            b: self
+                .edges
+                .map(|e| (e.a * (SUBPIXEL / 2) + e.b * py + e.c) as f64),
+            area: R::of(self.area2 as f64),
         }
     }
+
+    /// [`Self::weights`] of the [`WEIGHT_LANES`] pixels from column `i` on of the row of
+    /// `row` ([`Self::row_edges`]): the same values bit for bit, computed side by side.
+    ///
+    /// An edge function's value is an integer below 2^50 in magnitude (snapped vertices
+    /// within the guard band, pixel centres within 16384 pixels), and so are `a_k i` and
+    /// `b_k`: `f64` holds each exactly and adds them exactly, which gives the integer the
+    /// scalar path converts.
+    #[inline(always)]
+    pub fn weights_lanes(
+        &self,
+        row: &RowEdges<R>,
+        i: u32,
+    ) -> ([[R; WEIGHT_LANES]; 3], [R; WEIGHT_LANES]) {
+        let mut l = [[R::zero(); WEIGHT_LANES]; 3];
+        let mut z = [R::zero(); WEIGHT_LANES];
+        for k in 0..WEIGHT_LANES {
+            let x = (i as usize + k) as f64;
+            for e in 0..3 {
+                l[e][k] = R::of(row.a[e] * x + row.b[e]) / row.area;
+            }
+            z[k] = l[0][k] * self.z[0] + l[1][k] * self.z[1] + l[2][k] * self.z[2];
+        }
+        (l, z)
+    }
+}
+
+/// Pixels [`ScreenTriangle::weights_lanes`] works out together.
+pub const WEIGHT_LANES: usize = 8;
+
+/// One row's edge functions along its columns ([`ScreenTriangle::row_edges`]).
+#[derive(Clone, Copy, Debug)]
+pub struct RowEdges<R> {
+    /// Per edge, the step from one column to the next \[1/256 pixel, squared\].
+    a: [f64; 3],
+    /// Per edge, the value at column 0.
+    b: [f64; 3],
+    /// Twice the triangle's area, in the datapath.
+    area: R,
 }
 
 /// 1/w at weights `l`: sum(l_k / w_k), from the vertices' 1/w.
@@ -204,6 +209,8 @@ pub fn quads_in(rows: &[(u32, u32); 2]) -> u64 {
 }
 
 /// Receives triangle fragments: the ROP in a render, a probe in tests and accuracy runs.
+/// A triangle covers a pixel at most once, so the order its fragments arrive in does not
+/// matter to a sink that keeps per-pixel state.
 pub trait TriangleSink<R: Real> {
     /// Takes fragment `f` of triangle `t` at pixel (i, j).
     fn fragment(&mut self, t: &ScreenTriangle<R>, i: u32, j: u32, f: &TriangleFragment<R>);
@@ -218,9 +225,20 @@ pub trait TriangleSink<R: Real> {
         let f = t.fragment_at(l, z);
         self.fragment(t, i, j, &f);
     }
+
+    /// Takes the covered pixels `a..b` (not empty) of row `j` of triangle `t`. The default
+    /// hands each, left to right, to [`Self::covered`] with its weights and depth; the ROP
+    /// works out the weights of several pixels together ([`ScreenTriangle::weights_lanes`]).
+    #[inline]
+    fn row(&mut self, t: &ScreenTriangle<R>, j: u32, a: u32, b: u32) {
+        for i in a..b {
+            let (l, z) = t.weights(i, j);
+            self.covered(t, i, j, l, z);
+        }
+    }
 }
 
-/// Rasterizes one set-up triangle into `sink`, quad by quad.
+/// Rasterizes one set-up triangle into `sink`, a pair of rows at a time.
 pub fn rasterize<R: Real, S: TriangleSink<R>>(
     t: &ScreenTriangle<R>,
     sink: &mut S,
@@ -229,7 +247,9 @@ pub fn rasterize<R: Real, S: TriangleSink<R>>(
     rasterize_rows(t, 0, u32::MAX, sink, counts)
 }
 
-/// [`rasterize`] for the quads whose top row is in `lo..hi` (`lo` even).
+/// [`rasterize`] for the quads whose top row is in `lo..hi` (`lo` even): a band of rows
+/// of the frame. Each pair of rows counts the 2x2 quads its covered spans touch
+/// ([`quads_in`]); the covered pixels go to the sink a row at a time, top to bottom.
 pub fn rasterize_rows<R: Real, S: TriangleSink<R>>(
     t: &ScreenTriangle<R>,
     lo: u32,
@@ -237,17 +257,23 @@ pub fn rasterize_rows<R: Real, S: TriangleSink<R>>(
     sink: &mut S,
     counts: &mut Counts,
 ) {
-    t.quads_in_rows(lo, hi, |qi, qj, _, mask| {
-        counts.quads += 1;
-        for bit in 0..4 {
-            if mask & (1 << bit) != 0 {
-                let (i, j) = (qi + (bit & 1), qj + (bit >> 1));
-                let (l, z) = t.weights(i, j);
-                sink.covered(t, i, j, l, z);
-                counts.fragments += 1;
+    debug_assert!(
+        lo.is_multiple_of(2),
+        "bands start on even rows, as quads do"
+    );
+    let [_, _, j0, j1] = t.bbox;
+    let mut qj = (j0 & !1).max(lo);
+    while qj < j1.min(hi) {
+        let rows = [t.row_span(qj), t.row_span(qj + 1)];
+        counts.quads += quads_in(&rows);
+        for (j, (a, b)) in (qj..).zip(rows) {
+            if a < b {
+                sink.row(t, j, a, b);
+                counts.fragments += (b - a) as u64;
             }
         }
-    });
+        qj += 2;
+    }
 }
 
 /// Counts a culled triangle.

@@ -32,6 +32,28 @@ fn tri(id: u32, p: [(i64, i64); 3]) -> Option<ScreenTriangle<f64>> {
     .ok()
 }
 
+/// A triangle from sub-pixel vertex positions in the datapath `R`, on `viewport`.
+fn tri_in<R: Real>(p: [(i64, i64); 3], viewport: Viewport) -> ScreenTriangle<R> {
+    let v = Vertex {
+        z: R::of(0.25),
+        inv_w: R::one(),
+        normal_w: [R::zero(), R::zero(), R::one()],
+        position_w: [R::zero(); 3],
+    };
+    let mut v = [v; 3];
+    v[1].z = R::of(0.5);
+    v[2].z = R::of(0.875);
+    ScreenTriangle::assemble(
+        7,
+        p.map(|p| p.0),
+        p.map(|p| p.1),
+        v,
+        [R::one(); 3],
+        viewport,
+    )
+    .expect("a triangle in view")
+}
+
 /// Sets up a triangle inside the guard band: its one piece, or why it was culled.
 fn setup_one<R: Real>(
     id: u32,
@@ -250,7 +272,7 @@ fn a_fan_around_a_vertex_covers_each_pixel_exactly_once() {
 }
 
 #[test]
-fn quads_are_aligned_and_their_masks_match_coverage() {
+fn quads_counted_are_the_aligned_quads_with_a_covered_pixel_and_rows_bring_each_pixel() {
     let t = tri(
         0,
         [
@@ -260,30 +282,69 @@ fn quads_are_aligned_and_their_masks_match_coverage() {
         ],
     )
     .unwrap();
-    let mut seen = std::collections::BTreeSet::new();
-    let mut quads = 0u64;
-    t.quads(|qi, qj, rows, mask| {
-        assert!(qi % 2 == 0 && qj % 2 == 0 && mask != 0);
-        assert_eq!(*rows, [t.row_span(qj), t.row_span(qj + 1)]);
-        for bit in 0..4 {
-            let (i, j) = (qi + (bit & 1), qj + (bit >> 1));
-            let inside = i < VP.width && j < VP.height && t.covers(i, j);
-            assert_eq!(mask & (1 << bit) != 0, inside, "({i}, {j})");
-            if inside {
-                seen.insert((i, j));
+    // Every 2x2 quad at even (qi, qj) with a covered pixel, found pixel by pixel.
+    let covered = |i: u32, j: u32| i < VP.width && j < VP.height && t.covers(i, j);
+    let quads = (0..VP.height)
+        .step_by(2)
+        .flat_map(|qj| (0..VP.width).step_by(2).map(move |qi| (qi, qj)))
+        .filter(|&(qi, qj)| (0..4).any(|b| covered(qi + (b & 1), qj + (b >> 1))))
+        .count() as u64;
+    struct Rows(Vec<(u32, u32)>);
+    impl<R: Real> TriangleSink<R> for Rows {
+        fn fragment(&mut self, _: &ScreenTriangle<R>, _: u32, _: u32, _: &TriangleFragment<R>) {
+            unreachable!("rows come whole")
+        }
+        fn row(&mut self, _: &ScreenTriangle<R>, j: u32, a: u32, b: u32) {
+            self.0.extend((a..b).map(|i| (i, j)));
+        }
+    }
+    let (mut sink, mut counts) = (Rows(Vec::new()), Counts::default());
+    rasterize(&t, &mut sink, &mut counts);
+    assert_eq!(counts.quads, quads);
+    let all: Vec<_> = (0..VP.height)
+        .flat_map(|j| (0..VP.width).map(move |i| (i, j)))
+        .filter(|&(i, j)| covered(i, j))
+        .collect();
+    assert_eq!(sink.0, all, "each covered pixel once, row by row");
+    assert_eq!(counts.fragments, all.len() as u64);
+}
+
+#[test]
+fn weights_in_lanes_are_the_pixel_by_pixel_weights_bit_for_bit() {
+    // Every (step)th row and column from the bounding box's corner, 8 pixels on from each.
+    fn check<R: Real>(t: &ScreenTriangle<R>, step: usize) {
+        let [i0, i1, j0, j1] = t.bbox;
+        for j in (j0..j1).step_by(step) {
+            let row = t.row_edges(j);
+            for i in (i0..i1).step_by(step) {
+                let (l, z) = t.weights_lanes(&row, i);
+                for k in 0..WEIGHT_LANES {
+                    let (want_l, want_z) = t.weights(i + k as u32, j);
+                    let got = [l[0][k], l[1][k], l[2][k]];
+                    let bits = |v: [R; 3]| v.map(|x| x.f64().to_bits());
+                    assert_eq!(bits(got), bits(want_l), "({}, {j})", i + k as u32);
+                    assert_eq!(z[k].f64().to_bits(), want_z.f64().to_bits());
+                }
             }
         }
-        quads += 1;
-    });
-    let all: std::collections::BTreeSet<_> = (0..VP.height)
-        .flat_map(|j| (0..VP.width).map(move |i| (i, j)))
-        .filter(|&(i, j)| t.covers(i, j))
-        .collect();
-    assert_eq!(seen, all);
-    let per_row: u64 = (0..VP.height / 2)
-        .map(|q| quads_in(&[t.row_span(2 * q), t.row_span(2 * q + 1)]))
-        .sum();
-    assert_eq!(quads, per_row);
+    }
+    // A slanted triangle, and one from the guard band's corners over the largest viewport
+    // (edge values near 2^49).
+    let small = [
+        c(3, 1),
+        (40 * 256 + 17, 9 * 256 + 3),
+        (11 * 256 + 200, 30 * 256),
+    ];
+    check(&tri_in::<f32>(small, VP), 1);
+    check(&tri_in::<f64>(small, VP), 1);
+    let far = (GUARD_BAND_PX as i64) * SUBPIXEL;
+    let huge = [(-far, -far), (far, -far + 77), (-far + 300, far)];
+    let largest = Viewport {
+        width: 16384,
+        height: 16384,
+    };
+    check(&tri_in::<f32>(huge, largest), 1001);
+    check(&tri_in::<f64>(huge, largest), 1001);
 }
 
 #[test]
