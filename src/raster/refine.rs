@@ -151,10 +151,18 @@ impl<'a> Surface<'a> {
         }
     }
 
-    /// An error \[pixels\] at world point `p` beyond the tolerance and beyond the rounding
-    /// noise of projecting `p` there (far from the origin, or under extreme zoom, rounding
-    /// alone can exceed a small tolerance; splitting would then chase noise to the caps).
-    fn exceeds(&self, err: f64, p: DVec3) -> bool {
+    /// Whether the error vector (dx, dy) \[pixels\] at world point `p` is longer than the
+    /// tolerance, and than the rounding noise of projecting `p` there (far from the origin,
+    /// or under extreme zoom, rounding alone can exceed a small tolerance; splitting would
+    /// then chase noise to the caps). A vector whose |dx| + |dy| is clearly within the
+    /// tolerance is within it without `hypot` (slow in libm): |dx| + |dy| bounds the
+    /// length, and the margin of 4 ulps covers the sum's rounding and `hypot`'s (within one
+    /// ulp), so the answer is the one `hypot` gives.
+    fn exceeds(&self, dx: f64, dy: f64, p: DVec3) -> bool {
+        if dx.abs() + dy.abs() <= self.tol * (1.0 - 4.0 * f64::EPSILON) {
+            return false;
+        }
+        let err = dx.hypot(dy);
         if err <= self.tol {
             return false;
         }
@@ -216,7 +224,7 @@ impl<'a> Surface<'a> {
             let world = self.world(mid(end, m.0));
             let truth = self.screen(world);
             let got = parabola(&curve, t);
-            self.exceeds((got[0] - truth[0]).hypot(got[1] - truth[1]), world)
+            self.exceeds(got[0] - truth[0], got[1] - truth[1], world)
         })
     }
 
@@ -238,10 +246,7 @@ impl<'a> Surface<'a> {
             .any(|(u, v)| {
                 let world = self.world(at(u, v));
                 let truth = self.screen(world);
-                self.exceeds(
-                    (x.eval(u, v) - truth[0]).hypot(y.eval(u, v) - truth[1]),
-                    world,
-                )
+                self.exceeds(x.eval(u, v) - truth[0], y.eval(u, v) - truth[1], world)
             })
     }
 }
@@ -300,8 +305,8 @@ pub fn setup_refined<R: Real>(
         screen: world.map(|p| s.screen(p)),
         edges: [EdgeSource::Own; 3],
     };
-    let net = s.net(&world);
-    if s.projectable(&net) {
+    let root_net = s.net(&world);
+    if s.projectable(&root_net) {
         let points = ScreenPoints::of(&root.screen);
         if outside(view, points.hull()) {
             return Err(Cull::Outside);
@@ -310,7 +315,7 @@ pub fn setup_refined<R: Real>(
             return Err(Cull::Degenerate);
         }
     } else {
-        match beyond(&net) {
+        match beyond(&root_net) {
             Some(Beyond::Near) => return Err(Cull::BehindEye),
             Some(Beyond::Other) => return Err(Cull::Outside),
             None => {}
@@ -324,7 +329,11 @@ pub fn setup_refined<R: Real>(
         if node.depth > 0 {
             split.examined += 1;
         }
-        let net = s.net(&node.world);
+        // The root's net was worked out above.
+        let net = match node.depth {
+            0 => root_net,
+            _ => s.net(&node.world),
+        };
         let projectable = s.projectable(&net);
         let points = ScreenPoints::of(&node.screen);
         if node.depth > 0 {

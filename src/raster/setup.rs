@@ -587,7 +587,7 @@ fn closest_to_origin<R: Real>(t: [V2<R>; 3]) -> Option<V2<R>> {
 pub fn eigen_sym<R: Real>(p: R, q: R, r: R) -> [(V2<R>, R); 2] {
     let half = R::of(0.5);
     let m = (p + r) * half;
-    let dd = ((p - r) * half).hypot(q);
+    let dd = ((p - r) * half).length(q);
     let (l1, l2) = (m + dd, m - dd);
     let vec = |l: R| {
         let a = [q, l - p];

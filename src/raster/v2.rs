@@ -14,7 +14,7 @@ pub fn dot<R: Real>(a: V2<R>, b: V2<R>) -> R {
 /// The Euclidean length, without overflow (`hypot`).
 #[inline(always)]
 pub fn norm<R: Real>(a: V2<R>) -> R {
-    a[0].hypot(a[1])
+    a[0].length(a[1])
 }
 
 /// The vector turned a quarter turn clockwise (the walk direction for a gradient: the
