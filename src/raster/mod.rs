@@ -502,8 +502,7 @@ pub(crate) fn frame_with<R: Real>(
     let mut counts = Counts::default();
     let mut rop = Rop::<R>::new(&mut fb, &scene.light, view);
     let probe = draw(&mut rop, &mut counts)?;
-    counts.fragments_passed_depth = rop.finish();
-    counts.pixels_covered = fb.covered() as u64;
+    (counts.fragments_passed_depth, counts.pixels_covered) = rop.finish();
     Ok(Frame {
         framebuffer: fb,
         counts,

@@ -131,9 +131,9 @@ fn triangle_pieces<R: Real>(
     join_in_order(chunks, counts)
 }
 
-/// What one band drew: its counts and its passed depth tests; or the first error it met
-/// with the (piece, scanline) it met it at.
-type Band = std::result::Result<(Counts, u64), ((usize, u32), Error)>;
+/// What one band drew: its counts, its passed depth tests and covered pixels
+/// ([`Rop::finish`]); or the first error it met with the (piece, scanline) it met it at.
+type Band = std::result::Result<(Counts, (u64, u64)), ((usize, u32), Error)>;
 
 /// Runs `draw(lo, hi, rows)` for every band of the frame on the current rayon pool (of
 /// `threads` threads), each into its own rows of one frame buffer (cleared by the band's
@@ -159,12 +159,13 @@ fn in_bands(
         })
         .collect();
     let mut first_error: Option<((usize, u32), Error)> = None;
-    let mut passed = 0;
+    let (mut passed, mut covered) = (0, 0);
     for band in drawn {
         match band {
-            Ok((c, p)) => {
+            Ok((c, (p, n))) => {
                 counts += c;
                 passed += p;
+                covered += n;
             }
             Err((at, e)) => {
                 if first_error.as_ref().is_none_or(|(first, _)| at < *first) {
@@ -177,7 +178,7 @@ fn in_bands(
         return Err(e);
     }
     counts.fragments_passed_depth = passed;
-    counts.pixels_covered = framebuffer.covered() as u64;
+    counts.pixels_covered = covered;
     Ok(Frame {
         framebuffer,
         counts,

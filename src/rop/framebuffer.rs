@@ -5,7 +5,7 @@
 //! give the same image. Depth is stored as `f32` whatever the datapath, as a depth buffer
 //! would hold it. The normal buffer exists only when accuracy is measured.
 
-use super::plane::Plane;
+use super::plane::{fill, Plane};
 
 /// No primitive has written this pixel.
 pub const NO_PRIMITIVE: u32 = u32::MAX;
@@ -16,6 +16,21 @@ pub const NO_PRIMITIVE: u32 = u32::MAX;
 #[inline(always)]
 pub fn depth_test(z: f32, id: u32, depth: f32, primitive: u32) -> bool {
     (0.0..=1.0).contains(&z) && (z < depth || (z == depth && id < primitive))
+}
+
+/// Pixels of a winner plane some primitive wrote, counted in eight `u32` lanes, which the
+/// compiler keeps in vector registers (a plane holds fewer than 2^32 pixels a lane).
+fn covered(primitive: &[u32]) -> usize {
+    let mut lanes = [0u32; 8];
+    let chunks = primitive.chunks_exact(8);
+    let rest = chunks.remainder();
+    for c in chunks {
+        for k in 0..8 {
+            lanes[k] += (c[k] != NO_PRIMITIVE) as u32;
+        }
+    }
+    let tail = rest.iter().filter(|&&p| p != NO_PRIMITIVE).count();
+    lanes.iter().map(|&n| n as usize).sum::<usize>() + tail
 }
 
 /// Colour, depth and winner id per pixel, row 0 at the top.
@@ -153,10 +168,7 @@ impl FrameBuffer {
 
     /// Pixels some primitive wrote.
     pub fn covered(&self) -> usize {
-        self.primitive
-            .iter()
-            .filter(|&&p| p != NO_PRIMITIVE)
-            .count()
+        covered(&self.primitive)
     }
 
     /// The colour buffer as an `image` RGB8 image.
@@ -238,13 +250,18 @@ impl FrameRows<'_> {
         }
     }
 
+    /// Pixels of these rows some primitive wrote.
+    pub fn covered(&self) -> usize {
+        covered(self.primitive)
+    }
+
     /// Clears these rows as [`FrameBuffer::new`] clears a frame.
     pub fn clear(&mut self, background: [u8; 3]) {
-        self.color.fill(background);
-        self.depth.fill(1.0);
-        self.primitive.fill(NO_PRIMITIVE);
+        fill(self.color, background);
+        fill(self.depth, 1.0);
+        fill(self.primitive, NO_PRIMITIVE);
         if let Some(n) = self.normal.as_deref_mut() {
-            n.fill([0.0; 3]);
+            fill(n, [0.0; 3]);
         }
     }
 }
@@ -269,6 +286,20 @@ mod tests {
         }
         assert_eq!(a.color, b.color);
         assert_eq!(a.primitive[0], 3);
+    }
+
+    #[test]
+    fn covered_counts_the_pixels_with_a_winner() {
+        for len in [0, 1, 7, 8, 9, 100, 1029] {
+            let p: Vec<u32> = (0..len as u32)
+                .map(|i| if i % 3 == 0 { NO_PRIMITIVE } else { i })
+                .collect();
+            assert_eq!(
+                covered(&p),
+                (0..len).filter(|i| i % 3 != 0).count(),
+                "{len}"
+            );
+        }
     }
 
     #[test]

@@ -347,10 +347,11 @@ impl<'a, R: Real> Rop<'a, R> {
         }
     }
 
-    /// Shades what is held back and returns the fragments that passed the depth test.
-    pub fn finish(mut self) -> u64 {
+    /// Shades what is held back; returns the fragments that passed the depth test and the
+    /// pixels of its rows that some primitive covers.
+    pub fn finish(mut self) -> (u64, u64) {
         self.flush();
-        self.passed
+        (self.passed, self.fb.covered() as u64)
     }
 
     /// Shades and writes the batch.
