@@ -74,25 +74,6 @@ impl Real for f64 {
     }
 }
 
-/// `x.ceil()` exactly, but for the sign of a zero result (ceil(-0.5) is -0; this gives +0),
-/// without the C library call that `ceil` is on x86-64 below SSE4.1 (the project's
-/// baseline target): a truncation through an integer register, and one up when that was
-/// down. On a counting datapath, `ceil` as it is counted.
-#[inline(always)]
-pub fn ceil<R: Real>(x: R) -> R {
-    // From 2^23 (f32) or 2^52 (f64) on, every value is an integer; so are the infinities,
-    // and NaN stays NaN.
-    if R::COUNTS_OPERATIONS || !(x.abs() < R::one() / R::epsilon()) {
-        return x.ceil();
-    }
-    let t = R::of(x.f64() as i64 as f64);
-    if t < x {
-        t + R::one()
-    } else {
-        t
-    }
-}
-
 /// The datapath selected on the command line.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -117,37 +98,6 @@ impl Datapath {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn ceil_is_the_library_ceil_but_for_the_sign_of_zero() {
-        fn check<R: Real>(values: impl Iterator<Item = R>) {
-            for x in values {
-                let (got, want) = (ceil(x), x.ceil());
-                let same = got == want || (got.is_nan() && want.is_nan());
-                assert!(same, "ceil({x:?}) = {got:?}, not {want:?}");
-            }
-        }
-        let mut seed = 0x2545_f491_4f6c_dd1du64;
-        let mut next = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            seed
-        };
-        let edges = [
-            0.0, -0.0, 0.5, -0.5, 1.0, -1.0, 8388607.5, -8388607.5, 8388608.0, 1e30,
-        ];
-        check(edges.into_iter().map(|x: f64| x as f32));
-        check(
-            edges
-                .into_iter()
-                .chain([4503599627370495.5, -4503599627370495.5]),
-        );
-        check((0..1_000_000).map(|_| f32::from_bits(next() as u32)));
-        check((0..1_000_000).map(|_| f64::from_bits(next())));
-        check((0..1_000_000).map(|_| (next() % 4_000_001) as f32 / 1000.0 - 2000.0));
-        check([f32::INFINITY, f32::NEG_INFINITY, f32::NAN].into_iter());
-    }
 
     #[test]
     fn f32_length_is_the_library_hypot_bit_for_bit() {

@@ -11,7 +11,7 @@
 use super::setup::ScreenLembo;
 use super::subsegmenter::Subsegment;
 use super::Counts;
-use crate::datapath::{ceil, Real};
+use crate::datapath::Real;
 
 /// Receives fragments: the ROP in a render, a probe in tests and accuracy runs.
 pub trait FragmentSink<R: Real> {
@@ -122,8 +122,8 @@ pub fn span<R: Real>(sub: &Subsegment<R>, width: u32) -> Option<Span<R>> {
         return None;
     }
     let half = R::of(0.5);
-    let i0 = ceil(a.x - half).max(R::zero());
-    let i1 = ceil(b.x - half).min(R::of(width as f64));
+    let i0 = (a.x - half).ceil().max(R::zero());
+    let i1 = (b.x - half).ceil().min(R::of(width as f64));
     if !(i0 < i1) {
         return None;
     }

@@ -14,7 +14,7 @@ use super::interval::{CurvePoint, INTERIOR};
 use super::segmenter::Segment;
 use super::setup::ScreenLembo;
 use super::Counts;
-use crate::datapath::{ceil, Real};
+use crate::datapath::Real;
 
 /// A piece of a segment over which u, v and x are treated as linear; `a` and `b` in walk
 /// order (not sorted by x).
@@ -77,7 +77,8 @@ pub fn subsegments<R: Real>(
     };
     for w in 0..pieces {
         let (ta, tb) = (cuts[w], cuts[w + 1]);
-        let n = ceil((tb - ta) / dt)
+        let n = ((tb - ta) / dt)
+            .ceil()
             .to_u32()
             .unwrap_or(1)
             .clamp(1, MAX_SUBSEGMENTS_PER_SEGMENT);
