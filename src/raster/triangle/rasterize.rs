@@ -151,15 +151,15 @@ impl<R: Real> ScreenTriangle<R> {
         row: &RowEdges<R>,
         i: u32,
     ) -> ([[R; WEIGHT_LANES]; 3], [R; WEIGHT_LANES]) {
-        let mut l = [[R::zero(); WEIGHT_LANES]; 3];
-        let mut z = [R::zero(); WEIGHT_LANES];
-        for k in 0..WEIGHT_LANES {
-            let x = (i as usize + k) as f64;
-            for e in 0..3 {
-                l[e][k] = R::of(row.a[e] * x + row.b[e]) / row.area;
-            }
-            z[k] = l[0][k] * self.z[0] + l[1][k] * self.z[1] + l[2][k] * self.z[2];
-        }
+        let l: [[R; WEIGHT_LANES]; 3] = std::array::from_fn(|e| {
+            std::array::from_fn(|k| {
+                let x = (i as usize + k) as f64;
+                R::of(row.a[e] * x + row.b[e]) / row.area
+            })
+        });
+        let z = std::array::from_fn(|k| {
+            l[0][k] * self.z[0] + l[1][k] * self.z[1] + l[2][k] * self.z[2]
+        });
         (l, z)
     }
 }
