@@ -170,70 +170,55 @@ fn triangle_pieces<R: Real>(
 type Band = std::result::Result<(Counts, (u64, u64)), ((usize, u32), Error)>;
 
 /// Runs `draw(b, lo, hi, rows)` for every band `b` (rows `lo..hi`) of `bands` on the
-/// current rayon pool, each into its own rows of `framebuffer` (first cleared to
-/// `background` by the band's thread, when given).
-fn draw_bands(
-    framebuffer: &mut FrameBuffer,
+/// current rayon pool, each into its own rows of one frame buffer (cleared by the band's
+/// thread), and adds the bands' counts to setup's `counts`: the frame, or the first error
+/// any band met.
+fn in_bands(
+    scene: &Scene,
+    view: &View,
     bands: &[(u32, u32)],
-    background: Option<[u8; 3]>,
+    mut counts: Counts,
     draw: impl Fn(usize, u32, u32, FrameRows<'_>) -> Band + Sync,
-) -> Vec<Band> {
-    framebuffer
+) -> Result<Frame> {
+    let vp = view.viewport;
+    let background = scene.background.map(crate::rop::shade::to_u8::<f64>);
+    let mut framebuffer = FrameBuffer::zeroed(vp.width, vp.height);
+    let drawn: Vec<Band> = framebuffer
         .bands_mut(bands)
         .into_par_iter()
         .zip(bands.par_iter())
         .enumerate()
         .map(|(b, (mut rows, &(lo, hi)))| {
-            if let Some(background) = background {
-                rows.clear(background);
-            }
+            rows.clear(background);
             draw(b, lo, hi, rows)
         })
-        .collect()
-}
-
-/// What the bands of a frame drew, added up.
-#[derive(Default)]
-struct Tally {
-    counts: Counts,
-    passed: u64,
-    covered: u64,
-    first_error: Option<((usize, u32), Error)>,
-}
-
-impl Tally {
-    /// Adds what the bands drew.
-    fn add(&mut self, drawn: Vec<Band>) {
-        for band in drawn {
-            match band {
-                Ok((c, (p, n))) => {
-                    self.counts += c;
-                    self.passed += p;
-                    self.covered += n;
-                }
-                Err((at, e)) => {
-                    if self.first_error.as_ref().is_none_or(|(f, _)| at < *f) {
-                        self.first_error = Some((at, e));
-                    }
+        .collect();
+    let mut first_error: Option<((usize, u32), Error)> = None;
+    let (mut passed, mut covered) = (0, 0);
+    for band in drawn {
+        match band {
+            Ok((c, (p, n))) => {
+                counts += c;
+                passed += p;
+                covered += n;
+            }
+            Err((at, e)) => {
+                if first_error.as_ref().is_none_or(|(first, _)| at < *first) {
+                    first_error = Some((at, e));
                 }
             }
         }
     }
-
-    /// The frame, with setup's `counts`; or the first error any band met.
-    fn frame(self, framebuffer: FrameBuffer, mut counts: Counts) -> Result<Frame> {
-        if let Some((_, e)) = self.first_error {
-            return Err(e);
-        }
-        counts += self.counts;
-        counts.fragments_passed_depth = self.passed;
-        counts.pixels_covered = self.covered;
-        Ok(Frame {
-            framebuffer,
-            counts,
-            probe: None,
-        })
+    if let Some((_, e)) = first_error {
+        return Err(e);
     }
+    counts.fragments_passed_depth = passed;
+    counts.pixels_covered = covered;
+    Ok(Frame {
+        framebuffer,
+        counts,
+        probe: None,
+    })
 }
 
 /// A rayon pool of `threads` threads for one frame.
@@ -259,37 +244,27 @@ pub fn render_lembos_in_bands<R: Real>(
         let (width, height) = (view.viewport.width, view.viewport.height);
         let bands = bands(height, threads);
         let by_band = pieces.by_band(&bands, |&(_, j0, j1)| (j0, j1 + 1));
-        let background = scene.background.map(crate::rop::shade::to_u8::<f64>);
-        let mut framebuffer = FrameBuffer::zeroed(width, height);
-        let mut tally = Tally::default();
-        let drawn = draw_bands(
-            &mut framebuffer,
-            &bands,
-            Some(background),
-            |b, lo, hi, rows| {
-                let mut rop = Rop::<R>::band(rows, &scene.light, view, lo);
-                let mut c = Counts::default();
-                let mut buffers = Buffers::default();
-                for &(n, (l, j0, j1)) in &by_band[b] {
-                    for j in (*j0).max(lo)..=(*j1).min(hi - 1) {
-                        scanline(
-                            l,
-                            j,
-                            width,
-                            k,
-                            DEFAULT_SEGMENT_CAP,
-                            &mut rop,
-                            &mut c,
-                            &mut buffers,
-                        )
-                        .map_err(|e| ((n, j), e))?;
-                    }
+        in_bands(scene, view, &bands, counts, |b, lo, hi, rows| {
+            let mut rop = Rop::<R>::band(rows, &scene.light, view, lo);
+            let mut c = Counts::default();
+            let mut buffers = Buffers::default();
+            for &(n, (l, j0, j1)) in &by_band[b] {
+                for j in (*j0).max(lo)..=(*j1).min(hi - 1) {
+                    scanline(
+                        l,
+                        j,
+                        width,
+                        k,
+                        DEFAULT_SEGMENT_CAP,
+                        &mut rop,
+                        &mut c,
+                        &mut buffers,
+                    )
+                    .map_err(|e| ((n, j), e))?;
                 }
-                Ok((c, rop.finish()))
-            },
-        );
-        tally.add(drawn);
-        tally.frame(framebuffer, counts)
+            }
+            Ok((c, rop.finish()))
+        })
     })
 }
 
@@ -306,24 +281,14 @@ pub fn render_triangles_in_bands<R: Real>(
         let vp = view.viewport;
         let bands = bands(vp.height, threads);
         let by_band = pieces.by_band(&bands, |t| (t.bbox[2], t.bbox[3]));
-        let background = scene.background.map(crate::rop::shade::to_u8::<f64>);
-        let mut framebuffer = FrameBuffer::zeroed(vp.width, vp.height);
-        let mut tally = Tally::default();
-        let drawn = draw_bands(
-            &mut framebuffer,
-            &bands,
-            Some(background),
-            |b, lo, hi, rows| {
-                let mut rop = Rop::<R>::band(rows, &scene.light, view, lo);
-                let mut c = Counts::default();
-                for &(_, t) in &by_band[b] {
-                    rasterize_rows(t, lo, hi, &mut rop, &mut c);
-                }
-                Ok((c, rop.finish()))
-            },
-        );
-        tally.add(drawn);
-        tally.frame(framebuffer, counts)
+        in_bands(scene, view, &bands, counts, |b, lo, hi, rows| {
+            let mut rop = Rop::<R>::band(rows, &scene.light, view, lo);
+            let mut c = Counts::default();
+            for &(_, t) in &by_band[b] {
+                rasterize_rows(t, lo, hi, &mut rop, &mut c);
+            }
+            Ok((c, rop.finish()))
+        })
     })
 }
 
