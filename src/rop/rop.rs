@@ -19,7 +19,8 @@ use crate::raster::fragment::{self, FragmentSink, Span};
 use crate::raster::setup::ScreenLembo;
 use crate::raster::subsegmenter::Subsegment;
 use crate::raster::triangle::{
-    inv_w_at, perspective_lerp, ScreenTriangle, TriangleFragment, TriangleSink, WEIGHT_LANES,
+    inv_w_at, perspective_lerp, row_by_pixels, ScreenTriangle, TriangleFragment, TriangleSink,
+    WEIGHT_LANES,
 };
 
 /// Per-fragment shading (Piranda et al. 2006 equation 6) from the lembo's normal and position
@@ -452,11 +453,7 @@ impl<R: Real> TriangleSink<R> for Rop<'_, R> {
     #[inline]
     fn row(&mut self, t: &ScreenTriangle<R>, j: u32, a: u32, b: u32) {
         if R::COUNTS_OPERATIONS {
-            for i in a..b {
-                let (l, z) = t.weights(i, j);
-                self.covered(t, i, j, l, z);
-            }
-            return;
+            return row_by_pixels(self, t, j, a, b);
         }
         self.batch
             .begin_triangle(t, &self.shader, into_rows(&mut self.fb));

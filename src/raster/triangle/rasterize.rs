@@ -231,10 +231,23 @@ pub trait TriangleSink<R: Real> {
     /// works out the weights of several pixels together ([`ScreenTriangle::weights_lanes`]).
     #[inline]
     fn row(&mut self, t: &ScreenTriangle<R>, j: u32, a: u32, b: u32) {
-        for i in a..b {
-            let (l, z) = t.weights(i, j);
-            self.covered(t, i, j, l, z);
-        }
+        row_by_pixels(self, t, j, a, b);
+    }
+}
+
+/// [`TriangleSink::row`] pixel by pixel: each covered pixel `a..b` of row `j`, left to
+/// right, to [`TriangleSink::covered`] with its weights and depth.
+#[inline]
+pub fn row_by_pixels<R: Real, S: TriangleSink<R> + ?Sized>(
+    sink: &mut S,
+    t: &ScreenTriangle<R>,
+    j: u32,
+    a: u32,
+    b: u32,
+) {
+    for i in a..b {
+        let (l, z) = t.weights(i, j);
+        sink.covered(t, i, j, l, z);
     }
 }
 
