@@ -123,7 +123,7 @@ fn scanline_partition<R: Real>(
     counts: &mut Counts,
 ) -> ([R; 2], bool, Option<[R; 2]>) {
     match l.partition {
-        Partition::Monotone { a } => (a, false, None),
+        Partition::Monotone { a, .. } => (a, false, None),
         Partition::Valley { a } => (a, true, None),
         Partition::Central {
             centre,

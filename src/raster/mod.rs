@@ -334,6 +334,8 @@ fn scanline_range<R: Real>(
 
 /// The reused buffers of the scan-line stages.
 struct Buffers<R> {
+    /// The set-up piece's [`segmenter::least_reach`] for k (set per piece by [`Buffers::piece`]).
+    reach: Option<f64>,
     scratch: interval::IntervalScratch<R>,
     intervals: Vec<interval::Interval<R>>,
     segments: Vec<segmenter::Segment<R>>,
@@ -343,11 +345,23 @@ struct Buffers<R> {
 impl<R: Real> Default for Buffers<R> {
     fn default() -> Self {
         Buffers {
+            reach: None,
             scratch: Default::default(),
             intervals: Vec::new(),
             segments: Vec::new(),
             subsegments: Vec::new(),
         }
+    }
+}
+
+impl<R: Real> Buffers<R> {
+    /// Readies the buffers for the scanlines of piece `l` at tolerance `k`.
+    fn piece(&mut self, l: &setup::ScreenLembo<R>, k: R) {
+        self.reach = if R::COUNTS_OPERATIONS {
+            None
+        } else {
+            segmenter::least_reach(l, k)
+        };
     }
 }
 
@@ -365,6 +379,7 @@ fn render_lembo<R: Real, S: FragmentSink<R>>(
     let Some((j0, j1)) = scanline_range(l, height, counts) else {
         return Ok(());
     };
+    b.piece(l, k);
     for j in j0..=j1 {
         scanline(l, j, width, k, segment_cap, sink, counts, b)?;
     }
@@ -392,13 +407,13 @@ fn scanline<R: Real, S: FragmentSink<R>>(
     for iv in &b.intervals {
         b.segments.clear();
         R::charge(UnitKind::Segmenter);
-        segmenter::segments(l, j, k, iv, segment_cap, &mut b.segments, counts).map_err(|_| {
-            Error::SegmentCap {
+        segmenter::walk(l, j, k, iv, segment_cap, b.reach, &mut b.segments, counts).map_err(
+            |_| Error::SegmentCap {
                 lembo: l.id as usize,
                 scanline: j,
                 cap: segment_cap,
-            }
-        })?;
+            },
+        )?;
         for seg in &b.segments {
             b.subsegments.clear();
             R::charge(UnitKind::Subsegmenter);

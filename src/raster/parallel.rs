@@ -249,6 +249,7 @@ pub fn render_lembos_in_bands<R: Real>(
             let mut c = Counts::default();
             let mut buffers = Buffers::default();
             for &(n, (l, j0, j1)) in &by_band[b] {
+                buffers.piece(l, k);
                 for j in (*j0).max(lo)..=(*j1).min(hi - 1) {
                     scanline(
                         l,

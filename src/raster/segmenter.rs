@@ -55,6 +55,27 @@ pub fn segments<R: Real>(
     out: &mut Vec<Segment<R>>,
     counts: &mut Counts,
 ) -> Result<(), CapExceeded> {
+    let reach = if R::COUNTS_OPERATIONS {
+        None
+    } else {
+        least_reach(l, k)
+    };
+    walk(l, j, k, iv, cap, reach, out, counts)
+}
+
+/// [`segments`] with the lembo's [`least_reach`] for k computed once for all its intervals
+/// (`None`: every step is made).
+#[allow(clippy::too_many_arguments)]
+pub fn walk<R: Real>(
+    l: &ScreenLembo<R>,
+    j: u32,
+    k: R,
+    iv: &Interval<R>,
+    cap: usize,
+    reach: Option<f64>,
+    out: &mut Vec<Segment<R>>,
+    counts: &mut Counts,
+) -> Result<(), CapExceeded> {
     let first = out.len();
     if iv.straight {
         out.push(Segment {
@@ -89,9 +110,16 @@ pub fn segments<R: Real>(
         if out.len() - first >= cap {
             return Err(CapExceeded);
         }
-        let g = grad(p.uv);
-        let gn = norm(g);
-        let next = step(l, h, h_scale, eps, sigma, k, yj, p.uv, g, gn);
+        let y0 = l.y.eval(p.uv[0], p.uv[1]) - yj;
+        // Most walks of a small lembo end at the first step, past the interval end: that
+        // step is not made where it is sure to get there.
+        let next = match reach {
+            Some(r) if passes_end(r, k, y0, p.uv, iv.tau, key, iv.end_key) => None,
+            _ => {
+                let g = grad(p.uv);
+                step(h, h_scale, eps, sigma, k, y0, p.uv, g, norm(g))
+            }
+        };
         let stop = match next {
             Some(q) => {
                 let qk = dot(iv.tau, q);
@@ -250,18 +278,98 @@ fn curve_at_key<R: Real>(l: &ScreenLembo<R>, yj: R, tau: V2<R>, key: R) -> Optio
     (q[0].is_finite() && q[1].is_finite()).then_some(q)
 }
 
+/// The residual |Y(P) - y_j| up to which [`least_reach`] holds, as a fraction of k.
+const RESIDUAL_FRACTION: f64 = 0.125;
+
+/// How much looser than computed [`least_reach`] takes each of the Hessian's forms and the
+/// gradient bounds, relative to their magnitudes: many times the datapath's rounding of
+/// them.
+const LOOSE: f64 = 1e-4;
+
+/// How many times the distance to the interval end a step must be sure to reach before it is
+/// not made ([`passes_end`]).
+const REACH_MARGIN: f64 = 1.5;
+
+/// A lower bound on how far in walk key any [`step`] of k from a point of the lembo's domain
+/// reaches, where the residual there is at most [`RESIDUAL_FRACTION`] k; `None` for a
+/// partition other than [`Partition::Monotone`](super::setup::Partition) or where the bound
+/// is not positive. In `f64`, from per-lembo bounds: once per lembo ([`walk`]).
+///
+/// With a monotone partition, every gradient g of the domain has `a·g ≥ d > 0` and `|g| ≤ s`
+/// (`grad_bounds`, taken 10⁻⁴ looser for the datapath's rounding of g). So the unit
+/// gradient ĝ is within an angle θ of `a` with cos θ ≥ d / s, the unit tangent
+/// τ̂ = rot_cw(ĝ) within θ of `t = rot_cw(a)` (the walk direction `tau` of the part), the key
+/// advance per unit of α is `tau·τ̂ = a·ĝ ≥ d / s`, and β = lin / |g| ≤ (4k + 3|y0|) / d = βm.
+/// Writing τ̂ and ĝ in the basis (t, a), the Hessian's forms are bounded by its forms on t
+/// and a and sin θ: |τ̂ᵀHτ̂| ≤ At, |τ̂ᵀHĝ| ≤ Bt, |ĝᵀHĝ| ≤ Gt below. The step's α is a
+/// positive root of A α² + B α + C = 0 with |A| ≤ At, |B| ≤ 2 βm Bt and
+/// |C| ≥ 8k - 4|y0| - βm² Gt = Cm, and any positive root of such a quadratic is at least
+/// |C| / (|B| + sqrt(|A C|)) (from 2|C| / (|B| ± B + sqrt(B² ∓ 4|A C|))), which falls as |A|
+/// and |B| grow and rises with |C|. The key advances by α a·ĝ + β tau·ĝ ≥ α d / s - βm.
+// `!(x > 0)` is deliberate: it also rejects NaN.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
+pub fn least_reach<R: Real>(l: &ScreenLembo<R>, k: R) -> Option<f64> {
+    let super::setup::Partition::Monotone { a, grad_bounds } = l.partition else {
+        return None;
+    };
+    let (h0, h1, h2) = (l.hessian.0.f64(), l.hessian.1.f64(), l.hessian.2.f64());
+    let m = h0.abs() + 2.0 * h1.abs() + h2.abs();
+    let slack = LOOSE * (grad_bounds[1] + m);
+    let (d, s) = (grad_bounds[0] - slack, grad_bounds[1] + slack);
+    if !(d > 0.01 * s && m.is_finite()) {
+        return None;
+    }
+    let a = [a[0].f64(), a[1].f64()];
+    let t = [a[1], -a[0]];
+    let form = |p: [f64; 2], q: [f64; 2]| {
+        (h0 * p[0] * q[0] + h1 * (p[0] * q[1] + p[1] * q[0]) + h2 * p[1] * q[1]).abs() + LOOSE * m
+    };
+    let (htt, hta, haa) = (form(t, t), form(t, a), form(a, a));
+    let sin = (1.0 - (d / s) * (d / s)).max(0.0).sqrt() * (1.0 + LOOSE);
+    let at = htt + 2.0 * sin * hta + sin * sin * haa;
+    let bt = hta * (1.0 + sin * sin) + sin * (htt + haa);
+    let gt = haa + 2.0 * sin * hta + sin * sin * htt;
+    let k = k.f64();
+    let y0 = RESIDUAL_FRACTION * k;
+    let beta = (4.0 * k + 3.0 * y0) / d;
+    let c = 8.0 * k - 4.0 * y0 - beta * beta * gt;
+    if !(c > 0.0) {
+        return None;
+    }
+    let alpha = c / (2.0 * beta * bt + (at * c).sqrt());
+    let reach = alpha * d / s - beta * (1.0 + LOOSE);
+    (reach > 0.0).then_some(reach)
+}
+
+/// Whether the step from `p` (residual `y0`, walk key `key`) is sure to reach at least
+/// [`REACH_MARGIN`] times as far as the interval end `end_key` when every step of the lembo
+/// reaches `reach` ([`least_reach`]), so that the walk would refuse it. The margin and 64
+/// units in the last place of the keys cover the datapath's rounding of the step: at most
+/// about sqrt(ε) relative, where its quadratic has a double root, and far less elsewhere.
+/// `tests::a_step_sure_to_pass_the_end_is_one_the_walk_refuses` checks on random lembos that
+/// every walk is the same with and without the skip, and that each skipped first step would
+/// have been refused.
+#[inline]
+fn passes_end<R: Real>(reach: f64, k: R, y0: R, p: V2<R>, tau: V2<R>, key: R, end_key: R) -> bool {
+    let rounding = 64.0
+        * R::epsilon().f64()
+        * (tau[0].f64().abs() + tau[1].f64().abs())
+        * (1.0 + p[0].f64().abs() + p[1].f64().abs());
+    y0.f64().abs() <= RESIDUAL_FRACTION * k.f64()
+        && REACH_MARGIN * (end_key.f64() - key.f64()) + rounding <= reach
+}
+
 /// One step of the extreme method from `p`, or `None` when it has no finite forward solution.
 // `!(gn > 0)` is deliberate: it also rejects NaN.
 #[allow(clippy::too_many_arguments, clippy::neg_cmp_op_on_partial_ord)]
 #[inline]
 fn step<R: Real>(
-    l: &ScreenLembo<R>,
     h: (R, R, R),
     h_scale: R,
     eps: R,
     sigma: R,
     k: R,
-    yj: R,
+    y0: R,
     p: V2<R>,
     g: V2<R>,
     gn: R,
@@ -278,7 +386,6 @@ fn step<R: Real>(
     }
     let htg = quad_form(h, th, gh);
     let hgg = quad_form(h, gh, gh);
-    let y0 = l.y.eval(p[0], p[1]) - yj;
     let four = R::of(4.0);
     let lin = four * sigma * k - R::of(3.0) * y0; // ∇Y·s
     let quad = -R::of(8.0) * sigma * k + four * y0; // sᵀHs
@@ -364,6 +471,106 @@ mod tests {
             assert!(y_error(&l, 40, s.p0.uv) < tol, "{s:?}");
         }
         assert_eq!(chain.last().unwrap().p1.uv, chain[0].p0.uv);
+    }
+
+    /// A lembo of the test view with random screen quadratics: linear parts of up to 90
+    /// pixels and curved parts of up to `bend` pixels; `None` when setup drops it.
+    fn random_lembo<R: Real>(seed: &mut u64, bend: f64) -> Option<ScreenLembo<R>> {
+        let mut next = || {
+            *seed ^= *seed << 13;
+            *seed ^= *seed >> 7;
+            *seed ^= *seed << 17;
+            (*seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut q = |f: f64| {
+            let curve = [0; 3].map(|_| (2.0 * next() - 1.0) * bend);
+            let linear = [0; 2].map(|_| (2.0 * next() - 1.0) * 90.0);
+            quad(curve[0], curve[1], curve[2], linear[0], linear[1], f)
+        };
+        let (x, y) = (q(64.0), q(64.0));
+        crate::raster::setup::setup::<R>(
+            0,
+            &crate::raster::setup::tests::lembo_on_screen(x, y),
+            [0.8; 3],
+            &crate::raster::setup::tests::view(),
+        )
+        .ok()
+    }
+
+    /// On every interval of random lembos, in both datapaths and at three tolerances: the
+    /// walk gives the same segments and counts whether or not steps sure to pass the end are
+    /// skipped, and where a walk's first step is skipped, the step made there would indeed
+    /// have been refused. The skip must be taken on a good share of these lembos' intervals
+    /// (which are larger than a tessellated mesh's; 60 % of the bunny's are skipped), so
+    /// that the claim is tested.
+    fn skipped_steps_are_refused<R: Real>() {
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let (mut intervals_seen, mut skipped) = (0u64, 0u64);
+        for n in 0..400 {
+            let bend = [2.0, 10.0, 40.0, 200.0][n % 4];
+            let Some(l) = random_lembo::<R>(&mut seed, bend) else {
+                continue;
+            };
+            for k in [0.05, 0.5, 2.0] {
+                let k = R::of(k);
+                let reach = least_reach(&l, k);
+                let mut scratch = IntervalScratch::default();
+                for j in 0..crate::raster::setup::tests::SIDE {
+                    let (mut ivs, mut counts) = (Vec::new(), Counts::default());
+                    intervals(&l, j, k, &mut scratch, &mut ivs, &mut counts);
+                    for iv in ivs.iter().filter(|iv| !iv.straight) {
+                        intervals_seen += 1;
+                        let walked = |reach| {
+                            let (mut out, mut counts) = (Vec::new(), Counts::default());
+                            let cap = DEFAULT_SEGMENT_CAP;
+                            walk(&l, j, k, iv, cap, reach, &mut out, &mut counts)
+                                .expect("under the cap");
+                            (out, counts)
+                        };
+                        assert_eq!(walked(None), walked(reach), "lembo {n}, scanline {j}");
+                        let yj = R::of(j as f64 + 0.5);
+                        let p = iv.start.uv;
+                        let y0 = l.y.eval(p[0], p[1]) - yj;
+                        let key = dot(iv.tau, p);
+                        let Some(r) = reach else { continue };
+                        if !passes_end(r, k, y0, p, iv.tau, key, iv.end_key) {
+                            continue;
+                        }
+                        skipped += 1;
+                        let h = l.hessian;
+                        let h_scale = h.0.abs().max(h.1.abs()).max(h.2.abs());
+                        let (gu, gv) = l.y.grad(p[0], p[1]);
+                        let t0 = rot_cw([gu, gv]);
+                        let sigma = if quad_form(h, t0, t0) > R::zero() {
+                            -R::one()
+                        } else {
+                            R::one()
+                        };
+                        let eps = R::epsilon() * R::of(64.0);
+                        let g = [gu, gv];
+                        if let Some(q) = step(h, h_scale, eps, sigma, k, y0, p, g, norm(g)) {
+                            let qk = dot(iv.tau, q);
+                            assert!(
+                                qk >= iv.end_key || qk <= key,
+                                "lembo {n}, scanline {j}: a skipped step ends inside the \
+                                 interval ({key:?} < {qk:?} < {:?})",
+                                iv.end_key
+                            );
+                        }
+                    }
+                }
+            }
+        }
+        assert!(
+            skipped * 10 > intervals_seen,
+            "{skipped} of {intervals_seen} first steps skipped"
+        );
+    }
+
+    #[test]
+    fn a_step_sure_to_pass_the_end_is_one_the_walk_refuses() {
+        skipped_steps_are_refused::<f32>();
+        skipped_steps_are_refused::<f64>();
     }
 
     #[test]

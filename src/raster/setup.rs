@@ -57,6 +57,10 @@ pub enum Partition<R> {
     Monotone {
         /// The walk axis.
         a: V2<R>,
+        /// The least `a·∇Y` and the largest `|∇Y|` at the domain's corners, in `f64`: as
+        /// ∇Y is affine, they bound it over the whole domain (the segmenter's
+        /// `least_reach`).
+        grad_bounds: [f64; 2],
     },
     /// `∇Y` vanishes at an isolated point of the domain (an interior extremum if `det > 0`,
     /// a saddle if `det < 0`): the domain is split by the line `a·∇Y = 0`, with `a` chosen per
@@ -521,8 +525,21 @@ pub fn partition<R: Real>(y: &Quadratic<R>) -> Partition<R> {
     if let Some(c) = closest_to_origin(g) {
         let d = norm(c);
         if d > eps * scale {
+            let a = [c[0] / d, c[1] / d];
+            let (a0, a1) = (a[0].f64(), a[1].f64());
+            let along = g.map(|[gu, gv]| a0 * gu.f64() + a1 * gv.f64());
+            let length = g.map(|[gu, gv]| gu.f64().hypot(gv.f64()));
+            let finite = along.iter().chain(&length).all(|x| x.is_finite());
             return Partition::Monotone {
-                a: [c[0] / d, c[1] / d],
+                a,
+                grad_bounds: if finite {
+                    [
+                        along[0].min(along[1]).min(along[2]),
+                        length[0].max(length[1]).max(length[2]),
+                    ]
+                } else {
+                    [f64::NAN; 2]
+                },
             };
         }
     }
@@ -789,7 +806,7 @@ pub(crate) mod tests {
     fn partition_is_monotone_when_the_gradient_keeps_a_side() {
         // y = 10u + 3v + 2u²: gradient (10 + 4u, 3), never zero.
         match partition(&quad(2.0, 0.0, 0.0, 10.0, 3.0, 0.0)) {
-            Partition::Monotone { a } => {
+            Partition::Monotone { a, .. } => {
                 for (u, v) in [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (0.3, 0.3)] {
                     let (gu, gv) = quad(2.0, 0.0, 0.0, 10.0, 3.0, 0.0).grad(u, v);
                     assert!(a[0] * gu + a[1] * gv > 0.0);
