@@ -81,6 +81,7 @@ pub struct IntervalScratch<R> {
 }
 
 /// Appends the intervals of scanline `j` to `out`.
+#[inline(always)]
 pub fn intervals<R: Real>(
     l: &ScreenLembo<R>,
     j: u32,

@@ -21,7 +21,7 @@
 use super::setup::ScreenLembo;
 use super::triangle::{rasterize_rows, setup as setup_triangle, ScreenTriangle, TriangleSource};
 use super::{
-    scanline, scanline_range, set_up, Buffers, Counts, Frame, Tolerance, DEFAULT_SEGMENT_CAP,
+    scanline_range, scanlines, set_up, Buffers, Counts, Frame, Tolerance, DEFAULT_SEGMENT_CAP,
 };
 use crate::camera::View;
 use crate::datapath::Real;
@@ -249,20 +249,18 @@ pub fn render_lembos_in_bands<R: Real>(
             let mut c = Counts::default();
             let mut buffers = Buffers::default();
             for &(n, (l, j0, j1)) in &by_band[b] {
-                buffers.piece(l, k);
-                for j in (*j0).max(lo)..=(*j1).min(hi - 1) {
-                    scanline(
-                        l,
-                        j,
-                        width,
-                        k,
-                        DEFAULT_SEGMENT_CAP,
-                        &mut rop,
-                        &mut c,
-                        &mut buffers,
-                    )
-                    .map_err(|e| ((n, j), e))?;
-                }
+                scanlines(
+                    l,
+                    (*j0).max(lo),
+                    (*j1).min(hi - 1),
+                    width,
+                    k,
+                    DEFAULT_SEGMENT_CAP,
+                    &mut rop,
+                    &mut c,
+                    &mut buffers,
+                )
+                .map_err(|(j, e)| ((n, j), e))?;
             }
             Ok((c, rop.finish()))
         })

@@ -66,6 +66,7 @@ pub fn segments<R: Real>(
 /// [`segments`] with the lembo's [`least_reach`] for k computed once for all its intervals
 /// (`None`: every step is made).
 #[allow(clippy::too_many_arguments)]
+#[inline(always)]
 pub fn walk<R: Real>(
     l: &ScreenLembo<R>,
     j: u32,

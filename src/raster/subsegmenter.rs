@@ -31,6 +31,7 @@ pub struct Subsegment<R> {
 pub const MAX_SUBSEGMENTS_PER_SEGMENT: u32 = 1 << 15;
 
 /// Appends the subsegments of `seg` to `out`.
+#[inline(always)]
 pub fn subsegments<R: Real>(
     l: &ScreenLembo<R>,
     seg: &Segment<R>,
