@@ -450,7 +450,7 @@ impl<R: Real> TriangleSink<R> for Rop<'_, R> {
 
     /// The row's weights and depths [`WEIGHT_LANES`] pixels at a time (the same values as
     /// pixel by pixel), then the depth test of each pixel in turn.
-    #[inline]
+    #[inline(always)]
     fn row(&mut self, t: &ScreenTriangle<R>, j: u32, a: u32, b: u32) {
         if R::COUNTS_OPERATIONS {
             return row_by_pixels(self, t, j, a, b);
