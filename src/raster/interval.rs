@@ -81,7 +81,6 @@ pub struct IntervalScratch<R> {
 }
 
 /// Appends the intervals of scanline `j` to `out`.
-#[inline(always)]
 pub fn intervals<R: Real>(
     l: &ScreenLembo<R>,
     j: u32,

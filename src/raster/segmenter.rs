@@ -45,7 +45,7 @@ fn quad_form<R: Real>(h: (R, R, R), s: V2<R>, t: V2<R>) -> R {
     h.0 * s[0] * t[0] + h.1 * (s[0] * t[1] + s[1] * t[0]) + h.2 * s[1] * t[1]
 }
 
-/// Appends the segments of `iv` to `out`.
+/// Appends the segments of `iv` to `out`, making every step.
 pub fn segments<R: Real>(
     l: &ScreenLembo<R>,
     j: u32,
@@ -55,16 +55,12 @@ pub fn segments<R: Real>(
     out: &mut Vec<Segment<R>>,
     counts: &mut Counts,
 ) -> Result<(), CapExceeded> {
-    let reach = if R::COUNTS_OPERATIONS {
-        None
-    } else {
-        least_reach(l, k)
-    };
-    walk(l, j, k, iv, cap, reach, out, counts)
+    walk(l, j, k, iv, cap, None, out, counts)
 }
 
-/// [`segments`] with the lembo's [`least_reach`] for k computed once for all its intervals
-/// (`None`: every step is made).
+/// [`segments`], given the lembo's [`least_reach`] for k (worked out once for all its
+/// intervals): a step sure to reach past the interval end is not made, which changes no
+/// segment (`None`: every step is made).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub fn walk<R: Real>(
@@ -313,6 +309,7 @@ pub fn least_reach<R: Real>(l: &ScreenLembo<R>, k: R) -> Option<f64> {
     let super::setup::Partition::Monotone { a, grad_bounds } = l.partition else {
         return None;
     };
+    let grad_bounds = grad_bounds.map(R::f64);
     let (h0, h1, h2) = (l.hessian.0.f64(), l.hessian.1.f64(), l.hessian.2.f64());
     let m = h0.abs() + 2.0 * h1.abs() + h2.abs();
     let slack = LOOSE * (grad_bounds[1] + m);

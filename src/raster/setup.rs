@@ -57,10 +57,10 @@ pub enum Partition<R> {
     Monotone {
         /// The walk axis.
         a: V2<R>,
-        /// The least `a·∇Y` and the largest `|∇Y|` at the domain's corners, in `f64`: as
-        /// ∇Y is affine, they bound it over the whole domain (the segmenter's
-        /// `least_reach`).
-        grad_bounds: [f64; 2],
+        /// The least `a·∇Y` and the largest `|∇Y|` at the domain's corners (worked out in
+        /// `f64`): as ∇Y is affine, they bound it over the whole domain (the segmenter's
+        /// `least_reach`, which allows for their rounding).
+        grad_bounds: [R; 2],
     },
     /// `∇Y` vanishes at an isolated point of the domain (an interior extremum if `det > 0`,
     /// a saddle if `det < 0`): the domain is split by the line `a·∇Y = 0`, with `a` chosen per
@@ -534,11 +534,11 @@ pub fn partition<R: Real>(y: &Quadratic<R>) -> Partition<R> {
                 a,
                 grad_bounds: if finite {
                     [
-                        along[0].min(along[1]).min(along[2]),
-                        length[0].max(length[1]).max(length[2]),
+                        R::of(along[0].min(along[1]).min(along[2])),
+                        R::of(length[0].max(length[1]).max(length[2])),
                     ]
                 } else {
-                    [f64::NAN; 2]
+                    [R::nan(); 2]
                 },
             };
         }
