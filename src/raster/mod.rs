@@ -383,9 +383,11 @@ fn render_lembo<R: Real, S: FragmentSink<R>>(
 }
 
 /// The scan-line stages after minmax for scanlines `j0..=j1` of one set-up lembo or piece;
-/// an error comes with the scanline it was met on. On an x86-64 CPU with AVX2 the stages are
-/// compiled for it (three-operand instructions, rounding inline): the same IEEE operations in
-/// the same order, so the same bits.
+/// an error comes with the scanline it was met on. On an x86-64 CPU with AVX2 the stages
+/// from the segmenter on, and the ROP's depth tests, are compiled for it (three-operand
+/// instructions, rounding inline): the same IEEE operations in the same order, so the same
+/// bits. The interval manager stays a call to its baseline-compiled function: inlined here
+/// it ran slower.
 #[allow(clippy::too_many_arguments)]
 fn scanlines<R: Real, S: FragmentSink<R>>(
     l: &setup::ScreenLembo<R>,
