@@ -334,8 +334,6 @@ fn scanline_range<R: Real>(
 
 /// The reused buffers of the scan-line stages.
 struct Buffers<R> {
-    /// The set-up piece's [`segmenter::least_reach`] for k (set per piece by [`Buffers::piece`]).
-    reach: Option<f64>,
     scratch: interval::IntervalScratch<R>,
     intervals: Vec<interval::Interval<R>>,
     segments: Vec<segmenter::Segment<R>>,
@@ -345,23 +343,11 @@ struct Buffers<R> {
 impl<R: Real> Default for Buffers<R> {
     fn default() -> Self {
         Buffers {
-            reach: None,
             scratch: Default::default(),
             intervals: Vec::new(),
             segments: Vec::new(),
             subsegments: Vec::new(),
         }
-    }
-}
-
-impl<R: Real> Buffers<R> {
-    /// Readies the buffers for the scanlines of piece `l` at tolerance `k`.
-    fn piece(&mut self, l: &setup::ScreenLembo<R>, k: R) {
-        self.reach = if R::COUNTS_OPERATIONS {
-            None
-        } else {
-            segmenter::least_reach(l, k)
-        };
     }
 }
 
@@ -383,11 +369,12 @@ fn render_lembo<R: Real, S: FragmentSink<R>>(
 }
 
 /// The scan-line stages after minmax for scanlines `j0..=j1` of one set-up lembo or piece;
-/// an error comes with the scanline it was met on. On an x86-64 CPU with AVX2 the stages
-/// from the segmenter on, and the ROP's depth tests, are compiled for it (three-operand
-/// instructions, rounding inline): the same IEEE operations in the same order, so the same
-/// bits. The interval manager stays a call to its baseline-compiled function: inlined here
-/// it ran slower.
+/// an error comes with the scanline it was met on. On an x86-64 CPU with AVX2 the stages the
+/// compiler inlines here (the segmenter's walk, the subsegmenter, the fragment rasterizer's
+/// spans) are compiled for it (three-operand instructions, rounding inline): the same IEEE
+/// operations in the same order, so the same bits. What stays a call runs as compiled for
+/// the baseline: the interval manager (inlined here it ran slower), the segmenter's step
+/// and closing chords, and the sink's span where it is not inlined.
 #[allow(clippy::too_many_arguments)]
 fn scanlines<R: Real, S: FragmentSink<R>>(
     l: &setup::ScreenLembo<R>,
@@ -443,15 +430,22 @@ fn scanlines_as_compiled<R: Real, S: FragmentSink<R>>(
     counts: &mut Counts,
     b: &mut Buffers<R>,
 ) -> std::result::Result<(), (u32, Error)> {
-    b.piece(l, k);
+    // The piece's bound on a step's reach, for all its intervals (a counting datapath makes
+    // every step, for its counts).
+    let reach = if R::COUNTS_OPERATIONS {
+        None
+    } else {
+        segmenter::least_reach(l, k)
+    };
     for j in j0..=j1 {
-        scanline(l, j, width, k, segment_cap, sink, counts, b).map_err(|e| (j, e))?;
+        scanline(l, j, width, k, segment_cap, reach, sink, counts, b).map_err(|e| (j, e))?;
     }
     Ok(())
 }
 
 /// The scan-line stages after minmax (interval manager to fragment) for scanline `j` of one
-/// set-up lembo or piece. Scanline j's fragments are all in row j.
+/// set-up lembo or piece, whose steps reach at least `reach` ([`segmenter::walk`]).
+/// Scanline j's fragments are all in row j.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn scanline<R: Real, S: FragmentSink<R>>(
@@ -460,6 +454,7 @@ fn scanline<R: Real, S: FragmentSink<R>>(
     width: u32,
     k: R,
     segment_cap: usize,
+    reach: Option<f64>,
     sink: &mut S,
     counts: &mut Counts,
     b: &mut Buffers<R>,
@@ -471,7 +466,7 @@ fn scanline<R: Real, S: FragmentSink<R>>(
     for iv in &b.intervals {
         b.segments.clear();
         R::charge(UnitKind::Segmenter);
-        segmenter::walk(l, j, k, iv, segment_cap, b.reach, &mut b.segments, counts).map_err(
+        segmenter::walk(l, j, k, iv, segment_cap, reach, &mut b.segments, counts).map_err(
             |_| Error::SegmentCap {
                 lembo: l.id as usize,
                 scanline: j,
@@ -631,6 +626,15 @@ mod tests {
     use super::*;
     use crate::raster::subsegmenter::Subsegment;
 
+    /// The shipped scene at `path` (from the crate's root) on a 384x384 viewport, and its view.
+    fn shipped(path: &str) -> (Scene, View) {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(path);
+        let mut scene = Scene::load(&path).expect("a shipped scene");
+        scene.set_viewport(384, 384).expect("a valid viewport");
+        let view = View::new(&scene.camera, scene.viewport);
+        (scene, view)
+    }
+
     /// Every fragment as the bits of (i, j, u, v, z).
     #[derive(Default, PartialEq, Debug)]
     struct Bits(Vec<[u64; 5]>);
@@ -655,10 +659,7 @@ mod tests {
     /// fragments and counts of the stages compiled for the baseline instruction set, bit for
     /// bit, on every lembo of the bunny and of the default scene, in both datapaths.
     fn dispatched_as_compiled<R: Real>(scene: &str) {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(scene);
-        let mut scene = Scene::load(&path).expect("a shipped scene");
-        scene.set_viewport(384, 384).expect("a valid viewport");
-        let view = View::new(&scene.camera, scene.viewport);
+        let (scene, view) = shipped(scene);
         let tol = Tolerance::new(0.5);
         let k = R::of(tol.k);
         let (mut pieces, mut counts) = (Vec::new(), Counts::default());
@@ -695,10 +696,7 @@ mod tests {
     /// bit, through the functional ROP, for the bunny tessellated once and twice, in both
     /// datapaths.
     fn triangle_rows_as_compiled<R: Real>(level: u32) {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("traces/bunny.json");
-        let mut scene = Scene::load(&path).expect("a shipped scene");
-        scene.set_viewport(384, 384).expect("a valid viewport");
-        let view = View::new(&scene.camera, scene.viewport);
+        let (scene, view) = shipped("traces/bunny.json");
         let tessellation = crate::lembo::tessellate::Tessellation::new(&scene, level);
         let source: &dyn TriangleSource = &tessellation;
         let [dispatched, compiled] = [true, false].map(|dispatched| {

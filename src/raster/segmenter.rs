@@ -86,20 +86,13 @@ pub fn walk<R: Real>(
     let h = l.hessian;
     let h_scale = h.0.abs().max(h.1.abs()).max(h.2.abs());
     let eps = R::epsilon() * R::of(64.0);
-    let (zero, one) = (R::zero(), R::one());
+    let one = R::one();
 
     let grad = |p: V2<R>| {
         let (gu, gv) = l.y.grad(p[0], p[1]);
         [gu, gv]
     };
-    // Sign of k from the curvature at the start.
-    let g0 = grad(iv.start.uv);
-    let t0 = rot_cw(g0);
-    let sigma = if quad_form(h, t0, t0) > zero {
-        -one
-    } else {
-        one
-    };
+    let sigma = walk_sign(h, grad(iv.start.uv));
 
     let mut p = iv.start;
     let mut key = dot(iv.tau, p.uv);
@@ -275,6 +268,18 @@ fn curve_at_key<R: Real>(l: &ScreenLembo<R>, yj: R, tau: V2<R>, key: R) -> Optio
     (q[0].is_finite() && q[1].is_finite()).then_some(q)
 }
 
+/// The sign of k in the steps of a walk, from the curvature `τᵀHτ` along the walk direction
+/// `τ = rot_cw(g)` at its start (where ∇Y = `g`).
+#[inline]
+fn walk_sign<R: Real>(h: (R, R, R), g: V2<R>) -> R {
+    let t = rot_cw(g);
+    if quad_form(h, t, t) > R::zero() {
+        -R::one()
+    } else {
+        R::one()
+    }
+}
+
 /// The residual |Y(P) - y_j| up to which [`least_reach`] holds, as a fraction of k.
 const RESIDUAL_FRACTION: f64 = 0.125;
 
@@ -319,9 +324,7 @@ pub fn least_reach<R: Real>(l: &ScreenLembo<R>, k: R) -> Option<f64> {
     }
     let a = [a[0].f64(), a[1].f64()];
     let t = [a[1], -a[0]];
-    let form = |p: [f64; 2], q: [f64; 2]| {
-        (h0 * p[0] * q[0] + h1 * (p[0] * q[1] + p[1] * q[0]) + h2 * p[1] * q[1]).abs() + LOOSE * m
-    };
+    let form = |p: [f64; 2], q: [f64; 2]| quad_form((h0, h1, h2), p, q).abs() + LOOSE * m;
     let (htt, hta, haa) = (form(t, t), form(t, a), form(a, a));
     let sin = (1.0 - (d / s) * (d / s)).max(0.0).sqrt() * (1.0 + LOOSE);
     let at = htt + 2.0 * sin * hta + sin * sin * haa;
@@ -535,17 +538,13 @@ mod tests {
                             continue;
                         }
                         skipped += 1;
+                        // The walk's first step, with the walk's constants.
                         let h = l.hessian;
                         let h_scale = h.0.abs().max(h.1.abs()).max(h.2.abs());
-                        let (gu, gv) = l.y.grad(p[0], p[1]);
-                        let t0 = rot_cw([gu, gv]);
-                        let sigma = if quad_form(h, t0, t0) > R::zero() {
-                            -R::one()
-                        } else {
-                            R::one()
-                        };
                         let eps = R::epsilon() * R::of(64.0);
+                        let (gu, gv) = l.y.grad(p[0], p[1]);
                         let g = [gu, gv];
+                        let sigma = walk_sign(h, g);
                         if let Some(q) = step(h, h_scale, eps, sigma, k, y0, p, g, norm(g)) {
                             let qk = dot(iv.tau, q);
                             assert!(
