@@ -457,6 +457,9 @@ impl<R: Real> TriangleSink<R> for Rop<'_, R> {
         }
         self.batch
             .begin_triangle(t, &self.shader, into_rows(&mut self.fb));
+        // The pixels two rows down, which the next row pair's same row will most likely test.
+        self.fb.prefetch(a, j + 2 - self.row0);
+        self.fb.prefetch(b - 1, j + 2 - self.row0);
         let edges = t.row_edges(j);
         for i in (a..b).step_by(WEIGHT_LANES) {
             let (l, z) = t.weights_lanes(&edges, i);
