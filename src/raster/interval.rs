@@ -108,6 +108,21 @@ pub fn intervals<R: Real>(
     // The partition for this scanline: axis `a`, whether the domain is split, the saddle.
     let (a, split, saddle) = scanline_partition(l, yj, k, xs, counts);
     sort_crossings(l, a, split, xs);
+    // Most scanlines of a small lembo: an entry, then an exit of the same part, and no
+    // saddle. Their interval, as `pair_crossings` would pair them, without its loop.
+    if let ([p, q], None) = (&xs[..], saddle) {
+        if p.entry && !q.entry && p.part == q.part {
+            out.push(Interval {
+                start: p.p,
+                end: q.p,
+                tau: part_tau(a, p.part),
+                end_key: q.key,
+                straight: false,
+            });
+            counts.intervals += 1;
+            return;
+        }
+    }
     pair_crossings(l, a, saddle, xs, out, counts);
 }
 
@@ -448,6 +463,57 @@ mod tests {
             &mut counts,
         );
         (out, counts)
+    }
+
+    /// On every scanline of random lembos (from nearly flat to folded: monotone, valley,
+    /// extremum and saddle partitions), in both datapaths: `intervals`, which pairs an entry
+    /// followed by an exit without the pairing loop, gives the intervals and counts that the
+    /// loop gives; and both ways are taken.
+    fn shortcut_pairs_as_the_loop<R: Real>() {
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let (mut shortcut, mut looped) = (0, 0);
+        for n in 0..300 {
+            let bend = [2.0, 10.0, 40.0, 200.0][n % 4];
+            let Some(l) = crate::raster::setup::tests::random_lembo::<R>(&mut seed, bend) else {
+                continue;
+            };
+            for k in [0.05, 2.0] {
+                for j in 0..crate::raster::setup::tests::SIDE {
+                    let (got, got_counts) = run(&l, j, k);
+                    let (k, yj) = (R::of(k), R::of(j as f64 + 0.5));
+                    let (mut want, mut counts) = (Vec::new(), Counts::default());
+                    let mut xs = Vec::new();
+                    for e in 0..3 {
+                        edge_crossings(&l, e, yj, |p, entry| {
+                            xs.push(Crossing {
+                                p,
+                                entry,
+                                part: 1,
+                                is_virtual: false,
+                                key: R::zero(),
+                            })
+                        });
+                    }
+                    counts.edge_roots += xs.len() as u64;
+                    let (a, split, saddle) = scanline_partition(&l, yj, k, &mut xs, &mut counts);
+                    sort_crossings(&l, a, split, &mut xs);
+                    match (&xs[..], saddle) {
+                        ([p, q], None) if p.entry && !q.entry && p.part == q.part => shortcut += 1,
+                        ([], _) => {}
+                        _ => looped += 1,
+                    }
+                    pair_crossings(&l, a, saddle, &mut xs, &mut want, &mut counts);
+                    assert_eq!((got, got_counts), (want, counts), "lembo {n}, scanline {j}");
+                }
+            }
+        }
+        assert!(shortcut > 1000 && looped > 1000, "{shortcut} {looped}");
+    }
+
+    #[test]
+    fn an_entry_then_an_exit_is_paired_as_by_the_loop() {
+        shortcut_pairs_as_the_loop::<f32>();
+        shortcut_pairs_as_the_loop::<f64>();
     }
 
     /// The roots of scanline `j` on each domain edge.

@@ -474,30 +474,6 @@ mod tests {
         assert_eq!(chain.last().unwrap().p1.uv, chain[0].p0.uv);
     }
 
-    /// A lembo of the test view with random screen quadratics: linear parts of up to 90
-    /// pixels and curved parts of up to `bend` pixels; `None` when setup drops it.
-    fn random_lembo<R: Real>(seed: &mut u64, bend: f64) -> Option<ScreenLembo<R>> {
-        let mut next = || {
-            *seed ^= *seed << 13;
-            *seed ^= *seed >> 7;
-            *seed ^= *seed << 17;
-            (*seed >> 11) as f64 / (1u64 << 53) as f64
-        };
-        let mut q = |f: f64| {
-            let curve = [0; 3].map(|_| (2.0 * next() - 1.0) * bend);
-            let linear = [0; 2].map(|_| (2.0 * next() - 1.0) * 90.0);
-            quad(curve[0], curve[1], curve[2], linear[0], linear[1], f)
-        };
-        let (x, y) = (q(64.0), q(64.0));
-        crate::raster::setup::setup::<R>(
-            0,
-            &crate::raster::setup::tests::lembo_on_screen(x, y),
-            [0.8; 3],
-            &crate::raster::setup::tests::view(),
-        )
-        .ok()
-    }
-
     /// On every interval of random lembos, in both datapaths and at three tolerances: the
     /// walk gives the same segments and counts whether or not steps sure to pass the end are
     /// skipped, and where a walk's first step is skipped, the step made there would indeed
@@ -509,7 +485,7 @@ mod tests {
         let (mut intervals_seen, mut skipped) = (0u64, 0u64);
         for n in 0..400 {
             let bend = [2.0, 10.0, 40.0, 200.0][n % 4];
-            let Some(l) = random_lembo::<R>(&mut seed, bend) else {
+            let Some(l) = crate::raster::setup::tests::random_lembo::<R>(&mut seed, bend) else {
                 continue;
             };
             for k in [0.05, 0.5, 2.0] {

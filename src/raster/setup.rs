@@ -646,6 +646,24 @@ pub(crate) mod tests {
         Quadratic { a, b, c, d, e, f }
     }
 
+    /// A lembo of the test view with random screen quadratics: linear parts of up to 90
+    /// pixels and curved parts of up to `bend` pixels; `None` when setup drops it.
+    pub(crate) fn random_lembo<R: Real>(seed: &mut u64, bend: f64) -> Option<ScreenLembo<R>> {
+        let mut next = || {
+            *seed ^= *seed << 13;
+            *seed ^= *seed >> 7;
+            *seed ^= *seed << 17;
+            (*seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut q = |f: f64| {
+            let curve = [0; 3].map(|_| (2.0 * next() - 1.0) * bend);
+            let linear = [0; 2].map(|_| (2.0 * next() - 1.0) * 90.0);
+            quad(curve[0], curve[1], curve[2], linear[0], linear[1], f)
+        };
+        let (x, y) = (q(64.0), q(64.0));
+        setup::<R>(0, &lembo_on_screen(x, y), [0.8; 3], &view()).ok()
+    }
+
     /// Side of the test viewport \[pixels\].
     pub(crate) const SIDE: u32 = 128;
 
