@@ -493,6 +493,7 @@ impl<R: Real> FragmentSink<R> for Rop<'_, R> {
         self.batch
             .begin_lembo(l, &self.shader, into_rows(&mut self.fb));
         self.fb.prefetch(span.i0, j + 1 - self.row0);
+        self.fb.prefetch(span.i1 - 1, j + 1 - self.row0);
         span.walk(|i, u, v| self.test(l.id, i, j, l.z.eval(u, v), [u, v]));
     }
 }
