@@ -91,6 +91,31 @@ pub fn intervals<R: Real>(
 ) {
     let yj = R::of(j as f64 + 0.5);
     let xs = &mut scratch.crossings;
+    edge_roots_of(l, yj, xs);
+    counts.edge_roots += xs.len() as u64;
+
+    // The partition for this scanline: axis `a`, whether the domain is split, the saddle.
+    let (a, split, saddle) = scanline_partition(l, yj, k, xs, counts);
+    sort_crossings(l, a, split, xs);
+    // Their interval, as `pair_crossings` would pair them, without its loop.
+    if let Some((p, q)) = entry_then_exit(xs, saddle) {
+        out.push(Interval {
+            start: p.p,
+            end: q.p,
+            tau: part_tau(a, p.part),
+            end_key: q.key,
+            straight: false,
+        });
+        counts.intervals += 1;
+        return;
+    }
+    pair_crossings(l, a, saddle, xs, out, counts);
+}
+
+/// The roots of the scanline at `yj` on the three domain edges, in edge order, into `xs`
+/// (cleared first).
+#[inline]
+fn edge_roots_of<R: Real>(l: &ScreenLembo<R>, yj: R, xs: &mut Vec<Crossing<R>>) {
     xs.clear();
     for e in 0..3 {
         edge_crossings(l, e, yj, |p, entry| {
@@ -103,27 +128,19 @@ pub fn intervals<R: Real>(
             })
         });
     }
-    counts.edge_roots += xs.len() as u64;
+}
 
-    // The partition for this scanline: axis `a`, whether the domain is split, the saddle.
-    let (a, split, saddle) = scanline_partition(l, yj, k, xs, counts);
-    sort_crossings(l, a, split, xs);
-    // Most scanlines of a small lembo: an entry, then an exit of the same part, and no
-    // saddle. Their interval, as `pair_crossings` would pair them, without its loop.
-    if let ([p, q], None) = (&xs[..], saddle) {
-        if p.entry && !q.entry && p.part == q.part {
-            out.push(Interval {
-                start: p.p,
-                end: q.p,
-                tau: part_tau(a, p.part),
-                end_key: q.key,
-                straight: false,
-            });
-            counts.intervals += 1;
-            return;
-        }
+/// The entry and the exit, when the sorted crossings `xs` are one entry followed by one
+/// exit of the same part and there is no saddle: most scanlines of a small lembo.
+#[inline]
+fn entry_then_exit<R: Real>(
+    xs: &[Crossing<R>],
+    saddle: Option<[R; 2]>,
+) -> Option<(&Crossing<R>, &Crossing<R>)> {
+    match (xs, saddle) {
+        ([p, q], None) if p.entry && !q.entry && p.part == q.part => Some((p, q)),
+        _ => None,
     }
-    pair_crossings(l, a, saddle, xs, out, counts);
 }
 
 /// The partition of scanline `yj` (DESIGN.md §2): the walk axis, whether the domain is
@@ -483,24 +500,14 @@ mod tests {
                     let (k, yj) = (R::of(k), R::of(j as f64 + 0.5));
                     let (mut want, mut counts) = (Vec::new(), Counts::default());
                     let mut xs = Vec::new();
-                    for e in 0..3 {
-                        edge_crossings(&l, e, yj, |p, entry| {
-                            xs.push(Crossing {
-                                p,
-                                entry,
-                                part: 1,
-                                is_virtual: false,
-                                key: R::zero(),
-                            })
-                        });
-                    }
+                    edge_roots_of(&l, yj, &mut xs);
                     counts.edge_roots += xs.len() as u64;
                     let (a, split, saddle) = scanline_partition(&l, yj, k, &mut xs, &mut counts);
                     sort_crossings(&l, a, split, &mut xs);
-                    match (&xs[..], saddle) {
-                        ([p, q], None) if p.entry && !q.entry && p.part == q.part => shortcut += 1,
-                        ([], _) => {}
-                        _ => looped += 1,
+                    match entry_then_exit(&xs, saddle) {
+                        Some(_) => shortcut += 1,
+                        None if !xs.is_empty() => looped += 1,
+                        None => {}
                     }
                     pair_crossings(&l, a, saddle, &mut xs, &mut want, &mut counts);
                     assert_eq!((got, got_counts), (want, counts), "lembo {n}, scanline {j}");
