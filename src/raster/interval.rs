@@ -97,7 +97,8 @@ pub fn intervals<R: Real>(
     // The partition for this scanline: axis `a`, whether the domain is split, the saddle.
     let (a, split, saddle) = scanline_partition(l, yj, k, xs, counts);
     sort_crossings(l, a, split, xs);
-    // Their interval, as `pair_crossings` would pair them, without its loop.
+    // One entry, then one exit: their interval, as `pair_crossings` would pair them, without
+    // its loop.
     if let Some((p, q)) = entry_then_exit(xs, saddle) {
         out.push(Interval {
             start: p.p,
@@ -482,10 +483,10 @@ mod tests {
         (out, counts)
     }
 
-    /// On every scanline of random lembos (from nearly flat to folded: monotone, valley,
-    /// extremum and saddle partitions), in both datapaths: `intervals`, which pairs an entry
-    /// followed by an exit without the pairing loop, gives the intervals and counts that the
-    /// loop gives; and both ways are taken.
+    /// On every scanline of random lembos (from nearly flat to strongly bent), in both
+    /// datapaths: `intervals`, which pairs an entry followed by an exit without the pairing
+    /// loop, gives the intervals and counts that the loop gives; and both ways are taken
+    /// often (the loop on scanlines with other crossings).
     fn shortcut_pairs_as_the_loop<R: Real>() {
         let mut seed = 0x2545_f491_4f6c_dd1du64;
         let (mut shortcut, mut looped) = (0, 0);
