@@ -83,9 +83,7 @@ pub fn walk<R: Real>(
         return Ok(());
     }
     let yj = R::of(j as f64 + 0.5);
-    let h = l.hessian;
-    let h_scale = h.0.abs().max(h.1.abs()).max(h.2.abs());
-    let eps = R::epsilon() * R::of(64.0);
+    let (h, h_scale, eps) = step_constants(l);
     let one = R::one();
 
     let grad = |p: V2<R>| {
@@ -266,6 +264,15 @@ fn curve_at_key<R: Real>(l: &ScreenLembo<R>, yj: R, tau: V2<R>, key: R) -> Optio
     };
     let q = [o[0] + s * n[0], o[1] + s * n[1]];
     (q[0].is_finite() && q[1].is_finite()).then_some(q)
+}
+
+/// What every [`step`] of a walk on `l` takes from the lembo: y's Hessian, the scale its
+/// forms are judged by and the relative tolerance they are judged with.
+#[inline]
+fn step_constants<R: Real>(l: &ScreenLembo<R>) -> ((R, R, R), R, R) {
+    let h = l.hessian;
+    let h_scale = h.0.abs().max(h.1.abs()).max(h.2.abs());
+    (h, h_scale, R::epsilon() * R::of(64.0))
 }
 
 /// The sign of k in the steps of a walk, from the curvature `τᵀHτ` along the walk direction
@@ -515,9 +522,7 @@ mod tests {
                         }
                         skipped += 1;
                         // The walk's first step, with the walk's constants.
-                        let h = l.hessian;
-                        let h_scale = h.0.abs().max(h.1.abs()).max(h.2.abs());
-                        let eps = R::epsilon() * R::of(64.0);
+                        let (h, h_scale, eps) = step_constants(&l);
                         let (gu, gv) = l.y.grad(p[0], p[1]);
                         let g = [gu, gv];
                         let sigma = walk_sign(h, g);
