@@ -437,7 +437,22 @@ fn a_folder_another_live_sweep_writes_is_refused() {
         );
         std::thread::sleep(std::time::Duration::from_millis(20));
     }
-    let before = snapshot(&dir);
+    // Its temporaries are written before it holds: wait until they are there and still (a
+    // snapshot taken between the lock and their writes would see them change).
+    let before = loop {
+        let a = snapshot(&dir);
+        std::thread::sleep(std::time::Duration::from_millis(200));
+        let written = a
+            .iter()
+            .any(|(name, bytes)| name.ends_with(".tmp") && !bytes.is_empty());
+        if written && snapshot(&dir) == a {
+            break a;
+        }
+        assert!(
+            t0.elapsed().as_secs() < 60,
+            "the first sweep never wrote its temporaries"
+        );
+    };
     let holder = format!("process {}", first.id());
 
     let out = run_smoke(&dir, &[], &[]);
