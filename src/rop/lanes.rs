@@ -92,7 +92,15 @@ impl<R: Real> Shader<R> {
             [R::zero(); LANES]
         };
         let diffuse = lanes(|k| self.ka + self.kd * cos_a[k]);
-        lanes(|k| three(|c| to_u8(color[c] * diffuse[k] + spec[k])))
+        // Each channel in lanes, packed into a word per lane with vector shifts, then
+        // unpacked from the word: one move out of the vector registers a fragment, not one
+        // per channel.
+        let q = three(|c| lanes(|k| to_u8(color[c] * diffuse[k] + spec[k]) as u32));
+        let packed: [u32; LANES] = lanes(|k| q[0][k] | q[1][k] << 8 | q[2][k] << 16);
+        lanes(|k| {
+            let [r, g, b, _] = packed[k].to_le_bytes();
+            [r, g, b]
+        })
     }
 }
 
