@@ -376,14 +376,13 @@ pub fn edge_crossings<R: Real>(
     mut push: impl FnMut(CurvePoint<R>, bool),
 ) {
     let c = &l.edges[e];
-    let (two, three, four) = (R::of(2.0), R::of(3.0), R::of(4.0));
+    let (two, four) = (R::of(2.0), R::of(4.0));
     let f0 = c.y[0] - yj;
     let f1 = c.y[2] - yj;
     let (s0, s1) = (f0 >= R::zero(), f1 >= R::zero());
     // y(t) - y_j = A t² + B t + C through the canonical start, middle and end.
     let cc = f0;
-    let b = four * c.y[1] - three * c.y[0] - c.y[2];
-    let a = two * c.y[0] + two * c.y[2] - four * c.y[1];
+    let (a, b) = c.y_power();
     let mut roots = [R::zero(); 2];
     let n = if s0 != s1 {
         roots[0] = one_root_in_unit(a, b, cc);
@@ -407,8 +406,7 @@ pub fn edge_crossings<R: Real>(
         ];
         2
     };
-    let bx = four * c.x[1] - three * c.x[0] - c.x[2];
-    let ax = two * c.x[0] + two * c.x[2] - four * c.x[1];
+    let (ax, bx) = c.x_power();
     // Lembo-order sign at the edge start decides the type of the first crossing.
     let start_above = if c.reversed { s1 } else { s0 };
     // The crossing at edge parameter t (canonical order), with its parameter in lembo order.

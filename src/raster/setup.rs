@@ -33,6 +33,55 @@ pub struct EdgeCurve<R> {
     pub x: [R; 3],
     /// Whether canonical t runs against the lembo's edge direction.
     pub reversed: bool,
+    /// On a plain datapath, [`Self::y_power`] and [`Self::x_power`] worked out once at
+    /// Setup (the interval manager needs them on every scanline; the same bits); on a
+    /// counting datapath unused, so that the interval manager counts them where the
+    /// hardware computes them.
+    power: [R; 4],
+}
+
+impl<R: Real> EdgeCurve<R> {
+    /// The edge from its canonical screen values.
+    pub fn new(y: [R; 3], x: [R; 3], reversed: bool) -> Self {
+        let mut c = EdgeCurve {
+            y,
+            x,
+            reversed,
+            power: [R::zero(); 4],
+        };
+        if !R::COUNTS_OPERATIONS {
+            let ((ay, by), (ax, bx)) = (power(&c.y), power(&c.x));
+            c.power = [ay, by, ax, bx];
+        }
+        c
+    }
+
+    /// y(t) - y(0) = A t² + B t through the canonical start, middle and end: (A, B).
+    #[inline(always)]
+    pub fn y_power(&self) -> (R, R) {
+        if R::COUNTS_OPERATIONS {
+            return power(&self.y);
+        }
+        (self.power[0], self.power[1])
+    }
+
+    /// x(t) - x(0) = A t² + B t, as [`Self::y_power`].
+    #[inline(always)]
+    pub fn x_power(&self) -> (R, R) {
+        if R::COUNTS_OPERATIONS {
+            return power(&self.x);
+        }
+        (self.power[2], self.power[3])
+    }
+}
+
+/// (A, B) of the parabola through values `p` at t = 0, 1/2, 1, less its value at 0.
+#[inline(always)]
+fn power<R: Real>(p: &[R; 3]) -> (R, R) {
+    let (two, three, four) = (R::of(2.0), R::of(3.0), R::of(4.0));
+    let b = four * p[1] - three * p[0] - p[2];
+    let a = two * p[0] + two * p[2] - four * p[1];
+    (a, b)
 }
 
 /// The domain edges in the lembo's counter-clockwise order: A→B (v = 0), B→C (u + v = 1),
@@ -486,11 +535,7 @@ pub(super) fn build<R: Real>(
         // Canonical order: the end with the smaller (y, x) first.
         let reversed = (sy[e], sx[e]) < (sy[s], sx[s]);
         let (s, e) = if reversed { (e, s) } else { (s, e) };
-        EdgeCurve {
-            y: [sy[s], sy[m], sy[e]],
-            x: [sx[s], sx[m], sx[e]],
-            reversed,
-        }
+        EdgeCurve::new([sy[s], sy[m], sy[e]], [sx[s], sx[m], sx[e]], reversed)
     });
     let hessian = y.hessian();
     ScreenLembo {
