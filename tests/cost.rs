@@ -128,6 +128,72 @@ fn operations_are_charged_to_the_kinds_that_do_them() {
     assert_eq!(OPS.len(), 9);
 }
 
+/// Every kind's operation counts, as text: a line a kind that counts any.
+fn digest(ops: &lembo_sim::cost::counted::OpTable) -> String {
+    KINDS
+        .iter()
+        .filter(|&&k| ops.of(k).iter().any(|&n| n > 0))
+        .map(|&k| format!("{k:?} {:?}\n", ops.of(k)))
+        .collect()
+}
+
+/// The operation counts the cost model prices (every unit kind, every operation) on every
+/// shipped surface scene at 128 x 128, the lembo path in both datapaths and the triangle
+/// path (n = 2), kept as a golden: a change that moves an operation into or out of the
+/// counted datapath, or to another kind, changes the energy and area of every report, and
+/// must be explained. Regenerate with `LEMBO_BLESS=1 cargo test --release --test cost` only
+/// after an intended change of what the hardware computes.
+#[test]
+fn shipped_scenes_keep_their_operation_counts() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files = Vec::new();
+    for dir in ["traces", "traces/extremes"] {
+        for entry in std::fs::read_dir(root.join(dir)).unwrap() {
+            let p = entry.unwrap().path();
+            let name = p.file_name().unwrap().to_string_lossy().to_string();
+            if name.ends_with(".json") && name != "expect.json" {
+                files.push((format!("{dir}/{name}"), p));
+            }
+        }
+    }
+    files.sort();
+    let mut got = std::collections::BTreeMap::new();
+    for (name, path) in &files {
+        let mut scene = Scene::load(path).unwrap();
+        if scene.discoid_count() > 0 {
+            continue;
+        }
+        scene.set_viewport(128, 128).unwrap();
+        let view = View::new(&scene.camera, scene.viewport);
+        for dp in [Datapath::F32, Datapath::F64] {
+            let ops = match lembo_ops(&scene, &view, 0.5, dp) {
+                Ok((_, ops)) => digest(&ops),
+                Err(e) => format!("error: {e}"),
+            };
+            got.insert(format!("{name} lembo {dp:?}"), ops);
+        }
+        let tess = Tessellation::new(&scene, 2);
+        let (_, ops) = triangle_ops(&scene, &view, &tess, Datapath::F32);
+        got.insert(format!("{name} triangle F32"), digest(&ops));
+    }
+    assert!(got.len() > 40, "{} cases", got.len());
+    let golden = root.join("tests/golden/ops/shipped.json");
+    if std::env::var_os("LEMBO_BLESS").is_some() {
+        std::fs::create_dir_all(golden.parent().unwrap()).unwrap();
+        std::fs::write(&golden, serde_json::to_string_pretty(&got).unwrap() + "\n").unwrap();
+        return;
+    }
+    let want: std::collections::BTreeMap<String, String> =
+        serde_json::from_str(&std::fs::read_to_string(&golden).expect("golden exists")).unwrap();
+    let differ: Vec<String> = want
+        .iter()
+        .filter(|(case, w)| got.get(*case) != Some(w))
+        .map(|(case, w)| format!("{case}:\n  want {w}\n  got  {:?}", got.get(case)))
+        .collect();
+    assert_eq!(want.len(), got.len(), "cases");
+    assert!(differ.is_empty(), "{}", differ.join("\n"));
+}
+
 /// Every shipped technology file is valid, and a newer node costs less area and energy
 /// for the same frame.
 #[test]
