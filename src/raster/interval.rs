@@ -376,7 +376,6 @@ pub fn edge_crossings<R: Real>(
     mut push: impl FnMut(CurvePoint<R>, bool),
 ) {
     let c = &l.edges[e];
-    let (two, four) = (R::of(2.0), R::of(4.0));
     let f0 = c.y[0] - yj;
     let f1 = c.y[2] - yj;
     let (s0, s1) = (f0 >= R::zero(), f1 >= R::zero());
@@ -391,11 +390,11 @@ pub fn edge_crossings<R: Real>(
         if a == R::zero() {
             return;
         }
-        let tm = -b / (two * a);
+        let tm = c.y_vertex((a, b));
         if !(tm > R::zero() && tm < R::one()) {
             return;
         }
-        let fm = cc - b * b / (four * a);
+        let fm = cc - c.y_dip((a, b));
         if (fm >= R::zero()) == s0 {
             return;
         }

@@ -33,11 +33,11 @@ pub struct EdgeCurve<R> {
     pub x: [R; 3],
     /// Whether canonical t runs against the lembo's edge direction.
     pub reversed: bool,
-    /// On a plain datapath, [`Self::y_power`] and [`Self::x_power`] worked out once at
-    /// Setup (the interval manager needs them on every scanline; the same bits); on a
-    /// counting datapath unused, so that the interval manager counts them where the
-    /// hardware computes them.
-    power: [R; 4],
+    /// On a plain datapath, [`Self::y_power`], [`Self::x_power`], [`Self::y_vertex`] and
+    /// [`Self::y_dip`] worked out once at Setup (the interval manager needs them on every
+    /// scanline; the same bits); on a counting datapath unused, so that the interval
+    /// manager counts them where the hardware computes them.
+    power: [R; 6],
 }
 
 impl<R: Real> EdgeCurve<R> {
@@ -47,13 +47,34 @@ impl<R: Real> EdgeCurve<R> {
             y,
             x,
             reversed,
-            power: [R::zero(); 4],
+            power: [R::zero(); 6],
         };
         if !R::COUNTS_OPERATIONS {
             let ((ay, by), (ax, bx)) = (power(&c.y), power(&c.x));
-            c.power = [ay, by, ax, bx];
+            let (tm, dip) = (vertex(ay, by), dip(ay, by));
+            c.power = [ay, by, ax, bx, tm, dip];
         }
         c
+    }
+
+    /// Canonical t of the vertex of y's parabola, -B / 2A (not finite for a straight y),
+    /// from y's (A, B) = [`Self::y_power`] (a counting datapath works it out from them).
+    #[inline(always)]
+    pub fn y_vertex(&self, (a, b): (R, R)) -> R {
+        if R::COUNTS_OPERATIONS {
+            return vertex(a, b);
+        }
+        self.power[4]
+    }
+
+    /// How far y's vertex lies below y(0): B² / 4A (y(vertex) = y(0) - this), from y's
+    /// (A, B) as [`Self::y_vertex`].
+    #[inline(always)]
+    pub fn y_dip(&self, (a, b): (R, R)) -> R {
+        if R::COUNTS_OPERATIONS {
+            return dip(a, b);
+        }
+        self.power[5]
     }
 
     /// y(t) - y(0) = A t² + B t through the canonical start, middle and end: (A, B).
@@ -73,6 +94,18 @@ impl<R: Real> EdgeCurve<R> {
         }
         (self.power[2], self.power[3])
     }
+}
+
+/// -B / 2A.
+#[inline(always)]
+fn vertex<R: Real>(a: R, b: R) -> R {
+    -b / (R::of(2.0) * a)
+}
+
+/// B² / 4A.
+#[inline(always)]
+fn dip<R: Real>(a: R, b: R) -> R {
+    b * b / (R::of(4.0) * a)
 }
 
 /// (A, B) of the parabola through values `p` at t = 0, 1/2, 1, less its value at 0.
