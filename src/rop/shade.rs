@@ -143,6 +143,8 @@ impl<R: Real> Shader<R> {
 /// conversion, which the compiler vectorises across a batch's lanes; `as u8` on a float
 /// would check each value for NaN and range one by one. The same bits as
 /// `(c.clamp(0, 1) * 255 + 0.5) as u8` for every input (tested).
+// Not `clamp`: it keeps a NaN, which the unchecked conversion must not see.
+#[allow(clippy::manual_clamp)]
 #[inline]
 pub fn to_u8<R: Real>(c: R) -> u8 {
     let x = c.f64().max(0.0).min(1.0) * 255.0;
