@@ -1,5 +1,6 @@
 //! The cost model: counting changes no pixel, the counts are the ones a hand-worked lembo
-//! gives, and a timed report prices every unit it instantiates.
+//! gives and every shipped scene's are kept as a golden, and a timed report prices every
+//! unit it instantiates.
 
 mod common;
 

@@ -36,8 +36,9 @@ pub struct EdgeCurve<R> {
     /// On a plain datapath, [`Self::y_power`], [`Self::x_power`], [`Self::y_vertex`] and
     /// [`Self::y_dip`] worked out once at Setup (the interval manager needs them on every
     /// scanline; the same bits); on a counting datapath unused, so that the interval
-    /// manager counts them where the hardware computes them.
-    power: [R; 6],
+    /// manager counts them where the hardware computes them. Made by [`Self::new`] from
+    /// `y` and `x`, which nothing changes after.
+    hoisted: [R; 6],
 }
 
 impl<R: Real> EdgeCurve<R> {
@@ -47,12 +48,12 @@ impl<R: Real> EdgeCurve<R> {
             y,
             x,
             reversed,
-            power: [R::zero(); 6],
+            hoisted: [R::zero(); 6],
         };
         if !R::COUNTS_OPERATIONS {
             let ((ay, by), (ax, bx)) = (power(&c.y), power(&c.x));
             let (tm, dip) = (vertex(ay, by), dip(ay, by));
-            c.power = [ay, by, ax, bx, tm, dip];
+            c.hoisted = [ay, by, ax, bx, tm, dip];
         }
         c
     }
@@ -64,17 +65,16 @@ impl<R: Real> EdgeCurve<R> {
         if R::COUNTS_OPERATIONS {
             return vertex(a, b);
         }
-        self.power[4]
+        self.hoisted[4]
     }
 
-    /// How far y's vertex lies below y(0): B² / 4A (y(vertex) = y(0) - this), from y's
-    /// (A, B) as [`Self::y_vertex`].
+    /// y(0) less y at the vertex: B² / 4A, from y's (A, B) as [`Self::y_vertex`].
     #[inline(always)]
     pub fn y_dip(&self, (a, b): (R, R)) -> R {
         if R::COUNTS_OPERATIONS {
             return dip(a, b);
         }
-        self.power[5]
+        self.hoisted[5]
     }
 
     /// y(t) - y(0) = A t² + B t through the canonical start, middle and end: (A, B).
@@ -83,7 +83,7 @@ impl<R: Real> EdgeCurve<R> {
         if R::COUNTS_OPERATIONS {
             return power(&self.y);
         }
-        (self.power[0], self.power[1])
+        (self.hoisted[0], self.hoisted[1])
     }
 
     /// x(t) - x(0) = A t² + B t, as [`Self::y_power`].
@@ -92,7 +92,7 @@ impl<R: Real> EdgeCurve<R> {
         if R::COUNTS_OPERATIONS {
             return power(&self.x);
         }
-        (self.power[2], self.power[3])
+        (self.hoisted[2], self.hoisted[3])
     }
 }
 
