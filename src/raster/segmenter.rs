@@ -299,8 +299,8 @@ const LOOSE: f64 = 1e-4;
 /// not made ([`passes_end`]).
 const REACH_MARGIN: f64 = 1.5;
 
-/// A lower bound on how far in walk key any [`step`] of k from a point of the lembo's domain
-/// reaches, where the residual there is at most [`RESIDUAL_FRACTION`] k; `None` for a
+/// A lower bound on how far in walk key any `step` of k from a point of the lembo's domain
+/// reaches, where the residual there is at most `RESIDUAL_FRACTION` k; `None` for a
 /// partition other than [`Partition::Monotone`](super::setup::Partition) or where the bound
 /// is not positive. In `f64`, from per-lembo bounds: once per lembo ([`walk`]).
 ///

@@ -73,7 +73,7 @@ impl<T: PlaneValue> Plane<T> {
 const FILL_BLOCK: usize = 1024;
 
 /// `slice.fill(value)`, as fast for a 3-byte colour as for a word: the first
-/// [`FILL_BLOCK`] values are written one by one, and the rest copied from them a block at a
+/// `FILL_BLOCK` values are written one by one, and the rest copied from them a block at a
 /// time (`fill` stores an `[u8; 3]` three bytes at a time; a copy moves whole vectors).
 pub fn fill<T: PlaneValue>(slice: &mut [T], value: T) {
     let (first, rest) = slice.split_at_mut(FILL_BLOCK.min(slice.len()));
