@@ -89,14 +89,8 @@ pub fn intervals<R: Real>(
     out: &mut Vec<Interval<R>>,
     counts: &mut Counts,
 ) {
-    let yj = R::of(j as f64 + 0.5);
     let xs = &mut scratch.crossings;
-    edge_roots_of(l, yj, xs);
-    counts.edge_roots += xs.len() as u64;
-
-    // The partition for this scanline: axis `a`, whether the domain is split, the saddle.
-    let (a, split, saddle) = scanline_partition(l, yj, k, xs, counts);
-    sort_crossings(l, a, split, xs);
+    let (a, saddle) = sorted_crossings(l, j, k, xs, counts);
     // One entry, then one exit: their interval, as `pair_crossings` would pair them, without
     // its loop.
     if let Some((p, q)) = entry_then_exit(xs, saddle) {
@@ -113,10 +107,18 @@ pub fn intervals<R: Real>(
     pair_crossings(l, a, saddle, xs, out, counts);
 }
 
-/// The roots of the scanline at `yj` on the three domain edges, in edge order, into `xs`
-/// (cleared first).
+/// The crossings of scanline `j` in `xs` (cleared first), edge roots and any virtual ones,
+/// sorted along the walk; the scanline's walk axis and saddle point, if any.
 #[inline]
-fn edge_roots_of<R: Real>(l: &ScreenLembo<R>, yj: R, xs: &mut Vec<Crossing<R>>) {
+fn sorted_crossings<R: Real>(
+    l: &ScreenLembo<R>,
+    j: u32,
+    k: R,
+    xs: &mut Vec<Crossing<R>>,
+    counts: &mut Counts,
+) -> ([R; 2], Option<[R; 2]>) {
+    let yj = R::of(j as f64 + 0.5);
+    // The roots on the three domain edges, in edge order.
     xs.clear();
     for e in 0..3 {
         edge_crossings(l, e, yj, |p, entry| {
@@ -129,6 +131,11 @@ fn edge_roots_of<R: Real>(l: &ScreenLembo<R>, yj: R, xs: &mut Vec<Crossing<R>>) 
             })
         });
     }
+    counts.edge_roots += xs.len() as u64;
+    // The partition for this scanline: axis `a`, whether the domain is split, the saddle.
+    let (a, split, saddle) = scanline_partition(l, yj, k, xs, counts);
+    sort_crossings(l, a, split, xs);
+    (a, saddle)
 }
 
 /// The entry and the exit, when the sorted crossings `xs` are one entry followed by one
@@ -495,13 +502,9 @@ mod tests {
             for k in [0.05, 2.0] {
                 for j in 0..crate::raster::setup::tests::SIDE {
                     let (got, got_counts) = run(&l, j, k);
-                    let (k, yj) = (R::of(k), R::of(j as f64 + 0.5));
                     let (mut want, mut counts) = (Vec::new(), Counts::default());
                     let mut xs = Vec::new();
-                    edge_roots_of(&l, yj, &mut xs);
-                    counts.edge_roots += xs.len() as u64;
-                    let (a, split, saddle) = scanline_partition(&l, yj, k, &mut xs, &mut counts);
-                    sort_crossings(&l, a, split, &mut xs);
+                    let (a, saddle) = sorted_crossings(&l, j, R::of(k), &mut xs, &mut counts);
                     match entry_then_exit(&xs, saddle) {
                         Some(_) => shortcut += 1,
                         None if !xs.is_empty() => looped += 1,
