@@ -38,7 +38,16 @@ pub struct EdgeCurve<R> {
     /// scanline; the same bits); on a counting datapath unused, so that the interval
     /// manager counts them where the hardware computes them. Made by [`Self::new`] from
     /// `y` and `x`, which nothing changes after.
-    hoisted: [R; 6],
+    hoisted: Hoisted<R>,
+}
+
+/// An edge's values that depend on its screen values only ([`EdgeCurve::hoisted`]).
+#[derive(Clone, Copy, Debug)]
+struct Hoisted<R> {
+    y: (R, R),
+    x: (R, R),
+    vertex: R,
+    dip: R,
 }
 
 impl<R: Real> EdgeCurve<R> {
@@ -48,12 +57,21 @@ impl<R: Real> EdgeCurve<R> {
             y,
             x,
             reversed,
-            hoisted: [R::zero(); 6],
+            hoisted: Hoisted {
+                y: (R::zero(), R::zero()),
+                x: (R::zero(), R::zero()),
+                vertex: R::zero(),
+                dip: R::zero(),
+            },
         };
         if !R::COUNTS_OPERATIONS {
-            let ((ay, by), (ax, bx)) = (power(&c.y), power(&c.x));
-            let (tm, dip) = (vertex(ay, by), dip(ay, by));
-            c.hoisted = [ay, by, ax, bx, tm, dip];
+            let (a, b) = power(&c.y);
+            c.hoisted = Hoisted {
+                y: (a, b),
+                x: power(&c.x),
+                vertex: vertex(a, b),
+                dip: dip(a, b),
+            };
         }
         c
     }
@@ -65,7 +83,7 @@ impl<R: Real> EdgeCurve<R> {
         if R::COUNTS_OPERATIONS {
             return vertex(a, b);
         }
-        self.hoisted[4]
+        self.hoisted.vertex
     }
 
     /// y(0) less y at the vertex: B² / 4A, from y's (A, B) as [`Self::y_vertex`].
@@ -74,7 +92,7 @@ impl<R: Real> EdgeCurve<R> {
         if R::COUNTS_OPERATIONS {
             return dip(a, b);
         }
-        self.hoisted[5]
+        self.hoisted.dip
     }
 
     /// y(t) - y(0) = A t² + B t through the canonical start, middle and end: (A, B).
@@ -83,7 +101,7 @@ impl<R: Real> EdgeCurve<R> {
         if R::COUNTS_OPERATIONS {
             return power(&self.y);
         }
-        (self.hoisted[0], self.hoisted[1])
+        self.hoisted.y
     }
 
     /// x(t) - x(0) = A t² + B t, as [`Self::y_power`].
@@ -92,7 +110,7 @@ impl<R: Real> EdgeCurve<R> {
         if R::COUNTS_OPERATIONS {
             return power(&self.x);
         }
-        (self.hoisted[2], self.hoisted[3])
+        self.hoisted.x
     }
 }
 
