@@ -3,6 +3,8 @@
 //! unit it instantiates.
 
 mod common;
+#[path = "support/scenes.rs"]
+mod scenes;
 
 use common::*;
 use lembo_sim::camera::View;
@@ -147,19 +149,8 @@ fn digest(ops: &lembo_sim::cost::counted::OpTable) -> String {
 #[test]
 fn shipped_scenes_keep_their_operation_counts() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-    let mut files = Vec::new();
-    for dir in ["traces", "traces/extremes"] {
-        for entry in std::fs::read_dir(root.join(dir)).unwrap() {
-            let p = entry.unwrap().path();
-            let name = p.file_name().unwrap().to_string_lossy().to_string();
-            if name.ends_with(".json") && name != "expect.json" {
-                files.push((format!("{dir}/{name}"), p));
-            }
-        }
-    }
-    files.sort();
     let mut got = std::collections::BTreeMap::new();
-    for (name, path) in &files {
+    for (name, path) in &scenes::shipped_files() {
         let mut scene = Scene::load(path).unwrap();
         if scene.discoid_count() > 0 {
             continue;

@@ -137,17 +137,7 @@ fn check(name: &str, got: BTreeMap<String, String>) {
 /// Every shipped scene, at 128 x 128, each path, each shipped architecture.
 #[test]
 fn shipped_scenes_keep_their_cycle_reports() {
-    let mut files = Vec::new();
-    for dir in ["traces", "traces/extremes"] {
-        for entry in std::fs::read_dir(root().join(dir)).unwrap() {
-            let p = entry.unwrap().path();
-            let name = p.file_name().unwrap().to_string_lossy().to_string();
-            if name.ends_with(".json") && name != "expect.json" {
-                files.push((format!("{dir}/{name}"), p));
-            }
-        }
-    }
-    files.sort();
+    let files = scenes::shipped_files();
     let archs = ["baseline.json", "minimal.json", "wide.json"].map(|n| (n, arch(n)));
     let mut got = BTreeMap::new();
     for (name, path) in &files {

@@ -10,23 +10,16 @@ use lembo_sim::datapath::Datapath;
 use lembo_sim::lembo::tessellate::Tessellation;
 use lembo_sim::raster::{render_functional_on, Frame, PerspectiveTol};
 use lembo_sim::scene::Scene;
-use std::path::Path;
+
+#[path = "support/scenes.rs"]
+mod scenes;
 
 /// Every surface scene, at 203 x 157 (odd sizes: bands of unequal height, a last band of
 /// one row) or at its own viewport.
 fn scenes(small: bool) -> Vec<Scene> {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("traces");
-    let mut files: Vec<_> = std::fs::read_dir(&root)
-        .unwrap()
-        .chain(std::fs::read_dir(root.join("extremes")).unwrap())
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "json"))
-        .filter(|p| p.file_name().is_some_and(|n| n != "expect.json"))
-        .collect();
-    files.sort();
-    files
+    scenes::shipped_files()
         .iter()
-        .map(|f| Scene::load(f).unwrap_or_else(|e| panic!("{e}")))
+        .map(|(_, f)| Scene::load(f).unwrap_or_else(|e| panic!("{e}")))
         .filter(|s| s.discoid_count() == 0)
         .map(|mut s| {
             if small {

@@ -3,7 +3,25 @@
 #![allow(dead_code)]
 
 use lembo_sim::scene::Scene;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+
+/// Every scene shipped in `traces/` and `traces/extremes/`, sorted: its name from the
+/// crate's root (`traces/extremes/huge.json`) and its path.
+pub fn shipped_files() -> Vec<(String, PathBuf)> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files = Vec::new();
+    for dir in ["traces", "traces/extremes"] {
+        for entry in std::fs::read_dir(root.join(dir)).unwrap() {
+            let p = entry.unwrap().path();
+            let name = p.file_name().unwrap().to_string_lossy().to_string();
+            if name.ends_with(".json") && name != "expect.json" {
+                files.push((format!("{dir}/{name}"), p));
+            }
+        }
+    }
+    files.sort();
+    files
+}
 
 /// A scene of `traces/`, at `side` x `side` pixels when given.
 pub fn trace(name: &str, side: Option<u32>) -> Scene {
