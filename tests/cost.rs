@@ -3,6 +3,8 @@
 //! unit it instantiates.
 
 mod common;
+#[path = "support/golden.rs"]
+mod golden;
 #[path = "support/scenes.rs"]
 mod scenes;
 
@@ -169,21 +171,11 @@ fn shipped_scenes_keep_their_operation_counts() {
         got.insert(format!("{name} triangle F32"), digest(&ops));
     }
     assert!(got.len() > 40, "{} cases", got.len());
-    let golden = root.join("tests/golden/ops/shipped.json");
-    if std::env::var_os("LEMBO_BLESS").is_some() {
-        std::fs::create_dir_all(golden.parent().unwrap()).unwrap();
-        std::fs::write(&golden, serde_json::to_string_pretty(&got).unwrap() + "\n").unwrap();
-        return;
-    }
-    let want: std::collections::BTreeMap<String, String> =
-        serde_json::from_str(&std::fs::read_to_string(&golden).expect("golden exists")).unwrap();
-    let differ: Vec<String> = want
-        .iter()
-        .filter(|(case, w)| got.get(*case) != Some(w))
-        .map(|(case, w)| format!("{case}:\n  want {w}\n  got  {:?}", got.get(case)))
-        .collect();
-    assert_eq!(want.len(), got.len(), "cases");
-    assert!(differ.is_empty(), "{}", differ.join("\n"));
+    golden::check(
+        &root.join("tests/golden/ops/shipped.json"),
+        got,
+        "operation tables",
+    );
 }
 
 /// Every shipped technology file is valid, and a newer node costs less area and energy

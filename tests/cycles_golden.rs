@@ -33,6 +33,8 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+#[path = "support/golden.rs"]
+mod golden;
 #[path = "support/scenes.rs"]
 mod scenes;
 
@@ -97,40 +99,13 @@ fn run_with(scene: &Scene, a: &ArchConfig, triangles: bool, options: &SimOptions
     }
 }
 
-/// Compares `got` with the golden file `name`, or writes it when blessing.
+/// Compares `got` with the golden file `name` of `tests/golden/cycles`, or writes it when
+/// blessing.
 fn check(name: &str, got: BTreeMap<String, String>) {
-    let path = root().join("tests/golden/cycles").join(name);
-    if std::env::var_os("LEMBO_BLESS").is_some() {
-        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
-        std::fs::write(&path, serde_json::to_string_pretty(&got).unwrap() + "\n").unwrap();
-        return;
-    }
-    let want: BTreeMap<String, String> =
-        serde_json::from_str(&std::fs::read_to_string(&path).expect("golden exists")).unwrap();
-    assert_eq!(
-        want.keys().collect::<Vec<_>>(),
-        got.keys().collect::<Vec<_>>(),
-        "cases of {name}"
-    );
-    let mut differ = Vec::new();
-    for (case, w) in &want {
-        let g = &got[case];
-        if g != w {
-            let line = w
-                .lines()
-                .zip(g.lines())
-                .find(|(a, b)| a != b)
-                .map(|(a, b)| format!("\n  want {a}\n  got  {b}"))
-                .unwrap_or_default();
-            differ.push(format!("{case}:{line}"));
-        }
-    }
-    assert!(
-        differ.is_empty(),
-        "{} of {} cycle reports differ:\n{}",
-        differ.len(),
-        want.len(),
-        differ.join("\n")
+    golden::check(
+        &root().join("tests/golden/cycles").join(name),
+        got,
+        "cycle reports",
     );
 }
 
