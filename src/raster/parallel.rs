@@ -1,13 +1,15 @@
 //! One functional frame on several host threads (`--threads N`), bit-identical to the
 //! single-threaded render for every N.
 //!
-//! The frame's rows are cut into bands of an even number of rows (so no 2x2 quad straddles
-//! two), more bands than threads so that rayon can balance uneven ones. Setup runs once, in
-//! primitive order, keeping every set-up piece with its rows (lembos: minmax's scanline range;
-//! triangles: the bounding box); each band is handed the pieces that meet its rows, in the
-//! same order (`Pieces::by_band`), and walks them through the scan-line stages of its own
-//! rows only, into its own rows of the frame buffer (`FrameBuffer::bands_mut`, `Rop::band`),
-//! which its thread also clears. Every stage after setup works on one scanline (one row pair
+//! Setup runs once, in parallel chunks joined in primitive order, keeping every set-up piece
+//! with its rows (lembos: minmax's scanline range; triangles: the bounding box) and a rough
+//! cost of drawing each of them ([`RowSpan`]). The frame's rows are then cut into bands of
+//! an even number of rows (so no 2x2 quad straddles two) by that estimate, shrinking from
+//! top to bottom ([`bands`]), and the threads take the bands in order as they come free: the
+//! last ones are small, so the threads finish together however wrong the estimate. A band
+//! walks the pieces that meet its rows, in drawing order, through the scan-line stages of its
+//! own rows only, into its own rows of the frame buffer (`FrameBuffer::bands_mut`,
+//! `Rop::band`), which its thread also clears. Every stage after setup works on one scanline (one row pair
 //! for a quad) and a pixel is only ever written by fragments of its own row, so each pixel
 //! meets the same fragments in the same order as in the single-threaded render: the same
 //! depth tests, the same shading, the same winner. The counts are setup's plus the sum of the
@@ -30,33 +32,82 @@ use crate::rop::framebuffer::FrameRows;
 use crate::rop::{FrameBuffer, Rop};
 use crate::scene::Scene;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
 
-/// Bands per thread: enough for rayon to even out bands of unequal work.
-const BANDS_PER_THREAD: u32 = 8;
+/// Rough costs of the work a band does, in nanoseconds of one core (measured on the bunny
+/// and sphere24 frames at 1024x1024): they only weigh rows against each other, and a wrong
+/// one costs balance, never pixels.
+mod cost {
+    /// A lembo scanline: its intervals, segments and subsegments.
+    pub const LEMBO_SCANLINE: f32 = 160.0;
+    /// A triangle's row: its span and the quads' bookkeeping.
+    pub const TRIANGLE_ROW: f32 = 40.0;
+    /// A fragment: its depth test, attributes and shading.
+    pub const FRAGMENT: f32 = 18.0;
+    /// Clearing a pixel of a fresh frame (page faults included).
+    pub const CLEAR: f64 = 2.0;
+}
 
-/// The bands of a frame `height` rows high for `threads` threads: half-open row ranges,
-/// each starting on an even row, in order, covering every row.
-pub fn bands(height: u32, threads: u32) -> Vec<(u32, u32)> {
-    let pairs = height.div_ceil(2).max(1);
-    let count = (threads.max(1) * BANDS_PER_THREAD).min(pairs);
-    (0..count)
-        .map(|b| {
-            let lo = 2 * (pairs * b / count);
-            let hi = (2 * (pairs * (b + 1) / count)).min(height);
-            (lo, hi)
-        })
-        .filter(|(lo, hi)| lo < hi)
-        .collect()
+/// A set-up piece's rows, half-open, and what drawing one of them costs, roughly
+/// (nanoseconds, [`cost`]): its fixed work per row and fragments over half its width, as for
+/// a triangle.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct RowSpan {
+    lo: u32,
+    hi: u32,
+    cost: f32,
+}
+
+impl RowSpan {
+    /// Rows `lo..hi` of a piece `width` pixels wide with `fixed` work per row.
+    fn new(lo: u32, hi: u32, width: f64, fixed: f32) -> Self {
+        let cost = fixed + cost::FRAGMENT * (width.clamp(0.0, 1e6) as f32) / 2.0;
+        RowSpan { lo, hi, cost }
+    }
+}
+
+/// Bands of a frame's rows for `threads` threads, given each row's estimated cost
+/// `row_cost` (one entry a row): half-open row ranges, each starting on an even row, in
+/// order, covering every row. Each band takes a `1/(2 threads)` share of the estimated cost
+/// still left after the bands before it, but not under `1/(64 threads)` of the whole
+/// (guided self-scheduling): a thread that takes the next band when it comes free then
+/// finishes at most a small band's time after the others.
+fn bands(row_cost: &[f64], threads: u32) -> Vec<(u32, u32)> {
+    let height = row_cost.len() as u32;
+    let pairs: Vec<f64> = row_cost.chunks(2).map(|p| p.iter().sum()).collect();
+    let total: f64 = pairs.iter().sum();
+    let threads = threads.max(1) as f64;
+    let floor = total / (64.0 * threads);
+    let (mut out, mut left, mut lo) = (Vec::new(), total, 0);
+    while lo < pairs.len() {
+        let share = (left / (2.0 * threads)).max(floor);
+        let (mut hi, mut cost) = (lo, 0.0);
+        while hi < pairs.len() && (hi == lo || cost < share) {
+            cost += pairs[hi];
+            hi += 1;
+        }
+        out.push((2 * lo as u32, (2 * hi as u32).min(height)));
+        left -= cost;
+        lo = hi;
+    }
+    out
 }
 
 /// Most primitives per setup task.
 const SETUP_CHUNK: usize = 64;
+
+/// Setup tasks per thread, at most: enough that every thread gets some of a small scene.
+const SETUP_TASKS_PER_THREAD: usize = 8;
 
 /// A set-up lembo piece with its first and last scanline (minmax).
 type Piece<R> = (ScreenLembo<R>, u32, u32);
 
 /// A lembo of the scene with its colour.
 type SceneLembo<'a> = (&'a crate::lembo::Lembo, [f64; 3]);
+
+/// What a setup task hands on: its pieces, their rows, and what it counted.
+type SetUp<T> = (Vec<T>, Vec<RowSpan>, Counts);
 
 /// The pieces of the scene's `lembos` after setup and minmax, in order, with their rows and
 /// what setup counted; set up in chunks on the current rayon pool, joined in order.
@@ -69,68 +120,84 @@ fn lembo_pieces<R: Real>(
     // it into many pieces), so that every thread gets some.
     let size = lembos
         .len()
-        .div_ceil(rayon::current_num_threads() * BANDS_PER_THREAD as usize)
+        .div_ceil(rayon::current_num_threads() * SETUP_TASKS_PER_THREAD)
         .clamp(1, SETUP_CHUNK);
-    let chunks: Vec<(Vec<Piece<R>>, Counts)> = lembos
+    let tasks: Vec<SetUp<Piece<R>>> = lembos
         .par_chunks(size)
         .enumerate()
         .map(|(c, chunk)| {
-            let (mut out, mut counts) = (Vec::with_capacity(chunk.len()), Counts::default());
+            let mut out = Vec::with_capacity(chunk.len());
+            let (mut rows, mut counts) = (Vec::with_capacity(chunk.len()), Counts::default());
             let mut pieces = Vec::new();
             for (k, (lembo, color)) in chunk.iter().enumerate() {
                 let id = (c * size + k) as u32;
                 set_up(id, lembo, *color, view, tol, &mut pieces, &mut counts);
                 for l in pieces.drain(..) {
                     if let Some((j0, j1)) = scanline_range(&l, view.viewport.height, &mut counts) {
+                        let x = l.x.reference_values().map(|x: R| x.f64());
+                        let width = x.iter().fold(f64::MIN, |a, &b| a.max(b))
+                            - x.iter().fold(f64::MAX, |a, &b| a.min(b));
+                        rows.push(RowSpan::new(j0, j1 + 1, width, cost::LEMBO_SCANLINE));
                         out.push((l, j0, j1));
                     }
                 }
             }
-            (out, counts)
+            (out, rows, counts)
         })
         .collect();
     let mut counts = Counts::default();
-    let pieces = join_in_order(chunks, &mut counts);
+    let pieces = Pieces::join(tasks, &mut counts);
     (pieces, counts)
 }
 
-/// The setup tasks' pieces in task order, their counts added to `counts`. The tasks' own
-/// vectors are kept as they are (copying a few megabytes of set-up lembos into one vector
-/// would be serial work between setup and the bands).
-fn join_in_order<T>(tasks: Vec<(Vec<T>, Counts)>, counts: &mut Counts) -> Pieces<T> {
-    let mut out = Vec::with_capacity(tasks.len());
-    for (pieces, c) in tasks {
-        out.push(pieces);
-        *counts += c;
+/// Set-up pieces in drawing order, as the setup tasks left them (one vector a task; copying
+/// a few megabytes of set-up lembos into one vector would be serial work between setup and
+/// the bands), each task's with its pieces' rows.
+struct Pieces<T>(Vec<(Vec<T>, Vec<RowSpan>)>);
+
+impl<T: Sync> Pieces<T> {
+    /// The setup tasks' pieces in task order, their counts added to `counts`.
+    fn join(tasks: Vec<SetUp<T>>, counts: &mut Counts) -> Self {
+        let mut out = Vec::with_capacity(tasks.len());
+        for (pieces, rows, c) in tasks {
+            out.push((pieces, rows));
+            *counts += c;
+        }
+        Pieces(out)
     }
-    Pieces(out)
-}
 
-/// Set-up pieces in drawing order, as the setup tasks left them: one vector a task.
-struct Pieces<T>(Vec<Vec<T>>);
-
-impl<T> Pieces<T> {
-    /// For each band of `bands` (in order, following one another), the pieces whose rows
-    /// `rows(piece)` (half-open) meet it, in drawing order, with their index in that order.
-    /// A band walks only its own pieces (a frame of small lembos has thousands, and each
-    /// band would otherwise look at every one).
-    fn by_band(
-        &self,
-        bands: &[(u32, u32)],
-        rows: impl Fn(&T) -> (u32, u32),
-    ) -> Vec<Vec<(usize, &T)>> {
-        let mut out = vec![Vec::new(); bands.len()];
-        for (n, piece) in self.0.iter().flatten().enumerate() {
-            let (r0, r1) = rows(piece);
-            let first = bands.partition_point(|&(_, hi)| hi <= r0);
-            for (b, &(lo, _)) in bands.iter().enumerate().skip(first) {
-                if lo >= r1 {
-                    break;
-                }
-                out[b].push((n, piece));
+    /// The estimated cost of each of `height` rows `width` pixels wide: clearing it and
+    /// drawing the pieces that meet it ([`RowSpan`]).
+    fn row_cost(&self, width: u32, height: u32) -> Vec<f64> {
+        // Each piece adds its cost to its rows: a difference array, summed once.
+        let mut step = vec![0.0f64; height as usize + 1];
+        for r in self.0.iter().flat_map(|(_, rows)| rows) {
+            let (lo, hi) = (r.lo.min(height) as usize, r.hi.min(height) as usize);
+            if lo < hi {
+                step[lo] += r.cost as f64;
+                step[hi] -= r.cost as f64;
             }
         }
-        out
+        let clear = cost::CLEAR * width as f64;
+        let mut run = 0.0;
+        step[..height as usize]
+            .iter()
+            .map(|d| {
+                run += d;
+                clear + run.max(0.0)
+            })
+            .collect()
+    }
+
+    /// The pieces whose rows meet rows `lo..hi`, in drawing order, with their index in that
+    /// order. A band looks only at the pieces' rows, a few bytes each, to find its own.
+    fn meeting(&self, lo: u32, hi: u32) -> impl Iterator<Item = (usize, &T)> {
+        self.0
+            .iter()
+            .flat_map(|(pieces, rows)| pieces.iter().zip(rows))
+            .enumerate()
+            .filter(move |(_, (_, r))| r.lo < hi && lo < r.hi)
+            .map(|(n, (piece, _))| (n, piece))
     }
 }
 
@@ -145,10 +212,10 @@ fn triangle_pieces<R: Real>(
     // so its buffers are reused across them.
     let per_task = SETUP_CHUNK.div_ceil(source.per_chunk().max(1) as usize);
     let tasks = source.chunks().div_ceil(per_task);
-    let chunks: Vec<(Vec<ScreenTriangle<R>>, Counts)> = (0..tasks)
+    let tasks: Vec<SetUp<ScreenTriangle<R>>> = (0..tasks)
         .into_par_iter()
         .map(|task| {
-            let (mut out, mut counts) = (Vec::new(), Counts::default());
+            let (mut out, mut rows, mut counts) = (Vec::new(), Vec::new(), Counts::default());
             let (mut triangles, mut set_up) = (Vec::new(), Vec::new());
             for c in task * per_task..((task + 1) * per_task).min(source.chunks()) {
                 source.chunk(c, &mut triangles);
@@ -156,46 +223,63 @@ fn triangle_pieces<R: Real>(
                     let id = source.id(c, k);
                     setup_triangle::<R>(id, &t.positions, &t.normals, t.color, view, &mut set_up)
                         .count(&mut counts);
+                    rows.extend(set_up.iter().map(|t| {
+                        let [i0, i1, j0, j1] = t.bbox;
+                        RowSpan::new(j0, j1, i1 as f64 - i0 as f64, cost::TRIANGLE_ROW)
+                    }));
                     out.append(&mut set_up);
                 }
             }
-            (out, counts)
+            (out, rows, counts)
         })
         .collect();
-    join_in_order(chunks, counts)
+    Pieces::join(tasks, counts)
 }
 
 /// What one band drew: its counts, its passed depth tests and covered pixels
 /// ([`Rop::finish`]); or the first error it met with the (piece, scanline) it met it at.
 type Band = std::result::Result<(Counts, (u64, u64)), ((usize, u32), Error)>;
 
-/// Runs `draw(b, lo, hi, rows)` for every band `b` (rows `lo..hi`) of `bands` on the
+/// Runs `draw(lo, hi, rows, scratch)` for every band (rows `lo..hi`) of `bands` on the
 /// current rayon pool, each into its own rows of one frame buffer (cleared by the band's
-/// thread), and adds the bands' counts to setup's `counts`: the frame, or the first error
-/// any band met.
-fn in_bands(
+/// thread), every thread taking the next band in order when it comes free, with its own
+/// `scratch`; adds the bands' counts to setup's `counts`: the frame, or the first error any
+/// band met. Which thread draws a band changes nothing in it.
+fn in_bands<S: Default>(
     scene: &Scene,
     view: &View,
     bands: &[(u32, u32)],
     mut counts: Counts,
-    draw: impl Fn(usize, u32, u32, FrameRows<'_>) -> Band + Sync,
+    draw: impl Fn(u32, u32, FrameRows<'_>, &mut S) -> Band + Sync,
 ) -> Result<Frame> {
     let vp = view.viewport;
     let background = scene.background.map(crate::rop::shade::to_u8::<f64>);
     let mut framebuffer = FrameBuffer::zeroed(vp.width, vp.height);
-    let drawn: Vec<Band> = framebuffer
+    let rows: Vec<Mutex<Option<FrameRows<'_>>>> = framebuffer
         .bands_mut(bands)
-        .into_par_iter()
-        .zip(bands.par_iter())
-        .enumerate()
-        .map(|(b, (mut rows, &(lo, hi)))| {
-            rows.clear(background);
-            draw(b, lo, hi, rows)
-        })
+        .into_iter()
+        .map(|r| Mutex::new(Some(r)))
         .collect();
+    let next = AtomicUsize::new(0);
+    let drawn: Vec<Vec<Band>> = rayon::broadcast(|_| {
+        let (mut out, mut scratch) = (Vec::new(), S::default());
+        loop {
+            let b = next.fetch_add(1, Ordering::Relaxed);
+            let Some(&(lo, hi)) = bands.get(b) else {
+                return out;
+            };
+            let taken = rows[b].lock().map(|mut r| r.take());
+            let Ok(Some(mut band)) = taken else {
+                unreachable!("band {b} is taken once, by the thread that drew its number");
+            };
+            band.clear(background);
+            out.push(draw(lo, hi, band, &mut scratch));
+        }
+    });
+    drop(rows);
     let mut first_error: Option<((usize, u32), Error)> = None;
     let (mut passed, mut covered) = (0, 0);
-    for band in drawn {
+    for band in drawn.into_iter().flatten() {
         match band {
             Ok((c, (p, n))) => {
                 counts += c;
@@ -242,28 +326,32 @@ pub fn render_lembos_in_bands<R: Real>(
         let (pieces, counts) = lembo_pieces::<R>(&lembos, view, tol);
         let k = R::of(tol.k);
         let (width, height) = (view.viewport.width, view.viewport.height);
-        let bands = bands(height, threads);
-        let by_band = pieces.by_band(&bands, |&(_, j0, j1)| (j0, j1 + 1));
-        in_bands(scene, view, &bands, counts, |b, lo, hi, rows| {
-            let mut rop = Rop::<R>::band(rows, &scene.light, view, lo);
-            let mut c = Counts::default();
-            let mut buffers = Buffers::default();
-            for &(n, (l, j0, j1)) in &by_band[b] {
-                scanlines(
-                    l,
-                    (*j0).max(lo),
-                    (*j1).min(hi - 1),
-                    width,
-                    k,
-                    DEFAULT_SEGMENT_CAP,
-                    &mut rop,
-                    &mut c,
-                    &mut buffers,
-                )
-                .map_err(|(j, e)| ((n, j), e))?;
-            }
-            Ok((c, rop.finish()))
-        })
+        let bands = bands(&pieces.row_cost(width, height), threads);
+        in_bands(
+            scene,
+            view,
+            &bands,
+            counts,
+            |lo, hi, rows, buffers: &mut Buffers<R>| {
+                let mut rop = Rop::<R>::band(rows, &scene.light, view, lo);
+                let mut c = Counts::default();
+                for (n, (l, j0, j1)) in pieces.meeting(lo, hi) {
+                    scanlines(
+                        l,
+                        (*j0).max(lo),
+                        (*j1).min(hi - 1),
+                        width,
+                        k,
+                        DEFAULT_SEGMENT_CAP,
+                        &mut rop,
+                        &mut c,
+                        buffers,
+                    )
+                    .map_err(|(j, e)| ((n, j), e))?;
+                }
+                Ok((c, rop.finish()))
+            },
+        )
     })
 }
 
@@ -278,12 +366,11 @@ pub fn render_triangles_in_bands<R: Real>(
         let mut counts = Counts::default();
         let pieces = triangle_pieces::<R>(source, view, &mut counts);
         let vp = view.viewport;
-        let bands = bands(vp.height, threads);
-        let by_band = pieces.by_band(&bands, |t| (t.bbox[2], t.bbox[3]));
-        in_bands(scene, view, &bands, counts, |b, lo, hi, rows| {
+        let bands = bands(&pieces.row_cost(vp.width, vp.height), threads);
+        in_bands(scene, view, &bands, counts, |lo, hi, rows, _: &mut ()| {
             let mut rop = Rop::<R>::band(rows, &scene.light, view, lo);
             let mut c = Counts::default();
-            for &(_, t) in &by_band[b] {
+            for (_, t) in pieces.meeting(lo, hi) {
                 rasterize_rows(t, lo, hi, &mut rop, &mut c);
             }
             Ok((c, rop.finish()))
@@ -295,48 +382,119 @@ pub fn render_triangles_in_bands<R: Real>(
 mod tests {
     use super::*;
 
+    fn span(lo: u32, hi: u32) -> RowSpan {
+        RowSpan { lo, hi, cost: 1.0 }
+    }
+
     #[test]
-    fn each_band_gets_the_pieces_that_meet_its_rows_in_order() {
-        let bands = [(0, 4), (4, 8), (8, 10)];
-        // Pieces as half-open row ranges, over two setup tasks.
-        let pieces = Pieces(vec![
-            vec![(0, 1), (3, 5), (9, 10)],
-            vec![(0, 10), (4, 4), (7, 8)],
-        ]);
-        let got: Vec<Vec<usize>> = pieces
-            .by_band(&bands, |&r| r)
-            .iter()
-            .map(|b| b.iter().map(|&(n, _)| n).collect())
-            .collect();
-        let want: Vec<Vec<usize>> = bands
-            .iter()
-            .map(|&(lo, hi)| {
-                pieces
-                    .0
-                    .iter()
-                    .flatten()
-                    .enumerate()
-                    .filter(|(_, &(r0, r1))| r0 < hi && lo < r1)
-                    .map(|(n, _)| n)
-                    .collect()
-            })
-            .collect();
-        assert_eq!(got, want);
-        assert_eq!(got, vec![vec![0, 1, 3], vec![1, 3, 5], vec![2, 3]]);
+    fn a_band_meets_the_pieces_that_meet_its_rows_in_order() {
+        // Pieces over two setup tasks, named by their half-open rows.
+        let tasks = [vec![(0, 1), (3, 5), (9, 10)], vec![(0, 10), (4, 4), (7, 8)]];
+        let pieces = Pieces(
+            tasks
+                .iter()
+                .map(|t| (t.clone(), t.iter().map(|&(lo, hi)| span(lo, hi)).collect()))
+                .collect(),
+        );
+        let all: Vec<(u32, u32)> = tasks.concat();
+        for (lo, hi) in [(0, 4), (4, 8), (8, 10), (0, 10), (4, 5)] {
+            let got: Vec<(usize, (u32, u32))> =
+                pieces.meeting(lo, hi).map(|(n, &r)| (n, r)).collect();
+            let want: Vec<(usize, (u32, u32))> = all
+                .iter()
+                .copied()
+                .enumerate()
+                .filter(|&(_, (r0, r1))| r0 < hi && lo < r1)
+                .collect();
+            assert_eq!(got, want, "rows {lo}..{hi}");
+        }
+        let ids = |lo, hi| pieces.meeting(lo, hi).map(|(n, _)| n).collect::<Vec<_>>();
+        assert_eq!(ids(0, 4), [0, 1, 3]);
+        assert_eq!(ids(4, 8), [1, 3, 5]);
+        assert_eq!(ids(8, 10), [2, 3]);
+    }
+
+    #[test]
+    fn a_rows_cost_is_its_clear_and_the_pieces_that_meet_it() {
+        let pieces = Pieces(vec![(
+            vec![(); 2],
+            vec![
+                RowSpan {
+                    lo: 1,
+                    hi: 3,
+                    cost: 10.0,
+                },
+                RowSpan {
+                    lo: 2,
+                    hi: 9,
+                    cost: 100.0,
+                },
+            ],
+        )]);
+        let clear = cost::CLEAR * 4.0;
+        let got = pieces.row_cost(4, 5);
+        assert_eq!(
+            got,
+            [
+                clear,
+                clear + 10.0,
+                clear + 110.0,
+                clear + 100.0,
+                clear + 100.0
+            ]
+        );
     }
 
     #[test]
     fn bands_cover_every_row_once_from_even_rows() {
         for height in [1, 2, 3, 7, 64, 511, 512, 1024] {
             for threads in [1, 2, 3, 16] {
-                let b = bands(height, threads);
-                assert_eq!(b[0].0, 0);
-                assert_eq!(b.last().unwrap().1, height);
-                for w in b.windows(2) {
-                    assert_eq!(w[0].1, w[1].0);
+                for cost in [
+                    vec![1.0; height],
+                    (0..height).map(|j| (j % 7) as f64).collect(),
+                ] {
+                    let b = bands(&cost, threads);
+                    assert_eq!(b[0].0, 0);
+                    assert_eq!(b.last().unwrap().1, height as u32);
+                    for w in b.windows(2) {
+                        assert_eq!(w[0].1, w[1].0);
+                    }
+                    assert!(b.iter().all(|(lo, hi)| lo % 2 == 0 && lo < hi));
                 }
-                assert!(b.iter().all(|(lo, hi)| lo % 2 == 0 && lo < hi));
             }
+        }
+    }
+
+    #[test]
+    fn bands_shrink_with_the_cost_left_and_split_costly_rows_finer() {
+        let cost_of =
+            |cost: &[f64], (lo, hi): (u32, u32)| cost[lo as usize..hi as usize].iter().sum::<f64>();
+        // Uniform rows on two threads: the first band a quarter of the frame, then shrinking
+        // to the floor of 1/128 of it, never under it but for the last.
+        let uniform = vec![1.0; 1024];
+        let b = bands(&uniform, 2);
+        assert_eq!(b[0], (0, 256));
+        assert_eq!(b[1], (256, 448));
+        let sizes: Vec<u32> = b.iter().map(|(lo, hi)| hi - lo).collect();
+        assert!(sizes.windows(2).all(|w| w[0] >= w[1]), "{sizes:?}");
+        assert!(
+            sizes[..sizes.len() - 1].iter().all(|&s| s >= 8),
+            "{sizes:?}"
+        );
+        assert!(b.len() < 64, "{} bands", b.len());
+        // A costly stretch of rows in the middle is cut into short bands, a cheap one into
+        // long: bands hold similar costs, not similar rows.
+        let mut lumpy = vec![1.0; 1024];
+        lumpy[400..600].iter_mut().for_each(|c| *c = 50.0);
+        let b = bands(&lumpy, 2);
+        let total: f64 = lumpy.iter().sum();
+        let inside = b.iter().filter(|&&(lo, hi)| lo >= 400 && hi <= 600).count();
+        assert!(inside >= 4, "{b:?}");
+        for &band in &b[..b.len() - 1] {
+            assert!(
+                cost_of(&lumpy, band) >= total / 128.0 - 1e-9,
+                "{band:?} in {b:?}"
+            );
         }
     }
 }
