@@ -1,21 +1,26 @@
 //! One functional frame on several host threads (`--threads N`), bit-identical to the
 //! single-threaded render for every N.
 //!
-//! Setup runs once, in parallel chunks joined in primitive order, keeping every set-up piece
-//! with its rows (lembos: minmax's scanline range; triangles: the bounding box) and a rough
-//! cost of drawing each of them ([`RowSpan`]). The frame's rows are then cut into bands of
-//! an even number of rows (so no 2x2 quad straddles two) by that estimate, shrinking from
-//! top to bottom ([`bands`]), and the threads take the bands in order as they come free: the
-//! last ones are small, so the threads finish together however wrong the estimate. A band
-//! walks the pieces that meet its rows, in drawing order, through the scan-line stages of its
-//! own rows only, into its own rows of the frame buffer (`FrameBuffer::bands_mut`,
-//! `Rop::band`), which its thread also clears. Every stage after setup works on one scanline (one row pair
-//! for a quad) and a pixel is only ever written by fragments of its own row, so each pixel
-//! meets the same fragments in the same order as in the single-threaded render: the same
-//! depth tests, the same shading, the same winner. The counts are setup's plus the sum of the
-//! bands' (each counts only its rows, covered pixels included), and equal the
-//! single-threaded ones; the first error (a segment cap) is the smallest (piece, scanline)
-//! any band met, the one the single-threaded walk meets first.
+//! The frame's threads are the calling thread and N - 1 scoped ones, started for the frame
+//! and joined at its end (`draw_frame`); they take work by number from shared counters, so
+//! none waits on a scheduler, and meet once, when setup is done. Setup runs in tasks of up to
+//! 64 primitives, kept in primitive order, keeping every set-up piece with its rows (lembos:
+//! minmax's scanline range; triangles: the bounding box) and a rough cost of drawing each of
+//! them (`RowSpan`). The frame's rows are then cut into bands of an even number of rows (so
+//! no 2x2 quad straddles two) by that estimate, shrinking from top to bottom (`bands`), and
+//! the threads take the bands in order as they come free: the last ones are small, so the
+//! threads finish together however wrong the estimate. A band walks the pieces that meet its
+//! rows, in drawing order, through the scan-line stages of its own rows only, into its own
+//! rows of the frame buffer (`FrameBuffer::bands_mut`, `Rop::band`), which its thread also
+//! clears.
+//!
+//! Every stage after setup works on one scanline (one row pair for a quad) and a pixel is
+//! only ever written by fragments of its own row, so each pixel meets the same fragments in
+//! the same order as in the single-threaded render: the same depth tests, the same shading,
+//! the same winner. The counts are setup's plus the sum of the bands' (each counts only its
+//! rows, covered pixels included), and equal the single-threaded ones; the first error (a
+//! segment cap) is the smallest (piece, scanline) any band met, the one the single-threaded
+//! walk meets first. Which thread sets up a task or draws a band changes nothing in it.
 //!
 //! The analysed frame (`--reference`, with the fragment probe) and the counting runs of the
 //! cost model stay single-threaded.
@@ -31,9 +36,8 @@ use crate::error::{Error, Result};
 use crate::rop::framebuffer::FrameRows;
 use crate::rop::{FrameBuffer, Rop};
 use crate::scene::Scene;
-use rayon::prelude::*;
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::{Mutex, OnceLock};
 
 /// Rough costs of the work a band does, in nanoseconds of one core (measured on the bunny
 /// and sphere24 frames at 1024x1024): they only weigh rows against each other, and a wrong
@@ -109,61 +113,78 @@ type SceneLembo<'a> = (&'a crate::lembo::Lembo, [f64; 3]);
 /// What a setup task hands on: its pieces, their rows, and what it counted.
 type SetUp<T> = (Vec<T>, Vec<RowSpan>, Counts);
 
-/// The pieces of the scene's `lembos` after setup and minmax, in order, with their rows and
-/// what setup counted; set up in chunks on the current rayon pool, joined in order.
-fn lembo_pieces<R: Real>(
+/// What setup task `task` of the scene's `lembos` hands on: the pieces of its `size`
+/// lembos after setup and minmax, in order, with their rows and what it counted.
+fn set_up_lembos<R: Real>(
     lembos: &[SceneLembo<'_>],
+    size: usize,
+    task: usize,
     view: &View,
     tol: Tolerance,
-) -> (Pieces<Piece<R>>, Counts) {
-    // Up to SETUP_CHUNK lembos a task, fewer where there are few (a lembo's setup may split
-    // it into many pieces), so that every thread gets some.
-    let size = lembos
-        .len()
-        .div_ceil(rayon::current_num_threads() * SETUP_TASKS_PER_THREAD)
-        .clamp(1, SETUP_CHUNK);
-    let tasks: Vec<SetUp<Piece<R>>> = lembos
-        .par_chunks(size)
-        .enumerate()
-        .map(|(c, chunk)| {
-            let mut out = Vec::with_capacity(chunk.len());
-            let (mut rows, mut counts) = (Vec::with_capacity(chunk.len()), Counts::default());
-            let mut pieces = Vec::new();
-            for (k, (lembo, color)) in chunk.iter().enumerate() {
-                let id = (c * size + k) as u32;
-                set_up(id, lembo, *color, view, tol, &mut pieces, &mut counts);
-                for l in pieces.drain(..) {
-                    if let Some((j0, j1)) = scanline_range(&l, view.viewport.height, &mut counts) {
-                        let x = l.x.reference_values().map(|x: R| x.f64());
-                        let width = x.iter().fold(f64::MIN, |a, &b| a.max(b))
-                            - x.iter().fold(f64::MAX, |a, &b| a.min(b));
-                        rows.push(RowSpan::new(j0, j1 + 1, width, cost::LEMBO_SCANLINE));
-                        out.push((l, j0, j1));
-                    }
-                }
+) -> SetUp<Piece<R>> {
+    let chunk = &lembos[task * size..((task + 1) * size).min(lembos.len())];
+    let mut out = Vec::with_capacity(chunk.len());
+    let (mut rows, mut counts) = (Vec::with_capacity(chunk.len()), Counts::default());
+    let mut pieces = Vec::new();
+    for (k, (lembo, color)) in chunk.iter().enumerate() {
+        let id = (task * size + k) as u32;
+        set_up(id, lembo, *color, view, tol, &mut pieces, &mut counts);
+        for l in pieces.drain(..) {
+            if let Some((j0, j1)) = scanline_range(&l, view.viewport.height, &mut counts) {
+                let x = l.x.reference_values().map(|x: R| x.f64());
+                let width = x.iter().fold(f64::MIN, |a, &b| a.max(b))
+                    - x.iter().fold(f64::MAX, |a, &b| a.min(b));
+                rows.push(RowSpan::new(j0, j1 + 1, width, cost::LEMBO_SCANLINE));
+                out.push((l, j0, j1));
             }
-            (out, rows, counts)
-        })
-        .collect();
-    let mut counts = Counts::default();
-    let pieces = Pieces::join(tasks, &mut counts);
-    (pieces, counts)
+        }
+    }
+    (out, rows, counts)
 }
 
-/// Set-up pieces in drawing order, as the setup tasks left them (one vector a task; copying
+/// What setup task `task` of a triangle source hands on: the set-up triangles of its run of
+/// `per_task` of the source's chunks (a chunk may be one lembo's few triangles, so a task's
+/// buffers are reused across several), in order, with their rows and what it counted.
+fn set_up_triangles<R: Real>(
+    source: &dyn TriangleSource,
+    per_task: usize,
+    task: usize,
+    view: &View,
+) -> SetUp<ScreenTriangle<R>> {
+    let (mut out, mut rows, mut counts) = (Vec::new(), Vec::new(), Counts::default());
+    let (mut triangles, mut set_up) = (Vec::new(), Vec::new());
+    for c in task * per_task..((task + 1) * per_task).min(source.chunks()) {
+        source.chunk(c, &mut triangles);
+        for (k, t) in triangles.iter().enumerate() {
+            let id = source.id(c, k);
+            setup_triangle::<R>(id, &t.positions, &t.normals, t.color, view, &mut set_up)
+                .count(&mut counts);
+            rows.extend(set_up.iter().map(|t| {
+                let [i0, i1, j0, j1] = t.bbox;
+                RowSpan::new(j0, j1, i1 as f64 - i0 as f64, cost::TRIANGLE_ROW)
+            }));
+            out.append(&mut set_up);
+        }
+    }
+    (out, rows, counts)
+}
+
+/// Set-up pieces in drawing order, as the setup tasks left them (one slice a task; copying
 /// a few megabytes of set-up lembos into one vector would be serial work between setup and
 /// the bands), each task's with its pieces' rows.
-struct Pieces<T>(Vec<(Vec<T>, Vec<RowSpan>)>);
+struct Pieces<'a, T>(Vec<(&'a [T], &'a [RowSpan])>);
 
-impl<T: Sync> Pieces<T> {
+impl<'a, T> Pieces<'a, T> {
     /// The setup tasks' pieces in task order, their counts added to `counts`.
-    fn join(tasks: Vec<SetUp<T>>, counts: &mut Counts) -> Self {
-        let mut out = Vec::with_capacity(tasks.len());
-        for (pieces, rows, c) in tasks {
-            out.push((pieces, rows));
-            *counts += c;
-        }
-        Pieces(out)
+    fn join(tasks: impl Iterator<Item = &'a SetUp<T>>, counts: &mut Counts) -> Self {
+        Pieces(
+            tasks
+                .map(|(pieces, rows, c)| {
+                    *counts += *c;
+                    (&pieces[..], &rows[..])
+                })
+                .collect(),
+        )
     }
 
     /// The estimated cost of each of `height` rows `width` pixels wide: clearing it and
@@ -171,7 +192,7 @@ impl<T: Sync> Pieces<T> {
     fn row_cost(&self, width: u32, height: u32) -> Vec<f64> {
         // Each piece adds its cost to its rows: a difference array, summed once.
         let mut step = vec![0.0f64; height as usize + 1];
-        for r in self.0.iter().flat_map(|(_, rows)| rows) {
+        for r in self.0.iter().flat_map(|(_, rows)| rows.iter()) {
             let (lo, hi) = (r.lo.min(height) as usize, r.hi.min(height) as usize);
             if lo < hi {
                 step[lo] += r.cost as f64;
@@ -191,95 +212,138 @@ impl<T: Sync> Pieces<T> {
 
     /// The pieces whose rows meet rows `lo..hi`, in drawing order, with their index in that
     /// order. A band looks only at the pieces' rows, a few bytes each, to find its own.
-    fn meeting(&self, lo: u32, hi: u32) -> impl Iterator<Item = (usize, &T)> {
+    fn meeting(&self, lo: u32, hi: u32) -> impl Iterator<Item = (usize, &'a T)> + '_ {
         self.0
             .iter()
-            .flat_map(|(pieces, rows)| pieces.iter().zip(rows))
+            .flat_map(|&(pieces, rows)| pieces.iter().zip(rows))
             .enumerate()
             .filter(move |(_, (_, r))| r.lo < hi && lo < r.hi)
             .map(|(n, (piece, _))| (n, piece))
     }
 }
 
-/// The set-up pieces of a triangle source, in order; set up in chunks of the source on the
-/// current rayon pool, joined in order.
-fn triangle_pieces<R: Real>(
-    source: &dyn TriangleSource,
-    view: &View,
-    counts: &mut Counts,
-) -> Pieces<ScreenTriangle<R>> {
-    // A task takes a run of the source's chunks (a chunk may be one lembo's few triangles),
-    // so its buffers are reused across them.
-    let per_task = SETUP_CHUNK.div_ceil(source.per_chunk().max(1) as usize);
-    let tasks = source.chunks().div_ceil(per_task);
-    let tasks: Vec<SetUp<ScreenTriangle<R>>> = (0..tasks)
-        .into_par_iter()
-        .map(|task| {
-            let (mut out, mut rows, mut counts) = (Vec::new(), Vec::new(), Counts::default());
-            let (mut triangles, mut set_up) = (Vec::new(), Vec::new());
-            for c in task * per_task..((task + 1) * per_task).min(source.chunks()) {
-                source.chunk(c, &mut triangles);
-                for (k, t) in triangles.iter().enumerate() {
-                    let id = source.id(c, k);
-                    setup_triangle::<R>(id, &t.positions, &t.normals, t.color, view, &mut set_up)
-                        .count(&mut counts);
-                    rows.extend(set_up.iter().map(|t| {
-                        let [i0, i1, j0, j1] = t.bbox;
-                        RowSpan::new(j0, j1, i1 as f64 - i0 as f64, cost::TRIANGLE_ROW)
-                    }));
-                    out.append(&mut set_up);
-                }
-            }
-            (out, rows, counts)
-        })
-        .collect();
-    Pieces::join(tasks, counts)
-}
-
 /// What one band drew: its counts, its passed depth tests and covered pixels
 /// ([`Rop::finish`]); or the first error it met with the (piece, scanline) it met it at.
 type Band = std::result::Result<(Counts, (u64, u64)), ((usize, u32), Error)>;
 
-/// Runs `draw(lo, hi, rows, scratch)` for every band (rows `lo..hi`) of `bands` on the
-/// current rayon pool, each into its own rows of one frame buffer (cleared by the band's
-/// thread), every thread taking the next band in order when it comes free, with its own
-/// `scratch`; adds the bands' counts to setup's `counts`: the frame, or the first error any
-/// band met. Which thread draws a band changes nothing in it.
-fn in_bands<S: Default>(
+/// What the threads share once setup is done: the pieces, setup's counts, the bands and the
+/// rows of the frame buffer each band writes (taken by the thread that draws it).
+struct Plan<'a, 'fb, T> {
+    pieces: Pieces<'a, T>,
+    counts: Counts,
+    bands: Vec<(u32, u32)>,
+    rows: Vec<Mutex<Option<FrameRows<'fb>>>>,
+}
+
+/// Marks a frame abandoned if the thread holding it unwinds, so that no other thread waits
+/// for setup work that will never be done.
+struct Abandon<'a>(&'a AtomicBool);
+
+impl Drop for Abandon<'_> {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            self.0.store(true, Ordering::Release);
+        }
+    }
+}
+
+/// Draws a frame on `threads` threads: the calling thread and `threads - 1` scoped ones
+/// (one the system will not start is simply missing; the others do its share). They take
+/// the `tasks` setup tasks (`set_up(task)`) by number as they come free, wait until every
+/// task is done, and then take the bands ([`bands`], from the pieces' estimated costs) in
+/// order, each drawn by `draw(pieces, lo, hi, rows, scratch)` into its own rows of one frame
+/// buffer (cleared by the band's thread), with the thread's own `scratch`. The counts are
+/// setup's in task order plus the bands'; the result is the frame, or the first error any
+/// band met. Which thread sets up a task or draws a band changes nothing in it.
+fn draw_frame<T: Send + Sync, S: Default>(
     scene: &Scene,
     view: &View,
-    bands: &[(u32, u32)],
-    mut counts: Counts,
-    draw: impl Fn(u32, u32, FrameRows<'_>, &mut S) -> Band + Sync,
+    threads: u32,
+    tasks: usize,
+    set_up: impl Fn(usize) -> SetUp<T> + Sync,
+    draw: impl Fn(&Pieces<'_, T>, u32, u32, FrameRows<'_>, &mut S) -> Band + Sync,
 ) -> Result<Frame> {
     let vp = view.viewport;
     let background = scene.background.map(crate::rop::shade::to_u8::<f64>);
     let mut framebuffer = FrameBuffer::zeroed(vp.width, vp.height);
-    let rows: Vec<Mutex<Option<FrameRows<'_>>>> = framebuffer
-        .bands_mut(bands)
-        .into_iter()
-        .map(|r| Mutex::new(Some(r)))
-        .collect();
-    let next = AtomicUsize::new(0);
-    let drawn: Vec<Vec<Band>> = rayon::broadcast(|_| {
+    let unclaimed = Mutex::new(Some(&mut framebuffer));
+    let set: Vec<OnceLock<SetUp<T>>> = (0..tasks).map(|_| OnceLock::new()).collect();
+    let (next_task, tasks_done) = (AtomicUsize::new(0), AtomicUsize::new(0));
+    let next_band = AtomicUsize::new(0);
+    let abandoned = AtomicBool::new(false);
+    let plan = OnceLock::new();
+    let work = || -> Vec<Band> {
+        let _abandon = Abandon(&abandoned);
+        loop {
+            let task = next_task.fetch_add(1, Ordering::Relaxed);
+            if task >= tasks {
+                break;
+            }
+            let _ = set[task].set(set_up(task));
+            tasks_done.fetch_add(1, Ordering::Release);
+        }
+        while tasks_done.load(Ordering::Acquire) < tasks {
+            if abandoned.load(Ordering::Acquire) {
+                return Vec::new();
+            }
+            std::thread::yield_now();
+        }
+        let plan: &Plan<'_, '_, T> = plan.get_or_init(|| {
+            let mut counts = Counts::default();
+            let pieces = Pieces::join(set.iter().filter_map(OnceLock::get), &mut counts);
+            let bands = bands(&pieces.row_cost(vp.width, vp.height), threads);
+            let framebuffer = lock(&unclaimed)
+                .take()
+                .expect("the frame buffer is split into bands once");
+            let rows = framebuffer
+                .bands_mut(&bands)
+                .into_iter()
+                .map(|r| Mutex::new(Some(r)))
+                .collect();
+            Plan {
+                pieces,
+                counts,
+                bands,
+                rows,
+            }
+        });
         let (mut out, mut scratch) = (Vec::new(), S::default());
         loop {
-            let b = next.fetch_add(1, Ordering::Relaxed);
-            let Some(&(lo, hi)) = bands.get(b) else {
+            let b = next_band.fetch_add(1, Ordering::Relaxed);
+            let Some(&(lo, hi)) = plan.bands.get(b) else {
                 return out;
             };
-            let taken = rows[b].lock().map(|mut r| r.take());
-            let Ok(Some(mut band)) = taken else {
-                unreachable!("band {b} is taken once, by the thread that drew its number");
-            };
-            band.clear(background);
-            out.push(draw(lo, hi, band, &mut scratch));
+            let mut rows = lock(&plan.rows[b])
+                .take()
+                .expect("a band is taken once, by the thread that drew its number");
+            rows.clear(background);
+            out.push(draw(&plan.pieces, lo, hi, rows, &mut scratch));
         }
+    };
+    let drawn = std::thread::scope(|s| {
+        let others: Vec<_> = (1..threads.max(1))
+            .filter_map(|i| {
+                std::thread::Builder::new()
+                    .name(format!("frame-{i}"))
+                    .spawn_scoped(s, work)
+                    .ok()
+            })
+            .collect();
+        let mut drawn = work();
+        for other in others {
+            match other.join() {
+                Ok(bands) => drawn.extend(bands),
+                Err(panic) => std::panic::resume_unwind(panic),
+            }
+        }
+        drawn
     });
-    drop(rows);
+    let Plan { mut counts, .. } = plan
+        .into_inner()
+        .expect("every thread but a panicked one plans the bands");
     let mut first_error: Option<((usize, u32), Error)> = None;
     let (mut passed, mut covered) = (0, 0);
-    for band in drawn.into_iter().flatten() {
+    for band in drawn {
         match band {
             Ok((c, (p, n))) => {
                 counts += c;
@@ -305,13 +369,10 @@ fn in_bands<S: Default>(
     })
 }
 
-/// A rayon pool of `threads` threads for one frame.
-fn pool(threads: u32) -> Result<rayon::ThreadPool> {
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads as usize)
-        .thread_name(|i| format!("frame-{i}"))
-        .build()
-        .map_err(|e| Error::Internal(format!("cannot start the frame's threads: {e}")))
+/// A mutex's value; one poisoned by a panicking thread is still read (the panic itself is
+/// what the frame reports).
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
 /// The lembo path's functional frame on `threads` threads (module doc).
@@ -321,38 +382,41 @@ pub fn render_lembos_in_bands<R: Real>(
     tol: Tolerance,
     threads: u32,
 ) -> Result<Frame> {
-    pool(threads)?.install(|| {
-        let lembos: Vec<SceneLembo<'_>> = scene.lembos().collect();
-        let (pieces, counts) = lembo_pieces::<R>(&lembos, view, tol);
-        let k = R::of(tol.k);
-        let (width, height) = (view.viewport.width, view.viewport.height);
-        let bands = bands(&pieces.row_cost(width, height), threads);
-        in_bands(
-            scene,
-            view,
-            &bands,
-            counts,
-            |lo, hi, rows, buffers: &mut Buffers<R>| {
-                let mut rop = Rop::<R>::band(rows, &scene.light, view, lo);
-                let mut c = Counts::default();
-                for (n, (l, j0, j1)) in pieces.meeting(lo, hi) {
-                    scanlines(
-                        l,
-                        (*j0).max(lo),
-                        (*j1).min(hi - 1),
-                        width,
-                        k,
-                        DEFAULT_SEGMENT_CAP,
-                        &mut rop,
-                        &mut c,
-                        buffers,
-                    )
-                    .map_err(|(j, e)| ((n, j), e))?;
-                }
-                Ok((c, rop.finish()))
-            },
-        )
-    })
+    let lembos: Vec<SceneLembo<'_>> = scene.lembos().collect();
+    // Up to SETUP_CHUNK lembos a task, fewer where there are few (a lembo's setup may split
+    // it into many pieces), so that every thread gets some.
+    let size = lembos
+        .len()
+        .div_ceil(threads.max(1) as usize * SETUP_TASKS_PER_THREAD)
+        .clamp(1, SETUP_CHUNK);
+    let k = R::of(tol.k);
+    let width = view.viewport.width;
+    draw_frame(
+        scene,
+        view,
+        threads,
+        lembos.len().div_ceil(size),
+        |task| set_up_lembos::<R>(&lembos, size, task, view, tol),
+        |pieces, lo, hi, rows, buffers: &mut Buffers<R>| {
+            let mut rop = Rop::<R>::band(rows, &scene.light, view, lo);
+            let mut c = Counts::default();
+            for (n, (l, j0, j1)) in pieces.meeting(lo, hi) {
+                scanlines(
+                    l,
+                    (*j0).max(lo),
+                    (*j1).min(hi - 1),
+                    width,
+                    k,
+                    DEFAULT_SEGMENT_CAP,
+                    &mut rop,
+                    &mut c,
+                    buffers,
+                )
+                .map_err(|(j, e)| ((n, j), e))?;
+            }
+            Ok((c, rop.finish()))
+        },
+    )
 }
 
 /// The triangle path's functional frame on `threads` threads (module doc).
@@ -362,25 +426,107 @@ pub fn render_triangles_in_bands<R: Real>(
     source: &dyn TriangleSource,
     threads: u32,
 ) -> Result<Frame> {
-    pool(threads)?.install(|| {
-        let mut counts = Counts::default();
-        let pieces = triangle_pieces::<R>(source, view, &mut counts);
-        let vp = view.viewport;
-        let bands = bands(&pieces.row_cost(vp.width, vp.height), threads);
-        in_bands(scene, view, &bands, counts, |lo, hi, rows, _: &mut ()| {
+    let per_task = SETUP_CHUNK.div_ceil(source.per_chunk().max(1) as usize);
+    draw_frame(
+        scene,
+        view,
+        threads,
+        source.chunks().div_ceil(per_task),
+        |task| set_up_triangles::<R>(source, per_task, task, view),
+        |pieces, lo, hi, rows, _: &mut ()| {
             let mut rop = Rop::<R>::band(rows, &scene.light, view, lo);
             let mut c = Counts::default();
             for (_, t) in pieces.meeting(lo, hi) {
                 rasterize_rows(t, lo, hi, &mut rop, &mut c);
             }
             Ok((c, rop.finish()))
-        })
-    })
+        },
+    )
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A shipped scene on a small viewport, and its view.
+    fn shipped(path: &str) -> (Scene, View) {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(path);
+        let mut scene = Scene::load(&path).expect("a shipped scene");
+        scene.set_viewport(96, 64).expect("a valid viewport");
+        let view = View::new(&scene.camera, scene.viewport);
+        (scene, view)
+    }
+
+    /// A setup task that sets up nothing but says which task it was.
+    fn tagged(task: usize) -> SetUp<usize> {
+        (vec![task], vec![span(0, 2)], Counts::default())
+    }
+
+    #[test]
+    fn every_setup_task_runs_once_and_the_bands_see_them_in_order() {
+        let (scene, view) = shipped("traces/sphere24.json");
+        for threads in [1, 2, 5] {
+            let ran = Mutex::new(Vec::new());
+            let seen = Mutex::new(Vec::new());
+            draw_frame(
+                &scene,
+                &view,
+                threads,
+                37,
+                |task| {
+                    lock(&ran).push(task);
+                    tagged(task)
+                },
+                |pieces, lo, _, _, _: &mut ()| {
+                    if lo == 0 {
+                        *lock(&seen) = pieces.meeting(0, 2).map(|(n, &t)| (n, t)).collect();
+                    }
+                    Ok((Counts::default(), (0, 0)))
+                },
+            )
+            .expect("a frame");
+            let mut ran = ran.into_inner().unwrap();
+            ran.sort();
+            assert_eq!(ran, (0..37).collect::<Vec<_>>(), "{threads} threads");
+            let seen = seen.into_inner().unwrap();
+            assert_eq!(seen, (0..37).map(|t| (t, t)).collect::<Vec<_>>());
+        }
+    }
+
+    #[test]
+    fn a_panic_in_setup_reaches_the_caller_and_no_thread_waits_for_it() {
+        // On its own thread, so that a frame whose threads wait for ever fails the test.
+        let (done, finished) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            let (scene, view) = shipped("traces/sphere24.json");
+            for threads in [1, 2, 4] {
+                let run = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                    draw_frame(
+                        &scene,
+                        &view,
+                        threads,
+                        9,
+                        |task| {
+                            assert_ne!(task, 4, "task 4 fails");
+                            tagged(task)
+                        },
+                        |_, _, _, _, _: &mut ()| Ok((Counts::default(), (0, 0))),
+                    )
+                }));
+                let message = match run {
+                    Ok(_) => "no panic".to_string(),
+                    Err(p) => p.downcast_ref::<String>().cloned().unwrap_or_default(),
+                };
+                done.send((threads, message)).unwrap();
+            }
+        });
+        for _ in 0..3 {
+            let (threads, message) = finished
+                .recv_timeout(std::time::Duration::from_secs(60))
+                .expect("the frame ends, with the panic, within a minute");
+            assert!(message.contains("task 4 fails"), "{threads}: {message}");
+        }
+    }
 
     fn span(lo: u32, hi: u32) -> RowSpan {
         RowSpan { lo, hi, cost: 1.0 }
@@ -390,10 +536,15 @@ mod tests {
     fn a_band_meets_the_pieces_that_meet_its_rows_in_order() {
         // Pieces over two setup tasks, named by their half-open rows.
         let tasks = [vec![(0, 1), (3, 5), (9, 10)], vec![(0, 10), (4, 4), (7, 8)]];
+        let spans: Vec<Vec<RowSpan>> = tasks
+            .iter()
+            .map(|t| t.iter().map(|&(lo, hi)| span(lo, hi)).collect())
+            .collect();
         let pieces = Pieces(
             tasks
                 .iter()
-                .map(|t| (t.clone(), t.iter().map(|&(lo, hi)| span(lo, hi)).collect()))
+                .zip(&spans)
+                .map(|(t, s)| (&t[..], &s[..]))
                 .collect(),
         );
         let all: Vec<(u32, u32)> = tasks.concat();
@@ -416,21 +567,19 @@ mod tests {
 
     #[test]
     fn a_rows_cost_is_its_clear_and_the_pieces_that_meet_it() {
-        let pieces = Pieces(vec![(
-            vec![(); 2],
-            vec![
-                RowSpan {
-                    lo: 1,
-                    hi: 3,
-                    cost: 10.0,
-                },
-                RowSpan {
-                    lo: 2,
-                    hi: 9,
-                    cost: 100.0,
-                },
-            ],
-        )]);
+        let spans = [
+            RowSpan {
+                lo: 1,
+                hi: 3,
+                cost: 10.0,
+            },
+            RowSpan {
+                lo: 2,
+                hi: 9,
+                cost: 100.0,
+            },
+        ];
+        let pieces = Pieces(vec![(&[(); 2][..], &spans[..])]);
         let clear = cost::CLEAR * 4.0;
         let got = pieces.row_cost(4, 5);
         assert_eq!(
