@@ -151,9 +151,14 @@ fn set_up_triangles<R: Real>(
     task: usize,
     view: &View,
 ) -> SetUp<ScreenTriangle<R>> {
-    let (mut out, mut rows, mut counts) = (Vec::new(), Vec::new(), Counts::default());
+    let chunks = task * per_task..((task + 1) * per_task).min(source.chunks());
+    // Room for every triangle once (clipping may add some, culling takes some away): a
+    // vector grown by doubling would copy its set-up triangles and fault in pages twice.
+    let room = chunks.len() * source.per_chunk() as usize;
+    let (mut out, mut rows) = (Vec::with_capacity(room), Vec::with_capacity(room));
+    let mut counts = Counts::default();
     let (mut triangles, mut set_up) = (Vec::new(), Vec::new());
-    for c in task * per_task..((task + 1) * per_task).min(source.chunks()) {
+    for c in chunks {
         source.chunk(c, &mut triangles);
         for (k, t) in triangles.iter().enumerate() {
             let id = source.id(c, k);
