@@ -628,9 +628,15 @@ mod tests {
 
     /// The shipped scene at `path` (from the crate's root) on a 384x384 viewport, and its view.
     fn shipped(path: &str) -> (Scene, View) {
+        shipped_at(path, 384, 384)
+    }
+
+    /// The shipped scene at `path` (from the crate's root) on a `width` x `height`
+    /// viewport, and its view (the raster modules' tests).
+    pub(super) fn shipped_at(path: &str, width: u32, height: u32) -> (Scene, View) {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(path);
         let mut scene = Scene::load(&path).expect("a shipped scene");
-        scene.set_viewport(384, 384).expect("a valid viewport");
+        scene.set_viewport(width, height).expect("a valid viewport");
         let view = View::new(&scene.camera, scene.viewport);
         (scene, view)
     }

@@ -455,11 +455,7 @@ mod tests {
 
     /// A shipped scene on a small viewport, and its view.
     fn shipped(path: &str) -> (Scene, View) {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(path);
-        let mut scene = Scene::load(&path).expect("a shipped scene");
-        scene.set_viewport(96, 64).expect("a valid viewport");
-        let view = View::new(&scene.camera, scene.viewport);
-        (scene, view)
+        crate::raster::tests::shipped_at(path, 96, 64)
     }
 
     /// A setup task that sets up nothing but says which task it was.
