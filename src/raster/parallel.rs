@@ -104,9 +104,6 @@ const SETUP_CHUNK: usize = 64;
 /// Setup tasks per thread, at most: enough that every thread gets some of a small scene.
 const SETUP_TASKS_PER_THREAD: usize = 8;
 
-/// A set-up lembo piece with its first and last scanline (minmax).
-type Piece<R> = (ScreenLembo<R>, u32, u32);
-
 /// A lembo of the scene with its colour.
 type SceneLembo<'a> = (&'a crate::lembo::Lembo, [f64; 3]);
 
@@ -121,7 +118,7 @@ fn set_up_lembos<R: Real>(
     task: usize,
     view: &View,
     tol: Tolerance,
-) -> SetUp<Piece<R>> {
+) -> SetUp<ScreenLembo<R>> {
     let chunk = &lembos[task * size..((task + 1) * size).min(lembos.len())];
     let mut out = Vec::with_capacity(chunk.len());
     let (mut rows, mut counts) = (Vec::with_capacity(chunk.len()), Counts::default());
@@ -135,7 +132,7 @@ fn set_up_lembos<R: Real>(
                 let width = x.iter().fold(f64::MIN, |a, &b| a.max(b))
                     - x.iter().fold(f64::MAX, |a, &b| a.min(b));
                 rows.push(RowSpan::new(j0, j1 + 1, width, cost::LEMBO_SCANLINE));
-                out.push((l, j0, j1));
+                out.push(l);
             }
         }
     }
@@ -216,14 +213,15 @@ impl<'a, T> Pieces<'a, T> {
     }
 
     /// The pieces whose rows meet rows `lo..hi`, in drawing order, with their index in that
-    /// order. A band looks only at the pieces' rows, a few bytes each, to find its own.
-    fn meeting(&self, lo: u32, hi: u32) -> impl Iterator<Item = (usize, &'a T)> + '_ {
+    /// order and their own rows (half-open). A band looks only at the pieces' rows, a few
+    /// bytes each, to find its own.
+    fn meeting(&self, lo: u32, hi: u32) -> impl Iterator<Item = (usize, &'a T, (u32, u32))> + '_ {
         self.0
             .iter()
             .flat_map(|&(pieces, rows)| pieces.iter().zip(rows))
             .enumerate()
             .filter(move |(_, (_, r))| r.lo < hi && lo < r.hi)
-            .map(|(n, (piece, _))| (n, piece))
+            .map(|(n, (piece, r))| (n, piece, (r.lo, r.hi)))
     }
 }
 
@@ -405,11 +403,11 @@ pub fn render_lembos_in_bands<R: Real>(
         |pieces, lo, hi, rows, buffers: &mut Buffers<R>| {
             let mut rop = Rop::<R>::band(rows, &scene.light, view, lo);
             let mut c = Counts::default();
-            for (n, (l, j0, j1)) in pieces.meeting(lo, hi) {
+            for (n, l, (first, end)) in pieces.meeting(lo, hi) {
                 scanlines(
                     l,
-                    (*j0).max(lo),
-                    (*j1).min(hi - 1),
+                    first.max(lo),
+                    (end - 1).min(hi - 1),
                     width,
                     k,
                     DEFAULT_SEGMENT_CAP,
@@ -441,7 +439,7 @@ pub fn render_triangles_in_bands<R: Real>(
         |pieces, lo, hi, rows, _: &mut ()| {
             let mut rop = Rop::<R>::band(rows, &scene.light, view, lo);
             let mut c = Counts::default();
-            for (_, t) in pieces.meeting(lo, hi) {
+            for (_, t, _) in pieces.meeting(lo, hi) {
                 rasterize_rows(t, lo, hi, &mut rop, &mut c);
             }
             Ok((c, rop.finish()))
@@ -480,7 +478,7 @@ mod tests {
                 },
                 |pieces, lo, _, _, _: &mut ()| {
                     if lo == 0 {
-                        *lock(&seen) = pieces.meeting(0, 2).map(|(n, &t)| (n, t)).collect();
+                        *lock(&seen) = pieces.meeting(0, 2).map(|(n, &t, _)| (n, t)).collect();
                     }
                     Ok((Counts::default(), (0, 0)))
                 },
@@ -550,8 +548,13 @@ mod tests {
         );
         let all: Vec<(u32, u32)> = tasks.concat();
         for (lo, hi) in [(0, 4), (4, 8), (8, 10), (0, 10), (4, 5)] {
-            let got: Vec<(usize, (u32, u32))> =
-                pieces.meeting(lo, hi).map(|(n, &r)| (n, r)).collect();
+            let got: Vec<(usize, (u32, u32))> = pieces
+                .meeting(lo, hi)
+                .map(|(n, &r, rows)| {
+                    assert_eq!(rows, r, "a piece's own rows");
+                    (n, r)
+                })
+                .collect();
             let want: Vec<(usize, (u32, u32))> = all
                 .iter()
                 .copied()
@@ -560,7 +563,12 @@ mod tests {
                 .collect();
             assert_eq!(got, want, "rows {lo}..{hi}");
         }
-        let ids = |lo, hi| pieces.meeting(lo, hi).map(|(n, _)| n).collect::<Vec<_>>();
+        let ids = |lo, hi| {
+            pieces
+                .meeting(lo, hi)
+                .map(|(n, _, _)| n)
+                .collect::<Vec<_>>()
+        };
         assert_eq!(ids(0, 4), [0, 1, 3]);
         assert_eq!(ids(4, 8), [1, 3, 5]);
         assert_eq!(ids(8, 10), [2, 3]);

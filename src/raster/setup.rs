@@ -53,27 +53,29 @@ struct Hoisted<R> {
 impl<R: Real> EdgeCurve<R> {
     /// The edge from its canonical screen values.
     pub fn new(y: [R; 3], x: [R; 3], reversed: bool) -> Self {
-        let mut c = EdgeCurve {
+        let hoisted = if R::COUNTS_OPERATIONS {
+            let zero = R::zero();
+            Hoisted {
+                y: (zero, zero),
+                x: (zero, zero),
+                vertex: zero,
+                dip: zero,
+            }
+        } else {
+            let (a, b) = power(&y);
+            Hoisted {
+                y: (a, b),
+                x: power(&x),
+                vertex: vertex(a, b),
+                dip: dip(a, b),
+            }
+        };
+        EdgeCurve {
             y,
             x,
             reversed,
-            hoisted: Hoisted {
-                y: (R::zero(), R::zero()),
-                x: (R::zero(), R::zero()),
-                vertex: R::zero(),
-                dip: R::zero(),
-            },
-        };
-        if !R::COUNTS_OPERATIONS {
-            let (a, b) = power(&c.y);
-            c.hoisted = Hoisted {
-                y: (a, b),
-                x: power(&c.x),
-                vertex: vertex(a, b),
-                dip: dip(a, b),
-            };
+            hoisted,
         }
-        c
     }
 
     /// Canonical t of the vertex of y's parabola, -B / 2A (not finite for a straight y),
