@@ -3,16 +3,17 @@
 //!
 //! The frame's threads are the calling thread and N - 1 scoped ones, started for the frame
 //! and joined at its end (`draw_frame`); they take work by number from shared counters, so
-//! none waits on a scheduler, and meet once, when setup is done. Setup runs in tasks of up to
-//! 64 primitives, kept in primitive order, keeping every set-up piece with its rows (lembos:
-//! minmax's scanline range; triangles: the bounding box) and a rough cost of drawing each of
-//! them (`RowSpan`). The frame's rows are then cut into bands of an even number of rows (so
-//! no 2x2 quad straddles two) by that estimate, shrinking from top to bottom (`bands`), and
+//! none waits on a scheduler, and meet once, when setup is done, waiting running rather
+//! than asleep (`wait_until`). Setup runs in tasks of up to 64 primitives, kept in
+//! primitive order, keeping every set-up piece with its rows (lembos: minmax's scanline
+//! range; triangles: the bounding box) and a rough cost of drawing each of them
+//! (`RowSpan`). The frame's rows are then cut into bands of an even number of rows (so no
+//! 2x2 quad straddles two) by that estimate, shrinking from top to bottom (`bands`), and
 //! the threads take the bands in order as they come free: the last ones are small, so the
-//! threads finish together however wrong the estimate. A band walks the pieces that meet its
-//! rows, in drawing order, through the scan-line stages of its own rows only, into its own
-//! rows of the frame buffer (`FrameBuffer::bands_mut`, `Rop::band`), which its thread also
-//! clears.
+//! threads finish together however wrong the estimate. A band walks the pieces that meet
+//! its rows, in drawing order, through the scan-line stages of its own rows only, into its
+//! own rows of the frame buffer (`FrameBuffer::bands_mut`, `Rop::band`), which its thread
+//! also clears.
 //!
 //! Every stage after setup works on one scanline (one row pair for a quad) and a pixel is
 //! only ever written by fragments of its own row, so each pixel meets the same fragments in
@@ -238,16 +239,34 @@ struct Plan<'a, 'fb, T> {
     rows: Vec<Mutex<Option<FrameRows<'fb>>>>,
 }
 
-/// Marks a frame abandoned if the thread holding it unwinds, so that no other thread waits
-/// for setup work that will never be done.
-struct Abandon<'a>(&'a AtomicBool);
+/// Counts a frame's thread as gone when it leaves its work, and marks the frame abandoned if
+/// it unwinds, so that no other thread waits for setup work that will never be done.
+struct Leaving<'a> {
+    abandoned: &'a AtomicBool,
+    gone: &'a AtomicUsize,
+}
 
-impl Drop for Abandon<'_> {
+impl Drop for Leaving<'_> {
     fn drop(&mut self) {
         if std::thread::panicking() {
-            self.0.store(true, Ordering::Release);
+            self.abandoned.store(true, Ordering::Release);
         }
+        self.gone.fetch_add(1, Ordering::Release);
     }
+}
+
+/// Waits, running, until `done()`: false if the frame is abandoned first. A frame's threads
+/// never sleep on one another: on the virtual machine we measure on, a thread put to sleep
+/// is woken when its idle virtual CPU is, a millisecond or more later, far longer than any
+/// of these waits; `yield_now` leaves the CPU to any other thread that wants it.
+fn wait_until(done: impl Fn() -> bool, abandoned: &AtomicBool) -> bool {
+    while !done() {
+        if abandoned.load(Ordering::Acquire) {
+            return false;
+        }
+        std::thread::yield_now();
+    }
+    true
 }
 
 /// Draws a frame on `threads` threads: the calling thread and `threads - 1` scoped ones
@@ -273,10 +292,13 @@ fn draw_frame<T: Send + Sync, S: Default>(
     let set: Vec<OnceLock<SetUp<T>>> = (0..tasks).map(|_| OnceLock::new()).collect();
     let (next_task, tasks_done) = (AtomicUsize::new(0), AtomicUsize::new(0));
     let next_band = AtomicUsize::new(0);
-    let abandoned = AtomicBool::new(false);
-    let plan = OnceLock::new();
+    let (abandoned, gone) = (AtomicBool::new(false), AtomicUsize::new(0));
+    let (planning, plan) = (AtomicBool::new(false), OnceLock::new());
     let work = || -> Vec<Band> {
-        let _abandon = Abandon(&abandoned);
+        let _leaving = Leaving {
+            abandoned: &abandoned,
+            gone: &gone,
+        };
         loop {
             let task = next_task.fetch_add(1, Ordering::Relaxed);
             if task >= tasks {
@@ -285,13 +307,12 @@ fn draw_frame<T: Send + Sync, S: Default>(
             let _ = set[task].set(set_up(task));
             tasks_done.fetch_add(1, Ordering::Release);
         }
-        while tasks_done.load(Ordering::Acquire) < tasks {
-            if abandoned.load(Ordering::Acquire) {
-                return Vec::new();
-            }
-            std::thread::yield_now();
+        if !wait_until(|| tasks_done.load(Ordering::Acquire) == tasks, &abandoned) {
+            return Vec::new();
         }
-        let plan: &Plan<'_, '_, T> = plan.get_or_init(|| {
+        // The first thread here plans the bands; the others wait for the plan running
+        // (`OnceLock::get_or_init` would put them to sleep).
+        if !planning.swap(true, Ordering::AcqRel) {
             let mut counts = Counts::default();
             let pieces = Pieces::join(set.iter().filter_map(OnceLock::get), &mut counts);
             let bands = bands(&pieces.row_cost(vp.width, vp.height), threads);
@@ -303,13 +324,18 @@ fn draw_frame<T: Send + Sync, S: Default>(
                 .into_iter()
                 .map(|r| Mutex::new(Some(r)))
                 .collect();
-            Plan {
+            let planned = plan.set(Plan {
                 pieces,
                 counts,
                 bands,
                 rows,
-            }
-        });
+            });
+            assert!(planned.is_ok(), "one thread plans the bands");
+        }
+        if !wait_until(|| plan.get().is_some(), &abandoned) {
+            return Vec::new();
+        }
+        let plan: &Plan<'_, '_, T> = plan.get().expect("the bands are planned");
         let (mut out, mut scratch) = (Vec::new(), S::default());
         loop {
             let b = next_band.fetch_add(1, Ordering::Relaxed);
@@ -333,6 +359,12 @@ fn draw_frame<T: Send + Sync, S: Default>(
             })
             .collect();
         let mut drawn = work();
+        // Joining a thread still drawing would put this one to sleep (`wait_until`); the
+        // others are gone once `gone` counts them all, this one included.
+        wait_until(
+            || gone.load(Ordering::Acquire) == others.len() + 1,
+            &abandoned,
+        );
         for other in others {
             match other.join() {
                 Ok(bands) => drawn.extend(bands),
