@@ -27,7 +27,8 @@
 //! cost model stay single-threaded.
 
 use super::setup::ScreenLembo;
-use super::triangle::{rasterize_rows, setup as setup_triangle, ScreenTriangle, TriangleSource};
+use super::triangle::setup::setup_onto;
+use super::triangle::{rasterize_rows, ScreenTriangle, TriangleSource};
 use super::{
     scanline_range, scanlines, set_up, Buffers, Counts, Frame, Tolerance, DEFAULT_SEGMENT_CAP,
 };
@@ -154,19 +155,17 @@ fn set_up_triangles<R: Real>(
     // vector grown by doubling would copy its set-up triangles and fault in pages twice.
     let room = chunks.len() * source.per_chunk() as usize;
     let (mut out, mut rows) = (Vec::with_capacity(room), Vec::with_capacity(room));
-    let mut counts = Counts::default();
-    let (mut triangles, mut set_up) = (Vec::new(), Vec::new());
+    let (mut counts, mut triangles) = (Counts::default(), Vec::new());
     for c in chunks {
         source.chunk(c, &mut triangles);
         for (k, t) in triangles.iter().enumerate() {
-            let id = source.id(c, k);
-            setup_triangle::<R>(id, &t.positions, &t.normals, t.color, view, &mut set_up)
+            let (id, before) = (source.id(c, k), out.len());
+            setup_onto::<R>(id, &t.positions, &t.normals, t.color, view, &mut out)
                 .count(&mut counts);
-            rows.extend(set_up.iter().map(|t| {
+            rows.extend(out[before..].iter().map(|t| {
                 let [i0, i1, j0, j1] = t.bbox;
                 RowSpan::new(j0, j1, i1 as f64 - i0 as f64, cost::TRIANGLE_ROW)
             }));
-            out.append(&mut set_up);
         }
     }
     (out, rows, counts)

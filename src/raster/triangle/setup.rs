@@ -173,6 +173,19 @@ pub fn setup<R: Real>(
     out: &mut Vec<ScreenTriangle<R>>,
 ) -> SetupOutcome {
     out.clear();
+    setup_onto(id, positions, normals, color, view, out)
+}
+
+/// [`setup`] appending to `out` (what it holds stays): a caller that keeps every set-up
+/// triangle writes each once, where it stays.
+pub fn setup_onto<R: Real>(
+    id: u32,
+    positions: &[DVec3; 3],
+    normals: &[DVec3; 3],
+    color: [f64; 3],
+    view: &View,
+    out: &mut Vec<ScreenTriangle<R>>,
+) -> SetupOutcome {
     // The near and far planes: a triangle wholly beyond one is culled, one crossing either
     // is clipped to both before anything is projected.
     let depth = depth_planes(view);
@@ -477,7 +490,7 @@ pub(super) fn fan<R: Real>(
     if n < 3 {
         return SetupOutcome::culled(TriangleCull::Degenerate);
     }
-    let mut all_outside = true;
+    let (mut all_outside, before) = (true, out.len());
     for k in 1..n - 1 {
         let [a, b, c] = [order[0], order[k], order[k + 1]];
         match ScreenTriangle::assemble(
@@ -494,7 +507,7 @@ pub(super) fn fan<R: Real>(
     }
     SetupOutcome {
         fan: n - 2,
-        cull: out.is_empty().then_some(if all_outside {
+        cull: (out.len() == before).then_some(if all_outside {
             TriangleCull::Outside
         } else {
             TriangleCull::Degenerate

@@ -1195,3 +1195,52 @@ fn triangles_beyond_a_depth_plane_are_culled_and_clipped_ones_counted() {
         (4, 4, 1)
     );
 }
+
+#[test]
+fn setup_onto_appends_what_setup_gives_and_keeps_what_was_there() {
+    let view = perspective_view();
+    let n = [DVec3::Z; 3];
+    let near = |x: f64| {
+        [
+            DVec3::new(x, -0.6, -1.5),
+            DVec3::new(x + 0.5, -0.4, 0.5),
+            DVec3::new(x, 1.2, -2.0),
+        ]
+    };
+    let cases = [
+        // Inside the guard band; far past it; through the near plane; wholly off screen;
+        // a sliver through the near plane that covers no pixel centre, so every piece of
+        // its fan is culled; wholly behind the eye.
+        [
+            DVec3::new(-1.0, -0.6, -1.5),
+            DVec3::new(1.0, -0.4, -3.0),
+            DVec3::new(-0.5, 1.2, -2.0),
+        ],
+        [
+            DVec3::new(-1.0, -0.6, -1.5),
+            DVec3::new(5000.0, -0.4, -3.0),
+            DVec3::new(-0.5, 1.2, -2.0),
+        ],
+        near(0.0),
+        near(-1.0e4),
+        [
+            DVec3::new(0.0, 0.0, -1.5),
+            DVec3::new(0.0005, 0.0, 0.5),
+            DVec3::new(0.0, 0.0005, -2.0),
+        ],
+        [DVec3::new(0.0, 0.0, 1.0), DVec3::new(1.0, 0.0, 2.0), DVec3::Y],
+    ];
+    let mut fanned_to_nothing = false;
+    for p in cases {
+        let mut alone = Vec::new();
+        let want = setup::<f32>(3, &p, &n, [1.0; 3], &view, &mut alone);
+        let earlier = setup_one::<f32>(9, &cases[0], &n, &view).unwrap();
+        let mut onto = vec![earlier.clone()];
+        let got = setup_onto::<f32>(3, &p, &n, [1.0; 3], &view, &mut onto);
+        assert_eq!(got, want, "{p:?}");
+        assert_eq!(onto[0], earlier, "what was there stays");
+        assert_eq!(onto[1..], alone[..], "{p:?}");
+        fanned_to_nothing |= want.fan > 0 && want.cull.is_some();
+    }
+    assert!(fanned_to_nothing, "a case fans into pieces all culled");
+}
