@@ -1228,7 +1228,11 @@ fn setup_onto_appends_what_setup_gives_and_keeps_what_was_there() {
             DVec3::new(0.0005, 0.0, 0.5),
             DVec3::new(0.0, 0.0005, -2.0),
         ],
-        [DVec3::new(0.0, 0.0, 1.0), DVec3::new(1.0, 0.0, 2.0), DVec3::Y],
+        [
+            DVec3::new(0.0, 0.0, 1.0),
+            DVec3::new(1.0, 0.0, 2.0),
+            DVec3::Y,
+        ],
     ];
     let mut fanned_to_nothing = false;
     for p in cases {
