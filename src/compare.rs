@@ -366,7 +366,7 @@ fn check_host_threads(job: &CompareJob, arch: &ArchConfig) -> Result<()> {
         crate::pipeline::Path::Lembo,
         crate::pipeline::Path::Triangle,
     ]
-    .map(|p| crate::pipeline::graph::units(p, arch).len())
+    .map(|p| arch.instances(p).len())
     .into_iter()
     .min()
     .unwrap_or(1);

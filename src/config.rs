@@ -24,7 +24,9 @@
 //! crossbar, and DRAM timing beyond a bandwidth-limited port.
 
 use crate::error::{read_text_file, Error, Result};
-use crate::pipeline::graph::{self, UnitKind, BOUNDARIES, LINK_KEYS};
+use crate::graph::{
+    self, LinkConfig, Path as UnitPath, UnitInstance, UnitKind, BOUNDARIES, LINK_KEYS,
+};
 use crate::scene::parse_strict;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -318,36 +320,6 @@ pub struct FrameBufferConfig {
     pub bytes_per_fragment_written: u64,
 }
 
-/// One FIFO between two units: a bounded queue with a transit latency (DESIGN.md §3).
-#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
-#[serde(default, deny_unknown_fields)]
-pub struct LinkConfig {
-    /// Capacity \[items\]: a producer that has pushed `fifo_depth` items the consumer has not
-    /// yet popped waits for a credit. At least 1.
-    pub fifo_depth: u32,
-    /// Transit time \[cycles\]: an item pushed at cycle p can be popped at p + latency_cycles
-    /// at the earliest. At least 1 (a register between two units).
-    pub latency_cycles: u64,
-}
-
-impl LinkConfig {
-    /// A link `fifo_depth` items deep with a transit time of `latency_cycles`.
-    pub const fn new(fifo_depth: u32, latency_cycles: u64) -> LinkConfig {
-        LinkConfig {
-            fifo_depth,
-            latency_cycles,
-        }
-    }
-}
-
-impl Default for LinkConfig {
-    /// A shallow FIFO behind one register stage, for a link read on its own. Within an
-    /// [`ArchConfig`] each boundary has its own defaults, in [`LinksConfig`].
-    fn default() -> LinkConfig {
-        LinkConfig::new(4, 1)
-    }
-}
-
 /// The file's shape of one [`LinkConfig`]: a field left out keeps its boundary's default;
 /// `null` is refused like any other value of the wrong type.
 #[derive(Deserialize, Default)]
@@ -404,6 +376,11 @@ impl LinksConfig {
     /// When the graph has no such boundary.
     pub fn get_mut(&mut self, from: UnitKind, to: UnitKind) -> &mut LinkConfig {
         &mut self.0[graph::boundary(from, to)]
+    }
+
+    /// Every boundary of both paths with its link, in dataflow order.
+    pub fn boundaries(&self) -> impl Iterator<Item = (&'static graph::Boundary, &LinkConfig)> {
+        BOUNDARIES.iter().zip(&self.0)
     }
 
     /// Every link, mutable, in dataflow order (for tools and tests that set them all).
@@ -649,21 +626,58 @@ impl ArchConfig {
             .expect("the embedded baseline architecture is valid")
     }
 
-    /// Unit instances of the lembo path: Setup, MinMax and IntervalManager, the replicated
-    /// stages, and the frame-buffer port.
+    /// How many instances of `kind` this architecture has, and the latency of each
+    /// \[cycles\]: the one place a unit kind's configuration section is found. A blend unit
+    /// sits in each ROP, so it has the ROPs' count and latency.
+    pub fn unit(&self, kind: UnitKind) -> (u32, u64) {
+        match kind {
+            UnitKind::Setup => (1, self.setup.latency_cycles),
+            UnitKind::MinMax => (self.minmax.count, self.minmax.latency_cycles),
+            UnitKind::IntervalManager => (
+                self.interval_manager.count,
+                self.interval_manager.latency_cycles,
+            ),
+            UnitKind::Segmenter => (self.segmenter.count, self.segmenter.latency_cycles),
+            UnitKind::Subsegmenter => (self.subsegmenter.count, self.subsegmenter.latency_cycles),
+            UnitKind::FragmentRasterizer => (self.rasterizer.count, self.rasterizer.latency_cycles),
+            UnitKind::TriangleSetup => (1, self.triangle_setup.latency_cycles),
+            UnitKind::TriangleRasterizer => (
+                self.triangle_rasterizer.count,
+                self.triangle_rasterizer.latency_cycles,
+            ),
+            UnitKind::Rop | UnitKind::BlendUnit => (self.rop.count, self.rop.latency_cycles),
+            UnitKind::FrameBuffer => (1, 1),
+        }
+    }
+
+    /// The units `path` instantiates on this architecture, in dataflow order, with their
+    /// latencies \[cycles\].
+    pub fn instances(&self, path: UnitPath) -> Vec<(UnitInstance, u64)> {
+        graph::instances(path, |k| self.unit(k).0)
+            .into_iter()
+            .map(|u| {
+                let latency = self.unit(u.kind).1;
+                (u, latency)
+            })
+            .collect()
+    }
+
+    /// Unit instances of the lembo path (saturating, so that an unvalidated configuration
+    /// cannot overflow).
     pub fn units(&self) -> u32 {
-        // Saturating so that an unvalidated configuration cannot overflow; a validated one
-        // is at most 2 + 6 * MAX_UNIT_COUNT.
-        [
-            self.minmax.count,
-            self.interval_manager.count,
-            self.segmenter.count,
-            self.subsegmenter.count,
-            self.rasterizer.count,
-            self.rop.count,
-        ]
-        .into_iter()
-        .fold(1 + 1, u32::saturating_add)
+        graph::instance_count(UnitPath::Lembo, |k| self.unit(k).0)
+    }
+
+    /// The FIFO entries of every link `units` instantiate: each boundary's crossbar has one
+    /// link per (producer, consumer) pair, each `fifo_depth` entries deep; a boundary
+    /// between kinds absent from `units` has no links. Item sizes are not modelled, so this
+    /// counts entries, not bytes \[entries\].
+    pub fn fifo_entries(&self, units: &[UnitInstance]) -> u64 {
+        let count = |kind: UnitKind| units.iter().filter(|u| u.kind == kind).count() as u64;
+        self.links
+            .boundaries()
+            .map(|(b, link)| count(b.from) * count(b.to) * link.fifo_depth as u64)
+            .sum()
     }
 
     /// Checks every value against what the simulator accepts; the first refused value is

@@ -6,7 +6,7 @@
 //! this trait: it is always `f64`.
 
 use crate::cost::counted::Op;
-use crate::pipeline::graph::UnitKind;
+use crate::graph::UnitKind;
 use num_traits::Float;
 use std::fmt::Debug;
 

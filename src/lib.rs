@@ -58,6 +58,7 @@ pub mod datapath;
 pub mod datapath_study;
 pub mod discoid;
 pub mod error;
+pub mod graph;
 pub mod job;
 pub mod lembo;
 pub mod output;

@@ -16,7 +16,7 @@
 //! `other`, which the extreme method never needs (a test says it stays 0).
 
 use crate::datapath::Real;
-use crate::pipeline::graph::{UnitKind, KINDS};
+use crate::graph::{UnitKind, KINDS};
 use num_traits::{Float, Num, NumCast, One, ToPrimitive, Zero};
 use std::cell::Cell;
 use std::cmp::Ordering;

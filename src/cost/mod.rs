@@ -9,7 +9,7 @@ pub mod tech;
 use crate::camera::View;
 use crate::datapath::{Datapath, Real};
 use crate::error::Result;
-use crate::pipeline::graph::UnitKind;
+use crate::graph::UnitKind;
 use crate::raster::fragment::FragmentSink;
 use crate::raster::setup::ScreenLembo;
 use crate::raster::subsegmenter::Subsegment;

@@ -17,7 +17,7 @@ use super::counted::{OpTable, OPS};
 use super::tech::Tech;
 use crate::config::ArchConfig;
 use crate::datapath::Datapath;
-use crate::pipeline::graph::{boundaries, UnitKind};
+use crate::graph::UnitKind;
 use crate::pipeline::CycleReport;
 use serde::Serialize;
 
@@ -157,7 +157,7 @@ pub fn cost(tech: &Tech, arch: &ArchConfig, datapath: Datapath, work: &Work) -> 
         }
         // Input FIFOs: one link from every producer instance.
         let (mut fifo_um2, mut fifo_pj) = (0.0, 0.0);
-        for (b, link) in boundaries(arch).filter(|(b, _)| b.to == u.kind) {
+        for (b, link) in arch.links.boundaries().filter(|(b, _)| b.to == u.kind) {
             let producers = instances(b.from);
             let bits = b.item_words as f64 * word_bits;
             fifo_um2 +=

@@ -94,7 +94,7 @@ pub(super) fn run_discoids(
         FrameBuffer::stored_bytes(scene.viewport.width, scene.viewport.height),
         blend.accumulation_buffer_bytes,
         primitive_bytes,
-        model.arch().map(|a| pipeline::fifo_entries(a, &units)),
+        model.arch().map(|a| a.fifo_entries(&units)),
     );
     let report = Report {
         schema_version: SCHEMA_VERSION,

@@ -708,7 +708,7 @@ pub fn run_path(
         FrameBuffer::stored_bytes(scene.viewport.width, scene.viewport.height),
         0,
         primitives.bytes,
-        model.arch().map(|a| pipeline::fifo_entries(a, &units)),
+        model.arch().map(|a| a.fifo_entries(&units)),
     );
     let tess = match &route {
         Route::Triangles(t) => Some(t.level()),
@@ -1031,7 +1031,7 @@ fn settings(
 /// The host options of a timed run of `job` on `path`: `--host-threads` is refused when it
 /// exceeds the units the run instantiates (each host thread runs at least one unit).
 fn sim_options(job: &RenderJob, arch: &ArchConfig, path: pipeline::Path) -> Result<SimOptions> {
-    let units = pipeline::graph::units(path, arch).len();
+    let units = arch.instances(path).len();
     if job.host_threads as usize > units {
         return Err(Error::invalid(
             COMMAND_LINE,

@@ -15,7 +15,7 @@
 //! - [`runtime`]: the framework: clocks, links, the executor, the timeline. It knows no
 //!   unit.
 //! - [`units`]: one file per box of Figure 5, each using only [`runtime::Ctx`].
-//! - [`graph`]: which units each path instantiates and which boundaries carry links,
+//! - [`crate::graph`]: which units each path instantiates and which boundaries carry links,
 //!   written once.
 //! - this file: elaboration (units, links, host threads) and the cycle report;
 //!   [`discoid`]: the timed discoid passes.
@@ -24,11 +24,10 @@
 //! and each path only its own.
 
 pub mod discoid;
-pub mod graph;
 pub mod runtime;
 pub mod units;
 
-pub use graph::{fifo_entries, lembo_units, triangle_units, Path, UnitInstance, UnitKind};
+pub use crate::graph::{Path, UnitInstance, UnitKind};
 pub use runtime::{Cycle, SimOptions};
 
 use crate::camera::View;
@@ -238,7 +237,7 @@ pub fn run_timed(
     }
 }
 
-/// The links of one boundary of [`graph::BOUNDARIES`]: producers `producers` to consumers
+/// The links of one boundary of [`crate::graph::BOUNDARIES`]: producers `producers` to consumers
 /// `consumers` (global unit indices), each link configured as `arch.links` says for that
 /// boundary, with the channels of each link whose ends are on different host threads.
 struct Crossbar<T> {
@@ -629,7 +628,7 @@ fn run_in<R: Real>(
             recoveries: Recoveries::default(),
         });
     };
-    let planned = graph::units(path, arch);
+    let planned = arch.instances(path);
     let units: Vec<UnitInstance> = planned.iter().map(|u| u.0.clone()).collect();
     let threads = options.host_threads.clamp(1, units.len());
     let thread = runtime::partition(units.len(), threads, options.partition_seed);

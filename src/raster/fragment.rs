@@ -201,7 +201,7 @@ mod tests {
     #[test]
     fn fragment_counts_what_a_hand_worked_subsegment_costs() {
         use crate::cost::counted::{counting, Counted, Op};
-        use crate::pipeline::graph::UnitKind;
+        use crate::graph::UnitKind;
         type C = Counted<f64>;
         let l = screen_lembo::<C>(x_linear(), y_plane());
         let p = |x: f64| CurvePoint {

@@ -103,7 +103,7 @@ mod tests {
     #[test]
     fn minmax_counts_what_a_hand_worked_lembo_costs() {
         use crate::cost::counted::{counting, Counted, Op, OPS};
-        use crate::pipeline::graph::UnitKind;
+        use crate::graph::UnitKind;
         let l = screen_lembo::<Counted<f64>>(x_linear(), y_bowl());
         let (_, ops) = counting(UnitKind::MinMax, || y_range(&l));
         let central = matches!(l.partition, Partition::Central { .. }) as u64;

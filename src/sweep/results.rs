@@ -4,8 +4,8 @@
 
 use super::{spec::Spec, Shard, RESULTS_CSV, RESULTS_JSONL, SPEC_JSON};
 use crate::error::{Error, Result};
+use crate::graph::KINDS;
 use crate::output::write_files;
-use crate::pipeline::graph::KINDS;
 use crate::report::html::{self, REPORT_HTML};
 use serde::Deserialize;
 use serde_json::Value;

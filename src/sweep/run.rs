@@ -115,7 +115,7 @@ fn clamp_host_threads(plan: &mut Plan, host_threads: u32) {
             } else {
                 crate::pipeline::Path::Lembo
             };
-            let units = crate::pipeline::graph::units(path, arch).len().max(1);
+            let units = arch.instances(path).len().max(1);
             rj.host_threads = host_threads.min(units as u32);
         }
     }

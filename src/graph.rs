@@ -1,14 +1,18 @@
-//! The unit graph, described once: which kinds of unit each path instantiates, how many
-//! of each, and which boundaries between kinds carry links. Elaboration (`run_in` in the parent module),
-//! the report's unit list, the FIFO entry count and the sweep's column order all read it,
-//! so adding a unit means adding it here and writing its body in [`super::units`].
+//! The unit graph, described once: the kinds of unit, which kinds each path instantiates,
+//! and which boundaries between kinds carry links, with each link's defaults. Elaboration
+//! ([`crate::pipeline`]), the architecture file's `links` ([`crate::config`]), the report's
+//! unit list, the FIFO entry count, the counting runs' operation tables and the sweep's
+//! column order all read it, so adding a unit means adding it here and writing its body in
+//! `pipeline/units/`.
+//!
+//! A leaf of the crate: it imports nothing of it, so the functional model (which charges
+//! operations to unit kinds), the configuration and the timed pipeline can all depend on it.
 //!
 //! Every boundary is a crossbar: one link (FIFO depth and latency from the architecture's
 //! `links`) from every producer instance to every consumer instance; which link a producer
 //! pushes an item on is its dispatch rule (round-robin, or by screen tile into the ROPs).
 
-use crate::config::{ArchConfig, LinkConfig};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// The kinds of unit, in dataflow order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize)]
@@ -85,28 +89,6 @@ impl UnitKind {
                 | UnitKind::BlendUnit
         )
     }
-
-    /// Instances in `arch` and the latency of each \[cycles\].
-    pub fn in_arch(self, arch: &ArchConfig) -> (u32, u64) {
-        match self {
-            UnitKind::Setup => (1, arch.setup.latency_cycles),
-            UnitKind::MinMax => (arch.minmax.count, arch.minmax.latency_cycles),
-            UnitKind::IntervalManager => (
-                arch.interval_manager.count,
-                arch.interval_manager.latency_cycles,
-            ),
-            UnitKind::Segmenter => (arch.segmenter.count, arch.segmenter.latency_cycles),
-            UnitKind::Subsegmenter => (arch.subsegmenter.count, arch.subsegmenter.latency_cycles),
-            UnitKind::FragmentRasterizer => (arch.rasterizer.count, arch.rasterizer.latency_cycles),
-            UnitKind::TriangleSetup => (1, arch.triangle_setup.latency_cycles),
-            UnitKind::TriangleRasterizer => (
-                arch.triangle_rasterizer.count,
-                arch.triangle_rasterizer.latency_cycles,
-            ),
-            UnitKind::Rop | UnitKind::BlendUnit => (arch.rop.count, arch.rop.latency_cycles),
-            UnitKind::FrameBuffer => (1, 1),
-        }
-    }
 }
 
 /// Which primitives the timed pipeline draws.
@@ -135,6 +117,36 @@ impl Path {
             ],
             Path::Triangle => &[TriangleSetup, TriangleRasterizer, Rop, FrameBuffer],
         }
+    }
+}
+
+/// One FIFO between two units: a bounded queue with a transit latency (DESIGN.md §3).
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
+#[serde(default, deny_unknown_fields)]
+pub struct LinkConfig {
+    /// Capacity \[items\]: a producer that has pushed `fifo_depth` items the consumer has not
+    /// yet popped waits for a credit. At least 1.
+    pub fifo_depth: u32,
+    /// Transit time \[cycles\]: an item pushed at cycle p can be popped at p + latency_cycles
+    /// at the earliest. At least 1 (a register between two units).
+    pub latency_cycles: u64,
+}
+
+impl LinkConfig {
+    /// A link `fifo_depth` items deep with a transit time of `latency_cycles`.
+    pub const fn new(fifo_depth: u32, latency_cycles: u64) -> LinkConfig {
+        LinkConfig {
+            fifo_depth,
+            latency_cycles,
+        }
+    }
+}
+
+impl Default for LinkConfig {
+    /// A shallow FIFO behind one register stage, for a link read on its own. Within an
+    /// architecture each boundary has its own defaults, in [`BOUNDARIES`].
+    fn default() -> LinkConfig {
+        LinkConfig::new(4, 1)
     }
 }
 
@@ -284,11 +296,6 @@ pub fn boundary(from: UnitKind, to: UnitKind) -> usize {
         .unwrap_or_else(|| panic!("the unit graph has no boundary {from:?} -> {to:?}"))
 }
 
-/// Every boundary of both paths with its link configuration in `arch`.
-pub fn boundaries(arch: &ArchConfig) -> impl Iterator<Item = (&Boundary, &LinkConfig)> {
-    BOUNDARIES.iter().zip(arch.links.all().map(|(_, l)| l))
-}
-
 /// One instantiated unit.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct UnitInstance {
@@ -298,11 +305,11 @@ pub struct UnitInstance {
     pub kind: UnitKind,
 }
 
-/// The units `path` instantiates on `arch`, in dataflow order, with their latencies.
-pub fn units(path: Path, arch: &ArchConfig) -> Vec<(UnitInstance, u64)> {
+/// The units `path` instantiates when kind `k` has `count(k)` instances, in dataflow order.
+pub fn instances(path: Path, count: impl Fn(UnitKind) -> u32) -> Vec<UnitInstance> {
     let mut units = Vec::new();
     for &kind in path.kinds() {
-        let (n, latency) = kind.in_arch(arch);
+        let n = count(kind);
         for i in 0..n {
             // A replicable front-end unit keeps its plain name while single, as in
             // Figure 5 (and in every report before it could be replicated).
@@ -311,34 +318,19 @@ pub fn units(path: Path, arch: &ArchConfig) -> Vec<(UnitInstance, u64)> {
             } else {
                 kind.name().to_string()
             };
-            units.push((UnitInstance { name, kind }, latency));
+            units.push(UnitInstance { name, kind });
         }
     }
     units
 }
 
-/// The units a lembo scene instantiates, in dataflow order.
-pub fn lembo_units(arch: &ArchConfig) -> Vec<UnitInstance> {
-    units(Path::Lembo, arch).into_iter().map(|u| u.0).collect()
-}
-
-/// The units the triangle path instantiates, in dataflow order.
-pub fn triangle_units(arch: &ArchConfig) -> Vec<UnitInstance> {
-    units(Path::Triangle, arch)
-        .into_iter()
-        .map(|u| u.0)
-        .collect()
-}
-
-/// The FIFO entries of every link `units` instantiate: each boundary's crossbar has one
-/// link per (producer, consumer) pair, each `fifo_depth` entries deep; a boundary between
-/// kinds absent from `units` has no links. Item sizes are not modelled, so this counts
-/// entries, not bytes \[entries\].
-pub fn fifo_entries(arch: &ArchConfig, units: &[UnitInstance]) -> u64 {
-    let count = |kind: UnitKind| units.iter().filter(|u| u.kind == kind).count() as u64;
-    boundaries(arch)
-        .map(|(b, link)| count(b.from) * count(b.to) * link.fifo_depth as u64)
-        .sum()
+/// How many units `path` instantiates when kind `k` has `count(k)` instances, saturating
+/// (so that an unvalidated count cannot overflow).
+pub fn instance_count(path: Path, count: impl Fn(UnitKind) -> u32) -> u32 {
+    path.kinds()
+        .iter()
+        .map(|&k| count(k))
+        .fold(0, u32::saturating_add)
 }
 
 #[cfg(test)]
