@@ -367,7 +367,12 @@ impl LinksConfig {
     /// # Panics
     /// When the graph has no such boundary.
     pub fn get(&self, from: UnitKind, to: UnitKind) -> &LinkConfig {
-        &self.0[graph::boundary(from, to)]
+        &self.0[graph::boundary(from, to).expect("a boundary of the unit graph")]
+    }
+
+    /// The link of the boundary named `key`, if the graph has one.
+    pub fn by_key(&self, key: &str) -> Option<&LinkConfig> {
+        LINK_KEYS.iter().position(|k| *k == key).map(|i| &self.0[i])
     }
 
     /// The link of the boundary from `from` to `to`, mutable.
@@ -375,7 +380,7 @@ impl LinksConfig {
     /// # Panics
     /// When the graph has no such boundary.
     pub fn get_mut(&mut self, from: UnitKind, to: UnitKind) -> &mut LinkConfig {
-        &mut self.0[graph::boundary(from, to)]
+        &mut self.0[graph::boundary(from, to).expect("a boundary of the unit graph")]
     }
 
     /// Every boundary of both paths with its link, in dataflow order.
@@ -653,7 +658,13 @@ impl ArchConfig {
     /// The units `path` instantiates on this architecture, in dataflow order, with their
     /// latencies \[cycles\].
     pub fn instances(&self, path: UnitPath) -> Vec<(UnitInstance, u64)> {
-        graph::instances(path, |k| self.unit(k).0)
+        self.instances_with(path, false)
+    }
+
+    /// [`ArchConfig::instances`], with the units a scene with discoids adds when `discoids`
+    /// ([`graph::DISCOID_KINDS`]).
+    pub fn instances_with(&self, path: UnitPath, discoids: bool) -> Vec<(UnitInstance, u64)> {
+        graph::instances(&graph::kinds(path, discoids), |k| self.unit(k).0)
             .into_iter()
             .map(|u| {
                 let latency = self.unit(u.kind).1;

@@ -1,6 +1,7 @@
 //! The crate's error type. Every input error names the file (or flag), the field path and
 //! the offending value; `main` maps input errors to exit status 2 (DESIGN.md §8).
 
+use crate::graph::GraphError;
 use std::fmt;
 use std::path::PathBuf;
 
@@ -74,13 +75,24 @@ pub enum Error {
     /// A simulator fault (a host thread of the timed model panicked or could not start, or a
     /// merge took items out of order). Exit status 1.
     Internal(String),
+    /// The unit graph a timed run was to elaborate is mis-wired (a defect of the graph
+    /// description or of a unit's declaration, found before anything runs). Exit status 1.
+    Graph(GraphError),
+}
+
+impl From<GraphError> for Error {
+    fn from(e: GraphError) -> Self {
+        Error::Graph(e)
+    }
 }
 
 impl Error {
     /// Process exit status for this error: 2 for bad input, 1 otherwise.
     pub fn exit_code(&self) -> u8 {
         match self {
-            Error::Write { .. } | Error::Deadlock { .. } | Error::Internal(_) => 1,
+            Error::Write { .. } | Error::Deadlock { .. } | Error::Internal(_) | Error::Graph(_) => {
+                1
+            }
             _ => 2,
         }
     }
@@ -151,6 +163,10 @@ impl fmt::Display for Error {
                 write!(f, "the timed pipeline deadlocked: {}", waiting.join("; "))
             }
             Error::Internal(what) => write!(f, "internal simulator error: {what}"),
+            Error::Graph(e) => write!(
+                f,
+                "internal simulator error: the unit graph is mis-wired: {e}"
+            ),
         }
     }
 }

@@ -57,39 +57,62 @@ pub const KINDS: [UnitKind; 11] = [
     UnitKind::FrameBuffer,
 ];
 
+/// What the graph says of one kind: its entry.
+struct KindInfo {
+    /// The name in reports.
+    name: &'static str,
+    /// Whether the architecture replicates it from the start.
+    replicated: bool,
+    /// The kind this one sits inside, if any: listed and priced, its cycles its host's, and
+    /// not elaborated as a unit of its own.
+    inside: Option<UnitKind>,
+}
+
 impl UnitKind {
+    /// The graph's entry for this kind.
+    const fn info(self) -> KindInfo {
+        use UnitKind::*;
+        let (name, replicated, inside) = match self {
+            Setup => ("Setup", false, None),
+            MinMax => ("MinMax", false, None),
+            IntervalManager => ("IntervalManager", false, None),
+            Segmenter => ("Segmenter", true, None),
+            Subsegmenter => ("Subsegmenter", true, None),
+            FragmentRasterizer => ("FragmentRasterizer", true, None),
+            TriangleSetup => ("TriangleSetup", false, None),
+            TriangleRasterizer => ("TriangleRasterizer", true, None),
+            Rop => ("Rop", true, None),
+            BlendUnit => ("BlendUnit", true, Some(Rop)),
+            FrameBuffer => ("FrameBuffer", false, None),
+        };
+        KindInfo {
+            name,
+            replicated,
+            inside,
+        }
+    }
+
     /// The kind's name, as in reports.
     pub fn name(self) -> &'static str {
-        match self {
-            UnitKind::Setup => "Setup",
-            UnitKind::MinMax => "MinMax",
-            UnitKind::IntervalManager => "IntervalManager",
-            UnitKind::Segmenter => "Segmenter",
-            UnitKind::Subsegmenter => "Subsegmenter",
-            UnitKind::FragmentRasterizer => "FragmentRasterizer",
-            UnitKind::TriangleSetup => "TriangleSetup",
-            UnitKind::TriangleRasterizer => "TriangleRasterizer",
-            UnitKind::Rop => "Rop",
-            UnitKind::BlendUnit => "BlendUnit",
-            UnitKind::FrameBuffer => "FrameBuffer",
-        }
+        self.info().name
     }
 
     /// Whether the architecture replicates this kind from the start (its instances are
     /// named `Kind[i]` even when single). MinMax and the IntervalManager are replicable too
     /// but named `Kind[i]` only when there is more than one.
     pub fn replicated(self) -> bool {
-        matches!(
-            self,
-            UnitKind::Segmenter
-                | UnitKind::Subsegmenter
-                | UnitKind::FragmentRasterizer
-                | UnitKind::TriangleRasterizer
-                | UnitKind::Rop
-                | UnitKind::BlendUnit
-        )
+        self.info().replicated
+    }
+
+    /// The kind whose units this kind's units sit inside (a blend unit in its ROP), which
+    /// does their work in its own cycles; None for a unit the pipeline elaborates.
+    pub fn inside(self) -> Option<UnitKind> {
+        self.info().inside
     }
 }
+
+/// The kinds a scene with discoids adds to either path, each inside a kind of the path.
+pub const DISCOID_KINDS: [UnitKind; 1] = [UnitKind::BlendUnit];
 
 /// Which primitives the timed pipeline draws.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -162,10 +185,6 @@ pub struct Boundary {
     pub to: UnitKind,
     /// The link each of its crossbar's links has unless the architecture says otherwise.
     pub default: LinkConfig,
-    /// Datapath words an item takes in its FIFO (32 bits each in f32, 64 in f64), for the
-    /// FIFOs' area and energy (DESIGN.md §12): the fields the consumer reads, counted from
-    /// the item's type.
-    pub item_words: u32,
 }
 
 /// Every boundary of both paths, in dataflow order (the lembo path's, then the triangle
@@ -181,32 +200,20 @@ pub const BOUNDARIES: [Boundary; 9] = {
         to: UnitKind,
         depth: u32,
         latency: u64,
-        item_words: u32,
     ) -> Boundary {
         Boundary {
             key,
             from,
             to,
             default: LinkConfig::new(depth, latency),
-            item_words,
         }
     }
     [
         // Depth 8, latency 1: an item is a whole projected lembo (twelve vectors), a wide
         // entry, so few are buffered; adjacent units on one die, one register stage.
-        // Item: the screen lembo, x, y, z and the normal as six-coefficient quadratics (36
-        // words), its colour (3) and id (1): 40 words.
-        b("setup_to_minmax", Setup, MinMax, 8, 1, 40),
+        b("setup_to_minmax", Setup, MinMax, 8, 1),
         // Depth 8, latency 1: as setup_to_minmax, a lembo with its scanline range.
-        // Item: the screen lembo (40) with its first and last scanline (2).
-        b(
-            "minmax_to_interval_manager",
-            MinMax,
-            IntervalManager,
-            8,
-            1,
-            42,
-        ),
+        b("minmax_to_interval_manager", MinMax, IntervalManager, 8, 1),
         // Depth 32, latency 1: intervals are narrow (two roots and a scanline), and 32
         // absorb a lembo's burst of intervals against the segmenters' variable rate.
         b(
@@ -215,20 +222,10 @@ pub const BOUNDARIES: [Boundary; 9] = {
             Segmenter,
             32,
             1,
-            // Item: two roots (u, v), the walk direction (2), the scanline and lembo id.
-            8,
         ),
         // Depth 32, latency 1: narrow segments; the subsegmenter's work per segment varies
         // with curvature, so the FIFO smooths it.
-        // Item: a chord's two domain points (4), its scanline and lembo id.
-        b(
-            "segmenter_to_subsegmenter",
-            Segmenter,
-            Subsegmenter,
-            32,
-            1,
-            6,
-        ),
+        b("segmenter_to_subsegmenter", Segmenter, Subsegmenter, 32, 1),
         // Depth 32, latency 1: narrow subsegments, one per rasterizer start.
         b(
             "subsegmenter_to_rasterizer",
@@ -236,19 +233,15 @@ pub const BOUNDARIES: [Boundary; 9] = {
             FragmentRasterizer,
             32,
             1,
-            // Item: two domain points (4), their screen x (2), scanline and lembo id.
-            8,
         ),
         // Depth 64, latency 2: a full crossbar from every rasterizer to every ROP costs one
         // cycle of arbitration on top of the register stage; an item is a span of at most
         // one tile row, and GPU ROP input queues hold tens of such quads or spans.
-        // Item: a fragment's pixel (2), domain point (2), depth and lembo id.
-        b("rasterizer_to_rop", FragmentRasterizer, Rop, 64, 2, 6),
+        b("rasterizer_to_rop", FragmentRasterizer, Rop, 64, 2),
         // Depth 32, latency 4: the request queue of the memory controller, and the wires
         // and arbitration to reach it from the ROPs. DRAM access latency itself is not
         // modelled.
-        // Item: a write request, address and colour with depth.
-        b("rop_to_framebuffer", Rop, FrameBuffer, 32, 4, 3),
+        b("rop_to_framebuffer", Rop, FrameBuffer, 32, 4),
         // Depth 32, latency 1: set-up triangles to the triangle rasterizers, as
         // subsegmenter_to_rasterizer in the lembo path.
         b(
@@ -257,20 +250,9 @@ pub const BOUNDARIES: [Boundary; 9] = {
             TriangleRasterizer,
             32,
             1,
-            // Item: the set-up triangle: edge functions (12), depths and 1/w (6), normals
-            // and positions over w (18), bounding box (4), area and id.
-            42,
         ),
         // Depth 64, latency 2: as rasterizer_to_rop; an item is a quad-row piece.
-        // Item: a fragment's pixel (2), depth, normal (3), position (3) and triangle id.
-        b(
-            "triangle_rasterizer_to_rop",
-            TriangleRasterizer,
-            Rop,
-            64,
-            2,
-            10,
-        ),
+        b("triangle_rasterizer_to_rop", TriangleRasterizer, Rop, 64, 2),
     ]
 };
 
@@ -285,15 +267,9 @@ pub const LINK_KEYS: [&str; BOUNDARIES.len()] = {
     keys
 };
 
-/// The index in [`BOUNDARIES`] of the boundary from `from` to `to`.
-///
-/// # Panics
-/// When the graph has no such boundary: a programming error, not an input one.
-pub fn boundary(from: UnitKind, to: UnitKind) -> usize {
-    BOUNDARIES
-        .iter()
-        .position(|b| (b.from, b.to) == (from, to))
-        .unwrap_or_else(|| panic!("the unit graph has no boundary {from:?} -> {to:?}"))
+/// The index in [`BOUNDARIES`] of the boundary from `from` to `to`, if there is one.
+pub fn boundary(from: UnitKind, to: UnitKind) -> Option<usize> {
+    BOUNDARIES.iter().position(|b| (b.from, b.to) == (from, to))
 }
 
 /// One instantiated unit.
@@ -305,10 +281,24 @@ pub struct UnitInstance {
     pub kind: UnitKind,
 }
 
-/// The units `path` instantiates when kind `k` has `count(k)` instances, in dataflow order.
-pub fn instances(path: Path, count: impl Fn(UnitKind) -> u32) -> Vec<UnitInstance> {
+/// The kinds `path` instantiates, in dataflow order, with the [`DISCOID_KINDS`] whose host
+/// is on the path when the scene has discoids.
+pub fn kinds(path: Path, discoids: bool) -> Vec<UnitKind> {
+    let mut kinds = path.kinds().to_vec();
+    if discoids {
+        let hosted = DISCOID_KINDS
+            .iter()
+            .filter(|k| k.inside().is_some_and(|host| kinds.contains(&host)));
+        kinds = kinds.iter().chain(hosted).copied().collect();
+        kinds.sort();
+    }
+    kinds
+}
+
+/// The units of `kinds` when kind `k` has `count(k)` instances, in the order of `kinds`.
+pub fn instances(kinds: &[UnitKind], count: impl Fn(UnitKind) -> u32) -> Vec<UnitInstance> {
     let mut units = Vec::new();
-    for &kind in path.kinds() {
+    for &kind in kinds {
         let n = count(kind);
         for i in 0..n {
             // A replicable front-end unit keeps its plain name while single, as in
@@ -331,6 +321,145 @@ pub fn instance_count(path: Path, count: impl Fn(UnitKind) -> u32) -> u32 {
         .iter()
         .map(|&k| count(k))
         .fold(0, u32::saturating_add)
+}
+
+/// A graph to elaborate: the kinds it instantiates, in dataflow order, and the boundaries
+/// that may join them (those with both ends among the kinds carry links). [`Graph::of`] is
+/// each path's; the pipeline's builder checks any description before it runs one
+/// (`pipeline::builder::check`), so a broken one is refused with a [`GraphError`].
+#[derive(Clone, Copy, Debug)]
+pub struct Graph<'g> {
+    /// The kinds, in dataflow order.
+    pub kinds: &'g [UnitKind],
+    /// The boundaries.
+    pub boundaries: &'g [Boundary],
+}
+
+impl Graph<'static> {
+    /// The graph of `path`: its kinds and [`BOUNDARIES`].
+    pub fn of(path: Path) -> Self {
+        Graph {
+            kinds: path.kinds(),
+            boundaries: &BOUNDARIES,
+        }
+    }
+}
+
+impl Graph<'_> {
+    /// The boundaries with both ends among the graph's kinds: its links.
+    pub fn wired(&self) -> impl Iterator<Item = &Boundary> + '_ {
+        self.boundaries
+            .iter()
+            .filter(|b| self.kinds.contains(&b.from) && self.kinds.contains(&b.to))
+    }
+}
+
+/// Why a graph description cannot be elaborated: a defect of the description or of a unit's
+/// declaration, found before anything runs.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum GraphError {
+    /// A kind the graph instantiates has no unit body to elaborate.
+    NoBody {
+        /// The kind.
+        kind: UnitKind,
+    },
+    /// A kind appears twice in the graph's kinds.
+    Repeated {
+        /// The kind.
+        kind: UnitKind,
+    },
+    /// A unit reads items, but no boundary of the graph feeds it.
+    Unfed {
+        /// The unit's kind.
+        kind: UnitKind,
+    },
+    /// A unit writes items, but no boundary of the graph takes them.
+    Undrained {
+        /// The unit's kind.
+        kind: UnitKind,
+    },
+    /// A boundary feeds a unit that reads nothing (a source), or leaves one that writes
+    /// nothing (a sink).
+    NoPort {
+        /// The boundary's name.
+        boundary: &'static str,
+        /// The unit without the port.
+        kind: UnitKind,
+    },
+    /// Two boundaries feed one kind, or leave one kind (a unit has one input and one
+    /// output crossbar).
+    Fanned {
+        /// The kind.
+        kind: UnitKind,
+        /// The first boundary.
+        first: &'static str,
+        /// The second boundary.
+        second: &'static str,
+    },
+    /// A boundary's consumer reads another item type than its producer writes.
+    ItemMismatch {
+        /// The boundary's name.
+        boundary: &'static str,
+        /// The producer's output type.
+        written: &'static str,
+        /// The consumer's input type.
+        read: &'static str,
+    },
+    /// A boundary runs against the dataflow order of the graph's kinds (or from a kind to
+    /// itself), which would make the graph cyclic.
+    BackEdge {
+        /// The boundary's name.
+        boundary: &'static str,
+    },
+    /// A boundary of the graph has no link configuration in the architecture.
+    NoLink {
+        /// The boundary's name.
+        boundary: &'static str,
+    },
+}
+
+impl std::fmt::Display for GraphError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            GraphError::NoBody { kind } => write!(f, "{} has no unit body", kind.name()),
+            GraphError::Repeated { kind } => write!(f, "{} is listed twice", kind.name()),
+            GraphError::Unfed { kind } => {
+                write!(f, "{} reads items but no boundary feeds it", kind.name())
+            }
+            GraphError::Undrained { kind } => {
+                write!(f, "{} writes items but no boundary takes them", kind.name())
+            }
+            GraphError::NoPort { boundary, kind } => write!(
+                f,
+                "boundary {boundary} reaches {}, which has no port on that side",
+                kind.name()
+            ),
+            GraphError::Fanned {
+                kind,
+                first,
+                second,
+            } => write!(
+                f,
+                "{} is on two boundaries on one side, {first} and {second}",
+                kind.name()
+            ),
+            GraphError::ItemMismatch {
+                boundary,
+                written,
+                read,
+            } => write!(
+                f,
+                "boundary {boundary} carries {written} but its consumer reads {read}"
+            ),
+            GraphError::BackEdge { boundary } => write!(
+                f,
+                "boundary {boundary} runs against the dataflow order (the graph must be acyclic)"
+            ),
+            GraphError::NoLink { boundary } => {
+                write!(f, "boundary {boundary} has no link configuration")
+            }
+        }
+    }
 }
 
 #[cfg(test)]
@@ -357,7 +486,7 @@ mod tests {
                 .any(|p| p.kinds().contains(&b.from) && p.kinds().contains(&b.to)));
             assert_eq!(
                 boundary(b.from, b.to),
-                LINK_KEYS.iter().position(|k| *k == b.key).unwrap()
+                LINK_KEYS.iter().position(|k| *k == b.key)
             );
         }
         assert!(KINDS.windows(2).all(|w| w[0] < w[1]));

@@ -5,7 +5,7 @@
 //!   per instance to sustain the rate its architecture configures: the configured cycles
 //!   per item are what the busy cycles count. A class it never used costs nothing.
 //! - **FIFO area.** A unit owns its input FIFOs: one link per producer instance, each
-//!   `fifo_depth` entries of the boundary's `item_words` datapath words.
+//!   `fifo_depth` entries of the producing unit's `OUT_WORDS` datapath words.
 //! - **Energy.** Operations times their energy; every item through a FIFO is written once
 //!   and read once; every byte through the frame-buffer port is a DRAM byte; plus leakage
 //!   over the frame's time when the technology file gives a figure.
@@ -18,7 +18,7 @@ use super::tech::Tech;
 use crate::config::ArchConfig;
 use crate::datapath::Datapath;
 use crate::graph::UnitKind;
-use crate::pipeline::CycleReport;
+use crate::pipeline::{self, CycleReport};
 use serde::Serialize;
 
 /// `cost` in report.json: what the unit would cost in silicon for this frame.
@@ -159,7 +159,7 @@ pub fn cost(tech: &Tech, arch: &ArchConfig, datapath: Datapath, work: &Work) -> 
         let (mut fifo_um2, mut fifo_pj) = (0.0, 0.0);
         for (b, link) in arch.links.boundaries().filter(|(b, _)| b.to == u.kind) {
             let producers = instances(b.from);
-            let bits = b.item_words as f64 * word_bits;
+            let bits = pipeline::out_words(b.from) as f64 * word_bits;
             fifo_um2 +=
                 (producers * link.fifo_depth as u64) as f64 * bits * tech.sram.area_um2_per_bit;
             if producers > 0 {

@@ -29,7 +29,7 @@ use crate::rop::shade::to_u8;
 use crate::rop::FrameBuffer;
 use crate::scene::Scene;
 
-use super::units::rop::RopTiles;
+use super::tiles::RopTiles;
 use super::SimOptions;
 
 /// What the timed discoid passes produced.
@@ -147,18 +147,9 @@ fn passes<R: Real>(
     let mut counts = second.counts;
     counts.fragments_passed_depth = blend.fragments_accumulated;
     counts.pixels_covered = framebuffer.covered() as u64;
-    // The blend units and their accumulation target exist only here (model only what the
-    // scene requires).
-    let mut instances = second.units;
-    let at = instances
-        .iter()
-        .position(|u| u.kind == UnitKind::FrameBuffer)
-        .unwrap_or(instances.len());
-    let blenders = (0..arch.rop.count).map(|r| UnitInstance {
-        name: format!("BlendUnit[{r}]"),
-        kind: UnitKind::BlendUnit,
-    });
-    instances.splice(at..at, blenders);
+    // The blend units and their accumulation target exist only in a discoid pass, which
+    // lists them with its units (model only what the scene requires).
+    let instances = second.units;
     Ok(DiscoidTimed {
         framebuffer,
         counts,

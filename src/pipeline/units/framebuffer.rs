@@ -6,11 +6,33 @@
 //! Cost: ceil(bytes / bytes_per_cycle) per burst (at least one cycle). Not modelled:
 //! DRAM pages, refresh, compression, caches.
 
-use super::rop::WriteBurst;
 use crate::config::FrameBufferConfig;
+use crate::datapath::Real;
+use crate::graph::UnitKind;
+use crate::pipeline::items::WriteBurst;
+use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::{ceil_div, Ctx};
-use crate::pipeline::Finished;
+use crate::pipeline::unit::{Finished, Run, Unit};
 use crate::raster::Counts;
+
+/// The frame-buffer memory port.
+pub struct FrameBuffer;
+
+impl<R: Real> Unit<R> for FrameBuffer {
+    const KIND: UnitKind = UnitKind::FrameBuffer;
+    type In = WriteBurst;
+    type Out = ();
+    // A sink: no output links.
+    const OUT_WORDS: u32 = 0;
+
+    fn spawn<'a>(
+        ctx: Ctx<Self::In, Self::Out>,
+        run: &'a Run<'a, R>,
+        _: usize,
+    ) -> UnitFuture<'a, Finished> {
+        Box::pin(self::run(ctx, &run.arch.framebuffer))
+    }
+}
 
 /// The frame-buffer port's body: every write burst through the port at its byte rate.
 pub async fn run(mut ctx: Ctx<WriteBurst, ()>, cfg: &FrameBufferConfig) -> Finished {

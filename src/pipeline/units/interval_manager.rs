@@ -11,42 +11,59 @@
 //! interval emitted; ready `latency_cycles` after issue. Not modelled: the small sort of
 //! the roots by walk key, taken as part of the per-interval cycle.
 
-use super::minmax::ScanlineRange;
+use crate::config::IntervalManagerConfig;
 use crate::datapath::Real;
+use crate::graph::UnitKind;
+use crate::pipeline::items::{ScanInterval, ScanlineRange};
+use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::Ctx;
-use crate::pipeline::{Finished, PieceId, Shared};
-use crate::raster::interval::{intervals, Interval, IntervalScratch};
+use crate::pipeline::unit::{Finished, LemboTable, Run, Unit};
+use crate::raster::interval::{intervals, IntervalScratch};
 use crate::raster::Counts;
 
-/// One interval of scanline `j` of lembo `id`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ScanInterval<R> {
-    /// The lembo piece.
-    pub id: PieceId,
-    /// The scanline.
-    pub j: u32,
-    /// The piece of the curve Y = y_j to walk.
-    pub interval: Interval<R>,
+/// The interval manager, Figure 5's third box.
+pub struct IntervalManager;
+
+impl<R: Real> Unit<R> for IntervalManager {
+    const KIND: UnitKind = UnitKind::IntervalManager;
+    type In = ScanlineRange;
+    type Out = ScanInterval<R>;
+    // Two roots (u, v), the walk direction (2), the scanline and lembo id.
+    const OUT_WORDS: u32 = 8;
+
+    fn spawn<'a>(
+        ctx: Ctx<Self::In, Self::Out>,
+        run: &'a Run<'a, R>,
+        _: usize,
+    ) -> UnitFuture<'a, Finished> {
+        Box::pin(self::run(
+            ctx,
+            &run.arch.interval_manager,
+            &run.lembos,
+            run.k,
+        ))
+    }
 }
 
 /// The IntervalManager's body: per lembo piece, per scanline of its range, the intervals,
 /// dispatched round-robin to the segmenters.
 pub async fn run<R: Real>(
     mut ctx: Ctx<ScanlineRange, ScanInterval<R>>,
-    sh: &Shared<'_, R>,
+    cfg: &IntervalManagerConfig,
+    table: &LemboTable<R>,
+    k: R,
 ) -> Finished {
-    let cfg = &sh.arch.interval_manager;
     let mut counts = Counts::default();
     let mut scratch = IntervalScratch::default();
     let mut ivs = Vec::new();
     let mut next_port = 0;
     while let Some(ScanlineRange { id, j0, j1 }) = ctx.next_input().await {
-        let l = sh.lembo(id);
+        let l = table.get(id);
         for j in j0..=j1 {
             counts.scanlines += 1;
             ctx.work(cfg.cycles_per_scanline);
             ivs.clear();
-            intervals(l, j, sh.k, &mut scratch, &mut ivs, &mut counts);
+            intervals(l, j, k, &mut scratch, &mut ivs, &mut counts);
             for &interval in &ivs {
                 ctx.emit(
                     cfg.cycles_per_interval,

@@ -7,32 +7,54 @@
 //!
 //! Cost: `minmax.cycles_per_lembo` per lembo, ready `minmax.latency_cycles` later.
 
-use super::setup::LemboReady;
+use crate::config::MinMaxConfig;
 use crate::datapath::Real;
+use crate::graph::UnitKind;
+use crate::pipeline::items::{LemboReady, ScanlineRange};
+use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::Ctx;
-use crate::pipeline::{Finished, PieceId, Shared};
+use crate::pipeline::unit::{Finished, LemboTable, Run, Unit};
 use crate::raster::{minmax, Counts};
 
-/// The scanlines j0..=j1 of lembo `id`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct ScanlineRange {
-    /// The lembo piece.
-    pub id: PieceId,
-    /// The first scanline it covers.
-    pub j0: u32,
-    /// The last scanline it covers.
-    pub j1: u32,
+/// The MinMax finder, Figure 5's second box.
+pub struct MinMax;
+
+impl<R: Real> Unit<R> for MinMax {
+    const KIND: UnitKind = UnitKind::MinMax;
+    type In = LemboReady;
+    type Out = ScanlineRange;
+    // The screen lembo (40) with its first and last scanline (2).
+    const OUT_WORDS: u32 = 42;
+
+    fn spawn<'a>(
+        ctx: Ctx<Self::In, Self::Out>,
+        run: &'a Run<'a, R>,
+        _: usize,
+    ) -> UnitFuture<'a, Finished> {
+        Box::pin(self::run(
+            ctx,
+            &run.arch.minmax,
+            &run.lembos,
+            run.view.viewport.height,
+        ))
+    }
 }
 
-/// The MinMax finder's body: per lembo piece, its scanline range (or a cull).
-pub async fn run<R: Real>(mut ctx: Ctx<LemboReady, ScanlineRange>, sh: &Shared<'_, R>) -> Finished {
-    let cost = sh.arch.minmax.cycles_per_lembo;
+/// The MinMax finder's body: per lembo piece, its scanline range (or a cull) on a viewport
+/// `height` pixels high.
+pub async fn run<R: Real>(
+    mut ctx: Ctx<LemboReady, ScanlineRange>,
+    cfg: &MinMaxConfig,
+    table: &LemboTable<R>,
+    height: u32,
+) -> Finished {
+    let cost = cfg.cycles_per_lembo;
     let mut counts = Counts::default();
     // Whole lembos (pieces) to the interval managers, round-robin.
     let mut next_port = 0;
     while let Some(LemboReady { id }) = ctx.next_input().await {
-        let l = sh.lembo(id);
-        match minmax::scanlines(l, sh.view.viewport.height) {
+        let l = table.get(id);
+        match minmax::scanlines(l, height) {
             Some((j0, j1)) => {
                 ctx.emit(cost, next_port, ScanlineRange { id, j0, j1 })
                     .await;

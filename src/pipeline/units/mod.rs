@@ -1,6 +1,11 @@
-//! The units of Figure 5, one file per box, in dataflow order. Each is an `async fn` that
-//! takes its [`Ctx`](super::runtime::Ctx), calls the functional model and adds only time;
-//! none reaches into the runtime beyond `Ctx`.
+//! The units of Figure 5, one file per box, in dataflow order. Each file holds the unit's
+//! body, an `async fn run` that takes its [`Ctx`](super::runtime::Ctx) and its own context,
+//! calls the functional model and adds only time, and its [`Unit`] declaration: its kind,
+//! the items it reads and writes, and how its context is taken from a run. None reaches into
+//! the runtime beyond `Ctx`.
+//!
+//! Adding a unit: its kind in [`crate::graph`] (and the boundaries that reach it), its
+//! configuration section in [`crate::config`], its file here, and its line in [`bodies`].
 
 pub mod framebuffer;
 pub mod interval_manager;
@@ -12,3 +17,26 @@ pub mod setup;
 pub mod subsegmenter;
 pub mod triangle_rasterizer;
 pub mod triangle_setup;
+
+use super::unit::{Elaborate, Spec, Unit};
+use crate::datapath::Real;
+
+/// Every unit with a body, as the builder elaborates them; a kind of the graph missing here
+/// is refused by the builder's check before a run starts.
+pub fn bodies<R: Real>() -> Vec<Box<dyn Elaborate<R>>> {
+    fn entry<R: Real, U: Unit<R>>() -> Box<dyn Elaborate<R>> {
+        Box::new(Spec::<U>::new())
+    }
+    vec![
+        entry::<R, setup::Setup>(),
+        entry::<R, minmax::MinMax>(),
+        entry::<R, interval_manager::IntervalManager>(),
+        entry::<R, segmenter::Segmenter>(),
+        entry::<R, subsegmenter::Subsegmenter>(),
+        entry::<R, rasterizer::FragmentRasterizer>(),
+        entry::<R, triangle_setup::TriangleSetup>(),
+        entry::<R, triangle_rasterizer::TriangleRasterizer>(),
+        entry::<R, rop::Rop>(),
+        entry::<R, framebuffer::FrameBuffer>(),
+    ]
+}

@@ -4,7 +4,7 @@
 //!
 //! Input: [`ScanSubsegment`] from the subsegmenters, merged by (arrival, port). Output: the
 //! subsegment's pixel run cut at ROP tile borders into [`FragmentSpan`]s, each routed to
-//! the ROP that owns its tile (screen interleaving, [`RopTiles`](super::rop::RopTiles)).
+//! the ROP that owns its tile (screen interleaving, [`RopTiles`]).
 //! A span carries (u, v) at its first pixel and the increments; the ROP walks it with the
 //! same additions, so its fragments are bit-identical to the functional model's.
 //!
@@ -12,33 +12,50 @@
 //! ceil(n / fragments_per_cycle) per span of n fragments, ready `latency_cycles` later.
 //! Depth is evaluated from the depth quadratic in the ROP, with the depth test.
 
-use super::rop::RopItem;
-use super::subsegmenter::ScanSubsegment;
+use crate::config::RasterizerConfig;
 use crate::datapath::Real;
+use crate::graph::UnitKind;
+use crate::pipeline::items::{FragmentSpan, RopItem, ScanSubsegment};
+use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::{ceil_div, Ctx};
-use crate::pipeline::{Finished, PieceId, Shared};
+use crate::pipeline::tiles::RopTiles;
+use crate::pipeline::unit::{Finished, Run, Unit};
 use crate::raster::fragment::{span, Span};
 use crate::raster::Counts;
 
-/// Fragments of lembo `id` on scanline `j` inside one ROP tile.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct FragmentSpan<R> {
-    /// The lembo piece.
-    pub id: PieceId,
-    /// The scanline.
-    pub j: u32,
-    /// The pixels of one subsegment inside one ROP tile.
-    pub span: Span<R>,
+/// A fragment rasterizer, Figure 5's sixth box.
+pub struct FragmentRasterizer;
+
+impl<R: Real> Unit<R> for FragmentRasterizer {
+    const KIND: UnitKind = UnitKind::FragmentRasterizer;
+    type In = ScanSubsegment<R>;
+    type Out = RopItem<R>;
+    // A fragment's pixel (2), domain point (2), depth and lembo id.
+    const OUT_WORDS: u32 = 6;
+
+    fn spawn<'a>(
+        ctx: Ctx<Self::In, Self::Out>,
+        run: &'a Run<'a, R>,
+        _: usize,
+    ) -> UnitFuture<'a, Finished> {
+        Box::pin(self::run(
+            ctx,
+            &run.arch.rasterizer,
+            &run.tiles,
+            run.view.viewport.width,
+        ))
+    }
 }
 
-/// A FragmentRasterizer's body: per subsegment, its fragments in spans, one per ROP tile crossed.
+/// A FragmentRasterizer's body: per subsegment, its fragments on a screen `width` pixels
+/// wide in spans, one per ROP tile of `tiles` crossed.
 pub async fn run<R: Real>(
     mut ctx: Ctx<ScanSubsegment<R>, RopItem<R>>,
-    sh: &Shared<'_, R>,
+    cfg: &RasterizerConfig,
+    tiles: &RopTiles,
+    width: u32,
 ) -> Finished {
-    let cfg = &sh.arch.rasterizer;
     let mut counts = Counts::default();
-    let width = sh.view.viewport.width;
     while let Some(ScanSubsegment { id, j, subsegment }) = ctx.next_input().await {
         ctx.work(cfg.cycles_per_subsegment);
         let Some(mut run) = span(&subsegment, width) else {
@@ -46,7 +63,7 @@ pub async fn run<R: Real>(
         };
         counts.fragments += run.len() as u64;
         while !run.is_empty() {
-            let (rop, tile_end) = sh.tiles.owner(run.i0, j);
+            let (rop, tile_end) = tiles.owner(run.i0, j);
             let n = run.i1.min(tile_end) - run.i0;
             let piece = Span {
                 i1: run.i0 + n,

@@ -2,186 +2,87 @@
 //! the frame-buffer write, Np units screen-interleaved by tiles.
 //!
 //! Input: [`RopItem`]s from every rasterizer, merged by (arrival, port): lembo
-//! [`FragmentSpan`]s, or [`TrianglePiece`]s in the triangle path. For each fragment: its
+//! [`FragmentSpan`]s, or [`TrianglePiece`](crate::pipeline::items::TrianglePiece)s in the triangle path. For each fragment: its
 //! depth (from the lembo's depth quadratic, or the triangle's plane), the depth test on
 //! (z, id) (the winner does not depend on arrival order), and for a fragment that passes,
 //! Phong shading (Piranda et al. 2006 equation 6) and the write. Output: one [`WriteBurst`] per
 //! item to the frame-buffer memory port: depth reads for every fragment tested, colour and depth
 //! writes for every fragment that passed.
 //!
-//! Storage: each ROP owns the pixels of its tiles ([`RopTiles`]) and writes them in place
-//! in the one frame buffer ([`SharedFrame`]); the ROPs never share a pixel.
+//! Storage: each ROP owns the pixels of its tiles ([`RopTiles`](crate::pipeline::tiles::RopTiles)) and writes them in place
+//! in the one frame buffer ([`SharedFrame`](crate::pipeline::tiles::SharedFrame)); the ROPs never share a pixel.
 //!
 //! Cost: ceil(n / `rop.fragments_per_cycle`) per span of n fragments, ready
 //! `latency_cycles` later. Not modelled: caches; the frame-buffer port's bandwidth is the
 //! memory model.
 
-use super::rasterizer::FragmentSpan;
-use super::triangle_rasterizer::TrianglePiece;
-use crate::config::BlendConfig;
+use crate::camera::View;
+use crate::config::{BlendConfig, FrameBufferConfig, RopConfig};
 use crate::datapath::Real;
 use crate::discoid::blend::BlendMode;
 use crate::discoid::render::{
     accumulation_keeps, depth_pass_wins, evaluate, BlendReport, DiscoidFragment, KeptFragment, Pass,
 };
+use crate::graph::UnitKind;
+use crate::pipeline::items::{FragmentSpan, RopItem, WriteBurst};
+use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::{ceil_div, Ctx};
-use crate::pipeline::{DiscoidPass, Finished, Shared};
+use crate::pipeline::tiles::RopPixels;
+use crate::pipeline::unit::{DiscoidPass, Finished, LemboTable, Run, Unit};
 use crate::raster::Counts;
-use crate::rop::framebuffer::depth_test;
 use crate::rop::rop::{Batch, FragmentShader};
-use crate::rop::FrameBuffer;
 
-/// Screen interleaving: tile (tx, ty) of `tile_px` x `tile_px` pixels belongs to ROP
-/// (tx + ty) mod Np, so neighbouring tiles, along rows and columns, go to different ROPs.
-#[derive(Clone, Debug)]
-pub struct RopTiles {
-    /// Tile side \[pixels\].
-    pub tile_px: u32,
-    /// Tiles per row.
-    pub tiles_x: u32,
-    /// Tiles per column.
-    pub tiles_y: u32,
-    /// ROPs sharing the screen.
-    pub rops: u32,
-    /// log2 of `tile_px` and `rops - 1` when they are powers of two (the usual sizes): the
-    /// owner of a pixel is then found without a division.
-    shift: Option<u32>,
-    mask: Option<u32>,
-}
+/// A ROP.
+pub struct Rop;
 
-impl RopTiles {
-    /// The tiles of a `width` x `height` screen over `rops` ROPs.
-    pub fn new(width: u32, height: u32, tile_px: u32, rops: u32) -> Self {
-        RopTiles {
-            tile_px,
-            tiles_x: width.div_ceil(tile_px),
-            tiles_y: height.div_ceil(tile_px),
-            rops,
-            shift: tile_px.is_power_of_two().then(|| tile_px.trailing_zeros()),
-            mask: rops.is_power_of_two().then(|| rops - 1),
-        }
-    }
+impl<R: Real> Unit<R> for Rop {
+    const KIND: UnitKind = UnitKind::Rop;
+    type In = RopItem<R>;
+    type Out = WriteBurst;
+    // A write request: address and colour with depth.
+    const OUT_WORDS: u32 = 3;
 
-    /// The ROP owning pixel (i, j) and the first pixel column past its tile.
-    #[inline]
-    pub fn owner(&self, i: u32, j: u32) -> (usize, u32) {
-        let (tx, ty) = match self.shift {
-            Some(s) => (i >> s, j >> s),
-            None => (i / self.tile_px, j / self.tile_px),
-        };
-        let rop = match self.mask {
-            Some(m) => (tx + ty) & m,
-            None => (tx + ty) % self.rops,
-        };
-        (rop as usize, (tx + 1) * self.tile_px)
+    fn spawn<'a>(
+        ctx: Ctx<RopItem<R>, WriteBurst>,
+        run: &'a Run<'a, R>,
+        index: usize,
+    ) -> UnitFuture<'a, Finished> {
+        let arch = run.arch;
+        Box::pin(self::run(
+            ctx,
+            RopContext {
+                cfg: &arch.rop,
+                memory: &arch.framebuffer,
+                blend: &arch.blend,
+                pixels: RopPixels::new(&run.frame, &run.tiles, index, run.view.viewport.width),
+                shader: FragmentShader::<R>::new(&run.scene.light, run.view),
+                view: run.view,
+                lembos: &run.lembos,
+                discoid: run.discoid.as_ref(),
+            },
+        ))
     }
 }
 
-/// The frame buffer the ROPs write in place, each only the pixels of its own tiles.
-///
-/// The ROPs run as units of one host thread or of several; a pixel belongs to exactly one
-/// ROP ([`RopTiles`]), so no two ROPs ever touch the same pixel and the frame needs no
-/// lock and no per-ROP copy. Each ROP reaches it through [`RopPixels`], which checks that
-/// every row of pixels it is given lies inside one of its own tiles.
-pub struct SharedFrame<'f> {
-    depth: *mut f32,
-    primitive: *mut u32,
-    color: *mut [u8; 3],
-    len: usize,
-    _frame: std::marker::PhantomData<&'f mut FrameBuffer>,
-}
-
-// SAFETY: the pointers come from a `&'f mut FrameBuffer` held for 'f, and every access goes
-// through a `RopPixels`, which confines ROP r to the pixels of its own tiles (checked per
-// row); distinct ROPs therefore never access the same element, from any thread.
-unsafe impl Send for SharedFrame<'_> {}
-unsafe impl Sync for SharedFrame<'_> {}
-
-impl<'f> SharedFrame<'f> {
-    /// Shares `fb`'s depth, winner and colour planes among the ROPs for `'f`.
-    pub fn new(fb: &'f mut FrameBuffer) -> Self {
-        SharedFrame {
-            depth: fb.depth.as_mut_ptr(),
-            primitive: fb.primitive.as_mut_ptr(),
-            color: fb.color.as_mut_ptr(),
-            len: fb.depth.len(),
-            _frame: std::marker::PhantomData,
-        }
-    }
-}
-
-/// ROP `rop`'s access to the pixels of its tiles.
-pub struct RopPixels<'a, 'f> {
-    frame: &'a SharedFrame<'f>,
-    tiles: &'a RopTiles,
-    rop: usize,
-    width: usize,
-}
-
-impl<'a, 'f> RopPixels<'a, 'f> {
-    /// ROP `rop`'s pixels of `frame`, `width` pixels a row.
-    pub fn new(frame: &'a SharedFrame<'f>, tiles: &'a RopTiles, rop: usize, width: u32) -> Self {
-        RopPixels {
-            frame,
-            tiles,
-            rop,
-            width: width as usize,
-        }
-    }
-
-    /// The index of pixel (0, j): pixels i0..i1 of row j are `row + i`. Panics unless the
-    /// run lies inside one tile of this ROP (the rasterizers cut their output at tile
-    /// borders), which is what makes the unsynchronised writes sound.
-    #[inline]
-    fn row(&self, i0: u32, i1: u32, j: u32) -> usize {
-        let (owner, tile_end) = self.tiles.owner(i0, j);
-        assert!(
-            owner == self.rop && i1 <= tile_end && i0 < i1,
-            "ROP {} given pixels {i0}..{i1} of row {j}",
-            self.rop
-        );
-        let row = j as usize * self.width;
-        assert!(row + (i1 as usize) <= self.frame.len);
-        row
-    }
-
-    #[inline(always)]
-    fn depth(&self, idx: usize) -> f32 {
-        // SAFETY: idx is in a row `row` checked to be this ROP's (type doc).
-        unsafe { *self.frame.depth.add(idx) }
-    }
-
-    #[inline(always)]
-    fn primitive(&self, idx: usize) -> u32 {
-        // SAFETY: as for `depth`.
-        unsafe { *self.frame.primitive.add(idx) }
-    }
-
-    #[inline(always)]
-    fn set_depth(&mut self, idx: usize, z: f32, id: u32) {
-        // SAFETY: as for `depth`; `&mut self` keeps one writer per ROP.
-        unsafe {
-            *self.frame.depth.add(idx) = z;
-            *self.frame.primitive.add(idx) = id;
-        }
-    }
-
-    /// The depth test of fragment (z, id) at pixel index `idx`, and its depth and winner
-    /// written when it passes; whether it passed.
-    #[inline(always)]
-    fn test_depth(&mut self, idx: usize, z: f32, id: u32) -> bool {
-        let pass = depth_test(z, id, self.depth(idx), self.primitive(idx));
-        if pass {
-            self.set_depth(idx, z, id);
-        }
-        pass
-    }
-
-    #[inline(always)]
-    fn set_color(&mut self, idx: usize, rgb: [u8; 3]) {
-        // SAFETY: as for `depth`; `&mut self` keeps one writer per ROP.
-        unsafe { *self.frame.color.add(idx) = rgb };
-    }
+/// What a ROP works with: its configuration and the frame buffer's, its own pixels, the
+/// shader, the lembo table, and the discoid pass when there is one.
+pub struct RopContext<'a, R> {
+    /// Its rate.
+    pub cfg: &'a RopConfig,
+    /// The bytes a fragment moves through the frame-buffer port.
+    pub memory: &'a FrameBufferConfig,
+    /// The blend units' rates, in a discoid pass.
+    pub blend: &'a BlendConfig,
+    /// The pixels of its tiles.
+    pub pixels: RopPixels<'a, 'a>,
+    /// The fragment shader (the scene's light seen from the camera).
+    pub shader: FragmentShader<R>,
+    /// The camera, for the accumulation pass's threshold.
+    pub view: &'a View,
+    /// The lembos its spans come from.
+    pub lembos: &'a LemboTable<R>,
+    /// The discoid pass it runs; None for ordinary rendering.
+    pub discoid: Option<&'a DiscoidPass<'a, R>>,
 }
 
 /// Where a batch's colours go: this ROP's pixels.
@@ -191,29 +92,13 @@ fn into<'b, 'a: 'b, 'f: 'a, R>(
     move |idx, rgb, _| pixels.set_color(idx, rgb)
 }
 
-/// What a ROP takes: fragments of a lembo or of a triangle inside one of its tiles.
-#[derive(Clone, Debug, PartialEq)]
-pub enum RopItem<R> {
-    /// A lembo's span of fragments.
-    Lembo(FragmentSpan<R>),
-    /// A triangle's piece of two rows.
-    Triangle(TrianglePiece<R>),
-}
-
-/// Frame-buffer traffic of one span \[bytes\].
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct WriteBurst {
-    /// Bytes moved: depth reads, colour and depth writes \[bytes\].
-    pub bytes: u64,
-}
-
 /// A discoid pass's work on one fragment at pixel index `idx`: returns whether it passed
 /// (the depth pass) or was kept (the accumulation pass).
 #[allow(clippy::too_many_arguments)]
 #[inline]
 fn discoid_fragment<R: Real>(
     dp: &DiscoidPass<R>,
-    sh: &Shared<'_, R>,
+    view: &View,
     shader: &FragmentShader<R>,
     pixels: &mut RopPixels,
     kept: &mut (Vec<KeptFragment>, BlendReport),
@@ -231,15 +116,7 @@ fn discoid_fragment<R: Real>(
         }
         Pass::Accumulate => {
             let (depth, winner) = (dp.depth[idx], dp.winner[idx]);
-            match accumulation_keeps(
-                &mut kept.1,
-                sh.view,
-                shader,
-                dp.threshold,
-                &e,
-                depth,
-                winner,
-            ) {
+            match accumulation_keeps(&mut kept.1, view, shader, dp.threshold, &e, depth, winner) {
                 Some(input) => {
                     kept.0.push(KeptFragment {
                         idx: idx as u32,
@@ -255,18 +132,22 @@ fn discoid_fragment<R: Real>(
     }
 }
 
-/// ROP `rop`: depth-tests, shades and writes the fragments it is given into `frame`.
+/// A ROP's body: depth-tests, shades and writes the fragments it is given into its pixels.
 pub async fn run<R: Real>(
     mut ctx: Ctx<RopItem<R>, WriteBurst>,
-    sh: &Shared<'_, R>,
-    rop: usize,
-    frame: &SharedFrame<'_>,
+    rop: RopContext<'_, R>,
 ) -> Finished {
-    let cfg = &sh.arch.rop;
-    let fbc = &sh.arch.framebuffer;
+    let RopContext {
+        cfg,
+        memory: fbc,
+        blend,
+        mut pixels,
+        shader,
+        view,
+        lembos,
+        discoid,
+    } = rop;
     let mut counts = Counts::default();
-    let mut pixels = RopPixels::new(frame, &sh.tiles, rop, sh.view.viewport.width);
-    let shader = FragmentShader::<R>::new(&sh.scene.light, sh.view);
     let mut kept = (Vec::new(), BlendReport::default());
     // The fragments that passed, shaded in lanes as the functional ROP shades them
     // (`rop::Batch`): colours are written in arrival order, and a pixel is only ever this
@@ -274,9 +155,9 @@ pub async fn run<R: Real>(
     let mut batch = Batch::<R>::new();
     while let Some(item) = ctx.next_input().await {
         let mut passed = 0u64;
-        let n = match (item, &sh.discoid) {
+        let n = match (item, discoid) {
             (RopItem::Lembo(FragmentSpan { id, j, span }), None) => {
-                let l = sh.lembo(id);
+                let l = lembos.get(id);
                 let row = pixels.row(span.i0, span.i1, j);
                 batch.begin_lembo(l, &shader, into(&mut pixels));
                 span.walk(|i, u, v| {
@@ -292,13 +173,13 @@ pub async fn run<R: Real>(
                 span.len() as u64
             }
             (RopItem::Lembo(FragmentSpan { id, j, span }), Some(dp)) => {
-                let l = sh.lembo(id);
+                let l = lembos.get(id);
                 let row = pixels.row(span.i0, span.i1, j);
                 span.walk(|i, u, v| {
                     let idx = row + i as usize;
                     let z = l.z.eval(u, v);
                     let wins = dp.table.lembo_fragment(l, u, v, z).is_some_and(|f| {
-                        discoid_fragment(dp, sh, &shader, &mut pixels, &mut kept, idx, &f)
+                        discoid_fragment(dp, view, &shader, &mut pixels, &mut kept, idx, &f)
                     });
                     passed += wins as u64;
                 });
@@ -328,7 +209,15 @@ pub async fn run<R: Real>(
                             }
                             Some(dp) => {
                                 let df = dp.table.planar_fragment(t, &t.fragment(i, j));
-                                discoid_fragment(dp, sh, &shader, &mut pixels, &mut kept, idx, &df)
+                                discoid_fragment(
+                                    dp,
+                                    view,
+                                    &shader,
+                                    &mut pixels,
+                                    &mut kept,
+                                    idx,
+                                    &df,
+                                )
                             }
                         };
                         passed += wins as u64;
@@ -339,7 +228,7 @@ pub async fn run<R: Real>(
         };
         counts.fragments_passed_depth += passed;
         let tested = n * fbc.bytes_per_fragment_tested;
-        let (bytes, extra) = match &sh.discoid {
+        let (bytes, extra) = match discoid {
             None => (tested + passed * fbc.bytes_per_fragment_written, 0),
             // The depth pass writes depth only.
             Some(DiscoidPass {
@@ -347,7 +236,7 @@ pub async fn run<R: Real>(
             }) => (tested + passed * fbc.bytes_per_fragment_tested, 0),
             Some(dp) => (
                 tested + passed * dp.mode.bytes_per_fragment(),
-                passed * blend_cycles(&sh.arch.blend, dp.mode),
+                passed * blend_cycles(blend, dp.mode),
             ),
         };
         ctx.emit(
@@ -360,7 +249,7 @@ pub async fn run<R: Real>(
     batch.flush(&shader, into(&mut pixels));
     let mut finished = Finished::new(ctx, counts);
     if matches!(
-        &sh.discoid,
+        discoid,
         Some(DiscoidPass {
             pass: Pass::Accumulate,
             ..

@@ -10,43 +10,56 @@
 //! error and the interval dropped, so the run still ends and reports the first such
 //! interval in scene order, whatever the schedule.
 
-use super::interval_manager::ScanInterval;
+use crate::config::SegmenterConfig;
 use crate::datapath::Real;
 use crate::error::Error;
+use crate::graph::UnitKind;
+use crate::pipeline::items::{ScanInterval, ScanSegment};
+use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::Ctx;
-use crate::pipeline::{Finished, PieceId, Shared};
-use crate::raster::segmenter::{segments, Segment};
+use crate::pipeline::unit::{Finished, LemboTable, Run, Unit};
+use crate::raster::segmenter::segments;
 use crate::raster::{Counts, DEFAULT_SEGMENT_CAP};
 
-/// One chord of scanline `j` of lembo `id`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ScanSegment<R> {
-    /// The lembo piece.
-    pub id: PieceId,
-    /// The scanline.
-    pub j: u32,
-    /// The chord of midpoint error k.
-    pub segment: Segment<R>,
+/// A segmenter, Figure 5's fourth box.
+pub struct Segmenter;
+
+impl<R: Real> Unit<R> for Segmenter {
+    const KIND: UnitKind = UnitKind::Segmenter;
+    type In = ScanInterval<R>;
+    type Out = ScanSegment<R>;
+    // A chord's two domain points (4), its scanline and lembo id.
+    const OUT_WORDS: u32 = 6;
+
+    fn spawn<'a>(
+        ctx: Ctx<Self::In, Self::Out>,
+        run: &'a Run<'a, R>,
+        _: usize,
+    ) -> UnitFuture<'a, Finished> {
+        Box::pin(self::run(ctx, &run.arch.segmenter, &run.lembos, run.k))
+    }
 }
 
 /// A Segmenter's body: per interval, its segments, dispatched round-robin to the subsegmenters.
 pub async fn run<R: Real>(
     mut ctx: Ctx<ScanInterval<R>, ScanSegment<R>>,
-    sh: &Shared<'_, R>,
+    cfg: &SegmenterConfig,
+    table: &LemboTable<R>,
+    k: R,
 ) -> Finished {
-    let cost = sh.arch.segmenter.cycles_per_segment;
+    let cost = cfg.cycles_per_segment;
     let mut counts = Counts::default();
     let mut segs = Vec::new();
     let mut next_port = 0;
     // The first (lembo, piece, scanline) over the cap, as the functional model meets them.
     let mut cap_error: Option<(u32, u32, u32)> = None;
     while let Some(ScanInterval { id, j, interval }) = ctx.next_input().await {
-        let l = sh.lembo(id);
+        let l = table.get(id);
         segs.clear();
         if segments(
             l,
             j,
-            sh.k,
+            k,
             &interval,
             DEFAULT_SEGMENT_CAP,
             &mut segs,

@@ -17,44 +17,69 @@
 //! (it was computed with the split). The result is ready `setup.latency_cycles` later. Not
 //! modelled: the memory traffic of fetching the lembos.
 
+use crate::camera::View;
+use crate::config::SetupConfig;
 use crate::datapath::Real;
+use crate::graph::UnitKind;
+use crate::pipeline::items::{LemboReady, PieceId};
+use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::Ctx;
-use crate::pipeline::{Finished, PieceId, Shared};
+use crate::pipeline::unit::{Finished, LemboTable, Run, Unit};
 use crate::raster::setup::setup_pieces;
 use crate::raster::Counts;
+use crate::scene::Scene;
 
-/// A lembo whose screen-space form is in the lembo table.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct LemboReady {
-    /// The lembo piece, whose screen form Setup put in the shared table.
-    pub id: PieceId,
+/// Setup, Figure 5's first box.
+pub struct Setup;
+
+impl<R: Real> Unit<R> for Setup {
+    const KIND: UnitKind = UnitKind::Setup;
+    type In = ();
+    type Out = LemboReady;
+    // The screen lembo: x, y, z and the normal as six-coefficient quadratics (36 words),
+    // its colour (3) and id (1).
+    const OUT_WORDS: u32 = 40;
+
+    fn spawn<'a>(
+        ctx: Ctx<(), LemboReady>,
+        run: &'a Run<'a, R>,
+        _: usize,
+    ) -> UnitFuture<'a, Finished> {
+        Box::pin(self::run(
+            ctx,
+            &run.arch.setup,
+            run.scene,
+            run.view,
+            run.perspective_tol,
+            &run.lembos,
+        ))
+    }
 }
 
-/// Setup's body: every lembo of the scene in order, projected (and split or clipped) into the
-/// shared table.
-pub async fn run<R: Real>(mut ctx: Ctx<(), LemboReady>, sh: &Shared<'_, R>) -> Finished {
-    let cost = sh.arch.setup.cycles_per_lembo;
+/// Setup's body: every lembo of `scene` in order, projected (and split or clipped) into
+/// `table`.
+pub async fn run<R: Real>(
+    mut ctx: Ctx<(), LemboReady>,
+    cfg: &SetupConfig,
+    scene: &Scene,
+    view: &View,
+    perspective_tol: Option<f64>,
+    table: &LemboTable<R>,
+) -> Finished {
+    let cost = cfg.cycles_per_lembo;
     let mut counts = Counts::default();
     let mut pieces = Vec::new();
     // Pieces to the MinMax units, round-robin.
     let mut next_port = 0;
-    for (id, (lembo, color)) in sh.scene.lembos().enumerate() {
+    for (id, (lembo, color)) in scene.lembos().enumerate() {
         counts.lembos += 1;
-        match setup_pieces::<R>(
-            id as u32,
-            lembo,
-            color,
-            sh.view,
-            sh.perspective_tol,
-            &mut pieces,
-        ) {
+        match setup_pieces::<R>(id as u32, lembo, color, view, perspective_tol, &mut pieces) {
             Ok(split) => {
                 counts.add_split(split, pieces.len());
                 // Each sub-patch examined is set up as a lembo is (six points evaluated,
                 // hull tested); the lembo's own cost comes with its first emission.
                 let n = pieces.len();
-                // Each id is set once, by this unit only.
-                let _ = sh.lembos[id].set(std::mem::take(&mut pieces));
+                table.set(id, std::mem::take(&mut pieces));
                 let mut owed = cost * (1 + split.examined as u64);
                 for piece in 0..n {
                     let id = PieceId {

@@ -7,37 +7,50 @@
 //!
 //! Cost: `subsegmenter.cycles_per_subsegment` per subsegment, ready `latency_cycles` later.
 
-use super::segmenter::ScanSegment;
+use crate::config::SubsegmenterConfig;
 use crate::datapath::Real;
+use crate::graph::UnitKind;
+use crate::pipeline::items::{ScanSegment, ScanSubsegment};
+use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::Ctx;
-use crate::pipeline::{Finished, PieceId, Shared};
-use crate::raster::subsegmenter::{subsegments, Subsegment};
+use crate::pipeline::unit::{Finished, LemboTable, Run, Unit};
+use crate::raster::subsegmenter::subsegments;
 use crate::raster::Counts;
 
-/// One subsegment of scanline `j` of lembo `id`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ScanSubsegment<R> {
-    /// The lembo piece.
-    pub id: PieceId,
-    /// The scanline.
-    pub j: u32,
-    /// The piece of the chord along which x is linear.
-    pub subsegment: Subsegment<R>,
+/// A subsegmenter, Figure 5's fifth box.
+pub struct Subsegmenter;
+
+impl<R: Real> Unit<R> for Subsegmenter {
+    const KIND: UnitKind = UnitKind::Subsegmenter;
+    type In = ScanSegment<R>;
+    type Out = ScanSubsegment<R>;
+    // Two domain points (4), their screen x (2), scanline and lembo id.
+    const OUT_WORDS: u32 = 8;
+
+    fn spawn<'a>(
+        ctx: Ctx<Self::In, Self::Out>,
+        run: &'a Run<'a, R>,
+        _: usize,
+    ) -> UnitFuture<'a, Finished> {
+        Box::pin(self::run(ctx, &run.arch.subsegmenter, &run.lembos, run.k))
+    }
 }
 
 /// A Subsegmenter's body: per segment, its subsegments, dispatched round-robin to the rasterizers.
 pub async fn run<R: Real>(
     mut ctx: Ctx<ScanSegment<R>, ScanSubsegment<R>>,
-    sh: &Shared<'_, R>,
+    cfg: &SubsegmenterConfig,
+    table: &LemboTable<R>,
+    k: R,
 ) -> Finished {
-    let cost = sh.arch.subsegmenter.cycles_per_subsegment;
+    let cost = cfg.cycles_per_subsegment;
     let mut counts = Counts::default();
     let mut subs = Vec::new();
     let mut next_port = 0;
     while let Some(ScanSegment { id, j, segment }) = ctx.next_input().await {
-        let l = sh.lembo(id);
+        let l = table.get(id);
         subs.clear();
-        subsegments(l, &segment, sh.k, &mut subs, &mut counts);
+        subsegments(l, &segment, k, &mut subs, &mut counts);
         for &subsegment in &subs {
             ctx.emit(cost, next_port, ScanSubsegment { id, j, subsegment })
                 .await;

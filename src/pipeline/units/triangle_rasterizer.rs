@@ -13,38 +13,34 @@
 //! Quads with no covered pixel are skipped for free, as a hierarchical rasterizer rejects
 //! them by tile. Ready `latency_cycles` later.
 
-use super::rop::RopItem;
+use crate::config::TriangleRasterizerConfig;
 use crate::datapath::Real;
+use crate::graph::UnitKind;
+use crate::pipeline::items::{RopItem, TrianglePiece};
+use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::{ceil_div, Ctx};
-use crate::pipeline::{Finished, Shared};
+use crate::pipeline::tiles::RopTiles;
+use crate::pipeline::unit::{Finished, Run, Unit};
 use crate::raster::triangle::{quads_in, ScreenTriangle};
 use crate::raster::Counts;
 use std::sync::Arc;
 
-/// The covered pixels of triangle `tri` in rows `j` and `j + 1` inside one ROP tile:
-/// `rows[r]` is the half-open column range of row j + r (empty when start >= end).
-#[derive(Clone, Debug, PartialEq)]
-pub struct TrianglePiece<R> {
-    /// The set-up triangle.
-    pub tri: Arc<ScreenTriangle<R>>,
-    /// The first of the two rows (even).
-    pub j: u32,
-    /// Each row's half-open column range.
-    pub rows: [(u32, u32); 2],
-}
+/// A triangle path's quad rasterizer.
+pub struct TriangleRasterizer;
 
-impl<R> TrianglePiece<R> {
-    /// Fragments in the piece.
-    pub fn len(&self) -> u64 {
-        self.rows
-            .iter()
-            .map(|&(a, b)| b.saturating_sub(a) as u64)
-            .sum()
-    }
+impl<R: Real> Unit<R> for TriangleRasterizer {
+    const KIND: UnitKind = UnitKind::TriangleRasterizer;
+    type In = Arc<ScreenTriangle<R>>;
+    type Out = RopItem<R>;
+    // A fragment's pixel (2), depth, normal (3), position (3) and triangle id.
+    const OUT_WORDS: u32 = 10;
 
-    /// Whether the piece holds no fragment.
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
+    fn spawn<'a>(
+        ctx: Ctx<Self::In, Self::Out>,
+        run: &'a Run<'a, R>,
+        _: usize,
+    ) -> UnitFuture<'a, Finished> {
+        Box::pin(self::run(ctx, &run.arch.triangle_rasterizer, &run.tiles))
     }
 }
 
@@ -62,10 +58,10 @@ fn clip((a, b): (u32, u32), lo: u32, hi: u32) -> (u32, u32) {
 /// crossed.
 pub async fn run<R: Real>(
     mut ctx: Ctx<Arc<ScreenTriangle<R>>, RopItem<R>>,
-    sh: &Shared<'_, R>,
+    cfg: &TriangleRasterizerConfig,
+    tiles: &RopTiles,
 ) -> Finished {
-    let ppc = sh.arch.triangle_rasterizer.pixels_per_cycle;
-    let tiles = &sh.tiles;
+    let ppc = cfg.pixels_per_cycle;
     let tile = tiles.tile_px;
     let mut counts = Counts::default();
     while let Some(tri) = ctx.next_input().await {

@@ -16,24 +16,52 @@
 //! Not modelled: vertex fetch and the post-transform vertex cache (each triangle's three
 //! vertices are transformed here).
 
+use crate::camera::View;
+use crate::config::TriangleSetupConfig;
 use crate::datapath::Real;
+use crate::graph::UnitKind;
+use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::Ctx;
-use crate::pipeline::{Finished, Shared, Source};
-use crate::raster::triangle::{setup, ScreenTriangle};
+use crate::pipeline::unit::{Finished, Run, Unit};
+use crate::raster::triangle::{setup, ScreenTriangle, TriangleSource};
 use crate::raster::Counts;
 use std::sync::Arc;
+
+/// The triangle path's setup unit.
+pub struct TriangleSetup;
+
+impl<R: Real> Unit<R> for TriangleSetup {
+    const KIND: UnitKind = UnitKind::TriangleSetup;
+    type In = ();
+    type Out = Arc<ScreenTriangle<R>>;
+    // The set-up triangle: edge functions (12), depths and 1/w (6), normals and positions
+    // over w (18), bounding box (4), area and id.
+    const OUT_WORDS: u32 = 42;
+
+    fn spawn<'a>(
+        ctx: Ctx<Self::In, Self::Out>,
+        run: &'a Run<'a, R>,
+        _: usize,
+    ) -> UnitFuture<'a, Finished> {
+        Box::pin(self::run(
+            ctx,
+            &run.arch.triangle_setup,
+            run.triangles,
+            run.view,
+        ))
+    }
+}
 
 /// TriangleSetup's body: every triangle of the source in order, set up (clipped and fanned where
 /// needed).
 pub async fn run<R: Real>(
     mut ctx: Ctx<(), Arc<ScreenTriangle<R>>>,
-    sh: &Shared<'_, R>,
+    cfg: &TriangleSetupConfig,
+    source: &dyn TriangleSource,
+    view: &View,
 ) -> Finished {
-    let per_triangle = sh.arch.triangle_setup.cycles_per_triangle;
-    let per_piece = sh.arch.triangle_setup.cycles_per_clipped_piece;
-    let Source::Triangles(source) = sh.source else {
-        unreachable!("the triangle path is elaborated with a triangle source")
-    };
+    let per_triangle = cfg.cycles_per_triangle;
+    let per_piece = cfg.cycles_per_clipped_piece;
     let mut counts = Counts::default();
     let (mut triangles, mut pieces) = (Vec::new(), Vec::new());
     let mut next = 0;
@@ -41,7 +69,7 @@ pub async fn run<R: Real>(
         source.chunk(c, &mut triangles);
         for (k, t) in triangles.iter().enumerate() {
             let id = source.id(c, k);
-            let outcome = setup::<R>(id, &t.positions, &t.normals, t.color, sh.view, &mut pieces);
+            let outcome = setup::<R>(id, &t.positions, &t.normals, t.color, view, &mut pieces);
             outcome.count(&mut counts);
             let culled_in_fan = outcome.fan.saturating_sub(pieces.len()) as u64;
             let mut cost = per_triangle + per_piece * culled_in_fan;

@@ -1,0 +1,452 @@
+//! Elaboration, after DAM's `ProgramBuilder`: the graph description ([`crate::graph`]) drives
+//! it. [`Plan::new`] checks the description against the units' declarations
+//! ([`super::units::bodies`]) before anything runs (every kind has a body, every boundary
+//! joins a writer and a reader of the same item type in dataflow order, every unit's ports
+//! are connected) and refuses a bad one with a [`GraphError`]; then it instantiates each
+//! kind as the architecture says and makes each boundary's typed links. Each host thread
+//! then takes its units' bodies from the plan ([`Plan::bodies`]).
+
+use super::runtime::executor::UnitFuture;
+use super::runtime::{partition, LinkSpec, SimOptions};
+use super::unit::{Elaborate, Finished, Run};
+use super::units::bodies;
+use super::wiring::HostWiring;
+use crate::config::ArchConfig;
+use crate::datapath::Real;
+use crate::graph::{self, Graph, GraphError, UnitInstance, UnitKind};
+use std::any::Any;
+
+/// How a checked graph is wired: per kind (in the graph's order), the index of its body in
+/// [`bodies`] and of the boundaries (in the graph's) that feed it and that it feeds.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Ports {
+    /// The kinds, in dataflow order.
+    pub kinds: Vec<UnitKind>,
+    /// Each kind's body.
+    body: Vec<usize>,
+    /// Each kind's input boundary, None for a source.
+    input: Vec<Option<usize>>,
+    /// Each kind's output boundary, None for a sink.
+    output: Vec<Option<usize>>,
+}
+
+/// Checks `graph` against the units' declarations in `R`'s datapath; the wiring it implies.
+pub fn check<R: Real>(graph: &Graph) -> Result<Ports, GraphError> {
+    check_with(graph, &bodies::<R>())
+}
+
+fn check_with<R: Real>(
+    graph: &Graph,
+    bodies: &[Box<dyn Elaborate<R>>],
+) -> Result<Ports, GraphError> {
+    let kinds = graph.kinds;
+    let mut body = Vec::with_capacity(kinds.len());
+    for (i, &kind) in kinds.iter().enumerate() {
+        if kinds[..i].contains(&kind) {
+            return Err(GraphError::Repeated { kind });
+        }
+        let b = bodies.iter().position(|b| b.kind() == kind);
+        body.push(b.ok_or(GraphError::NoBody { kind })?);
+    }
+    let at = |kind: UnitKind| kinds.iter().position(|&k| k == kind);
+    let mut input: Vec<Option<usize>> = vec![None; kinds.len()];
+    let mut output: Vec<Option<usize>> = vec![None; kinds.len()];
+    for (bi, b) in graph.boundaries.iter().enumerate() {
+        let (Some(p), Some(c)) = (at(b.from), at(b.to)) else {
+            // A boundary of another path.
+            continue;
+        };
+        if p >= c {
+            return Err(GraphError::BackEdge { boundary: b.key });
+        }
+        let written = bodies[body[p]].output().ok_or(GraphError::NoPort {
+            boundary: b.key,
+            kind: b.from,
+        })?;
+        let read = bodies[body[c]].input().ok_or(GraphError::NoPort {
+            boundary: b.key,
+            kind: b.to,
+        })?;
+        if written.0 != read.0 {
+            return Err(GraphError::ItemMismatch {
+                boundary: b.key,
+                written: written.1,
+                read: read.1,
+            });
+        }
+        for (side, at, kind) in [(&mut output, p, b.from), (&mut input, c, b.to)] {
+            if let Some(first) = side[at] {
+                return Err(GraphError::Fanned {
+                    kind,
+                    first: graph.boundaries[first].key,
+                    second: b.key,
+                });
+            }
+            side[at] = Some(bi);
+        }
+    }
+    for (i, &kind) in kinds.iter().enumerate() {
+        let unit = &bodies[body[i]];
+        if unit.input().is_some() && input[i].is_none() {
+            return Err(GraphError::Unfed { kind });
+        }
+        if unit.output().is_some() && output[i].is_none() {
+            return Err(GraphError::Undrained { kind });
+        }
+    }
+    Ok(Ports {
+        kinds: kinds.to_vec(),
+        body,
+        input,
+        output,
+    })
+}
+
+/// A checked graph instantiated on an architecture, partitioned over host threads, with
+/// every boundary's links made: what each host thread elaborates its units from.
+pub struct Plan {
+    /// Every unit, in dataflow order (each kind's instances together).
+    pub units: Vec<UnitInstance>,
+    /// Each unit's latency \[cycles\].
+    pub latency: Vec<u64>,
+    /// Each unit's host thread.
+    pub thread: Vec<usize>,
+    /// Host threads.
+    pub threads: usize,
+    ports: Ports,
+    /// The global index of each kind's first unit.
+    first: Vec<usize>,
+    /// Each boundary's crossbar (a `Crossbar<T>` of its item type) and the index of its
+    /// producer's kind, for the boundaries with links.
+    crossbars: Vec<Option<(usize, Box<dyn Any + Send + Sync>)>>,
+}
+
+impl Plan {
+    /// Checks `graph` and instantiates it on `arch` over the host threads `options` asks for.
+    pub fn new<R: Real>(
+        graph: &Graph,
+        arch: &ArchConfig,
+        options: &SimOptions,
+    ) -> Result<Plan, GraphError> {
+        let bodies = bodies::<R>();
+        let ports = check_with(graph, &bodies)?;
+        let units = graph::instances(&ports.kinds, |k| arch.unit(k).0);
+        let latency = units.iter().map(|u| arch.unit(u.kind).1).collect();
+        let first = ports
+            .kinds
+            .iter()
+            .map(|&k| {
+                units
+                    .iter()
+                    .position(|u| u.kind == k)
+                    .unwrap_or(units.len())
+            })
+            .collect();
+        let threads = options.host_threads.clamp(1, units.len().max(1));
+        let thread = partition(units.len(), threads, options.partition_seed);
+        let mut crossbars: Vec<Option<(usize, Box<dyn Any + Send + Sync>)>> =
+            graph.boundaries.iter().map(|_| None).collect();
+        for (p, out) in ports.output.iter().enumerate() {
+            let Some(bi) = *out else { continue };
+            let b = &graph.boundaries[bi];
+            let link = arch
+                .links
+                .by_key(b.key)
+                .ok_or(GraphError::NoLink { boundary: b.key })?;
+            let spec = LinkSpec {
+                fifo_depth: link.fifo_depth,
+                latency_cycles: link.latency_cycles,
+            };
+            let xb = bodies[ports.body[p]].crossbar(&units, b.to, &thread, spec);
+            crossbars[bi] = Some((p, xb));
+        }
+        Ok(Plan {
+            units,
+            latency,
+            thread,
+            threads,
+            ports,
+            first,
+            crossbars,
+        })
+    }
+
+    /// The bodies of `host`'s units, by local index, with their ends of every link.
+    pub fn bodies<'a, R: Real>(
+        &self,
+        host: &mut HostWiring,
+        run: &'a Run<'a, R>,
+        trace: Option<usize>,
+    ) -> Vec<UnitFuture<'a, Finished>> {
+        let bodies = bodies::<R>();
+        let mut wired: Vec<Option<Box<dyn Any>>> = self
+            .crossbars
+            .iter()
+            .map(|xb| {
+                xb.as_ref()
+                    .map(|(p, xb)| bodies[self.ports.body[*p]].wire(host, xb.as_ref()))
+            })
+            .collect();
+        let mut futures = Vec::new();
+        for g in (0..self.units.len()).filter(|&g| host.is_local(g)) {
+            let k = self
+                .ports
+                .kinds
+                .iter()
+                .position(|&k| k == self.units[g].kind)
+                .expect("every unit is of a kind of the plan");
+            let (input, output) = (self.ports.input[k], self.ports.output[k]);
+            let mut rx = input.and_then(|b| wired[b].take());
+            let mut tx = output.and_then(|b| wired[b].take());
+            futures.push(bodies[self.ports.body[k]].spawn(
+                host,
+                g,
+                g - self.first[k],
+                rx.as_deref_mut(),
+                tx.as_deref_mut(),
+                run,
+                trace,
+            ));
+            if let Some(b) = input {
+                wired[b] = rx;
+            }
+            if let Some(b) = output {
+                wired[b] = tx;
+            }
+        }
+        futures
+    }
+}
+
+/// The datapath words one item of `kind`'s output takes in a FIFO ([`super::unit::Unit::OUT_WORDS`];
+/// 0 for a sink or a kind without a body).
+pub fn out_words(kind: UnitKind) -> u32 {
+    bodies::<f32>()
+        .iter()
+        .find(|b| b.kind() == kind)
+        .map_or(0, |b| b.out_words())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::graph::{Boundary, LinkConfig, Path, BOUNDARIES};
+    use UnitKind::*;
+
+    fn boundary(key: &'static str, from: UnitKind, to: UnitKind) -> Boundary {
+        Boundary {
+            key,
+            from,
+            to,
+            default: LinkConfig::default(),
+        }
+    }
+
+    /// Both paths' graphs check in both datapaths: sources and sinks where Figure 5 has
+    /// them, every other unit fed and drained by the boundary from and to its neighbour.
+    #[test]
+    fn builder_accepts_both_paths() {
+        for path in [Path::Lembo, Path::Triangle] {
+            let ports = check::<f32>(&Graph::of(path)).unwrap();
+            assert_eq!(check::<f64>(&Graph::of(path)).unwrap(), ports);
+            let n = ports.kinds.len();
+            assert_eq!(ports.input[0], None, "{path:?}: the first unit is a source");
+            assert_eq!(
+                ports.output[n - 1],
+                None,
+                "{path:?}: the last unit is a sink"
+            );
+            for i in 0..n - 1 {
+                let b = &BOUNDARIES[ports.output[i].unwrap()];
+                assert_eq!((b.from, b.to), (ports.kinds[i], ports.kinds[i + 1]));
+                assert_eq!(ports.input[i + 1], ports.output[i]);
+            }
+        }
+    }
+
+    /// Each way of mis-wiring the lembo path is refused, before anything runs, with the
+    /// error that names it.
+    #[test]
+    fn builder_refuses_a_miswired_graph_with_a_named_error() {
+        let lembo = Path::Lembo.kinds();
+        let check = |kinds: &[UnitKind], boundaries: &[Boundary]| {
+            check::<f32>(&Graph { kinds, boundaries })
+        };
+        // A boundary left out: the segmenters' output goes nowhere.
+        let without: Vec<Boundary> = BOUNDARIES
+            .iter()
+            .filter(|b| b.key != "segmenter_to_subsegmenter")
+            .copied()
+            .collect();
+        assert_eq!(
+            check(lembo, &without),
+            Err(GraphError::Undrained { kind: Segmenter })
+        );
+        // Setup wired straight to the segmenters, which read intervals, not lembos.
+        let skipped = [
+            boundary("setup_to_segmenter", Setup, Segmenter),
+            boundary("segmenter_to_subsegmenter", Segmenter, Subsegmenter),
+        ];
+        match check(&[Setup, Segmenter, Subsegmenter], &skipped) {
+            Err(GraphError::ItemMismatch {
+                boundary,
+                written,
+                read,
+            }) => {
+                assert_eq!(boundary, "setup_to_segmenter");
+                assert!(written.ends_with("LemboReady"), "{written}");
+                assert!(read.contains("ScanInterval<f32>"), "{read}");
+            }
+            other => panic!("{other:?}"),
+        }
+        // A boundary against the dataflow order would close a cycle.
+        let mut back = BOUNDARIES.to_vec();
+        back.push(boundary(
+            "subsegmenter_to_segmenter",
+            Subsegmenter,
+            Segmenter,
+        ));
+        assert_eq!(
+            check(lembo, &back),
+            Err(GraphError::BackEdge {
+                boundary: "subsegmenter_to_segmenter"
+            })
+        );
+        // A blend unit sits inside a ROP and has no body of its own.
+        let mut with_blend = lembo.to_vec();
+        with_blend.insert(with_blend.len() - 1, BlendUnit);
+        assert_eq!(
+            check(&with_blend, &BOUNDARIES),
+            Err(GraphError::NoBody { kind: BlendUnit })
+        );
+        assert_eq!(
+            check(&[Setup, Setup], &BOUNDARIES),
+            Err(GraphError::Repeated { kind: Setup })
+        );
+        // Both rasterizers into the ROPs: a ROP has one input crossbar.
+        let both = [
+            Setup,
+            MinMax,
+            IntervalManager,
+            Segmenter,
+            Subsegmenter,
+            FragmentRasterizer,
+            TriangleSetup,
+            TriangleRasterizer,
+            Rop,
+            FrameBuffer,
+        ];
+        assert_eq!(
+            check(&both, &BOUNDARIES),
+            Err(GraphError::Fanned {
+                kind: Rop,
+                first: "rasterizer_to_rop",
+                second: "triangle_rasterizer_to_rop"
+            })
+        );
+        // The frame-buffer port is a sink: a boundary out of it has no port to leave by.
+        let out_of_sink = [
+            boundary("rop_to_framebuffer", Rop, FrameBuffer),
+            boundary("framebuffer_to_setup", FrameBuffer, TriangleSetup),
+        ];
+        assert_eq!(
+            check(&[Rop, FrameBuffer, TriangleSetup], &out_of_sink),
+            Err(GraphError::NoPort {
+                boundary: "framebuffer_to_setup",
+                kind: FrameBuffer
+            })
+        );
+        // A unit that reads but is fed by nothing.
+        assert_eq!(
+            check(&[MinMax, IntervalManager], &BOUNDARIES),
+            Err(GraphError::Unfed { kind: MinMax })
+        );
+    }
+
+    /// A boundary the architecture has no link for is refused by the plan, and the error
+    /// reaches the caller as a simulator fault (exit status 1), not a panic.
+    #[test]
+    fn plan_refuses_a_boundary_without_a_link() {
+        let renamed: Vec<Boundary> = BOUNDARIES
+            .iter()
+            .map(|b| match b.key {
+                "setup_to_minmax" => boundary("setup_to_min_max", b.from, b.to),
+                _ => *b,
+            })
+            .collect();
+        let graph = Graph {
+            kinds: Path::Lembo.kinds(),
+            boundaries: &renamed,
+        };
+        let e = Plan::new::<f32>(&graph, &ArchConfig::default(), &SimOptions::default())
+            .err()
+            .unwrap();
+        assert_eq!(
+            e,
+            GraphError::NoLink {
+                boundary: "setup_to_min_max"
+            }
+        );
+        let e = crate::error::Error::from(e);
+        assert_eq!(e.exit_code(), 1);
+        assert!(e.to_string().contains("mis-wired"), "{e}");
+    }
+
+    /// The words each boundary's items take in a FIFO are the producing unit's declaration,
+    /// as the hardware items are counted (DESIGN.md §12).
+    #[test]
+    fn out_words_are_the_hardware_items() {
+        let words: Vec<u32> = BOUNDARIES.iter().map(|b| out_words(b.from)).collect();
+        assert_eq!(words, [40, 42, 8, 6, 8, 6, 3, 42, 10]);
+        assert_eq!(out_words(FrameBuffer), 0);
+        assert_eq!(out_words(BlendUnit), 0);
+    }
+
+    /// A plan instantiates the architecture's counts, each kind's instances together, and
+    /// makes links only for the path's boundaries.
+    #[test]
+    fn plan_instantiates_the_architecture() {
+        let mut arch = ArchConfig::default();
+        arch.segmenter.count = 3;
+        arch.rop.count = 2;
+        let plan = Plan::new::<f64>(
+            &Graph::of(Path::Lembo),
+            &arch,
+            &SimOptions {
+                host_threads: 2,
+                ..SimOptions::default()
+            },
+        )
+        .unwrap();
+        let names: Vec<&str> = plan.units.iter().map(|u| u.name.as_str()).collect();
+        assert_eq!(
+            names,
+            [
+                "Setup",
+                "MinMax",
+                "IntervalManager",
+                "Segmenter[0]",
+                "Segmenter[1]",
+                "Segmenter[2]",
+                "Subsegmenter[0]",
+                "Subsegmenter[1]",
+                "FragmentRasterizer[0]",
+                "FragmentRasterizer[1]",
+                "FragmentRasterizer[2]",
+                "FragmentRasterizer[3]",
+                "Rop[0]",
+                "Rop[1]",
+                "FrameBuffer"
+            ]
+        );
+        assert_eq!(plan.threads, 2);
+        assert_eq!(plan.latency[0], arch.setup.latency_cycles);
+        let linked: Vec<&str> = BOUNDARIES
+            .iter()
+            .zip(&plan.crossbars)
+            .filter(|(_, xb)| xb.is_some())
+            .map(|(b, _)| b.key)
+            .collect();
+        assert_eq!(linked, &crate::graph::LINK_KEYS[..7]);
+    }
+}

@@ -1,0 +1,134 @@
+//! What the links carry: every item type of the unit graph, in dataflow order (the
+//! triangle path's set-up triangle is an `Arc<ScreenTriangle>`). A unit declares the item
+//! it reads and the item it writes ([`super::unit::Unit`]); the builder creates each
+//! boundary's typed links from the producer's output type and refuses a graph whose
+//! consumer reads another type.
+//!
+//! An item is what the simulator passes, which is sometimes less than what the hardware
+//! moves: a lembo travels as its [`PieceId`] while its screen form waits in the lembo
+//! table, where a hardware Setup would write it into a parameter buffer the later stages
+//! index. What the hardware FIFO holds, for its area and energy (DESIGN.md §12), is each
+//! producing unit's [`super::unit::Unit::OUT_WORDS`].
+
+use crate::raster::fragment::Span;
+use crate::raster::interval::Interval;
+use crate::raster::segmenter::Segment;
+use crate::raster::subsegmenter::Subsegment;
+use crate::raster::triangle::ScreenTriangle;
+use std::sync::Arc;
+
+/// An entry of the lembo table: piece `piece` of lembo `lembo` (piece 0 of a lembo Setup
+/// kept whole).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PieceId {
+    /// The lembo's id in the scene.
+    pub lembo: u32,
+    /// The piece's index among those Setup split the lembo into.
+    pub piece: u32,
+}
+
+/// A lembo whose screen-space form is in the lembo table (Setup to MinMax).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LemboReady {
+    /// The lembo piece, whose screen form Setup put in the shared table.
+    pub id: PieceId,
+}
+
+/// The scanlines j0..=j1 of lembo `id` (MinMax to the IntervalManager).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ScanlineRange {
+    /// The lembo piece.
+    pub id: PieceId,
+    /// The first scanline it covers.
+    pub j0: u32,
+    /// The last scanline it covers.
+    pub j1: u32,
+}
+
+/// One interval of scanline `j` of lembo `id` (IntervalManager to the Segmenters).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScanInterval<R> {
+    /// The lembo piece.
+    pub id: PieceId,
+    /// The scanline.
+    pub j: u32,
+    /// The piece of the curve Y = y_j to walk.
+    pub interval: Interval<R>,
+}
+
+/// One chord of scanline `j` of lembo `id` (Segmenter to the Subsegmenters).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScanSegment<R> {
+    /// The lembo piece.
+    pub id: PieceId,
+    /// The scanline.
+    pub j: u32,
+    /// The chord of midpoint error k.
+    pub segment: Segment<R>,
+}
+
+/// One subsegment of scanline `j` of lembo `id` (Subsegmenter to the FragmentRasterizers).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScanSubsegment<R> {
+    /// The lembo piece.
+    pub id: PieceId,
+    /// The scanline.
+    pub j: u32,
+    /// The piece of the chord along which x is linear.
+    pub subsegment: Subsegment<R>,
+}
+
+/// Fragments of lembo `id` on scanline `j` inside one ROP tile.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FragmentSpan<R> {
+    /// The lembo piece.
+    pub id: PieceId,
+    /// The scanline.
+    pub j: u32,
+    /// The pixels of one subsegment inside one ROP tile.
+    pub span: Span<R>,
+}
+
+/// The covered pixels of triangle `tri` in rows `j` and `j + 1` inside one ROP tile:
+/// `rows[r]` is the half-open column range of row j + r (empty when start >= end).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TrianglePiece<R> {
+    /// The set-up triangle.
+    pub tri: Arc<ScreenTriangle<R>>,
+    /// The first of the two rows (even).
+    pub j: u32,
+    /// Each row's half-open column range.
+    pub rows: [(u32, u32); 2],
+}
+
+impl<R> TrianglePiece<R> {
+    /// Fragments in the piece.
+    pub fn len(&self) -> u64 {
+        self.rows
+            .iter()
+            .map(|&(a, b)| b.saturating_sub(a) as u64)
+            .sum()
+    }
+
+    /// Whether the piece holds no fragment.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// What a ROP takes: fragments of a lembo or of a triangle inside one of its tiles (a
+/// rasterizer of either path to the ROPs).
+#[derive(Clone, Debug, PartialEq)]
+pub enum RopItem<R> {
+    /// A lembo's span of fragments.
+    Lembo(FragmentSpan<R>),
+    /// A triangle's piece of two rows.
+    Triangle(TrianglePiece<R>),
+}
+
+/// Frame-buffer traffic of one span \[bytes\] (a ROP to the frame-buffer port).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct WriteBurst {
+    /// Bytes moved: depth reads, colour and depth writes \[bytes\].
+    pub bytes: u64,
+}

@@ -1,0 +1,163 @@
+//! The screen as the ROPs share it: the tile interleave that says which ROP owns a pixel
+//! ([`RopTiles`]; the rasterizers route their output by it), and the one frame buffer every
+//! ROP writes its own tiles of in place ([`SharedFrame`], reached through [`RopPixels`]).
+
+use crate::rop::framebuffer::depth_test;
+use crate::rop::FrameBuffer;
+
+/// Screen interleaving: tile (tx, ty) of `tile_px` x `tile_px` pixels belongs to ROP
+/// (tx + ty) mod Np, so neighbouring tiles, along rows and columns, go to different ROPs.
+#[derive(Clone, Debug)]
+pub struct RopTiles {
+    /// Tile side \[pixels\].
+    pub tile_px: u32,
+    /// Tiles per row.
+    pub tiles_x: u32,
+    /// Tiles per column.
+    pub tiles_y: u32,
+    /// ROPs sharing the screen.
+    pub rops: u32,
+    /// log2 of `tile_px` and `rops - 1` when they are powers of two (the usual sizes): the
+    /// owner of a pixel is then found without a division.
+    shift: Option<u32>,
+    mask: Option<u32>,
+}
+
+impl RopTiles {
+    /// The tiles of a `width` x `height` screen over `rops` ROPs.
+    pub fn new(width: u32, height: u32, tile_px: u32, rops: u32) -> Self {
+        RopTiles {
+            tile_px,
+            tiles_x: width.div_ceil(tile_px),
+            tiles_y: height.div_ceil(tile_px),
+            rops,
+            shift: tile_px.is_power_of_two().then(|| tile_px.trailing_zeros()),
+            mask: rops.is_power_of_two().then(|| rops - 1),
+        }
+    }
+
+    /// The ROP owning pixel (i, j) and the first pixel column past its tile.
+    #[inline]
+    pub fn owner(&self, i: u32, j: u32) -> (usize, u32) {
+        let (tx, ty) = match self.shift {
+            Some(s) => (i >> s, j >> s),
+            None => (i / self.tile_px, j / self.tile_px),
+        };
+        let rop = match self.mask {
+            Some(m) => (tx + ty) & m,
+            None => (tx + ty) % self.rops,
+        };
+        (rop as usize, (tx + 1) * self.tile_px)
+    }
+}
+
+/// The frame buffer the ROPs write in place, each only the pixels of its own tiles.
+///
+/// The ROPs run as units of one host thread or of several; a pixel belongs to exactly one
+/// ROP ([`RopTiles`]), so no two ROPs ever touch the same pixel and the frame needs no
+/// lock and no per-ROP copy. Each ROP reaches it through [`RopPixels`], which checks that
+/// every row of pixels it is given lies inside one of its own tiles.
+pub struct SharedFrame<'f> {
+    depth: *mut f32,
+    primitive: *mut u32,
+    color: *mut [u8; 3],
+    len: usize,
+    _frame: std::marker::PhantomData<&'f mut FrameBuffer>,
+}
+
+// SAFETY: the pointers come from a `&'f mut FrameBuffer` held for 'f, and every access goes
+// through a `RopPixels`, which confines ROP r to the pixels of its own tiles (checked per
+// row); distinct ROPs therefore never access the same element, from any thread.
+unsafe impl Send for SharedFrame<'_> {}
+unsafe impl Sync for SharedFrame<'_> {}
+
+impl<'f> SharedFrame<'f> {
+    /// Shares `fb`'s depth, winner and colour planes among the ROPs for `'f`.
+    pub fn new(fb: &'f mut FrameBuffer) -> Self {
+        SharedFrame {
+            depth: fb.depth.as_mut_ptr(),
+            primitive: fb.primitive.as_mut_ptr(),
+            color: fb.color.as_mut_ptr(),
+            len: fb.depth.len(),
+            _frame: std::marker::PhantomData,
+        }
+    }
+}
+
+/// ROP `rop`'s access to the pixels of its tiles.
+pub struct RopPixels<'a, 'f> {
+    frame: &'a SharedFrame<'f>,
+    tiles: &'a RopTiles,
+    rop: usize,
+    width: usize,
+}
+
+impl<'a, 'f> RopPixels<'a, 'f> {
+    /// ROP `rop`'s pixels of `frame`, `width` pixels a row.
+    pub fn new(frame: &'a SharedFrame<'f>, tiles: &'a RopTiles, rop: usize, width: u32) -> Self {
+        RopPixels {
+            frame,
+            tiles,
+            rop,
+            width: width as usize,
+        }
+    }
+
+    /// The index of pixel (0, j): pixels i0..i1 of row j are `row + i`. Panics unless the
+    /// run lies inside one tile of this ROP (the rasterizers cut their output at tile
+    /// borders), which is what makes the unsynchronised writes sound.
+    #[inline]
+    pub fn row(&self, i0: u32, i1: u32, j: u32) -> usize {
+        let (owner, tile_end) = self.tiles.owner(i0, j);
+        assert!(
+            owner == self.rop && i1 <= tile_end && i0 < i1,
+            "ROP {} given pixels {i0}..{i1} of row {j}",
+            self.rop
+        );
+        let row = j as usize * self.width;
+        assert!(row + (i1 as usize) <= self.frame.len);
+        row
+    }
+
+    /// The depth at pixel index `idx`.
+    #[inline(always)]
+    pub fn depth(&self, idx: usize) -> f32 {
+        // SAFETY: idx is in a row `row` checked to be this ROP's (type doc).
+        unsafe { *self.frame.depth.add(idx) }
+    }
+
+    /// The winning primitive at pixel index `idx`.
+    #[inline(always)]
+    pub fn primitive(&self, idx: usize) -> u32 {
+        // SAFETY: as for `depth`.
+        unsafe { *self.frame.primitive.add(idx) }
+    }
+
+    /// Writes depth `z` and winner `id` at pixel index `idx`.
+    #[inline(always)]
+    pub fn set_depth(&mut self, idx: usize, z: f32, id: u32) {
+        // SAFETY: as for `depth`; `&mut self` keeps one writer per ROP.
+        unsafe {
+            *self.frame.depth.add(idx) = z;
+            *self.frame.primitive.add(idx) = id;
+        }
+    }
+
+    /// The depth test of fragment (z, id) at pixel index `idx`, and its depth and winner
+    /// written when it passes; whether it passed.
+    #[inline(always)]
+    pub fn test_depth(&mut self, idx: usize, z: f32, id: u32) -> bool {
+        let pass = depth_test(z, id, self.depth(idx), self.primitive(idx));
+        if pass {
+            self.set_depth(idx, z, id);
+        }
+        pass
+    }
+
+    /// Writes colour `rgb` at pixel index `idx`.
+    #[inline(always)]
+    pub fn set_color(&mut self, idx: usize, rgb: [u8; 3]) {
+        // SAFETY: as for `depth`; `&mut self` keeps one writer per ROP.
+        unsafe { *self.frame.color.add(idx) = rgb };
+    }
+}

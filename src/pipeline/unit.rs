@@ -1,0 +1,290 @@
+//! What a unit of the timed pipeline is to the builder (after DAM's contexts): a [`Unit`]
+//! declares its kind, the item it reads and the item it writes, the size of its output
+//! items in a FIFO, and how to start its body from a [`Run`]. The body itself sees only its
+//! own context: its links ([`Ctx`]), its configuration section, and what else it needs (the
+//! lembo table, its tolerance, the scene source), never the whole architecture.
+//!
+//! [`Elaborate`] is the same declaration with the types erased, so that the builder can
+//! take the units of a path from a list, make each boundary's links from its producer's
+//! output type, and refuse a graph whose consumer reads another type before anything runs.
+
+use super::items::PieceId;
+use super::runtime::executor::UnitFuture;
+use super::runtime::trace::Recorder;
+use super::runtime::{Ctx, LinkSpec, UnitStats};
+use super::tiles::{RopTiles, SharedFrame};
+use super::wiring::{Crossbar, HostWiring, Wired};
+use crate::camera::View;
+use crate::config::ArchConfig;
+use crate::datapath::Real;
+use crate::discoid::blend::BlendMode;
+use crate::discoid::render::{BlendReport, DiscoidTable, KeptFragment, Pass};
+use crate::error::Error;
+use crate::graph::{UnitInstance, UnitKind};
+use crate::raster::setup::ScreenLembo;
+use crate::raster::triangle::TriangleSource;
+use crate::raster::Counts;
+use crate::scene::Scene;
+use std::any::{type_name, Any, TypeId};
+use std::marker::PhantomData;
+use std::sync::OnceLock;
+
+/// What a unit hands back when it ends.
+pub struct Finished {
+    /// Its busy, starved and blocked cycles and item counts.
+    pub stats: UnitStats,
+    /// Its timeline events, when traced.
+    pub trace: Option<Recorder>,
+    /// The unit's share of the functional counts.
+    pub counts: Counts,
+    /// A functional error the unit recorded (the run still ends normally).
+    pub error: Option<Error>,
+    /// A ROP's accumulation-pass output in a discoid pass: the fragments it kept and its
+    /// counters.
+    pub discoid: Option<(Vec<KeptFragment>, BlendReport)>,
+}
+
+impl Finished {
+    /// Ends `ctx`'s outputs and collects its counters with the unit's `counts`.
+    pub fn new<I, O>(ctx: Ctx<I, O>, counts: Counts) -> Self {
+        let (stats, trace) = ctx.finish();
+        Finished {
+            stats,
+            trace,
+            counts,
+            error: None,
+            discoid: None,
+        }
+    }
+}
+
+/// Screen-space lembos by id, each whole or as the pieces Setup split it into, filled by
+/// Setup before it sends their ids downstream (empty in the triangle path): the parameter
+/// buffer a hardware Setup writes and the later stages index.
+pub struct LemboTable<R>(Vec<OnceLock<Vec<ScreenLembo<R>>>>);
+
+impl<R> LemboTable<R> {
+    /// A table of `n` lembos, none set up yet.
+    pub fn new(n: usize) -> Self {
+        LemboTable((0..n).map(|_| OnceLock::new()).collect())
+    }
+
+    /// Lembo `lembo`'s pieces, set once, by Setup.
+    pub fn set(&self, lembo: usize, pieces: Vec<ScreenLembo<R>>) {
+        // Each id is set once, by Setup only.
+        let _ = self.0[lembo].set(pieces);
+    }
+
+    /// The screen-space lembo (or piece) `id`, which Setup filled before sending the id.
+    #[inline]
+    pub fn get(&self, id: PieceId) -> &ScreenLembo<R> {
+        &self.0[id.lembo as usize]
+            .get()
+            .expect("Setup fills a lembo's entry before it sends the id")[id.piece as usize]
+    }
+}
+
+/// What the timed pipeline draws.
+#[derive(Clone, Copy)]
+pub enum Source<'a> {
+    /// The scene's lembos, on the lembo path (Figure 5).
+    Lembos,
+    /// Triangles (a tessellation of the scene, or a discoid atlas's planar quads), on the
+    /// triangle path.
+    Triangles(&'a dyn TriangleSource),
+}
+
+/// The triangle source of a run on the lembo path: no triangles.
+pub struct NoTriangles;
+
+impl TriangleSource for NoTriangles {
+    fn chunks(&self) -> usize {
+        0
+    }
+
+    fn per_chunk(&self) -> u64 {
+        0
+    }
+
+    fn chunk(&self, _: usize, out: &mut Vec<crate::lembo::tessellate::Triangle>) {
+        out.clear();
+    }
+}
+
+/// What the ROPs need for a discoid pass.
+pub struct DiscoidPass<'a, R> {
+    /// Which of the passes this run is.
+    pub pass: Pass,
+    /// The discoids' texture coordinates and shading inputs by primitive id.
+    pub table: &'a DiscoidTable<R>,
+    /// Precision of the blend units.
+    pub mode: BlendMode,
+    /// The accumulation threshold t \[world units\].
+    pub threshold: f64,
+    /// The depth pass's result, whole frame: depth and winner per pixel (accumulation pass).
+    pub depth: &'a [f32],
+    /// The depth pass's winning primitive id per pixel.
+    pub winner: &'a [u32],
+}
+
+/// What one run offers its units: each unit's [`Unit::spawn`] takes out its own context and
+/// hands its body only that.
+pub struct Run<'a, R> {
+    /// The scene being drawn.
+    pub scene: &'a Scene,
+    /// Its camera and viewport.
+    pub view: &'a View,
+    /// The architecture: each unit takes its own section.
+    pub arch: &'a ArchConfig,
+    /// Tolerance k in the datapath's precision \[pixels\].
+    pub k: R,
+    /// Setup's perspective tolerance \[pixels\]; None: the paper's Setup.
+    pub perspective_tol: Option<f64>,
+    /// The lembo table Setup fills.
+    pub lembos: LemboTable<R>,
+    /// The triangles this run draws (none on the lembo path).
+    pub triangles: &'a dyn TriangleSource,
+    /// Which ROP owns each screen tile.
+    pub tiles: RopTiles,
+    /// The discoid pass the ROPs run; None for ordinary rendering.
+    pub discoid: Option<DiscoidPass<'a, R>>,
+    /// The frame buffer the ROPs write in place.
+    pub frame: SharedFrame<'a>,
+}
+
+/// A box of Figure 5 as the builder sees it: one file of [`super::units`] each.
+pub trait Unit<R: Real>: 'static {
+    /// Its kind in the graph ([`crate::graph`]).
+    const KIND: UnitKind;
+    /// The item it reads from its input links; `()` for a unit without inputs (a source).
+    type In: Send + 'static;
+    /// The item it writes to its output links; `()` for a unit without outputs (a sink).
+    type Out: Send + 'static;
+    /// Datapath words one of its output items takes in a FIFO (32 bits each in f32, 64 in
+    /// f64), counted from what the hardware would send, for the FIFOs' area and energy
+    /// (DESIGN.md §12); 0 for a sink.
+    const OUT_WORDS: u32;
+    /// The body of instance `index` of this kind, on its links `ctx`, with its context
+    /// taken from `run`.
+    fn spawn<'a>(
+        ctx: Ctx<Self::In, Self::Out>,
+        run: &'a Run<'a, R>,
+        index: usize,
+    ) -> UnitFuture<'a, Finished>;
+}
+
+/// A [`Unit`] with its types erased, as the builder's list holds it.
+pub trait Elaborate<R: Real> {
+    /// Its kind.
+    fn kind(&self) -> UnitKind;
+    /// The type it reads, or None for a source.
+    fn input(&self) -> Option<(TypeId, &'static str)>;
+    /// The type it writes, or None for a sink.
+    fn output(&self) -> Option<(TypeId, &'static str)>;
+    /// [`Unit::OUT_WORDS`].
+    fn out_words(&self) -> u32;
+    /// The crossbar of its output links to every instance of `to` (a `Crossbar<Out>`).
+    fn crossbar(
+        &self,
+        units: &[UnitInstance],
+        to: UnitKind,
+        thread: &[usize],
+        spec: LinkSpec,
+    ) -> Box<dyn Any + Send + Sync>;
+    /// One host thread's ends of `xb`, one of this unit's crossbars (a `Wired<Out>`).
+    fn wire(&self, host: &mut HostWiring, xb: &(dyn Any + Send + Sync)) -> Box<dyn Any>;
+    /// The body of unit `g`, instance `index` of its kind, with its inputs taken from
+    /// `inputs` (a `Wired<In>`) and its outputs from `outputs` (a `Wired<Out>`).
+    #[allow(clippy::too_many_arguments)]
+    fn spawn<'a>(
+        &self,
+        host: &HostWiring,
+        g: usize,
+        index: usize,
+        inputs: Option<&mut dyn Any>,
+        outputs: Option<&mut dyn Any>,
+        run: &'a Run<'a, R>,
+        trace: Option<usize>,
+    ) -> UnitFuture<'a, Finished>;
+}
+
+/// The erased form of unit `U`.
+pub struct Spec<U>(PhantomData<U>);
+
+impl<U> Spec<U> {
+    /// Unit `U`'s entry in the builder's list.
+    pub const fn new() -> Self {
+        Spec(PhantomData)
+    }
+}
+
+impl<U> Default for Spec<U> {
+    fn default() -> Self {
+        Spec::new()
+    }
+}
+
+/// `T`'s identity, or None for `()` (no link on that side).
+fn link_type<T: 'static>() -> Option<(TypeId, &'static str)> {
+    (TypeId::of::<T>() != TypeId::of::<()>()).then(|| (TypeId::of::<T>(), type_name::<T>()))
+}
+
+impl<R: Real, U: Unit<R>> Elaborate<R> for Spec<U> {
+    fn kind(&self) -> UnitKind {
+        U::KIND
+    }
+
+    fn input(&self) -> Option<(TypeId, &'static str)> {
+        link_type::<U::In>()
+    }
+
+    fn output(&self) -> Option<(TypeId, &'static str)> {
+        link_type::<U::Out>()
+    }
+
+    fn out_words(&self) -> u32 {
+        U::OUT_WORDS
+    }
+
+    fn crossbar(
+        &self,
+        units: &[UnitInstance],
+        to: UnitKind,
+        thread: &[usize],
+        spec: LinkSpec,
+    ) -> Box<dyn Any + Send + Sync> {
+        Box::new(Crossbar::<U::Out>::new(units, U::KIND, to, thread, spec))
+    }
+
+    fn wire(&self, host: &mut HostWiring, xb: &(dyn Any + Send + Sync)) -> Box<dyn Any> {
+        let xb = xb
+            .downcast_ref::<Crossbar<U::Out>>()
+            .expect("a unit wires only the crossbars it made");
+        Box::new(host.wire(xb))
+    }
+
+    fn spawn<'a>(
+        &self,
+        host: &HostWiring,
+        g: usize,
+        index: usize,
+        inputs: Option<&mut dyn Any>,
+        outputs: Option<&mut dyn Any>,
+        run: &'a Run<'a, R>,
+        trace: Option<usize>,
+    ) -> UnitFuture<'a, Finished> {
+        // The builder checked before elaboration that every consumer reads its producer's
+        // type, so these casts only fail on a builder defect.
+        let rx = inputs.map_or_else(Vec::new, |w| {
+            w.downcast_mut::<Wired<U::In>>()
+                .expect("the graph check matched the input type")
+                .take_rx(index)
+        });
+        let tx = outputs.map_or_else(Vec::new, |w| {
+            w.downcast_mut::<Wired<U::Out>>()
+                .expect("the graph check matched the output type")
+                .take_tx(index)
+        });
+        U::spawn(host.ctx(g, rx, tx, trace), run, index)
+    }
+}
