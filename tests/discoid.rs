@@ -107,9 +107,7 @@ fn timed_blend_images_are_bit_identical_to_the_functional_ones() {
                         u.name
                     );
                 }
-                let passes = t.blend.cycles_depth_pass.unwrap()
-                    + t.blend.cycles_accumulation_pass.unwrap()
-                    + t.blend.cycles_resolve_pass.unwrap();
+                let passes = t.passes.depth + t.passes.accumulation + t.passes.resolve;
                 assert_eq!(passes, c.total, "{what}");
             }
         }

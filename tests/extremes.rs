@@ -163,7 +163,7 @@ fn run_scene(file: &str, expect: &Value) {
                 j.blend = blend;
                 let run = run_path(&j, &scene, &view, Model::Functional, None)
                     .unwrap_or_else(|e| panic!("{file}: {e}"));
-                let b = run.report.blend.as_ref().expect("blend section");
+                let b = &run.report.blend.as_ref().expect("blend section").blend;
                 let bound = num(d, key).unwrap_or_else(|| panic!("{file}: {key}")) as u64;
                 match blend {
                     BlendMode::Rgba8 => assert!(b.saturations >= bound, "{file}: {b:?}"),

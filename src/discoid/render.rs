@@ -36,7 +36,6 @@ use crate::datapath::{Datapath, Real};
 use crate::error::{Error, Result};
 use crate::lembo::tessellate::Triangle;
 use crate::lembo::{eval3, Quadratic};
-use crate::pipeline::Cycle;
 use crate::raster::fragment::FragmentSink;
 use crate::raster::setup::ScreenLembo;
 use crate::raster::subsegmenter::Subsegment;
@@ -51,7 +50,8 @@ use crate::rop::FrameBuffer;
 use crate::scene::Scene;
 use serde::Serialize;
 
-/// `blend` in report.json.
+/// The blend units' counters and error, what the functional passes find (`blend` in
+/// report.json, with the timed passes' cycles beside them: `report::BlendSection`).
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct BlendReport {
     /// `rgba8`, `f16` or `f32`.
@@ -80,13 +80,6 @@ pub struct BlendReport {
     /// Uncovered pixels with covered pixels within 3 px to their left, right, top and
     /// bottom (holes inside the silhouette, [`count_holes`]), for every kind of discoid.
     pub holes: Option<u64>,
-    /// Timed runs: the cycles of each pass (depth, accumulation, resolve); null in
-    /// functional mode.
-    pub cycles_depth_pass: Option<Cycle>,
-    /// The accumulation pass's frame cycles; null in functional mode.
-    pub cycles_accumulation_pass: Option<Cycle>,
-    /// The resolve pass's cycles; null in functional mode.
-    pub cycles_resolve_pass: Option<Cycle>,
 }
 
 /// The scene's planar discoids as a triangle source: two triangles per discoid, after the

@@ -12,7 +12,7 @@ use crate::error::{Error, Result};
 use crate::pipeline;
 use crate::reference::oracle::ReferenceImage;
 use crate::reference::{heatmap, metrics, oracle};
-use crate::report::{Memory, Primitives, Report, SCHEMA_VERSION};
+use crate::report::{BlendSection, Memory, Primitives, Report, SCHEMA_VERSION};
 use crate::rop::FrameBuffer;
 use crate::scene::Scene;
 use std::time::Instant;
@@ -53,7 +53,8 @@ pub(super) fn run_discoids(
                     },
                 )?,
             )?;
-            (t.framebuffer, t.counts, t.blend, t.units, Some(t.cycles))
+            let blend = BlendSection::new(t.blend, Some(t.passes));
+            (t.framebuffer, t.counts, blend, t.units, Some(t.cycles))
         }
         Model::Functional => {
             let f = discoid::render::render_discoids_functional(
@@ -64,7 +65,13 @@ pub(super) fn run_discoids(
                 job.blend,
                 threshold,
             )?;
-            (f.framebuffer, f.counts, f.blend, Vec::new(), None)
+            (
+                f.framebuffer,
+                f.counts,
+                BlendSection::new(f.blend, None),
+                Vec::new(),
+                None,
+            )
         }
     };
     let wall = t0.elapsed().as_secs_f64();
@@ -92,7 +99,7 @@ pub(super) fn run_discoids(
     let primitive_bytes = PLANAR_DISCOID_BYTES * planar + CURVED_DISCOID_BYTES * curved;
     let memory = Memory::new(
         FrameBuffer::stored_bytes(scene.viewport.width, scene.viewport.height),
-        blend.accumulation_buffer_bytes,
+        blend.blend.accumulation_buffer_bytes,
         primitive_bytes,
         model.arch().map(|a| a.fifo_entries(&units)),
     );

@@ -42,8 +42,21 @@ pub struct DiscoidTimed {
     pub units: Vec<UnitInstance>,
     /// The three passes' accounting, per unit and in total.
     pub cycles: CycleReport,
-    /// The passes' counters, cycles and the blend error.
+    /// The passes' counters and the blend error.
     pub blend: BlendReport,
+    /// Each pass's frame cycles.
+    pub passes: PassCycles,
+}
+
+/// The frame cycles of each timed discoid pass.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PassCycles {
+    /// The depth pass's.
+    pub depth: Cycle,
+    /// The accumulation pass's.
+    pub accumulation: Cycle,
+    /// The resolve pass's.
+    pub resolve: Cycle,
 }
 
 /// Runs a discoid scene's three passes on the timed pipeline of `arch`.
@@ -140,10 +153,12 @@ fn passes<R: Real>(
             _ => Some(u),
         })
         .map(|u| u.name.clone());
-    let mut blend = target.report;
-    blend.cycles_depth_pass = Some(c1.total);
-    blend.cycles_accumulation_pass = Some(c2.total);
-    blend.cycles_resolve_pass = Some(Cycle(resolve_total));
+    let blend = target.report;
+    let passes = PassCycles {
+        depth: c1.total,
+        accumulation: c2.total,
+        resolve: Cycle(resolve_total),
+    };
     let mut counts = second.counts;
     counts.fragments_passed_depth = blend.fragments_accumulated;
     counts.pixels_covered = framebuffer.covered() as u64;
@@ -162,6 +177,7 @@ fn passes<R: Real>(
             units,
         },
         blend,
+        passes,
     })
 }
 

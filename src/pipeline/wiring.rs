@@ -4,8 +4,8 @@
 //! ([`Wired`]) and its [`Ctx`].
 
 use super::runtime::core::Core;
-use super::runtime::executor::Signal;
 use super::runtime::link::{local_link, Ends, RemoteEnd, RemoteParts, Rx, Tx};
+use super::runtime::signal::Signal;
 use super::runtime::{Ctx, LinkName, LinkSpec};
 use crate::graph::{UnitInstance, UnitKind};
 use std::ops::Range;

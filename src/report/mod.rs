@@ -5,7 +5,8 @@
 use crate::config::ArchConfig;
 use crate::cost::model::CostReport;
 use crate::discoid::render::BlendReport;
-use crate::pipeline::{CycleReport, UnitInstance};
+use crate::pipeline::discoid::PassCycles;
+use crate::pipeline::{Cycle, CycleReport, UnitInstance};
 use crate::raster::Counts;
 use crate::reference::metrics::Accuracy;
 use serde::Serialize;
@@ -41,11 +42,39 @@ pub struct Report {
     /// Accuracy against the exact reference; null without `--reference`.
     pub accuracy: Option<Accuracy>,
     /// The discoid blend units' counters and error; null for scenes without discoids.
-    pub blend: Option<BlendReport>,
+    pub blend: Option<BlendSection>,
     /// The storage the simulated unit instantiates for this run.
     pub memory: Memory,
     /// What the simulation cost the host (not deterministic).
     pub host: Host,
+}
+
+/// `blend` in report.json: the blend units' counters and error, then the timed passes'
+/// cycles.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct BlendSection {
+    /// The counters and error, from the functional passes.
+    #[serde(flatten)]
+    pub blend: BlendReport,
+    /// Timed runs: the cycles of each pass (depth, accumulation, resolve); null in
+    /// functional mode.
+    pub cycles_depth_pass: Option<Cycle>,
+    /// The accumulation pass's frame cycles; null in functional mode.
+    pub cycles_accumulation_pass: Option<Cycle>,
+    /// The resolve pass's cycles; null in functional mode.
+    pub cycles_resolve_pass: Option<Cycle>,
+}
+
+impl BlendSection {
+    /// `blend` with the timed passes' cycles, when the passes were timed.
+    pub fn new(blend: BlendReport, passes: Option<PassCycles>) -> Self {
+        BlendSection {
+            blend,
+            cycles_depth_pass: passes.map(|p| p.depth),
+            cycles_accumulation_pass: passes.map(|p| p.accumulation),
+            cycles_resolve_pass: passes.map(|p| p.resolve),
+        }
+    }
 }
 
 /// The scene a report is about.

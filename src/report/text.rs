@@ -216,13 +216,14 @@ cost      {:.3} mm2, {:.1} uJ this frame{} (technology {}; {} frame-buffer bytes
 
     /// The blend units' counters, for a discoid scene.
     fn write_blend(&self, t: &mut String) {
-        let Some(b) = &self.blend else { return };
+        let Some(section) = &self.blend else { return };
+        let b = &section.blend;
         let _ = writeln!(
             t,
             "\nblend     {} ({} bytes per fragment), threshold {} world units",
             b.mode, b.bytes_per_fragment, b.threshold
         );
-        if let Ok(serde_json::Value::Object(map)) = serde_json::to_value(b) {
+        if let Ok(serde_json::Value::Object(map)) = serde_json::to_value(section) {
             for (k, v) in map {
                 if !matches!(k.as_str(), "mode" | "bytes_per_fragment" | "threshold") {
                     let _ = writeln!(t, "  {k:<28} {v}");
@@ -298,7 +299,7 @@ cost      {:.3} mm2, {:.1} uJ this frame{} (technology {}; {} frame-buffer bytes
     fn summarise_drawing(&self, t: &mut String) {
         let r = self;
         let c = &r.counts;
-        if let Some(b) = &r.blend {
+        if let Some(b) = r.blend.as_ref().map(|s| &s.blend) {
             let _ = writeln!(
                 t,
                 "{}: {} discoids, {}x{} px, blend {} ({} bytes/fragment), threshold {}: {} fragments accumulated, {} beyond the threshold, {} beta = 0, {} back-facing, {} saturations; error max {:.4}, mean {:.5}{}",

@@ -23,11 +23,12 @@
 use super::core::{recover, Core, UnitSnap, Wait};
 use super::cycle::Cycle;
 use super::link::RemoteEnd;
+pub use super::signal::Signal;
 use std::future::Future;
 use std::pin::Pin;
 use std::rc::Rc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering::Relaxed, Ordering::SeqCst};
-use std::sync::{Mutex, OnceLock};
+use std::sync::Mutex;
 use std::task::{Context, Poll, Waker};
 use std::time::Duration;
 
@@ -37,37 +38,6 @@ const TICK: Duration = Duration::from_millis(20);
 
 /// A unit's body, as the executor polls it.
 pub type UnitFuture<'a, F> = Pin<Box<dyn Future<Output = F> + 'a>>;
-
-/// Wakes a host thread: something was sent to it.
-#[derive(Debug, Default)]
-pub struct Signal {
-    /// Items, an end or credits were sent: the thread is not quiescent until it read them.
-    dirty: AtomicBool,
-    /// Only a horizon moved: the thread should look, but stays idle unless a unit can run
-    /// (in a mis-wired loop horizons would otherwise circle forever and hide the deadlock).
-    horizon: AtomicBool,
-    thread: OnceLock<std::thread::Thread>,
-}
-
-impl Signal {
-    /// Marks the thread as having something to read and unparks it.
-    pub fn notify(&self) {
-        self.dirty.store(true, SeqCst);
-        self.unpark();
-    }
-
-    /// Tells the thread a horizon it reads moved.
-    pub fn nudge(&self) {
-        self.horizon.store(true, SeqCst);
-        self.unpark();
-    }
-
-    fn unpark(&self) {
-        if let Some(t) = self.thread.get() {
-            t.unpark();
-        }
-    }
-}
 
 /// Per host thread, under the board's lock.
 #[derive(Clone, Debug, Default)]

@@ -23,7 +23,7 @@
 
 use super::core::{Core, InputSnap, InputView, Wait};
 use super::cycle::{Cycle, Timed};
-use super::executor::Signal;
+use super::signal::Signal;
 use crossbeam_channel::{Receiver, Sender, TryRecvError};
 use std::cell::{Cell, RefCell};
 use std::collections::VecDeque;

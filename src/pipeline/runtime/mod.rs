@@ -15,6 +15,7 @@ pub mod ctx;
 pub mod cycle;
 pub mod executor;
 pub mod link;
+pub mod signal;
 pub mod trace;
 
 pub use ctx::{ceil_div, Ctx, UnitStats};
