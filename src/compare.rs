@@ -27,12 +27,12 @@ use crate::job::{
 use crate::lembo::tessellate::Tessellation;
 use crate::output::{check_out_dir, write_set};
 use crate::raster;
-use crate::raster::PerspectiveTol;
 use crate::reference::metrics::Accuracy;
 use crate::reference::montage::{montage, Panel};
 use crate::reference::oracle::ReferenceImage;
 use crate::report::{html, png_bytes, Report};
 use crate::scene::Scene;
+use crate::tolerance::PerspectiveTol;
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};

@@ -15,7 +15,6 @@ use crate::lembo::Lembo;
 use crate::output::{check_out_dir, check_out_file, write_set};
 use crate::pipeline::{self, Cycle, CycleReport, SimOptions, Source};
 use crate::raster;
-use crate::raster::{PerspectiveTol, Tolerance};
 use crate::reference::oracle::ReferenceImage;
 use crate::reference::{heatmap, metrics, oracle, see_through, Accuracy};
 use crate::report::html::{self, REPORT_HTML};
@@ -25,6 +24,7 @@ use crate::report::{
 };
 use crate::rop::FrameBuffer;
 use crate::scene::Scene;
+use crate::tolerance::{check_k, PerspectiveTol, Tolerance};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -54,8 +54,6 @@ pub fn check_count<T: Copy + PartialOrd + From<u8> + std::fmt::Display>(
         ))
     }
 }
-/// Accepted range of the tolerance k \[pixels\] (DESIGN.md §8).
-pub const K_RANGE: (f64, f64) = (1e-4, 64.0);
 /// Largest accepted reference supersampling factor (samples per pixel side).
 pub const MAX_SUPERSAMPLE: u32 = 8;
 
@@ -201,15 +199,7 @@ impl RenderJob {
                 "only meaningful with --path lembo (the triangle path clips its triangles)",
             ));
         }
-        let (lo, hi) = K_RANGE;
-        if !(self.k.is_finite() && self.k >= lo && self.k <= hi) {
-            return Err(Error::invalid(
-                COMMAND_LINE,
-                "--k",
-                self.k,
-                format!("k must be a number in [{lo}, {hi}] pixels"),
-            ));
-        }
+        check_k(self.k).map_err(|why| Error::invalid(COMMAND_LINE, "--k", self.k, why))?;
         check_count(
             "--supersample",
             self.supersample,

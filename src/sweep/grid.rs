@@ -10,8 +10,8 @@ use crate::config::ArchConfig;
 use crate::datapath::Datapath;
 use crate::discoid::blend::BlendMode;
 use crate::error::{Error, Result};
-use crate::job::{check_tess_range, Mode, PrimitivePath, K_RANGE};
-use crate::raster::PerspectiveTol;
+use crate::job::{check_tess_range, Mode, PrimitivePath};
+use crate::tolerance::{check_k, PerspectiveTol};
 use serde_json::Value;
 use std::collections::{BTreeMap, BTreeSet};
 
@@ -273,17 +273,7 @@ impl Expander<'_> {
                 _ => PrimitivePath::Triangle,
             }),
             "k" => {
-                let k = number()?;
-                let (lo, hi) = K_RANGE;
-                if !(k >= lo && k <= hi) {
-                    return Err(Error::invalid(
-                        file,
-                        field,
-                        v,
-                        format!("k must be a number in [{lo}, {hi}] pixels"),
-                    ));
-                }
-                Setting::K(k)
+                Setting::K(check_k(number()?).map_err(|why| Error::invalid(file, field, v, why))?)
             }
             "perspective_tol" => {
                 let tol = match (v.as_str(), v.as_f64()) {
