@@ -9,7 +9,7 @@ use crate::config::ArchConfig;
 use crate::cost::{self, model::CostReport, tech::Tech};
 use crate::datapath::Datapath;
 use crate::discoid::{self, blend::BlendMode};
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, COMMAND_LINE};
 use crate::lembo::tessellate::Tessellation;
 use crate::lembo::Lembo;
 use crate::output::{check_out_dir, check_out_file, write_set};
@@ -31,9 +31,6 @@ use std::time::Instant;
 mod discoids;
 use discoids::run_discoids;
 pub use discoids::{CURVED_DISCOID_BYTES, PLANAR_DISCOID_BYTES};
-
-/// Where command-line errors say they come from.
-pub const COMMAND_LINE: &str = "command line";
 
 /// Checks a count given on the command line: `value` of `flag` must be in 1..=`max`
 /// (`unit` says of what); the error names the flag.

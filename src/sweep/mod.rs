@@ -50,8 +50,8 @@ pub mod results;
 pub mod run;
 pub mod spec;
 
-use crate::error::{Error, Result};
-use crate::job::{check_count, COMMAND_LINE, MAX_HOST_THREADS};
+use crate::error::{Error, Result, COMMAND_LINE};
+use crate::job::{check_count, MAX_HOST_THREADS};
 pub use lock::{FolderLock, LOCK_FILE};
 pub use merge::{run_merge, MergeJob, MergeOutput};
 pub use plan::Plan;
