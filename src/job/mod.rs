@@ -29,6 +29,6 @@ pub use reference::{
 pub use render::{load_arch, load_scene, run_render, RenderOutput};
 pub use route::{check_triangle_budget, Model, Route, MAX_TRIANGLES};
 pub use validate::{
-    check_count, check_tess_range, machine_threads, Given, Mode, PrimitivePath, RenderJob,
-    MAX_HOST_THREADS, MAX_SUPERSAMPLE, MAX_TESS, MAX_THREADS,
+    check_count, check_tess_range, check_threshold, machine_threads, Given, Mode, PrimitivePath,
+    RenderJob, MAX_HOST_THREADS, MAX_SUPERSAMPLE, MAX_TESS, MAX_THREADS,
 };

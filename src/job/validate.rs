@@ -217,14 +217,8 @@ impl RenderJob {
             }
         }
         if let Some(t) = self.threshold {
-            if !(t.is_finite() && t > 0.0) {
-                return Err(Error::invalid(
-                    COMMAND_LINE,
-                    "--threshold",
-                    t,
-                    "must be a finite distance above 0 world units",
-                ));
-            }
+            check_threshold(t)
+                .map_err(|why| Error::invalid(COMMAND_LINE, "--threshold", t, why))?;
         }
         if let Some(n) = self.tess {
             if self.path != PrimitivePath::Triangle {
@@ -267,6 +261,17 @@ impl RenderJob {
     }
 }
 
+/// Checks a discoid threshold t \[world units\] (`--threshold`, a sweep's `threshold`): it
+/// must be finite and above 0. The error says what is accepted; the caller names the flag or
+/// field and the value as given.
+pub fn check_threshold(t: f64) -> std::result::Result<f64, &'static str> {
+    if t.is_finite() && t > 0.0 {
+        Ok(t)
+    } else {
+        Err("must be a finite distance above 0 world units")
+    }
+}
+
 /// `--tess` must be in 1..=MAX_TESS.
 pub fn check_tess_range(n: u32) -> Result<()> {
     if (1..=MAX_TESS).contains(&n) {
@@ -278,5 +283,78 @@ pub fn check_tess_range(n: u32) -> Result<()> {
             n,
             format!("must be 1 to {MAX_TESS} (triangles per lembo edge)"),
         ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::tolerance::DEFAULT_K_PX;
+
+    /// `render` with no flag given.
+    fn job() -> RenderJob {
+        RenderJob {
+            scene: None,
+            out: None,
+            k: DEFAULT_K_PX,
+            perspective_tol: PerspectiveTol::FollowK,
+            datapath: Datapath::F32,
+            reference: false,
+            supersample: 1,
+            viewport: None,
+            mode: Mode::Timed,
+            arch: None,
+            trace_out: None,
+            tech: None,
+            path: PrimitivePath::Lembo,
+            tess: None,
+            blend: BlendMode::Rgba8,
+            threshold: None,
+            host_threads: 1,
+            threads: None,
+            given: Given::default(),
+            no_memory_check: false,
+        }
+    }
+
+    /// The flag, value and reason of an `Error::Invalid` from the command line.
+    fn refused(e: Error) -> (String, String, String) {
+        match e {
+            Error::Invalid {
+                file,
+                field,
+                value,
+                reason,
+            } if file == COMMAND_LINE => (field, value, reason),
+            other => panic!("expected a command-line Error::Invalid, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn k_and_threshold_are_refused_with_their_checks_reasons() {
+        assert!(job().validate().is_ok());
+        let e = RenderJob { k: 100.0, ..job() }.validate().unwrap_err();
+        let why = check_k(100.0).unwrap_err();
+        assert_eq!(refused(e), ("--k".into(), "100".into(), why));
+        let e = RenderJob {
+            threshold: Some(-0.5),
+            ..job()
+        }
+        .validate()
+        .unwrap_err();
+        let why = check_threshold(-0.5).unwrap_err().to_string();
+        assert_eq!(refused(e), ("--threshold".into(), "-0.5".into(), why));
+    }
+
+    #[test]
+    fn check_threshold_accepts_a_positive_finite_distance_only() {
+        assert_eq!(check_threshold(0.25), Ok(0.25));
+        for t in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            assert_eq!(
+                check_threshold(t),
+                Err("must be a finite distance above 0 world units"),
+                "{t}"
+            );
+        }
     }
 }
