@@ -20,6 +20,7 @@ use lembo_sim::pipeline::{run_timed, SimOptions, Source};
 use lembo_sim::raster::{
     self, fragment, interval, minmax, segmenter, setup, subsegmenter, triangle, Counts,
 };
+use lembo_sim::tolerance::PerspectiveTol;
 
 #[path = "../tests/support/scenes.rs"]
 mod scenes;
@@ -387,7 +388,7 @@ fn frame_threads(c: &mut Criterion) {
     g.sample_size(10);
     let s = scenes::trace("bunny.json", Some(1024));
     let view = View::new(&s.camera, s.viewport);
-    let tol = raster::PerspectiveTol::FollowK.with_k(0.5);
+    let tol = PerspectiveTol::FollowK.with_k(0.5);
     let t = Tessellation::new(&s, 1);
     for threads in [1u32, 2, 4] {
         for (path, source) in [

@@ -19,7 +19,7 @@ use crate::camera::View;
 use crate::config::ArchConfig;
 use crate::datapath::Datapath;
 use crate::discoid::blend::BlendMode;
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, COMMAND_LINE};
 use crate::job::{
     self, check_tess_range, check_triangle_budget, load_arch, render_reference, run_path, Given,
     Mode, Model, PathRun, PrimitivePath, RenderJob, MAX_TRIANGLES,
@@ -27,12 +27,12 @@ use crate::job::{
 use crate::lembo::tessellate::Tessellation;
 use crate::output::{check_out_dir, write_set};
 use crate::raster;
-use crate::raster::PerspectiveTol;
 use crate::reference::metrics::Accuracy;
 use crate::reference::montage::{montage, Panel};
 use crate::reference::oracle::ReferenceImage;
 use crate::report::{html, png_bytes, Report};
 use crate::scene::Scene;
+use crate::tolerance::PerspectiveTol;
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -372,7 +372,7 @@ fn check_host_threads(job: &CompareJob, arch: &ArchConfig) -> Result<()> {
     .unwrap_or(1);
     if job.host_threads as usize > units {
         return Err(Error::invalid(
-            job::COMMAND_LINE,
+            COMMAND_LINE,
             "--host-threads",
             job.host_threads,
             format!("more than the {units} units of the smaller path's pipeline (each host thread runs at least one)"),

@@ -5,6 +5,9 @@ use crate::graph::GraphError;
 use std::fmt;
 use std::path::PathBuf;
 
+/// Where command-line errors say they come from: the `file` of an error about a flag.
+pub const COMMAND_LINE: &str = "command line";
+
 /// Everything that can go wrong in a run.
 #[derive(Debug)]
 pub enum Error {

@@ -38,6 +38,8 @@
 //!   plots.
 //! - [`output`]: every output file written whole or not at all, also under Ctrl-C;
 //!   [`error`]: every error a run can end with, and its exit status.
+//! - [`tolerance`]: the lembo path's tolerances, k and Setup's perspective tolerance, each
+//!   with its default, range and check.
 //! - [`datapath`]: the `f32`/`f64` datapath; [`datapath_study`]: f32 against f64 over
 //!   seeded random lembos, for `examples/datapath_study.rs` and `tests/datapath.rs`.
 //!
@@ -70,3 +72,4 @@ pub mod report;
 pub mod rop;
 pub mod scene;
 pub mod sweep;
+pub mod tolerance;

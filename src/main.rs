@@ -5,10 +5,8 @@ use lembo_sim::compare::{run_compare, CompareJob, Tess};
 use lembo_sim::datapath::Datapath;
 use lembo_sim::discoid::blend::BlendMode;
 use lembo_sim::job::{self, run_render, Given, PrimitivePath, RenderJob};
-use lembo_sim::raster::PerspectiveTol;
-use lembo_sim::sweep::{
-    run_merge, run_sweep, MergeJob, Shard, SweepJob, SweepOutcome, DEFAULT_K_PX,
-};
+use lembo_sim::sweep::{run_merge, run_sweep, MergeJob, Shard, SweepJob, SweepOutcome};
+use lembo_sim::tolerance::{PerspectiveTol, DEFAULT_K_PX};
 use std::io::Write as _;
 use std::path::PathBuf;
 
@@ -240,7 +238,7 @@ struct CompareArgs {
     #[arg(
         long,
         value_name = "PX",
-        default_value_t = 0.5,
+        default_value_t = DEFAULT_K_PX,
         allow_negative_numbers = true
     )]
     k: f64,

@@ -38,7 +38,7 @@
 //! waits S seconds between steps 2 and 3, so a test can interrupt a run whose temporaries
 //! are all written (`tests/atomic.rs`).
 
-use crate::error::{parent_dir, Error, Result};
+use crate::error::{parent_dir, Error, Result, COMMAND_LINE};
 use std::fs::File;
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
@@ -200,7 +200,7 @@ fn previous_set(dir: &Path) -> Vec<String> {
 pub fn check_out_dir(flag: &str, dir: &Path) -> Result<()> {
     if dir.exists() && !dir.is_dir() {
         return Err(Error::invalid(
-            crate::job::COMMAND_LINE,
+            COMMAND_LINE,
             flag,
             dir.display(),
             "names an existing file; it must name a folder (created when missing)",
@@ -214,7 +214,7 @@ pub fn check_out_dir(flag: &str, dir: &Path) -> Result<()> {
 pub fn check_out_file(flag: &str, file: &Path) -> Result<()> {
     if file.is_dir() {
         return Err(Error::invalid(
-            crate::job::COMMAND_LINE,
+            COMMAND_LINE,
             flag,
             file.display(),
             "names an existing folder; it must name a file",

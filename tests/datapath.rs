@@ -16,8 +16,9 @@
 use lembo_sim::camera::View;
 use lembo_sim::datapath::Datapath;
 use lembo_sim::datapath_study::{run, summarise, CaseResult, Family, StudySettings, FAMILIES};
-use lembo_sim::raster::{render_functional, Tolerance};
+use lembo_sim::raster::render_functional;
 use lembo_sim::scene::Scene;
+use lembo_sim::tolerance::Tolerance;
 use std::path::Path;
 
 /// The study's default seed: these cases are the first of its default run.

@@ -8,9 +8,10 @@ use lembo_sim::job::{render_reference, run_path, Mode, Model, PrimitivePath, Ren
 use lembo_sim::raster::fragment::FragmentSink;
 use lembo_sim::raster::setup::ScreenLembo;
 use lembo_sim::raster::subsegmenter::Subsegment;
-use lembo_sim::raster::{render_lembos, Counts, PerspectiveTol, Tolerance, DEFAULT_SEGMENT_CAP};
+use lembo_sim::raster::{render_lembos, Counts, DEFAULT_SEGMENT_CAP};
 use lembo_sim::reference::metrics::Accuracy;
 use lembo_sim::scene::Scene;
+use lembo_sim::tolerance::{PerspectiveTol, Tolerance};
 use std::path::Path;
 
 fn scene(file: &str) -> Scene {

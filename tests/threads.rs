@@ -8,8 +8,9 @@
 use lembo_sim::camera::View;
 use lembo_sim::datapath::Datapath;
 use lembo_sim::lembo::tessellate::Tessellation;
-use lembo_sim::raster::{render_functional_on, Frame, PerspectiveTol};
+use lembo_sim::raster::{render_functional_on, Frame};
 use lembo_sim::scene::Scene;
+use lembo_sim::tolerance::PerspectiveTol;
 
 #[path = "support/scenes.rs"]
 mod scenes;

@@ -16,8 +16,9 @@ use crate::raster::subsegmenter::Subsegment;
 use crate::raster::triangle::{
     self, ScreenTriangle, TriangleFragment, TriangleSink, TriangleSource,
 };
-use crate::raster::{frame_with, render_lembos, Frame, Tolerance, DEFAULT_SEGMENT_CAP};
+use crate::raster::{frame_with, render_lembos, Frame, DEFAULT_SEGMENT_CAP};
 use crate::scene::Scene;
+use crate::tolerance::Tolerance;
 use counted::{counting, Counted, OpTable};
 
 /// A sink that charges what its inner sink (the ROP) does to the ROP, and hands the charge

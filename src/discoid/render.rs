@@ -42,12 +42,13 @@ use crate::raster::subsegmenter::Subsegment;
 use crate::raster::triangle::{
     render_triangles, ScreenTriangle, TriangleFragment, TriangleSink, TriangleSource,
 };
-use crate::raster::{render_lembos, Counts, Tolerance, DEFAULT_SEGMENT_CAP};
+use crate::raster::{render_lembos, Counts, DEFAULT_SEGMENT_CAP};
 use crate::rop::framebuffer::{depth_test, NO_PRIMITIVE};
 use crate::rop::rop::{normalize, FragmentShader};
 use crate::rop::shade::to_u8;
 use crate::rop::FrameBuffer;
 use crate::scene::Scene;
+use crate::tolerance::Tolerance;
 use serde::Serialize;
 
 /// The blend units' counters and error, what the functional passes find (`blend` in

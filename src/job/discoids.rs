@@ -2,10 +2,10 @@
 //! report, and with `--reference` the blended image measured against the surface the
 //! discoids stand for.
 
-use super::{
-    host, reference_scene, scene_info, settings, sim_options, Measured, Model, PathRun, RenderJob,
-    LEMBO_BYTES,
-};
+use super::path::sim_options;
+use super::reference::Measured;
+use super::sections::{host, scene_info, settings};
+use super::{reference_scene, Model, PathRun, RenderJob, LEMBO_BYTES};
 use crate::camera::View;
 use crate::discoid;
 use crate::error::{Error, Result};

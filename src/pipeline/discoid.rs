@@ -23,11 +23,12 @@ use crate::discoid::render::{
     check_scene, resolve, BlendReport, DiscoidTable, DiscoidTarget, Pass,
 };
 use crate::error::{Error, Result};
-use crate::raster::{Counts, Tolerance};
+use crate::raster::Counts;
 use crate::rop::rop::FragmentShader;
 use crate::rop::shade::to_u8;
 use crate::rop::FrameBuffer;
 use crate::scene::Scene;
+use crate::tolerance::Tolerance;
 
 use super::tiles::RopTiles;
 use super::SimOptions;

@@ -49,113 +49,18 @@ pub(super) fn error_against(
         return None;
     }
     let xy: Vec<(f64, f64)> = pts.iter().map(|&(_, xy)| xy).collect();
-    let within = |p: &Point| match (budget, p.area_mm2) {
-        (None, _) => true,
-        (Some(b), Some(a)) => a <= b,
-        (Some(_), None) => false,
-    };
     let mut by_path: BTreeMap<&str, Vec<usize>> = BTreeMap::new();
     for (i, (p, _)) in pts.iter().enumerate() {
         by_path.entry(p.path.as_str()).or_default().push(i);
     }
-    // The fronts: one over both paths, or one per path within the budget.
-    let front_of = |members: &[usize]| -> Vec<usize> {
-        let kept: Vec<usize> = members
-            .iter()
-            .copied()
-            .filter(|&i| within(pts[i].0))
-            .collect();
-        let sub: Vec<(f64, f64)> = kept.iter().map(|&i| xy[i]).collect();
-        pareto_front(&sub).into_iter().map(|j| kept[j]).collect()
-    };
-    let fronts: Vec<(RGBColor, Vec<usize>)> = match budget {
-        None => vec![(BLACK, front_of(&(0..pts.len()).collect::<Vec<_>>()))],
-        Some(_) => by_path
-            .iter()
-            .enumerate()
-            .map(|(s, (path, members))| (path_style(path, s).0, front_of(members)))
-            .collect(),
-    };
-    // Series: a path, split by the datapath and blend mode where they vary, so points that
-    // differ only in those (and often coincide) keep apart by their marker.
-    let all: Vec<&Point> = pts.iter().map(|(p, _)| *p).collect();
-    let variant_keys: Vec<String> = varying(&all)
-        .into_iter()
-        .filter(|k| k == "datapath" || k == "blend")
-        .collect();
-    let mut series: BTreeMap<(String, String), Vec<usize>> = BTreeMap::new();
-    for (i, (p, _)) in pts.iter().enumerate() {
-        let variant = assignment(p, &variant_keys);
-        series.entry((p.path.clone(), variant)).or_default().push(i);
-    }
+    let fronts = fronts(&pts, &by_path, budget);
     let paths: Vec<&str> = by_path.keys().copied().collect();
-    let style_of = |path: &str, variant_rank: usize| {
-        let s = paths.iter().position(|p| *p == path).unwrap_or(0);
-        let (color, mark) = path_style(path, s);
-        let marks: Vec<Mark> = std::iter::once(mark)
-            .chain(MARKS.iter().copied().filter(|m| *m != mark))
-            .collect();
-        (color, marks[variant_rank % marks.len()])
-    };
-    let mut styles: Vec<(RGBColor, Mark)> = Vec::new();
-    let mut entries: Vec<Entry> = Vec::new();
-    let mut rank: BTreeMap<&str, usize> = BTreeMap::new();
-    for (path, variant) in series.keys() {
-        let r = rank.entry(path.as_str()).or_default();
-        let (color, mark) = style_of(path, *r);
-        *r += 1;
-        styles.push((color, mark));
-        let what = match path.as_str() {
-            "lembo" => "lembo path".to_string(),
-            "triangle" => "triangle path".to_string(),
-            other => format!("{other} path"),
-        };
-        let levels = match path.as_str() {
-            "lembo" => ", labelled with k, the chord error [px]",
-            "triangle" => ", labelled with n (n² triangles per lembo)",
-            _ => "",
-        };
-        entries.push(Entry {
-            mark: Some(mark),
-            line: false,
-            color,
-            label: if variant.is_empty() {
-                format!("{what}{levels}")
-            } else {
-                format!("{what}, {variant}{levels}")
-            },
-            note: None,
-        });
-    }
+    let (series, mut entries) = series(&pts, &paths);
     let measure = match against {
         Against::Cycles => "cycles",
         Against::Energy => "energy",
     };
-    match budget {
-        None => entries.push(Entry {
-            mark: Some(Mark::Ring),
-            line: true,
-            color: BLACK,
-            label: format!("Pareto front over both paths (circled): no other point has both less {measure} and less error"),
-            note: None,
-        }),
-        Some(b) => {
-            entries.push(Entry {
-                mark: Some(Mark::Ring),
-                line: true,
-                color: BLACK,
-                label: format!("each path's Pareto front (circled) among configurations of at most {} mm²", fmt_num(b)),
-                note: None,
-            });
-            entries.push(Entry {
-                mark: Some(Mark::Dot),
-                line: false,
-                color: OVER_BUDGET,
-                label: format!("over the area budget of {} mm² (report.json cost.area_mm2)", fmt_num(b)),
-                note: None,
-            });
-        }
-    }
+    entries.extend(front_entries(budget, measure));
     let title = match budget {
         None => format!("{scene}: image error against {measure}"),
         Some(b) => format!(
@@ -207,11 +112,15 @@ pub(super) fn error_against(
         // Marks first, then labels placed where they cover no other label.
         let mut labels = Labels::default();
         let mut pending = Vec::new();
-        for (members, &(color, mark)) in series.values().zip(&styles) {
-            for &i in members {
+        for s in &series {
+            for &i in &s.members {
                 let at = chart.backend_coord(&xy[i]);
-                let color = if within(pts[i].0) { color } else { OVER_BUDGET };
-                draw_mark(root, at, mark, color)?;
+                let color = if within(budget, pts[i].0) {
+                    s.color
+                } else {
+                    OVER_BUDGET
+                };
+                draw_mark(root, at, s.mark, color)?;
                 pending.push((pts[i].0.level(), at, color));
             }
         }
@@ -222,6 +131,145 @@ pub(super) fn error_against(
         }
         draw_legend(&legend, &entries)
     })
+}
+
+/// Whether `p` is within the area budget (every point is, without one).
+fn within(budget: Option<f64>, p: &Point) -> bool {
+    match (budget, p.area_mm2) {
+        (None, _) => true,
+        (Some(b), Some(a)) => a <= b,
+        (Some(_), None) => false,
+    }
+}
+
+/// The fronts, each with its colour and its points (indices into `pts`) in order: one over
+/// both paths, or one per path (`by_path`) within the budget.
+fn fronts(
+    pts: &[(&Point, (f64, f64))],
+    by_path: &BTreeMap<&str, Vec<usize>>,
+    budget: Option<f64>,
+) -> Vec<(RGBColor, Vec<usize>)> {
+    let front_of = |members: &[usize]| -> Vec<usize> {
+        let kept: Vec<usize> = members
+            .iter()
+            .copied()
+            .filter(|&i| within(budget, pts[i].0))
+            .collect();
+        let sub: Vec<(f64, f64)> = kept.iter().map(|&i| pts[i].1).collect();
+        pareto_front(&sub).into_iter().map(|j| kept[j]).collect()
+    };
+    match budget {
+        None => vec![(BLACK, front_of(&(0..pts.len()).collect::<Vec<_>>()))],
+        Some(_) => by_path
+            .iter()
+            .enumerate()
+            .map(|(s, (path, members))| (path_style(path, s).0, front_of(members)))
+            .collect(),
+    }
+}
+
+/// One series of an error plot: its points (indices into the plotted points), its colour
+/// and its marker.
+struct Series {
+    members: Vec<usize>,
+    color: RGBColor,
+    mark: Mark,
+}
+
+/// The series of an error plot: a path, split by the datapath and blend mode where they
+/// vary, so points that differ only in those (and often coincide) keep apart by their
+/// marker. A path keeps its colour (`paths` ranks them); its variants take its marker,
+/// then the others in turn. Each series comes with its legend entry.
+fn series(pts: &[(&Point, (f64, f64))], paths: &[&str]) -> (Vec<Series>, Vec<Entry>) {
+    let all: Vec<&Point> = pts.iter().map(|(p, _)| *p).collect();
+    let variant_keys: Vec<String> = varying(&all)
+        .into_iter()
+        .filter(|k| k == "datapath" || k == "blend")
+        .collect();
+    let mut members: BTreeMap<(String, String), Vec<usize>> = BTreeMap::new();
+    for (i, (p, _)) in pts.iter().enumerate() {
+        let variant = assignment(p, &variant_keys);
+        members
+            .entry((p.path.clone(), variant))
+            .or_default()
+            .push(i);
+    }
+    let style_of = |path: &str, variant_rank: usize| {
+        let s = paths.iter().position(|p| *p == path).unwrap_or(0);
+        let (color, mark) = path_style(path, s);
+        let marks: Vec<Mark> = std::iter::once(mark)
+            .chain(MARKS.iter().copied().filter(|m| *m != mark))
+            .collect();
+        (color, marks[variant_rank % marks.len()])
+    };
+    let mut rank: BTreeMap<String, usize> = BTreeMap::new();
+    members
+        .into_iter()
+        .map(|((path, variant), members)| {
+            let r = rank.entry(path.clone()).or_default();
+            let (color, mark) = style_of(&path, *r);
+            *r += 1;
+            let what = match path.as_str() {
+                "lembo" => "lembo path".to_string(),
+                "triangle" => "triangle path".to_string(),
+                other => format!("{other} path"),
+            };
+            let levels = match path.as_str() {
+                "lembo" => ", labelled with k, the chord error [px]",
+                "triangle" => ", labelled with n (n² triangles per lembo)",
+                _ => "",
+            };
+            let entry = Entry {
+                mark: Some(mark),
+                line: false,
+                color,
+                label: if variant.is_empty() {
+                    format!("{what}{levels}")
+                } else {
+                    format!("{what}, {variant}{levels}")
+                },
+                note: None,
+            };
+            (
+                Series {
+                    members,
+                    color,
+                    mark,
+                },
+                entry,
+            )
+        })
+        .unzip()
+}
+
+/// The legend's entries for the fronts and, with an area budget, for the points over it;
+/// `measure` is what the x axis shows (`cycles`, `energy`).
+fn front_entries(budget: Option<f64>, measure: &str) -> Vec<Entry> {
+    match budget {
+        None => vec![Entry {
+            mark: Some(Mark::Ring),
+            line: true,
+            color: BLACK,
+            label: format!("Pareto front over both paths (circled): no other point has both less {measure} and less error"),
+            note: None,
+        }],
+        Some(b) => vec![
+            Entry {
+                mark: Some(Mark::Ring),
+                line: true,
+                color: BLACK,
+                label: format!("each path's Pareto front (circled) among configurations of at most {} mm²", fmt_num(b)),
+                note: None,
+            },
+            Entry {
+                mark: Some(Mark::Dot),
+                line: false,
+                color: OVER_BUDGET,
+                label: format!("over the area budget of {} mm² (report.json cost.area_mm2)", fmt_num(b)),
+                note: None,
+            },
+        ],
+    }
 }
 
 /// Labels placed beside their points so that no two overlap: each tries the four corners

@@ -28,6 +28,7 @@ use crate::graph::UnitKind;
 use crate::lembo::Lembo;
 use crate::rop::{FrameBuffer, Rop};
 use crate::scene::Scene;
+use crate::tolerance::Tolerance;
 use fragment::FragmentSink;
 use serde::Serialize;
 use triangle::TriangleSource;
@@ -35,97 +36,6 @@ use triangle::TriangleSource;
 /// Default cap on segments per interval (DESIGN.md §8): far above what a visible patch needs
 /// at k >= 1e-4 px on a 16384-pixel viewport, low enough to refuse runaway walks quickly.
 pub const DEFAULT_SEGMENT_CAP: usize = 1 << 16;
-
-/// What Setup's perspective tolerance is by default, as a fraction of k: with the walk's
-/// error at most k and Setup's at most k/2, k bounds the end-to-end error of a fragment's
-/// position to within 1.5 k.
-pub const DEFAULT_PERSPECTIVE_FRACTION: f64 = 0.5;
-
-/// The lembo path's tolerances \[pixels\].
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Tolerance {
-    /// k: the midpoint error of every segment of the walk (Martinelli 2006, section 5).
-    pub k: f64,
-    /// How far Setup's rebuilt screen quadratics may be from the true perspective projection
-    /// before it splits a lembo ([`refine`], `--perspective-tol`); `None` is the paper's
-    /// Setup, which projects six points and neither splits for perspective nor clips.
-    pub perspective: Option<f64>,
-}
-
-impl Tolerance {
-    /// k with the default perspective tolerance, k · [`DEFAULT_PERSPECTIVE_FRACTION`].
-    pub fn new(k: f64) -> Self {
-        Tolerance {
-            k,
-            perspective: Some(k * DEFAULT_PERSPECTIVE_FRACTION),
-        }
-    }
-
-    /// k with Setup as the paper has it (`--perspective-tol off`).
-    pub fn paper(k: f64) -> Self {
-        Tolerance {
-            k,
-            perspective: None,
-        }
-    }
-}
-
-/// Setup's perspective tolerance as a user sets it (`--perspective-tol PX|off`).
-#[derive(Clone, Copy, Debug, PartialEq, Default)]
-pub enum PerspectiveTol {
-    /// k · [`DEFAULT_PERSPECTIVE_FRACTION`].
-    #[default]
-    FollowK,
-    /// A fixed tolerance \[pixels\], finite and > 0.
-    Px(f64),
-    /// The paper's Setup: no perspective split, no near-plane handling.
-    Off,
-}
-
-impl PerspectiveTol {
-    /// The tolerances for k \[pixels\].
-    pub fn with_k(self, k: f64) -> Tolerance {
-        match self {
-            PerspectiveTol::FollowK => Tolerance::new(k),
-            PerspectiveTol::Px(px) => Tolerance {
-                k,
-                perspective: Some(px),
-            },
-            PerspectiveTol::Off => Tolerance::paper(k),
-        }
-    }
-
-    /// Parses `off` or a number of pixels; the error says what is accepted.
-    pub fn parse(text: &str) -> std::result::Result<Self, String> {
-        if text.trim() == "off" {
-            return Ok(PerspectiveTol::Off);
-        }
-        match text.trim().parse::<f64>() {
-            Ok(px) => PerspectiveTol::px(px),
-            Err(_) => Err(format!(
-                "must be `off` or a tolerance in pixels, a finite number > 0 (got `{text}`)"
-            )),
-        }
-    }
-
-    /// A fixed tolerance, refused unless finite and > 0.
-    pub fn px(px: f64) -> std::result::Result<Self, String> {
-        if px.is_finite() && px > 0.0 {
-            Ok(PerspectiveTol::Px(px))
-        } else {
-            Err(format!(
-                "must be `off` or a tolerance in pixels, a finite number > 0 (got {px})"
-            ))
-        }
-    }
-}
-
-impl From<f64> for Tolerance {
-    /// k with the default perspective tolerance ([`Tolerance::new`]).
-    fn from(k: f64) -> Self {
-        Tolerance::new(k)
-    }
-}
 
 /// What the functional model produced, stage by stage.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]

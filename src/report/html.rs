@@ -7,8 +7,10 @@
 //! Builders here put reports into HTML; [`escape`] is applied to every piece of text that
 //! comes from a report or a file name.
 
-use super::Report;
+use super::{Host, Memory, Report};
+use crate::cost::model::CostReport;
 use crate::pipeline::{Cycle, CycleReport};
+use crate::reference::metrics::Accuracy;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -190,16 +192,37 @@ pub fn unit_bars(c: &CycleReport) -> String {
 /// cost, blend, counts, memory, the trace link, the settings and architecture echo, and
 /// the host; headings at `level`.
 pub fn report_sections(r: &Report, trace: Option<&str>, level: u8) -> String {
-    let section = |heading: &str, content: &str| section_at(level, heading, content);
-    let mut body = String::new();
-    if let Some(a) = &r.accuracy {
-        let rows: Vec<Vec<String>> = a.lines().into_iter().map(|(k, v)| vec![k, v]).collect();
-        body += &section(
-            "Accuracy against the exact reference",
-            &table(&["metric", "value"], &rows),
-        );
-    }
-    match &r.cycles {
+    [
+        r.accuracy.as_ref().map(accuracy_section),
+        Some(cycles_section(r)),
+        r.cost.as_ref().map(cost_section),
+        r.blend.as_ref().map(|b| ("Blend units", pre_json(b))),
+        Some(counts_section(r)),
+        Some(memory_section(&r.memory)),
+        trace.map(timeline_section),
+        Some(settings_section(r)),
+        r.arch.as_ref().map(|a| ("Architecture", pre_json(a))),
+        Some(host_section(&r.host)),
+    ]
+    .into_iter()
+    .flatten()
+    .map(|(heading, content)| section_at(level, heading, &content))
+    .collect()
+}
+
+/// The accuracy metrics against the exact reference: heading and content.
+fn accuracy_section(a: &Accuracy) -> (&'static str, String) {
+    let rows: Vec<Vec<String>> = a.lines().into_iter().map(|(k, v)| vec![k, v]).collect();
+    (
+        "Accuracy against the exact reference",
+        table(&["metric", "value"], &rows),
+    )
+}
+
+/// The frame's cycles, clock, frame rate and bottleneck with the unit bars, or why there
+/// are none: heading and content.
+fn cycles_section(r: &Report) -> (&'static str, String) {
+    let content = match &r.cycles {
         Some(c) => {
             let head = format!(
                 "{} cycles at {} MHz: {}; bottleneck {} (most busy cycles){}",
@@ -214,59 +237,58 @@ pub fn report_sections(r: &Report, trace: Option<&str>, level: u8) -> String {
                     .map(|a| format!(", architecture {}", a.name))
                     .unwrap_or_default()
             );
-            body += &section("Cycles", &(para(&head) + &unit_bars(c)));
+            para(&head) + &unit_bars(c)
         }
-        None => {
-            body += &section(
-                "Cycles",
-                &para("n/a: functional mode (no timing model ran)"),
-            )
-        }
-    }
-    if let Some(c) = &r.cost {
-        let rows: Vec<Vec<String>> = c
-            .units
-            .iter()
-            .map(|u| {
-                vec![
-                    u.name.clone(),
-                    format!("{:.4}", u.area_mm2),
-                    format!("{:.4}", u.fifo_area_mm2),
-                    format!("{:.3}", u.energy_pj * 1e-6),
-                    format!("{:.3}", u.fifo_energy_pj * 1e-6),
-                    super::text::functional_units(&u.functional_units),
-                ]
-            })
-            .collect();
-        let head = format!(
-            "{:.3} mm², {:.1} µJ this frame{} (technology {}; {} frame-buffer bytes charged as DRAM)",
-            c.area_mm2,
-            c.energy_pj * 1e-6,
-            c.power_mw
-                .map(|p| format!(" = {p:.0} mW at the clock"))
-                .unwrap_or_default(),
-            c.tech,
-            c.framebuffer_bytes
-        );
-        body += &section(
-            "Cost: area and energy (DESIGN.md §12)",
-            &(para(&head)
-                + &table(
-                    &[
-                        "unit",
-                        "area mm²",
-                        "of it FIFO mm²",
-                        "energy µJ",
-                        "of it FIFO µJ",
-                        "functional units",
-                    ],
-                    &rows,
-                )),
-        );
-    }
-    if let Some(b) = &r.blend {
-        body += &section("Blend units", &pre_json(b));
-    }
+        None => para("n/a: functional mode (no timing model ran)"),
+    };
+    ("Cycles", content)
+}
+
+/// The unit's area and the frame's energy, unit by unit: heading and content.
+fn cost_section(c: &CostReport) -> (&'static str, String) {
+    let rows: Vec<Vec<String>> = c
+        .units
+        .iter()
+        .map(|u| {
+            vec![
+                u.name.clone(),
+                format!("{:.4}", u.area_mm2),
+                format!("{:.4}", u.fifo_area_mm2),
+                format!("{:.3}", u.energy_pj * 1e-6),
+                format!("{:.3}", u.fifo_energy_pj * 1e-6),
+                super::text::functional_units(&u.functional_units),
+            ]
+        })
+        .collect();
+    let head = format!(
+        "{:.3} mm², {:.1} µJ this frame{} (technology {}; {} frame-buffer bytes charged as DRAM)",
+        c.area_mm2,
+        c.energy_pj * 1e-6,
+        c.power_mw
+            .map(|p| format!(" = {p:.0} mW at the clock"))
+            .unwrap_or_default(),
+        c.tech,
+        c.framebuffer_bytes
+    );
+    (
+        "Cost: area and energy (DESIGN.md §12)",
+        para(&head)
+            + &table(
+                &[
+                    "unit",
+                    "area mm²",
+                    "of it FIFO mm²",
+                    "energy µJ",
+                    "of it FIFO µJ",
+                    "functional units",
+                ],
+                &rows,
+            ),
+    )
+}
+
+/// The counters, of the timed pipeline or of the functional model: heading and content.
+fn counts_section(r: &Report) -> (&'static str, String) {
     let counts = serde_json::to_value(r.counts).expect("counts serialise");
     let rows: Vec<Vec<String>> = counts
         .as_object()
@@ -279,11 +301,14 @@ pub fn report_sections(r: &Report, trace: Option<&str>, level: u8) -> String {
     } else {
         "Counts (functional model)"
     };
-    body += &section(heading, &table(&["counter", "value"], &rows));
-    let m = &r.memory;
-    body += &section(
+    (heading, table(&["counter", "value"], &rows))
+}
+
+/// The bytes the unit holds, part by part: heading and content.
+fn memory_section(m: &Memory) -> (&'static str, String) {
+    (
         "Memory the unit holds",
-        &table(
+        table(
             &["part", "bytes"],
             &[
                 vec!["frame buffer".to_string(), m.framebuffer_bytes.to_string()],
@@ -297,21 +322,27 @@ pub fn report_sections(r: &Report, trace: Option<&str>, level: u8) -> String {
                 ],
             ],
         ),
-    );
-    if let Some(trace) = trace {
-        body += &section(
-            "Timeline",
-            &format!(
-                "<p><a href=\"{trace}\">The trace of this run</a> is Chrome trace-event JSON: \
-                 open <a href=\"https://ui.perfetto.dev\">ui.perfetto.dev</a>, choose \
-                 \u{201c}Open trace file\u{201d} and pick it (it stays on your machine); \
-                 <code>chrome://tracing</code> reads it too.</p>\n"
-            ),
-        );
-    }
-    body += &section(
+    )
+}
+
+/// The link to the run's trace and how to open it: heading and content.
+fn timeline_section(trace: &str) -> (&'static str, String) {
+    (
+        "Timeline",
+        format!(
+            "<p><a href=\"{trace}\">The trace of this run</a> is Chrome trace-event JSON: \
+             open <a href=\"https://ui.perfetto.dev\">ui.perfetto.dev</a>, choose \
+             \u{201c}Open trace file\u{201d} and pick it (it stays on your machine); \
+             <code>chrome://tracing</code> reads it too.</p>\n"
+        ),
+    )
+}
+
+/// The settings echoed, with the scene and its primitives: heading and content.
+fn settings_section(r: &Report) -> (&'static str, String) {
+    (
         "Settings",
-        &(pre_json(&r.settings)
+        pre_json(&r.settings)
             + &para(&format!(
                 "scene {} ({}), {}x{} px, {} lembos; {} {}s, {} vertices, {} bytes",
                 r.scene.name,
@@ -323,15 +354,15 @@ pub fn report_sections(r: &Report, trace: Option<&str>, level: u8) -> String {
                 r.primitives.kind,
                 r.primitives.vertices,
                 r.primitives.bytes
-            ))),
-    );
-    if let Some(a) = &r.arch {
-        body += &section("Architecture", &pre_json(a));
-    }
-    let h = &r.host;
-    body += &section(
+            )),
+    )
+}
+
+/// The host's wall time, rates and peak memory: heading and content.
+fn host_section(h: &Host) -> (&'static str, String) {
+    (
         "Host",
-        &para(&format!(
+        para(&format!(
             "render {:.3} s, {:.1} M fragments/s{}{}",
             h.wall_seconds,
             h.fragments_per_second / 1e6,
@@ -345,8 +376,7 @@ pub fn report_sections(r: &Report, trace: Option<&str>, level: u8) -> String {
                 ))
                 .unwrap_or_default()
         )),
-    );
-    body
+    )
 }
 
 /// The page of one render: its images, then [`report_sections`]. `images` are the files

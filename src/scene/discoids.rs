@@ -81,53 +81,7 @@ impl Check<'_> {
                 (label, Vec::new(), source)
             }
             DiscoidSource::Builtin(name) => {
-                let source = format!("{field}.builtin");
-                if set.beta == BetaShape::Ewa {
-                    return Err(self.invalid(
-                        format!("{field}.beta"),
-                        "\"ewa\"",
-                        "the EWA kernel is set up per planar discoid (its centre's projection); curved discoids take disk, star or gaussian",
-                    ));
-                }
-                let Some(curved) = builtin_discoids(name) else {
-                    return Err(self.invalid(
-                        source,
-                        format!("{name:?}"),
-                        format!(
-                            "unknown builtin discoid shape; known: {}",
-                            BUILTIN_DISCOID_NAMES.join(", ")
-                        ),
-                    ));
-                };
-                self.within_limit(&source, curved.lembos.len(), before)?;
-                let lembos = match t {
-                    Some(t) => curved
-                        .lembos
-                        .iter()
-                        .map(|l| {
-                            Lembo::new(
-                                l.points.map(|p| t.point(p)),
-                                l.normals.map(|n| t.rotate * n),
-                            )
-                        })
-                        .collect(),
-                    None => curved.lembos,
-                };
-                if spec.surface.is_some() {
-                    return Err(self.invalid(
-                        format!("{field}.surface"),
-                        "(given)",
-                        "builtin discoids stand for their own shape; `surface` is for `items` and `surfels`",
-                    ));
-                }
-                set.lembo_texcoords = curved.texcoords;
-                let scale = t.map_or(1.0, |t| t.scale);
-                set.surface = Some(DiscoidSurface::Sphere {
-                    center: t.map_or(glam::DVec3::ZERO, |t| t.point(glam::DVec3::ZERO)),
-                    radius: scale,
-                });
-                radii.extend(curved.radii.iter().map(|r| r * scale));
-                (format!("builtin discoids {name}"), lembos, source)
+                self.builtin_curved(&field, name, spec, t, &mut set, radii)?
             }
             DiscoidSource::Surfels(path) => {
                 let source = format!("{field}.surfels");
@@ -144,6 +98,67 @@ impl Check<'_> {
         self.place_planar(object, source, &mut set.planar, t)?;
         radii.extend(set.planar.iter().map(|d| d.radius));
         Ok((label, lembos, set))
+    }
+
+    /// Builtin curved discoids (`discoids.builtin` of the object at `field`): their lembos
+    /// placed by `t`, their texture coordinates and the sphere they stand for into `set`,
+    /// their world radii pushed to `radii`; with the label and the source field.
+    fn builtin_curved(
+        &self,
+        field: &str,
+        name: &str,
+        spec: &DiscoidsSpec,
+        t: Option<&Transform>,
+        set: &mut DiscoidSet,
+        radii: &mut Vec<f64>,
+    ) -> Result<(String, Vec<Lembo>, String)> {
+        let source = format!("{field}.builtin");
+        if set.beta == BetaShape::Ewa {
+            return Err(self.invalid(
+                format!("{field}.beta"),
+                "\"ewa\"",
+                "the EWA kernel is set up per planar discoid (its centre's projection); curved discoids take disk, star or gaussian",
+            ));
+        }
+        let Some(curved) = builtin_discoids(name) else {
+            return Err(self.invalid(
+                source,
+                format!("{name:?}"),
+                format!(
+                    "unknown builtin discoid shape; known: {}",
+                    BUILTIN_DISCOID_NAMES.join(", ")
+                ),
+            ));
+        };
+        self.within_limit(&source, curved.lembos.len(), radii.len())?;
+        let lembos = match t {
+            Some(t) => curved
+                .lembos
+                .iter()
+                .map(|l| {
+                    Lembo::new(
+                        l.points.map(|p| t.point(p)),
+                        l.normals.map(|n| t.rotate * n),
+                    )
+                })
+                .collect(),
+            None => curved.lembos,
+        };
+        if spec.surface.is_some() {
+            return Err(self.invalid(
+                format!("{field}.surface"),
+                "(given)",
+                "builtin discoids stand for their own shape; `surface` is for `items` and `surfels`",
+            ));
+        }
+        set.lembo_texcoords = curved.texcoords;
+        let scale = t.map_or(1.0, |t| t.scale);
+        set.surface = Some(DiscoidSurface::Sphere {
+            center: t.map_or(glam::DVec3::ZERO, |t| t.point(glam::DVec3::ZERO)),
+            radius: scale,
+        });
+        radii.extend(curved.radii.iter().map(|r| r * scale));
+        Ok((format!("builtin discoids {name}"), lembos, source))
     }
 
     /// The one source of an object's discoids, with the options that apply only to

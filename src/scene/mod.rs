@@ -35,7 +35,7 @@ pub mod validate;
 
 use crate::camera::{Camera, Viewport};
 use crate::discoid::DiscoidSet;
-use crate::error::{parent_dir, read_text_file, Error, Result};
+use crate::error::{parent_dir, read_text_file, Error, Result, COMMAND_LINE};
 use crate::lembo::construct::TriangleMesh;
 use crate::lembo::Lembo;
 use crate::rop::shade::Light;
@@ -174,10 +174,7 @@ impl Scene {
     /// Sets the viewport (CLI override), validated like the file's.
     pub fn set_viewport(&mut self, width: u32, height: u32) -> Result<()> {
         let viewport = Viewport { width, height };
-        Check {
-            file: "command line",
-        }
-        .viewport(&viewport)?;
+        Check { file: COMMAND_LINE }.viewport(&viewport)?;
         self.viewport = viewport;
         Ok(())
     }

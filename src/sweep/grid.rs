@@ -10,8 +10,8 @@ use crate::config::ArchConfig;
 use crate::datapath::Datapath;
 use crate::discoid::blend::BlendMode;
 use crate::error::{Error, Result};
-use crate::job::{check_tess_range, Mode, PrimitivePath, K_RANGE};
-use crate::raster::PerspectiveTol;
+use crate::job::{check_tess_range, check_threshold, Mode, PrimitivePath};
+use crate::tolerance::{check_k, PerspectiveTol};
 use serde_json::Value;
 use std::collections::{BTreeMap, BTreeSet};
 
@@ -273,17 +273,7 @@ impl Expander<'_> {
                 _ => PrimitivePath::Triangle,
             }),
             "k" => {
-                let k = number()?;
-                let (lo, hi) = K_RANGE;
-                if !(k >= lo && k <= hi) {
-                    return Err(Error::invalid(
-                        file,
-                        field,
-                        v,
-                        format!("k must be a number in [{lo}, {hi}] pixels"),
-                    ));
-                }
-                Setting::K(k)
+                Setting::K(check_k(number()?).map_err(|why| Error::invalid(file, field, v, why))?)
             }
             "perspective_tol" => {
                 let tol = match (v.as_str(), v.as_f64()) {
@@ -315,18 +305,9 @@ impl Expander<'_> {
                         .expect("one of the names"),
                 )
             }
-            "threshold" => {
-                let t = number()?;
-                if !(t.is_finite() && t > 0.0) {
-                    return Err(Error::invalid(
-                        file,
-                        field,
-                        v,
-                        "must be a finite distance above 0 world units",
-                    ));
-                }
-                Setting::Threshold(t)
-            }
+            "threshold" => Setting::Threshold(
+                check_threshold(number()?).map_err(|why| Error::invalid(file, field, v, why))?,
+            ),
             _ => match name.strip_prefix(ARCH) {
                 Some(path) => {
                     let canonical = self.arch_value(path, v, field)?;

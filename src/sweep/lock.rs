@@ -21,8 +21,7 @@
 //! by an unrelated process after the holder died keeps the lock held until the user
 //! removes it; the message says how.
 
-use crate::error::{Error, Result};
-use crate::job::COMMAND_LINE;
+use crate::error::{Error, Result, COMMAND_LINE};
 use crate::output::{pid_alive, register_lock, temp_name, unregister_lock};
 use serde::{Deserialize, Serialize};
 use std::io::ErrorKind;

@@ -6,8 +6,7 @@ use super::{
     spec::Spec,
     Shard, RESULTS_JSONL, SPEC_JSON,
 };
-use crate::error::{read_text_file, Error, Result};
-use crate::job::COMMAND_LINE;
+use crate::error::{read_text_file, Error, Result, COMMAND_LINE};
 use serde_json::Value;
 use std::collections::BTreeMap;
 use std::path::PathBuf;

@@ -50,8 +50,8 @@ pub mod results;
 pub mod run;
 pub mod spec;
 
-use crate::error::{Error, Result};
-use crate::job::{check_count, COMMAND_LINE, MAX_HOST_THREADS};
+use crate::error::{Error, Result, COMMAND_LINE};
+use crate::job::{check_count, MAX_HOST_THREADS};
 pub use lock::{FolderLock, LOCK_FILE};
 pub use merge::{run_merge, MergeJob, MergeOutput};
 pub use plan::Plan;
@@ -66,8 +66,6 @@ use std::path::PathBuf;
 pub const MAX_RUNS: usize = 100_000;
 /// The most threads `--jobs` accepts; each run is one host thread (or `--host-threads`).
 pub const MAX_JOBS: usize = 256;
-/// Tolerance k of a point that sets none \[pixels\]: `render`'s default.
-pub const DEFAULT_K_PX: f64 = 0.5;
 /// The records file of a sweep directory.
 pub const RESULTS_JSONL: &str = "results.jsonl";
 /// The table of a sweep directory.

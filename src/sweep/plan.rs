@@ -4,7 +4,7 @@
 use super::{
     grid::{reword, set_arch_field},
     spec::{Point, Run, Setting, Spec},
-    Shard, ARCH, DEFAULT_K_PX,
+    Shard, ARCH,
 };
 use crate::camera::View;
 use crate::config::ArchConfig;
@@ -16,10 +16,10 @@ use crate::job::{
     check_available, check_triangle_budget, memory_estimate, run_path, Given, Mode, PrimitivePath,
     RenderJob,
 };
-use crate::raster::PerspectiveTol;
 use crate::reference::oracle::ReferenceImage;
 use crate::report::Report;
 use crate::scene::Scene;
+use crate::tolerance::{PerspectiveTol, DEFAULT_K_PX};
 use serde::Serialize;
 use serde_json::Value;
 use std::collections::BTreeMap;

@@ -1,0 +1,96 @@
+//! The memory a run is estimated to need, and the refusal, before any work, of a run larger
+//! than the memory available (`--no-memory-check` runs it anyway).
+
+use super::{Mode, RenderJob};
+use crate::error::{Error, Result, COMMAND_LINE};
+use crate::scene::Scene;
+
+/// Bytes a run holds per pixel, measured as peak resident memory over pixels on the bunny
+/// at 2048x2048 and 4096x4096 (2026-11-25), rounded up: the functional model's frame buffer
+/// and image; the timed pipeline's shared frame buffer and FIFOs besides; the exact
+/// reference's image, supersampled colours and metrics; a discoid scene's accumulation
+/// target and kept fragments (measured on bunny_discoids at 512x512).
+const BYTES_PER_PIXEL_FUNCTIONAL: f64 = 17.0;
+
+const BYTES_PER_PIXEL_TIMED: f64 = 25.0;
+
+const BYTES_PER_PIXEL_REFERENCE: f64 = 175.0;
+
+const BYTES_PER_PIXEL_DISCOIDS: f64 = 160.0;
+
+/// What a run holds whatever its size: the binary, the scene, the thread stacks.
+const BYTES_FIXED: f64 = 64.0 * 1024.0 * 1024.0;
+
+/// The memory `job` on `scene` is estimated to need \[bytes\], plus `extra_per_pixel`.
+pub fn memory_estimate(job: &RenderJob, scene: &Scene, extra_per_pixel: f64) -> f64 {
+    let pixels = scene.viewport.width as f64 * scene.viewport.height as f64;
+    let mut per_pixel = match job.mode {
+        Mode::Functional => BYTES_PER_PIXEL_FUNCTIONAL,
+        Mode::Timed => BYTES_PER_PIXEL_TIMED,
+    } + extra_per_pixel;
+    if job.reference {
+        per_pixel += BYTES_PER_PIXEL_REFERENCE;
+    }
+    if scene.discoid_count() > 0 {
+        per_pixel += BYTES_PER_PIXEL_DISCOIDS;
+    }
+    BYTES_FIXED + pixels * per_pixel
+}
+
+/// The memory the system can give a new allocation without swapping \[bytes\]
+/// (`MemAvailable` of /proc/meminfo); None where it cannot be read.
+fn memory_available() -> Option<f64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024.0)
+}
+
+/// Refuses, before any work, a run estimated to need more memory than is available,
+/// naming `--viewport` and the estimate; `--no-memory-check` runs it anyway. A run estimated
+/// at over 1 GiB says so on standard error before it starts.
+pub fn check_memory(job: &RenderJob, scene: &Scene, extra_per_pixel: f64) -> Result<()> {
+    let size = format!("{}x{}", scene.viewport.width, scene.viewport.height);
+    check_available(
+        memory_estimate(job, scene, extra_per_pixel),
+        job.no_memory_check,
+        ("--viewport", &size),
+        &format!("{size} px: this run"),
+        "render a smaller viewport",
+    )
+}
+
+/// Refuses work estimated at `need` bytes when the system has less available, naming
+/// `flag` = value (`(flag, value)`) with `advice`, unless `insist` (`--no-memory-check`);
+/// `what` needs it, as the note above 1 GiB says.
+pub fn check_available(
+    need: f64,
+    insist: bool,
+    (flag, value): (&str, &str),
+    what: &str,
+    advice: &str,
+) -> Result<()> {
+    const GIB: f64 = (1u64 << 30) as f64;
+    let have = memory_available();
+    if need > GIB {
+        eprintln!(
+            "lembo-sim: {what} needs about {:.1} GiB of memory (estimate{})",
+            need / GIB,
+            have.map(|h| format!("; {:.1} GiB available", h / GIB))
+                .unwrap_or_default()
+        );
+    }
+    match have {
+        Some(have) if need > have && !insist => Err(Error::invalid(
+            COMMAND_LINE,
+            flag,
+            value,
+            format!(
+                "{what} would need about {:.1} GiB (estimate), more than the {:.1} GiB of memory available; {advice}, or pass --no-memory-check to run anyway",
+                need / GIB,
+                have / GIB
+            ),
+        )),
+        _ => Ok(()),
+    }
+}

@@ -1,0 +1,307 @@
+//! One lembo or triangle route drawn on one model into a [`PathRun`]: the image, measured
+//! against the reference when there is one, and its report; a timed frame is priced
+//! (DESIGN.md §12) by a counting run whose image must equal it.
+
+use super::discoids::run_discoids;
+use super::reference::measure;
+use super::sections::{host, scene_info, settings};
+use super::{Model, PrimitivePath, RenderJob, Route};
+use crate::camera::View;
+use crate::config::ArchConfig;
+use crate::cost::{self, model::CostReport};
+use crate::error::{Error, Result, COMMAND_LINE};
+use crate::pipeline::{self, CycleReport, SimOptions, Source};
+use crate::raster;
+use crate::reference::oracle::ReferenceImage;
+use crate::report::{Memory, Primitives, Report, SCHEMA_VERSION};
+use crate::rop::FrameBuffer;
+use crate::scene::Scene;
+use std::time::Instant;
+
+/// Bytes of one lembo as the Setup unit reads it: six points and six normals in f32.
+pub const LEMBO_BYTES: u64 = 6 * 2 * 3 * 4;
+
+/// One path's run on a loaded scene: what `render` writes, and what `compare` puts side by
+/// side.
+pub struct PathRun {
+    /// The run's report.
+    pub report: Report,
+    /// The image (the timed pipeline's, or the functional model's).
+    pub framebuffer: FrameBuffer,
+    /// The error heat map against the reference, when one was given.
+    pub error_map: Option<image::RgbImage>,
+    /// Chrome trace-event JSON, when requested.
+    pub trace: Option<String>,
+}
+
+/// Runs `job`'s path on `scene` on `model`, and with a `reference` (and the wall time it
+/// took) the accuracy metrics, from the functional model's fragment probe; the timed image
+/// must equal the functional one bit for bit, and this is checked on every such run.
+pub fn run_path(
+    job: &RenderJob,
+    scene: &Scene,
+    view: &View,
+    model: Model,
+    reference: Option<(&ReferenceImage, f64)>,
+) -> Result<PathRun> {
+    let route = Route::new(job, scene)?;
+    if let Route::Discoids = route {
+        return run_discoids(job, scene, view, model, reference);
+    }
+    let (drawn, wall) = draw(job, scene, view, model, &route, reference.is_some())?;
+    let measured = match (reference, drawn.probed()) {
+        (Some(reference), Some(frame)) => Some(measure(job, scene, view, &route, frame, reference)),
+        _ => None,
+    };
+    let counts = drawn.counts();
+    let primitives = primitives(scene, &route, &counts);
+    let (framebuffer, units, cycles, trace) = match drawn {
+        Drawn::Functional(f) => (f.framebuffer, Vec::new(), None, None),
+        Drawn::Timed { timed, .. } => (
+            timed.framebuffer,
+            timed.units,
+            Some(timed.cycles),
+            timed.trace,
+        ),
+    };
+    let cost = match (model, &cycles) {
+        (Model::Timed(arch), Some(cycles)) => Some(cost_of(
+            job,
+            scene,
+            view,
+            &route,
+            arch,
+            cycles,
+            &counts,
+            &framebuffer,
+        )?),
+        _ => None,
+    };
+    let memory = Memory::new(
+        FrameBuffer::stored_bytes(scene.viewport.width, scene.viewport.height),
+        0,
+        primitives.bytes,
+        model.arch().map(|a| a.fifo_entries(&units)),
+    );
+    let tess = match &route {
+        Route::Triangles(t) => Some(t.level()),
+        _ => None,
+    };
+    let report = Report {
+        schema_version: SCHEMA_VERSION,
+        scene: scene_info(scene),
+        settings: settings(
+            job,
+            model,
+            job.path.name(),
+            (job.path == PrimitivePath::Lembo).then_some(job.k),
+            tess,
+            reference.is_some(),
+        ),
+        primitives,
+        units,
+        counts,
+        host: {
+            let mut h = host(
+                wall,
+                counts.fragments,
+                cycles.as_ref().map(|c| (c.total, job.host_threads)),
+                measured.as_ref().map(|m| m.reference_wall),
+                measured.as_ref().map(|m| m.metrics_wall),
+            );
+            if cycles.is_none() {
+                // The functional frame's threads: the analysed frame is drawn on one.
+                h.host_threads = Some(if measured.is_some() { 1 } else { job.threads() });
+            }
+            h
+        },
+        cycles,
+        cost,
+        arch: model.arch().cloned(),
+        accuracy: measured.as_ref().map(|m| m.accuracy.clone()),
+        blend: None,
+        memory,
+    };
+    Ok(PathRun {
+        report,
+        framebuffer,
+        error_map: measured.map(|m| m.error_map),
+        trace,
+    })
+}
+
+/// The primitives section of a lembo or triangle route's report.
+fn primitives(scene: &Scene, route: &Route, counts: &raster::Counts) -> Primitives {
+    match route {
+        Route::Triangles(t) => Primitives {
+            kind: "triangle".into(),
+            count: t.len(),
+            vertices: t.vertex_count(),
+            bytes: t.bytes(),
+            quad_efficiency: counts.quad_efficiency(),
+        },
+        _ => {
+            let lembos = scene.lembo_count() as u64;
+            Primitives {
+                kind: "lembo".into(),
+                count: lembos,
+                vertices: 6 * lembos,
+                bytes: LEMBO_BYTES * lembos,
+                quad_efficiency: None,
+            }
+        }
+    }
+}
+
+/// The cost of a timed lembo or triangle frame (DESIGN.md §12): the functional model runs
+/// again in a counting datapath for the operations of each kind (its image must equal the
+/// timed one, so counting cannot have changed what was drawn), priced with the timed run's
+/// busy cycles and items and the bytes through the frame-buffer port.
+#[allow(clippy::too_many_arguments)]
+fn cost_of(
+    job: &RenderJob,
+    scene: &Scene,
+    view: &View,
+    route: &Route,
+    arch: &ArchConfig,
+    cycles: &CycleReport,
+    counts: &raster::Counts,
+    timed: &FrameBuffer,
+) -> Result<CostReport> {
+    let (frame, ops) = match route {
+        Route::Triangles(t) => cost::triangle_ops(scene, view, t, job.datapath),
+        _ => cost::lembo_ops(scene, view, job.tolerance(), job.datapath)?,
+    };
+    if frame.framebuffer.color != timed.color {
+        return Err(Error::Internal(
+            "the counting run's image differs from the timed one".into(),
+        ));
+    }
+    let fb = &arch.framebuffer;
+    let framebuffer_bytes = counts.fragments * fb.bytes_per_fragment_tested
+        + counts.fragments_passed_depth * fb.bytes_per_fragment_written;
+    let work = cost::model::Work {
+        ops: &ops,
+        cycles,
+        framebuffer_bytes,
+    };
+    Ok(cost::model::cost(&job.tech()?, arch, job.datapath, &work))
+}
+
+/// A surface path's image with what each model contributed (one per run, so the variants'
+/// sizes do not matter).
+#[allow(clippy::large_enum_variant)]
+enum Drawn {
+    /// The functional model alone (with its probe when the run is measured).
+    Functional(raster::Frame),
+    /// The timed pipeline; for a measured run also the functional model's probed frame.
+    Timed {
+        timed: pipeline::TimedFrame,
+        probed: Option<raster::Frame>,
+    },
+}
+
+impl Drawn {
+    /// The functional frame carrying the fragment probe, when the run is measured.
+    fn probed(&self) -> Option<&raster::Frame> {
+        match self {
+            Drawn::Functional(f) => Some(f),
+            Drawn::Timed { probed, .. } => probed.as_ref(),
+        }
+    }
+
+    /// The counts of the model that made the image.
+    fn counts(&self) -> raster::Counts {
+        match self {
+            Drawn::Functional(f) => f.counts,
+            Drawn::Timed { timed, .. } => timed.counts,
+        }
+    }
+}
+
+/// Draws a lembo or triangle `route` on `model`, with the wall time of that render alone
+/// \[seconds\]; with `analyse`, the functional model also runs with its probe (a timed run
+/// checks its image against it), outside the time taken.
+fn draw(
+    job: &RenderJob,
+    scene: &Scene,
+    view: &View,
+    model: Model,
+    route: &Route,
+    analyse: bool,
+) -> Result<(Drawn, f64)> {
+    let functional = |analyse: bool| -> Result<raster::Frame> {
+        let triangles = match route {
+            Route::Triangles(t) => Some(t as &dyn raster::triangle::TriangleSource),
+            _ => None,
+        };
+        raster::render_functional_on(
+            scene,
+            view,
+            job.tolerance(),
+            triangles,
+            job.datapath,
+            analyse,
+            job.threads(),
+        )
+    };
+    let arch = match model {
+        Model::Functional => {
+            let t0 = Instant::now();
+            let frame = functional(analyse)?;
+            return Ok((Drawn::Functional(frame), t0.elapsed().as_secs_f64()));
+        }
+        Model::Timed(arch) => arch,
+    };
+    let (path, source) = match route {
+        Route::Triangles(t) => (pipeline::Path::Triangle, Source::Triangles(t)),
+        _ => (pipeline::Path::Lembo, Source::Lembos),
+    };
+    let options = sim_options(job, arch, path)?;
+    let t0 = Instant::now();
+    let timed = pipeline::run_timed(
+        scene,
+        view,
+        job.tolerance(),
+        job.datapath,
+        arch,
+        source,
+        &options,
+    )?;
+    let wall = t0.elapsed().as_secs_f64();
+    let probed = if analyse {
+        let frame = functional(true)?;
+        if timed.framebuffer.color != frame.framebuffer.color {
+            return Err(Error::Internal(
+                "the timed image differs from the functional one".into(),
+            ));
+        }
+        Some(frame)
+    } else {
+        None
+    };
+    Ok((Drawn::Timed { timed, probed }, wall))
+}
+
+/// The host options of a timed run of `job` on `path`: `--host-threads` is refused when it
+/// exceeds the units the run instantiates (each host thread runs at least one unit).
+pub(super) fn sim_options(
+    job: &RenderJob,
+    arch: &ArchConfig,
+    path: pipeline::Path,
+) -> Result<SimOptions> {
+    let units = arch.instances(path).len();
+    if job.host_threads as usize > units {
+        return Err(Error::invalid(
+            COMMAND_LINE,
+            "--host-threads",
+            job.host_threads,
+            format!("more than the {units} units this run instantiates (each host thread runs at least one)"),
+        ));
+    }
+    Ok(SimOptions {
+        host_threads: job.host_threads as usize,
+        trace: job.trace_out.is_some(),
+        ..SimOptions::default()
+    })
+}

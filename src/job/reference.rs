@@ -1,0 +1,139 @@
+//! The exact reference a run is measured against (for a discoid scene, the surface its
+//! discoids stand for) and a frame's accuracy against it.
+
+use super::{PrimitivePath, RenderJob, Route};
+use crate::camera::View;
+use crate::discoid;
+use crate::error::{Error, Result, COMMAND_LINE};
+use crate::lembo::Lembo;
+use crate::raster;
+use crate::reference::oracle::ReferenceImage;
+use crate::reference::{heatmap, metrics, oracle, see_through, Accuracy};
+use crate::rop::FrameBuffer;
+use crate::scene::Scene;
+use std::time::Instant;
+
+/// The scene whose lembos the exact reference of `scene` renders: the scene itself, or for
+/// a discoid scene the surface its discoids stand for (`discoid::surface`); a discoid
+/// scene that does not say what surface that is has `--reference` refused naming why.
+pub fn reference_scene(scene: &Scene) -> Result<std::borrow::Cow<'_, Scene>> {
+    if scene.discoid_count() == 0 {
+        return Ok(std::borrow::Cow::Borrowed(scene));
+    }
+    discoid::surface::surface_scene(scene)
+        .map(std::borrow::Cow::Owned)
+        .map_err(no_surface)
+}
+
+/// Refuses, before any work, `--reference` on a discoid scene that does not say what
+/// surface it stands for ([`reference_scene`] without building the surface).
+pub fn check_reference_scene(scene: &Scene) -> Result<()> {
+    discoid::surface::check_surfaces(scene).map_err(no_surface)
+}
+
+/// The `--reference` error of a discoid scene without a surface.
+fn no_surface(why: String) -> Error {
+    Error::invalid(
+        COMMAND_LINE,
+        "--reference",
+        "given",
+        format!("the reference of a discoid scene is the surface its discoids stand for: {why}"),
+    )
+}
+
+/// The exact reference of `scene`'s lembo surfaces, with the wall time it took; for a
+/// discoid scene, pass its [`reference_scene`].
+pub fn render_reference(scene: &Scene, view: &View, supersample: u32) -> (ReferenceImage, f64) {
+    let t = Instant::now();
+    let lembos: Vec<_> = scene.lembos().collect();
+    let reference = oracle::render_reference(&oracle::ReferenceInput {
+        lembos: &lembos,
+        view,
+        light: &scene.light,
+        background: scene.background,
+        supersample,
+    });
+    (reference, t.elapsed().as_secs_f64())
+}
+
+/// A measured run's accuracy, error map and the wall time the measuring took.
+pub(super) struct Measured {
+    pub(super) accuracy: Accuracy,
+    pub(super) error_map: image::RgbImage,
+    /// The reference's wall time plus the metrics' \[seconds\].
+    pub(super) reference_wall: f64,
+    /// The metrics' wall time \[seconds\].
+    pub(super) metrics_wall: f64,
+}
+
+/// Measures `frame` (probed) against `reference` (with the wall time it took).
+pub(super) fn measure(
+    job: &RenderJob,
+    scene: &Scene,
+    view: &View,
+    route: &Route,
+    frame: &raster::Frame,
+    (reference, wall): (&ReferenceImage, f64),
+) -> Measured {
+    let t1 = Instant::now();
+    let ids_per_lembo = match route {
+        Route::Triangles(t) => t.triangles_per_lembo(),
+        _ => 1,
+    };
+    let accuracy = measure_frame(scene, view, frame, reference, job.path, ids_per_lembo);
+    let metrics_wall = t1.elapsed().as_secs_f64();
+    let error_map = heatmap::error_heatmap(&frame.framebuffer, reference);
+    Measured {
+        accuracy,
+        error_map,
+        reference_wall: wall + t1.elapsed().as_secs_f64(),
+        metrics_wall,
+    }
+}
+
+/// The accuracy of `frame` (rendered with `analyse`) of `scene` against its `reference`:
+/// the metrics, with the reference traced anew where the sub-pixel silhouette asks, the
+/// fragment probe's counts and the see-through count. `ids_per_lembo` maps the frame's
+/// winner ids to lembo ids: 1 on the lembo path, n² on the triangle path at level n.
+pub fn measure_frame(
+    scene: &Scene,
+    view: &View,
+    frame: &raster::Frame,
+    reference: &ReferenceImage,
+    path: PrimitivePath,
+    ids_per_lembo: u64,
+) -> Accuracy {
+    let probe = frame.probe.unwrap_or_default();
+    let tracer = oracle::Tracer::new(scene.lembos().map(|(l, _)| l), view);
+    metrics::measure(
+        &frame.framebuffer,
+        reference,
+        &tracer,
+        probe.double_hit_pixels,
+        match path {
+            PrimitivePath::Lembo => Some(probe.max_scanline_deviation_px),
+            PrimitivePath::Triangle => None,
+        },
+        see_through_px(scene, view, &frame.framebuffer, ids_per_lembo),
+    )
+}
+
+/// The see-through pixels of a render of `scene` (`reference::see_through`): the lembos
+/// of objects built from a triangle mesh (`mesh` and `builtin` objects) are checked against
+/// their triangles; None when the scene has no such object.
+pub fn see_through_px(
+    scene: &Scene,
+    view: &View,
+    render: &FrameBuffer,
+    ids_per_lembo: u64,
+) -> Option<u64> {
+    if scene.objects.iter().all(|o| o.mesh.is_none()) {
+        return None;
+    }
+    let lembos: Vec<(&Lembo, bool)> = scene
+        .objects
+        .iter()
+        .flat_map(|o| o.lembos.iter().map(move |l| (l, o.mesh.is_some())))
+        .collect();
+    Some(see_through::see_through(&lembos, view, render, ids_per_lembo).total())
+}

@@ -1,0 +1,163 @@
+//! What a run is, as types decided once: the [`Model`] it is simulated on and the [`Route`]
+//! its scene is drawn by; a setting given where the route does not use it is refused, and a
+//! tessellation must stay within [`MAX_TRIANGLES`].
+
+use super::{check_reference_scene, PrimitivePath, RenderJob};
+use crate::config::ArchConfig;
+use crate::error::{Error, Result, COMMAND_LINE};
+use crate::lembo::tessellate::Tessellation;
+use crate::scene::Scene;
+
+/// The most triangles a tessellated scene may have: beyond it a run takes hours, and
+/// triangle ids must fit 32 bits.
+pub const MAX_TRIANGLES: u64 = 1 << 26;
+
+/// The scene tessellated at level n must stay within [`MAX_TRIANGLES`].
+pub fn check_triangle_budget(scene: &Scene, n: u32) -> Result<()> {
+    let triangles = scene.lembo_count() as u64 * n as u64 * n as u64;
+    if triangles > MAX_TRIANGLES {
+        return Err(Error::invalid(
+            COMMAND_LINE,
+            "--tess",
+            n,
+            format!(
+                "{} lembos x {n}² = {triangles} triangles, more than the {MAX_TRIANGLES} accepted",
+                scene.lembo_count()
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Which model a run is simulated on.
+#[derive(Clone, Copy, Debug)]
+pub enum Model<'a> {
+    /// The functional model alone: the image and its counts, no cycles.
+    Functional,
+    /// The timed pipeline of this architecture (the image is checked against the
+    /// functional model's wherever both ran).
+    Timed(&'a ArchConfig),
+}
+
+impl<'a> Model<'a> {
+    /// The model of a job whose architecture [`load_arch`](super::load_arch) gave: timed when there is one.
+    pub fn new(arch: Option<&'a ArchConfig>) -> Self {
+        arch.map_or(Model::Functional, Model::Timed)
+    }
+
+    /// The architecture, for a timed run.
+    pub fn arch(self) -> Option<&'a ArchConfig> {
+        match self {
+            Model::Functional => None,
+            Model::Timed(arch) => Some(arch),
+        }
+    }
+}
+
+/// What a scene is drawn as: decided once, from the scene and `--path`.
+pub enum Route<'s> {
+    /// Its lembos, by the extreme method.
+    Lembos,
+    /// Its lembos tessellated into triangles, rasterized as a GPU does.
+    Triangles(Tessellation<'s>),
+    /// Its atlas of discoids, in three passes through the ROPs' blend units.
+    Discoids,
+}
+
+impl<'s> Route<'s> {
+    /// The route of `job` on `scene`; a tessellation must stay within [`MAX_TRIANGLES`].
+    pub fn new(job: &RenderJob, scene: &'s Scene) -> Result<Self> {
+        check_applies(job, scene)?;
+        if scene.discoid_count() > 0 {
+            return Ok(Route::Discoids);
+        }
+        Ok(match job.path {
+            PrimitivePath::Lembo => Route::Lembos,
+            PrimitivePath::Triangle => {
+                let level = job.tess.unwrap_or(1);
+                check_triangle_budget(scene, level)?;
+                Route::Triangles(Tessellation::new(scene, level))
+            }
+        })
+    }
+}
+
+/// Refuses a setting the user gave that does not apply to `scene` or to the path: the
+/// discoid settings on a scene without discoids, the path and tessellation on a discoid
+/// scene, k and the perspective tolerance where no lembo is drawn.
+fn check_applies(job: &RenderJob, scene: &Scene) -> Result<()> {
+    let discoids = scene.discoid_count();
+    if job.reference {
+        check_reference_scene(scene)?;
+    }
+    let curved = scene.lembo_count() > 0;
+    let lembos_drawn = if discoids > 0 {
+        curved
+    } else {
+        job.path == PrimitivePath::Lembo
+    };
+    let on_scene = if discoids > 0 {
+        format!(
+            "does not apply to {}, a scene of {discoids} {} discoids",
+            scene.name,
+            if curved { "curved" } else { "planar" }
+        )
+    } else {
+        format!("does not apply to {}, which has no discoids", scene.name)
+    };
+    let no_lembos = if discoids > 0 {
+        on_scene.clone()
+    } else {
+        "does not apply to the triangle path (it has no tolerance k)".to_string()
+    };
+    let given: [(&str, bool, String, bool, &String); 6] = [
+        (
+            "--path",
+            job.given.path,
+            job.path.name().into(),
+            discoids == 0,
+            &on_scene,
+        ),
+        (
+            "--tess",
+            job.tess.is_some(),
+            job.tess.unwrap_or_default().to_string(),
+            discoids == 0,
+            &on_scene,
+        ),
+        (
+            "--blend",
+            job.given.blend,
+            job.blend.name().into(),
+            discoids > 0,
+            &on_scene,
+        ),
+        (
+            "--threshold",
+            job.threshold.is_some(),
+            job.threshold.unwrap_or_default().to_string(),
+            discoids > 0,
+            &on_scene,
+        ),
+        (
+            "--k",
+            job.given.k,
+            job.k.to_string(),
+            lembos_drawn,
+            &no_lembos,
+        ),
+        (
+            "--perspective-tol",
+            job.given.perspective_tol,
+            "given".into(),
+            lembos_drawn,
+            &no_lembos,
+        ),
+    ];
+    for (flag, set, value, applies, why) in given {
+        if set && !applies {
+            return Err(Error::invalid(COMMAND_LINE, flag, value, why.as_str()));
+        }
+    }
+    Ok(())
+}

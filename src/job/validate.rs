@@ -1,0 +1,360 @@
+//! What a render request is and its flags' checks: [`RenderJob`] (with [`PrimitivePath`],
+//! [`Mode`] and [`Given`]) is validated once, every flag against its range and the flags
+//! that only apply in one mode against that mode, so nothing downstream re-checks it.
+
+use crate::camera::MAX_VIEWPORT_SIDE;
+use crate::cost::tech::Tech;
+use crate::datapath::Datapath;
+use crate::discoid::blend::BlendMode;
+use crate::error::{Error, Result, COMMAND_LINE};
+use crate::output::{check_out_dir, check_out_file};
+use crate::tolerance::{check_k, PerspectiveTol, Tolerance};
+use std::path::PathBuf;
+
+/// Checks a count given on the command line: `value` of `flag` must be in 1..=`max`
+/// (`unit` says of what); the error names the flag.
+pub fn check_count<T: Copy + PartialOrd + From<u8> + std::fmt::Display>(
+    flag: &str,
+    value: T,
+    max: T,
+    unit: &str,
+) -> Result<()> {
+    if (T::from(1)..=max).contains(&value) {
+        Ok(())
+    } else {
+        Err(Error::invalid(
+            COMMAND_LINE,
+            flag,
+            value,
+            format!("must be in 1..={max} {unit}"),
+        ))
+    }
+}
+
+/// Largest accepted reference supersampling factor (samples per pixel side).
+pub const MAX_SUPERSAMPLE: u32 = 8;
+
+/// The largest accepted tessellation level (triangles per lembo edge).
+pub const MAX_TESS: u32 = 1024;
+
+/// Which primitives the scene's surfaces are drawn as.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum PrimitivePath {
+    /// Lembos, by the extreme method (the default).
+    #[default]
+    Lembo,
+    /// Each lembo tessellated into n² triangles, rasterized as a GPU does.
+    Triangle,
+}
+
+impl PrimitivePath {
+    /// The path's name in reports and on the command line (`lembo`, `triangle`).
+    pub fn name(self) -> &'static str {
+        match self {
+            PrimitivePath::Lembo => "lembo",
+            PrimitivePath::Triangle => "triangle",
+        }
+    }
+}
+
+/// How a render is simulated.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Mode {
+    /// The Figure 5 pipeline with cycle accounting (the default).
+    #[default]
+    Timed,
+    /// The functional model alone: the same image, no cycles.
+    Functional,
+}
+
+/// A validated render request.
+#[derive(Clone, Debug)]
+pub struct RenderJob {
+    /// Scene file, or None for the embedded default scene.
+    pub scene: Option<PathBuf>,
+    /// Output directory; None for `out/<scene name>/`.
+    pub out: Option<PathBuf>,
+    /// Tolerance k \[pixels\].
+    pub k: f64,
+    /// Setup's perspective tolerance (`--perspective-tol`; lembo path only).
+    pub perspective_tol: PerspectiveTol,
+    /// Datapath precision of the functional model and the units (`--datapath`).
+    pub datapath: Datapath,
+    /// Whether the exact reference is rendered and the frame measured (`--reference`).
+    pub reference: bool,
+    /// Reference samples per pixel side.
+    pub supersample: u32,
+    /// Viewport override (width, height) \[pixels\].
+    pub viewport: Option<(u32, u32)>,
+    /// Timed pipeline or functional model alone (`--mode`).
+    pub mode: Mode,
+    /// Architecture file; None for the embedded baseline. Timed mode only.
+    pub arch: Option<PathBuf>,
+    /// Where to write the Chrome trace-event timeline. Timed mode only.
+    pub trace_out: Option<PathBuf>,
+    /// Technology file pricing the unit's area and energy (`--tech`); None for the
+    /// embedded `sim/tech/45nm.json`. Timed mode only.
+    pub tech: Option<PathBuf>,
+    /// Which primitives the surfaces are drawn as (`--path`).
+    pub path: PrimitivePath,
+    /// Tessellation level n (n² triangles per lembo); None for the default, 1. Triangle
+    /// path only.
+    pub tess: Option<u32>,
+    /// Precision of the discoid blend units (scenes with discoids only).
+    pub blend: BlendMode,
+    /// The discoid threshold t [world units]; None for the scene's.
+    pub threshold: Option<f64>,
+    /// Host threads the timed model's units are partitioned over (`--host-threads`, >= 1;
+    /// no simulated result depends on it).
+    pub host_threads: u32,
+    /// Host threads a functional frame is drawn on (`--threads`, >= 1); None for the
+    /// machine's cores. No pixel or count depends on it (`raster::parallel`).
+    pub threads: Option<u32>,
+    /// Which settings with a default the user gave, so that one that does not apply to the
+    /// scene is refused instead of ignored.
+    pub given: Given,
+    /// Run even when the memory estimate exceeds the memory available
+    /// (`--no-memory-check`).
+    pub no_memory_check: bool,
+}
+
+/// Which of `render`'s defaulted settings were given on the command line (`tess` and
+/// `threshold` are options and say so themselves). A setting given where it does not apply
+/// is refused, naming it and why (DESIGN.md §8), as a sweep refuses such a parameter.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Given {
+    /// `--k`.
+    pub k: bool,
+    /// `--perspective-tol`.
+    pub perspective_tol: bool,
+    /// `--path`.
+    pub path: bool,
+    /// `--blend`.
+    pub blend: bool,
+}
+
+/// Most host threads a timed run may use (`--host-threads`).
+pub const MAX_HOST_THREADS: u32 = 1024;
+
+/// Most host threads a functional frame may be drawn on (`--threads`).
+pub const MAX_THREADS: u32 = 256;
+
+/// The machine's cores, as the default of `--threads` (at most [`MAX_THREADS`]).
+pub fn machine_threads() -> u32 {
+    std::thread::available_parallelism()
+        .map(|n| n.get() as u32)
+        .unwrap_or(1)
+        .min(MAX_THREADS)
+}
+
+impl RenderJob {
+    /// The host threads a functional frame is drawn on: `--threads`, or the machine's cores.
+    pub fn threads(&self) -> u32 {
+        self.threads.unwrap_or_else(machine_threads)
+    }
+
+    /// The lembo path's tolerances: k and Setup's perspective tolerance.
+    pub fn tolerance(&self) -> Tolerance {
+        self.perspective_tol.with_k(self.k)
+    }
+
+    /// Checks every flag; errors name the flag and the value.
+    pub fn validate(&self) -> Result<()> {
+        if let PerspectiveTol::Px(px) = self.perspective_tol {
+            if let Err(why) = PerspectiveTol::px(px) {
+                return Err(Error::invalid(COMMAND_LINE, "--perspective-tol", px, why));
+            }
+        }
+        if self.perspective_tol != PerspectiveTol::FollowK && self.path == PrimitivePath::Triangle {
+            return Err(Error::invalid(
+                COMMAND_LINE,
+                "--perspective-tol",
+                format!("{:?}", self.perspective_tol),
+                "only meaningful with --path lembo (the triangle path clips its triangles)",
+            ));
+        }
+        check_k(self.k).map_err(|why| Error::invalid(COMMAND_LINE, "--k", self.k, why))?;
+        check_count(
+            "--supersample",
+            self.supersample,
+            MAX_SUPERSAMPLE,
+            "samples per pixel side",
+        )?;
+        if let Some((w, h)) = self.viewport {
+            for (name, v) in [("--viewport width", w), ("--viewport height", h)] {
+                check_count(name, v, MAX_VIEWPORT_SIDE, "pixels")?;
+            }
+        }
+        check_count(
+            "--host-threads",
+            self.host_threads,
+            MAX_HOST_THREADS,
+            "host threads",
+        )?;
+        if let Some(n) = self.threads {
+            check_count("--threads", n, MAX_THREADS, "host threads")?;
+            if self.mode == Mode::Timed {
+                return Err(Error::invalid(
+                    COMMAND_LINE,
+                    "--threads",
+                    n,
+                    "only meaningful with --mode functional (a timed run's units take --host-threads)",
+                ));
+            }
+        }
+        if let Some(dir) = &self.out {
+            check_out_dir("--out", dir)?;
+        }
+        if let Some(path) = &self.trace_out {
+            check_out_file("--trace-out", path)?;
+            if path.file_name().is_none() {
+                return Err(Error::invalid(
+                    COMMAND_LINE,
+                    "--trace-out",
+                    path.display(),
+                    "must name a file",
+                ));
+            }
+        }
+        if let Some(t) = self.threshold {
+            check_threshold(t)
+                .map_err(|why| Error::invalid(COMMAND_LINE, "--threshold", t, why))?;
+        }
+        if let Some(n) = self.tess {
+            if self.path != PrimitivePath::Triangle {
+                return Err(Error::invalid(
+                    COMMAND_LINE,
+                    "--tess",
+                    n,
+                    "only meaningful with --path triangle",
+                ));
+            }
+            check_tess_range(n)?;
+        }
+        if self.mode == Mode::Functional {
+            for (flag, set) in [
+                ("--arch", self.arch.is_some()),
+                ("--trace-out", self.trace_out.is_some()),
+                ("--tech", self.tech.is_some()),
+                ("--host-threads", self.host_threads != 1),
+            ] {
+                if set {
+                    return Err(Error::invalid(
+                        COMMAND_LINE,
+                        flag,
+                        "given",
+                        "only meaningful with --mode timed",
+                    ));
+                }
+            }
+        }
+        self.tech()?;
+        Ok(())
+    }
+
+    /// The technology file pricing a timed run's cost: `--tech`, or the embedded 45 nm one.
+    pub fn tech(&self) -> Result<Tech> {
+        match &self.tech {
+            Some(path) => Tech::load(path),
+            None => Ok(Tech::default_45nm()),
+        }
+    }
+}
+
+/// Checks a discoid threshold t \[world units\] (`--threshold`, a sweep's `threshold`): it
+/// must be finite and above 0. The error says what is accepted; the caller names the flag or
+/// field and the value as given.
+pub fn check_threshold(t: f64) -> std::result::Result<f64, &'static str> {
+    if t.is_finite() && t > 0.0 {
+        Ok(t)
+    } else {
+        Err("must be a finite distance above 0 world units")
+    }
+}
+
+/// `--tess` must be in 1..=MAX_TESS.
+pub fn check_tess_range(n: u32) -> Result<()> {
+    if (1..=MAX_TESS).contains(&n) {
+        Ok(())
+    } else {
+        Err(Error::invalid(
+            COMMAND_LINE,
+            "--tess",
+            n,
+            format!("must be 1 to {MAX_TESS} (triangles per lembo edge)"),
+        ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::tolerance::DEFAULT_K_PX;
+
+    /// `render` with no flag given.
+    fn job() -> RenderJob {
+        RenderJob {
+            scene: None,
+            out: None,
+            k: DEFAULT_K_PX,
+            perspective_tol: PerspectiveTol::FollowK,
+            datapath: Datapath::F32,
+            reference: false,
+            supersample: 1,
+            viewport: None,
+            mode: Mode::Timed,
+            arch: None,
+            trace_out: None,
+            tech: None,
+            path: PrimitivePath::Lembo,
+            tess: None,
+            blend: BlendMode::Rgba8,
+            threshold: None,
+            host_threads: 1,
+            threads: None,
+            given: Given::default(),
+            no_memory_check: false,
+        }
+    }
+
+    /// The flag, value and reason of an `Error::Invalid` from the command line.
+    fn refused(e: Error) -> (String, String, String) {
+        match e {
+            Error::Invalid {
+                file,
+                field,
+                value,
+                reason,
+            } if file == COMMAND_LINE => (field, value, reason),
+            other => panic!("expected a command-line Error::Invalid, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn k_and_threshold_are_refused_with_their_checks_reasons() {
+        assert!(job().validate().is_ok());
+        let e = RenderJob { k: 100.0, ..job() }.validate().unwrap_err();
+        let why = check_k(100.0).unwrap_err();
+        assert_eq!(refused(e), ("--k".into(), "100".into(), why));
+        let e = RenderJob {
+            threshold: Some(-0.5),
+            ..job()
+        }
+        .validate()
+        .unwrap_err();
+        let why = check_threshold(-0.5).unwrap_err().to_string();
+        assert_eq!(refused(e), ("--threshold".into(), "-0.5".into(), why));
+    }
+
+    #[test]
+    fn check_threshold_accepts_a_positive_finite_distance_only() {
+        assert_eq!(check_threshold(0.25), Ok(0.25));
+        for t in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            assert_eq!(
+                check_threshold(t),
+                Err("must be a finite distance above 0 world units"),
+                "{t}"
+            );
+        }
+    }
+}
