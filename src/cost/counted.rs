@@ -15,66 +15,13 @@
 //! the reports) are not counted. Anything else (`exp`, `ln`, trigonometry) is counted as
 //! `other`, which the extreme method never needs (a test says it stays 0).
 
-use crate::datapath::Real;
+use crate::datapath::{Op, Real, OPS};
 use crate::graph::{UnitKind, KINDS};
 use num_traits::{Float, Num, NumCast, One, ToPrimitive, Zero};
 use std::cell::Cell;
 use std::cmp::Ordering;
 use std::num::FpCategory;
 use std::ops::{Add, Div, Mul, Neg, Rem, Sub};
-
-/// The classes of datapath operation a unit is charged for.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
-pub enum Op {
-    /// Addition or subtraction.
-    Add,
-    /// Multiplication.
-    Mul,
-    /// Division, remainder or reciprocal.
-    Div,
-    /// Square root.
-    Sqrt,
-    /// Comparison (a subtraction whose sign is kept), `min`, `max`.
-    Cmp,
-    /// Rounding to an integer (`floor`, `ceil`, `round`, `trunc`).
-    Round,
-    /// Any other function (transcendental); the model never needs one.
-    Other,
-    /// A fixed-point (integer) addition, subtraction or comparison beside the datapath.
-    IntAdd,
-    /// A fixed-point (integer) multiplication beside the datapath.
-    IntMul,
-}
-
-/// Every class, in report order.
-pub const OPS: [Op; 9] = [
-    Op::Add,
-    Op::Mul,
-    Op::Div,
-    Op::Sqrt,
-    Op::Cmp,
-    Op::Round,
-    Op::Other,
-    Op::IntAdd,
-    Op::IntMul,
-];
-
-impl Op {
-    /// The class's name in reports.
-    pub fn name(self) -> &'static str {
-        match self {
-            Op::Add => "add",
-            Op::Mul => "mul",
-            Op::Div => "div",
-            Op::Sqrt => "sqrt",
-            Op::Cmp => "cmp",
-            Op::Round => "round",
-            Op::Other => "other",
-            Op::IntAdd => "int_add",
-            Op::IntMul => "int_mul",
-        }
-    }
-}
 
 const CELLS: usize = OPS.len() * KINDS.len();
 
