@@ -37,7 +37,8 @@
 //!   resumable, shardable and locked against a second writer; [`plot`]: a sweep's SVG
 //!   plots.
 //! - [`output`]: every output file written whole or not at all, also under Ctrl-C;
-//!   [`error`]: every error a run can end with, and its exit status.
+//!   [`error`]: every error a run can end with, and its exit status; [`json`]: strict
+//!   parsing of every input file, errors naming the field path.
 //! - [`datapath`]: the `f32`/`f64` datapath; [`datapath_study`]: f32 against f64 over
 //!   seeded random lembos, for `examples/datapath_study.rs` and `tests/datapath.rs`.
 //!
@@ -60,6 +61,7 @@ pub mod discoid;
 pub mod error;
 pub mod graph;
 pub mod job;
+pub mod json;
 pub mod lembo;
 pub mod output;
 pub mod pipeline;

@@ -6,7 +6,7 @@
 
 use crate::datapath::{Datapath, Op};
 use crate::error::{read_text_file, Error, Result};
-use crate::scene::parse_strict;
+use crate::json::parse_strict;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 

@@ -16,8 +16,12 @@
 //! validated field by field. Every error names the file, the field path in one style
 //! (`viewport.width`, `camera.projection.near`, `objects[1].transform.scale`) and the
 //! value (DESIGN.md §8): serde errors become [`Error::Parse`] with the path that
-//! `serde_path_to_error` tracked, refused values become [`Error::Invalid`], and mesh files
-//! and point-cloud files that cannot be loaded or hold bad numbers become [`Error::Mesh`].
+//! [`crate::json`] tracked, refused values become [`Error::Invalid`], and mesh files and
+//! point-cloud files that cannot be loaded or hold bad numbers become [`Error::Mesh`].
+//!
+//! [`Error::Parse`]: crate::error::Error::Parse
+//! [`Error::Invalid`]: crate::error::Error::Invalid
+//! [`Error::Mesh`]: crate::error::Error::Mesh
 //!
 //! Layout: [`format`](mod@format) (the file's shape), [`validate`] (the scene-wide checks and the
 //! walk over the objects), [`objects`] (builtin, inline and mesh objects), [`discoids`] (an
@@ -35,7 +39,8 @@ pub mod validate;
 
 use crate::camera::{Camera, Viewport};
 use crate::discoid::DiscoidSet;
-use crate::error::{parent_dir, read_text_file, Error, Result};
+use crate::error::{parent_dir, read_text_file, Result};
+use crate::json::parse_strict;
 use crate::lembo::construct::TriangleMesh;
 use crate::lembo::Lembo;
 use crate::rop::shade::Light;
@@ -194,39 +199,6 @@ fn given(options: &[(&str, bool)]) -> String {
         "none".to_string()
     } else {
         present.join(" and ")
-    }
-}
-
-/// Parses JSON text into `T`: errors name the file and the field path, and text after the
-/// value is an error, not ignored. Shared by scenes, architectures and sweep specs.
-pub(crate) fn parse_strict<T: serde::de::DeserializeOwned>(text: &str, file: &str) -> Result<T> {
-    let de = &mut serde_json::Deserializer::from_str(text);
-    let value: T = serde_path_to_error::deserialize(&mut *de).map_err(|e| parse_error(file, e))?;
-    de.end().map_err(|e| Error::Parse {
-        file: file.to_string(),
-        field: String::new(),
-        message: e.to_string(),
-    })?;
-    Ok(value)
-}
-
-pub(crate) fn parse_error(file: &str, e: serde_path_to_error::Error<serde_json::Error>) -> Error {
-    // A syntax error leaves an unknown (`?`) last segment, and one before any field an
-    // empty path (printed "."): drop both, serde's message gives the line and column.
-    let mut field = e.path().to_string();
-    while field.ends_with('?') {
-        field.pop();
-        if field.ends_with('.') {
-            field.pop();
-        }
-    }
-    if field == "." {
-        field.clear();
-    }
-    Error::Parse {
-        file: file.to_string(),
-        field,
-        message: e.into_inner().to_string(),
     }
 }
 

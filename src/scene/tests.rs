@@ -8,6 +8,7 @@ use super::*;
 use crate::camera::Projection;
 use crate::discoid::shapes::discoids_from_mesh;
 use crate::discoid::{BetaShape, Discoid};
+use crate::error::Error;
 use crate::lembo::shapes::BUILTIN_NAMES;
 use glam::DVec3;
 use std::io::Write;
