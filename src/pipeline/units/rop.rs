@@ -27,8 +27,9 @@ use crate::discoid::render::{
 use crate::pipeline::runtime::{ceil_div, Ctx};
 use crate::pipeline::{DiscoidPass, Finished, Shared};
 use crate::raster::Counts;
+use crate::rop::fragment_shader::FragmentShader;
 use crate::rop::framebuffer::depth_test;
-use crate::rop::rop::{Batch, FragmentShader};
+use crate::rop::rop::Batch;
 use crate::rop::FrameBuffer;
 
 /// Screen interleaving: tile (tx, ty) of `tile_px` x `tile_px` pixels belongs to ROP
