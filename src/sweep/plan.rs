@@ -3,8 +3,7 @@
 
 use super::{
     grid::{reword, set_arch_field},
-    spec::{Point, Run, Setting, Spec},
-    Shard, ARCH, DEFAULT_K_PX,
+    spec::{Point, Run, Setting, Shard, Spec, ARCH, DEFAULT_K_PX},
 };
 use crate::camera::View;
 use crate::config::ArchConfig;

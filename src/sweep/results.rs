@@ -2,7 +2,7 @@
 //! resume (each record checked against the spec and shard), and the finished set written
 //! at once: `results.jsonl` in index order, `results.csv` and the plots.
 
-use super::{spec::Spec, Shard, RESULTS_CSV, RESULTS_JSONL, SPEC_JSON};
+use super::spec::{Shard, Spec};
 use crate::error::{Error, Result};
 use crate::graph::KINDS;
 use crate::output::write_files;
@@ -12,6 +12,15 @@ use serde::Deserialize;
 use serde_json::Value;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
+
+/// The records file of a sweep directory.
+pub const RESULTS_JSONL: &str = "results.jsonl";
+
+/// The table of a sweep directory.
+pub const RESULTS_CSV: &str = "results.csv";
+
+/// The copy of the spec in a sweep directory.
+pub const SPEC_JSON: &str = "spec.json";
 
 /// A directory that holds results must hold this spec's.
 pub(super) fn check_same_spec(dir: &Path, spec: &Spec) -> Result<()> {
