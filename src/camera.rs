@@ -6,6 +6,21 @@
 
 use glam::{DMat4, DVec3, DVec4};
 use serde::{Deserialize, Serialize};
+use std::cell::Cell;
+
+thread_local! {
+    /// [`View::project`] calls on this thread not yet taken by [`take_projections`].
+    static PROJECTIONS: Cell<u64> = const { Cell::new(0) };
+}
+
+/// How many times [`View::project`] ran on this thread since the last call; counting starts
+/// again from zero. Setup projects in `f64` on the host, outside the datapath word that
+/// counts operations, so the camera tallies its projections (always: a thread-local add,
+/// so no path can project uncounted) and the cost layer, which knows what a projection
+/// costs, takes and prices them (`cost::counted`); the camera knows nothing of costs.
+pub fn take_projections() -> u64 {
+    PROJECTIONS.with(|c| c.replace(0))
+}
 
 /// The largest accepted viewport side \[pixels\] (DESIGN.md §8).
 pub const MAX_VIEWPORT_SIDE: u32 = 16384;
@@ -139,7 +154,7 @@ impl View {
 
     /// Projects a world point to the viewport (no clipping; check `w` for points behind).
     pub fn project(&self, p: DVec3) -> ScreenPoint {
-        crate::cost::counted::count_projection();
+        PROJECTIONS.with(|c| c.set(c.get() + 1));
         let c = self.view_proj * p.extend(1.0);
         let inv_w = 1.0 / c.w;
         let (nx, ny, nz) = (c.x * inv_w, c.y * inv_w, c.z * inv_w);

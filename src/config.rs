@@ -27,7 +27,7 @@ use crate::error::{read_text_file, Error, Result};
 use crate::graph::{
     self, LinkConfig, Path as UnitPath, UnitInstance, UnitKind, BOUNDARIES, LINK_KEYS,
 };
-use crate::scene::parse_strict;
+use crate::json::parse_strict;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 

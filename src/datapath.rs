@@ -1,11 +1,11 @@
-//! The datapath precision of the functional model.
+//! The datapath precision of the functional model, and the classes of operation a datapath
+//! word does ([`Op`]), which a counting word ([`crate::cost::counted::Counted`]) tallies.
 //!
 //! Every stage of the extreme method is written once, generic over [`Real`], and
 //! instantiated for `f32` (the default, as a hardware unit would be built) and `f64`
 //! (to separate the method's own error from rounding). The reference renderer does not use
 //! this trait: it is always `f64`.
 
-use crate::cost::counted::Op;
 use crate::graph::UnitKind;
 use num_traits::Float;
 use std::fmt::Debug;
@@ -71,6 +71,59 @@ impl Real for f64 {
     #[inline(always)]
     fn f64(self) -> f64 {
         self
+    }
+}
+
+/// The classes of datapath operation a unit is charged for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Op {
+    /// Addition or subtraction.
+    Add,
+    /// Multiplication.
+    Mul,
+    /// Division, remainder or reciprocal.
+    Div,
+    /// Square root.
+    Sqrt,
+    /// Comparison (a subtraction whose sign is kept), `min`, `max`.
+    Cmp,
+    /// Rounding to an integer (`floor`, `ceil`, `round`, `trunc`).
+    Round,
+    /// Any other function (transcendental); the model never needs one.
+    Other,
+    /// A fixed-point (integer) addition, subtraction or comparison beside the datapath.
+    IntAdd,
+    /// A fixed-point (integer) multiplication beside the datapath.
+    IntMul,
+}
+
+/// Every class, in report order.
+pub const OPS: [Op; 9] = [
+    Op::Add,
+    Op::Mul,
+    Op::Div,
+    Op::Sqrt,
+    Op::Cmp,
+    Op::Round,
+    Op::Other,
+    Op::IntAdd,
+    Op::IntMul,
+];
+
+impl Op {
+    /// The class's name in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Op::Add => "add",
+            Op::Mul => "mul",
+            Op::Div => "div",
+            Op::Sqrt => "sqrt",
+            Op::Cmp => "cmp",
+            Op::Round => "round",
+            Op::Other => "other",
+            Op::IntAdd => "int_add",
+            Op::IntMul => "int_mul",
+        }
     }
 }
 

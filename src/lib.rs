@@ -37,7 +37,8 @@
 //!   resumable, shardable and locked against a second writer; [`plot`]: a sweep's SVG
 //!   plots.
 //! - [`output`]: every output file written whole or not at all, also under Ctrl-C;
-//!   [`error`]: every error a run can end with, and its exit status.
+//!   [`error`]: every error a run can end with, and its exit status; [`json`]: strict
+//!   parsing of every input file, errors naming the field path.
 //! - [`tolerance`]: the lembo path's tolerances, k and Setup's perspective tolerance, each
 //!   with its default, range and check.
 //! - [`datapath`]: the `f32`/`f64` datapath; [`datapath_study`]: f32 against f64 over
@@ -62,6 +63,7 @@ pub mod discoid;
 pub mod error;
 pub mod graph;
 pub mod job;
+pub mod json;
 pub mod lembo;
 pub mod output;
 pub mod pipeline;

@@ -10,9 +10,9 @@ mod scenes;
 
 use common::*;
 use lembo_sim::camera::View;
-use lembo_sim::cost::counted::{Op, OPS};
 use lembo_sim::cost::{lembo_ops, triangle_ops};
 use lembo_sim::datapath::Datapath;
+use lembo_sim::datapath::{Op, OPS};
 use lembo_sim::graph::{UnitKind, KINDS};
 use lembo_sim::lembo::tessellate::Tessellation;
 use lembo_sim::raster::{render_functional, render_functional_triangles};

@@ -15,66 +15,14 @@
 //! the reports) are not counted. Anything else (`exp`, `ln`, trigonometry) is counted as
 //! `other`, which the extreme method never needs (a test says it stays 0).
 
-use crate::datapath::Real;
+use crate::camera::take_projections;
+use crate::datapath::{Op, Real, OPS};
 use crate::graph::{UnitKind, KINDS};
 use num_traits::{Float, Num, NumCast, One, ToPrimitive, Zero};
 use std::cell::Cell;
 use std::cmp::Ordering;
 use std::num::FpCategory;
 use std::ops::{Add, Div, Mul, Neg, Rem, Sub};
-
-/// The classes of datapath operation a unit is charged for.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
-pub enum Op {
-    /// Addition or subtraction.
-    Add,
-    /// Multiplication.
-    Mul,
-    /// Division, remainder or reciprocal.
-    Div,
-    /// Square root.
-    Sqrt,
-    /// Comparison (a subtraction whose sign is kept), `min`, `max`.
-    Cmp,
-    /// Rounding to an integer (`floor`, `ceil`, `round`, `trunc`).
-    Round,
-    /// Any other function (transcendental); the model never needs one.
-    Other,
-    /// A fixed-point (integer) addition, subtraction or comparison beside the datapath.
-    IntAdd,
-    /// A fixed-point (integer) multiplication beside the datapath.
-    IntMul,
-}
-
-/// Every class, in report order.
-pub const OPS: [Op; 9] = [
-    Op::Add,
-    Op::Mul,
-    Op::Div,
-    Op::Sqrt,
-    Op::Cmp,
-    Op::Round,
-    Op::Other,
-    Op::IntAdd,
-    Op::IntMul,
-];
-
-impl Op {
-    /// The class's name in reports.
-    pub fn name(self) -> &'static str {
-        match self {
-            Op::Add => "add",
-            Op::Mul => "mul",
-            Op::Div => "div",
-            Op::Sqrt => "sqrt",
-            Op::Cmp => "cmp",
-            Op::Round => "round",
-            Op::Other => "other",
-            Op::IntAdd => "int_add",
-            Op::IntMul => "int_mul",
-        }
-    }
-}
 
 const CELLS: usize = OPS.len() * KINDS.len();
 
@@ -86,6 +34,7 @@ thread_local! {
 /// Charges this thread's following operations to `kind` until the next call; returns the
 /// kind charged before, so a caller can restore it.
 pub fn charge_to(kind: UnitKind) -> UnitKind {
+    count_projections();
     let before = CHARGED.with(|c| c.replace(kind_index(kind)));
     KINDS[before]
 }
@@ -103,16 +52,21 @@ fn count(op: Op, n: u64) {
     COUNTS.with(|c| c[cell].set(c[cell].get() + n));
 }
 
-/// Counts one [`crate::camera::View::project`]: the 4x4 view-projection of (p, 1) (16
+/// Counts the [`View::project`](crate::camera::View::project) calls the camera tallied since the last charge, charged to
+/// the kind charged while they ran. One projection is the 4x4 view-projection of (p, 1) (16
 /// multiplies, 12 adds), the perspective divide (a reciprocal and 3 multiplies) and the
 /// viewport map (5 multiplies, 3 adds). Setup projects in `f64` on the host, as the
 /// hardware's would in its datapath; this is the one count taken beside the code rather
-/// than by [`Counted`], always on (a thread-local add) so no path can project uncounted.
-#[inline]
-pub fn count_projection() {
-    count(Op::Mul, 24);
-    count(Op::Add, 15);
-    count(Op::Div, 1);
+/// than by [`Counted`]. Every change of the charged kind and every counting run's start and
+/// end take the tally first, so each projection lands where it would have been counted
+/// when it ran.
+fn count_projections() {
+    let n = take_projections();
+    if n > 0 {
+        count(Op::Mul, 24 * n);
+        count(Op::Add, 15 * n);
+        count(Op::Div, n);
+    }
 }
 
 /// Operation counts per unit kind.
@@ -141,6 +95,7 @@ impl OpTable {
 /// result and what it counted. Counters of the caller (a counting run around this one) are
 /// restored afterwards, so counting runs nest.
 pub fn counting<T>(first: UnitKind, f: impl FnOnce() -> T) -> (T, OpTable) {
+    count_projections();
     let saved: Vec<u64> = COUNTS.with(|c| c.iter().map(|x| x.replace(0)).collect());
     let before = charge_to(first);
     let out = f();
@@ -429,5 +384,45 @@ mod tests {
         });
         assert_eq!(outer.get(UnitKind::Setup, Op::Add), 2);
         assert_eq!(outer.get(UnitKind::MinMax, Op::Mul), 0);
+    }
+
+    /// A projection is 24 multiplies, 15 adds and a divide, charged to the kind working when
+    /// it ran, also when the kind changes or a nested run starts before anything takes the
+    /// camera's tally; projections outside a counting run are in none.
+    #[test]
+    fn projections_are_charged_to_the_kind_working_when_they_ran() {
+        use crate::camera::{Camera, Projection, View, Viewport};
+        let view = View::new(
+            &Camera {
+                eye: [0.0, 0.0, 5.0],
+                target: [0.0; 3],
+                up: [0.0, 1.0, 0.0],
+                projection: Projection::Orthographic {
+                    height: 2.0,
+                    near: 1.0,
+                    far: 10.0,
+                },
+            },
+            Viewport {
+                width: 8,
+                height: 8,
+            },
+        );
+        let project = || {
+            view.project(glam::DVec3::ZERO);
+        };
+        project();
+        let ((), table) = counting(UnitKind::Setup, || {
+            project();
+            charge_to(UnitKind::TriangleSetup);
+            project();
+            project();
+            let ((), inner) = counting(UnitKind::MinMax, project);
+            assert_eq!(inner.of(UnitKind::MinMax)[..3], [15, 24, 1]);
+            project();
+        });
+        assert_eq!(table.of(UnitKind::Setup)[..3], [15, 24, 1]);
+        assert_eq!(table.of(UnitKind::TriangleSetup)[..3], [45, 72, 3]);
+        assert_eq!(table.of(UnitKind::MinMax), [0; OPS.len()]);
     }
 }

@@ -13,10 +13,10 @@
 //! A kind's operations are shared among its instances in proportion to the items each
 //! took in.
 
-use super::counted::{OpTable, OPS};
+use super::counted::OpTable;
 use super::tech::Tech;
 use crate::config::ArchConfig;
-use crate::datapath::Datapath;
+use crate::datapath::{Datapath, OPS};
 use crate::graph::UnitKind;
 use crate::pipeline::{self, CycleReport};
 use serde::Serialize;
@@ -60,7 +60,7 @@ pub struct UnitCost {
 
 /// Counts per operation class (report order of [`OPS`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
-#[allow(missing_docs)] // named by their class, see counted::Op
+#[allow(missing_docs)] // named by their class, see datapath::Op
 pub struct OpCounts {
     pub add: u64,
     pub mul: u64,

@@ -4,10 +4,9 @@
 //! nobody wrote down is not a cost), finite and not negative; each group carries a `note`
 //! citing its source, and the file a `source` (DESIGN.md §12).
 
-use super::counted::Op;
-use crate::datapath::Datapath;
+use crate::datapath::{Datapath, Op};
 use crate::error::{read_text_file, Error, Result};
-use crate::scene::parse_strict;
+use crate::json::parse_strict;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 

@@ -43,8 +43,8 @@ use crate::raster::triangle::{
     render_triangles, ScreenTriangle, TriangleFragment, TriangleSink, TriangleSource,
 };
 use crate::raster::{render_lembos, Counts, DEFAULT_SEGMENT_CAP};
+use crate::rop::fragment_shader::{normalize, FragmentShader};
 use crate::rop::framebuffer::{depth_test, NO_PRIMITIVE};
-use crate::rop::rop::{normalize, FragmentShader};
 use crate::rop::shade::to_u8;
 use crate::rop::FrameBuffer;
 use crate::scene::Scene;

@@ -2,10 +2,11 @@
 //! report, and with `--reference` the blended image measured against the surface the
 //! discoids stand for.
 
-use super::path::sim_options;
+use super::reference::reference_scene;
 use super::reference::Measured;
+use super::route::{sim_options, Model, PathRun, LEMBO_BYTES};
 use super::sections::{host, scene_info, settings};
-use super::{reference_scene, Model, PathRun, RenderJob, LEMBO_BYTES};
+use super::validate::RenderJob;
 use crate::camera::View;
 use crate::discoid;
 use crate::error::{Error, Result};

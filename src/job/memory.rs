@@ -1,7 +1,7 @@
 //! The memory a run is estimated to need, and the refusal, before any work, of a run larger
 //! than the memory available (`--no-memory-check` runs it anyway).
 
-use super::{Mode, RenderJob};
+use super::validate::{Mode, RenderJob};
 use crate::error::{Error, Result, COMMAND_LINE};
 use crate::scene::Scene;
 

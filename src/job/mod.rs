@@ -22,12 +22,12 @@ mod validate;
 
 pub use discoids::{CURVED_DISCOID_BYTES, PLANAR_DISCOID_BYTES};
 pub use memory::{check_available, check_memory, memory_estimate};
-pub use path::{run_path, PathRun, LEMBO_BYTES};
+pub use path::run_path;
 pub use reference::{
     check_reference_scene, measure_frame, reference_scene, render_reference, see_through_px,
 };
 pub use render::{load_arch, load_scene, run_render, RenderOutput};
-pub use route::{check_triangle_budget, Model, Route, MAX_TRIANGLES};
+pub use route::{check_triangle_budget, Model, PathRun, Route, LEMBO_BYTES, MAX_TRIANGLES};
 pub use validate::{
     check_count, check_tess_range, check_threshold, machine_threads, Given, Mode, PrimitivePath,
     RenderJob, MAX_HOST_THREADS, MAX_SUPERSAMPLE, MAX_TESS, MAX_THREADS,

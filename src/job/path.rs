@@ -4,35 +4,20 @@
 
 use super::discoids::run_discoids;
 use super::reference::measure;
+use super::route::{sim_options, Model, PathRun, Route, LEMBO_BYTES};
 use super::sections::{host, scene_info, settings};
-use super::{Model, PrimitivePath, RenderJob, Route};
+use super::validate::{PrimitivePath, RenderJob};
 use crate::camera::View;
 use crate::config::ArchConfig;
 use crate::cost::{self, model::CostReport};
-use crate::error::{Error, Result, COMMAND_LINE};
-use crate::pipeline::{self, CycleReport, SimOptions, Source};
+use crate::error::{Error, Result};
+use crate::pipeline::{self, CycleReport, Source};
 use crate::raster;
 use crate::reference::oracle::ReferenceImage;
 use crate::report::{Memory, Primitives, Report, SCHEMA_VERSION};
 use crate::rop::FrameBuffer;
 use crate::scene::Scene;
 use std::time::Instant;
-
-/// Bytes of one lembo as the Setup unit reads it: six points and six normals in f32.
-pub const LEMBO_BYTES: u64 = 6 * 2 * 3 * 4;
-
-/// One path's run on a loaded scene: what `render` writes, and what `compare` puts side by
-/// side.
-pub struct PathRun {
-    /// The run's report.
-    pub report: Report,
-    /// The image (the timed pipeline's, or the functional model's).
-    pub framebuffer: FrameBuffer,
-    /// The error heat map against the reference, when one was given.
-    pub error_map: Option<image::RgbImage>,
-    /// Chrome trace-event JSON, when requested.
-    pub trace: Option<String>,
-}
 
 /// Runs `job`'s path on `scene` on `model`, and with a `reference` (and the wall time it
 /// took) the accuracy metrics, from the functional model's fragment probe; the timed image
@@ -50,7 +35,13 @@ pub fn run_path(
     }
     let (drawn, wall) = draw(job, scene, view, model, &route, reference.is_some())?;
     let measured = match (reference, drawn.probed()) {
-        (Some(reference), Some(frame)) => Some(measure(job, scene, view, &route, frame, reference)),
+        (Some(reference), Some(frame)) => {
+            let ids_per_lembo = match &route {
+                Route::Triangles(t) => t.triangles_per_lembo(),
+                _ => 1,
+            };
+            Some(measure(job, scene, view, ids_per_lembo, frame, reference))
+        }
         _ => None,
     };
     let counts = drawn.counts();
@@ -281,27 +272,4 @@ fn draw(
         None
     };
     Ok((Drawn::Timed { timed, probed }, wall))
-}
-
-/// The host options of a timed run of `job` on `path`: `--host-threads` is refused when it
-/// exceeds the units the run instantiates (each host thread runs at least one unit).
-pub(super) fn sim_options(
-    job: &RenderJob,
-    arch: &ArchConfig,
-    path: pipeline::Path,
-) -> Result<SimOptions> {
-    let units = arch.instances(path).len();
-    if job.host_threads as usize > units {
-        return Err(Error::invalid(
-            COMMAND_LINE,
-            "--host-threads",
-            job.host_threads,
-            format!("more than the {units} units this run instantiates (each host thread runs at least one)"),
-        ));
-    }
-    Ok(SimOptions {
-        host_threads: job.host_threads as usize,
-        trace: job.trace_out.is_some(),
-        ..SimOptions::default()
-    })
 }

@@ -1,7 +1,7 @@
 //! The exact reference a run is measured against (for a discoid scene, the surface its
 //! discoids stand for) and a frame's accuracy against it.
 
-use super::{PrimitivePath, RenderJob, Route};
+use super::validate::{PrimitivePath, RenderJob};
 use crate::camera::View;
 use crate::discoid;
 use crate::error::{Error, Result, COMMAND_LINE};
@@ -66,20 +66,17 @@ pub(super) struct Measured {
     pub(super) metrics_wall: f64,
 }
 
-/// Measures `frame` (probed) against `reference` (with the wall time it took).
+/// Measures `frame` (probed) against `reference` (with the wall time it took);
+/// `ids_per_lembo` as [`measure_frame`] takes it.
 pub(super) fn measure(
     job: &RenderJob,
     scene: &Scene,
     view: &View,
-    route: &Route,
+    ids_per_lembo: u64,
     frame: &raster::Frame,
     (reference, wall): (&ReferenceImage, f64),
 ) -> Measured {
     let t1 = Instant::now();
-    let ids_per_lembo = match route {
-        Route::Triangles(t) => t.triangles_per_lembo(),
-        _ => 1,
-    };
     let accuracy = measure_frame(scene, view, frame, reference, job.path, ids_per_lembo);
     let metrics_wall = t1.elapsed().as_secs_f64();
     let error_map = heatmap::error_heatmap(&frame.framebuffer, reference);

@@ -1,10 +1,11 @@
 //! `lembo-sim render`: the scene and architecture loaded, the reference rendered when asked,
 //! one path run, and its files written as one set, nothing unless everything succeeded.
 
-use super::{
-    check_memory, check_triangle_budget, reference_scene, render_reference, run_path, Mode, Model,
-    PrimitivePath, RenderJob,
-};
+use super::memory::check_memory;
+use super::path::run_path;
+use super::reference::{reference_scene, render_reference};
+use super::route::{check_triangle_budget, Model};
+use super::validate::{Mode, PrimitivePath, RenderJob};
 use crate::camera::View;
 use crate::config::ArchConfig;
 use crate::error::Result;

@@ -1,11 +1,16 @@
 //! What a run is, as types decided once: the [`Model`] it is simulated on and the [`Route`]
 //! its scene is drawn by; a setting given where the route does not use it is refused, and a
-//! tessellation must stay within [`MAX_TRIANGLES`].
+//! tessellation must stay within [`MAX_TRIANGLES`]. Also what a route yields ([`PathRun`])
+//! and the host options a timed run is simulated with.
 
-use super::{check_reference_scene, PrimitivePath, RenderJob};
+use super::reference::check_reference_scene;
+use super::validate::{PrimitivePath, RenderJob};
 use crate::config::ArchConfig;
 use crate::error::{Error, Result, COMMAND_LINE};
 use crate::lembo::tessellate::Tessellation;
+use crate::pipeline::{self, SimOptions};
+use crate::report::Report;
+use crate::rop::FrameBuffer;
 use crate::scene::Scene;
 
 /// The most triangles a tessellated scene may have: beyond it a run takes hours, and
@@ -160,4 +165,43 @@ fn check_applies(job: &RenderJob, scene: &Scene) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// Bytes of one lembo as the Setup unit reads it: six points and six normals in f32.
+pub const LEMBO_BYTES: u64 = 6 * 2 * 3 * 4;
+
+/// One path's run on a loaded scene: what `render` writes, and what `compare` puts side by
+/// side.
+pub struct PathRun {
+    /// The run's report.
+    pub report: Report,
+    /// The image (the timed pipeline's, or the functional model's).
+    pub framebuffer: FrameBuffer,
+    /// The error heat map against the reference, when one was given.
+    pub error_map: Option<image::RgbImage>,
+    /// Chrome trace-event JSON, when requested.
+    pub trace: Option<String>,
+}
+
+/// The host options of a timed run of `job` on `path`: `--host-threads` is refused when it
+/// exceeds the units the run instantiates (each host thread runs at least one unit).
+pub(super) fn sim_options(
+    job: &RenderJob,
+    arch: &ArchConfig,
+    path: pipeline::Path,
+) -> Result<SimOptions> {
+    let units = arch.instances(path).len();
+    if job.host_threads as usize > units {
+        return Err(Error::invalid(
+            COMMAND_LINE,
+            "--host-threads",
+            job.host_threads,
+            format!("more than the {units} units this run instantiates (each host thread runs at least one)"),
+        ));
+    }
+    Ok(SimOptions {
+        host_threads: job.host_threads as usize,
+        trace: job.trace_out.is_some(),
+        ..SimOptions::default()
+    })
 }

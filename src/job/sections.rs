@@ -1,7 +1,8 @@
 //! The sections of a report every route fills in the same way: the scene, the settings and
 //! the host.
 
-use super::{Model, RenderJob};
+use super::route::Model;
+use super::validate::RenderJob;
 use crate::pipeline::Cycle;
 use crate::report::{peak_rss_bytes, Host, PerspectiveSetting, SceneInfo, Settings};
 use crate::scene::Scene;

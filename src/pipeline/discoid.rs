@@ -24,7 +24,7 @@ use crate::discoid::render::{
 };
 use crate::error::{Error, Result};
 use crate::raster::Counts;
-use crate::rop::rop::FragmentShader;
+use crate::rop::fragment_shader::FragmentShader;
 use crate::rop::shade::to_u8;
 use crate::rop::FrameBuffer;
 use crate::scene::Scene;

@@ -2,11 +2,11 @@
 //! paths, or per path within a sweep's area budget), and the placement of the points'
 //! level labels.
 
-use super::{
-    assignment, draw_legend, draw_mark, fmt_num, log_axis, log_range, mesh, pareto_front,
-    plot_size, svg, varying, Entry, Mark, Plot, Point, CHART_HEIGHT, FONT, LEMBO, MARKS, PALETTE,
-    TRIANGLE,
+use super::chart::{
+    draw_legend, draw_mark, fmt_num, log_axis, log_range, mesh, plot_size, svg, Entry, Mark, Plot,
+    CHART_HEIGHT, FONT, LEMBO, MARKS, PALETTE, TRIANGLE,
 };
+use super::point::{assignment, pareto_front, varying, Point};
 use plotters::prelude::*;
 use std::collections::BTreeMap;
 

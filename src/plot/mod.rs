@@ -21,16 +21,30 @@
 //! as `<text>` elements that the viewer lays out, so plotters places captions and tick
 //! labels by its built-in size estimate instead of a font library: the spacing is
 //! approximate, the text itself exact.
+//!
+//! Layout: this file the entry ([`plot_files`], [`write_plots`]) and plots 2 to 4 (cycles
+//! against k, unit counts and FIFO depths; utilisation); `error.rs` plot 1; `point.rs` what
+//! the plots read from a record; `chart.rs` how they draw. The children import each other
+//! downwards (error.rs imports point.rs and chart.rs, point.rs imports chart.rs) and never
+//! this file.
+
+mod chart;
+mod error;
+mod point;
 
 use crate::error::{Error, Result};
-use plotters::coord::combinators::WithKeyPoints;
-use plotters::coord::types::RangedCoordf64;
-use plotters::coord::Shift;
+use chart::{
+    draw_legend, draw_lines, draw_mark, fmt_int, fmt_num, fmt_value, log_axis, log_range, mesh,
+    plot_size, svg, Entry, Plot, CHART_HEIGHT, FONT, LEMBO, MARKS, PALETTE, WIDTH,
+};
+use error::{error_against, Against};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
+pub use point::pareto_front;
+pub(crate) use point::used;
+use point::{assignment, varying, Point};
 use serde_json::Value;
 use std::collections::{BTreeMap, BTreeSet};
-use std::ops::Range;
 use std::path::Path;
 
 /// Writes the sweep's plots into `dir` and returns the file names written (only the plots the
@@ -92,303 +106,9 @@ pub fn plot_files(records: &[Value], budget: Option<f64>) -> Result<Vec<(String,
     Ok(files)
 }
 
-/// Indices of the points that no other point dominates, minimising both coordinates (q
-/// dominates p when q is no larger in both and smaller in one). Equal points do not dominate
-/// each other, so duplicates on the front are all returned. The indices come in ascending x
-/// (ties by ascending y, then index), the order a step line through the front takes. Points
-/// with a NaN coordinate are never on the front.
-pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {
-    let mut order: Vec<usize> = (0..points.len())
-        .filter(|&i| !points[i].0.is_nan() && !points[i].1.is_nan())
-        .collect();
-    order.sort_by(|&a, &b| {
-        let (pa, pb) = (points[a], points[b]);
-        pa.0.total_cmp(&pb.0)
-            .then(pa.1.total_cmp(&pb.1))
-            .then(a.cmp(&b))
-    });
-    let mut front: Vec<usize> = Vec::new();
-    for i in order {
-        // Every earlier point has x no larger; it dominates this one unless this one has a
-        // smaller y than all of them, or it is the last front point again.
-        let keep = match front.last() {
-            None => true,
-            Some(&last) => points[i].1 < points[last].1 || points[i] == points[last],
-        };
-        if keep {
-            front.push(i);
-        }
-    }
-    front
-}
-
-/// One sweep point, as far as the plots use it.
-struct Point {
-    index: u64,
-    scene: String,
-    /// `lembo` or `triangle` (`report.settings.path`).
-    path: String,
-    /// Tolerance k \[px\]; lembo path only.
-    k_px: Option<f64>,
-    /// Tessellation level n; triangle path only.
-    tess: Option<u64>,
-    /// The sweep's parameters of this point; a parameter another point has and this one
-    /// lacks counts as null.
-    params: BTreeMap<String, Value>,
-    /// Frame time \[cycles\]; `None` in functional mode.
-    cycles: Option<u64>,
-    units: Vec<UnitTime>,
-    /// RMS colour error 255·10^(−PSNR/20) [0-255]; `None` without a reference.
-    rms_error: Option<f64>,
-    /// The run's report, for the value of a parameter its point left at the default.
-    report: Value,
-    /// The frame's energy \[pJ\]; `None` without a cost section.
-    energy_pj: Option<f64>,
-    /// The unit's area \[mm²\]; `None` without a cost section.
-    area_mm2: Option<f64>,
-}
-
-/// One unit's cycle accounting; busy + starved + blocked = the frame's cycles.
-struct UnitTime {
-    name: String,
-    busy: u64,
-    starved: u64,
-    blocked: u64,
-}
-
-impl Point {
-    fn from_record(record: &Value) -> Option<Point> {
-        let report = record.get("report")?;
-        let settings = report.get("settings")?;
-        let path = settings.get("path")?.as_str()?.to_string();
-        let scene = record
-            .get("scene")
-            .and_then(Value::as_str)
-            .or_else(|| report.pointer("/scene/name").and_then(Value::as_str))?
-            .to_string();
-        let params = record
-            .get("params")
-            .and_then(Value::as_object)
-            .map(|m| m.iter().map(|(k, v)| (k.clone(), v.clone())).collect())
-            .unwrap_or_default();
-        let cycles = report.pointer("/cycles/total").and_then(Value::as_u64);
-        let units = report
-            .pointer("/cycles/units")
-            .and_then(Value::as_array)
-            .map(|units| {
-                units
-                    .iter()
-                    .filter_map(|u| {
-                        Some(UnitTime {
-                            name: u.get("name")?.as_str()?.to_string(),
-                            busy: u.get("busy")?.as_u64()?,
-                            starved: u.get("starved")?.as_u64()?,
-                            blocked: u.get("blocked")?.as_u64()?,
-                        })
-                    })
-                    .collect()
-            })
-            .unwrap_or_default();
-        let rms_error = report
-            .pointer("/accuracy/psnr_db")
-            .and_then(Value::as_f64)
-            .map(|psnr| 255.0 * 10f64.powf(-psnr / 20.0))
-            .filter(|e| e.is_finite() && *e > 0.0);
-        Some(Point {
-            index: record.get("index").and_then(Value::as_u64).unwrap_or(0),
-            scene,
-            path,
-            k_px: settings.get("k_px").and_then(Value::as_f64),
-            tess: settings.get("tess").and_then(Value::as_u64),
-            params,
-            cycles: cycles.filter(|&c| c > 0),
-            units,
-            rms_error,
-            report: report.clone(),
-            energy_pj: report.pointer("/cost/energy_pj").and_then(Value::as_f64),
-            area_mm2: report.pointer("/cost/area_mm2").and_then(Value::as_f64),
-        })
-    }
-
-    /// The swept level of detail: `k=0.5` or `n=4`.
-    fn level(&self) -> String {
-        match (self.k_px, self.tess) {
-            (Some(k), _) => format!("k={}", fmt_num(k)),
-            (None, Some(n)) => format!("n={n}"),
-            (None, None) => format!("#{}", self.index),
-        }
-    }
-
-    /// The point's value of parameter `key`, or the value its run used by default (as its
-    /// report echoes it); null where the parameter does not apply.
-    fn param(&self, key: &str) -> &Value {
-        static NULL: Value = Value::Null;
-        self.params
-            .get(key)
-            .or_else(|| crate::sweep::results::used(&self.report, key))
-            .unwrap_or(&NULL)
-    }
-}
-
-mod error;
-use error::{error_against, Against};
-
-type DrawResult = std::result::Result<(), Box<dyn std::error::Error>>;
-type Plot = Option<std::result::Result<String, Box<dyn std::error::Error>>>;
-type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
-
-/// Draws one SVG of `size` pixels.
-fn svg(size: (u32, u32), draw: impl FnOnce(&Area) -> DrawResult) -> Plot {
-    let mut out = String::new();
-    let drawn = (|| -> DrawResult {
-        let root = SVGBackend::with_string(&mut out, size).into_drawing_area();
-        root.fill(&WHITE)?;
-        draw(&root)?;
-        root.present()?;
-        Ok(())
-    })();
-    Some(drawn.map(|()| out))
-}
-
-const FONT: &str = "sans-serif";
-/// Width of every plot and height of the chart above its legend \[px\].
-const WIDTH: u32 = 900;
-const CHART_HEIGHT: u32 = 600;
-const LEMBO: RGBColor = RGBColor(31, 119, 180);
-const TRIANGLE: RGBColor = RGBColor(214, 39, 40);
-/// Series colours other than the two paths' (the tab10 palette, less its blue and red).
-const PALETTE: [RGBColor; 8] = [
-    RGBColor(255, 127, 14),
-    RGBColor(44, 160, 44),
-    RGBColor(148, 103, 189),
-    RGBColor(140, 86, 75),
-    RGBColor(227, 119, 194),
-    RGBColor(127, 127, 127),
-    RGBColor(188, 189, 34),
-    RGBColor(23, 190, 207),
-];
 const BUSY: RGBColor = RGBColor(44, 160, 44);
 const STARVED: RGBColor = RGBColor(199, 199, 199);
 const BLOCKED: RGBColor = RGBColor(214, 39, 40);
-
-/// A series' point marker. Series differ in shape as well as colour, so one drawn over
-/// another (equal cycles in f32 and f64, say) still shows.
-#[derive(Clone, Copy, PartialEq, Eq)]
-enum Mark {
-    Dot,
-    Ring,
-    Cross,
-    Triangle,
-    Square,
-}
-
-const MARKS: [Mark; 5] = [
-    Mark::Dot,
-    Mark::Ring,
-    Mark::Cross,
-    Mark::Triangle,
-    Mark::Square,
-];
-
-/// One line of a legend: a marker (none for a plain note), a line through it or not, the
-/// label and an optional second line.
-struct Entry {
-    mark: Option<Mark>,
-    line: bool,
-    color: RGBColor,
-    label: String,
-    note: Option<String>,
-}
-
-impl Entry {
-    fn height(&self) -> u32 {
-        if self.note.is_some() {
-            38
-        } else {
-            20
-        }
-    }
-}
-
-/// Draws a marker centred on `at`, in `area`'s pixel coordinates.
-fn draw_mark(area: &Area, at: (i32, i32), mark: Mark, color: RGBColor) -> DrawResult {
-    let (x, y) = at;
-    match mark {
-        Mark::Dot => area.draw(&Circle::new(at, 4, color.filled()))?,
-        Mark::Ring => area.draw(&Circle::new(at, 5, color.stroke_width(2)))?,
-        Mark::Cross => area.draw(&Cross::new(at, 5, color.stroke_width(2)))?,
-        Mark::Triangle => area.draw(&TriangleMarker::new(at, 6, color.filled()))?,
-        Mark::Square => area.draw(&Rectangle::new(
-            [(x - 4, y - 4), (x + 4, y + 4)],
-            color.filled(),
-        ))?,
-    }
-    Ok(())
-}
-
-/// Draws a legend into `area` (below the chart, so it never hides a point), one entry a line.
-fn draw_legend(area: &Area, entries: &[Entry]) -> DrawResult {
-    let x = 60;
-    let mut y = 10;
-    for e in entries {
-        if e.line {
-            area.draw(&PathElement::new(
-                vec![(x - 14, y), (x + 14, y)],
-                e.color.stroke_width(2),
-            ))?;
-        }
-        if let Some(mark) = e.mark {
-            draw_mark(area, (x, y), mark, e.color)?;
-        }
-        let text = |s: &str, y: i32| {
-            Text::new(
-                s.to_string(),
-                (x + 24, y),
-                (FONT, 13)
-                    .into_font()
-                    .color(&BLACK)
-                    .pos(Pos::new(HPos::Left, VPos::Center)),
-            )
-        };
-        area.draw(&text(&e.label, y))?;
-        if let Some(note) = &e.note {
-            area.draw(&text(note, y + 18))?;
-        }
-        y += e.height() as i32;
-    }
-    Ok(())
-}
-
-/// The chart and legend areas of a plot whose legend has `entries`.
-fn plot_size(entries: &[Entry]) -> (u32, u32) {
-    let legend: u32 = entries.iter().map(Entry::height).sum();
-    (WIDTH, CHART_HEIGHT + legend + 10)
-}
-
-/// A log axis over `range` with ticks at 1, 2 and 5 per decade, or at every digit when that
-/// gives fewer than four (plotters' own log axis labels only powers of ten).
-fn log_axis(range: Range<f64>) -> WithKeyPoints<LogCoord<f64>> {
-    let ticks = |mantissas: &[f64]| -> Vec<f64> {
-        let first = range.start.log10().floor() as i32;
-        let last = range.end.log10().ceil() as i32;
-        (first..=last)
-            .flat_map(|e| mantissas.iter().map(move |m| m * 10f64.powi(e)))
-            .filter(|v| range.contains(v))
-            .collect()
-    };
-    let every = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0];
-    let light = ticks(&every);
-    let bold = [&[1.0][..], &[1.0, 2.0, 5.0]]
-        .iter()
-        .map(|m| ticks(m))
-        .find(|t| t.len() >= 4)
-        .unwrap_or_else(|| light.clone());
-    range
-        .clone()
-        .log_scale()
-        .with_key_points(bold)
-        .with_light_points(light)
-}
 
 /// Plot 2: cycles against k on the lembo path, one series per combination of the other
 /// parameters that vary. A combination run at a single k says nothing about k: its points
@@ -583,52 +303,6 @@ fn held_series(points: &[Point], axis: ArchAxis) -> Vec<(Entry, Vec<(f64, f64)>)
 /// The y axis of the plots of cycles.
 const CYCLES: &str = "simulated frame time [cycles]";
 
-/// Draws the mesh of `chart` with its axis descriptions, numbers in [`fmt_num`].
-fn mesh<'a, X, Y>(
-    chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>,
-    x_desc: &str,
-    y_desc: &str,
-) -> DrawResult
-where
-    X: Ranged<ValueType = f64> + plotters::coord::ranged1d::ValueFormatter<f64>,
-    Y: Ranged<ValueType = f64> + plotters::coord::ranged1d::ValueFormatter<f64>,
-{
-    chart
-        .configure_mesh()
-        .x_desc(x_desc)
-        .y_desc(y_desc)
-        .x_label_formatter(&|v| fmt_num(*v))
-        .y_label_formatter(&|v| fmt_num(*v))
-        .label_style((FONT, 13))
-        .axis_desc_style((FONT, 15))
-        .draw()?;
-    Ok(())
-}
-
-/// Draws each entry's line and marks into `chart`.
-fn draw_lines<'a, X>(
-    root: &Area,
-    chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, RangedCoordf64>>,
-    entries: &[Entry],
-    lines: &[Vec<(f64, f64)>],
-) -> DrawResult
-where
-    X: Ranged<ValueType = f64>,
-{
-    for (entry, line) in entries.iter().zip(lines) {
-        chart.draw_series(LineSeries::new(
-            line.iter().copied(),
-            entry.color.stroke_width(2),
-        ))?;
-        if let Some(mark) = entry.mark {
-            for p in line {
-                draw_mark(root, chart.backend_coord(p), mark, entry.color)?;
-            }
-        }
-    }
-    Ok(())
-}
-
 /// Plot 3: cycles against unit counts (`ArchAxis::Counts`, linear x) or FIFO depths
 /// (`ArchAxis::FifoDepths`, log x), one series per varying field, the other parameters at
 /// their most common value. No series, no plot.
@@ -778,18 +452,6 @@ fn utilisation(scene: &str, points: &[Point]) -> Plot {
     })
 }
 
-/// The parameters whose value is not the same at every point (a missing one counts as null).
-fn varying(points: &[&Point]) -> Vec<String> {
-    let keys: BTreeSet<&String> = points.iter().flat_map(|p| p.params.keys()).collect();
-    keys.into_iter()
-        .filter(|k| {
-            let values: BTreeSet<String> = points.iter().map(|p| p.param(k).to_string()).collect();
-            values.len() > 1
-        })
-        .cloned()
-        .collect()
-}
-
 /// The value of `key` most points have; ties go to the one seen first.
 fn most_common(points: &[&Point], key: &str) -> Value {
     let mut tally: Vec<(Value, usize)> = Vec::new();
@@ -808,15 +470,6 @@ fn most_common(points: &[&Point], key: &str) -> Value {
         .unwrap_or(Value::Null)
 }
 
-/// `key=value, ...` for the given parameters of a point.
-fn assignment(p: &Point, keys: &[String]) -> String {
-    keys.iter()
-        .map(|k| format!("{k}={}", fmt_value(p.param(k))))
-        .collect::<Vec<_>>()
-        .join(", ")
-}
-
-/// A point for a caption: its path and level, the other varying parameters and its index.
 /// The most characters a 16-point caption holds across a plot.
 const CAPTION_CHARS: usize = 100;
 
@@ -844,6 +497,7 @@ fn describe_apart(p: &Point, pts: &[&Point], varying: &[String]) -> String {
     describe(p, &apart)
 }
 
+/// A point for a caption: its path and level, the other varying parameters and its index.
 fn describe(p: &Point, varying: &[String]) -> String {
     let others: Vec<String> = varying
         .iter()
@@ -855,64 +509,6 @@ fn describe(p: &Point, varying: &[String]) -> String {
         s += &format!(", {}", assignment(p, &others));
     }
     s + &format!(", point {}", p.index)
-}
-
-fn fmt_value(v: &Value) -> String {
-    match v {
-        Value::String(s) => s.clone(),
-        Value::Null => "-".into(),
-        Value::Number(n) => n.as_f64().map(fmt_num).unwrap_or_else(|| n.to_string()),
-        other => other.to_string(),
-    }
-}
-
-/// Three significant digits with k, M or G for thousands: `52.5k`, `0.00255`.
-fn fmt_num(v: f64) -> String {
-    let a = v.abs();
-    if a == 0.0 || !v.is_finite() {
-        return format!("{v}");
-    }
-    let (x, suffix) = match a {
-        a if a >= 1e9 => (v / 1e9, "G"),
-        a if a >= 1e6 => (v / 1e6, "M"),
-        a if a >= 1e4 => (v / 1e3, "k"),
-        _ => (v, ""),
-    };
-    if x.abs() < 1e-4 {
-        return format!("{x:.2e}");
-    }
-    let digits = (2 - x.abs().log10().floor() as i32).clamp(0, 8) as usize;
-    let mut s = format!("{x:.digits$}");
-    if s.contains('.') {
-        s = s.trim_end_matches('0').trim_end_matches('.').to_string();
-    }
-    s + suffix
-}
-
-/// An integer with its thousands apart: `103 273`.
-fn fmt_int(n: u64) -> String {
-    let digits = n.to_string();
-    let mut out = String::new();
-    for (i, c) in digits.chars().enumerate() {
-        if i > 0 && (digits.len() - i).is_multiple_of(3) {
-            out.push(' ');
-        }
-        out.push(c);
-    }
-    out
-}
-
-/// A log axis range around positive values, with a margin of a quarter on either side.
-fn log_range(values: impl Iterator<Item = f64>) -> Range<f64> {
-    let (lo, hi) = values
-        .filter(|v| *v > 0.0 && v.is_finite())
-        .fold((f64::INFINITY, 0.0f64), |(lo, hi), v| {
-            (lo.min(v), hi.max(v))
-        });
-    if hi == 0.0 {
-        return 0.1..10.0;
-    }
-    lo / 1.25..hi * 1.25
 }
 
 /// A file-name stem for a scene: ASCII letters, digits, `-`, `_` and `.`, the rest `_`;

@@ -1,6 +1,8 @@
 //! Tests of the sweep plots: what each plot draws, and what it leaves out.
 
+use super::chart::*;
 use super::error::Labels;
+use super::point::*;
 use super::*;
 use serde_json::json;
 

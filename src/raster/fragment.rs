@@ -200,7 +200,8 @@ mod tests {
     /// and the two increments (2 adds).
     #[test]
     fn fragment_counts_what_a_hand_worked_subsegment_costs() {
-        use crate::cost::counted::{counting, Counted, Op};
+        use crate::cost::counted::{counting, Counted};
+        use crate::datapath::Op;
         use crate::graph::UnitKind;
         type C = Counted<f64>;
         let l = screen_lembo::<C>(x_linear(), y_plane());

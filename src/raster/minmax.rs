@@ -102,7 +102,8 @@ mod tests {
     /// centre of a central partition (given by Setup).
     #[test]
     fn minmax_counts_what_a_hand_worked_lembo_costs() {
-        use crate::cost::counted::{counting, Counted, Op, OPS};
+        use crate::cost::counted::{counting, Counted};
+        use crate::datapath::{Op, OPS};
         use crate::graph::UnitKind;
         let l = screen_lembo::<Counted<f64>>(x_linear(), y_bowl());
         let (_, ops) = counting(UnitKind::MinMax, || y_range(&l));

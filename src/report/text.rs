@@ -3,8 +3,8 @@
 //! is what `report.json` says; each section of `report.txt` has its own writer below.
 
 use super::Report;
-use crate::cost::counted::OPS;
 use crate::cost::model::OpCounts;
+use crate::datapath::OPS;
 use crate::pipeline::Cycle;
 use std::fmt::Write as _;
 

@@ -16,7 +16,7 @@
 //! count both sides of every branch, so the ROP shades its fragments one at a time and the
 //! counts stay those of the formula as written.
 
-use super::rop::FragmentShader;
+use super::fragment_shader::FragmentShader;
 use super::shade::{to_u8, Shader};
 use crate::datapath::Real;
 
@@ -104,7 +104,7 @@ impl<R: Real> Shader<R> {
     }
 }
 
-/// [`super::rop::normalize`] of one vector, without a branch.
+/// [`super::fragment_shader::normalize`] of one vector, without a branch.
 #[inline(always)]
 fn normalize_one<R: Real>(v: [R; 3]) -> [R; 3] {
     let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();

@@ -1,4 +1,5 @@
 //! The ROP: depth test, shading of the fragments that pass, and the frame buffer.
+pub mod fragment_shader;
 pub mod framebuffer;
 pub mod lanes;
 pub mod plane;

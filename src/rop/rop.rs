@@ -8,12 +8,12 @@
 //! A batch is shaded when it is full, when a fragment of another primitive (or another piece
 //! of a split lembo) arrives, before a fragment is shaded alone, and at [`Rop::finish`].
 
+use super::fragment_shader::FragmentShader;
 use super::framebuffer::{FrameBuffer, FrameRows};
 use super::lanes::{self, three, Lanes, LANES};
-use super::shade::{to_u8, Light, Shader};
+use super::shade::Light;
 use crate::camera::View;
-use crate::cost::counted::Op;
-use crate::datapath::Real;
+use crate::datapath::{Op, Real};
 use crate::lembo::{eval3, Quadratic3};
 use crate::raster::fragment::{self, FragmentSink, Span};
 use crate::raster::setup::ScreenLembo;
@@ -22,80 +22,6 @@ use crate::raster::triangle::{
     inv_w_at, perspective_lerp, row_by_pixels, ScreenTriangle, TriangleFragment, TriangleSink,
     WEIGHT_LANES,
 };
-
-/// Per-fragment shading (Piranda et al. 2006 equation 6) from the lembo's normal and position
-/// functions; shared by the functional ROP and the timed ROP units so both give the same
-/// colour bit for bit.
-pub struct FragmentShader<R> {
-    shader: Shader<R>,
-    /// Eye position (perspective) [world units].
-    eye: [R; 3],
-    /// Constant direction to the eye (orthographic).
-    to_eye: Option<[R; 3]>,
-}
-
-impl<R: Real> FragmentShader<R> {
-    /// The shader of `light` for `view` (a constant direction to the eye when orthographic).
-    pub fn new(light: &Light, view: &View) -> Self {
-        let to_eye = view
-            .orthographic
-            .then(|| view.to_eye(glam::DVec3::ZERO).to_array().map(R::of));
-        FragmentShader {
-            shader: Shader::new(light),
-            eye: view.eye.to_array().map(R::of),
-            to_eye,
-        }
-    }
-
-    /// The colour of lembo `l` at (u, v) and the unit normal it was shaded with.
-    #[inline]
-    pub fn shade(&self, l: &ScreenLembo<R>, u: R, v: R) -> ([u8; 3], [R; 3]) {
-        let position = match self.to_eye {
-            Some(_) => [R::zero(); 3],
-            None => eval3(&l.position, u, v),
-        };
-        self.shade_at(eval3(&l.normal, u, v), position, l.color)
-    }
-
-    /// The colour of a surface point with (not necessarily unit) normal `normal` at world
-    /// `position` (unused for orthographic views), and the unit normal it was shaded with.
-    #[inline]
-    pub fn shade_at(&self, normal: [R; 3], position: [R; 3], color: [R; 3]) -> ([u8; 3], [R; 3]) {
-        let n = normalize(normal);
-        let c = self.shader.shade(n, self.to_eye(position), color);
-        ([to_u8(c[0]), to_u8(c[1]), to_u8(c[2])], n)
-    }
-
-    /// The unit direction from world `position` to the eye (constant for orthographic
-    /// views, where `position` is unused).
-    #[inline]
-    pub fn to_eye(&self, position: [R; 3]) -> [R; 3] {
-        match self.to_eye {
-            Some(d) => d,
-            None => {
-                let p = position;
-                normalize([self.eye[0] - p[0], self.eye[1] - p[1], self.eye[2] - p[2]])
-            }
-        }
-    }
-
-    /// The light and material terms.
-    pub fn shader(&self) -> &Shader<R> {
-        &self.shader
-    }
-
-    /// The direction to the eye when it is the same everywhere (orthographic views).
-    #[inline(always)]
-    pub(super) fn to_eye_constant(&self) -> Option<[R; 3]> {
-        self.to_eye
-    }
-
-    /// The eye position \[world units\].
-    #[inline(always)]
-    pub(super) fn eye(&self) -> [R; 3] {
-        self.eye
-    }
-}
 
 /// Fragments a ROP holds back to shade together, at most.
 pub const BATCH: usize = 64;
@@ -388,17 +314,6 @@ impl<R: Real> Drop for Rop<'_, R> {
     /// What is held back is shaded even if [`Rop::finish`] is not called.
     fn drop(&mut self) {
         self.flush();
-    }
-}
-
-/// `v` scaled to unit length, or zero for a zero vector.
-#[inline(always)]
-pub fn normalize<R: Real>(v: [R; 3]) -> [R; 3] {
-    let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-    if n > R::zero() {
-        [v[0] / n, v[1] / n, v[2] / n]
-    } else {
-        [R::zero(); 3]
     }
 }
 

@@ -3,10 +3,9 @@
 
 use super::{
     format::{DiscoidItemSpec, DiscoidSource, DiscoidsSpec},
-    given,
     mesh::{load_obj, transform_mesh, Transform},
     pointcloud::load_surfels,
-    validate::{discoid_in_range, unit, Check, Vec3Value},
+    validate::{discoid_in_range, given, unit, Check, Vec3Value},
     MAX_DISCOIDS, MAX_WORLD_COORDINATE,
 };
 use crate::discoid::shapes::{builtin_discoids, discoids_from_mesh, BUILTIN_DISCOID_NAMES};

@@ -16,18 +16,26 @@
 //! validated field by field. Every error names the file, the field path in one style
 //! (`viewport.width`, `camera.projection.near`, `objects[1].transform.scale`) and the
 //! value (DESIGN.md §8): serde errors become [`Error::Parse`] with the path that
-//! `serde_path_to_error` tracked, refused values become [`Error::Invalid`], and mesh files
-//! and point-cloud files that cannot be loaded or hold bad numbers become [`Error::Mesh`].
+//! [`crate::json`] tracked, refused values become [`Error::Invalid`], and mesh files and
+//! point-cloud files that cannot be loaded or hold bad numbers become [`Error::Mesh`].
 //!
-//! Layout: [`format`](mod@format) (the file's shape), [`validate`] (the scene-wide checks and the
-//! walk over the objects), [`objects`] (builtin, inline and mesh objects), [`discoids`] (an
-//! object's discoids), [`mesh`] (transforms and OBJ files), [`pointcloud`] (PLY surfels).
+//! [`Error::Parse`]: crate::error::Error::Parse
+//! [`Error::Invalid`]: crate::error::Error::Invalid
+//! [`Error::Mesh`]: crate::error::Error::Mesh
+//!
+//! Layout: this file the validated [`Scene`] and the format's defaults and bounds, which the
+//! children import (it imports none of them); [`load`] (a file, JSON text or the embedded
+//! default into a `Scene`), [`format`](mod@format) (the file's shape), [`validate`] (the
+//! scene-wide checks and the walk over the objects), [`objects`] (builtin, inline and mesh
+//! objects), [`discoids`] (an object's discoids), [`mesh`] (transforms and OBJ files),
+//! [`pointcloud`] (PLY surfels).
 //!
 //! Not modelled here: triangles as scene objects, point clouds in formats other than PLY,
 //! and non-uniform scaling (which would need the inverse transpose for normals).
 
 pub mod discoids;
 pub mod format;
+pub mod load;
 pub mod mesh;
 pub mod objects;
 pub mod pointcloud;
@@ -35,13 +43,10 @@ pub mod validate;
 
 use crate::camera::{Camera, Viewport};
 use crate::discoid::DiscoidSet;
-use crate::error::{parent_dir, read_text_file, Error, Result, COMMAND_LINE};
 use crate::lembo::construct::TriangleMesh;
 use crate::lembo::Lembo;
 use crate::rop::shade::Light;
-use format::SceneSpec;
-use std::path::{Path, PathBuf};
-use validate::Check;
+use std::path::PathBuf;
 
 /// The viewport of a scene file without one \[pixels\].
 pub const DEFAULT_VIEWPORT: Viewport = Viewport {
@@ -64,11 +69,6 @@ pub const MAX_DISCOIDS: usize = 1_000_000;
 /// (Piranda et al. 2006: the threshold "must be chosen much smaller than the dimension of the
 /// discoids").
 pub const DEFAULT_THRESHOLD_PER_RADIUS: f64 = 0.25;
-
-/// The embedded default scene (`lembo-sim` with no arguments renders it).
-const DEFAULT_SCENE_JSON: &str = include_str!("../../traces/default.json");
-/// Where the embedded default scene's relative paths point.
-const DEFAULT_SCENE_DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/traces");
 
 /// A validated scene: everything in world space, every number finite and in range.
 #[derive(Clone, Debug)]
@@ -114,33 +114,6 @@ pub struct SceneObject {
 }
 
 impl Scene {
-    /// Reads and validates a scene file; mesh paths in it are relative to its directory.
-    pub fn load(path: &Path) -> Result<Scene> {
-        let text = read_text_file(path)?;
-        let mut scene = Scene::from_json(&text, &path.display().to_string(), parent_dir(path))?;
-        scene.source = Some(path.to_path_buf());
-        Ok(scene)
-    }
-
-    /// Parses and validates a scene from JSON text. `file` is the name used in error
-    /// messages; mesh paths are relative to `base_dir`.
-    pub fn from_json(text: &str, file: &str, base_dir: &Path) -> Result<Scene> {
-        let spec: SceneSpec = parse_strict(text, file)?;
-        spec.validate(&Check { file }, base_dir)
-    }
-
-    /// The embedded `traces/default.json`: the sphere of 24 lembos.
-    pub fn default_scene() -> Scene {
-        // The text is part of the binary and checked by a unit test, so failing here is a
-        // build defect, not bad input.
-        Scene::from_json(
-            DEFAULT_SCENE_JSON,
-            "traces/default.json (embedded)",
-            Path::new(DEFAULT_SCENE_DIR),
-        )
-        .expect("the embedded default scene is valid")
-    }
-
     /// The scene file as errors and reports name it, or `(embedded default)`.
     pub fn source_name(&self) -> String {
         self.source
@@ -169,61 +142,6 @@ impl Scene {
         self.objects
             .iter()
             .flat_map(|o| o.lembos.iter().map(move |l| (l, o.color)))
-    }
-
-    /// Sets the viewport (CLI override), validated like the file's.
-    pub fn set_viewport(&mut self, width: u32, height: u32) -> Result<()> {
-        let viewport = Viewport { width, height };
-        Check { file: COMMAND_LINE }.viewport(&viewport)?;
-        self.viewport = viewport;
-        Ok(())
-    }
-}
-
-/// The names of the alternatives present, joined with "and", or "none": the value an
-/// "exactly one of" error reports.
-fn given(options: &[(&str, bool)]) -> String {
-    let present: Vec<&str> = options
-        .iter()
-        .filter_map(|&(name, present)| present.then_some(name))
-        .collect();
-    if present.is_empty() {
-        "none".to_string()
-    } else {
-        present.join(" and ")
-    }
-}
-
-/// Parses JSON text into `T`: errors name the file and the field path, and text after the
-/// value is an error, not ignored. Shared by scenes, architectures and sweep specs.
-pub(crate) fn parse_strict<T: serde::de::DeserializeOwned>(text: &str, file: &str) -> Result<T> {
-    let de = &mut serde_json::Deserializer::from_str(text);
-    let value: T = serde_path_to_error::deserialize(&mut *de).map_err(|e| parse_error(file, e))?;
-    de.end().map_err(|e| Error::Parse {
-        file: file.to_string(),
-        field: String::new(),
-        message: e.to_string(),
-    })?;
-    Ok(value)
-}
-
-pub(crate) fn parse_error(file: &str, e: serde_path_to_error::Error<serde_json::Error>) -> Error {
-    // A syntax error leaves an unknown (`?`) last segment, and one before any field an
-    // empty path (printed "."): drop both, serde's message gives the line and column.
-    let mut field = e.path().to_string();
-    while field.ends_with('?') {
-        field.pop();
-        if field.ends_with('.') {
-            field.pop();
-        }
-    }
-    if field == "." {
-        field.clear();
-    }
-    Error::Parse {
-        file: file.to_string(),
-        field,
-        message: e.into_inner().to_string(),
     }
 }
 

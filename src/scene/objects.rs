@@ -3,9 +3,8 @@
 
 use super::{
     format::ObjectSpec,
-    given,
     mesh::{load_obj, transform_mesh},
-    validate::{lembo_in_range, Check},
+    validate::{given, lembo_in_range, Check},
     SceneObject, DEFAULT_COLOR, MAX_WORLD_COORDINATE,
 };
 use crate::error::{Error, Result};

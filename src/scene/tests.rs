@@ -8,9 +8,11 @@ use super::*;
 use crate::camera::Projection;
 use crate::discoid::shapes::discoids_from_mesh;
 use crate::discoid::{BetaShape, Discoid};
+use crate::error::{Error, Result};
 use crate::lembo::shapes::BUILTIN_NAMES;
 use glam::DVec3;
 use std::io::Write;
+use std::path::{Path, PathBuf};
 
 fn traces() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("traces")

@@ -27,6 +27,20 @@ pub(super) struct Check<'a> {
 /// Formats a vector as the file spells it, e.g. `[0, 1, 0.5]`.
 pub(super) struct Vec3Value(pub(super) [f64; 3]);
 
+/// The names of the alternatives present, joined with "and", or "none": the value an
+/// "exactly one of" error reports.
+pub(super) fn given(options: &[(&str, bool)]) -> String {
+    let present: Vec<&str> = options
+        .iter()
+        .filter_map(|&(name, present)| present.then_some(name))
+        .collect();
+    if present.is_empty() {
+        "none".to_string()
+    } else {
+        present.join(" and ")
+    }
+}
+
 impl fmt::Display for Vec3Value {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let [x, y, z] = self.0;

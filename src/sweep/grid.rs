@@ -2,9 +2,8 @@
 //! (`Given`), checked against the render settings and the architecture's shape, and
 //! multiplied out into points (`Expander`).
 
-use super::{
-    spec::{empty_list, key, too_many, Params, Point, Setting},
-    ARCH, MAX_RUNS, SCENES, SETTINGS,
+use super::spec::{
+    empty_list, key, too_many, Params, Point, Setting, ARCH, MAX_RUNS, SCENES, SETTINGS,
 };
 use crate::config::ArchConfig;
 use crate::datapath::Datapath;

@@ -2,9 +2,8 @@
 
 use super::{
     lock::FolderLock,
-    results::{check_record, record_id, spec_difference, write_final},
-    spec::Spec,
-    Shard, RESULTS_JSONL, SPEC_JSON,
+    results::{check_record, record_id, spec_difference, write_final, RESULTS_JSONL, SPEC_JSON},
+    spec::{Shard, Spec},
 };
 use crate::error::{read_text_file, Error, Result, COMMAND_LINE};
 use serde_json::Value;

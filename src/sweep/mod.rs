@@ -37,204 +37,34 @@
 //! One writer per folder: a sweep (and a merge, into its `--out`) holds a [`FolderLock`]
 //! while it writes; see [`lock`].
 //!
-//! Layout: [`spec`] (the file's shape and `Spec::parse`), `grid` (expanding blocks and
-//! points), [`plan`] (`Plan::load`: everything validated before a run), [`run`] (the pool,
-//! appends, resumption), [`results`] (reading `results.jsonl` back, `results.csv`, the final
-//! set), [`merge`] (`sweep-merge`), [`lock`].
+//! Layout, from the bottom up: [`spec`] (names and bounds, the file's shape, the expanded
+//! spec, shards), `grid` (expanding blocks and points), `parse` (`Spec::parse`), [`plan`]
+//! (`Plan::load`: everything validated before a run), [`results`] (the folder's files:
+//! reading `results.jsonl` back, `results.csv`, the final set), [`run`] (the request, the
+//! pool, appends, resumption), [`merge`] (`sweep-merge`), [`lock`]. Each imports only files
+//! before it (and `lock`); this file only declares them and re-exports their public items.
 
 mod grid;
 pub mod lock;
 pub mod merge;
+mod parse;
 pub mod plan;
 pub mod results;
 pub mod run;
 pub mod spec;
 
-use crate::error::{Error, Result, COMMAND_LINE};
-use crate::job::{check_count, MAX_HOST_THREADS};
 pub use lock::{FolderLock, LOCK_FILE};
 pub use merge::{run_merge, MergeJob, MergeOutput};
 pub use plan::Plan;
-pub use results::csv_bytes;
-pub use run::run_sweep;
-pub use spec::{Point, Run, Spec};
-use std::fmt;
-use std::path::PathBuf;
-
-/// The most runs (points × scenes) a spec may expand to: beyond it a sweep takes days, and
-/// a typo in a grid should be refused rather than expanded.
-pub const MAX_RUNS: usize = 100_000;
-/// The most threads `--jobs` accepts; each run is one host thread (or `--host-threads`).
-pub const MAX_JOBS: usize = 256;
-/// The records file of a sweep directory.
-pub const RESULTS_JSONL: &str = "results.jsonl";
-/// The table of a sweep directory.
-pub const RESULTS_CSV: &str = "results.csv";
-/// The copy of the spec in a sweep directory.
-pub const SPEC_JSON: &str = "spec.json";
-
-/// The render settings a point can set, besides `arch.<field>`.
-const SETTINGS: [&str; 7] = [
-    "path",
-    "k",
-    "perspective_tol",
-    "tess",
-    "datapath",
-    "blend",
-    "threshold",
-];
-/// A block's or point's scene restriction: not a parameter.
-const SCENES: &str = "scenes";
-/// The prefix of architecture parameters.
-const ARCH: &str = "arch.";
-// ---- Running -------------------------------------------------------------------------
-
-/// `--shard I/N`: the runs whose index is I modulo N.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Shard {
-    /// This shard's index I, in 0..N.
-    pub index: u32,
-    /// The number of shards N.
-    pub count: u32,
-}
-
-impl Shard {
-    /// Every run.
-    pub const ALL: Shard = Shard { index: 0, count: 1 };
-
-    /// Checks N >= 1 and I < N.
-    pub fn new(index: u32, count: u32) -> Result<Shard> {
-        if count == 0 || index >= count {
-            return Err(Error::invalid(
-                COMMAND_LINE,
-                "--shard",
-                format!("{index}/{count}"),
-                "must be I/N with N >= 1 and I in 0..N",
-            ));
-        }
-        Ok(Shard { index, count })
-    }
-
-    /// Whether run `index` belongs to this shard.
-    pub fn keeps(self, index: usize) -> bool {
-        index % self.count as usize == self.index as usize
-    }
-}
-
-/// A sweep request, from the command line.
-#[derive(Clone, Debug)]
-pub struct SweepJob {
-    /// The spec file.
-    pub spec: PathBuf,
-    /// Output directory; None for `out/sweeps/<spec name>/`.
-    pub out: Option<PathBuf>,
-    /// Worker threads; None for the host's available parallelism.
-    pub jobs: Option<usize>,
-    /// Which runs this process does (`--shard`).
-    pub shard: Shard,
-    /// Test hook: stop once this many records were appended (see [`SweepOutcome`]).
-    pub stop_after: Option<usize>,
-    /// Draw a progress bar on stderr (hidden anyway when stderr is not a terminal).
-    pub progress: bool,
-    /// Host threads of each timed run (`--host-threads`; results do not depend on it).
-    pub host_threads: u32,
-    /// Run even when the runs at once are estimated to need more memory than is available
-    /// (`--no-memory-check`).
-    pub no_memory_check: bool,
-}
-
-/// What a sweep did.
-#[derive(Debug)]
-pub enum SweepOutcome {
-    /// Every run of the shard has a record; the final files are written.
-    Done(SweepOutput),
-    /// Stopped by `stop_after` with `appended` records added to `results.jsonl`; the
-    /// final files are not written.
-    Stopped {
-        /// The sweep folder.
-        dir: PathBuf,
-        /// Records appended by this process.
-        appended: usize,
-    },
-}
-
-/// A finished sweep, for its summary.
-#[derive(Debug)]
-pub struct SweepOutput {
-    /// The sweep folder.
-    pub dir: PathBuf,
-    /// The spec's name.
-    pub name: String,
-    /// Runs of this shard.
-    pub runs: usize,
-    /// Runs found done in `results.jsonl` and skipped.
-    pub skipped: usize,
-    /// Worker threads used.
-    pub jobs: usize,
-    /// Files written, in the directory.
-    pub files: Vec<String>,
-    /// Wall time of the whole sweep \[s\].
-    pub wall_seconds: f64,
-}
-
-/// A sweep that failed: the error, and the run it happened in when it was a run's.
-#[derive(Debug)]
-pub struct SweepError {
-    /// Boxed so that results carrying a SweepError stay small.
-    pub error: Box<Error>,
-    /// `run 7 (key)` when a run failed; None for a refused spec or flag.
-    pub run: Option<String>,
-}
-
-impl SweepError {
-    /// The process's exit status for this failure (2 for bad input).
-    pub fn exit_code(&self) -> u8 {
-        self.error.exit_code()
-    }
-}
-
-impl fmt::Display for SweepError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match &self.run {
-            Some(run) => write!(f, "{run}: {}", self.error),
-            None => write!(f, "{}", self.error),
-        }
-    }
-}
-
-impl From<Error> for SweepError {
-    fn from(error: Error) -> SweepError {
-        SweepError {
-            error: Box::new(error),
-            run: None,
-        }
-    }
-}
-
-impl SweepJob {
-    /// Checks the flags; errors name the flag and the value.
-    pub fn validate(&self) -> Result<()> {
-        if let Some(n) = self.jobs {
-            check_count("--jobs", n, MAX_JOBS, "threads")?;
-        }
-        Shard::new(self.shard.index, self.shard.count)?;
-        if let Some(dir) = &self.out {
-            crate::output::check_out_dir("--out", dir)?;
-        }
-        check_count(
-            "--host-threads",
-            self.host_threads,
-            MAX_HOST_THREADS,
-            "host threads",
-        )?;
-        Ok(())
-    }
-}
+pub use results::{csv_bytes, RESULTS_CSV, RESULTS_JSONL, SPEC_JSON};
+pub use run::{run_sweep, SweepError, SweepJob, SweepOutcome, SweepOutput, MAX_JOBS};
+pub use spec::{Point, Run, Shard, Spec, MAX_RUNS};
 
 #[cfg(test)]
 mod tests {
     use super::results::unit_order;
     use super::*;
+    use crate::error::{Error, Result};
 
     const BASE: &str = r#""name": "t", "scenes": ["a.json", "b.json"]"#;
 

@@ -3,8 +3,7 @@
 
 use super::{
     grid::{reword, set_arch_field},
-    spec::{Point, Run, Setting, Spec},
-    Shard, ARCH,
+    spec::{Point, Run, Setting, Shard, Spec, ARCH},
 };
 use crate::camera::View;
 use crate::config::ArchConfig;

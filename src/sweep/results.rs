@@ -2,15 +2,25 @@
 //! resume (each record checked against the spec and shard), and the finished set written
 //! at once: `results.jsonl` in index order, `results.csv` and the plots.
 
-use super::{spec::Spec, Shard, RESULTS_CSV, RESULTS_JSONL, SPEC_JSON};
+use super::spec::{Shard, Spec};
 use crate::error::{Error, Result};
 use crate::graph::KINDS;
 use crate::output::write_files;
+use crate::plot::{plot_files, used};
 use crate::report::html::{self, REPORT_HTML};
 use serde::Deserialize;
 use serde_json::Value;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
+
+/// The records file of a sweep directory.
+pub const RESULTS_JSONL: &str = "results.jsonl";
+
+/// The table of a sweep directory.
+pub const RESULTS_CSV: &str = "results.csv";
+
+/// The copy of the spec in a sweep directory.
+pub const SPEC_JSON: &str = "spec.json";
 
 /// A directory that holds results must hold this spec's.
 pub(super) fn check_same_spec(dir: &Path, spec: &Spec) -> Result<()> {
@@ -178,7 +188,7 @@ pub(super) fn write_final(
     let budget = serde_json::from_slice::<Value>(spec_text)
         .ok()
         .and_then(|v| v.get("area_budget_mm2").and_then(Value::as_f64));
-    let plots = crate::plot::plot_files(&records, budget)?;
+    let plots = plot_files(&records, budget)?;
     let mut files: Vec<(&str, Vec<u8>)> = vec![
         (RESULTS_JSONL, joined(lines)),
         (RESULTS_CSV, csv_bytes(&records)?),
@@ -269,23 +279,6 @@ pub(super) fn cell(v: Option<&Value>) -> String {
         Some(Value::String(s)) => s.clone(),
         Some(other) => other.to_string(),
     }
-}
-
-/// The value a run used for parameter `name` that its point did not set (the default), as
-/// its report echoes it; None where the parameter does not apply to the run (k on the
-/// triangle path) or the report does not say.
-pub(crate) fn used<'a>(report: &'a Value, name: &str) -> Option<&'a Value> {
-    let pointer = match name {
-        "path" => "/settings/path".to_string(),
-        "k" => "/settings/k_px".to_string(),
-        "perspective_tol" => "/settings/perspective_tol".to_string(),
-        "tess" => "/settings/tess".to_string(),
-        "datapath" => "/settings/datapath".to_string(),
-        "blend" => "/blend/mode".to_string(),
-        "threshold" => "/blend/threshold".to_string(),
-        arch => format!("/arch/{}", arch.strip_prefix("arch.")?.replace('.', "/")),
-    };
-    report.pointer(&pointer).filter(|v| !v.is_null())
 }
 
 /// `results.csv`: one row per record, columns as `sim/sweeps/README.md` lists them.

@@ -4,21 +4,138 @@
 use super::{
     lock::FolderLock,
     plan::Plan,
-    results::{check_same_spec, joined, read_partial, write_final},
-    spec::Run,
-    SweepError, SweepJob, SweepOutcome, SweepOutput, MAX_JOBS, RESULTS_JSONL, SPEC_JSON,
+    results::{check_same_spec, joined, read_partial, write_final, RESULTS_JSONL, SPEC_JSON},
+    spec::{Run, Shard},
 };
 use crate::error::{Error, Result};
-use crate::job::{render_reference, PrimitivePath};
+use crate::job::{check_count, render_reference, PrimitivePath, MAX_HOST_THREADS};
 use crate::output::write_files;
 use crate::reference::oracle::ReferenceImage;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::collections::BTreeMap;
+use std::fmt;
 use std::io::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Mutex;
 use std::time::Instant;
+
+// ---- The request and its outcome -----------------------------------------------------
+
+/// The most threads `--jobs` accepts; each run is one host thread (or `--host-threads`).
+pub const MAX_JOBS: usize = 256;
+
+/// A sweep request, from the command line.
+#[derive(Clone, Debug)]
+pub struct SweepJob {
+    /// The spec file.
+    pub spec: PathBuf,
+    /// Output directory; None for `out/sweeps/<spec name>/`.
+    pub out: Option<PathBuf>,
+    /// Worker threads; None for the host's available parallelism.
+    pub jobs: Option<usize>,
+    /// Which runs this process does (`--shard`).
+    pub shard: Shard,
+    /// Test hook: stop once this many records were appended (see [`SweepOutcome`]).
+    pub stop_after: Option<usize>,
+    /// Draw a progress bar on stderr (hidden anyway when stderr is not a terminal).
+    pub progress: bool,
+    /// Host threads of each timed run (`--host-threads`; results do not depend on it).
+    pub host_threads: u32,
+    /// Run even when the runs at once are estimated to need more memory than is available
+    /// (`--no-memory-check`).
+    pub no_memory_check: bool,
+}
+
+/// What a sweep did.
+#[derive(Debug)]
+pub enum SweepOutcome {
+    /// Every run of the shard has a record; the final files are written.
+    Done(SweepOutput),
+    /// Stopped by `stop_after` with `appended` records added to `results.jsonl`; the
+    /// final files are not written.
+    Stopped {
+        /// The sweep folder.
+        dir: PathBuf,
+        /// Records appended by this process.
+        appended: usize,
+    },
+}
+
+/// A finished sweep, for its summary.
+#[derive(Debug)]
+pub struct SweepOutput {
+    /// The sweep folder.
+    pub dir: PathBuf,
+    /// The spec's name.
+    pub name: String,
+    /// Runs of this shard.
+    pub runs: usize,
+    /// Runs found done in `results.jsonl` and skipped.
+    pub skipped: usize,
+    /// Worker threads used.
+    pub jobs: usize,
+    /// Files written, in the directory.
+    pub files: Vec<String>,
+    /// Wall time of the whole sweep \[s\].
+    pub wall_seconds: f64,
+}
+
+/// A sweep that failed: the error, and the run it happened in when it was a run's.
+#[derive(Debug)]
+pub struct SweepError {
+    /// Boxed so that results carrying a SweepError stay small.
+    pub error: Box<Error>,
+    /// `run 7 (key)` when a run failed; None for a refused spec or flag.
+    pub run: Option<String>,
+}
+
+impl SweepError {
+    /// The process's exit status for this failure (2 for bad input).
+    pub fn exit_code(&self) -> u8 {
+        self.error.exit_code()
+    }
+}
+
+impl fmt::Display for SweepError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match &self.run {
+            Some(run) => write!(f, "{run}: {}", self.error),
+            None => write!(f, "{}", self.error),
+        }
+    }
+}
+
+impl From<Error> for SweepError {
+    fn from(error: Error) -> SweepError {
+        SweepError {
+            error: Box::new(error),
+            run: None,
+        }
+    }
+}
+
+impl SweepJob {
+    /// Checks the flags; errors name the flag and the value.
+    pub fn validate(&self) -> Result<()> {
+        if let Some(n) = self.jobs {
+            check_count("--jobs", n, MAX_JOBS, "threads")?;
+        }
+        Shard::new(self.shard.index, self.shard.count)?;
+        if let Some(dir) = &self.out {
+            crate::output::check_out_dir("--out", dir)?;
+        }
+        check_count(
+            "--host-threads",
+            self.host_threads,
+            MAX_HOST_THREADS,
+            "host threads",
+        )?;
+        Ok(())
+    }
+}
+
+// ---- Running -------------------------------------------------------------------------
 
 /// Runs a sweep: validates everything, then runs what `results.jsonl` does not hold yet.
 pub fn run_sweep(job: &SweepJob) -> std::result::Result<SweepOutcome, SweepError> {

@@ -1,15 +1,12 @@
-//! A sweep spec: the file's shape (`SpecFile`), the expanded spec (`Spec`: points, runs and
-//! their keys) and `Spec::parse`, which validates the shape and expands the grid with
-//! the `grid` module.
+//! A sweep spec: its names and bounds (the settings a point can set, the most runs, the
+//! default k), the file's shape (`SpecFile`), the expanded spec (`Spec`: points, runs and
+//! their keys) and the runs a shard keeps. The lowest file of the sweep: `grid` expands
+//! into these types and `parse` (`Spec::parse`) builds them; it imports neither.
 
-use super::{grid::Expander, MAX_RUNS};
-use crate::camera::MAX_VIEWPORT_SIDE;
-use crate::config::ArchConfig;
 use crate::datapath::Datapath;
 use crate::discoid::blend::BlendMode;
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, COMMAND_LINE};
 use crate::job::{Mode, PrimitivePath};
-use crate::scene::parse_strict;
 use crate::tolerance::PerspectiveTol;
 use serde::de::{self, MapAccess, Visitor};
 use serde::{Deserialize, Deserializer};
@@ -17,21 +14,44 @@ use serde_json::Value;
 use std::collections::BTreeMap;
 use std::fmt;
 
+// ---- Names and bounds ----------------------------------------------------------------
+
+/// The most runs (points × scenes) a spec may expand to: beyond it a sweep takes days, and
+/// a typo in a grid should be refused rather than expanded.
+pub const MAX_RUNS: usize = 100_000;
+
+/// The render settings a point can set, besides `arch.<field>`.
+pub(super) const SETTINGS: [&str; 7] = [
+    "path",
+    "k",
+    "perspective_tol",
+    "tess",
+    "datapath",
+    "blend",
+    "threshold",
+];
+
+/// A block's or point's scene restriction: not a parameter.
+pub(super) const SCENES: &str = "scenes";
+
+/// The prefix of architecture parameters.
+pub(super) const ARCH: &str = "arch.";
+
 // ---- The file's shape ----------------------------------------------------------------
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct SpecFile {
-    name: String,
-    scenes: Vec<String>,
-    viewport: Option<[u32; 2]>,
+    pub(super) name: String,
+    pub(super) scenes: Vec<String>,
+    pub(super) viewport: Option<[u32; 2]>,
     #[serde(default)]
-    mode: ModeSpec,
-    reference: Option<bool>,
-    arch: Option<String>,
-    area_budget_mm2: Option<f64>,
-    grid: Option<Vec<Params>>,
-    points: Option<Vec<Params>>,
+    pub(super) mode: ModeSpec,
+    pub(super) reference: Option<bool>,
+    pub(super) arch: Option<String>,
+    pub(super) area_budget_mm2: Option<f64>,
+    pub(super) grid: Option<Vec<Params>>,
+    pub(super) points: Option<Vec<Params>>,
 }
 
 #[derive(Deserialize, Default, Clone, Copy, PartialEq, Eq)]
@@ -176,123 +196,41 @@ pub struct Spec {
     pub runs: Vec<Run>,
 }
 
-impl Spec {
-    /// Parses and expands a spec; `file` names it in messages.
-    pub fn parse(text: &str, file: &str) -> Result<Spec> {
-        let f: SpecFile = parse_strict(text, file)?;
-        let value: Value = serde_json::from_str(text).expect("the spec parsed once already");
+// ---- Shards --------------------------------------------------------------------------
 
-        check_name(file, &f.name)?;
-        if f.scenes.is_empty() {
-            return Err(empty_list(file, "scenes"));
-        }
-        let viewport = match f.viewport {
-            Some([w, h]) => {
-                for (i, side) in [w, h].into_iter().enumerate() {
-                    if !(1..=MAX_VIEWPORT_SIDE).contains(&side) {
-                        return Err(Error::invalid(
-                            file,
-                            format!("viewport[{i}]"),
-                            side,
-                            format!("must be in 1..={MAX_VIEWPORT_SIDE} pixels"),
-                        ));
-                    }
-                }
-                Some((w, h))
-            }
-            None => None,
-        };
-        let mode = match f.mode {
-            ModeSpec::Timed => Mode::Timed,
-            ModeSpec::Functional => Mode::Functional,
-        };
-        if mode == Mode::Functional && f.arch.is_some() {
+/// `--shard I/N`: the runs whose index is I modulo N.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Shard {
+    /// This shard's index I, in 0..N.
+    pub index: u32,
+    /// The number of shards N.
+    pub count: u32,
+}
+
+impl Shard {
+    /// Every run.
+    pub const ALL: Shard = Shard { index: 0, count: 1 };
+
+    /// Checks N >= 1 and I < N.
+    pub fn new(index: u32, count: u32) -> Result<Shard> {
+        if count == 0 || index >= count {
             return Err(Error::invalid(
-                file,
-                "arch",
-                f.arch.as_deref().unwrap_or_default(),
-                "only meaningful with mode timed",
+                COMMAND_LINE,
+                "--shard",
+                format!("{index}/{count}"),
+                "must be I/N with N >= 1 and I in 0..N",
             ));
         }
+        Ok(Shard { index, count })
+    }
 
-        if let Some(b) = f.area_budget_mm2 {
-            if mode == Mode::Functional {
-                return Err(Error::invalid(
-                    file,
-                    "area_budget_mm2",
-                    b,
-                    "only meaningful with mode timed (a functional run has no cost)",
-                ));
-            }
-            if !(b.is_finite() && b > 0.0) {
-                return Err(Error::invalid(
-                    file,
-                    "area_budget_mm2",
-                    b,
-                    "must be a finite area above 0 mm2",
-                ));
-            }
-        }
-
-        let mut ex = Expander {
-            file,
-            scenes: &f.scenes,
-            mode,
-            arch_shape: serde_json::to_value(ArchConfig::default())
-                .expect("the architecture serialises"),
-            points: Vec::new(),
-            by_params: BTreeMap::new(),
-        };
-        match (&f.grid, &f.points) {
-            (None, None) => {
-                return Err(Error::invalid(
-                    file,
-                    "grid",
-                    "absent",
-                    "a spec needs `grid` or `points` (or both)",
-                ))
-            }
-            (Some(g), _) if g.is_empty() => return Err(empty_list(file, "grid")),
-            (_, Some(p)) if p.is_empty() => return Err(empty_list(file, "points")),
-            _ => {}
-        }
-        for (b, block) in f.grid.iter().flatten().enumerate() {
-            ex.block(b, block)?;
-        }
-        for (p, point) in f.points.iter().flatten().enumerate() {
-            ex.point(p, point)?;
-        }
-
-        let mut runs = Vec::new();
-        for (p, point) in ex.points.iter().enumerate() {
-            for &s in &point.scenes {
-                runs.push(Run {
-                    index: runs.len(),
-                    point: p,
-                    scene: s,
-                    key: key(&f.scenes[s], &point.params),
-                });
-            }
-        }
-        if runs.len() > MAX_RUNS {
-            return Err(too_many(file, "grid", runs.len()));
-        }
-        Ok(Spec {
-            file: file.to_string(),
-            text: text.to_string(),
-            value,
-            name: f.name,
-            viewport,
-            mode,
-            reference: f.reference.unwrap_or(true),
-            arch: f.arch,
-            area_budget_mm2: f.area_budget_mm2,
-            points: ex.points,
-            runs,
-            scenes: f.scenes,
-        })
+    /// Whether run `index` belongs to this shard.
+    pub fn keeps(self, index: usize) -> bool {
+        index % self.count as usize == self.index as usize
     }
 }
+
+// ---- Helpers -------------------------------------------------------------------------
 
 /// The canonical key of a run.
 pub(super) fn key(scene: &str, params: &BTreeMap<String, Value>) -> String {

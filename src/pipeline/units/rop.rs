@@ -30,7 +30,8 @@ use crate::pipeline::runtime::{ceil_div, Ctx};
 use crate::pipeline::tiles::RopPixels;
 use crate::pipeline::unit::{DiscoidPass, Finished, LemboTable, Run, Unit};
 use crate::raster::Counts;
-use crate::rop::rop::{Batch, FragmentShader};
+use crate::rop::fragment_shader::FragmentShader;
+use crate::rop::rop::Batch;
 
 /// A ROP.
 pub struct Rop;

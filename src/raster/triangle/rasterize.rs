@@ -2,7 +2,7 @@
 //! rule, 2x2 quads, and each covered pixel's perspective-correct [`TriangleFragment`].
 
 use super::setup::{pixel_centre, ScreenTriangle, TriangleCull, SUBPIXEL};
-use crate::cost::counted::Op;
+use crate::datapath::Op;
 use crate::datapath::Real;
 use crate::raster::Counts;
 

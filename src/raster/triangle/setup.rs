@@ -4,7 +4,7 @@
 
 use super::rasterize::count_cull;
 use crate::camera::{ScreenPoint, View, Viewport};
-use crate::cost::counted::Op;
+use crate::datapath::Op;
 use crate::datapath::Real;
 use crate::raster::Counts;
 use glam::{DVec3, DVec4};

@@ -1,0 +1,130 @@
+//! `Spec::parse`: a spec file's own fields checked (name, scenes, viewport, mode, area
+//! budget) and its grid blocks and points expanded ([`super::grid`]) into points and runs.
+
+use super::grid::Expander;
+use super::spec::{check_name, empty_list, key, too_many, ModeSpec, Run, Spec, SpecFile, MAX_RUNS};
+use crate::camera::MAX_VIEWPORT_SIDE;
+use crate::config::ArchConfig;
+use crate::error::{Error, Result};
+use crate::job::Mode;
+use crate::json::parse_strict;
+use serde_json::Value;
+use std::collections::BTreeMap;
+
+impl Spec {
+    /// Parses and expands a spec; `file` names it in messages.
+    pub fn parse(text: &str, file: &str) -> Result<Spec> {
+        let f: SpecFile = parse_strict(text, file)?;
+        let value: Value = serde_json::from_str(text).expect("the spec parsed once already");
+
+        check_name(file, &f.name)?;
+        if f.scenes.is_empty() {
+            return Err(empty_list(file, "scenes"));
+        }
+        let viewport = match f.viewport {
+            Some([w, h]) => {
+                for (i, side) in [w, h].into_iter().enumerate() {
+                    if !(1..=MAX_VIEWPORT_SIDE).contains(&side) {
+                        return Err(Error::invalid(
+                            file,
+                            format!("viewport[{i}]"),
+                            side,
+                            format!("must be in 1..={MAX_VIEWPORT_SIDE} pixels"),
+                        ));
+                    }
+                }
+                Some((w, h))
+            }
+            None => None,
+        };
+        let mode = match f.mode {
+            ModeSpec::Timed => Mode::Timed,
+            ModeSpec::Functional => Mode::Functional,
+        };
+        if mode == Mode::Functional && f.arch.is_some() {
+            return Err(Error::invalid(
+                file,
+                "arch",
+                f.arch.as_deref().unwrap_or_default(),
+                "only meaningful with mode timed",
+            ));
+        }
+
+        if let Some(b) = f.area_budget_mm2 {
+            if mode == Mode::Functional {
+                return Err(Error::invalid(
+                    file,
+                    "area_budget_mm2",
+                    b,
+                    "only meaningful with mode timed (a functional run has no cost)",
+                ));
+            }
+            if !(b.is_finite() && b > 0.0) {
+                return Err(Error::invalid(
+                    file,
+                    "area_budget_mm2",
+                    b,
+                    "must be a finite area above 0 mm2",
+                ));
+            }
+        }
+
+        let mut ex = Expander {
+            file,
+            scenes: &f.scenes,
+            mode,
+            arch_shape: serde_json::to_value(ArchConfig::default())
+                .expect("the architecture serialises"),
+            points: Vec::new(),
+            by_params: BTreeMap::new(),
+        };
+        match (&f.grid, &f.points) {
+            (None, None) => {
+                return Err(Error::invalid(
+                    file,
+                    "grid",
+                    "absent",
+                    "a spec needs `grid` or `points` (or both)",
+                ))
+            }
+            (Some(g), _) if g.is_empty() => return Err(empty_list(file, "grid")),
+            (_, Some(p)) if p.is_empty() => return Err(empty_list(file, "points")),
+            _ => {}
+        }
+        for (b, block) in f.grid.iter().flatten().enumerate() {
+            ex.block(b, block)?;
+        }
+        for (p, point) in f.points.iter().flatten().enumerate() {
+            ex.point(p, point)?;
+        }
+
+        let mut runs = Vec::new();
+        for (p, point) in ex.points.iter().enumerate() {
+            for &s in &point.scenes {
+                runs.push(Run {
+                    index: runs.len(),
+                    point: p,
+                    scene: s,
+                    key: key(&f.scenes[s], &point.params),
+                });
+            }
+        }
+        if runs.len() > MAX_RUNS {
+            return Err(too_many(file, "grid", runs.len()));
+        }
+        Ok(Spec {
+            file: file.to_string(),
+            text: text.to_string(),
+            value,
+            name: f.name,
+            viewport,
+            mode,
+            reference: f.reference.unwrap_or(true),
+            arch: f.arch,
+            area_budget_mm2: f.area_budget_mm2,
+            points: ex.points,
+            runs,
+            scenes: f.scenes,
+        })
+    }
+}
