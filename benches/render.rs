@@ -21,7 +21,7 @@ use lembo_sim::raster::{
     self, fragment, interval, minmax, segmenter, setup, subsegmenter, triangle, Counts,
 };
 
-#[path = "../tests/support/scenes.rs"]
+#[path = "../tests/integration/support/scenes.rs"]
 mod scenes;
 
 fn scenes(c: &mut Criterion) {

@@ -14,8 +14,7 @@ use lembo_sim::raster::{render_functional, render_functional_triangles, Frame};
 use lembo_sim::scene::Scene;
 use std::path::Path;
 
-#[path = "support/scenes.rs"]
-mod scenes;
+use crate::support::scenes;
 use scenes::trace;
 
 /// A 12-sided closed cylinder (radius 1, y from -1 to 1) as OBJ with one normal per face

@@ -15,8 +15,7 @@ use lembo_sim::raster::{render_functional_triangles, Frame};
 use lembo_sim::scene::Scene;
 use std::path::Path;
 
-#[path = "support/scenes.rs"]
-mod scenes;
+use crate::support::scenes;
 use scenes::trace as scene;
 
 fn arch(name: &str) -> ArchConfig {

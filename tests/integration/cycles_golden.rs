@@ -15,8 +15,8 @@
 //! same in any execution order and host partition (checked here), with every merge's items
 //! taken in (arrival, port) order (checked on every run).
 //!
-//! Regenerate with `LEMBO_BLESS=1 cargo test --release --test cycles_golden` only after
-//! an intended change of the timing model.
+//! Regenerate with `LEMBO_BLESS=1 cargo test --release --test integration cycles_golden::`
+//! only after an intended change of the timing model.
 
 use lembo_sim::camera::View;
 use lembo_sim::config::ArchConfig;
@@ -33,10 +33,8 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-#[path = "support/golden.rs"]
-mod golden;
-#[path = "support/scenes.rs"]
-mod scenes;
+use crate::support::golden;
+use crate::support::scenes;
 
 const SIDE: u32 = 128;
 

@@ -13,8 +13,7 @@ use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
 use std::path::Path;
 
-#[path = "support/scenes.rs"]
-mod scenes;
+use crate::support::scenes;
 use scenes::trace as scene;
 
 fn timed(scene: &Scene, arch: &ArchConfig, options: &SimOptions) -> TimedFrame {

@@ -24,8 +24,7 @@ use lembo_sim::reference::metrics::{measure, Accuracy};
 use lembo_sim::reference::oracle::{self, ReferenceInput};
 use lembo_sim::scene::Scene;
 
-#[path = "support/scenes.rs"]
-mod scenes;
+use crate::support::scenes;
 use scenes::trace as scene;
 
 fn functional(s: &Scene, n: u32, datapath: Datapath) -> Frame {
