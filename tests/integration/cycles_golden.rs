@@ -34,16 +34,12 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use crate::support::golden;
-use crate::support::scenes;
+use crate::support::{arch, scenes};
 
 const SIDE: u32 = 128;
 
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).to_path_buf()
-}
-
-fn arch(name: &str) -> ArchConfig {
-    ArchConfig::load(&root().join("sim/arch").join(name)).unwrap()
 }
 
 /// One line per unit (name, busy, starved, blocked, items in, items out, most items in an
