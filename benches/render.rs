@@ -22,7 +22,7 @@ use lembo_sim::raster::{
 };
 use lembo_sim::tolerance::PerspectiveTol;
 
-#[path = "../tests/support/scenes.rs"]
+#[path = "../tests/integration/support/scenes.rs"]
 mod scenes;
 
 fn scenes(c: &mut Criterion) {

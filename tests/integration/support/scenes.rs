@@ -1,5 +1,5 @@
-//! Scenes shared by integration tests and the benchmarks (included with `#[path]`, so each
-//! crate compiles only the functions it uses).
+//! Scenes shared by the integration tests and the benchmarks (`benches/render.rs` includes
+//! this file with `#[path]` and uses part of it, hence the `allow`).
 #![allow(dead_code)]
 
 use lembo_sim::scene::Scene;

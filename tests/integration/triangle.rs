@@ -5,28 +5,16 @@
 
 use lembo_sim::camera::View;
 use lembo_sim::config::ArchConfig;
-use lembo_sim::datapath::{Datapath, Real};
+use lembo_sim::datapath::Datapath;
 use lembo_sim::job::{measure_frame, render_reference, PrimitivePath};
 use lembo_sim::lembo::tessellate::Tessellation;
 use lembo_sim::pipeline::SimOptions;
 use lembo_sim::pipeline::{run_timed, Source, TimedFrame, UnitKind};
-use lembo_sim::raster::triangle::{setup, TriangleSource};
 use lembo_sim::raster::{render_functional_triangles, Frame};
 use lembo_sim::scene::Scene;
-use std::path::Path;
 
-#[path = "support/scenes.rs"]
-mod scenes;
+use crate::support::{arch, fans, scenes};
 use scenes::trace as scene;
-
-fn arch(name: &str) -> ArchConfig {
-    ArchConfig::load(
-        &Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("sim/arch")
-            .join(name),
-    )
-    .unwrap()
-}
 
 fn timed(scene: &Scene, n: u32, arch: &ArchConfig, datapath: Datapath) -> TimedFrame {
     let view = View::new(&scene.camera, scene.viewport);
@@ -102,21 +90,6 @@ fn timed_triangle_path_is_bit_identical_to_its_functional_model() {
             }
         }
     }
-}
-
-/// Triangles in the fans of the scene's clipped triangles at tessellation `n`.
-fn fans<R: Real>(s: &Scene, n: u32, view: &View) -> u64 {
-    let t = Tessellation::new(s, n);
-    let (mut tris, mut pieces, mut fan) = (Vec::new(), Vec::new(), 0);
-    for c in 0..t.chunks() {
-        t.chunk(c, &mut tris);
-        for (k, tr) in tris.iter().enumerate() {
-            let id = t.id(c, k);
-            let o = setup::<R>(id, &tr.positions, &tr.normals, tr.color, view, &mut pieces);
-            fan += o.fan as u64;
-        }
-    }
-    fan
 }
 
 #[test]

@@ -12,8 +12,7 @@ use lembo_sim::raster::{render_functional_on, Frame};
 use lembo_sim::scene::Scene;
 use lembo_sim::tolerance::PerspectiveTol;
 
-#[path = "support/scenes.rs"]
-mod scenes;
+use crate::support::scenes;
 
 /// Every surface scene, at 203 x 157 (odd sizes: bands of unequal height, a last band of
 /// one row) or at its own viewport.

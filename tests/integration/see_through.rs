@@ -6,16 +6,14 @@
 use glam::DVec3;
 use lembo_sim::camera::View;
 use lembo_sim::datapath::Datapath;
-use lembo_sim::discoid::blend::BlendMode;
-use lembo_sim::job::{run_render, see_through_px, Mode, PrimitivePath, RenderJob};
+use lembo_sim::job::{run_render, see_through_px, RenderJob};
 use lembo_sim::lembo::construct::{lembo_from_triangle, TriangleMesh};
 use lembo_sim::lembo::tessellate::Tessellation;
 use lembo_sim::raster::{render_functional, render_functional_triangles, Frame};
 use lembo_sim::scene::Scene;
 use std::path::Path;
 
-#[path = "support/scenes.rs"]
-mod scenes;
+use crate::support::{render_job, scenes};
 use scenes::trace;
 
 /// A 12-sided closed cylinder (radius 1, y from -1 to 1) as OBJ with one normal per face
@@ -154,24 +152,8 @@ fn render_reports_see_through_in_both_reports() {
     let job = RenderJob {
         scene: Some(cylinder_scene(dir.path(), 256)),
         out: Some(dir.path().join("out")),
-        k: 0.5,
-        perspective_tol: Default::default(),
-        datapath: Datapath::F32,
         reference: true,
-        supersample: 1,
-        viewport: None,
-        mode: Mode::Functional,
-        arch: None,
-        trace_out: None,
-        tech: None,
-        path: PrimitivePath::Lembo,
-        tess: None,
-        blend: BlendMode::Rgba8,
-        threshold: None,
-        host_threads: 1,
-        threads: None,
-        given: Default::default(),
-        no_memory_check: false,
+        ..render_job(0.5, Datapath::F32)
     };
     let out = run_render(&job).unwrap();
     let accuracy = out.report.accuracy.as_ref().unwrap();

@@ -3,7 +3,7 @@
 //! before any run. Outputs are compared with host timing masked (`report.host` in the
 //! records, `wall_seconds` in the table); everything else must be equal.
 
-mod common;
+use crate::support::binary;
 use lembo_sim::sweep::Plan;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -574,7 +574,7 @@ fn the_readme_cluster_recipes_give_the_unsharded_sweep() {
 /// about 100 GiB); `--no-memory-check` is the way to insist.
 #[test]
 fn runs_at_once_larger_than_memory_are_refused_before_any_run() {
-    let available = common::memory_available();
+    let available = binary::memory_available();
     let Some(bytes) = available.filter(|b| *b < 90e9) else {
         eprintln!("skipped: this machine may have the memory for the runs");
         return;

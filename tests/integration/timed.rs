@@ -11,10 +11,8 @@ use lembo_sim::raster::render_functional;
 use lembo_sim::scene::Scene;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
-use std::path::Path;
 
-#[path = "support/scenes.rs"]
-mod scenes;
+use crate::support::{arch, scenes};
 use scenes::trace as scene;
 
 fn timed(scene: &Scene, arch: &ArchConfig, options: &SimOptions) -> TimedFrame {
@@ -29,15 +27,6 @@ fn timed(scene: &Scene, arch: &ArchConfig, options: &SimOptions) -> TimedFrame {
         options,
     )
     .expect("timed run")
-}
-
-fn arch(name: &str) -> ArchConfig {
-    ArchConfig::load(
-        &Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("sim/arch")
-            .join(name),
-    )
-    .unwrap()
 }
 
 /// Every link of `a` set to `depth`.

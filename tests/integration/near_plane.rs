@@ -9,7 +9,6 @@
 
 use glam::DVec3;
 use lembo_sim::camera::View;
-use lembo_sim::config::ArchConfig;
 use lembo_sim::datapath::{Datapath, Real};
 use lembo_sim::job::{measure_frame, render_reference, PrimitivePath};
 use lembo_sim::lembo::tessellate::{Tessellation, Triangle};
@@ -17,15 +16,14 @@ use lembo_sim::lembo::Lembo;
 use lembo_sim::pipeline::SimOptions;
 use lembo_sim::pipeline::{run_timed, Source, UnitKind};
 use lembo_sim::raster::triangle::{
-    render_triangles, setup, ScreenTriangle, TriangleFragment, TriangleSink, TriangleSource,
+    render_triangles, ScreenTriangle, TriangleFragment, TriangleSink, TriangleSource,
 };
 use lembo_sim::raster::{render_functional_triangles, Counts, Frame};
 use lembo_sim::reference::metrics::{measure, Accuracy};
 use lembo_sim::reference::oracle::{self, ReferenceInput};
 use lembo_sim::scene::Scene;
 
-#[path = "support/scenes.rs"]
-mod scenes;
+use crate::support::{arch, fans, scenes};
 use scenes::trace as scene;
 
 fn functional(s: &Scene, n: u32, datapath: Datapath) -> Frame {
@@ -258,37 +256,8 @@ fn a_camera_inside_a_closed_mesh_sees_it_all_around() {
     );
 }
 
-/// Triangles in the fans of the scene's clipped triangles at level `n`.
-fn fans<R: Real>(s: &Scene, n: u32, view: &View) -> u64 {
-    let t = Tessellation::new(s, n);
-    let (mut tris, mut pieces, mut fan) = (Vec::new(), Vec::new(), 0);
-    for c in 0..t.chunks() {
-        t.chunk(c, &mut tris);
-        for (k, tr) in tris.iter().enumerate() {
-            let o = setup::<R>(
-                t.id(c, k),
-                &tr.positions,
-                &tr.normals,
-                tr.color,
-                view,
-                &mut pieces,
-            );
-            fan += o.fan as u64;
-        }
-    }
-    fan
-}
-
 #[test]
 fn timed_near_clipping_draws_the_functional_image_and_charges_its_pieces() {
-    let arch = |name: &str| {
-        ArchConfig::load(
-            &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-                .join("sim/arch")
-                .join(name),
-        )
-        .unwrap()
-    };
     for name in [
         "walkthrough_ground.json",
         "near_camera.json",

@@ -2,49 +2,21 @@
 //! perspective, `off` keeps the paper's Setup, and split surfaces stay watertight.
 
 use lembo_sim::camera::View;
-use lembo_sim::datapath::{Datapath, Real};
-use lembo_sim::discoid::blend::BlendMode;
-use lembo_sim::job::{render_reference, run_path, Mode, Model, PrimitivePath, RenderJob};
-use lembo_sim::raster::fragment::FragmentSink;
-use lembo_sim::raster::setup::ScreenLembo;
-use lembo_sim::raster::subsegmenter::Subsegment;
+use lembo_sim::datapath::Datapath;
+use lembo_sim::job::{render_reference, run_path, Model, RenderJob};
 use lembo_sim::raster::{render_lembos, Counts, DEFAULT_SEGMENT_CAP};
 use lembo_sim::reference::metrics::Accuracy;
 use lembo_sim::scene::Scene;
 use lembo_sim::tolerance::{PerspectiveTol, Tolerance};
-use std::path::Path;
 
-fn scene(file: &str) -> Scene {
-    Scene::load(
-        &Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("traces")
-            .join(file),
-    )
-    .unwrap()
-}
+use crate::support::scenes::trace as scene;
+use crate::support::{render_job, Hits};
 
 fn job(k: f64, perspective_tol: PerspectiveTol, datapath: Datapath) -> RenderJob {
     RenderJob {
-        scene: None,
-        out: None,
-        k,
         perspective_tol,
-        datapath,
         reference: true,
-        supersample: 1,
-        viewport: None,
-        mode: Mode::Functional,
-        arch: None,
-        trace_out: None,
-        tech: None,
-        path: PrimitivePath::Lembo,
-        tess: None,
-        blend: BlendMode::Rgba8,
-        threshold: None,
-        host_threads: 1,
-        threads: None,
-        given: Default::default(),
-        no_memory_check: false,
+        ..render_job(k, datapath)
     }
 }
 
@@ -77,7 +49,7 @@ fn misplaced(a: &Accuracy) -> u64 {
 /// hundreds of pixels whatever k is (measured 392, 302, 293).
 #[test]
 fn k_bounds_the_error_under_perspective() {
-    let s = scene("sphere24.json");
+    let s = scene("sphere24.json", None);
     let ks = [0.5, 0.05, 0.005];
     let runs: Vec<_> = [PerspectiveTol::FollowK, PerspectiveTol::Off]
         .into_iter()
@@ -120,7 +92,7 @@ fn k_bounds_the_error_under_perspective() {
 /// splits nothing, so the image is the paper's Setup's bit for bit.
 #[test]
 fn orthographic_views_are_not_split() {
-    let mut s = scene("sphere24.json");
+    let mut s = scene("sphere24.json", None);
     s.camera.projection = lembo_sim::camera::Projection::Orthographic {
         height: 3.0,
         near: 0.1,
@@ -141,27 +113,6 @@ fn orthographic_views_are_not_split() {
     assert_eq!(on.framebuffer.depth, off.framebuffer.depth);
 }
 
-/// Counts every fragment per pixel, before any depth test.
-struct Hits {
-    width: u32,
-    count: Vec<u32>,
-}
-
-impl<R: Real> FragmentSink<R> for Hits {
-    fn fragment(
-        &mut self,
-        _: &ScreenLembo<R>,
-        _: &Subsegment<R>,
-        i: u32,
-        j: u32,
-        _: R,
-        _: R,
-        _: R,
-    ) {
-        self.count[(j * self.width + i) as usize] += 1;
-    }
-}
-
 /// A closed surface drawn without gaps or overlaps covers every point of the plane an even
 /// number of times (front and back sheets; more where it folds over itself). A crack or a
 /// double hit between two pieces or two lembos makes a pixel's count odd. So on the closed
@@ -175,7 +126,7 @@ fn split_closed_surfaces_stay_watertight() {
         ("sphere24.json", Some([0.3, 0.4, 1.25])),
         ("extremes/close_up.json", None),
     ] {
-        let mut s = scene(file);
+        let mut s = scene(file, None);
         if let Some(eye) = eye {
             s.camera.eye = eye;
         }
@@ -188,10 +139,7 @@ fn split_closed_surfaces_stay_watertight() {
         ] {
             let mut counts = Counts::default();
             let (w, h) = (s.viewport.width, s.viewport.height);
-            let mut f32_hits = Hits {
-                width: w,
-                count: vec![0; (w * h) as usize],
-            };
+            let mut f32_hits = Hits::new(w, h);
             render_lembos::<f32, _>(
                 &s,
                 &view,
@@ -201,10 +149,7 @@ fn split_closed_surfaces_stay_watertight() {
                 &mut counts,
             )
             .unwrap();
-            let mut f64_hits = Hits {
-                width: w,
-                count: vec![0; (w * h) as usize],
-            };
+            let mut f64_hits = Hits::new(w, h);
             render_lembos::<f64, _>(
                 &s,
                 &view,
@@ -237,7 +182,7 @@ fn near_plane_scenes_match_their_reference_on_the_lembo_path() {
         ("near_camera.json", false),
         ("inside_mesh.json", true),
     ] {
-        let s = scene(file);
+        let s = scene(file, None);
         let runs = [
             (k, PerspectiveTol::FollowK, Datapath::F32),
             (k, PerspectiveTol::FollowK, Datapath::F64),
@@ -268,7 +213,7 @@ fn crease_scenes_have_no_see_through_and_no_double_hits() {
         "bunny_creased.json",
     ] {
         let (a, _) = &measure(
-            &scene(file),
+            &scene(file, None),
             &[(0.5, PerspectiveTol::FollowK, Datapath::F32)],
         )[0];
         assert_eq!(a.see_through_px, Some(0), "{file}: {a:?}");

@@ -38,8 +38,8 @@
 //! cores. `LEMBO_FUZZ_CASES` multiplies them, so a longer local run is one command:
 //!
 //! ```text
-//! LEMBO_FUZZ_CASES=20 cargo test --release --test fuzz   # 20 x the default cases
-//! LEMBO_FUZZ_CASES=0.1 cargo test --test fuzz            # a quick smoke run
+//! LEMBO_FUZZ_CASES=20 cargo test --release --test integration fuzz::   # 20 x the default cases
+//! LEMBO_FUZZ_CASES=0.1 cargo test --test integration fuzz::            # a quick smoke run
 //! ```
 //!
 //! A debug build (`cargo test` without `--release`) runs a tenth of the cases and allows the

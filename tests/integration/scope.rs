@@ -13,8 +13,7 @@ use lembo_sim::pipeline::{run_timed, Source, TimedFrame, UnitKind};
 use lembo_sim::scene::Scene;
 use std::path::Path;
 
-#[path = "support/scenes.rs"]
-mod scenes;
+use crate::support::scenes;
 
 /// A timed frame on the default architecture: the lembo path, or the triangle path at
 /// tessellation `tess`.

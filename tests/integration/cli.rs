@@ -1,8 +1,7 @@
 //! The `lembo-sim` binary as a user meets it: the default run, the golden default scene,
 //! and bad input (exit status 2, an error naming the field, no file written).
 
-mod common;
-use common::{bin, files_in, run};
+use crate::support::binary::{bin, files_in, memory_available, run};
 use std::path::{Path, PathBuf};
 
 fn manifest() -> PathBuf {
@@ -136,7 +135,8 @@ fn reference_run_writes_the_accuracy_names_and_images() {
 /// The default scene's image, counts and cycle report (timed, baseline architecture),
 /// compared exactly with tests/golden/default/ (Setup's default perspective tolerance, k/2)
 /// and tests/golden/default_paper/ (`--perspective-tol off`: the paper's Setup).
-/// Regenerate with `LEMBO_BLESS=1 cargo test --test cli` after an intended change.
+/// Regenerate with `LEMBO_BLESS=1 cargo test --test integration cli::` after an intended
+/// change.
 #[test]
 fn golden_default_scene() {
     check_golden(&["render", "--out", "o"], "default");
@@ -916,7 +916,7 @@ fn endless_input_files_are_refused_not_read_forever() {
 /// 50 GiB); below that, the estimate is printed before a large run.
 #[test]
 fn a_run_larger_than_memory_is_refused_before_it_starts() {
-    let available = common::memory_available();
+    let available = memory_available();
     match available {
         Some(bytes) if bytes < 40e9 => {
             let bunny = manifest().join("traces/bunny.json");

@@ -1,4 +1,4 @@
-//! Golden files of named cases (included with `#[path]`): a JSON map from case to its text.
+//! Golden files of named cases: a JSON map from case to its text.
 
 use std::collections::BTreeMap;
 use std::path::Path;

@@ -3,8 +3,7 @@
 //! loads without a console message (the pages run no script, so any message is an error),
 //! every file it links to exists beside it, and its screenshot is not blank.
 
-mod common;
-use common::run;
+use crate::support::binary::{files_in, run};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -273,7 +272,7 @@ fn render_compare_and_sweep_pages_load_whole_in_a_browser() {
     let spec = manifest().join("sim/sweeps/smoke.json");
     ok(&["sweep", spec.to_str().unwrap(), "--out", "s"]);
     let dir = tmp.path().join("s");
-    let plots: Vec<String> = common::files_in(&dir)
+    let plots: Vec<String> = files_in(&dir)
         .into_iter()
         .filter(|f| f.ends_with(".svg"))
         .collect();

@@ -16,8 +16,7 @@
 //! triangle, or a boundary edge) are counted apart as *outline* pixels: there the curved
 //! outline legitimately differs from the flat one by a fraction of a pixel.
 
-#[path = "support/scenes.rs"]
-mod scenes;
+use crate::support::scenes;
 
 use glam::DVec3;
 use lembo_sim::camera::View;

@@ -17,6 +17,8 @@ use std::path::{Path, PathBuf};
 use std::sync::mpsc;
 use std::time::Duration;
 
+use crate::support::render_job;
+
 /// The longest one scene's runs may take, all of them together.
 const TIME_LIMIT: Duration = Duration::from_secs(20);
 
@@ -35,26 +37,10 @@ fn expectations() -> serde_json::Map<String, Value> {
 
 fn job(path: PrimitivePath, datapath: Datapath, k: f64, mode: Mode) -> RenderJob {
     RenderJob {
-        scene: None,
-        out: None,
-        k,
-        perspective_tol: Default::default(),
-        datapath,
-        reference: false,
-        supersample: 1,
-        viewport: None,
         mode,
-        arch: None,
-        trace_out: None,
-        tech: None,
         path,
         tess: (path == PrimitivePath::Triangle).then_some(TESS),
-        blend: BlendMode::Rgba8,
-        threshold: None,
-        host_threads: 1,
-        threads: None,
-        given: Default::default(),
-        no_memory_check: false,
+        ..render_job(k, datapath)
     }
 }
 

@@ -15,11 +15,9 @@ use lembo_sim::datapath::{Datapath, Real};
 use lembo_sim::job::{measure_frame, PrimitivePath};
 use lembo_sim::lembo::construct::lembo_from_triangle;
 use lembo_sim::lembo::Lembo;
-use lembo_sim::raster::fragment::FragmentSink;
 use lembo_sim::raster::interval::{edge_crossings, CurvePoint};
 use lembo_sim::raster::probe::shared_edges;
 use lembo_sim::raster::setup::{setup, ScreenLembo};
-use lembo_sim::raster::subsegmenter::Subsegment;
 use lembo_sim::raster::{
     minmax, render_functional, render_lembos, Counts, Frame, DEFAULT_SEGMENT_CAP,
 };
@@ -30,6 +28,9 @@ use lembo_sim::scene::Scene;
 use proptest::prelude::*;
 use proptest::test_runner::{RngAlgorithm, TestRng, TestRunner};
 use std::path::Path;
+
+use crate::support::scenes::trace;
+use crate::support::Hits;
 
 /// Side of the test viewport [pixels].
 const SIDE: usize = 128;
@@ -63,15 +64,6 @@ fn ortho_scene(lembos: Vec<Lembo>) -> Scene {
 /// World point of screen position (x, y) [pixels] at depth coordinate z in [`ortho_scene`].
 fn world(x: f64, y: f64, z: f64) -> DVec3 {
     DVec3::new(x - 64.0, 64.0 - y, z)
-}
-
-fn trace(name: &str) -> Scene {
-    Scene::load(
-        &Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("traces")
-            .join(name),
-    )
-    .unwrap()
 }
 
 fn view_of(scene: &Scene) -> View {
@@ -269,26 +261,6 @@ fn random_lembos_keep_the_paper_guarantees() {
     }
 }
 
-/// Counts fragments per pixel over all lembos of a render.
-struct Multiplicity {
-    hits: Vec<u32>,
-}
-
-impl<R: Real> FragmentSink<R> for Multiplicity {
-    fn fragment(
-        &mut self,
-        _: &ScreenLembo<R>,
-        _: &Subsegment<R>,
-        i: u32,
-        j: u32,
-        _: R,
-        _: R,
-        _: R,
-    ) {
-        self.hits[j as usize * SIDE + i as usize] += 1;
-    }
-}
-
 /// Two lembos built from triangles (p0, p1, p2) and (p2, p1, p3), which share the edge
 /// p1 p2 traversed in opposite directions, with vertex normals `n`.
 fn pair(p: [DVec3; 4], n: [DVec3; 4]) -> Vec<Lembo> {
@@ -400,13 +372,11 @@ fn check_pair_render<R: Real>(
     if exact_once {
         // No fold on screen: every pixel is hit by at most one fragment of the two lembos,
         // and each row's covered pixels are one run.
-        let mut sink = Multiplicity {
-            hits: vec![0; SIDE * SIDE],
-        };
+        let mut sink = Hits::new(SIDE as u32, SIDE as u32);
         let mut counts = Counts::default();
         render_lembos::<R, _>(scene, &view, k, DEFAULT_SEGMENT_CAP, &mut sink, &mut counts)
             .unwrap();
-        for (j, row) in sink.hits.chunks(SIDE).enumerate() {
+        for (j, row) in sink.count.chunks(SIDE).enumerate() {
             prop_assert!(
                 row.iter().all(|&n| n <= 1),
                 "{} row {}: {:?}",
@@ -540,8 +510,8 @@ fn closed_meshes_have_no_cracks_and_no_double_hits() {
     );
     let scenes = [
         Scene::default_scene(),
-        trace("sphere24.json"),
-        trace("bunny.json"),
+        trace("sphere24.json", None),
+        trace("bunny.json", None),
         Scene::from_json(&ortho, "sphere24 orthographic", Path::new(".")).unwrap(),
     ];
     for scene in &scenes {

@@ -7,8 +7,7 @@
 //! time limits, and a run interrupted earlier or later than expected must leave the same.
 #![cfg(target_os = "linux")]
 
-mod common;
-use common::{bin, files_in, run};
+use crate::support::binary::{bin, files_in, run};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::time::{Duration, Instant};

@@ -15,8 +15,8 @@
 //! same in any execution order and host partition (checked here), with every merge's items
 //! taken in (arrival, port) order (checked on every run).
 //!
-//! Regenerate with `LEMBO_BLESS=1 cargo test --release --test cycles_golden` only after
-//! an intended change of the timing model.
+//! Regenerate with `LEMBO_BLESS=1 cargo test --release --test integration cycles_golden::`
+//! only after an intended change of the timing model.
 
 use lembo_sim::camera::View;
 use lembo_sim::config::ArchConfig;
@@ -33,19 +33,13 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-#[path = "support/golden.rs"]
-mod golden;
-#[path = "support/scenes.rs"]
-mod scenes;
+use crate::support::golden;
+use crate::support::{arch, scenes};
 
 const SIDE: u32 = 128;
 
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).to_path_buf()
-}
-
-fn arch(name: &str) -> ArchConfig {
-    ArchConfig::load(&root().join("sim/arch").join(name)).unwrap()
 }
 
 /// One line per unit (name, busy, starved, blocked, items in, items out, most items in an

@@ -2,13 +2,8 @@
 //! gives and every shipped scene's are kept as a golden, and a timed report prices every
 //! unit it instantiates.
 
-mod common;
-#[path = "support/golden.rs"]
-mod golden;
-#[path = "support/scenes.rs"]
-mod scenes;
-
-use common::*;
+use crate::support::binary::{files_in, run};
+use crate::support::{golden, scenes};
 use lembo_sim::camera::View;
 use lembo_sim::cost::{lembo_ops, triangle_ops};
 use lembo_sim::datapath::Datapath;
@@ -146,8 +141,9 @@ fn digest(ops: &lembo_sim::cost::counted::OpTable) -> String {
 /// shipped surface scene at 128 x 128, the lembo path in both datapaths and the triangle
 /// path (n = 2), kept as a golden: a change that moves an operation into or out of the
 /// counted datapath, or to another kind, changes the energy and area of every report, and
-/// must be explained. Regenerate with `LEMBO_BLESS=1 cargo test --release --test cost` only
-/// after an intended change of what the hardware computes.
+/// must be explained. Regenerate with
+/// `LEMBO_BLESS=1 cargo test --release --test integration cost::` only after an intended
+/// change of what the hardware computes.
 #[test]
 fn shipped_scenes_keep_their_operation_counts() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));

@@ -1,6 +1,4 @@
 //! Helpers shared by the tests that run the `lembo-sim` binary as a user would.
-// Each test crate includes this module and uses part of it.
-#![allow(dead_code)]
 
 use std::path::Path;
 use std::process::{Command, Output};

@@ -1,0 +1,105 @@
+//! What several test modules share: running the binary, golden files, the shipped scenes and
+//! architectures, a render job to vary, a fragment count per pixel and the triangle path's
+//! fan count.
+
+pub mod binary;
+pub mod golden;
+pub mod scenes;
+
+use lembo_sim::camera::View;
+use lembo_sim::config::ArchConfig;
+use lembo_sim::datapath::{Datapath, Real};
+use lembo_sim::discoid::blend::BlendMode;
+use lembo_sim::job::{Mode, PrimitivePath, RenderJob};
+use lembo_sim::lembo::tessellate::Tessellation;
+use lembo_sim::raster::fragment::FragmentSink;
+use lembo_sim::raster::setup::ScreenLembo;
+use lembo_sim::raster::subsegmenter::Subsegment;
+use lembo_sim::raster::triangle::{setup, TriangleSource};
+use lembo_sim::scene::Scene;
+use std::path::Path;
+
+/// The shipped architecture `sim/arch/<name>`.
+pub fn arch(name: &str) -> ArchConfig {
+    ArchConfig::load(
+        &Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("sim/arch")
+            .join(name),
+    )
+    .unwrap()
+}
+
+/// A functional render of the embedded default scene at `k` on `datapath`: the lembo path,
+/// no reference, one host thread, every other setting at its default. A test sets what it
+/// varies over this with `..render_job(k, datapath)`.
+pub fn render_job(k: f64, datapath: Datapath) -> RenderJob {
+    RenderJob {
+        scene: None,
+        out: None,
+        k,
+        perspective_tol: Default::default(),
+        datapath,
+        reference: false,
+        supersample: 1,
+        viewport: None,
+        mode: Mode::Functional,
+        arch: None,
+        trace_out: None,
+        tech: None,
+        path: PrimitivePath::Lembo,
+        tess: None,
+        blend: BlendMode::Rgba8,
+        threshold: None,
+        host_threads: 1,
+        threads: None,
+        given: Default::default(),
+        no_memory_check: false,
+    }
+}
+
+/// Counts every fragment per pixel of a frame, before any depth test.
+pub struct Hits {
+    width: u32,
+    /// Fragments per pixel, row by row.
+    pub count: Vec<u32>,
+}
+
+impl Hits {
+    /// No fragment yet on a `width` x `height` frame.
+    pub fn new(width: u32, height: u32) -> Self {
+        Hits {
+            width,
+            count: vec![0; (width * height) as usize],
+        }
+    }
+}
+
+impl<R: Real> FragmentSink<R> for Hits {
+    fn fragment(
+        &mut self,
+        _: &ScreenLembo<R>,
+        _: &Subsegment<R>,
+        i: u32,
+        j: u32,
+        _: R,
+        _: R,
+        _: R,
+    ) {
+        self.count[(j * self.width + i) as usize] += 1;
+    }
+}
+
+/// Triangles in the fans of the scene's clipped triangles at tessellation level `n`.
+pub fn fans<R: Real>(s: &Scene, n: u32, view: &View) -> u64 {
+    let t = Tessellation::new(s, n);
+    let (mut tris, mut pieces, mut fan) = (Vec::new(), Vec::new(), 0);
+    for c in 0..t.chunks() {
+        t.chunk(c, &mut tris);
+        for (k, tr) in tris.iter().enumerate() {
+            let id = t.id(c, k);
+            let o = setup::<R>(id, &tr.positions, &tr.normals, tr.color, view, &mut pieces);
+            fan += o.fan as u64;
+        }
+    }
+    fan
+}
