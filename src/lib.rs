@@ -42,7 +42,7 @@
 //! - [`tolerance`]: the lembo path's tolerances, k and Setup's perspective tolerance, each
 //!   with its default, range and check.
 //! - [`datapath`]: the `f32`/`f64` datapath; [`datapath_study`]: f32 against f64 over
-//!   seeded random lembos, for `examples/datapath_study.rs` and `tests/datapath.rs`.
+//!   seeded random lembos, for `examples/datapath_study.rs` and `tests/integration/datapath.rs`.
 //!
 //! DESIGN.md (beside the crate) holds the design the code relies on: what a cycle means,
 //! the report contract, the bad-input policy and the accuracy metrics' definitions;

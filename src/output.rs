@@ -36,7 +36,7 @@
 //!
 //! Test hook: with the environment variable `LEMBO_HOLD_BEFORE_RENAME_SECS=S` every write
 //! waits S seconds between steps 2 and 3, so a test can interrupt a run whose temporaries
-//! are all written (`tests/atomic.rs`).
+//! are all written (`tests/integration/atomic.rs`).
 
 use crate::error::{parent_dir, Error, Result, COMMAND_LINE};
 use std::fs::File;

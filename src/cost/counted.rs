@@ -4,7 +4,7 @@
 //! ([`charge_to`]). Every stage of the extreme method, the ROP's shading and the triangle
 //! path's interpolation are generic over [`Real`], so instantiating them with
 //! `Counted<f32>` counts what they do without a formula anybody has to keep in step with
-//! the code; the pixels are the same bits (`tests/cost.rs`).
+//! the code; the pixels are the same bits (`tests/integration/cost.rs`).
 //!
 //! What is counted as what (DESIGN.md §12): `+ -` an add; `*` a multiply; `/`, `%` and
 //! `recip` a divide; `sqrt` a square root; `< <= > >= == !=`, `min`, `max` a compare;

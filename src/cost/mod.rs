@@ -57,7 +57,7 @@ impl<R: Real, S: TriangleSink<R>> TriangleSink<R> for ChargedToRop<'_, S> {
 
 /// The lembo path's frame drawn by the functional model in a counting datapath, with the
 /// operations of each kind: the same pixels as [`crate::raster::render_functional`] (the
-/// counting words do the same IEEE operations; `tests/cost.rs`).
+/// counting words do the same IEEE operations; `tests/integration/cost.rs`).
 pub fn lembo_ops(
     scene: &Scene,
     view: &View,
