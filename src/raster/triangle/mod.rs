@@ -59,7 +59,7 @@ pub mod probe;
 pub mod rasterize;
 pub mod setup;
 
-use super::Counts;
+use super::counts::Counts;
 use crate::camera::View;
 use crate::datapath::Real;
 use crate::graph::UnitKind;
