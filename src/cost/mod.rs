@@ -1,6 +1,10 @@
 //! What the simulated unit costs in silicon: operation counts taken by the code that does
 //! the arithmetic ([`counted`]), a technology file of cited energies and areas ([`tech`]),
 //! and each unit's area and energy from both ([`model`]). DESIGN.md §12 defines the model.
+//!
+//! The counting runs ([`lembo_ops`], [`triangle_ops`]) are the functional driver's
+//! single-threaded frame ([`draw_in_order`]) in a counting datapath, with a sink that charges
+//! the ROP's operations to it (`ChargedToRop`); each stage charges its own kind.
 
 pub mod counted;
 pub mod model;
@@ -10,13 +14,16 @@ use crate::camera::View;
 use crate::datapath::{Datapath, Real};
 use crate::error::Result;
 use crate::graph::UnitKind;
+use crate::raster::driver::draw_in_order;
 use crate::raster::fragment::FragmentSink;
-use crate::raster::setup::ScreenLembo;
+use crate::raster::frame::{frame_with, Frame};
+use crate::raster::lembo_path::LemboPath;
+use crate::raster::screen::ScreenLembo;
 use crate::raster::subsegmenter::Subsegment;
 use crate::raster::triangle::{
-    self, ScreenTriangle, TriangleFragment, TriangleSink, TriangleSource,
+    ScreenTriangle, TriangleFragment, TrianglePath, TriangleSink, TriangleSource,
 };
-use crate::raster::{frame_with, render_lembos, Frame, DEFAULT_SEGMENT_CAP};
+use crate::raster::DEFAULT_SEGMENT_CAP;
 use crate::scene::Scene;
 use crate::tolerance::Tolerance;
 use counted::{counting, Counted, OpTable};
@@ -78,7 +85,9 @@ fn lembo_ops_in<R: Real>(scene: &Scene, view: &View, tol: Tolerance) -> Result<(
                 inner: rop,
                 caller: UnitKind::FragmentRasterizer,
             };
-            render_lembos(scene, view, tol, DEFAULT_SEGMENT_CAP, &mut sink, counts)?;
+            let cap = DEFAULT_SEGMENT_CAP;
+            let path = LemboPath::new(scene, view, tol.k, tol.perspective, cap);
+            draw_in_order(&path, &mut sink, counts)?;
             Ok(None)
         })
     });
@@ -110,7 +119,7 @@ fn triangle_ops_in<R: Real>(
                 inner: rop,
                 caller: UnitKind::TriangleRasterizer,
             };
-            triangle::render_triangles(source, view, &mut sink, counts);
+            draw_in_order(&TrianglePath::new(source, view), &mut sink, counts)?;
             Ok(None)
         })
     });

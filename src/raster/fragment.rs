@@ -8,9 +8,9 @@
 //! when x0 <= i + 0.5 < x1, so consecutive subsegments neither drop nor double a pixel.
 //! Pixels outside the viewport are clipped here.
 
-use super::setup::ScreenLembo;
+use super::counts::Counts;
+use super::screen::ScreenLembo;
 use super::subsegmenter::Subsegment;
-use super::Counts;
 use crate::datapath::Real;
 
 /// Receives fragments: the ROP in a render, a probe in tests and accuracy runs.

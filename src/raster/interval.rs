@@ -25,9 +25,9 @@
 //!
 //! Cost model hook: one interval per message; the timed pipeline charges per root pair.
 
-use super::setup::{edge_uv, Partition, ScreenLembo};
+use super::counts::Counts;
+use super::screen::{edge_uv, Partition, ScreenLembo};
 use super::v2::{dot, rot_cw, V2};
-use super::Counts;
 use crate::datapath::Real;
 
 /// A point of the curve with its screen x \[pixels\] (from the edge curve on domain edges,

@@ -11,7 +11,7 @@
 //! grazing an extremum is still handed to the interval manager, whose edge tests decide it
 //! exactly (and identically for neighbouring lembos).
 
-use super::setup::{Partition, ScreenLembo};
+use super::screen::{Partition, ScreenLembo};
 use crate::datapath::Real;
 
 /// Widening of the y range \[pixels\] before rounding to scanlines.

@@ -7,14 +7,23 @@
 //!
 //! Every stage is generic over the datapath [`Real`] (`f32` or `f64`) and works on one item
 //! at a time into reused buffers, so the timed pipeline can call the same functions per
-//! message. [`render_lembos`] runs the stages in order for a whole scene.
+//! message. One driver ([`driver`]) runs a path's stages in order for a whole scene: the
+//! lembo path's ([`lembo_path`]) or the triangle path's ([`triangle::TrianglePath`]), on
+//! one thread ([`render_lembos`], [`render_functional`], the cost model's counting runs) or
+//! in bands on several ([`parallel`]). The types every stage shares are in leaf files that
+//! import no driver: [`counts`], [`screen`] (the set-up lembo) and [`frame`].
 
+pub mod counts;
+pub mod driver;
 pub mod fragment;
+pub mod frame;
 pub mod interval;
+pub mod lembo_path;
 pub mod minmax;
 pub mod parallel;
 pub mod probe;
 pub mod refine;
+pub mod screen;
 pub mod segmenter;
 pub mod setup;
 pub mod subsegmenter;
@@ -23,168 +32,20 @@ pub mod v2;
 
 use crate::camera::View;
 use crate::datapath::{Datapath, Real};
-use crate::error::{Error, Result};
-use crate::graph::UnitKind;
-use crate::lembo::Lembo;
-use crate::rop::{FrameBuffer, Rop};
+use crate::error::Result;
 use crate::scene::Scene;
 use crate::tolerance::Tolerance;
+pub use counts::Counts;
+use driver::draw_in_order;
 use fragment::FragmentSink;
-use serde::Serialize;
-use triangle::TriangleSource;
+use frame::frame_with;
+pub use frame::Frame;
+use lembo_path::LemboPath;
+use triangle::{TrianglePath, TriangleSource};
 
 /// Default cap on segments per interval (DESIGN.md §8): far above what a visible patch needs
 /// at k >= 1e-4 px on a 16384-pixel viewport, low enough to refuse runaway walks quickly.
 pub const DEFAULT_SEGMENT_CAP: usize = 1 << 16;
-
-/// What the functional model produced, stage by stage.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
-pub struct Counts {
-    /// Lembos in the scene.
-    pub lembos: u64,
-    /// Lembos dropped at the eye: with a perspective tolerance, those wholly nearer than the
-    /// near plane; with `--perspective-tol off` (the paper's Setup, which does not clip),
-    /// those with a point of their hull behind the eye.
-    pub lembos_culled_behind_eye: u64,
-    /// Lembos whose hull lies outside the viewport or depth range (one cull test each).
-    pub lembos_culled_outside: u64,
-    /// Lembos whose screen map has zero area everywhere (a point, a line or a curve on
-    /// screen): they cover no pixel centre and are dropped after the cull test.
-    pub lembos_degenerate: u64,
-    /// Lembos whose hull reaches beyond the split guard band, split by Setup into pieces
-    /// (`setup::setup_pieces`).
-    pub lembos_split: u64,
-    /// Pieces of split lembos that go down the pipeline.
-    pub lembo_pieces: u64,
-    /// Sub-patches of split lembos dropped because their hull misses the viewport.
-    pub lembo_pieces_culled: u64,
-    /// Lembos split because their rebuilt screen quadratics were farther than the
-    /// perspective tolerance from the true projection (`refine.rs`).
-    pub lembos_split_perspective: u64,
-    /// Lembos split because part of them lies too near the eye to be projected (they cross
-    /// the near plane; `refine.rs`).
-    pub lembos_split_near: u64,
-    /// Sub-patches of split lembos dropped because they lie wholly nearer than the near plane.
-    pub lembo_pieces_culled_near: u64,
-    /// Sub-patches kept at the split depth or piece cap while still over the perspective
-    /// tolerance or the guard band (or dropped there, still unprojectable).
-    pub lembo_pieces_capped: u64,
-    /// (lembo, scanline) pairs handed to the interval manager.
-    pub scanlines: u64,
-    /// Roots of Y = y_j found on domain edges.
-    pub edge_roots: u64,
-    /// Roots on the partition line (ellipse tips around an interior extremum).
-    pub virtual_roots: u64,
-    /// Intervals (curve pieces) produced.
-    pub intervals: u64,
-    /// Roots that could not be paired (0 unless rounding broke the walk order).
-    pub unpaired_roots: u64,
-    /// Intervals split at a saddle crossing.
-    pub saddle_splits: u64,
-    /// Segments (chords of midpoint error k) produced.
-    pub segments: u64,
-    /// Segments clamped to their interval end (the last of each walk, flat curves).
-    pub segments_clamped: u64,
-    /// Extra splits of a walk's clamped last chord whose midpoint error exceeded k.
-    pub segments_refined: u64,
-    /// Subsegments (pieces along which x is linear) produced.
-    pub subsegments: u64,
-    /// Segments split at a fold of x(t).
-    pub folds: u64,
-    /// Triangles of the triangle path (tessellated lembos).
-    pub triangles: u64,
-    /// Triangles dropped because they lie wholly on the eye's side of the near plane
-    /// (nearer than it, or behind the eye).
-    pub triangles_culled_behind_eye: u64,
-    /// Triangles with a vertex beyond the 16.8 guard band (±32767 px), clipped to it and
-    /// fanned into pieces that are set up and rasterized as triangles with their parent's id.
-    pub triangles_clipped: u64,
-    /// Triangles crossing the near or the far plane, clipped to the depth range in clip
-    /// space (then to the guard band if they still reach beyond it) and fanned into pieces
-    /// as above.
-    pub triangles_clipped_depth: u64,
-    /// Triangles beside the viewport or wholly beyond the far plane (one cull test each).
-    pub triangles_culled_outside: u64,
-    /// Triangles of zero area after snapping, or covering no pixel centre of their box.
-    pub triangles_degenerate: u64,
-    /// 2x2 quads with at least one covered pixel (triangle path).
-    pub quads: u64,
-    /// Fragments generated (pixel centres covered by subsegments or triangles, inside the
-    /// viewport).
-    pub fragments: u64,
-    /// Fragments that passed the depth test when they arrived.
-    pub fragments_passed_depth: u64,
-    /// Pixels covered in the final image.
-    pub pixels_covered: u64,
-}
-
-impl Counts {
-    /// Covered pixels over pixels of the quads rasterized, fragments / (4 quads); None
-    /// when no quad was rasterized (the lembo path).
-    pub fn quad_efficiency(&self) -> Option<f64> {
-        (self.quads > 0).then(|| self.fragments as f64 / (4 * self.quads) as f64)
-    }
-
-    /// Counts a lembo Setup dropped.
-    pub fn add_cull(&mut self, cull: setup::Cull) {
-        match cull {
-            setup::Cull::BehindEye => self.lembos_culled_behind_eye += 1,
-            setup::Cull::Outside => self.lembos_culled_outside += 1,
-            setup::Cull::Degenerate => self.lembos_degenerate += 1,
-        }
-    }
-
-    /// Counts what splitting a lembo into `pieces` pieces took (nothing for a whole lembo).
-    pub fn add_split(&mut self, split: setup::Split, pieces: usize) {
-        if split != setup::Split::default() {
-            self.lembos_split += 1;
-            self.lembo_pieces += pieces as u64;
-            self.lembo_pieces_culled += split.culled as u64;
-            self.lembos_split_perspective += split.perspective as u64;
-            self.lembos_split_near += split.near as u64;
-            self.lembo_pieces_culled_near += split.culled_near as u64;
-            self.lembo_pieces_capped += split.capped as u64;
-        }
-    }
-}
-
-impl std::ops::AddAssign for Counts {
-    /// Sums the shares of parallel units.
-    fn add_assign(&mut self, o: Counts) {
-        self.lembos += o.lembos;
-        self.lembos_culled_behind_eye += o.lembos_culled_behind_eye;
-        self.lembos_culled_outside += o.lembos_culled_outside;
-        self.lembos_degenerate += o.lembos_degenerate;
-        self.lembos_split += o.lembos_split;
-        self.lembo_pieces += o.lembo_pieces;
-        self.lembo_pieces_culled += o.lembo_pieces_culled;
-        self.lembos_split_perspective += o.lembos_split_perspective;
-        self.lembos_split_near += o.lembos_split_near;
-        self.lembo_pieces_culled_near += o.lembo_pieces_culled_near;
-        self.lembo_pieces_capped += o.lembo_pieces_capped;
-        self.scanlines += o.scanlines;
-        self.edge_roots += o.edge_roots;
-        self.virtual_roots += o.virtual_roots;
-        self.intervals += o.intervals;
-        self.unpaired_roots += o.unpaired_roots;
-        self.saddle_splits += o.saddle_splits;
-        self.segments += o.segments;
-        self.segments_clamped += o.segments_clamped;
-        self.segments_refined += o.segments_refined;
-        self.subsegments += o.subsegments;
-        self.folds += o.folds;
-        self.triangles += o.triangles;
-        self.triangles_culled_behind_eye += o.triangles_culled_behind_eye;
-        self.triangles_clipped += o.triangles_clipped;
-        self.triangles_clipped_depth += o.triangles_clipped_depth;
-        self.triangles_culled_outside += o.triangles_culled_outside;
-        self.triangles_degenerate += o.triangles_degenerate;
-        self.quads += o.quads;
-        self.fragments += o.fragments;
-        self.fragments_passed_depth += o.fragments_passed_depth;
-        self.pixels_covered += o.pixels_covered;
-    }
-}
 
 /// Runs the extreme method over every lembo of `scene`, in scene order, into `sink`.
 pub fn render_lembos<R: Real, S: FragmentSink<R>>(
@@ -196,214 +57,8 @@ pub fn render_lembos<R: Real, S: FragmentSink<R>>(
     counts: &mut Counts,
 ) -> Result<()> {
     let tol = tol.into();
-    let k = R::of(tol.k);
-    let mut buffers = Buffers::default();
-    let mut pieces = Vec::new();
-    for (id, (lembo, color)) in scene.lembos().enumerate() {
-        set_up(id as u32, lembo, color, view, tol, &mut pieces, counts);
-        for l in &pieces {
-            render_lembo(l, view, k, segment_cap, sink, counts, &mut buffers)?;
-        }
-    }
-    Ok(())
-}
-
-/// Setup of lembo `id` into `pieces` (cleared first; none when it is culled), counted.
-fn set_up<R: Real>(
-    id: u32,
-    lembo: &Lembo,
-    color: [f64; 3],
-    view: &View,
-    tol: Tolerance,
-    pieces: &mut Vec<setup::ScreenLembo<R>>,
-    counts: &mut Counts,
-) {
-    counts.lembos += 1;
-    pieces.clear();
-    R::charge(UnitKind::Setup);
-    match setup::setup_pieces::<R>(id, lembo, color, view, tol.perspective, pieces) {
-        Ok(split) => counts.add_split(split, pieces.len()),
-        Err(cull) => counts.add_cull(cull),
-    }
-}
-
-/// Minmax of a set-up piece: its first and last scanline, or None (counted) when it
-/// crosses none of the viewport's.
-fn scanline_range<R: Real>(
-    l: &setup::ScreenLembo<R>,
-    height: u32,
-    counts: &mut Counts,
-) -> Option<(u32, u32)> {
-    R::charge(UnitKind::MinMax);
-    let range = minmax::scanlines(l, height);
-    if range.is_none() {
-        counts.lembos_culled_outside += 1;
-    }
-    range
-}
-
-/// The reused buffers of the scan-line stages.
-struct Buffers<R> {
-    scratch: interval::IntervalScratch<R>,
-    intervals: Vec<interval::Interval<R>>,
-    segments: Vec<segmenter::Segment<R>>,
-    subsegments: Vec<subsegmenter::Subsegment<R>>,
-}
-
-impl<R: Real> Default for Buffers<R> {
-    fn default() -> Self {
-        Buffers {
-            scratch: Default::default(),
-            intervals: Vec::new(),
-            segments: Vec::new(),
-            subsegments: Vec::new(),
-        }
-    }
-}
-
-/// The scan-line stages (minmax to fragment) for one set-up lembo or piece.
-fn render_lembo<R: Real, S: FragmentSink<R>>(
-    l: &setup::ScreenLembo<R>,
-    view: &View,
-    k: R,
-    segment_cap: usize,
-    sink: &mut S,
-    counts: &mut Counts,
-    b: &mut Buffers<R>,
-) -> Result<()> {
-    let (width, height) = (view.viewport.width, view.viewport.height);
-    let Some((j0, j1)) = scanline_range(l, height, counts) else {
-        return Ok(());
-    };
-    scanlines(l, j0, j1, width, k, segment_cap, sink, counts, b).map_err(|(_, e)| e)
-}
-
-/// The scan-line stages after minmax for scanlines `j0..=j1` of one set-up lembo or piece;
-/// an error comes with the scanline it was met on. On an x86-64 CPU with AVX2 the stages the
-/// compiler inlines here (the segmenter's walk, the subsegmenter, the fragment rasterizer's
-/// spans) are compiled for it (three-operand instructions, rounding inline): the same IEEE
-/// operations in the same order, so the same bits. What stays a call runs as compiled for
-/// the baseline: the interval manager (inlined here it ran slower), the segmenter's step
-/// and closing chords, and the sink's span where it is not inlined.
-#[allow(clippy::too_many_arguments)]
-fn scanlines<R: Real, S: FragmentSink<R>>(
-    l: &setup::ScreenLembo<R>,
-    j0: u32,
-    j1: u32,
-    width: u32,
-    k: R,
-    segment_cap: usize,
-    sink: &mut S,
-    counts: &mut Counts,
-    b: &mut Buffers<R>,
-) -> std::result::Result<(), (u32, Error)> {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU has AVX2.
-        return unsafe { scanlines_avx2(l, j0, j1, width, k, segment_cap, sink, counts, b) };
-    }
-    scanlines_as_compiled(l, j0, j1, width, k, segment_cap, sink, counts, b)
-}
-
-/// [`scanlines`] compiled for AVX2.
-///
-/// # Safety
-/// The CPU must have AVX2.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-#[allow(clippy::too_many_arguments)]
-unsafe fn scanlines_avx2<R: Real, S: FragmentSink<R>>(
-    l: &setup::ScreenLembo<R>,
-    j0: u32,
-    j1: u32,
-    width: u32,
-    k: R,
-    segment_cap: usize,
-    sink: &mut S,
-    counts: &mut Counts,
-    b: &mut Buffers<R>,
-) -> std::result::Result<(), (u32, Error)> {
-    scanlines_as_compiled(l, j0, j1, width, k, segment_cap, sink, counts, b)
-}
-
-/// [`scanlines`] for the instruction set its caller is compiled for.
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-fn scanlines_as_compiled<R: Real, S: FragmentSink<R>>(
-    l: &setup::ScreenLembo<R>,
-    j0: u32,
-    j1: u32,
-    width: u32,
-    k: R,
-    segment_cap: usize,
-    sink: &mut S,
-    counts: &mut Counts,
-    b: &mut Buffers<R>,
-) -> std::result::Result<(), (u32, Error)> {
-    // The piece's bound on a step's reach, for all its intervals (a counting datapath makes
-    // every step, for its counts).
-    let reach = if R::COUNTS_OPERATIONS {
-        None
-    } else {
-        segmenter::least_reach(l, k)
-    };
-    for j in j0..=j1 {
-        scanline(l, j, width, k, segment_cap, reach, sink, counts, b).map_err(|e| (j, e))?;
-    }
-    Ok(())
-}
-
-/// The scan-line stages after minmax (interval manager to fragment) for scanline `j` of one
-/// set-up lembo or piece, whose steps reach at least `reach` ([`segmenter::walk`]).
-/// Scanline j's fragments are all in row j.
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-fn scanline<R: Real, S: FragmentSink<R>>(
-    l: &setup::ScreenLembo<R>,
-    j: u32,
-    width: u32,
-    k: R,
-    segment_cap: usize,
-    reach: Option<f64>,
-    sink: &mut S,
-    counts: &mut Counts,
-    b: &mut Buffers<R>,
-) -> Result<()> {
-    counts.scanlines += 1;
-    b.intervals.clear();
-    R::charge(UnitKind::IntervalManager);
-    interval::intervals(l, j, k, &mut b.scratch, &mut b.intervals, counts);
-    for iv in &b.intervals {
-        b.segments.clear();
-        R::charge(UnitKind::Segmenter);
-        segmenter::walk(l, j, k, iv, segment_cap, reach, &mut b.segments, counts).map_err(
-            |_| Error::SegmentCap {
-                lembo: l.id as usize,
-                scanline: j,
-                cap: segment_cap,
-            },
-        )?;
-        for seg in &b.segments {
-            b.subsegments.clear();
-            R::charge(UnitKind::Subsegmenter);
-            subsegmenter::subsegments(l, seg, k, &mut b.subsegments, counts);
-            for sub in &b.subsegments {
-                R::charge(UnitKind::FragmentRasterizer);
-                fragment::rasterize(l, j, sub, width, sink, counts);
-            }
-        }
-    }
-    Ok(())
-}
-
-/// A rendered frame and what it took.
-pub struct Frame {
-    /// The image, depth and winners.
-    pub framebuffer: FrameBuffer,
-    /// What the stages produced.
-    pub counts: Counts,
-    /// Fragment-level measurements, when requested.
-    pub probe: Option<probe::ProbeReport>,
+    let path = LemboPath::<R>::new(scene, view, tol.k, tol.perspective, segment_cap);
+    draw_in_order(&path, sink, counts)
 }
 
 /// Renders `scene` with the functional model in the given datapath. With `analyse`, the
@@ -444,15 +99,30 @@ pub fn render_functional_on(
             None => render_functional(scene, view, tol, datapath, analyse),
         };
     }
-    match (triangles, datapath) {
-        (Some(t), Datapath::F32) => {
-            parallel::render_triangles_in_bands::<f32>(scene, view, t, threads)
+    match datapath {
+        Datapath::F32 => in_bands::<f32>(scene, view, tol, triangles, threads),
+        Datapath::F64 => in_bands::<f64>(scene, view, tol, triangles, threads),
+    }
+}
+
+/// The frame drawn in bands on `threads` threads in datapath `R`: the triangle path's of
+/// `triangles`, or else the lembo path's.
+fn in_bands<R: Real>(
+    scene: &Scene,
+    view: &View,
+    tol: Tolerance,
+    triangles: Option<&dyn TriangleSource>,
+    threads: u32,
+) -> Result<Frame> {
+    match triangles {
+        Some(t) => {
+            parallel::render_in_bands::<R, _>(scene, view, &TrianglePath::new(t, view), threads)
         }
-        (Some(t), Datapath::F64) => {
-            parallel::render_triangles_in_bands::<f64>(scene, view, t, threads)
+        None => {
+            let path =
+                LemboPath::<R>::new(scene, view, tol.k, tol.perspective, DEFAULT_SEGMENT_CAP);
+            parallel::render_in_bands(scene, view, &path, threads)
         }
-        (None, Datapath::F32) => parallel::render_lembos_in_bands::<f32>(scene, view, tol, threads),
-        (None, Datapath::F64) => parallel::render_lembos_in_bands::<f64>(scene, view, tol, threads),
     }
 }
 
@@ -470,28 +140,6 @@ pub fn render_functional_triangles(
         Datapath::F32 => triangles_in::<f32>(scene, view, tessellation, analyse),
         Datapath::F64 => triangles_in::<f64>(scene, view, tessellation, analyse),
     }
-}
-
-/// A frame drawn by `draw` into a ROP over a fresh frame buffer (keeping normals when
-/// analysing); `draw` returns the probe's report when it measured one.
-pub(crate) fn frame_with<R: Real>(
-    scene: &Scene,
-    view: &View,
-    analyse: bool,
-    draw: impl FnOnce(&mut Rop<R>, &mut Counts) -> Result<Option<probe::ProbeReport>>,
-) -> Result<Frame> {
-    let vp = view.viewport;
-    let bg = scene.background.map(crate::rop::shade::to_u8::<f64>);
-    let mut fb = FrameBuffer::new(vp.width, vp.height, bg, analyse);
-    let mut counts = Counts::default();
-    let mut rop = Rop::<R>::new(&mut fb, &scene.light, view);
-    let probe = draw(&mut rop, &mut counts)?;
-    (counts.fragments_passed_depth, counts.pixels_covered) = rop.finish();
-    Ok(Frame {
-        framebuffer: fb,
-        counts,
-        probe,
-    })
 }
 
 fn triangles_in<R: Real>(
@@ -534,7 +182,8 @@ fn render_in<R: Real>(scene: &Scene, view: &View, tol: Tolerance, analyse: bool)
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::raster::subsegmenter::Subsegment;
+    use crate::raster::driver::Stages;
+    use crate::rop::{FrameBuffer, Rop};
 
     /// The shipped scene at `path` (from the crate's root) on a 384x384 viewport, and its view.
     fn shipped(path: &str) -> (Scene, View) {
@@ -551,62 +200,6 @@ mod tests {
         (scene, view)
     }
 
-    /// Every fragment as the bits of (i, j, u, v, z).
-    #[derive(Default, PartialEq, Debug)]
-    struct Bits(Vec<[u64; 5]>);
-
-    impl<R: Real> FragmentSink<R> for Bits {
-        fn fragment(
-            &mut self,
-            _: &setup::ScreenLembo<R>,
-            _: &Subsegment<R>,
-            i: u32,
-            j: u32,
-            u: R,
-            v: R,
-            z: R,
-        ) {
-            let bits = |x: R| x.f64().to_bits();
-            self.0.push([i as u64, j as u64, bits(u), bits(v), bits(z)]);
-        }
-    }
-
-    /// The scan-line stages as dispatched (compiled for AVX2 where the CPU has it) give the
-    /// fragments and counts of the stages compiled for the baseline instruction set, bit for
-    /// bit, on every lembo of the bunny and of the default scene, in both datapaths.
-    fn dispatched_as_compiled<R: Real>(scene: &str) {
-        let (scene, view) = shipped(scene);
-        let tol = Tolerance::new(0.5);
-        let k = R::of(tol.k);
-        let (mut pieces, mut counts) = (Vec::new(), Counts::default());
-        let (mut dispatched, mut compiled) = (Bits::default(), Bits::default());
-        let (mut c1, mut c2) = (Counts::default(), Counts::default());
-        let (mut b1, mut b2) = (Buffers::default(), Buffers::default());
-        for (id, (lembo, color)) in scene.lembos().enumerate() {
-            set_up::<R>(
-                id as u32,
-                lembo,
-                color,
-                &view,
-                tol,
-                &mut pieces,
-                &mut counts,
-            );
-            for l in &pieces {
-                let Some((j0, j1)) = scanline_range(l, 384, &mut counts) else {
-                    continue;
-                };
-                let cap = DEFAULT_SEGMENT_CAP;
-                scanlines(l, j0, j1, 384, k, cap, &mut dispatched, &mut c1, &mut b1).unwrap();
-                scanlines_as_compiled(l, j0, j1, 384, k, cap, &mut compiled, &mut c2, &mut b2)
-                    .unwrap();
-            }
-        }
-        assert!(dispatched.0.len() > 10_000, "{}", dispatched.0.len());
-        assert_eq!(c1, c2);
-        assert!(dispatched == compiled, "the fragments differ");
-    }
-
     /// The triangle path's rows as dispatched (compiled for AVX2 where the CPU has it) draw
     /// the frame and counts of the rows compiled for the baseline instruction set, bit for
     /// bit, through the functional ROP, for the bunny tessellated once and twice, in both
@@ -619,33 +212,28 @@ mod tests {
             let mut fb = FrameBuffer::new(384, 384, [0; 3], false);
             let mut counts = Counts::default();
             let mut rop = Rop::<R>::new(&mut fb, &scene.light, &view);
-            let (mut triangles, mut pieces) = (Vec::new(), Vec::new());
-            for c in 0..source.chunks() {
-                source.chunk(c, &mut triangles);
-                for (k, t) in triangles.iter().enumerate() {
-                    let id = source.id(c, k);
-                    triangle::setup::setup::<R>(
-                        id,
-                        &t.positions,
-                        &t.normals,
-                        t.color,
-                        &view,
-                        &mut pieces,
-                    )
-                    .count(&mut counts);
-                    for st in &pieces {
-                        if dispatched {
-                            triangle::rasterize::rasterize_rows(st, 0, 384, &mut rop, &mut counts);
-                        } else {
-                            triangle::rasterize::rasterize_rows_as_compiled(
-                                st,
-                                0,
-                                384,
-                                &mut rop,
-                                &mut counts,
-                            );
-                        }
-                    }
+            let path = TrianglePath::new(source, &view);
+            let all = 0..Stages::<R>::primitives(&path);
+            let mut pieces = Vec::new();
+            driver::set_up(
+                &path,
+                all,
+                &mut Default::default(),
+                &mut pieces,
+                |_, _| {},
+                &mut counts,
+            );
+            for st in &pieces {
+                if dispatched {
+                    triangle::rasterize::rasterize_rows(st, 0, 384, &mut rop, &mut counts);
+                } else {
+                    triangle::rasterize::rasterize_rows_as_compiled(
+                        st,
+                        0,
+                        384,
+                        &mut rop,
+                        &mut counts,
+                    );
                 }
             }
             (counts.fragments_passed_depth, counts.pixels_covered) = rop.finish();
@@ -678,14 +266,6 @@ mod tests {
         for level in [1, 2] {
             triangle_rows_as_compiled::<f32>(level);
             triangle_rows_as_compiled::<f64>(level);
-        }
-    }
-
-    #[test]
-    fn scanlines_compiled_for_avx2_give_the_same_bits() {
-        for scene in ["traces/bunny.json", "traces/default.json"] {
-            dispatched_as_compiled::<f32>(scene);
-            dispatched_as_compiled::<f64>(scene);
         }
     }
 }

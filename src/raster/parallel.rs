@@ -2,15 +2,15 @@
 //! single-threaded render for every N.
 //!
 //! The frame's threads are the calling thread and N - 1 scoped ones, started for the frame
-//! and joined at its end (`draw_frame`); they take work by number from shared counters, so
-//! none waits on a scheduler, and meet once, when setup is done, waiting running rather
-//! than asleep (`wait_until`). Setup runs in tasks of up to 64 primitives, kept in
-//! primitive order, keeping every set-up piece with its rows (lembos: minmax's scanline
+//! and joined at its end (`draw_frame`, `on_threads`); they take work by number from shared
+//! counters, so none waits on a scheduler, and meet once, when setup is done, waiting
+//! running rather than asleep (`wait_until`). Setup runs in tasks of up to 64 primitives
+//! (`SetupTasks`; a lembo's triangles in one task), kept in primitive order, keeping every set-up piece with its rows (lembos: minmax's scanline
 //! range; triangles: the bounding box) and a rough cost of drawing each of them
 //! (`RowSpan`). The frame's rows are then cut into bands of an even number of rows (so no
 //! 2x2 quad straddles two) by that estimate, shrinking from top to bottom (`bands`), and
 //! the threads take the bands in order as they come free: the last ones are small, so the
-//! threads finish together however wrong the estimate. A band walks the pieces that meet
+//! threads finish together however wrong the estimate (`Bands`). A band walks the pieces that meet
 //! its rows, in drawing order, through the scan-line stages of its own rows only, into its
 //! own rows of the frame buffer (`FrameBuffer::bands_mut`, `Rop::band`), which its thread
 //! also clears.
@@ -26,12 +26,11 @@
 //! The analysed frame (`--reference`, with the fragment probe) and the counting runs of the
 //! cost model stay single-threaded.
 
-use super::setup::ScreenLembo;
-use super::triangle::setup::setup_onto;
-use super::triangle::{rasterize_rows, ScreenTriangle, TriangleSource};
-use super::{
-    scanline_range, scanlines, set_up, Buffers, Counts, Frame, Tolerance, DEFAULT_SEGMENT_CAP,
-};
+use super::counts::Counts;
+use super::driver::{self, Draw, Placed, Stages};
+use super::frame::Frame;
+use super::screen::ScreenLembo;
+use super::triangle::ScreenTriangle;
 use crate::camera::View;
 use crate::datapath::Real;
 use crate::error::{Error, Result};
@@ -55,22 +54,41 @@ mod cost {
     pub const CLEAR: f64 = 2.0;
 }
 
-/// A set-up piece's rows, half-open, and what drawing one of them costs, roughly
-/// (nanoseconds, [`cost`]): its fixed work per row and fragments over half its width, as for
-/// a triangle.
+/// What drawing one row of a set-up piece costs, roughly, to weigh the frame's rows
+/// against each other when cutting it into bands.
+pub trait RowCost {
+    /// Nanoseconds of one core, roughly: the piece's fixed work per row and fragments over
+    /// half its width, as for a triangle.
+    fn row_cost(&self) -> f32;
+}
+
+/// A row's fixed work `fixed` and the fragments of half a `width` pixels wide piece.
+fn per_row(width: f64, fixed: f32) -> f32 {
+    fixed + cost::FRAGMENT * (width.clamp(0.0, 1e6) as f32) / 2.0
+}
+
+impl<R: Real> RowCost for ScreenLembo<R> {
+    fn row_cost(&self) -> f32 {
+        let x = self.x.reference_values().map(|x: R| x.f64());
+        let width =
+            x.iter().fold(f64::MIN, |a, &b| a.max(b)) - x.iter().fold(f64::MAX, |a, &b| a.min(b));
+        per_row(width, cost::LEMBO_SCANLINE)
+    }
+}
+
+impl<R: Real> RowCost for ScreenTriangle<R> {
+    fn row_cost(&self) -> f32 {
+        let [i0, i1, _, _] = self.bbox;
+        per_row(i1 as f64 - i0 as f64, cost::TRIANGLE_ROW)
+    }
+}
+
+/// A set-up piece's rows, half-open, and what drawing one of them costs ([`RowCost`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct RowSpan {
     lo: u32,
     hi: u32,
     cost: f32,
-}
-
-impl RowSpan {
-    /// Rows `lo..hi` of a piece `width` pixels wide with `fixed` work per row.
-    fn new(lo: u32, hi: u32, width: f64, fixed: f32) -> Self {
-        let cost = fixed + cost::FRAGMENT * (width.clamp(0.0, 1e6) as f32) / 2.0;
-        RowSpan { lo, hi, cost }
-    }
 }
 
 /// Bands of a frame's rows for `threads` threads, given each row's estimated cost
@@ -106,69 +124,44 @@ const SETUP_CHUNK: usize = 64;
 /// Setup tasks per thread, at most: enough that every thread gets some of a small scene.
 const SETUP_TASKS_PER_THREAD: usize = 8;
 
-/// A lembo of the scene with its colour.
-type SceneLembo<'a> = (&'a crate::lembo::Lembo, [f64; 3]);
+/// Primitives per setup task on `threads` threads, for `primitives` fetched `together`
+/// ([`Stages::fetched_together`]): whole fetches, up to [`SETUP_CHUNK`] primitives (at
+/// least one fetch), fewer where there are few so that every thread gets some tasks (a
+/// lembo's setup may split it into many pieces).
+fn per_task(primitives: usize, together: usize, threads: u32) -> usize {
+    let together = together.max(1);
+    let fetches = primitives.div_ceil(together);
+    let tasks = threads.max(1) as usize * SETUP_TASKS_PER_THREAD;
+    together
+        * fetches
+            .div_ceil(tasks)
+            .clamp(1, SETUP_CHUNK.div_ceil(together))
+}
 
 /// What a setup task hands on: its pieces, their rows, and what it counted.
 type SetUp<T> = (Vec<T>, Vec<RowSpan>, Counts);
 
-/// What setup task `task` of the scene's `lembos` hands on: the pieces of its `size`
-/// lembos after setup and minmax, in order, with their rows and what it counted.
-fn set_up_lembos<R: Real>(
-    lembos: &[SceneLembo<'_>],
-    size: usize,
-    task: usize,
-    view: &View,
-    tol: Tolerance,
-) -> SetUp<ScreenLembo<R>> {
-    let chunk = &lembos[task * size..((task + 1) * size).min(lembos.len())];
-    let mut out = Vec::with_capacity(chunk.len());
-    let (mut rows, mut counts) = (Vec::with_capacity(chunk.len()), Counts::default());
-    let mut pieces = Vec::new();
-    for (k, (lembo, color)) in chunk.iter().enumerate() {
-        let id = (task * size + k) as u32;
-        set_up(id, lembo, *color, view, tol, &mut pieces, &mut counts);
-        for l in pieces.drain(..) {
-            if let Some((j0, j1)) = scanline_range(&l, view.viewport.height, &mut counts) {
-                let x = l.x.reference_values().map(|x: R| x.f64());
-                let width = x.iter().fold(f64::MIN, |a, &b| a.max(b))
-                    - x.iter().fold(f64::MAX, |a, &b| a.min(b));
-                rows.push(RowSpan::new(j0, j1 + 1, width, cost::LEMBO_SCANLINE));
-                out.push(l);
-            }
-        }
-    }
-    (out, rows, counts)
-}
-
-/// What setup task `task` of a triangle source hands on: the set-up triangles of its run of
-/// `per_task` of the source's chunks (a chunk may be one lembo's few triangles, so a task's
-/// buffers are reused across several), in order, with their rows and what it counted.
-fn set_up_triangles<R: Real>(
-    source: &dyn TriangleSource,
-    per_task: usize,
-    task: usize,
-    view: &View,
-) -> SetUp<ScreenTriangle<R>> {
-    let chunks = task * per_task..((task + 1) * per_task).min(source.chunks());
-    // Room for every triangle once (clipping may add some, culling takes some away): a
-    // vector grown by doubling would copy its set-up triangles and fault in pages twice.
-    let room = chunks.len() * source.per_chunk() as usize;
-    let (mut out, mut rows) = (Vec::with_capacity(room), Vec::with_capacity(room));
-    let (mut counts, mut triangles) = (Counts::default(), Vec::new());
-    for c in chunks {
-        source.chunk(c, &mut triangles);
-        for (k, t) in triangles.iter().enumerate() {
-            let (id, before) = (source.id(c, k), out.len());
-            setup_onto::<R>(id, &t.positions, &t.normals, t.color, view, &mut out)
-                .count(&mut counts);
-            rows.extend(out[before..].iter().map(|t| {
-                let [i0, i1, j0, j1] = t.bbox;
-                RowSpan::new(j0, j1, i1 as f64 - i0 as f64, cost::TRIANGLE_ROW)
-            }));
-        }
-    }
-    (out, rows, counts)
+/// What setup task `task` hands on: the pieces of its run of `per_task` primitives that
+/// cover some row, in order, with their rows, and what it counted.
+fn set_up_task<R: Real, P: Stages<R>>(path: &P, per_task: usize, task: usize) -> SetUp<P::Piece>
+where
+    P::Piece: RowCost,
+{
+    let run = task * per_task..((task + 1) * per_task).min(path.primitives());
+    // Room for a piece a primitive (splitting and clipping add some, culling takes some
+    // away): a vector grown by doubling would copy its pieces and fault in pages twice.
+    let (mut pieces, mut rows) = (Vec::with_capacity(run.len()), Vec::with_capacity(run.len()));
+    let mut counts = Counts::default();
+    let keep = |piece: &P::Piece, (lo, hi)| {
+        rows.push(RowSpan {
+            lo,
+            hi,
+            cost: piece.row_cost(),
+        })
+    };
+    let mut scratch = P::SetupScratch::default();
+    driver::set_up(path, run, &mut scratch, &mut pieces, keep, &mut counts);
+    (pieces, rows, counts)
 }
 
 /// Set-up pieces in drawing order, as the setup tasks left them (one slice a task; copying
@@ -215,7 +208,7 @@ impl<'a, T> Pieces<'a, T> {
     /// The pieces whose rows meet rows `lo..hi`, in drawing order, with their index in that
     /// order and their own rows (half-open). A band looks only at the pieces' rows, a few
     /// bytes each, to find its own.
-    fn meeting(&self, lo: u32, hi: u32) -> impl Iterator<Item = (usize, &'a T, (u32, u32))> + '_ {
+    fn meeting(&self, lo: u32, hi: u32) -> impl Iterator<Item = Placed<'a, T>> + '_ {
         self.0
             .iter()
             .flat_map(|&(pieces, rows)| pieces.iter().zip(rows))
@@ -229,6 +222,41 @@ impl<'a, T> Pieces<'a, T> {
 /// ([`Rop::finish`]); or the first error it met with the (piece, scanline) it met it at.
 type Band = std::result::Result<(Counts, (u64, u64)), ((usize, u32), Error)>;
 
+/// A frame's setup tasks, which its threads take by number as they come free.
+struct SetupTasks<T> {
+    handed_on: Vec<OnceLock<SetUp<T>>>,
+    next: AtomicUsize,
+    done: AtomicUsize,
+}
+
+impl<T> SetupTasks<T> {
+    /// `tasks` tasks, none taken yet.
+    fn new(tasks: usize) -> Self {
+        SetupTasks {
+            handed_on: (0..tasks).map(|_| OnceLock::new()).collect(),
+            next: AtomicUsize::new(0),
+            done: AtomicUsize::new(0),
+        }
+    }
+
+    /// Runs `set_up(task)` for the tasks no other thread has taken, until none is left.
+    fn run(&self, set_up: &impl Fn(usize) -> SetUp<T>) {
+        loop {
+            let task = self.next.fetch_add(1, Ordering::Relaxed);
+            if task >= self.handed_on.len() {
+                return;
+            }
+            let _ = self.handed_on[task].set(set_up(task));
+            self.done.fetch_add(1, Ordering::Release);
+        }
+    }
+
+    /// Whether every task is done.
+    fn all_done(&self) -> bool {
+        self.done.load(Ordering::Acquire) == self.handed_on.len()
+    }
+}
+
 /// What the threads share once setup is done: the pieces, setup's counts, the bands and the
 /// rows of the frame buffer each band writes (taken by the thread that draws it).
 struct Plan<'a, 'fb, T> {
@@ -236,6 +264,83 @@ struct Plan<'a, 'fb, T> {
     counts: Counts,
     bands: Vec<(u32, u32)>,
     rows: Vec<Mutex<Option<FrameRows<'fb>>>>,
+}
+
+/// A frame's bands: planned once, by the first thread done with setup, then taken by number
+/// by the threads as they come free.
+struct Bands<'a, 'fb, T> {
+    /// The frame buffer, until the plan splits it into the bands' rows.
+    unclaimed: Mutex<Option<&'fb mut FrameBuffer>>,
+    planning: AtomicBool,
+    plan: OnceLock<Plan<'a, 'fb, T>>,
+    next: AtomicUsize,
+}
+
+impl<'a, 'fb, T> Bands<'a, 'fb, T> {
+    /// Bands to be planned over `framebuffer`.
+    fn new(framebuffer: &'fb mut FrameBuffer) -> Self {
+        Bands {
+            unclaimed: Mutex::new(Some(framebuffer)),
+            planning: AtomicBool::new(false),
+            plan: OnceLock::new(),
+            next: AtomicUsize::new(0),
+        }
+    }
+
+    /// Plans the bands for `threads` threads from the pieces `tasks` handed on, unless
+    /// another thread already does: the other threads wait for the plan running
+    /// (`OnceLock::get_or_init` would put them to sleep).
+    fn plan(&self, tasks: &'a SetupTasks<T>, threads: u32) {
+        if self.planning.swap(true, Ordering::AcqRel) {
+            return;
+        }
+        let mut counts = Counts::default();
+        let pieces = Pieces::join(
+            tasks.handed_on.iter().filter_map(OnceLock::get),
+            &mut counts,
+        );
+        let framebuffer = lock(&self.unclaimed)
+            .take()
+            .expect("the frame buffer is split into bands once");
+        let bands = bands(
+            &pieces.row_cost(framebuffer.width, framebuffer.height),
+            threads,
+        );
+        let rows = framebuffer
+            .bands_mut(&bands)
+            .into_iter()
+            .map(|r| Mutex::new(Some(r)))
+            .collect();
+        let planned = self.plan.set(Plan {
+            pieces,
+            counts,
+            bands,
+            rows,
+        });
+        assert!(planned.is_ok(), "one thread plans the bands");
+    }
+
+    /// Draws the bands no other thread has taken, each cleared to `background` and then
+    /// drawn by `draw` with this thread's own scratch, until none is left; what each drew.
+    fn draw<S: Default>(
+        &self,
+        background: [u8; 3],
+        draw: &impl Fn(&Pieces<'_, T>, u32, u32, FrameRows<'_>, &mut S) -> Band,
+    ) -> Vec<Band> {
+        let plan = self.plan.get().expect("the bands are planned");
+        let (mut out, mut scratch) = (Vec::new(), S::default());
+        loop {
+            let b = self.next.fetch_add(1, Ordering::Relaxed);
+            let Some(&(lo, hi)) = plan.bands.get(b) else {
+                return out;
+            };
+            let mut rows = lock(&plan.rows[b])
+                .take()
+                .expect("a band is taken once, by the thread that drew its number");
+            rows.clear(background);
+            out.push(draw(&plan.pieces, lo, hi, rows, &mut scratch));
+        }
+    }
 }
 
 /// Counts a frame's thread as gone when it leaves its work, and marks the frame abandoned if
@@ -268,87 +373,21 @@ fn wait_until(done: impl Fn() -> bool, abandoned: &AtomicBool) -> bool {
     true
 }
 
-/// Draws a frame on `threads` threads: the calling thread and `threads - 1` scoped ones
-/// (one the system will not start is simply missing; the others do its share). They take
-/// the `tasks` setup tasks (`set_up(task)`) by number as they come free, wait until every
-/// task is done, and then take the bands ([`bands`], from the pieces' estimated costs) in
-/// order, each drawn by `draw(pieces, lo, hi, rows, scratch)` into its own rows of one frame
-/// buffer (cleared by the band's thread), with the thread's own `scratch`. The counts are
-/// setup's in task order plus the bands'; the result is the frame, or the first error any
-/// band met. Which thread sets up a task or draws a band changes nothing in it.
-fn draw_frame<T: Send + Sync, S: Default>(
-    scene: &Scene,
-    view: &View,
+/// Runs `work` on the calling thread and `threads - 1` scoped ones (one the system will not
+/// start is simply missing; the others do its share), each counted by `gone` as it leaves
+/// ([`Leaving`]); what they return, this thread's first. A panic on another thread is
+/// resumed on this one.
+fn on_threads<B: Send>(
     threads: u32,
-    tasks: usize,
-    set_up: impl Fn(usize) -> SetUp<T> + Sync,
-    draw: impl Fn(&Pieces<'_, T>, u32, u32, FrameRows<'_>, &mut S) -> Band + Sync,
-) -> Result<Frame> {
-    let vp = view.viewport;
-    let background = scene.background.map(crate::rop::shade::to_u8::<f64>);
-    let mut framebuffer = FrameBuffer::zeroed(vp.width, vp.height);
-    let unclaimed = Mutex::new(Some(&mut framebuffer));
-    let set: Vec<OnceLock<SetUp<T>>> = (0..tasks).map(|_| OnceLock::new()).collect();
-    let (next_task, tasks_done) = (AtomicUsize::new(0), AtomicUsize::new(0));
-    let next_band = AtomicUsize::new(0);
-    let (abandoned, gone) = (AtomicBool::new(false), AtomicUsize::new(0));
-    let (planning, plan) = (AtomicBool::new(false), OnceLock::new());
-    let work = || -> Vec<Band> {
-        let _leaving = Leaving {
-            abandoned: &abandoned,
-            gone: &gone,
-        };
-        loop {
-            let task = next_task.fetch_add(1, Ordering::Relaxed);
-            if task >= tasks {
-                break;
-            }
-            let _ = set[task].set(set_up(task));
-            tasks_done.fetch_add(1, Ordering::Release);
-        }
-        if !wait_until(|| tasks_done.load(Ordering::Acquire) == tasks, &abandoned) {
-            return Vec::new();
-        }
-        // The first thread here plans the bands; the others wait for the plan running
-        // (`OnceLock::get_or_init` would put them to sleep).
-        if !planning.swap(true, Ordering::AcqRel) {
-            let mut counts = Counts::default();
-            let pieces = Pieces::join(set.iter().filter_map(OnceLock::get), &mut counts);
-            let bands = bands(&pieces.row_cost(vp.width, vp.height), threads);
-            let framebuffer = lock(&unclaimed)
-                .take()
-                .expect("the frame buffer is split into bands once");
-            let rows = framebuffer
-                .bands_mut(&bands)
-                .into_iter()
-                .map(|r| Mutex::new(Some(r)))
-                .collect();
-            let planned = plan.set(Plan {
-                pieces,
-                counts,
-                bands,
-                rows,
-            });
-            assert!(planned.is_ok(), "one thread plans the bands");
-        }
-        if !wait_until(|| plan.get().is_some(), &abandoned) {
-            return Vec::new();
-        }
-        let plan: &Plan<'_, '_, T> = plan.get().expect("the bands are planned");
-        let (mut out, mut scratch) = (Vec::new(), S::default());
-        loop {
-            let b = next_band.fetch_add(1, Ordering::Relaxed);
-            let Some(&(lo, hi)) = plan.bands.get(b) else {
-                return out;
-            };
-            let mut rows = lock(&plan.rows[b])
-                .take()
-                .expect("a band is taken once, by the thread that drew its number");
-            rows.clear(background);
-            out.push(draw(&plan.pieces, lo, hi, rows, &mut scratch));
-        }
+    work: impl Fn() -> Vec<B> + Sync,
+    abandoned: &AtomicBool,
+    gone: &AtomicUsize,
+) -> Vec<B> {
+    let work = || {
+        let _leaving = Leaving { abandoned, gone };
+        work()
     };
-    let drawn = std::thread::scope(|s| {
+    std::thread::scope(|s| {
         let others: Vec<_> = (1..threads.max(1))
             .filter_map(|i| {
                 std::thread::Builder::new()
@@ -362,7 +401,7 @@ fn draw_frame<T: Send + Sync, S: Default>(
         // others are gone once `gone` counts them all, this one included.
         wait_until(
             || gone.load(Ordering::Acquire) == others.len() + 1,
-            &abandoned,
+            abandoned,
         );
         for other in others {
             match other.join() {
@@ -371,10 +410,13 @@ fn draw_frame<T: Send + Sync, S: Default>(
             }
         }
         drawn
-    });
-    let Plan { mut counts, .. } = plan
-        .into_inner()
-        .expect("every thread but a panicked one plans the bands");
+    })
+}
+
+/// The frame's counts from setup's `counts` and what the bands drew: the bands' counts,
+/// passed depth tests and covered pixels added; or the first error any band met, the one
+/// at the smallest (piece, scanline), which the single-threaded walk meets first.
+fn gather(mut counts: Counts, drawn: Vec<Band>) -> Result<Counts> {
     let mut first_error: Option<((usize, u32), Error)> = None;
     let (mut passed, mut covered) = (0, 0);
     for band in drawn {
@@ -396,6 +438,47 @@ fn draw_frame<T: Send + Sync, S: Default>(
     }
     counts.fragments_passed_depth = passed;
     counts.pixels_covered = covered;
+    Ok(counts)
+}
+
+/// Draws a frame on `threads` threads ([`on_threads`]). They take the `tasks` setup tasks
+/// (`set_up(task)`) by number as they come free, wait until every task is done, and then
+/// take the bands ([`bands`], from the pieces' estimated costs) in order, each drawn by
+/// `draw(pieces, lo, hi, rows, scratch)` into its own rows of one frame buffer (cleared by
+/// the band's thread), with the thread's own `scratch`. The counts are setup's in task
+/// order plus the bands'; the result is the frame, or the first error any band met. Which
+/// thread sets up a task or draws a band changes nothing in it.
+fn draw_frame<T: Send + Sync, S: Default>(
+    scene: &Scene,
+    view: &View,
+    threads: u32,
+    tasks: usize,
+    set_up: impl Fn(usize) -> SetUp<T> + Sync,
+    draw: impl Fn(&Pieces<'_, T>, u32, u32, FrameRows<'_>, &mut S) -> Band + Sync,
+) -> Result<Frame> {
+    let vp = view.viewport;
+    let background = scene.background.map(crate::rop::shade::to_u8::<f64>);
+    let mut framebuffer = FrameBuffer::zeroed(vp.width, vp.height);
+    let tasks = SetupTasks::new(tasks);
+    let bands = Bands::new(&mut framebuffer);
+    let (abandoned, gone) = (AtomicBool::new(false), AtomicUsize::new(0));
+    let work = || -> Vec<Band> {
+        tasks.run(&set_up);
+        if !wait_until(|| tasks.all_done(), &abandoned) {
+            return Vec::new();
+        }
+        bands.plan(&tasks, threads);
+        if !wait_until(|| bands.plan.get().is_some(), &abandoned) {
+            return Vec::new();
+        }
+        bands.draw(background, &draw)
+    };
+    let drawn = on_threads(threads, work, &abandoned, &gone);
+    let plan = bands
+        .plan
+        .into_inner()
+        .expect("every thread but a panicked one plans the bands");
+    let counts = gather(plan.counts, drawn)?;
     Ok(Frame {
         framebuffer,
         counts,
@@ -409,70 +492,37 @@ fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
     m.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
-/// The lembo path's functional frame on `threads` threads (module doc).
-pub fn render_lembos_in_bands<R: Real>(
+/// The functional frame of `path` (the lembo or the triangle path) on `threads` threads
+/// (module doc): setup tasks of `per_task` primitives, then bands drawn through a ROP
+/// each.
+pub fn render_in_bands<R: Real, P>(
     scene: &Scene,
     view: &View,
-    tol: Tolerance,
+    path: &P,
     threads: u32,
-) -> Result<Frame> {
-    let lembos: Vec<SceneLembo<'_>> = scene.lembos().collect();
-    // Up to SETUP_CHUNK lembos a task, fewer where there are few (a lembo's setup may split
-    // it into many pieces), so that every thread gets some.
-    let size = lembos
-        .len()
-        .div_ceil(threads.max(1) as usize * SETUP_TASKS_PER_THREAD)
-        .clamp(1, SETUP_CHUNK);
-    let k = R::of(tol.k);
-    let width = view.viewport.width;
+) -> Result<Frame>
+where
+    P: Stages<R> + for<'fb> Draw<R, Rop<'fb, R>>,
+    P::Piece: RowCost,
+{
+    let per_task = per_task(path.primitives(), path.fetched_together(), threads);
     draw_frame(
         scene,
         view,
         threads,
-        lembos.len().div_ceil(size),
-        |task| set_up_lembos::<R>(&lembos, size, task, view, tol),
-        |pieces, lo, hi, rows, buffers: &mut Buffers<R>| {
+        path.primitives().div_ceil(per_task),
+        |task| set_up_task(path, per_task, task),
+        |pieces, lo, hi, rows, buffers: &mut P::Buffers| {
             let mut rop = Rop::<R>::band(rows, &scene.light, view, lo);
             let mut c = Counts::default();
-            for (n, l, (first, end)) in pieces.meeting(lo, hi) {
-                scanlines(
-                    l,
-                    first.max(lo),
-                    (end - 1).min(hi - 1),
-                    width,
-                    k,
-                    DEFAULT_SEGMENT_CAP,
-                    &mut rop,
-                    &mut c,
-                    buffers,
-                )
-                .map_err(|(j, e)| ((n, j), e))?;
-            }
-            Ok((c, rop.finish()))
-        },
-    )
-}
-
-/// The triangle path's functional frame on `threads` threads (module doc).
-pub fn render_triangles_in_bands<R: Real>(
-    scene: &Scene,
-    view: &View,
-    source: &dyn TriangleSource,
-    threads: u32,
-) -> Result<Frame> {
-    let per_task = SETUP_CHUNK.div_ceil(source.per_chunk().max(1) as usize);
-    draw_frame(
-        scene,
-        view,
-        threads,
-        source.chunks().div_ceil(per_task),
-        |task| set_up_triangles::<R>(source, per_task, task, view),
-        |pieces, lo, hi, rows, _: &mut ()| {
-            let mut rop = Rop::<R>::band(rows, &scene.light, view, lo);
-            let mut c = Counts::default();
-            for (_, t, _) in pieces.meeting(lo, hi) {
-                rasterize_rows(t, lo, hi, &mut rop, &mut c);
-            }
+            driver::draw(
+                path,
+                pieces.meeting(lo, hi),
+                (lo, hi),
+                &mut rop,
+                &mut c,
+                buffers,
+            )?;
             Ok((c, rop.finish()))
         },
     )
@@ -556,6 +606,21 @@ mod tests {
                 .expect("the frame ends, with the panic, within a minute");
             assert!(message.contains("task 4 fails"), "{threads}: {message}");
         }
+    }
+
+    #[test]
+    fn setup_tasks_are_whole_fetches_and_every_thread_gets_some() {
+        // Lembos, fetched one at a time: up to 64 a task, fewer so that each of 2 threads
+        // gets 8 tasks of a small scene.
+        assert_eq!(per_task(5000, 1, 2), 64);
+        assert_eq!(per_task(24, 1, 2), 2);
+        assert_eq!(per_task(3, 1, 4), 1);
+        // Triangles, a lembo's 16 (or 100) fetched together: whole lembos, up to 64
+        // triangles a task but at least one lembo.
+        assert_eq!(per_task(5000 * 16, 16, 2), 64);
+        assert_eq!(per_task(24 * 16, 16, 2), 32);
+        assert_eq!(per_task(24 * 100, 100, 2), 100);
+        assert_eq!(per_task(0, 16, 2), 16);
     }
 
     fn span(lo: u32, hi: u32) -> RowSpan {

@@ -19,7 +19,7 @@
 
 use super::fragment::FragmentSink;
 use super::interval::{CurvePoint, INTERIOR};
-use super::setup::ScreenLembo;
+use super::screen::ScreenLembo;
 use super::subsegmenter::Subsegment;
 use crate::camera::Viewport;
 use crate::datapath::Real;

@@ -48,7 +48,7 @@
 //! [`MAX_PIECES`] pieces per lembo. A piece kept at a cap while still over the tolerance is
 //! counted (`capped`); one that still cannot be projected there is dropped and counted.
 
-use super::setup::{
+use super::screen::{
     build_piece, build_whole, on_domain_edge, outside, parabola, reference_uv, within_guard_band,
     zero_area, Cull, ScreenLembo, ScreenPoints, Split, EDGE_POINTS, MAX_PIECES, MAX_SPLIT_DEPTH,
 };

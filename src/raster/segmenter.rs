@@ -21,10 +21,10 @@
 //! about 0, no finite step), a vanishing gradient or a system without a forward root also
 //! clamp to the end. More than `cap` segments in one interval is refused.
 
+use super::counts::Counts;
 use super::interval::{CurvePoint, Interval, INTERIOR};
-use super::setup::ScreenLembo;
+use super::screen::ScreenLembo;
 use super::v2::{dot, norm, rot_cw, V2};
-use super::Counts;
 use crate::datapath::Real;
 
 /// One chord of the curve, from `p0` to `p1` in walking order.
@@ -301,7 +301,7 @@ const REACH_MARGIN: f64 = 1.5;
 
 /// A lower bound on how far in walk key any `step` of k from a point of the lembo's domain
 /// reaches, where the residual there is at most `RESIDUAL_FRACTION` k; `None` for a
-/// partition other than [`Partition::Monotone`](super::setup::Partition) or where the bound
+/// partition other than [`Partition::Monotone`](super::screen::Partition) or where the bound
 /// is not positive. In `f64`, from per-lembo bounds: once per lembo ([`walk`]).
 ///
 /// With a monotone partition, every gradient g of the domain has `a·g ≥ d > 0` and `|g| ≤ s`
@@ -318,7 +318,7 @@ const REACH_MARGIN: f64 = 1.5;
 // `!(x > 0)` is deliberate: it also rejects NaN.
 #[allow(clippy::neg_cmp_op_on_partial_ord)]
 pub fn least_reach<R: Real>(l: &ScreenLembo<R>, k: R) -> Option<f64> {
-    let super::setup::Partition::Monotone { a, grad_bounds } = l.partition else {
+    let super::screen::Partition::Monotone { a, grad_bounds } = l.partition else {
         return None;
     };
     let grad_bounds = grad_bounds.map(R::f64);

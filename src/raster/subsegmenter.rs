@@ -10,10 +10,10 @@
 //! step). A fold (x'(t) = 0 inside the segment, x turning back) is a cut point, so each
 //! subsegment's chord spans its exact x extent.
 
+use super::counts::Counts;
 use super::interval::{CurvePoint, INTERIOR};
+use super::screen::ScreenLembo;
 use super::segmenter::Segment;
-use super::setup::ScreenLembo;
-use super::Counts;
 use crate::datapath::Real;
 
 /// A piece of a segment over which u, v and x are treated as linear; `a` and `b` in walk

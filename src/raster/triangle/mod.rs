@@ -49,7 +49,8 @@
 //!
 //! Layout: [`setup`](mod@setup) (projection, clipping, snapping, fans, edge functions),
 //! [`rasterize`](mod@rasterize) (coverage, quads, fragments), [`probe`] (measurements); this module
-//! the sources of triangles and [`render_triangles`].
+//! the sources of triangles, the path in the driver's terms ([`TrianglePath`]) and
+//! [`render_triangles`].
 //!
 //! Not modelled: back-face culling (the lembo path has none either; both paths shade
 //! two-sided). The lembo path's counterpart of near-plane clipping is Setup's near-plane
@@ -59,9 +60,11 @@ pub mod probe;
 pub mod rasterize;
 pub mod setup;
 
-use super::Counts;
+use super::counts::Counts;
+use super::driver::{draw_in_order, Draw, Stages};
 use crate::camera::View;
 use crate::datapath::Real;
+use crate::error::Error;
 use crate::graph::UnitKind;
 use crate::lembo::tessellate::{Tessellation, Triangle};
 pub use probe::*;
@@ -102,6 +105,88 @@ impl TriangleSource for Tessellation<'_> {
     }
 }
 
+/// The triangle path over a source's triangles, in the driver's terms
+/// ([`super::driver`]): triangle setup (clipping, snapping, edge functions), the rows of a
+/// set-up triangle's bounding box, and the rasterizer a pair of rows at a time into a
+/// [`TriangleSink`].
+pub struct TrianglePath<'a> {
+    source: &'a dyn TriangleSource,
+    view: &'a View,
+}
+
+impl<'a> TrianglePath<'a> {
+    /// The triangles of `source` seen through `view`.
+    pub fn new(source: &'a dyn TriangleSource, view: &'a View) -> Self {
+        TrianglePath { source, view }
+    }
+}
+
+/// The triangles of the chunk of a [`TriangleSource`] Setup fetched last.
+#[derive(Default)]
+pub struct Fetched {
+    chunk: Option<usize>,
+    triangles: Vec<Triangle>,
+}
+
+impl<R: Real> Stages<R> for TrianglePath<'_> {
+    type Piece = ScreenTriangle<R>;
+    type SetupScratch = Fetched;
+    type Buffers = ();
+
+    fn primitives(&self) -> usize {
+        self.source.chunks() * self.source.per_chunk() as usize
+    }
+
+    fn fetched_together(&self) -> usize {
+        self.source.per_chunk() as usize
+    }
+
+    /// Setup of triangle `n`, the source's chunk fetched when it is not already.
+    fn set_up(
+        &self,
+        n: usize,
+        fetched: &mut Fetched,
+        pieces: &mut Vec<ScreenTriangle<R>>,
+        counts: &mut Counts,
+    ) {
+        let per_chunk = self.source.per_chunk() as usize;
+        let (c, k) = (n / per_chunk, n % per_chunk);
+        if fetched.chunk != Some(c) {
+            self.source.chunk(c, &mut fetched.triangles);
+            fetched.chunk = Some(c);
+        }
+        let t = &fetched.triangles[k];
+        let id = self.source.id(c, k);
+        R::charge(UnitKind::TriangleSetup);
+        setup_onto::<R>(id, &t.positions, &t.normals, t.color, self.view, pieces).count(counts);
+    }
+
+    /// The rows of the triangle's bounding box.
+    fn rows(&self, t: &ScreenTriangle<R>, _: &mut Counts) -> Option<(u32, u32)> {
+        let [_, _, j0, j1] = t.bbox;
+        Some((j0, j1))
+    }
+}
+
+impl<R: Real, S: TriangleSink<R>> Draw<R, S> for TrianglePath<'_> {
+    #[inline]
+    fn draw(
+        &self,
+        t: &ScreenTriangle<R>,
+        lo: u32,
+        hi: u32,
+        sink: &mut S,
+        counts: &mut Counts,
+        _: &mut (),
+    ) -> std::result::Result<(), (u32, Error)> {
+        R::charge(UnitKind::TriangleRasterizer);
+        // The quads whose top row is in lo..hi: the first starts on the even row at or
+        // above lo (a band starts on an even row, so it holds that quad's top row too).
+        rasterize_rows(t, lo & !1, hi, sink, counts);
+        Ok(())
+    }
+}
+
 /// Runs the triangle path over every triangle of `source`, in order, into `sink`.
 pub fn render_triangles<R: Real, S: TriangleSink<R>>(
     source: &dyn TriangleSource,
@@ -109,19 +194,8 @@ pub fn render_triangles<R: Real, S: TriangleSink<R>>(
     sink: &mut S,
     counts: &mut Counts,
 ) {
-    let (mut triangles, mut pieces) = (Vec::new(), Vec::new());
-    for c in 0..source.chunks() {
-        source.chunk(c, &mut triangles);
-        for (k, t) in triangles.iter().enumerate() {
-            let id = source.id(c, k);
-            R::charge(UnitKind::TriangleSetup);
-            setup::<R>(id, &t.positions, &t.normals, t.color, view, &mut pieces).count(counts);
-            for st in &pieces {
-                R::charge(UnitKind::TriangleRasterizer);
-                rasterize(st, sink, counts);
-            }
-        }
-    }
+    draw_in_order(&TrianglePath::new(source, view), sink, counts)
+        .expect("the triangle path records no error");
 }
 
 #[cfg(test)]

@@ -1,10 +1,10 @@
 //! The triangle path's rasterizer: coverage by integer edge functions with the top-left
 //! rule, 2x2 quads, and each covered pixel's perspective-correct [`TriangleFragment`].
 
-use super::setup::{pixel_centre, ScreenTriangle, TriangleCull, SUBPIXEL};
+use super::setup::{pixel_centre, ScreenTriangle, SUBPIXEL};
 use crate::datapath::Op;
 use crate::datapath::Real;
-use crate::raster::Counts;
+use crate::raster::counts::Counts;
 
 /// One fragment of a triangle: what the ROP needs to test and shade it.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -322,14 +322,5 @@ pub(crate) fn rasterize_rows_as_compiled<R: Real, S: TriangleSink<R>>(
             }
         }
         qj += 2;
-    }
-}
-
-/// Counts a culled triangle.
-pub(super) fn count_cull(cull: TriangleCull, counts: &mut Counts) {
-    match cull {
-        TriangleCull::BehindEye => counts.triangles_culled_behind_eye += 1,
-        TriangleCull::Outside => counts.triangles_culled_outside += 1,
-        TriangleCull::Degenerate => counts.triangles_degenerate += 1,
     }
 }

@@ -2,11 +2,10 @@
 //! (Sutherland-Hodgman on the world triangle), 16.8 snapping, fans, and the edge functions
 //! of a [`ScreenTriangle`].
 
-use super::rasterize::count_cull;
 use crate::camera::{ScreenPoint, View, Viewport};
 use crate::datapath::Op;
 use crate::datapath::Real;
-use crate::raster::Counts;
+use crate::raster::counts::Counts;
 use glam::{DVec3, DVec4};
 
 /// Fractional bits of the snapped vertex coordinates (16.8 fixed point).
@@ -156,6 +155,15 @@ impl SetupOutcome {
         if let Some(cull) = self.cull {
             count_cull(cull, counts);
         }
+    }
+}
+
+/// Counts a culled triangle.
+fn count_cull(cull: TriangleCull, counts: &mut Counts) {
+    match cull {
+        TriangleCull::BehindEye => counts.triangles_culled_behind_eye += 1,
+        TriangleCull::Outside => counts.triangles_culled_outside += 1,
+        TriangleCull::Degenerate => counts.triangles_degenerate += 1,
     }
 }
 
