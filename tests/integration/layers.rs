@@ -17,6 +17,9 @@
 //! written as `use` trees and `crate::`/`super::`/`self::`/`child::` paths, never built by
 //! macros. A failure prints every cycle with each edge's first line, or every import against
 //! the layer order; a new top-level module fails until it is placed in [`LAYERS`].
+//!
+//! The same tokens also measure every function of `src/`: none is longer than
+//! [`MAX_FN_LINES`] (a function that needs a scroll bar is several).
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
@@ -107,6 +110,96 @@ fn the_graph_has_the_crates_files_and_imports() {
         graph.edges[MAIN_FILE].len() >= 5,
         "main.rs imports too little"
     );
+}
+
+/// The most lines a function of `src/` may take, from its `fn` line to its closing brace
+/// (ARCHITECTURE.md's invariant; test code included).
+const MAX_FN_LINES: usize = 150;
+
+#[test]
+fn no_function_is_longer_than_150_lines() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    read_tree(&src, &src, &mut files);
+    let mut measured = 0;
+    let mut long = Vec::new();
+    for (path, text) in &files {
+        for (name, line, lines) in fn_lengths(text) {
+            measured += 1;
+            if lines > MAX_FN_LINES {
+                long.push(format!("src/{path}:{line} fn {name}: {lines} lines"));
+            }
+        }
+    }
+    assert!(measured >= 1000, "only {measured} functions measured");
+    assert!(
+        long.is_empty(),
+        "functions over {MAX_FN_LINES} lines (split them by the steps their comments name):\n{}",
+        long.join("\n")
+    );
+}
+
+/// The measure itself, on functions of known length: a body's lines counted from `fn` to
+/// its closing brace, braces in strings and comments ignored, declarations without a body
+/// and `fn` pointer types skipped.
+#[test]
+fn fn_lengths_counts_from_fn_to_the_closing_brace() {
+    let body: String = (0..150)
+        .map(|i| format!("    let x{i} = \"{{\"; // }}\n"))
+        .collect();
+    let text = format!(
+        "trait T {{\n    fn declared(&self) -> u32;\n}}\n\
+         fn long(f: fn(u32) -> u32) -> u32 {{\n{body}    f(1)\n}}\n\
+         impl T for () {{\n    fn declared(&self) -> u32 {{\n        1\n    }}\n}}\n"
+    );
+    assert_eq!(
+        fn_lengths(&text),
+        [
+            ("long".to_string(), 4, 153),
+            ("declared".to_string(), 158, 3)
+        ]
+    );
+}
+
+/// Each function with a body in `text`: its name, the line of its `fn` and its length in
+/// lines through its closing brace.
+fn fn_lengths(text: &str) -> Vec<(String, usize, usize)> {
+    let tokens = tokenize(text);
+    let mut out = Vec::new();
+    for i in 0..tokens.len().saturating_sub(1) {
+        if tokens[i].text != "fn" || !is_ident(&tokens[i + 1].text) {
+            continue;
+        }
+        // The body's brace, or the `;` of a declaration, outside the parameters.
+        let mut depth = 0i32;
+        let mut j = i + 2;
+        while j < tokens.len() {
+            match tokens[j].text.as_str() {
+                "(" | "[" => depth += 1,
+                ")" | "]" => depth -= 1,
+                ";" | "{" if depth == 0 => break,
+                _ => {}
+            }
+            j += 1;
+        }
+        if j == tokens.len() || tokens[j].text == ";" {
+            continue;
+        }
+        let mut braces = 0i32;
+        for t in &tokens[j..] {
+            match t.text.as_str() {
+                "{" => braces += 1,
+                "}" => braces -= 1,
+                _ => {}
+            }
+            if braces == 0 {
+                let lines = t.line - tokens[i].line + 1;
+                out.push((tokens[i + 1].text.clone(), tokens[i].line, lines));
+                break;
+            }
+        }
+    }
+    out
 }
 
 /// The checker itself on a crate made up for it: one cycle (a child importing its parent,
