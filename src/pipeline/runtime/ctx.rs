@@ -202,7 +202,7 @@ impl<I, O> Ctx<I, O> {
 
     /// What the merge can do now: the queued item with the smallest (arrival, port), once
     /// every other input's bound proves nothing earlier can come (or a recovery did).
-    #[inline]
+    #[inline(always)]
     fn choose(&mut self) -> Choice {
         // One pass: the earliest queued item, and the earliest cached bound of an empty
         // input (both as (cycle, port), the merge's order).
@@ -248,7 +248,7 @@ impl<I, O> Ctx<I, O> {
         Choice::Take(port, arrival)
     }
 
-    #[inline]
+    #[inline(always)]
     fn pop(&mut self, port: usize, arrival: Cycle) -> I {
         self.core.slots[self.unit as usize].go.set(None);
         // Every item a merge takes is the earliest (arrival, port) of all it will ever
