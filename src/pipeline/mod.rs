@@ -14,10 +14,13 @@
 //!
 //! - [`runtime`]: the framework: clocks, links, the executor, the timeline. It knows no
 //!   unit.
-//! - [`units`]: one file per box of Figure 5, each using only [`runtime::Ctx`].
+//! - [`unit`]: what a unit is to the builder ([`unit::Unit`]) and what a run offers it;
+//!   [`items`]: what the links carry; [`tiles`]: the ROPs' screen interleave and frame.
+//! - [`units`]: one file per box of Figure 5, each using only [`runtime::Ctx`] and its own
+//!   context.
 //! - [`crate::graph`]: which units each path instantiates and which boundaries carry links,
-//!   written once.
-//! - this file: elaboration (units, links, host threads) and the cycle report;
+//!   written once; [`builder`] checks it and elaborates it ([`wiring`]: the links).
+//! - this file: a run (plan, units' bodies, host threads) and the cycle report;
 //!   [`discoid`]: the timed discoid passes.
 //!
 //! Model only what a scene requires: a scene without primitives instantiates no units,
