@@ -14,7 +14,7 @@
 //!
 //! - [`runtime`]: the framework: clocks, links, the executor, the timeline. It knows no
 //!   unit.
-//! - [`unit`]: what a unit is to the builder ([`unit::Unit`]) and what a run offers it;
+//! - [`unit`](mod@unit): what a unit is to the builder ([`unit::Unit`]) and what a run offers it;
 //!   [`items`]: what the links carry; [`tiles`]: the ROPs' screen interleave and frame.
 //! - [`units`]: one file per box of Figure 5, each using only [`runtime::Ctx`] and its own
 //!   context.
