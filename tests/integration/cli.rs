@@ -2,6 +2,7 @@
 //! and bad input (exit status 2, an error naming the field, no file written).
 
 use crate::support::binary::{bin, files_in, memory_available, run};
+use crate::support::golden;
 use std::path::{Path, PathBuf};
 
 fn manifest() -> PathBuf {
@@ -135,8 +136,8 @@ fn reference_run_writes_the_accuracy_names_and_images() {
 /// The default scene's image, counts and cycle report (timed, baseline architecture),
 /// compared exactly with tests/golden/default/ (Setup's default perspective tolerance, k/2)
 /// and tests/golden/default_paper/ (`--perspective-tol off`: the paper's Setup).
-/// Regenerate with `LEMBO_BLESS=1 cargo test --test integration cli::` after an intended
-/// change.
+/// Regenerate with `LEMBO_BLESS=1 cargo test --release --test integration cli::golden`
+/// after an intended change; a blank image or an empty frame is refused either way.
 #[test]
 fn golden_default_scene() {
     check_golden(&["render", "--out", "o"], "default");
@@ -160,7 +161,34 @@ fn check_golden(args: &[&str], name: &str) {
         serde_json::from_slice(&std::fs::read(dir.path().join("o/report.json")).unwrap()).unwrap();
     let counts = serde_json::to_string_pretty(&report["counts"]).unwrap() + "\n";
     let cycles = serde_json::to_string_pretty(&report["cycles"]).unwrap() + "\n";
-    if std::env::var_os("LEMBO_BLESS").is_some() {
+    let got = image::load_from_memory(&image).unwrap().to_rgb8();
+    // What no golden may be, blessed or compared: a blank image or an empty frame.
+    let colours: std::collections::BTreeSet<[u8; 3]> = got.pixels().map(|p| p.0).collect();
+    assert!(
+        colours.len() > 16,
+        "{name}: {} colours in the image",
+        colours.len()
+    );
+    assert!(
+        report["counts"]["pixels_covered"].as_u64() > Some(1000),
+        "{name}: {counts}"
+    );
+    assert!(
+        report["cycles"]["total"].as_u64() > Some(0),
+        "{name}: {cycles}"
+    );
+    if golden::blessing() {
+        let old = |f: &str| std::fs::read(golden.join(f)).unwrap_or_default();
+        let changed: Vec<&str> = [
+            ("image.png", image.as_slice()),
+            ("counts.json", counts.as_bytes()),
+            ("cycles.json", cycles.as_bytes()),
+        ]
+        .into_iter()
+        .filter(|(f, new)| old(f) != *new)
+        .map(|(f, _)| f)
+        .collect();
+        eprintln!("{}: {name} changed: {changed:?}", golden::BLESS);
         std::fs::create_dir_all(&golden).unwrap();
         std::fs::write(golden.join("image.png"), &image).unwrap();
         std::fs::write(golden.join("counts.json"), &counts).unwrap();
@@ -169,7 +197,6 @@ fn check_golden(args: &[&str], name: &str) {
     let want = image::load_from_memory(&std::fs::read(golden.join("image.png")).unwrap())
         .unwrap()
         .to_rgb8();
-    let got = image::load_from_memory(&image).unwrap().to_rgb8();
     assert_eq!(want.dimensions(), got.dimensions());
     let differing = want
         .pixels()

@@ -93,13 +93,18 @@ fn run_with(scene: &Scene, a: &ArchConfig, triangles: bool, options: &SimOptions
     }
 }
 
-/// Compares `got` with the golden file `name` of `tests/golden/cycles`, or writes it when
-/// blessing.
-fn check(name: &str, got: BTreeMap<String, String>) {
+/// Compares `got` with the golden file `name` of `tests/golden/cycles` (at least `min_cases`
+/// cases, every run a frame of some cycles), or writes it when blessing.
+fn check(name: &str, got: BTreeMap<String, String>, min_cases: usize) {
     golden::check(
         &root().join("tests/golden/cycles").join(name),
         got,
         "cycle reports",
+        &golden::Expect {
+            min_cases,
+            expected_errors: &[],
+            valid: &golden::cycles_above_zero,
+        },
     );
 }
 
@@ -136,7 +141,7 @@ fn shipped_scenes_keep_their_cycle_reports() {
             }
         }
     }
-    check("shipped.json", got);
+    check("shipped.json", got, 150);
 }
 
 /// 200 seeded random architectures (unit counts 1-8, costs, FIFO depths 1-64, latencies,
@@ -219,5 +224,5 @@ fn random_architectures_keep_their_cycle_reports() {
             },
         )
         .unwrap();
-    check("random.json", got.into_inner());
+    check("random.json", got.into_inner(), 400);
 }
