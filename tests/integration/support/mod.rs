@@ -103,3 +103,16 @@ pub fn fans<R: Real>(s: &Scene, n: u32, view: &View) -> u64 {
     }
     fan
 }
+
+/// The step of .ci/run that sets `LEMBO_EXPECT_DEBUG_ASSERTIONS=1` runs with debug
+/// assertions on (the `debug_assert!`s of the runtime and the stages are compiled in), as
+/// it says; the release suite, which does not set it, compiles them out.
+#[test]
+fn debug_assertions_are_on_where_ci_expects_them() {
+    if std::env::var_os("LEMBO_EXPECT_DEBUG_ASSERTIONS").is_some_and(|v| v == "1") {
+        assert!(
+            cfg!(debug_assertions),
+            "this step was built without debug assertions"
+        );
+    }
+}
