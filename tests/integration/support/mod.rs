@@ -108,6 +108,8 @@ pub fn fans<R: Real>(s: &Scene, n: u32, view: &View) -> u64 {
 /// assertions on (the `debug_assert!`s of the runtime and the stages are compiled in), as
 /// it says; the release suite, which does not set it, compiles them out.
 #[test]
+// The assertion is constant per build: that is what it checks.
+#[allow(clippy::assertions_on_constants)]
 fn debug_assertions_are_on_where_ci_expects_them() {
     if std::env::var_os("LEMBO_EXPECT_DEBUG_ASSERTIONS").is_some_and(|v| v == "1") {
         assert!(
