@@ -142,7 +142,7 @@ fn timed_results_do_not_depend_on_the_host_schedule() {
 }
 
 #[test]
-fn deeper_fifos_are_never_slower() {
+fn one_entry_fifos_are_slower_than_deep_ones() {
     let s = scene("sphere24.json", Some(256));
     let shallow = timed(
         &s,
@@ -154,8 +154,10 @@ fn deeper_fifos_are_never_slower() {
         &with_depth(ArchConfig::default(), 64),
         &SimOptions::default(),
     );
+    // Strictly: one-entry FIFOs stall the sphere's bursts of intervals and spans, so a
+    // model that ignored the depth would fail here.
     assert!(
-        shallow.cycles.total >= deep.cycles.total,
+        shallow.cycles.total > deep.cycles.total,
         "depth 1: {} cycles, depth 64: {}",
         shallow.cycles.total,
         deep.cycles.total
