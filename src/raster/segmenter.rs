@@ -603,6 +603,7 @@ mod tests {
         // every chord is within k, in walk order, from the start to the end.
         let l = screen_lembo::<R>(x_linear(), y_bowl());
         let (walks, _) = run(&l, 45, 0.1);
+        assert!(!walks.is_empty(), "scanline 45 crosses the bowl");
         for (iv, _) in &walks {
             let (mut out, mut c) = (Vec::new(), Counts::default());
             let yj = R::of(45.5);
@@ -649,13 +650,16 @@ mod tests {
         for (y, j) in [(y_parabolic(), 40), (y_bowl(), 45)] {
             let l = screen_lembo::<f32>(x_linear(), y);
             let (walks, _) = run(&l, j, 0.1);
+            let mut checked = 0;
             for s in walks.iter().flat_map(|(_, s)| s) {
                 let mid = [
                     0.5 * (s.p0.uv[0] + s.p1.uv[0]),
                     0.5 * (s.p0.uv[1] + s.p1.uv[1]),
                 ];
                 assert!(y_error(&l, j, mid) <= 0.1 + 1e-3);
+                checked += 1;
             }
+            assert!(checked > 5, "scanline {j}: {checked} segments");
         }
     }
 
