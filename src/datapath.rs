@@ -1,5 +1,5 @@
 //! The datapath precision of the functional model, and the classes of operation a datapath
-//! word does ([`Op`]), which a counting word ([`crate::cost::counted::Counted`]) tallies.
+//! word does ([`Op`]), which a counting word (`cost::counted::Counted`) tallies.
 //!
 //! Every stage of the extreme method is written once, generic over [`Real`], and
 //! instantiated for `f32` (the default, as a hardware unit would be built) and `f64`
@@ -14,7 +14,7 @@ use std::fmt::Debug;
 pub trait Real: Float + Debug + Default + Send + Sync + 'static {
     /// Name used in reports and on the command line.
     const NAME: &'static str;
-    /// Whether this word counts its operations ([`crate::cost::counted::Counted`]): code
+    /// Whether this word counts its operations (`cost::counted::Counted`): code
     /// that would do extra arithmetic for speed (the ROP's shading in lanes, which computes
     /// both sides of a branch) does the formula as written instead.
     const COUNTS_OPERATIONS: bool = false;
@@ -23,7 +23,7 @@ pub trait Real: Float + Debug + Default + Send + Sync + 'static {
     /// Widens to `f64` exactly.
     fn f64(self) -> f64;
     /// Charges the operations that follow to the unit kind `kind` (a counting datapath,
-    /// [`crate::cost::counted::Counted`], keeps per-kind counts; for `f32` and `f64` this is
+    /// `cost::counted::Counted`, keeps per-kind counts; for `f32` and `f64` this is
     /// nothing).
     #[inline(always)]
     fn charge(_kind: UnitKind) {}

@@ -1,6 +1,6 @@
 //! The unit graph, described once: the kinds of unit, which kinds each path instantiates,
 //! and which boundaries between kinds carry links, with each link's defaults. Elaboration
-//! ([`crate::pipeline`]), the architecture file's `links` ([`crate::config`]), the report's
+//! (`pipeline`), the architecture file's `links` (`config`), the report's
 //! unit list, the FIFO entry count, the counting runs' operation tables and the sweep's
 //! column order all read it, so adding a unit means adding it here and writing its body in
 //! `pipeline/units/`.

@@ -33,7 +33,7 @@ pub struct Tolerance {
     /// k: the midpoint error of every segment of the walk (Martinelli 2006, section 5).
     pub k: f64,
     /// How far Setup's rebuilt screen quadratics may be from the true perspective projection
-    /// before it splits a lembo ([`refine`](crate::raster::refine), `--perspective-tol`);
+    /// before it splits a lembo (`raster::refine`, `--perspective-tol`);
     /// `None` is the paper's Setup, which projects six points and neither splits for
     /// perspective nor clips.
     pub perspective: Option<f64>,

@@ -12,7 +12,7 @@
 //! `__powisf2`/`__powidf2` runs, written out so it can run in lanes. No operation is fused
 //! (Rust never contracts `a * b + c` into a fused multiply-add).
 //!
-//! A counting datapath ([`crate::cost::counted::Counted`]) never comes here: selects would
+//! A counting datapath (`cost::counted::Counted`) never comes here: selects would
 //! count both sides of every branch, so the ROP shades its fragments one at a time and the
 //! counts stay those of the formula as written.
 
