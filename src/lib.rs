@@ -62,6 +62,7 @@ pub mod datapath_study;
 pub mod discoid;
 pub mod error;
 pub mod graph;
+pub mod isa;
 pub mod job;
 pub mod json;
 pub mod lembo;

@@ -75,7 +75,8 @@ struct SweepArgs {
     #[arg(long, value_name = "N", default_value_t = 1)]
     host_threads: u32,
     /// Run even when the runs at once (--jobs) are estimated to need more memory than the
-    /// machine has available.
+    /// machine has available (/proc/meminfo's MemAvailable, or LEMBO_MEMORY_AVAILABLE bytes
+    /// when set).
     #[arg(long)]
     no_memory_check: bool,
 }
@@ -222,7 +223,8 @@ struct RenderArgs {
     #[arg(long, value_name = "N")]
     threads: Option<u32>,
     /// Run even when the memory estimate for this viewport is above the memory the machine
-    /// has available (a run that large is refused before it starts otherwise).
+    /// has available (a run that large is refused before it starts otherwise). Available is
+    /// /proc/meminfo's MemAvailable, or LEMBO_MEMORY_AVAILABLE (bytes) when set.
     #[arg(long)]
     no_memory_check: bool,
 }
@@ -279,7 +281,8 @@ struct CompareArgs {
     #[arg(long, value_name = "N", default_value_t = 1)]
     host_threads: u32,
     /// Run even when the memory estimate for this viewport is above the memory the machine
-    /// has available (a run that large is refused before it starts otherwise).
+    /// has available (a run that large is refused before it starts otherwise). Available is
+    /// /proc/meminfo's MemAvailable, or LEMBO_MEMORY_AVAILABLE (bytes) when set.
     #[arg(long)]
     no_memory_check: bool,
 }

@@ -37,9 +37,32 @@ pub fn memory_estimate(job: &RenderJob, scene: &Scene, extra_per_pixel: f64) -> 
     BYTES_FIXED + pixels * per_pixel
 }
 
+/// The environment variable that, when set, replaces the memory the system reports as
+/// available \[bytes\]: a machine of any size can then be asked how a smaller one refuses
+/// (the tests use it, so the refusal is tested on every machine).
+pub const MEMORY_AVAILABLE_ENV: &str = "LEMBO_MEMORY_AVAILABLE";
+
+/// The memory a run may count on \[bytes\]: [`MEMORY_AVAILABLE_ENV`] when set (a positive
+/// whole number of bytes, else refused naming it), else what the system can give a new
+/// allocation without swapping (`MemAvailable` of /proc/meminfo); None where neither says.
+fn memory_available() -> Result<Option<f64>> {
+    match std::env::var(MEMORY_AVAILABLE_ENV) {
+        Ok(v) => match v.trim().parse::<u64>() {
+            Ok(bytes) if bytes > 0 => Ok(Some(bytes as f64)),
+            _ => Err(Error::invalid(
+                "environment",
+                MEMORY_AVAILABLE_ENV,
+                format!("{v:?}"),
+                "must be a positive whole number of bytes (or unset, to read /proc/meminfo)",
+            )),
+        },
+        Err(_) => Ok(system_memory_available()),
+    }
+}
+
 /// The memory the system can give a new allocation without swapping \[bytes\]
 /// (`MemAvailable` of /proc/meminfo); None where it cannot be read.
-fn memory_available() -> Option<f64> {
+fn system_memory_available() -> Option<f64> {
     let text = std::fs::read_to_string("/proc/meminfo").ok()?;
     let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
     let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
@@ -71,7 +94,7 @@ pub fn check_available(
     advice: &str,
 ) -> Result<()> {
     const GIB: f64 = (1u64 << 30) as f64;
-    let have = memory_available();
+    let have = memory_available()?;
     if need > GIB {
         eprintln!(
             "lembo-sim: {what} needs about {:.1} GiB of memory (estimate{})",

@@ -137,8 +137,8 @@ fn scanlines<R: Real, S: FragmentSink<R>>(
     b: &mut Buffers<R>,
 ) -> std::result::Result<(), (u32, Error)> {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU has AVX2.
+    if crate::isa::kernels() == crate::isa::Isa::Avx2 {
+        // SAFETY: `kernels` says AVX2 only where the CPU has it.
         return unsafe { scanlines_avx2(l, j0, j1, width, k, segment_cap, sink, counts, b) };
     }
     scanlines_as_compiled(l, j0, j1, width, k, segment_cap, sink, counts, b)
@@ -267,6 +267,9 @@ mod tests {
     /// fragments and counts of the stages compiled for the baseline instruction set, bit for
     /// bit, on every lembo of the bunny and of the default scene, in both datapaths.
     fn dispatched_as_compiled<R: Real>(scene: &str) {
+        if !crate::isa::avx2_comparable("the AVX2 scan-line stages") {
+            return;
+        }
         let (scene, view) = shipped_at(scene, 384, 384);
         let tol = Tolerance::new(0.5);
         let path = LemboPath::<R>::new(&scene, &view, tol.k, tol.perspective, DEFAULT_SEGMENT_CAP);

@@ -205,6 +205,9 @@ mod tests {
     /// bit, through the functional ROP, for the bunny tessellated once and twice, in both
     /// datapaths.
     fn triangle_rows_as_compiled<R: Real>(level: u32) {
+        if !crate::isa::avx2_comparable("the AVX2 triangle rows") {
+            return;
+        }
         let (scene, view) = shipped("traces/bunny.json");
         let tessellation = crate::lembo::tessellate::Tessellation::new(&scene, level);
         let source: &dyn TriangleSource = &tessellation;

@@ -219,7 +219,7 @@ mod tests {
 
     fn check<R: Real>(light: &Light, view: &View, rng: &mut impl RngExt) {
         #[cfg(target_arch = "x86_64")]
-        let avx2 = std::arch::is_x86_feature_detected!("avx2");
+        let avx2 = crate::isa::avx2_comparable("the AVX2 shading lanes");
         let shader = FragmentShader::<R>::new(light, view);
         let color = [0.9, 0.45, 0.1].map(R::of);
         for _ in 0..4000 {
@@ -228,7 +228,7 @@ mod tests {
             let (rgb, n) = shader.shade_lanes(|k| lane(&normal, &position, k), color);
             #[cfg(target_arch = "x86_64")]
             if avx2 {
-                // SAFETY: the CPU has AVX2, checked above.
+                // SAFETY: `avx2_comparable` is true only where the kernels run as AVX2.
                 let wide = unsafe { shade_lanes_avx2(&shader, &normal, &position, color) };
                 assert_eq!(wide.0, rgb);
                 assert_eq!(

@@ -137,8 +137,8 @@ impl<R: Real> Batch<R> {
             return;
         }
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has AVX2, checked just above. (No fused multiply-add is
+        if crate::isa::kernels() == crate::isa::Isa::Avx2 {
+            // SAFETY: `kernels` says AVX2 only where the CPU has it. (No fused multiply-add is
             // enabled, and Rust does not contract without it: the same IEEE operations.)
             unsafe { self.flush_avx2(shader, write) };
             return;

@@ -31,7 +31,7 @@ use std::path::Path;
 const LAYERS: &[(&str, &[&str])] = &[
     (
         "leaf types and errors",
-        &["error", "graph", "datapath", "json", "tolerance"],
+        &["error", "graph", "datapath", "isa", "json", "tolerance"],
     ),
     ("the architecture file", &["config"]),
     (

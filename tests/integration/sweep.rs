@@ -22,7 +22,8 @@ fn sweep(args: &[&str], envs: &[(&str, &str)], cwd: &Path) -> Output {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_lembo-sim"));
     cmd.args(args)
         .current_dir(cwd)
-        .env_remove("LEMBO_SWEEP_STOP_AFTER");
+        .env_remove("LEMBO_SWEEP_STOP_AFTER")
+        .env_remove("LEMBO_MEMORY_AVAILABLE");
     for (k, v) in envs {
         cmd.env(k, v);
     }
@@ -235,6 +236,11 @@ fn merged_shards_equal_the_unsharded_sweep() {
 /// A bad spec (or flag) is refused with status 2, an error naming `needle`, and no
 /// results.jsonl.
 fn assert_refused(spec: &str, extra: &[&str], needle: &str) {
+    assert_refused_with(spec, extra, &[], needle);
+}
+
+/// As [`assert_refused`], with the environment variables `envs` set.
+fn assert_refused_with(spec: &str, extra: &[&str], envs: &[(&str, &str)], needle: &str) {
     let tmp = tempfile::tempdir().unwrap();
     let spec_path = tmp.path().join("bad.json");
     std::fs::write(&spec_path, spec).unwrap();
@@ -242,7 +248,7 @@ fn assert_refused(spec: &str, extra: &[&str], needle: &str) {
     let out_s = out_dir.to_string_lossy().into_owned();
     let mut args = vec!["sweep", spec_path.to_str().unwrap(), "--out", &out_s];
     args.extend_from_slice(extra);
-    let out = sweep(&args, &[], tmp.path());
+    let out = sweep(&args, envs, tmp.path());
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{spec}: {stderr}");
     assert!(
@@ -570,22 +576,57 @@ fn the_readme_cluster_recipes_give_the_unsharded_sweep() {
 }
 
 /// Runs that together would need more memory than the machine has are refused before any
-/// run, naming `--jobs` and the estimate (two 16384x16384 runs with their reference need
-/// about 100 GiB); `--no-memory-check` is the way to insist.
+/// run, naming `--jobs` and the estimate; `--no-memory-check` is the way to insist. Two
+/// 2048x2048 runs with their reference need about 1.7 GiB, one about 0.8 GiB: on a machine
+/// set (`LEMBO_MEMORY_AVAILABLE`) to 1.25 GiB, `--jobs 2` is refused and `--jobs 1` passes
+/// the check (`LEMBO_SWEEP_STOP_AFTER=0` then stops it before any run). Where the machine
+/// itself has less than 90 GB, two 16384x16384 runs (about 100 GiB) are refused on its own
+/// reading of /proc/meminfo too.
 #[test]
 fn runs_at_once_larger_than_memory_are_refused_before_any_run() {
-    let available = binary::memory_available();
-    let Some(bytes) = available.filter(|b| *b < 90e9) else {
-        eprintln!("skipped: this machine may have the memory for the runs");
-        return;
-    };
     let scene = manifest().join("traces/sphere24.json");
-    let spec = format!(
-        r#"{{"name": "big", "scenes": [{:?}], "viewport": [16384, 16384], "grid": [{{"k": [1, 0.5]}}]}}"#,
-        scene.to_string_lossy()
+    let spec_at = |side: u32| {
+        format!(
+            r#"{{"name": "big", "scenes": [{:?}], "viewport": [{side}, {side}], "grid": [{{"k": [1, 0.5]}}]}}"#,
+            scene.to_string_lossy()
+        )
+    };
+    let small_machine = ("LEMBO_MEMORY_AVAILABLE", "1342177280");
+    for needle in [
+        "field `--jobs` = 2",
+        "1.7 GiB (estimate)",
+        "--no-memory-check",
+    ] {
+        assert_refused_with(&spec_at(2048), &["--jobs", "2"], &[small_machine], needle);
+    }
+    // The control: one run at a time fits the same machine.
+    let tmp = tempfile::tempdir().unwrap();
+    let spec_path = tmp.path().join("big.json");
+    std::fs::write(&spec_path, spec_at(2048)).unwrap();
+    let out = sweep(
+        &[
+            "sweep",
+            spec_path.to_str().unwrap(),
+            "--out",
+            "o",
+            "--jobs",
+            "1",
+        ],
+        &[small_machine, ("LEMBO_SWEEP_STOP_AFTER", "0")],
+        tmp.path(),
     );
-    assert_refused(&spec, &["--jobs", "2"], "field `--jobs` = 2");
-    assert_refused(&spec, &["--jobs", "2"], "GiB (estimate)");
-    assert_refused(&spec, &["--jobs", "2"], "--no-memory-check");
-    eprintln!("{:.1} GiB available", bytes / (1u64 << 30) as f64);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(3), "{stderr}");
+    assert!(stderr.contains("after 0 runs"), "{stderr}");
+    match binary::memory_available().filter(|b| *b < 90e9) {
+        Some(bytes) => {
+            for needle in ["field `--jobs` = 2", "GiB (estimate)", "--no-memory-check"] {
+                assert_refused(&spec_at(16384), &["--jobs", "2"], needle);
+            }
+            eprintln!("{:.1} GiB available", bytes / (1u64 << 30) as f64);
+        }
+        None => eprintln!(
+            "skipped the part on this machine's own memory: it may have the memory for two 16384x16384 runs; the refusal was tested at a set size"
+        ),
+    }
 }

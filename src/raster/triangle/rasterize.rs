@@ -274,8 +274,8 @@ pub fn rasterize_rows<R: Real, S: TriangleSink<R>>(
     counts: &mut Counts,
 ) {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU has AVX2.
+    if crate::isa::kernels() == crate::isa::Isa::Avx2 {
+        // SAFETY: `kernels` says AVX2 only where the CPU has it.
         return unsafe { rasterize_rows_avx2(t, lo, hi, sink, counts) };
     }
     rasterize_rows_as_compiled(t, lo, hi, sink, counts)

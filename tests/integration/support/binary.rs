@@ -3,9 +3,12 @@
 use std::path::Path;
 use std::process::{Command, Output};
 
-/// The built binary.
+/// The built binary, with the test hooks a caller's environment may hold removed (a test
+/// sets the ones it means).
 pub fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_lembo-sim"))
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_lembo-sim"));
+    cmd.env_remove("LEMBO_MEMORY_AVAILABLE");
+    cmd
 }
 
 /// Runs the binary with `args` in `cwd` and waits for it.
