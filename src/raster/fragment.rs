@@ -223,6 +223,47 @@ mod tests {
         }
     }
 
+    /// A run split anywhere, each piece walked after [`Span::advance`] past the pixels
+    /// before it (as the timed rasterizer splits runs at ROP tiles), gives the whole run's
+    /// pixels and domain points bit for bit.
+    #[test]
+    fn a_span_split_and_advanced_walks_as_the_whole() {
+        fn bits<R: Real>(span: &Span<R>) -> Vec<(u32, u64, u64)> {
+            let mut v = Vec::new();
+            span.walk(|i, u, w| v.push((i, u.f64().to_bits(), w.f64().to_bits())));
+            v
+        }
+        fn check<R: Real>() {
+            let whole = Span {
+                i0: 3,
+                i1: 40,
+                u: R::of(0.123_456_7),
+                v: R::of(0.765_432_1),
+                dudx: R::of(0.010_101_3),
+                dvdx: R::of(-0.007_003_9),
+            };
+            let want = bits(&whole);
+            assert_eq!(want.len(), 37);
+            for cuts in [vec![1], vec![5, 6, 20], vec![36], vec![0, 13, 13, 30]] {
+                let mut got = Vec::new();
+                let mut rest = whole;
+                let mut at = 0;
+                for &cut in cuts.iter().chain([&37]) {
+                    let mut piece = rest;
+                    piece.i1 = whole.i0 + cut;
+                    got.extend(bits(&piece));
+                    rest.advance(cut - at);
+                    at = cut;
+                }
+                assert_eq!(rest.i0, whole.i1);
+                assert!(rest.is_empty() && rest.len() == 0);
+                assert_eq!(got, want, "cut at {cuts:?}");
+            }
+        }
+        check::<f32>();
+        check::<f64>();
+    }
+
     #[test]
     fn fragment_pixel_rule_is_half_open() {
         let want = BTreeMap::from([(10, 1), (11, 1)]);

@@ -1,0 +1,95 @@
+#!/usr/bin/env python3
+"""The RESULTS.md table of a mutation run: per module, mutants, caught, missed, timeouts,
+unviable and the score (caught + timeouts that hang, over the viable mutants).
+
+Usage: tests/mutants/table.py [RESULTS_DIR...]   (default: every out/mutants/results*)
+
+Reads each RESULTS_DIR/mutants.out/outcomes.json (cargo-mutants' record); with several
+(shards, or a later `--iterate` run), a mutant's last outcome counts. A timeout counts as
+caught only when it is listed in tests/mutants/hangs.txt (checked by hand to hang, not to
+be merely slow); the others count as missed.
+"""
+import glob
+import json
+import os
+import sys
+from collections import defaultdict
+
+ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
+
+
+def outcomes(dirs):
+    last = {}
+    for d in dirs:
+        path = os.path.join(d, "mutants.out", "outcomes.json")
+        if not os.path.exists(path):
+            continue
+        with open(path) as f:
+            record = json.load(f)
+        for o in record["outcomes"]:
+            s = o["scenario"]
+            if not isinstance(s, dict) or "Mutant" not in s:
+                continue  # the baseline
+            last[s["Mutant"]["name"]] = (s["Mutant"]["file"], o["summary"])
+    return last
+
+
+def hangs():
+    path = os.path.join(ROOT, "tests", "mutants", "hangs.txt")
+    if not os.path.exists(path):
+        return set()
+    with open(path) as f:
+        return {l.strip() for l in f if l.strip() and not l.startswith("#")}
+
+
+def main():
+    dirs = sys.argv[1:] or sorted(glob.glob(os.path.join(ROOT, "out", "mutants", "results*")))
+    hung = hangs()
+    rows = defaultdict(lambda: defaultdict(int))
+    missed = []
+    for name, (file, summary) in sorted(outcomes(dirs).items()):
+        r = rows[file]
+        r["mutants"] += 1
+        if summary == "CaughtMutant":
+            r["caught"] += 1
+        elif summary == "MissedMutant":
+            r["missed"] += 1
+            missed.append(name)
+        elif summary == "Timeout":
+            r["timeouts"] += 1
+            if name in hung:
+                r["hung"] += 1
+            else:
+                missed.append(name + "  (timeout, not known to hang)")
+        elif summary == "Unviable":
+            r["unviable"] += 1
+        else:
+            r["other"] += 1
+            missed.append(f"{name}  ({summary})")
+    print("| module | mutants | caught | missed | timeouts (hang) | unviable | score |")
+    print("|---|---:|---:|---:|---:|---:|---:|")
+    total = defaultdict(int)
+    for file in sorted(rows):
+        r = rows[file]
+        for k, v in r.items():
+            total[k] += v
+        print(row(file.removeprefix("src/"), r))
+    print(row("**all**", total))
+    if missed:
+        print("\nNot caught:")
+        for m in missed:
+            print("-", m)
+
+
+def row(name, r):
+    viable = r["mutants"] - r["unviable"]
+    caught = r["caught"] + r["hung"]
+    score = f"{100.0 * caught / viable:.1f} %" if viable else "-"
+    return (
+        f"| {name} | {r['mutants']} | {r['caught']} | {r['missed']} | "
+        f"{r['timeouts']} ({r['hung']}) | {r['unviable']} | {score} |"
+    )
+
+
+if __name__ == "__main__":
+    main()
