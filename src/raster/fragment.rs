@@ -264,6 +264,19 @@ mod tests {
         check::<f64>();
     }
 
+    /// `span` gives a run only where a pixel centre lies inside the subsegment (half-open on
+    /// the right), and the run's emptiness is its length's.
+    #[test]
+    fn a_span_is_given_only_where_a_pixel_centre_is_covered() {
+        let at = |x0, x1| span(&sub(x0, x1), SIDE);
+        assert_eq!(at(10.5, 12.5).map(|s| (s.i0, s.i1)), Some((10, 12)));
+        assert!(!at(10.5, 12.5).unwrap().is_empty());
+        // No centre inside (10.5 is pixel 10's centre, counted on the left end only).
+        for (x0, x1) in [(10.6, 11.4), (9.6, 10.5), (11.5, 11.5), (f64::NAN, 3.0)] {
+            assert_eq!(at(x0, x1), None, "[{x0}, {x1}]");
+        }
+    }
+
     #[test]
     fn fragment_pixel_rule_is_half_open() {
         let want = BTreeMap::from([(10, 1), (11, 1)]);

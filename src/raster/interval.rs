@@ -518,6 +518,39 @@ mod tests {
         assert!(shortcut > 1000 && looped > 1000, "{shortcut} {looped}");
     }
 
+    /// The shortcut takes exactly two crossings, an entry then an exit of one part, with no
+    /// saddle; anything else (an exit first, two entries, two parts, a saddle, one or three
+    /// crossings) goes to the pairing loop.
+    #[test]
+    fn only_an_entry_then_an_exit_of_one_part_takes_the_shortcut() {
+        let c = |entry: bool, part: i8| Crossing {
+            p: CurvePoint {
+                uv: [0.25, 0.25],
+                x: 3.0,
+                edge: INTERIOR,
+            },
+            entry,
+            part,
+            is_virtual: false,
+            key: 0.0f64,
+        };
+        let (entry, exit) = (c(true, 1), c(false, 1));
+        assert!(entry_then_exit(&[entry, exit], None).is_some());
+        assert!(entry_then_exit(&[c(true, -1), c(false, -1)], None).is_some());
+        for xs in [
+            vec![exit, entry],
+            vec![entry, entry],
+            vec![exit, exit],
+            vec![entry, c(false, -1)],
+            vec![entry],
+            vec![entry, exit, exit],
+            vec![],
+        ] {
+            assert!(entry_then_exit(&xs, None).is_none(), "{xs:?}");
+        }
+        assert!(entry_then_exit(&[entry, exit], Some([0.5, 0.5])).is_none());
+    }
+
     #[test]
     fn an_entry_then_an_exit_is_paired_as_by_the_loop() {
         shortcut_pairs_as_the_loop::<f32>();
