@@ -518,6 +518,34 @@ mod tests {
         assert!(shortcut > 1000 && looped > 1000, "{shortcut} {looped}");
     }
 
+    /// The tips an interior extremum puts on a scanline lie on the curve Y = y_j, for a bowl
+    /// whose axes are not the domain's (y = 40.3 + 100 ((u-.3)² + (v-.3)²) + 80 (u-.3)(v-.3):
+    /// eigenvectors along the diagonals, so both components of each tip move).
+    fn tips_on_the_curve<R: Real>() {
+        let l = screen_lembo::<R>(x_linear(), quad(100.0, 100.0, 80.0, -84.0, -84.0, 65.5));
+        for j in [41, 45, 50] {
+            let (mut xs, mut counts) = (Vec::new(), Counts::default());
+            sorted_crossings(&l, j, R::of(0.5), &mut xs, &mut counts);
+            assert_eq!(counts.virtual_roots, 2, "scanline {j}");
+            let tips: Vec<_> = xs.iter().filter(|c| c.is_virtual).collect();
+            assert!(!tips.is_empty(), "scanline {j}");
+            for c in tips {
+                let [u, v] = c.p.uv;
+                let y = l.y.eval(u, v).f64();
+                assert!(
+                    (y - (j as f64 + 0.5)).abs() < tol::<R>(),
+                    "scanline {j}: {y} at {u:?}, {v:?}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn an_extremum_puts_its_tips_on_the_scanline() {
+        tips_on_the_curve::<f32>();
+        tips_on_the_curve::<f64>();
+    }
+
     /// The shortcut takes exactly two crossings, an entry then an exit of one part, with no
     /// saddle; anything else (an exit first, two entries, two parts, a saddle, one or three
     /// crossings) goes to the pairing loop.
