@@ -338,12 +338,25 @@ mod tests {
         hits
     }
 
-    fn closed_loop<R: Real>(slack: f64) {
-        let l = screen_lembo::<R>(x_linear(), y_bowl());
-        let (frags, c) = scanline_fragments(&l, 40, 0.5);
+    /// y = 40.3 + 100 ((u-.3)² + (v-.3)²) + 80 (u-.3)(v-.3): the bowl turned so that its
+    /// axes are the domain's diagonals.
+    fn y_turned_bowl() -> crate::lembo::Quadratic<f64> {
+        quad(100.0, 100.0, 80.0, -84.0, -84.0, 65.5)
+    }
+
+    /// y = 60.7 - 100 ((u-.3)² + (v-.3)²) - 80 (u-.3)(v-.3): the turned bowl upside down
+    /// (an interior maximum).
+    fn y_turned_dome() -> crate::lembo::Quadratic<f64> {
+        quad(-100.0, -100.0, -80.0, 84.0, 84.0, 35.5)
+    }
+
+    fn closed_loop<R: Real>(y: crate::lembo::Quadratic<f64>, j: u32, slack: f64) {
+        let l = screen_lembo::<R>(x_linear(), y);
+        let (frags, c) = scanline_fragments(&l, j, 0.5);
         assert!(c.virtual_roots == 2 && !frags.is_empty(), "{c:?}");
+        assert_eq!((c.intervals, c.unpaired_roots), (2, 0), "{c:?}");
         for (_, u, v) in &frags {
-            assert!(y_error(&l, 40, [*u, *v]) <= 0.5 + slack);
+            assert!(y_error(&l, j, [*u, *v]) <= 0.5 + slack);
         }
         // The loop maps onto a piece of the scanline, run forward then back (the bowl is
         // seen edge-on along a contour): every pixel of that piece is covered exactly twice,
@@ -356,16 +369,39 @@ mod tests {
 
     #[test]
     fn fragment_closed_loop_covers_its_scanline_piece() {
-        closed_loop::<f32>(1e-3);
-        closed_loop::<f64>(1e-9);
+        for (y, j) in [
+            (y_bowl(), 40),
+            (y_turned_bowl(), 40),
+            (y_turned_bowl(), 46),
+            (y_turned_dome(), 60),
+            (y_turned_dome(), 54),
+        ] {
+            closed_loop::<f32>(y, j, 1e-3);
+            closed_loop::<f64>(y, j, 1e-9);
+        }
     }
 
+    /// Near the saddle (scanline 50, within k/2 of its value) the walk splits there; away
+    /// from it (scanlines 44 and 56, 6 px below and above) each of the hyperbola's two
+    /// branches is one interval; every fragment within k, no root unpaired.
     fn saddle<R: Real>(slack: f64) {
         let l = screen_lembo::<R>(x_linear(), y_saddle());
-        let (frags, c) = scanline_fragments(&l, 50, 0.5);
-        assert!(c.saddle_splits > 0 && !frags.is_empty());
-        for (_, u, v) in &frags {
-            assert!(y_error(&l, 50, [*u, *v]) <= 0.5 + slack);
+        for j in [50, 44, 56] {
+            let (frags, c) = scanline_fragments(&l, j, 0.5);
+            assert!(!frags.is_empty(), "scanline {j}");
+            assert_eq!(c.unpaired_roots, 0, "scanline {j}: {c:?}");
+            if j == 50 {
+                assert!(c.saddle_splits > 0, "{c:?}");
+            } else {
+                assert_eq!(
+                    (c.saddle_splits, c.intervals),
+                    (0, 2),
+                    "scanline {j}: {c:?}"
+                );
+            }
+            for (_, u, v) in &frags {
+                assert!(y_error(&l, j, [*u, *v]) <= 0.5 + slack, "scanline {j}");
+            }
         }
     }
 

@@ -546,6 +546,67 @@ mod tests {
         tips_on_the_curve::<f64>();
     }
 
+    /// `pair_crossings` on crossings of one part at walk keys `keys` (entry or exit): the
+    /// intervals as (start key, end key), and the unpaired roots.
+    fn paired<R: Real>(keys: &[(R, bool)]) -> (Vec<(f64, f64)>, u64) {
+        let l = screen_lembo::<R>(x_linear(), y_plane());
+        let mut xs: Vec<Crossing<R>> = keys
+            .iter()
+            .map(|&(key, entry)| Crossing {
+                p: CurvePoint {
+                    uv: [R::of(0.25), R::of(0.25)],
+                    x: key,
+                    edge: 0,
+                },
+                entry,
+                part: 1,
+                is_virtual: false,
+                key,
+            })
+            .collect();
+        let (mut out, mut counts) = (Vec::new(), Counts::default());
+        pair_crossings(
+            &l,
+            [R::one(), R::zero()],
+            None,
+            &mut xs,
+            &mut out,
+            &mut counts,
+        );
+        let ends = out
+            .iter()
+            .map(|i| (i.start.x.f64(), i.end_key.f64()))
+            .collect();
+        (ends, counts.unpaired_roots)
+    }
+
+    /// An exit then an entry within rounding of one key (a few ulps apart, at keys near 0
+    /// and near 1000) are the curve touching the domain at one point: paired entry first.
+    /// Apart, they are not paired; an entry while one is open leaves the first unpaired and
+    /// pairs the second.
+    fn pairs_within_rounding<R: Real>() {
+        let ulps = |key: f64| R::of(key) + R::epsilon() * R::of(4.0 * (1.0 + key));
+        for key in [0.0, 1000.0] {
+            let (out, unpaired) = paired(&[(R::of(key), false), (ulps(key), true)]);
+            assert_eq!((out.len(), unpaired), (1, 0), "at key {key}");
+        }
+        assert_eq!(
+            paired(&[(R::of(0.0), false), (R::of(0.5), true)]),
+            (vec![], 2)
+        );
+        let r = |x: f64| R::of(x).f64();
+        assert_eq!(
+            paired(&[(R::of(0.0), true), (R::of(0.2), true), (R::of(0.5), false)]),
+            (vec![(r(0.2), r(0.5))], 1)
+        );
+    }
+
+    #[test]
+    fn roots_within_rounding_of_each_other_pair() {
+        pairs_within_rounding::<f32>();
+        pairs_within_rounding::<f64>();
+    }
+
     /// The shortcut takes exactly two crossings, an entry then an exit of one part, with no
     /// saddle; anything else (an exit first, two entries, two parts, a saddle, one or three
     /// crossings) goes to the pairing loop.
