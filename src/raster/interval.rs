@@ -607,6 +607,65 @@ mod tests {
         pairs_within_rounding::<f64>();
     }
 
+    /// The domain is the closed triangle u, v >= 0, u + v <= 1.
+    #[test]
+    fn the_domain_is_the_closed_triangle() {
+        for p in [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [0.5, 0.5], [0.2, 0.3]] {
+            assert!(in_domain::<f64>(p), "{p:?}");
+        }
+        let e = 1e-9;
+        for p in [
+            [-e, 0.3],
+            [0.3, -e],
+            [0.5 + e, 0.5],
+            [0.6, 0.6],
+            [-0.5, -0.5],
+            [2.0, -1.0],
+        ] {
+            assert!(!in_domain::<f64>(p), "{p:?}");
+        }
+    }
+
+    /// Every edge root of random lembos (curved in x as in y) lies on its edge with the
+    /// screen x of the lembo there and y on the scanline.
+    fn roots_lie_where_they_say<R: Real>() {
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut roots = 0;
+        for n in 0..60 {
+            let Some(l) = crate::raster::setup::tests::random_lembo::<R>(&mut seed, 40.0) else {
+                continue;
+            };
+            for j in (0..crate::raster::setup::tests::SIDE).step_by(3) {
+                for (e, on_edge) in roots_per_edge(&l, j).iter().enumerate() {
+                    for (p, _) in on_edge {
+                        roots += 1;
+                        let [u, v] = p.uv;
+                        assert_eq!(p.edge as usize, e);
+                        let x = l.x.eval(u, v).f64();
+                        let y = l.y.eval(u, v).f64();
+                        let scale = 1.0 + x.abs();
+                        assert!(
+                            (p.x.f64() - x).abs() < tol::<R>() * scale,
+                            "lembo {n}, scanline {j}: x {:?} against {x}",
+                            p.x
+                        );
+                        assert!(
+                            (y - (j as f64 + 0.5)).abs() < tol::<R>() * 10.0,
+                            "lembo {n}, scanline {j}: y {y}"
+                        );
+                    }
+                }
+            }
+        }
+        assert!(roots > 1000, "{roots}");
+    }
+
+    #[test]
+    fn edge_roots_lie_on_the_curve_at_their_x() {
+        roots_lie_where_they_say::<f32>();
+        roots_lie_where_they_say::<f64>();
+    }
+
     /// The shortcut takes exactly two crossings, an entry then an exit of one part, with no
     /// saddle; anything else (an exit first, two entries, two parts, a saddle, one or three
     /// crossings) goes to the pairing loop.
