@@ -460,7 +460,9 @@ mod tests {
                 .expect("under the cap");
                 (iv, segs)
             })
-            .collect();
+            .collect::<Walks<R>>();
+        let chords: usize = out.iter().map(|(_, s)| s.len()).sum();
+        assert_eq!(counts.segments, chords as u64, "every chord counted once");
         (out, counts)
     }
 
@@ -604,7 +606,7 @@ mod tests {
         let l = screen_lembo::<R>(x_linear(), y_bowl());
         let (walks, _) = run(&l, 45, 0.1);
         assert!(!walks.is_empty(), "scanline 45 crosses the bowl");
-        for (iv, _) in &walks {
+        for (iv, walked) in &walks {
             let (mut out, mut c) = (Vec::new(), Counts::default());
             let yj = R::of(45.5);
             last_chords(
@@ -620,6 +622,16 @@ mod tests {
             )
             .expect("under the cap");
             assert!(c.segments_refined > 2 && out.len() > 2, "{c:?}");
+            // Split only where too far: each split adds one chord, and halving in key needs
+            // no more than twice the chords of the walk at exactly k (16 against 12 here).
+            assert_eq!(c.segments_refined + 1, out.len() as u64);
+            assert_eq!(c.segments, out.len() as u64);
+            assert!(
+                out.len() <= 2 * walked.len(),
+                "{} chords against {} walked",
+                out.len(),
+                walked.len()
+            );
             assert_eq!((out[0].p0, out.last().unwrap().p1), (iv.start, iv.end));
             for (n, s) in out.iter().enumerate() {
                 let mid = [
@@ -643,6 +655,39 @@ mod tests {
     fn segmenter_closing_chord_is_split_until_within_k() {
         closing_chord_is_split_until_within_k::<f32>(1e-3);
         closing_chord_is_split_until_within_k::<f64>(1e-9);
+    }
+
+    /// A closing chord whose midpoint error is k up to the datapath's rounding (each chord of
+    /// a walk, whose error is exactly k by construction) is not split.
+    fn chords_at_exactly_k_are_not_split<R: Real>() {
+        let mut chords = 0;
+        for (y, j) in [(y_parabolic(), 40), (y_bowl(), 45)] {
+            let l = screen_lembo::<R>(x_linear(), y);
+            let (walks, _) = run(&l, j, 0.1);
+            for (iv, segs) in &walks {
+                for s in &segs[..segs.len() - 1] {
+                    let piece = Interval {
+                        start: s.p0,
+                        end: s.p1,
+                        end_key: dot(iv.tau, s.p1.uv),
+                        ..*iv
+                    };
+                    let (mut out, mut c) = (Vec::new(), Counts::default());
+                    let yj = R::of(j as f64 + 0.5);
+                    last_chords(&l, yj, R::of(0.1), &piece, s.p0, 0, 64, &mut out, &mut c)
+                        .expect("under the cap");
+                    assert_eq!(out.len(), 1, "scanline {j}: {s:?}");
+                    chords += 1;
+                }
+            }
+        }
+        assert!(chords > 10, "{chords}");
+    }
+
+    #[test]
+    fn segmenter_chords_at_exactly_k_are_not_split() {
+        chords_at_exactly_k_are_not_split::<f32>();
+        chords_at_exactly_k_are_not_split::<f64>();
     }
 
     #[test]
@@ -709,7 +754,18 @@ mod tests {
             &mut ivs,
             &mut counts,
         );
-        let mut segs = Vec::new();
+        // The cap counts this interval's chords, not those already in `out`.
+        let earlier = Segment {
+            p0: ivs[0].start,
+            p1: ivs[0].start,
+        };
+        let mut segs = vec![earlier; 5];
+        assert_eq!(
+            segments(&l, 45, 0.01, &ivs[0], 3, &mut segs, &mut counts),
+            Err(CapExceeded)
+        );
+        assert_eq!(segs.len(), 5 + 3);
+        segs.clear();
         assert_eq!(
             segments(&l, 45, 0.01, &ivs[0], 3, &mut segs, &mut counts),
             Err(CapExceeded)
