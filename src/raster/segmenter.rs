@@ -541,8 +541,10 @@ mod tests {
                 }
             }
         }
+        // Measured: 17 664 of 88 122 (20.0 %) in both datapaths; a bound made weaker than
+        // it is would skip fewer.
         assert!(
-            skipped * 10 > intervals_seen,
+            skipped * 100 >= intervals_seen * 19,
             "{skipped} of {intervals_seen} first steps skipped"
         );
     }
