@@ -256,7 +256,8 @@ mod tests {
                     at = cut;
                 }
                 assert_eq!(rest.i0, whole.i1);
-                assert!(rest.is_empty() && rest.len() == 0);
+                assert!(rest.is_empty());
+                assert_eq!(rest.len(), 0);
                 assert_eq!(got, want, "cut at {cuts:?}");
             }
         }
