@@ -772,28 +772,25 @@ mod tests {
             assert_eq!(link.latency_cycles, default.latency_cycles, "{name}");
         }
         // Everything else is the baseline.
-        let expected = ArchConfig {
-            name: "minimal".to_string(),
-            segmenter: SegmenterConfig {
-                count: 1,
-                ..defaults.segmenter.clone()
-            },
-            subsegmenter: SubsegmenterConfig {
-                count: 1,
-                ..defaults.subsegmenter.clone()
-            },
-            rasterizer: RasterizerConfig {
-                count: 1,
-                ..defaults.rasterizer.clone()
-            },
-            rop: RopConfig {
-                count: 1,
-                ..defaults.rop.clone()
-            },
-            links: config.links.clone(),
-            ..defaults
-        };
+        let expected = baseline_with("minimal", [1, 1, 1, 1], config.links.clone());
         assert_eq!(config, expected);
+    }
+
+    /// The baseline named `name` with the segmenter, subsegmenter, rasterizer and ROP counts
+    /// `counts` and the links `links`.
+    fn baseline_with(name: &str, counts: [u32; 4], links: LinksConfig) -> ArchConfig {
+        let mut c = ArchConfig {
+            name: name.to_string(),
+            links,
+            ..ArchConfig::default()
+        };
+        [
+            c.segmenter.count,
+            c.subsegmenter.count,
+            c.rasterizer.count,
+            c.rop.count,
+        ] = counts;
+        c
     }
 
     #[test]
@@ -811,31 +808,8 @@ mod tests {
             assert_eq!(link.fifo_depth, depth, "{name}");
             assert_eq!(link.latency_cycles, default.latency_cycles, "{name}");
         }
-        let expected = ArchConfig {
-            name: "wide".to_string(),
-            segmenter: SegmenterConfig {
-                count: 4,
-                ..defaults.segmenter.clone()
-            },
-            subsegmenter: SubsegmenterConfig {
-                count: 4,
-                ..defaults.subsegmenter.clone()
-            },
-            rasterizer: RasterizerConfig {
-                count: 8,
-                ..defaults.rasterizer.clone()
-            },
-            triangle_rasterizer: TriangleRasterizerConfig {
-                count: 2,
-                ..defaults.triangle_rasterizer.clone()
-            },
-            rop: RopConfig {
-                count: 4,
-                ..defaults.rop.clone()
-            },
-            links: config.links.clone(),
-            ..defaults
-        };
+        let mut expected = baseline_with("wide", [4, 4, 8, 4], config.links.clone());
+        expected.triangle_rasterizer.count = 2;
         assert_eq!(config, expected);
     }
 
