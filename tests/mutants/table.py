@@ -2,10 +2,14 @@
 """The RESULTS.md table of a mutation run: per module, mutants, caught, missed, timeouts,
 unviable and the score (caught + timeouts that hang, over the viable mutants).
 
-Usage: tests/mutants/table.py [RESULTS_DIR...]   (default: every out/mutants/results*)
+Usage: tests/mutants/table.py [RESULTS_DIR...]   (default: every out/mutants/runs/*)
+       tests/mutants/table.py --names caught|tested [RESULTS_DIR...]
+                             (the mutants an earlier run caught, or tested at all, one
+                             name a line: what tests/mutants/run --again/--untested skip)
 
 Reads each RESULTS_DIR/mutants.out/outcomes.json (cargo-mutants' record); with several
-(shards, or a later `--iterate` run), a mutant's last outcome counts. A timeout counts as
+(shards, or a later run of the mutants still missed), a mutant's last outcome counts, the
+runs taken in the order their outcomes were written. A timeout counts as
 caught only when it is listed in tests/mutants/hangs.txt (checked by hand to hang, not to
 be merely slow); the others count as missed.
 """
@@ -20,10 +24,8 @@ ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
 
 def outcomes(dirs):
     last = {}
-    for d in dirs:
-        path = os.path.join(d, "mutants.out", "outcomes.json")
-        if not os.path.exists(path):
-            continue
+    paths = [os.path.join(d, "mutants.out", "outcomes.json") for d in dirs]
+    for path in sorted((p for p in paths if os.path.exists(p)), key=os.path.getmtime):
         with open(path) as f:
             record = json.load(f)
         for o in record["outcomes"]:
@@ -43,8 +45,21 @@ def hangs():
 
 
 def main():
-    dirs = sys.argv[1:] or sorted(glob.glob(os.path.join(ROOT, "out", "mutants", "results*")))
+    args = sys.argv[1:]
+    names = None
+    if args[:1] == ["--names"]:
+        if len(args) < 2 or args[1] not in ("caught", "tested"):
+            sys.exit("table.py: --names takes caught or tested")
+        names, args = args[1], args[2:]
+    dirs = args or glob.glob(os.path.join(ROOT, "out", "mutants", "runs", "*"))
     hung = hangs()
+    if names:
+        done = {"CaughtMutant", "Unviable"}
+        for name, (_, summary) in sorted(outcomes(dirs).items()):
+            caught = summary in done or (summary == "Timeout" and name in hung)
+            if names == "tested" or caught:
+                print(name)
+        return
     rows = defaultdict(lambda: defaultdict(int))
     missed = []
     for name, (file, summary) in sorted(outcomes(dirs).items()):
