@@ -220,6 +220,25 @@ mod tests {
         }
     }
 
+    /// x's second derivative along a segment takes all three second-order terms of x(u, v)
+    /// (u², v² and uv), each with its own sign: segments in both diagonal directions, where
+    /// leaving out or flipping any of them misplaces x inside the segment.
+    #[test]
+    fn subsegmenter_takes_every_second_order_term_of_x() {
+        // x = 30u² + 70v² - 90uv + 10u - 20v + 40: a saddle-free bowl tilted in (u, v).
+        let l = screen_lembo::<f64>(quad(30.0, 70.0, -90.0, 10.0, -20.0, 40.0), y_plane());
+        for (p0, p1) in [
+            ([0.05, 0.05], [0.7, 0.25]),
+            ([0.1, 0.8], [0.6, 0.05]),
+            ([0.0, 0.0], [0.0, 0.9]),
+        ] {
+            for k in [0.5, 0.05] {
+                let (subs, _) = check(&l, &segment(&l, p0, p1), k);
+                assert!(subs.len() > 1, "{p0:?}-{p1:?} k {k}: x is not linear");
+            }
+        }
+    }
+
     #[test]
     fn subsegmenter_linear_x_is_one_subsegment() {
         let l = screen_lembo::<f32>(x_linear(), y_plane());
