@@ -137,6 +137,7 @@ mod tests {
         assert_eq!(out[0].a, seg.p0);
         assert_eq!(out.last().unwrap().b, seg.p1);
         for (n, s) in out.iter().enumerate() {
+            assert_ne!(s.a.uv, s.b.uv, "subsegment {n} is a point");
             if n > 0 {
                 assert_eq!(
                     out[n - 1].b,
@@ -192,6 +193,16 @@ mod tests {
                 .unwrap();
             assert!((fold.b.x.f64() - 24.0).abs() < 1e-4, "{fold:?}");
             assert!(subs.iter().all(|s| s.a.x.min(s.b.x).f64() >= 24.0 - 1e-4));
+            // Each side of the fold in the fewest equal steps within k: along the segment
+            // x(t) = 64 t² + ..., the chord of a step dt errs by 64 dt²/4.
+            let dt = (4.0 * k / 64.0f64).sqrt();
+            let steps = |len: f64| (len / dt).ceil() as usize;
+            assert_eq!(subs.len(), steps(0.5 / 0.8) + steps(0.3 / 0.8), "k {k}");
+        }
+        // A segment that starts or ends at the fold has none inside: one monotone piece.
+        for (p0, p1) in [([0.5, 0.2], [0.9, 0.2]), ([0.1, 0.2], [0.5, 0.2])] {
+            let (_, c) = check(&l, &segment(&l, p0, p1), 0.05);
+            assert_eq!(c.folds, 0, "{p0:?}-{p1:?}");
         }
     }
 
