@@ -659,6 +659,93 @@ mod tests {
         closing_chord_is_split_until_within_k::<f64>(1e-9);
     }
 
+    /// `curve_at_key` against a brute-force search on random lembos, random lines (walk
+    /// directions of any length) and scanlines: along the line, Y - y_j is a quadratic in the
+    /// distance across it, so it goes up through zero at most once; the search brackets that
+    /// crossing by sampling and bisects it. Where the search finds it, `curve_at_key` finds
+    /// the same point (on the curve, on the line); where it finds none, neither does
+    /// `curve_at_key` (up to a crossing beyond the sampled stretch). Nearly flat lembos (Y
+    /// almost linear along the line) need the stable form of the root on both signs of its
+    /// linear term: the textbook form loses the root to cancellation there.
+    #[test]
+    fn the_curve_point_at_a_key_is_the_upward_crossing_of_the_line() {
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut lembo_seed = 0x1234_5678_9abc_def1u64;
+        let (mut found, mut none) = (0, 0);
+        for n in 0..400 {
+            let bend = [2.0, 40.0, 200.0, 1e-9][n % 4];
+            let Some(l) = crate::raster::setup::tests::random_lembo::<f64>(&mut lembo_seed, bend)
+            else {
+                continue;
+            };
+            let angle = next() * std::f64::consts::TAU;
+            let length = 0.25 + 4.0 * next();
+            let tau = [length * angle.cos(), length * angle.sin()];
+            let (u, v) = (next(), next());
+            let key = dot(tau, [u, v]);
+            let yj = l.y.eval(u, v) + (next() - 0.5) * 20.0;
+            // Y along the line, at signed distance d across it (towards rot_ccw(tau)).
+            let t2 = dot(tau, tau);
+            let (o, nu) = (
+                [tau[0] * key / t2, tau[1] * key / t2],
+                [-tau[1] / t2.sqrt(), tau[0] / t2.sqrt()],
+            );
+            let at = |d: f64| [o[0] + d * nu[0], o[1] + d * nu[1]];
+            let f = |d: f64| {
+                let p = at(d);
+                l.y.eval(p[0], p[1]) - yj
+            };
+            let samples: Vec<f64> = (0..=4000).map(|i| -4.0 + 8.0 * i as f64 / 4000.0).collect();
+            let up = samples
+                .windows(2)
+                .find(|w| f(w[0]) < 0.0 && f(w[1]) >= 0.0)
+                .map(|w| {
+                    let (mut lo, mut hi) = (w[0], w[1]);
+                    for _ in 0..60 {
+                        let mid = 0.5 * (lo + hi);
+                        if f(mid) < 0.0 {
+                            lo = mid;
+                        } else {
+                            hi = mid;
+                        }
+                    }
+                    at(0.5 * (lo + hi))
+                });
+            let got = curve_at_key(&l, yj, tau, key);
+            match (up, got) {
+                (Some(p), Some(q)) => {
+                    found += 1;
+                    let err = ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).sqrt();
+                    assert!(err < 1e-7, "lembo {n}: {q:?} against {p:?}");
+                    assert!(
+                        (dot(tau, q) - key).abs() < 1e-9 * length,
+                        "lembo {n}: off the line"
+                    );
+                }
+                (None, None) => none += 1,
+                (None, Some(q)) => {
+                    // Only a crossing beyond the sampled stretch.
+                    let d = dot([q[0] - o[0], q[1] - o[1]], nu);
+                    assert!(
+                        d.abs() > 4.0,
+                        "lembo {n}: {q:?} at {d} is no upward crossing"
+                    );
+                }
+                (Some(p), None) => panic!("lembo {n}: missed the crossing at {p:?}"),
+            }
+        }
+        assert!(
+            found > 100 && none > 20,
+            "{found} found, {none} without a crossing"
+        );
+    }
+
     /// A closing chord whose midpoint error is k up to the datapath's rounding (each chord of
     /// a walk, whose error is exactly k by construction) is not split.
     fn chords_at_exactly_k_are_not_split<R: Real>() {
