@@ -659,6 +659,49 @@ mod tests {
         closing_chord_is_split_until_within_k::<f64>(1e-9);
     }
 
+    /// The walk never leaves the lembo's domain, even where the interval's end key lies
+    /// beyond the domain's edge (as rounding of an end key could put it): the step that
+    /// would leave the closed triangle is refused and the walk closes at the interval's end.
+    /// Every scanline of a parabolic and a bowl-shaped lembo, whose curves leave the domain
+    /// through each of its three edges.
+    #[test]
+    fn the_walk_stays_in_the_domain_past_a_wrong_end_key() {
+        let mut exits = [0; 3];
+        for y in [y_parabolic(), y_bowl()] {
+            let l = screen_lembo::<f64>(x_linear(), y);
+            for j in 0..crate::raster::setup::tests::SIDE {
+                let (walks, _) = run(&l, j, 0.05);
+                for (iv, _) in walks.iter().filter(|(iv, _)| !iv.straight) {
+                    let e = iv.end.uv;
+                    let near = 1e-9;
+                    exits[0] += (e[0] < near) as u32;
+                    exits[1] += (e[1] < near) as u32;
+                    exits[2] += (e[0] + e[1] > 1.0 - near) as u32;
+                    let wrong = Interval {
+                        end_key: iv.end_key + 10.0,
+                        ..*iv
+                    };
+                    let (mut out, mut c) = (Vec::new(), Counts::default());
+                    segments(&l, j, 0.05, &wrong, 1 << 16, &mut out, &mut c)
+                        .expect("under the cap");
+                    assert_eq!(out.last().unwrap().p1, iv.end, "scanline {j}");
+                    for s in &out {
+                        let q = s.p1.uv;
+                        let eps = 1e-12;
+                        assert!(
+                            q[0] >= -eps && q[1] >= -eps && q[0] + q[1] <= 1.0 + eps,
+                            "scanline {j}: the walk left the domain at {q:?}"
+                        );
+                    }
+                }
+            }
+        }
+        assert!(
+            exits.iter().all(|&n| n > 0),
+            "exits through u = 0, v = 0, u + v = 1: {exits:?}"
+        );
+    }
+
     /// `curve_at_key` against a brute-force search on random lembos, random lines (walk
     /// directions of any length) and scanlines: along the line, Y - y_j is a quadratic in the
     /// distance across it, so it goes up through zero at most once; the search brackets that
