@@ -878,6 +878,39 @@ mod tests {
         }
     }
 
+    /// The chords closing a walk count towards the interval's cap, and only the interval's
+    /// own chords do (not those already in the output).
+    #[test]
+    fn closing_chords_count_towards_the_cap() {
+        let l = screen_lembo::<f64>(x_linear(), y_bowl());
+        let (walks, _) = run(&l, 45, 0.1);
+        let iv = &walks[0].0;
+        let close = |earlier: usize, cap: usize| {
+            let (mut out, mut c) = (
+                vec![
+                    Segment {
+                        p0: iv.start,
+                        p1: iv.start
+                    };
+                    earlier
+                ],
+                Counts::default(),
+            );
+            let r = last_chords(&l, 45.5, 0.1, iv, iv.start, earlier, cap, &mut out, &mut c);
+            (r, out.len() - earlier)
+        };
+        let (r, chords) = close(0, 1 << 16);
+        assert!(r.is_ok() && chords > 4, "{chords} closing chords");
+        for earlier in [0, 5] {
+            assert_eq!(
+                close(earlier, chords),
+                (Ok(()), chords),
+                "{earlier} earlier"
+            );
+            assert_eq!(close(earlier, chords - 1), (Err(CapExceeded), chords - 1));
+        }
+    }
+
     #[test]
     fn segmenter_cap_is_an_error() {
         let l = screen_lembo::<f64>(x_linear(), y_bowl());
