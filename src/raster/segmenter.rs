@@ -702,6 +702,53 @@ mod tests {
         );
     }
 
+    /// A closing chord is split only at points of the domain: where an interval's end lies
+    /// outside the closed triangle (as a wrong end would), the chords towards it are split
+    /// while their split points are inside, and the rest is left as one chord to the end.
+    #[test]
+    fn closing_chords_split_only_inside_the_domain() {
+        let l = screen_lembo::<f64>(x_linear(), y_parabolic());
+        let inside = |q: [f64; 2]| {
+            let eps = 1e-12;
+            q[0] >= -eps && q[1] >= -eps && q[0] + q[1] <= 1.0 + eps
+        };
+        let mut tested = 0;
+        for j in 0..crate::raster::setup::tests::SIDE {
+            let (walks, _) = run(&l, j, 0.05);
+            let yj = j as f64 + 0.5;
+            for (iv, _) in walks.iter().filter(|(iv, _)| !iv.straight) {
+                for beyond in [0.05, 0.2, 0.5] {
+                    let key = iv.end_key + beyond * dot(iv.tau, iv.tau);
+                    let Some(q) = curve_at_key(&l, yj, iv.tau, key) else {
+                        continue;
+                    };
+                    if inside(q) {
+                        continue;
+                    }
+                    let end = CurvePoint {
+                        uv: q,
+                        x: l.x.eval(q[0], q[1]),
+                        edge: INTERIOR,
+                    };
+                    let wrong = Interval {
+                        end,
+                        end_key: dot(iv.tau, q),
+                        ..*iv
+                    };
+                    let (mut out, mut c) = (Vec::new(), Counts::default());
+                    last_chords(&l, yj, 0.05, &wrong, iv.start, 0, 1 << 16, &mut out, &mut c)
+                        .expect("under the cap");
+                    assert_eq!(out.last().unwrap().p1, end);
+                    for s in &out[..out.len() - 1] {
+                        assert!(inside(s.p1.uv), "scanline {j}: split at {:?}", s.p1.uv);
+                    }
+                    tested += 1;
+                }
+            }
+        }
+        assert!(tested > 20, "{tested} ends outside the domain");
+    }
+
     /// `curve_at_key` against a brute-force search on random lembos, random lines (walk
     /// directions of any length) and scanlines: along the line, Y - y_j is a quadratic in the
     /// distance across it, so it goes up through zero at most once; the search brackets that
