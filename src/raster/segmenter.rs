@@ -702,6 +702,46 @@ mod tests {
         );
     }
 
+    /// Towards an end off the curve (as a bad end point would be), halving never brings the
+    /// last chord within k: the split stops (at the depth bound, 48 levels, or where f64's
+    /// walk keys can no longer be halved, a few levels further: 52 chords here), the walk
+    /// still closes at the end, and every chord before the last is within k.
+    #[test]
+    fn closing_chords_towards_an_end_off_the_curve_stop_at_the_depth_bound() {
+        let l = screen_lembo::<f64>(x_linear(), y_parabolic());
+        let (walks, _) = run(&l, 40, 0.05);
+        let (iv, segs) = &walks[0];
+        // A point halfway along the walk, moved across the curve 5 scanlines off it.
+        let on = segs[segs.len() / 2].p1;
+        let g = l.y.grad(on.uv[0], on.uv[1]);
+        let gg = g.0 * g.0 + g.1 * g.1;
+        let uv = [on.uv[0] + 5.0 * g.0 / gg, on.uv[1] + 5.0 * g.1 / gg];
+        let end = CurvePoint { uv, ..on };
+        let off = Interval {
+            end,
+            end_key: dot(iv.tau, uv),
+            ..*iv
+        };
+        assert!(y_error(&l, 40, uv) > 4.0);
+        let (mut out, mut c) = (Vec::new(), Counts::default());
+        last_chords(&l, 40.5, 0.05, &off, iv.start, 0, 1 << 16, &mut out, &mut c)
+            .expect("under the cap");
+        assert_eq!(out.last().unwrap().p1, end);
+        let depth = 48;
+        assert!(
+            out.len() >= depth - 1 && out.len() <= 2 * depth,
+            "{} chords",
+            out.len()
+        );
+        for s in &out[..out.len() - 1] {
+            let mid = [
+                0.5 * (s.p0.uv[0] + s.p1.uv[0]),
+                0.5 * (s.p0.uv[1] + s.p1.uv[1]),
+            ];
+            assert!(y_error(&l, 40, mid) <= 0.05 * (1.0 + 1e-6), "{s:?}");
+        }
+    }
+
     /// A closing chord is split only at points of the domain: where an interval's end lies
     /// outside the closed triangle (as a wrong end would), the chords towards it are split
     /// while their split points are inside, and the rest is left as one chord to the end.
