@@ -3,6 +3,9 @@
 unviable and the score (caught + timeouts that hang, over the viable mutants).
 
 Usage: tests/mutants/table.py [RESULTS_DIR...]   (default: every out/mutants/runs/*)
+       tests/mutants/table.py --before [RESULTS_DIR...]
+                             (each mutant's first outcome instead: the score before the
+                             tests written for survivors)
        tests/mutants/table.py --names caught|tested [RESULTS_DIR...]
                              (the mutants an earlier run caught, or tested at all, one
                              name a line: what tests/mutants/run --again/--untested skip)
@@ -22,7 +25,7 @@ from collections import defaultdict
 ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
 
 
-def outcomes(dirs):
+def outcomes(dirs, first=False):
     last = {}
     paths = [os.path.join(d, "mutants.out", "outcomes.json") for d in dirs]
     for path in sorted((p for p in paths if os.path.exists(p)), key=os.path.getmtime):
@@ -32,7 +35,9 @@ def outcomes(dirs):
             s = o["scenario"]
             if not isinstance(s, dict) or "Mutant" not in s:
                 continue  # the baseline
-            last[s["Mutant"]["name"]] = (s["Mutant"]["file"], o["summary"])
+            name = s["Mutant"]["name"]
+            if not (first and name in last):
+                last[name] = (s["Mutant"]["file"], o["summary"])
     return last
 
 
@@ -47,6 +52,9 @@ def hangs():
 def main():
     args = sys.argv[1:]
     names = None
+    first = args[:1] == ["--before"]
+    if first:
+        args = args[1:]
     if args[:1] == ["--names"]:
         if len(args) < 2 or args[1] not in ("caught", "tested"):
             sys.exit("table.py: --names takes caught or tested")
@@ -62,7 +70,7 @@ def main():
         return
     rows = defaultdict(lambda: defaultdict(int))
     missed = []
-    for name, (file, summary) in sorted(outcomes(dirs).items()):
+    for name, (file, summary) in sorted(outcomes(dirs, first).items()):
         r = rows[file]
         r["mutants"] += 1
         if summary == "CaughtMutant":
