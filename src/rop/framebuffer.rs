@@ -286,6 +286,38 @@ mod tests {
         }
         assert_eq!(a.color, b.color);
         assert_eq!(a.primitive[0], 3);
+        // A primitive's second fragment at the same depth keeps its first (a tie with itself
+        // is no win), so a pixel a lembo covers twice holds what it wrote first.
+        assert!(!depth_test(0.5, 3, 0.5, 3));
+    }
+
+    /// Each band's rows are the frame's rows lo..hi: what a band writes at its row j lands in
+    /// the frame's row lo + j, in every plane.
+    #[test]
+    fn bands_are_the_frames_rows() {
+        let (w, h) = (5, 7);
+        let mut fb = FrameBuffer::new(w, h, [0; 3], true);
+        let bands = [(0, 2), (2, 3), (3, 7)];
+        for (b, mut rows) in fb.bands_mut(&bands).into_iter().enumerate() {
+            let (lo, hi) = bands[b];
+            for j in 0..hi - lo {
+                for i in 0..w {
+                    let idx = rows.index(i, j);
+                    let tag = (lo + j) * w + i;
+                    rows.write(idx, 0.5, tag, [b as u8; 3], || [tag as f32; 3]);
+                }
+            }
+        }
+        for (b, &(lo, hi)) in bands.iter().enumerate() {
+            for j in lo..hi {
+                for i in 0..w {
+                    let k = (j * w + i) as usize;
+                    assert_eq!(fb.primitive[k], j * w + i, "({i}, {j})");
+                    assert_eq!(fb.color[k], [b as u8; 3]);
+                    assert_eq!(fb.normal.as_ref().unwrap()[k], [(j * w + i) as f32; 3]);
+                }
+            }
+        }
     }
 
     #[test]
