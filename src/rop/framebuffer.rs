@@ -292,9 +292,10 @@ mod tests {
     }
 
     /// Each band's rows are the frame's rows lo..hi: what a band writes at its row j lands in
-    /// the frame's row lo + j, in every plane.
+    /// the frame's row lo + j, in every plane; all are then covered, and the image shows
+    /// each band's colour where it wrote.
     #[test]
-    fn bands_are_the_frames_rows() {
+    fn bands_are_the_frames_rows_and_the_image_shows_them() {
         let (w, h) = (5, 7);
         let mut fb = FrameBuffer::new(w, h, [0; 3], true);
         let bands = [(0, 2), (2, 3), (3, 7)];
@@ -308,8 +309,12 @@ mod tests {
                 }
             }
         }
+        assert_eq!(fb.covered(), (w * h) as usize);
+        let image = fb.to_image();
+        assert_eq!(image.dimensions(), (w, h));
         for (b, &(lo, hi)) in bands.iter().enumerate() {
             for j in lo..hi {
+                assert!((0..w).all(|i| image.get_pixel(i, j).0 == [b as u8; 3]));
                 for i in 0..w {
                     let k = (j * w + i) as usize;
                     assert_eq!(fb.primitive[k], j * w + i, "({i}, {j})");
