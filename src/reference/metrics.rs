@@ -746,6 +746,169 @@ mod tests {
     }
 
     #[test]
+    fn measure_normal_mean_is_the_mean_angle_over_the_pixels_both_cover() {
+        // Four pixels of the disc off +z: by 10 and 40 degrees, by 20 degrees on the far side
+        // (the same up to sign) and with no normal at all (90 degrees); the rest exact.
+        let mut fb = render_disc(16.0);
+        let normals = fb.normal.as_mut().unwrap();
+        for (k, deg, sign) in [
+            (16 * 32 + 16, 10.0, 1.0),
+            (15 * 32 + 12, 20.0, -1.0),
+            (20 * 32 + 18, 40.0, 1.0),
+        ] {
+            let t = f64::to_radians(deg);
+            normals[k] = [(sign * t.sin()) as f32, 0.0, (sign * t.cos()) as f32];
+        }
+        normals[10 * 32 + 16] = [0.0; 3];
+        let a = measure_disc(&fb, 0, Some(0.0));
+        let compared = count(|i, j| in_disc(i, j, 16.0));
+        assert_eq!(a.pixels_compared, compared);
+        assert_eq!(a.normal_max_deg, 90.0);
+        let mean = (10.0 + 20.0 + 40.0 + 90.0) / compared as f64;
+        assert!((a.normal_mean_deg - mean).abs() < 1e-5, "{a:?} vs {mean}");
+    }
+
+    #[test]
+    fn angle_up_to_sign_is_90_degrees_against_a_zero_normal() {
+        // A missing normal on either side is as wrong as a normal can be.
+        for v in [DVec3::Z, DVec3::new(0.3, -0.4, 2.0)] {
+            assert_eq!(angle_up_to_sign(DVec3::ZERO, v), 90.0);
+            assert_eq!(angle_up_to_sign(v, DVec3::ZERO), 90.0);
+            assert_eq!(angle_up_to_sign(v, -2.0 * v), 0.0);
+        }
+    }
+
+    /// A reference of `w` x `h` covering every pixel or none.
+    fn uniform_reference(w: u32, h: u32, covered: bool) -> ReferenceImage {
+        let n = (w * h) as usize;
+        let hit = ReferenceHit {
+            depth: 0.5,
+            normal: DVec3::Z,
+            lembo: 0,
+            u: 0.2,
+            v: 0.2,
+        };
+        ReferenceImage {
+            width: w,
+            height: h,
+            supersample: 1,
+            hits: vec![covered.then_some(hit); n],
+            color: vec![if covered { COLOR } else { BACKGROUND }; n],
+            color_supersampled: None,
+            coverage: None,
+        }
+    }
+
+    /// The coverage of a reference covering everything or nothing.
+    struct Uniform(bool);
+
+    impl ReferenceCoverage for Uniform {
+        fn covered(&self, _: f64, _: f64) -> bool {
+            self.0
+        }
+    }
+
+    #[test]
+    fn measure_against_a_reference_covering_nothing_or_everything() {
+        // No outline to measure to: each misplaced pixel counts the image diagonal. A
+        // non-square image, so that the diagonal's two sides cannot be confused.
+        let (w, h) = (7u32, 5u32);
+        let diagonal = f64::from(w * w + h * h).sqrt();
+        // Three pixels on the border, so that a miss is never a crack.
+        let border = [(0, 0), (3, 0), (6, 4)];
+        for covered in [false, true] {
+            let mut fb = FrameBuffer::new(w, h, BACKGROUND, true);
+            for j in 0..h {
+                for i in 0..w {
+                    if covered != border.contains(&(i, j)) {
+                        let k = fb.index(i, j);
+                        fb.write(k, 0.5, 0, COLOR);
+                        fb.normal.as_mut().unwrap()[k] = [0.0, 0.0, 1.0];
+                    }
+                }
+            }
+            let reference = uniform_reference(w, h, covered);
+            let a = measure(&fb, &reference, &Uniform(covered), 0, None, None);
+            let misplaced = if covered {
+                (a.coverage_false_negative, a.coverage_false_positive)
+            } else {
+                (a.coverage_false_positive, a.coverage_false_negative)
+            };
+            assert_eq!(misplaced, (3, 0), "{a:?}");
+            assert_eq!(a.crack_pixels, 0);
+            assert_eq!(
+                (a.silhouette_max_px, a.silhouette_mean_px),
+                (diagonal, diagonal)
+            );
+            let both = if covered { w * h - 3 } else { 0 };
+            assert_eq!(a.pixels_compared, u64::from(both));
+            // Nothing compared: no normal error (not 0 / 0).
+            assert_eq!((a.normal_max_deg, a.normal_mean_deg), (0.0, 0.0));
+            // Three pixels differ by (200, 150, 80) out of 3 w h channel values.
+            let mse =
+                (200f64.powi(2) + 150f64.powi(2) + 80f64.powi(2)) * 3.0 / f64::from(3 * w * h);
+            let psnr = 10.0 * (255.0f64.powi(2) / mse).log10();
+            assert!((a.psnr_db - psnr).abs() < 1e-9, "{a:?} vs {psnr}");
+            assert_eq!(a.max_abs_error, 200);
+        }
+    }
+
+    #[test]
+    fn crack_mask_matches_its_definition_on_random_masks() {
+        // A crack: the reference covers the pixel and its 4 neighbours (all inside the
+        // image), the render misses it and covers both its left and right neighbours or
+        // both those above and below.
+        let (w, h) = (9, 7);
+        let mut random = crate::datapath_study::SplitMix64::new(7);
+        let mut cracks = 0;
+        for _ in 0..300 {
+            let mut draw = |p: f64| (0..w * h).map(|_| random.unit() < p).collect::<Vec<_>>();
+            let (theirs, ours) = (draw(0.9), draw(0.6));
+            let mask = crack_mask(&ours, &theirs, w, h);
+            for j in 0..h as i64 {
+                for i in 0..w as i64 {
+                    let at = |m: &[bool], x: i64, y: i64| {
+                        (0..w as i64).contains(&x)
+                            && (0..h as i64).contains(&y)
+                            && m[y as usize * w + x as usize]
+                    };
+                    let interior = [(0, 0), (-1, 0), (1, 0), (0, -1), (0, 1)]
+                        .iter()
+                        .all(|&(di, dj)| at(&theirs, i + di, j + dj));
+                    let gap = (at(&ours, i - 1, j) && at(&ours, i + 1, j))
+                        || (at(&ours, i, j - 1) && at(&ours, i, j + 1));
+                    let want = interior && !at(&ours, i, j) && gap;
+                    assert_eq!(mask[j as usize * w + i as usize], want, "({i}, {j})");
+                    cracks += want as u32;
+                }
+            }
+        }
+        assert!(cracks > 100, "{cracks}");
+    }
+
+    #[test]
+    fn ring_search_matches_brute_force_on_dense_masks() {
+        // Dense masks: the nearest pixel of either value is found within the rings.
+        let (w, h) = (23, 17);
+        let mut random = crate::datapath_study::SplitMix64::new(11);
+        for density in [0.5, 0.1, 0.02] {
+            let mask: Vec<bool> = (0..w * h).map(|_| random.unit() < density).collect();
+            let mut bounds = Bounds::new(&mask, w, h);
+            for value in [true, false] {
+                for k in 0..w * h {
+                    let (x, y) = ((k % w) as i64, (k / w) as i64);
+                    let brute = (0..w * h)
+                        .filter(|&p| mask[p] == value)
+                        .map(|p| ((p % w) as i64 - x).pow(2) + ((p / w) as i64 - y).pow(2))
+                        .min()
+                        .map(|d2| (d2 as f64).sqrt());
+                    assert_eq!(bounds.nearest(k, value), brute, "pixel {k}, {value}");
+                }
+            }
+        }
+    }
+
+    #[test]
     fn lines_name_every_field_with_its_unit() {
         let a = measure_disc(&render_disc(16.0), 0, Some(0.0));
         let lines = a.lines();
