@@ -549,17 +549,23 @@ mod tests {
     /// `pair_crossings` on crossings of one part at walk keys `keys` (entry or exit): the
     /// intervals as (start key, end key), and the unpaired roots.
     fn paired<R: Real>(keys: &[(R, bool)]) -> (Vec<(f64, f64)>, u64) {
+        let in_one_part: Vec<_> = keys.iter().map(|&(key, entry)| (key, entry, 1)).collect();
+        paired_in_parts(&in_one_part)
+    }
+
+    /// [`paired`] on crossings (key, entry, part) of either part.
+    fn paired_in_parts<R: Real>(keys: &[(R, bool, i8)]) -> (Vec<(f64, f64)>, u64) {
         let l = screen_lembo::<R>(x_linear(), y_plane());
         let mut xs: Vec<Crossing<R>> = keys
             .iter()
-            .map(|&(key, entry)| Crossing {
+            .map(|&(key, entry, part)| Crossing {
                 p: CurvePoint {
                     uv: [R::of(0.25), R::of(0.25)],
                     x: key,
                     edge: 0,
                 },
                 entry,
-                part: 1,
+                part,
                 is_virtual: false,
                 key,
             })
@@ -583,7 +589,8 @@ mod tests {
     /// An exit then an entry within rounding of one key (a few ulps apart, at keys near 0
     /// and near 1000) are the curve touching the domain at one point: paired entry first.
     /// Apart, they are not paired; an entry while one is open leaves the first unpaired and
-    /// pairs the second.
+    /// pairs the second; an exit then an entry while one is open are the curve touching an
+    /// edge from inside; an entry and an exit of different parts are both unpaired.
     fn pairs_within_rounding<R: Real>() {
         let ulps = |key: f64| R::of(key) + R::epsilon() * R::of(4.0 * (1.0 + key));
         for key in [0.0, 1000.0] {
@@ -599,6 +606,28 @@ mod tests {
             paired(&[(R::of(0.0), true), (R::of(0.2), true), (R::of(0.5), false)]),
             (vec![(r(0.2), r(0.5))], 1)
         );
+        // The curve touching an edge from inside: with an interval open, an exit then an
+        // entry within rounding stay in that order (it leaves and re-enters there).
+        let touch = R::of(0.5);
+        assert_eq!(
+            paired(&[
+                (R::of(0.0), true),
+                (touch, false),
+                (ulps(0.5), true),
+                (R::of(1.0), false)
+            ]),
+            (vec![(r(0.0), touch.f64()), (ulps(0.5).f64(), r(1.0))], 0)
+        );
+        // An entry of one part and an exit of the other do not pair.
+        for (entry_part, exit_part) in [(-1, 1), (1, -1)] {
+            assert_eq!(
+                paired_in_parts(&[
+                    (R::of(0.0), true, entry_part),
+                    (R::of(0.5), false, exit_part)
+                ]),
+                (vec![], 2)
+            );
+        }
     }
 
     #[test]
@@ -699,6 +728,114 @@ mod tests {
         assert!(entry_then_exit(&[entry, exit], Some([0.5, 0.5])).is_none());
     }
 
+    /// Checks that `iv` is one piece of the curve Y = y_j in the domain, inside its part of
+    /// the partition: the walk key does not decrease from start to end, and every key
+    /// strictly between has a curve point in the domain on the part's side. Along the line
+    /// of one key, p(w) = key·τ + w·n with n = rot_ccw(τ) (the part's axis, so the part is
+    /// where n·∇Y >= 0), Y is a quadratic in w whose derivative is affine: Y increases on a
+    /// half-line only, so the part holds at most one curve point per key, and an interval
+    /// joining the ends of two different pieces leaves keys between them with none.
+    fn assert_one_piece<R: Real>(l: &ScreenLembo<R>, j: u32, iv: &Interval<R>, what: &str) {
+        let y = l.y.cast::<f64>();
+        let g = |p: [f64; 2]| y.eval(p[0], p[1]) - (j as f64 + 0.5);
+        let len = iv.tau[0].f64().hypot(iv.tau[1].f64());
+        let tau = [iv.tau[0].f64() / len, iv.tau[1].f64() / len];
+        let n = [-tau[1], tau[0]];
+        let key = |p: V2<R>| tau[0] * p[0].f64() + tau[1] * p[1].f64();
+        let (k0, k1) = (key(iv.start.uv), key(iv.end.uv));
+        let slack = if R::epsilon().f64() > 1e-10 {
+            1e-5
+        } else {
+            1e-12
+        };
+        assert!(
+            k0 <= k1 + slack,
+            "{what}: key falls from {k0} to {k1}: {iv:?}"
+        );
+        for f in [0.125, 0.5, 0.875] {
+            let t = k0 + f * (k1 - k0);
+            let p = |w: f64| [t * tau[0] + w * n[0], t * tau[1] + w * n[1]];
+            // The line's w range inside the triangle: each of u >= 0, v >= 0, 1 - u - v >= 0
+            // is c0 + c1 w >= -slack.
+            let (mut lo, mut hi) = (-10.0f64, 10.0f64);
+            let (p0, p1) = (p(0.0), p(1.0));
+            for (c0, c1) in [
+                (p0[0], p1[0] - p0[0]),
+                (p0[1], p1[1] - p0[1]),
+                (1.0 - p0[0] - p0[1], p0[0] + p0[1] - p1[0] - p1[1]),
+            ] {
+                if c1 > 0.0 {
+                    lo = lo.max(-(c0 + slack) / c1);
+                } else if c1 < 0.0 {
+                    hi = hi.min(-(c0 + slack) / c1);
+                } else {
+                    assert!(c0 >= -slack, "{what}: key {t} misses the domain: {iv:?}");
+                }
+            }
+            // Y along the line: g0 + β w + α w²; the part is where 2αw + β >= 0.
+            let (g0, gp, gm) = (g(p(0.0)), g(p(1.0)), g(p(-1.0)));
+            let (alpha, beta) = ((gp + gm) / 2.0 - g0, (gp - gm) / 2.0);
+            if alpha > 0.0 {
+                lo = lo.max(-beta / (2.0 * alpha));
+            } else if alpha < 0.0 {
+                hi = hi.min(-beta / (2.0 * alpha));
+            }
+            let tol = 1e3 * slack * (1.0 + g0.abs());
+            assert!(
+                lo <= hi + slack && g(p(lo)) <= tol && g(p(hi)) >= -tol,
+                "{what}: no curve point at key {t} ({f} of the way), w in [{lo}, {hi}], \
+                 g {} .. {}: {iv:?}",
+                g(p(lo)),
+                g(p(hi))
+            );
+        }
+    }
+
+    /// On every scanline of random lembos (flat to strongly bent: planes, valleys, interior
+    /// extrema and saddles), in both datapaths and with a saddle tolerance that makes the
+    /// hyperbola near a saddle walked or split: no root is left unpaired, every walked
+    /// interval is one piece of the curve in its part, and a split one meets its twin at
+    /// the saddle.
+    fn intervals_are_pieces<R: Real>() {
+        let mut seed = 0x6a09_e667_f3bc_c908u64;
+        // Walked intervals on lembos with an interior extremum, a saddle, or neither.
+        let mut walked = [0u32; 3];
+        for n in 0..200 {
+            let bend = [2.0, 10.0, 40.0, 200.0][n % 4];
+            let Some(l) = crate::raster::setup::tests::random_lembo::<R>(&mut seed, bend) else {
+                continue;
+            };
+            let kind = match l.partition {
+                Partition::Central { det, .. } if det > R::zero() => 0,
+                Partition::Central { .. } => 1,
+                _ => 2,
+            };
+            for k in [0.05, 2.0] {
+                for j in 0..crate::raster::setup::tests::SIDE {
+                    let (ivs, c) = run(&l, j, k);
+                    let what = format!("lembo {n}, k {k}, scanline {j}");
+                    assert_eq!(c.unpaired_roots, 0, "{what}: {c:?}");
+                    for iv in &ivs {
+                        if !iv.straight {
+                            assert_one_piece(&l, j, iv, &what);
+                            walked[kind] += 1;
+                        }
+                    }
+                }
+            }
+        }
+        assert!(
+            walked[0] > 100 && walked[1] > 100 && walked[2] > 1000,
+            "{walked:?}"
+        );
+    }
+
+    #[test]
+    fn every_interval_is_one_piece_of_the_curve_in_its_part() {
+        intervals_are_pieces::<f32>();
+        intervals_are_pieces::<f64>();
+    }
+
     #[test]
     fn an_entry_then_an_exit_is_paired_as_by_the_loop() {
         shortcut_pairs_as_the_loop::<f32>();
@@ -726,7 +863,46 @@ mod tests {
 
     fn closed_loop<R: Real>() {
         let l = screen_lembo::<R>(x_linear(), y_bowl());
-        let (ivs, c) = run(&l, 40, 0.5);
+        assert_closed_loop(&l);
+        // Just below the minimum: nothing at all.
+        let (ivs, c) = run(&l, 39, 0.5);
+        assert!(
+            ivs.is_empty() && c.edge_roots + c.virtual_roots + c.unpaired_roots == 0,
+            "{c:?}"
+        );
+        // y = 41.5 - 64 (u - 1/4)² - 32 (v - 1/4)²: a dome, whose steeper axis (the split
+        // axis, larger |λ|) is u, with a first component of -1 as eigen_sym orients it.
+        let l = screen_lembo::<R>(x_linear(), quad(-64.0, -32.0, 0.0, 32.0, 16.0, 35.5));
+        assert!(
+            matches!(l.partition, Partition::Central { eig, .. } if eig[0].0[0] < R::of(-0.9)),
+            "{:?}",
+            l.partition
+        );
+        assert_closed_loop(&l);
+        // y = 40.5 ± 64 ((u - 1/4)² + (v - 1/4)²): the minimum or maximum exactly on
+        // scanline 40 (exact in both datapaths) is a single point: nothing to pair.
+        for s in [1.0, -1.0] {
+            let y = quad(
+                64.0 * s,
+                64.0 * s,
+                0.0,
+                -32.0 * s,
+                -32.0 * s,
+                40.5 + 8.0 * s,
+            );
+            let l = screen_lembo::<R>(x_linear(), y);
+            let (ivs, c) = run(&l, 40, 0.5);
+            assert!(
+                ivs.is_empty() && c.edge_roots + c.virtual_roots + c.unpaired_roots == 0,
+                "{c:?} {ivs:?}"
+            );
+        }
+    }
+
+    /// Scanline 40 of `l` (a level of a bowl or dome wholly inside the domain) is a closed
+    /// loop, walked as two halves between its tips.
+    fn assert_closed_loop<R: Real>(l: &ScreenLembo<R>) {
+        let (ivs, c) = run(l, 40, 0.5);
         assert_eq!(
             (c.edge_roots, c.virtual_roots, c.intervals, c.unpaired_roots),
             (0, 2, 2, 0),
@@ -741,17 +917,12 @@ mod tests {
             assert_ne!(iv.start.uv, iv.end.uv);
             for p in [iv.start, iv.end] {
                 assert_eq!(p.edge, INTERIOR);
-                assert!(y_error(&l, 40, p.uv) < tol::<R>(), "{p:?}");
+                assert!(y_error(l, 40, p.uv) < tol::<R>(), "{p:?}");
             }
             // The walk key increases from start to end.
             assert!(dot(iv.tau, iv.start.uv) < iv.end_key);
+            assert_one_piece(l, 40, iv, "closed loop");
         }
-        // Just below the minimum: nothing at all.
-        let (ivs, c) = run(&l, 39, 0.5);
-        assert!(
-            ivs.is_empty() && c.edge_roots + c.virtual_roots + c.unpaired_roots == 0,
-            "{c:?}"
-        );
     }
 
     #[test]
@@ -779,6 +950,20 @@ mod tests {
         assert!(near(ivs[1].end.uv, [1.0 / 3.0, 0.0]), "{ivs:?}");
         let (_, c) = scanline_fragments(&l, 79, 0.5);
         assert!(c.fragments > 0 && c.unpaired_roots == 0, "{c:?}");
+
+        // y = 36.5 + 64 (u - 1/2)² + 256 v²: on scanline 40 the ellipse's tips (1/4, 0) and
+        // (3/4, 0) are both on v = 0 (at the same v), each also an edge root there. Each
+        // merges with its own edge root only: the upper half is one interval, tip to tip.
+        let l = screen_lembo::<R>(x_linear(), quad(64.0, 256.0, 0.0, -64.0, 0.0, 52.5));
+        let (ivs, c) = run(&l, 40, 0.5);
+        assert_eq!(
+            (c.edge_roots, c.unpaired_roots, ivs.len()),
+            (2, 0, 1),
+            "{c:?} {ivs:?}"
+        );
+        assert!(near(ivs[0].start.uv, [0.25, 0.0]), "{ivs:?}");
+        assert!(near(ivs[0].end.uv, [0.75, 0.0]), "{ivs:?}");
+        assert_one_piece(&l, 40, &ivs[0], "tips on v = 0");
     }
 
     #[test]
