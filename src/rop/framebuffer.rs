@@ -292,8 +292,8 @@ mod tests {
     }
 
     /// Each band's rows are the frame's rows lo..hi: what a band writes at its row j lands in
-    /// the frame's row lo + j, in every plane; all are then covered, and the image shows
-    /// each band's colour where it wrote.
+    /// the frame's row lo + j, in every plane; a band's depth test, coverage and clear see
+    /// its own rows only, and the image shows each band's colour where it wrote.
     #[test]
     fn bands_are_the_frames_rows_and_the_image_shows_them() {
         let (w, h) = (5, 7);
@@ -301,19 +301,34 @@ mod tests {
         let bands = [(0, 2), (2, 3), (3, 7)];
         for (b, mut rows) in fb.bands_mut(&bands).into_iter().enumerate() {
             let (lo, hi) = bands[b];
+            let n = ((hi - lo) * w) as usize;
             for j in 0..hi - lo {
                 for i in 0..w {
                     let idx = rows.index(i, j);
                     let tag = (lo + j) * w + i;
+                    assert!(rows.passes(idx, 0.5, tag));
                     rows.write(idx, 0.5, tag, [b as u8; 3], || [tag as f32; 3]);
+                    assert!(!rows.passes(idx, 0.6, tag), "nearer was written");
                 }
             }
+            assert_eq!(rows.covered(), n);
+            if b == 1 {
+                // A band cleared is as new, and its neighbours keep what they wrote.
+                rows.clear([9; 3]);
+                assert_eq!(rows.covered(), 0);
+                assert!(rows.passes(rows.index(0, 0), 0.99, 0));
+            }
         }
-        assert_eq!(fb.covered(), (w * h) as usize);
+        assert_eq!(fb.covered(), (w * (h - 1)) as usize);
         let image = fb.to_image();
         assert_eq!(image.dimensions(), (w, h));
         for (b, &(lo, hi)) in bands.iter().enumerate() {
             for j in lo..hi {
+                if b == 1 {
+                    assert!((0..w).all(|i| image.get_pixel(i, j).0 == [9; 3]));
+                    assert!((0..w).all(|i| fb.primitive[(j * w + i) as usize] == NO_PRIMITIVE));
+                    continue;
+                }
                 assert!((0..w).all(|i| image.get_pixel(i, j).0 == [b as u8; 3]));
                 for i in 0..w {
                     let k = (j * w + i) as usize;

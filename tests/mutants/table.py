@@ -12,7 +12,7 @@ Usage: tests/mutants/table.py [RESULTS_DIR...]   (default: every out/mutants/run
 
 Reads each RESULTS_DIR/mutants.out/outcomes.json (cargo-mutants' record); with several
 (shards, or a later run of the mutants still missed), a mutant's last outcome counts, the
-runs taken in the order their outcomes were written. A timeout counts as
+runs taken in the order they started. A timeout counts as
 caught only when it is listed in tests/mutants/hangs.txt (checked by hand to hang, not to
 be merely slow); the others count as missed.
 """
@@ -28,9 +28,13 @@ ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
 def outcomes(dirs, first=False):
     last = {}
     paths = [os.path.join(d, "mutants.out", "outcomes.json") for d in dirs]
-    for path in sorted((p for p in paths if os.path.exists(p)), key=os.path.getmtime):
-        with open(path) as f:
-            record = json.load(f)
+    records = []
+    for path in paths:
+        if os.path.exists(path):
+            with open(path) as f:
+                records.append(json.load(f))
+    # A run started later tests a later tree (newer tests): its outcome counts.
+    for record in sorted(records, key=lambda r: r["start_time"]):
         for o in record["outcomes"]:
             s = o["scenario"]
             if not isinstance(s, dict) or "Mutant" not in s:
