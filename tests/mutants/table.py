@@ -53,6 +53,19 @@ def hangs():
         return {l.strip() for l in f if l.strip() and not l.startswith("#")}
 
 
+def reasons():
+    """Survivor name -> why it is left, from tests/mutants/survivors.md."""
+    path = os.path.join(ROOT, "tests", "mutants", "survivors.md")
+    out = {}
+    if os.path.exists(path):
+        with open(path) as f:
+            for line in f:
+                if line.startswith("- src/") and " — " in line:
+                    name, why = line[2:].rstrip("\n").split(" — ", 1)
+                    out[name] = why
+    return out
+
+
 def main():
     args = sys.argv[1:]
     names = None
@@ -103,9 +116,11 @@ def main():
         print(row(file.removeprefix("src/"), r))
     print(row("**all**", total))
     if missed:
-        print("\nNot caught:")
+        why = reasons()
+        unexplained = [m for m in missed if m.split("  (")[0] not in why]
+        print(f"\nNot caught ({len(missed)}; {len(unexplained)} without a reason in survivors.md):")
         for m in missed:
-            print("-", m)
+            print("-", m, "—", why.get(m.split("  (")[0], "NO REASON GIVEN"))
 
 
 def row(name, r):
