@@ -800,12 +800,7 @@ mod tests {
     #[test]
     fn the_curve_point_at_a_key_is_the_upward_crossing_of_the_line() {
         let mut seed = 0x2545_f491_4f6c_dd1du64;
-        let mut next = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = move || crate::raster::setup::tests::uniform(&mut seed);
         let mut lembo_seed = 0x1234_5678_9abc_def1u64;
         let (mut found, mut none) = (0, 0);
         for n in 0..400 {

@@ -196,13 +196,16 @@ pub(crate) mod tests {
 
     /// A lembo of the test view with random screen quadratics: linear parts of up to 90
     /// pixels and curved parts of up to `bend` pixels; `None` when setup drops it.
+    /// The next of a xorshift sequence from `seed`, uniform in [0, 1).
+    pub(crate) fn uniform(seed: &mut u64) -> f64 {
+        *seed ^= *seed << 13;
+        *seed ^= *seed >> 7;
+        *seed ^= *seed << 17;
+        (*seed >> 11) as f64 / (1u64 << 53) as f64
+    }
+
     pub(crate) fn random_lembo<R: Real>(seed: &mut u64, bend: f64) -> Option<ScreenLembo<R>> {
-        let mut next = || {
-            *seed ^= *seed << 13;
-            *seed ^= *seed >> 7;
-            *seed ^= *seed << 17;
-            (*seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = || uniform(seed);
         let mut q = |f: f64| {
             let curve = [0; 3].map(|_| (2.0 * next() - 1.0) * bend);
             let linear = [0; 2].map(|_| (2.0 * next() - 1.0) * 90.0);
