@@ -803,4 +803,109 @@ mod tests {
             core.clear();
         }
     }
+
+    /// A link between host threads with both halves on this test thread: unit 0 of
+    /// `cp` produces, unit 0 of `cc` consumes.
+    struct Remote {
+        cp: Rc<Core>,
+        cc: Rc<Core>,
+        tx_half: Rc<RemoteTx<u32>>,
+        rx_half: Rc<RemoteRx<u32>>,
+        tx: Tx<u32>,
+        rx: Rx<u32>,
+    }
+
+    fn remote(d: u32, l: u64) -> Remote {
+        let cp = Rc::new(Core::new(vec![("p".into(), 1)], None));
+        let cc = Rc::new(Core::new(vec![("c".into(), 1)], None));
+        let name = LinkName {
+            producer: "p".into(),
+            consumer: "c".into(),
+        };
+        let ends = Ends {
+            producer: 0,
+            port: 0,
+            consumer: 0,
+            from: 0,
+        };
+        let parts = RemoteParts::new(spec(d, l));
+        let signal = Arc::new(Signal::default());
+        let tx_half = Rc::new(parts.tx(cp.clone(), spec(d, l), name.clone(), ends, signal.clone()));
+        let rx_half = Rc::new(parts.rx(cc.clone(), spec(d, l), name, ends, signal));
+        Remote {
+            tx: Tx::Remote(tx_half.clone()),
+            rx: Rx::Remote(rx_half.clone()),
+            cp,
+            cc,
+            tx_half,
+            rx_half,
+        }
+    }
+
+    /// Between host threads as on one: push n waits for the credit of item n - D, and the
+    /// credit reaches the producer when the consumer's thread flushes, even when fewer
+    /// credits are pending than a batch (a consumer whose thread ran out of work).
+    #[test]
+    fn remote_link_credit_of_item_n_minus_depth_gates_push_n() {
+        let r = remote(4, 1);
+        assert_eq!(r.tx.credit_needed(), Some(Cycle::ZERO));
+        for n in 0..4 {
+            r.tx.push(Cycle(n), n as u32);
+        }
+        // Item 4 needs the pop time of item 0, not yet popped.
+        assert_eq!(r.tx.credit_needed(), None);
+        // Items travel in batches: nothing arrives before the producer's thread flushes.
+        assert!(!r.rx_half.drain());
+        assert_eq!(r.rx.head(), None);
+        r.tx_half.flush();
+        assert!(r.rx_half.drain());
+        assert_eq!(r.rx.head(), Some(Cycle(1)));
+        assert_eq!(r.rx.pop(Cycle(10)), 0);
+        // One credit pending, a batch is D/2 = 2: it waits for the consumer's flush.
+        assert_eq!(r.tx.credit_needed(), None);
+        assert!(r.rx_half.flush(), "a pending credit is sent");
+        assert!(!r.rx_half.flush(), "nothing left to send");
+        assert_eq!(r.tx.credit_needed(), Some(Cycle(10)));
+        // Two pops fill a batch: sent at once, no flush needed.
+        r.tx.push(Cycle(10), 4);
+        assert_eq!(r.tx.credit_needed(), None);
+        assert_eq!(r.rx.pop(Cycle(11)), 1);
+        assert_eq!(r.rx.pop(Cycle(12)), 2);
+        assert_eq!(r.tx.credit_needed(), Some(Cycle(11)));
+        r.cp.clear();
+        r.cc.clear();
+    }
+
+    /// With no item in flight the consumer's bound is the producer's published horizon;
+    /// a drain that finds nothing new reports no change (the executor then goes idle).
+    #[test]
+    fn remote_link_consumer_bound_follows_the_producer_horizon() {
+        let r = remote(4, 2);
+        assert_eq!(r.rx.next_arrival(&r.cc), Cycle(2));
+        // The producer's clock moves to 20 without pushing: its bound is 20 + latency 1.
+        r.cp.slots[0].now.set(Cycle(20));
+        r.cp.next_step();
+        assert!(r.tx_half.flush(), "the horizon moved");
+        assert!(
+            !r.tx_half.flush(),
+            "the same horizon is not published twice"
+        );
+        assert!(r.rx_half.drain());
+        assert_eq!(r.rx.next_arrival(&r.cc), Cycle(21 + 2));
+        assert!(!r.rx_half.drain(), "nothing new arrived");
+        assert_eq!(r.rx.next_arrival(&r.cc), Cycle(23));
+        // An item behind the horizon: the queued item is next, then the bound.
+        r.tx.push(Cycle(30), 7);
+        r.tx_half.flush();
+        assert!(r.rx_half.drain());
+        assert_eq!(r.rx.next_arrival(&r.cc), Cycle(32));
+        assert_eq!(r.rx.pop(Cycle(32)), 7);
+        assert_eq!(r.rx.next_arrival(&r.cc), Cycle(32));
+        r.tx.end();
+        assert!(r.rx_half.drain());
+        assert!(r.rx.finished());
+        assert_eq!(r.rx.next_arrival(&r.cc), Cycle::NEVER);
+        r.cp.clear();
+        r.cc.clear();
+    }
 }
