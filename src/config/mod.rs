@@ -47,6 +47,8 @@ pub const MAX_FRAGMENTS_PER_CYCLE: u64 = 64;
 pub const MAX_TILE_PX: u32 = 256;
 /// The largest accepted `bytes_*` figure of the frame buffer \[bytes\].
 pub const MAX_BYTES: u64 = 4096;
+/// The largest accepted batch of primitives dealt to one front-end engine \[primitives\].
+pub const MAX_BATCH: u32 = 65_536;
 /// The largest accepted FIFO depth \[items\]. Deeper FIFOs would only cost host memory.
 pub const MAX_FIFO_DEPTH: u32 = 4096;
 /// The largest accepted clock \[MHz\].
@@ -92,11 +94,19 @@ pub struct ArchConfig {
     pub links: LinksConfig,
 }
 
-/// Setup: projects a lembo's six control points and six normals to screen space. One
-/// instance. Item: one lembo.
+/// Setup: projects a lembo's six control points and six normals to screen space.
+/// Replicable: the scene's lembos are dealt to the instances in batches of `batch`, in
+/// submission order (batch b to instance b mod count), as a GPU's front end deals batches
+/// of primitives to its geometry engines. Item: one lembo.
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
 #[serde(default, deny_unknown_fields)]
 pub struct SetupConfig {
+    /// Number of instances. Default 1, Martinelli's Figure 5.
+    pub count: u32,
+    /// Lembos per batch dealt to one instance \[primitives\]. Default 32: each engine then
+    /// reads runs of consecutive lembos (neighbours in a mesh share edges), and a batch's
+    /// 192 busy cycles dwarf the dealing; only matters when `count` > 1.
+    pub batch: u32,
     /// Cycles from accepting a lembo to its projected form being ready \[cycles\]. Default
     /// 20: a pipelined 4x4 matrix-vector multiply (about 6 stages of multiply-add), a
     /// reciprocal for the perspective divide (about 10 stages) and the viewport transform
@@ -212,10 +222,18 @@ pub struct RasterizerConfig {
 
 /// TriangleSetup (the triangle path, DESIGN.md §5): projects a triangle's three vertices,
 /// snaps them to 16.8 fixed point and sets up the integer edge functions and the
-/// perspective-correct attribute planes. One instance. Item: one triangle.
+/// perspective-correct attribute planes. Replicable: triangles are dealt to the instances
+/// in batches of `batch`, in submission order (batch b to instance b mod count), as GPUs
+/// since 2010 deal batches of primitives to several geometry and setup engines, each about
+/// one primitive per clock. Item: one triangle.
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
 #[serde(default, deny_unknown_fields)]
 pub struct TriangleSetupConfig {
+    /// Number of instances. Default 1.
+    pub count: u32,
+    /// Triangles per batch dealt to one instance \[primitives\]. Default 32 (a batch of
+    /// vertex work of a GPU's front end); only matters when `count` > 1.
+    pub batch: u32,
     /// Cycles from accepting a triangle to its setup being ready \[cycles\]. Default 20, as
     /// the lembo Setup: a transform and perspective divide per vertex (about 16 stages) and
     /// the edge-function and plane setup (about 4).
@@ -345,6 +363,8 @@ impl Default for ArchConfig {
 impl Default for SetupConfig {
     fn default() -> SetupConfig {
         SetupConfig {
+            count: 1,
+            batch: 32,
             latency_cycles: 20,
             cycles_per_lembo: 6,
         }
@@ -406,6 +426,8 @@ impl Default for RasterizerConfig {
 impl Default for TriangleSetupConfig {
     fn default() -> TriangleSetupConfig {
         TriangleSetupConfig {
+            count: 1,
+            batch: 32,
             latency_cycles: 20,
             cycles_per_triangle: 1,
             cycles_per_clipped_piece: 1,
@@ -472,7 +494,7 @@ impl ArchConfig {
     /// sits in each ROP, so it has the ROPs' count and latency.
     pub fn unit(&self, kind: UnitKind) -> (u32, u64) {
         match kind {
-            UnitKind::Setup => (1, self.setup.latency_cycles),
+            UnitKind::Setup => (self.setup.count, self.setup.latency_cycles),
             UnitKind::MinMax => (self.minmax.count, self.minmax.latency_cycles),
             UnitKind::IntervalManager => (
                 self.interval_manager.count,
@@ -481,7 +503,10 @@ impl ArchConfig {
             UnitKind::Segmenter => (self.segmenter.count, self.segmenter.latency_cycles),
             UnitKind::Subsegmenter => (self.subsegmenter.count, self.subsegmenter.latency_cycles),
             UnitKind::FragmentRasterizer => (self.rasterizer.count, self.rasterizer.latency_cycles),
-            UnitKind::TriangleSetup => (1, self.triangle_setup.latency_cycles),
+            UnitKind::TriangleSetup => (
+                self.triangle_setup.count,
+                self.triangle_setup.latency_cycles,
+            ),
             UnitKind::TriangleRasterizer => (
                 self.triangle_rasterizer.count,
                 self.triangle_rasterizer.latency_cycles,
@@ -551,6 +576,8 @@ impl ArchConfig {
         }
 
         let setup = &self.setup;
+        check.count("setup.count", setup.count)?;
+        check.batch("setup.batch", setup.batch)?;
         check.cycles("setup.latency_cycles", setup.latency_cycles)?;
         check.cycles("setup.cycles_per_lembo", setup.cycles_per_lembo)?;
 
@@ -594,6 +621,8 @@ impl ArchConfig {
         check.fragments_per_cycle("rasterizer.fragments_per_cycle", ras.fragments_per_cycle)?;
 
         let ts = &self.triangle_setup;
+        check.count("triangle_setup.count", ts.count)?;
+        check.batch("triangle_setup.batch", ts.batch)?;
         check.cycles("triangle_setup.latency_cycles", ts.latency_cycles)?;
         check.cycles("triangle_setup.cycles_per_triangle", ts.cycles_per_triangle)?;
         check.cycles(
@@ -680,6 +709,15 @@ impl Check<'_> {
             value.into(),
             MAX_UNIT_COUNT.into(),
             "instances (every stage needs at least one unit)",
+        )
+    }
+
+    fn batch(&self, field: &str, value: u32) -> Result<()> {
+        self.range(
+            field,
+            value.into(),
+            MAX_BATCH.into(),
+            "primitives per batch",
         )
     }
 
@@ -943,6 +981,29 @@ mod tests {
         );
         assert_invalid(r#"{"rasterizer": {"count": 65}}"#, "rasterizer.count", "65");
         assert_invalid(r#"{"rop": {"count": 0}}"#, "rop.count", "0");
+        assert_invalid(r#"{"setup": {"count": 0}}"#, "setup.count", "0");
+        assert_invalid(
+            r#"{"triangle_setup": {"count": 65}}"#,
+            "triangle_setup.count",
+            "65",
+        );
+    }
+
+    #[test]
+    fn config_front_end_batch_out_of_range_is_refused_naming_it() {
+        assert_invalid(r#"{"setup": {"batch": 0}}"#, "setup.batch", "0");
+        assert_invalid(
+            r#"{"triangle_setup": {"batch": 65537}}"#,
+            "triangle_setup.batch",
+            "65537",
+        );
+        let ok = ArchConfig::from_json(
+            r#"{"setup": {"count": 64, "batch": 1}, "triangle_setup": {"count": 4, "batch": 65536}}"#,
+            "test",
+        )
+        .unwrap();
+        assert_eq!(ok.unit(UnitKind::Setup).0, 64);
+        assert_eq!(ok.unit(UnitKind::TriangleSetup).0, 4);
     }
 
     #[test]

@@ -27,6 +27,7 @@
 //! and each path only its own.
 
 pub mod builder;
+pub mod deal;
 pub mod discoid;
 pub mod items;
 pub mod runtime;

@@ -233,6 +233,11 @@ fn bad_architecture_field_is_refused_by_name() {
         ),
         (r#"{"segmenter": {"count": 0}}"#, "segmenter.count"),
         (r#"{"rop": {"count": 0}}"#, "rop.count"),
+        (
+            r#"{"triangle_setup": {"count": 0}}"#,
+            "triangle_setup.count",
+        ),
+        (r#"{"setup": {"batch": 0}}"#, "setup.batch"),
     ] {
         let dir = tempfile::tempdir().unwrap();
         std::fs::write(dir.path().join("a.json"), arch).unwrap();

@@ -294,3 +294,134 @@ fn a_replicated_front_end_deals_whole_lembos_and_draws_the_same_pixels() {
         last = t.cycles.total.0;
     }
 }
+
+/// `counts` without `fragments_passed_depth`, which depends on the order fragments reach a
+/// pixel (DESIGN.md §3: the image does not).
+fn order_free(counts: &lembo_sim::raster::Counts) -> lembo_sim::raster::Counts {
+    lembo_sim::raster::Counts {
+        fragments_passed_depth: 0,
+        ..*counts
+    }
+}
+
+/// Replicated setup engines (`setup.count`, `triangle_setup.count`), each dealt batches of
+/// primitives in submission order, draw the functional model's pixels with the same counts
+/// on both paths whatever the count and batch; each engine takes its batches (the item
+/// counts of `batch`-sized deals differ by at most a batch), and where setup bounds the
+/// frame (the triangle path at n = 4) more engines take fewer cycles.
+#[test]
+fn replicated_setup_engines_deal_batches_and_draw_the_same_pixels() {
+    use lembo_sim::lembo::tessellate::Tessellation;
+    use lembo_sim::raster::render_functional_triangles;
+    let s = scene("bunny.json", Some(256));
+    let view = View::new(&s.camera, s.viewport);
+    let options = SimOptions::default();
+    // The lembo path.
+    let functional = render_functional(&s, &view, 0.5, Datapath::F32, false).unwrap();
+    let mut base = None;
+    for (n, batch) in [(1, 32), (2, 32), (3, 1), (4, 7)] {
+        let mut a = ArchConfig::default();
+        a.setup.count = n;
+        a.setup.batch = batch;
+        a.validate("setup engines").unwrap();
+        let t = timed(&s, &a, &options);
+        assert!(
+            t.framebuffer.color == functional.framebuffer.color,
+            "lembo, {n} setups"
+        );
+        assert_eq!(t.framebuffer.depth, functional.framebuffer.depth);
+        assert_eq!(t.counts.fragments, functional.counts.fragments);
+        assert_eq!(t.counts.lembos, s.lembos().count() as u64);
+        let base = base.get_or_insert(t.counts);
+        assert_eq!(
+            order_free(&t.counts),
+            order_free(base),
+            "lembo path counts, {n} setups, batch {batch}"
+        );
+        assert_accounting(&t);
+        let setups: Vec<_> = t
+            .cycles
+            .units
+            .iter()
+            .filter(|u| u.kind == UnitKind::Setup)
+            .collect();
+        assert_eq!(setups.len() as u32, n);
+        if n > 1 {
+            assert_eq!(setups[1].name, "Setup[1]");
+        }
+    }
+    // The triangle path: setup is the bottleneck at n = 4 with one engine.
+    let tess = Tessellation::new(&s, 4);
+    let functional = render_functional_triangles(&s, &view, &tess, Datapath::F32, false);
+    let run = |a: &ArchConfig| {
+        run_timed(
+            &s,
+            &view,
+            0.5,
+            Datapath::F32,
+            a,
+            Source::Triangles(&tess),
+            &options,
+        )
+        .expect("timed triangles")
+    };
+    let mut one = ArchConfig::default();
+    one.triangle_rasterizer.count = 4;
+    let single = run(&one);
+    assert_eq!(single.cycles.bottleneck.as_deref(), Some("TriangleSetup"));
+    for (n, batch) in [(2, 32), (4, 32), (4, 1), (3, 100)] {
+        let mut a = one.clone();
+        a.triangle_setup.count = n;
+        a.triangle_setup.batch = batch;
+        a.validate("triangle setup engines").unwrap();
+        let t = run(&a);
+        assert!(
+            t.framebuffer.color == functional.framebuffer.color,
+            "triangles, {n} setups"
+        );
+        assert_eq!(t.framebuffer.depth, functional.framebuffer.depth);
+        assert_eq!(
+            order_free(&t.counts),
+            order_free(&single.counts),
+            "triangle counts, {n} setups, batch {batch}"
+        );
+        assert_accounting(&t);
+        let setups: Vec<_> = t
+            .cycles
+            .units
+            .iter()
+            .filter(|u| u.kind == UnitKind::TriangleSetup)
+            .collect();
+        assert_eq!(setups.len() as u32, n);
+        assert_eq!(setups[0].name, "TriangleSetup[0]");
+        // Every triangle is set up by exactly one engine, each its own batches.
+        assert_eq!(t.counts.triangles_clipped, 0);
+        let triangles = tess.lembos() as u64 * tess.triangles_per_lembo();
+        let batches = triangles.div_ceil(batch as u64);
+        for (i, u) in setups.iter().enumerate() {
+            let mine = (0..batches)
+                .filter(|b| b % n as u64 == i as u64)
+                .map(|b| (triangles - b * batch as u64).min(batch as u64))
+                .sum::<u64>();
+            // One cycle a triangle, culled or not (nothing is clipped here).
+            assert_eq!(u.busy.0, mine, "{}", u.name);
+        }
+        // Setup divides among the engines until it is no longer what bounds the frame.
+        let setup_bound = t
+            .cycles
+            .bottleneck
+            .as_deref()
+            .is_some_and(|b| b.starts_with("TriangleSetup"));
+        assert!(
+            !setup_bound || t.cycles.total.0 * n as u64 <= single.cycles.total.0 * 105 / 100,
+            "{n} setups: {} cycles against {} with one",
+            t.cycles.total,
+            single.cycles.total
+        );
+        assert!(
+            t.cycles.total.0 * 10 <= single.cycles.total.0 * 6,
+            "{n} setups: {}",
+            t.cycles.total
+        );
+    }
+}

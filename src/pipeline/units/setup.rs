@@ -3,10 +3,12 @@
 //! transform, and culls lembos outside the viewport or behind the eye (one cull test each).
 //!
 //! Input: the scene's lembos, read from memory in scene order (the unit is the source, so
-//! it is never starved until it runs out). Output: [`LemboReady`] per visible lembo to
-//! MinMax; the [`ScreenLembo`](crate::raster::setup::ScreenLembo) itself goes to the
-//! pipeline's lembo table, as a hardware setup unit writes a primitive's coefficients into
-//! a parameter buffer that later stages index.
+//! it is never starved until it runs out); with `setup.count` instances, each reads the
+//! batches of `setup.batch` lembos dealt to it ([`Deal`]). Output: [`LemboReady`] per
+//! visible lembo to the MinMax units, round-robin; the
+//! [`ScreenLembo`](crate::raster::setup::ScreenLembo) itself goes to the pipeline's lembo
+//! table, as a hardware setup unit writes a primitive's coefficients into a parameter
+//! buffer that later stages index.
 //!
 //! A lembo whose hull reaches far beyond the viewport is split into pieces
 //! ([`setup_pieces`]); each piece is a table entry of its own and goes down the pipeline as
@@ -21,6 +23,7 @@ use crate::camera::View;
 use crate::config::SetupConfig;
 use crate::datapath::Real;
 use crate::graph::UnitKind;
+use crate::pipeline::deal::Deal;
 use crate::pipeline::items::{LemboReady, PieceId};
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::Ctx;
@@ -43,11 +46,12 @@ impl<R: Real> Unit<R> for Setup {
     fn spawn<'a>(
         ctx: Ctx<(), LemboReady>,
         run: &'a Run<'a, R>,
-        _: usize,
+        index: usize,
     ) -> UnitFuture<'a, Finished> {
         Box::pin(self::run(
             ctx,
             &run.arch.setup,
+            index,
             run.scene,
             run.view,
             run.perspective_tol,
@@ -56,11 +60,12 @@ impl<R: Real> Unit<R> for Setup {
     }
 }
 
-/// Setup's body: every lembo of `scene` in order, projected (and split or clipped) into
-/// `table`.
+/// Setup's body: instance `index`'s lembos of `scene` (its batches, [`Deal`]) in
+/// order, projected (and split or clipped) into `table`.
 pub async fn run<R: Real>(
     mut ctx: Ctx<(), LemboReady>,
     cfg: &SetupConfig,
+    index: usize,
     scene: &Scene,
     view: &View,
     perspective_tol: Option<f64>,
@@ -71,7 +76,12 @@ pub async fn run<R: Real>(
     let mut pieces = Vec::new();
     // Pieces to the MinMax units, round-robin.
     let mut next_port = 0;
-    for (id, (lembo, color)) in scene.lembos().enumerate() {
+    let mine = Deal::new(index, cfg.count, cfg.batch);
+    for (id, (lembo, color)) in scene
+        .lembos()
+        .enumerate()
+        .filter(|(id, _)| mine.takes(*id as u64))
+    {
         counts.lembos += 1;
         match setup_pieces::<R>(id as u32, lembo, color, view, perspective_tol, &mut pieces) {
             Ok(split) => {

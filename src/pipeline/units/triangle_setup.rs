@@ -6,8 +6,10 @@
 //!
 //! Input: the triangles (the tessellated scene), in their source's order (the unit is the
 //! source: the Tessellator's output is read from memory, so the unit is never starved until
-//! it runs out). Output: each set-up triangle, or each piece of a clipped one (with its
-//! parent's id), round-robin to the triangle rasterizers.
+//! it runs out); with `triangle_setup.count` instances, each reads the batches of
+//! `triangle_setup.batch` triangles dealt to it ([`Deal`]). Output: each set-up triangle,
+//! or each piece of a clipped one (with its parent's id), round-robin to the triangle
+//! rasterizers.
 //!
 //! Cost: `triangle_setup.cycles_per_triangle` busy cycles per triangle, culled or not, plus
 //! `triangle_setup.cycles_per_clipped_piece` per triangle of a clipped triangle's fan
@@ -20,6 +22,7 @@ use crate::camera::View;
 use crate::config::TriangleSetupConfig;
 use crate::datapath::Real;
 use crate::graph::UnitKind;
+use crate::pipeline::deal::Deal;
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::Ctx;
 use crate::pipeline::unit::{Finished, Run, Unit};
@@ -41,22 +44,24 @@ impl<R: Real> Unit<R> for TriangleSetup {
     fn spawn<'a>(
         ctx: Ctx<Self::In, Self::Out>,
         run: &'a Run<'a, R>,
-        _: usize,
+        index: usize,
     ) -> UnitFuture<'a, Finished> {
         Box::pin(self::run(
             ctx,
             &run.arch.triangle_setup,
+            index,
             run.triangles,
             run.view,
         ))
     }
 }
 
-/// TriangleSetup's body: every triangle of the source in order, set up (clipped and fanned where
-/// needed).
+/// TriangleSetup's body: instance `index`'s triangles of the source (its batches,
+/// [`Deal`]) in order, set up (clipped and fanned where needed).
 pub async fn run<R: Real>(
     mut ctx: Ctx<(), Arc<ScreenTriangle<R>>>,
     cfg: &TriangleSetupConfig,
+    index: usize,
     source: &dyn TriangleSource,
     view: &View,
 ) -> Finished {
@@ -65,9 +70,18 @@ pub async fn run<R: Real>(
     let mut counts = Counts::default();
     let (mut triangles, mut pieces) = (Vec::new(), Vec::new());
     let mut next = 0;
+    let mine = Deal::new(index, cfg.count, cfg.batch);
+    let per_chunk = source.per_chunk();
     for c in 0..source.chunks() {
+        let first = c as u64 * per_chunk;
+        if !mine.takes_any(first, per_chunk) {
+            continue;
+        }
         source.chunk(c, &mut triangles);
         for (k, t) in triangles.iter().enumerate() {
+            if !mine.takes(first + k as u64) {
+                continue;
+            }
             let id = source.id(c, k);
             let outcome = setup::<R>(id, &t.positions, &t.normals, t.color, view, &mut pieces);
             outcome.count(&mut counts);
