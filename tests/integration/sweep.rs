@@ -3,9 +3,10 @@
 //! before any run. Outputs are compared with host timing masked (`report.host` in the
 //! records, `wall_seconds` in the table); everything else must be equal.
 
-use crate::support::binary;
+use crate::support::{binary, golden};
 use lembo_sim::sweep::Plan;
 use serde_json::Value;
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::sync::OnceLock;
@@ -629,4 +630,129 @@ fn runs_at_once_larger_than_memory_are_refused_before_any_run() {
             "skipped the part on this machine's own memory: it may have the memory for two 16384x16384 runs; the refusal was tested at a set size"
         ),
     }
+}
+
+/// A results table as cases for [`golden::differences`]: each row under its index, scene
+/// and point, as `column = value` lines, without the host's `wall_seconds`.
+fn table_cases(csv: &str) -> BTreeMap<String, String> {
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap_or_default().split(',').collect();
+    lines
+        .map(|row| {
+            let cells: Vec<&str> = row.split(',').collect();
+            let text = header
+                .iter()
+                .zip(&cells)
+                .filter(|(h, _)| **h != "wall_seconds")
+                .map(|(h, c)| format!("{h} = {c}"))
+                .collect::<Vec<_>>()
+                .join("\n");
+            (format!("row {}", cells.first().unwrap_or(&"?")), text)
+        })
+        .collect()
+}
+
+/// The committed sweep results README and RESULTS quote (`sim/sweeps/results/NAME/`, from
+/// `sim/sweeps/NAME.json`) are what the code computes now: each spec is swept again and its
+/// table (host time aside) and the plots committed beside it must equal the committed
+/// ones. `LEMBO_BLESS=1`
+/// rewrites the committed files instead, after printing what changed (then re-read the
+/// quoted figures in README.md and RESULTS.md).
+#[test]
+fn committed_sweep_results_are_what_the_code_computes() {
+    let results = manifest().join("sim/sweeps/results");
+    let mut names: Vec<String> = std::fs::read_dir(&results)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert!(names.len() >= 2, "committed results: {names:?}");
+    let bless = golden::blessing();
+    let mut failures = Vec::new();
+    for name in &names {
+        let committed = results.join(name);
+        let spec = manifest().join(format!("sim/sweeps/{name}.json"));
+        assert!(
+            spec.exists(),
+            "{} has no spec {}",
+            committed.display(),
+            spec.display()
+        );
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("out");
+        ok(&sweep(
+            &[
+                "sweep",
+                spec.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+                "--jobs",
+                "2",
+            ],
+            &[],
+            dir.path(),
+        ));
+        // The table, row by row.
+        let read = |d: &Path, f: &str| std::fs::read_to_string(d.join(f)).unwrap_or_default();
+        let want = table_cases(&read(&committed, "results.csv"));
+        let got = table_cases(&read(&out, "results.csv"));
+        assert!(got.len() >= 10, "{name}: {} rows swept", got.len());
+        let mut differ = golden::differences(&want, &got);
+        // The plots committed (a chosen few of the sweep's), byte for byte.
+        let svgs = |d: &Path| -> BTreeMap<String, Vec<u8>> {
+            std::fs::read_dir(d)
+                .unwrap()
+                .map(|e| e.unwrap().path())
+                .filter(|p| p.extension().is_some_and(|e| e == "svg"))
+                .map(|p| {
+                    let bytes = std::fs::read(&p).unwrap();
+                    (p.file_name().unwrap().to_string_lossy().into_owned(), bytes)
+                })
+                .collect()
+        };
+        let (want_svg, got_svg) = (svgs(&committed), svgs(&out));
+        assert!(!want_svg.is_empty(), "{name}: no plot committed");
+        for (plot, bytes) in &want_svg {
+            match got_svg.get(plot) {
+                None => differ.push(format!("{plot}: no longer drawn")),
+                Some(g) if g != bytes => differ.push(format!("{plot}: differs")),
+                Some(_) => {}
+            }
+        }
+        if bless {
+            eprintln!(
+                "{}: {} of {} rows and plots changed in {}",
+                golden::BLESS,
+                differ.len(),
+                got.len() + want_svg.len(),
+                committed.display()
+            );
+            for d in differ.iter().take(5) {
+                eprintln!("  {d}");
+            }
+            std::fs::copy(out.join("results.csv"), committed.join("results.csv")).unwrap();
+            for plot in want_svg.keys() {
+                match got_svg.contains_key(plot) {
+                    true => std::fs::copy(out.join(plot), committed.join(plot)).map(drop),
+                    false => std::fs::remove_file(committed.join(plot)),
+                }
+                .unwrap();
+            }
+        } else if !differ.is_empty() {
+            failures.push(format!(
+                "{}: {} of {} rows and plots differ from what the code computes (rerun with \
+                 LEMBO_BLESS=1, then update the figures README.md and RESULTS.md quote):\n{}",
+                committed.display(),
+                differ.len(),
+                want.len() + want_svg.len(),
+                differ
+                    .iter()
+                    .take(8)
+                    .cloned()
+                    .collect::<Vec<_>>()
+                    .join("\n")
+            ));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n\n"));
 }

@@ -69,7 +69,7 @@ fn refusals(got: &BTreeMap<String, String>, expect: &Expect) -> Vec<String> {
 
 /// Each case of `want` and `got` that differs, with its first differing line; cases only
 /// in one of them are named as added or removed.
-fn differences(want: &BTreeMap<String, String>, got: &BTreeMap<String, String>) -> Vec<String> {
+pub fn differences(want: &BTreeMap<String, String>, got: &BTreeMap<String, String>) -> Vec<String> {
     let mut out = Vec::new();
     for (case, g) in got {
         match want.get(case) {
