@@ -386,8 +386,8 @@ pub enum GraphError {
         /// The unit without the port.
         kind: UnitKind,
     },
-    /// Two boundaries feed one kind, or leave one kind (a unit has one input and one
-    /// output crossbar).
+    /// Two boundaries leave one kind (a unit has one output crossbar; it may have several
+    /// input crossbars, merged as one set of ports).
     Fanned {
         /// The kind.
         kind: UnitKind,
@@ -440,7 +440,7 @@ impl std::fmt::Display for GraphError {
                 second,
             } => write!(
                 f,
-                "{} is on two boundaries on one side, {first} and {second}",
+                "{} writes to two boundaries, {first} and {second}",
                 kind.name()
             ),
             GraphError::ItemMismatch {

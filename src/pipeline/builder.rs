@@ -5,6 +5,11 @@
 //! are connected) and refuses a bad one with a [`GraphError`]; then it instantiates each
 //! kind as the architecture says and makes each boundary's typed links. Each host thread
 //! then takes its units' bodies from the plan ([`Plan::bodies`]).
+//!
+//! A kind writes to one boundary but may read from several (a memory port fed by the ROPs
+//! and by a geometry fetch): its input ports are every feeding boundary's links, boundary
+//! by boundary in the graph's order, each boundary's producers in order, all merged by
+//! (arrival, port) as one crossbar's are.
 
 use super::runtime::executor::UnitFuture;
 use super::runtime::{partition, LinkSpec, SimOptions};
@@ -24,8 +29,8 @@ pub struct Ports {
     pub kinds: Vec<UnitKind>,
     /// Each kind's body.
     body: Vec<usize>,
-    /// Each kind's input boundary, None for a source.
-    input: Vec<Option<usize>>,
+    /// Each kind's input boundaries, in the graph's order; none for a source.
+    input: Vec<Vec<usize>>,
     /// Each kind's output boundary, None for a sink.
     output: Vec<Option<usize>>,
 }
@@ -49,7 +54,7 @@ fn check_with<R: Real>(
         body.push(b.ok_or(GraphError::NoBody { kind })?);
     }
     let at = |kind: UnitKind| kinds.iter().position(|&k| k == kind);
-    let mut input: Vec<Option<usize>> = vec![None; kinds.len()];
+    let mut input: Vec<Vec<usize>> = vec![Vec::new(); kinds.len()];
     let mut output: Vec<Option<usize>> = vec![None; kinds.len()];
     for (bi, b) in graph.boundaries.iter().enumerate() {
         let (Some(p), Some(c)) = (at(b.from), at(b.to)) else {
@@ -74,20 +79,19 @@ fn check_with<R: Real>(
                 read: read.1,
             });
         }
-        for (side, at, kind) in [(&mut output, p, b.from), (&mut input, c, b.to)] {
-            if let Some(first) = side[at] {
-                return Err(GraphError::Fanned {
-                    kind,
-                    first: graph.boundaries[first].key,
-                    second: b.key,
-                });
-            }
-            side[at] = Some(bi);
+        if let Some(first) = output[p] {
+            return Err(GraphError::Fanned {
+                kind: b.from,
+                first: graph.boundaries[first].key,
+                second: b.key,
+            });
         }
+        output[p] = Some(bi);
+        input[c].push(bi);
     }
     for (i, &kind) in kinds.iter().enumerate() {
         let unit = &bodies[body[i]];
-        if unit.input().is_some() && input[i].is_none() {
+        if unit.input().is_some() && input[i].is_empty() {
             return Err(GraphError::Unfed { kind });
         }
         if unit.output().is_some() && output[i].is_none() {
@@ -195,20 +199,23 @@ impl Plan {
                 .iter()
                 .position(|&k| k == self.units[g].kind)
                 .expect("every unit is of a kind of the plan");
-            let (input, output) = (self.ports.input[k], self.ports.output[k]);
-            let mut rx = input.and_then(|b| wired[b].take());
+            let (input, output) = (&self.ports.input[k], self.ports.output[k]);
+            let mut rx: Vec<(usize, Box<dyn Any>)> = input
+                .iter()
+                .filter_map(|&b| wired[b].take().map(|w| (b, w)))
+                .collect();
             let mut tx = output.and_then(|b| wired[b].take());
             futures.push(bodies[self.ports.body[k]].spawn(
                 host,
                 g,
                 g - self.first[k],
-                rx.as_deref_mut(),
+                rx.iter_mut().map(|(_, w)| w.as_mut()).collect(),
                 tx.as_deref_mut(),
                 run,
                 trace,
             ));
-            if let Some(b) = input {
-                wired[b] = rx;
+            for (b, w) in rx {
+                wired[b] = Some(w);
             }
             if let Some(b) = output {
                 wired[b] = tx;
@@ -250,7 +257,10 @@ mod tests {
             let ports = check::<f32>(&Graph::of(path)).unwrap();
             assert_eq!(check::<f64>(&Graph::of(path)).unwrap(), ports);
             let n = ports.kinds.len();
-            assert_eq!(ports.input[0], None, "{path:?}: the first unit is a source");
+            assert!(
+                ports.input[0].is_empty(),
+                "{path:?}: the first unit is a source"
+            );
             assert_eq!(
                 ports.output[n - 1],
                 None,
@@ -259,7 +269,7 @@ mod tests {
             for i in 0..n - 1 {
                 let b = &BOUNDARIES[ports.output[i].unwrap()];
                 assert_eq!((b.from, b.to), (ports.kinds[i], ports.kinds[i + 1]));
-                assert_eq!(ports.input[i + 1], ports.output[i]);
+                assert_eq!(ports.input[i + 1], [ports.output[i].unwrap()]);
             }
         }
     }
@@ -323,7 +333,8 @@ mod tests {
             check(&[Setup, Setup], &BOUNDARIES),
             Err(GraphError::Repeated { kind: Setup })
         );
-        // Both rasterizers into the ROPs: a ROP has one input crossbar.
+        // Both rasterizers into the ROPs: a ROP reads from both boundaries, its ports the
+        // lembo rasterizers' then the triangle rasterizers'.
         let both = [
             Setup,
             MinMax,
@@ -336,12 +347,18 @@ mod tests {
             Rop,
             FrameBuffer,
         ];
+        let ports = check(&both, &BOUNDARIES).unwrap();
+        let keys: Vec<&str> = ports.input[8].iter().map(|&b| BOUNDARIES[b].key).collect();
+        assert_eq!(keys, ["rasterizer_to_rop", "triangle_rasterizer_to_rop"]);
+        // A unit writes to one boundary: a second one out of Setup is refused.
+        let mut twice = BOUNDARIES.to_vec();
+        twice.insert(1, boundary("setup_to_minmax_again", Setup, MinMax));
         assert_eq!(
-            check(&both, &BOUNDARIES),
+            check(lembo, &twice),
             Err(GraphError::Fanned {
-                kind: Rop,
-                first: "rasterizer_to_rop",
-                second: "triangle_rasterizer_to_rop"
+                kind: Setup,
+                first: "setup_to_minmax",
+                second: "setup_to_minmax_again"
             })
         );
         // The frame-buffer port is a sink: a boundary out of it has no port to leave by.

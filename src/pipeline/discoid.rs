@@ -120,6 +120,7 @@ fn passes<R: Real>(
                 winner,
             }),
             options,
+            None,
         )
     };
     let first = pass(Pass::Depth, &[], &[])?;

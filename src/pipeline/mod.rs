@@ -135,8 +135,8 @@ pub fn run_timed(
 ) -> Result<TimedFrame> {
     let tol = tol.into();
     match datapath {
-        Datapath::F32 => run_in::<f32>(scene, view, tol, arch, source, None, options),
-        Datapath::F64 => run_in::<f64>(scene, view, tol, arch, source, None, options),
+        Datapath::F32 => run_in::<f32>(scene, view, tol, arch, source, None, options, None),
+        Datapath::F64 => run_in::<f64>(scene, view, tol, arch, source, None, options, None),
     }
 }
 
@@ -151,6 +151,9 @@ impl Drop for AbortOnPanic<'_> {
     }
 }
 
+/// [`run_timed`] in datapath `R`, for a discoid pass when `discoid`, on `graph` (a test's)
+/// instead of the path's own when given.
+#[allow(clippy::too_many_arguments)]
 fn run_in<R: Real>(
     scene: &Scene,
     view: &View,
@@ -159,6 +162,7 @@ fn run_in<R: Real>(
     source: Source,
     discoid: Option<DiscoidPass<R>>,
     options: &SimOptions,
+    graph: Option<&Graph>,
 ) -> Result<TimedFrame> {
     let vp = view.viewport;
     let background = scene.background.map(crate::rop::shade::to_u8::<f64>);
@@ -188,7 +192,7 @@ fn run_in<R: Real>(
             recoveries: Recoveries::default(),
         });
     };
-    let plan = Plan::new::<R>(&Graph::of(path), arch, options)?;
+    let plan = Plan::new::<R>(graph.unwrap_or(&Graph::of(path)), arch, options)?;
     let discoids = discoid.is_some();
     let trace_cap = options.trace_event_cap / plan.units.len();
     let trace = options.trace.then_some(trace_cap);
@@ -433,4 +437,81 @@ fn finish(
         discoid,
         recoveries: Recoveries::default(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::graph::BOUNDARIES;
+
+    /// A kind may read from several boundaries: the ROPs fed by both paths' rasterizers
+    /// (the triangle units idle on a lembo scene) merge the extra ports with the lembo
+    /// rasterizers' and draw the lembo path's frame in the same cycles, unit for unit,
+    /// over one host thread or three.
+    #[test]
+    fn a_unit_fed_by_two_boundaries_merges_them_as_one_crossbar() {
+        use UnitKind::*;
+        let mut scene = Scene::default_scene();
+        scene.set_viewport(96, 96).unwrap();
+        let view = View::new(&scene.camera, scene.viewport);
+        let tol = Tolerance::from(0.5);
+        let arch = ArchConfig::default();
+        let both = [
+            Setup,
+            MinMax,
+            IntervalManager,
+            Segmenter,
+            Subsegmenter,
+            FragmentRasterizer,
+            TriangleSetup,
+            TriangleRasterizer,
+            Rop,
+            FrameBuffer,
+        ];
+        let graph = Graph {
+            kinds: &both,
+            boundaries: &BOUNDARIES,
+        };
+        for threads in [1, 3] {
+            let options = SimOptions {
+                host_threads: threads,
+                ..SimOptions::default()
+            };
+            let run = |graph: Option<&Graph>| {
+                run_in::<f32>(
+                    &scene,
+                    &view,
+                    tol,
+                    &arch,
+                    Source::Lembos,
+                    None,
+                    &options,
+                    graph,
+                )
+                .unwrap()
+            };
+            let (plain, fanned) = (run(None), run(Some(&graph)));
+            assert!(plain.framebuffer.color == fanned.framebuffer.color);
+            assert_eq!(plain.counts, fanned.counts);
+            assert_eq!(plain.cycles.total, fanned.cycles.total);
+            for u in &plain.cycles.units {
+                let f = fanned
+                    .cycles
+                    .units
+                    .iter()
+                    .find(|f| f.name == u.name)
+                    .unwrap();
+                assert_eq!(u, f, "{} over {threads} host threads", u.name);
+            }
+            // The triangle units are there, fed nothing.
+            let extra: Vec<_> = fanned
+                .cycles
+                .units
+                .iter()
+                .filter(|u| matches!(u.kind, TriangleSetup | TriangleRasterizer))
+                .collect();
+            assert_eq!(extra.len(), 2);
+            assert!(extra.iter().all(|u| u.items_in == 0 && u.items_out == 0));
+        }
+    }
 }

@@ -194,14 +194,15 @@ pub trait Elaborate<R: Real> {
     /// One host thread's ends of `xb`, one of this unit's crossbars (a `Wired<Out>`).
     fn wire(&self, host: &mut HostWiring, xb: &(dyn Any + Send + Sync)) -> Box<dyn Any>;
     /// The body of unit `g`, instance `index` of its kind, with its inputs taken from
-    /// `inputs` (a `Wired<In>`) and its outputs from `outputs` (a `Wired<Out>`).
+    /// `inputs` (a `Wired<In>` per feeding boundary, in the graph's order: its ports, one
+    /// boundary's after another's) and its outputs from `outputs` (a `Wired<Out>`).
     #[allow(clippy::too_many_arguments)]
     fn spawn<'a>(
         &self,
         host: &HostWiring,
         g: usize,
         index: usize,
-        inputs: Option<&mut dyn Any>,
+        inputs: Vec<&mut dyn Any>,
         outputs: Option<&mut dyn Any>,
         run: &'a Run<'a, R>,
         trace: Option<usize>,
@@ -268,18 +269,21 @@ impl<R: Real, U: Unit<R>> Elaborate<R> for Spec<U> {
         host: &HostWiring,
         g: usize,
         index: usize,
-        inputs: Option<&mut dyn Any>,
+        inputs: Vec<&mut dyn Any>,
         outputs: Option<&mut dyn Any>,
         run: &'a Run<'a, R>,
         trace: Option<usize>,
     ) -> UnitFuture<'a, Finished> {
-        // The builder checked before elaboration that every consumer reads its producer's
+        // The builder checked before elaboration that every consumer reads its producers'
         // type, so these casts only fail on a builder defect.
-        let rx = inputs.map_or_else(Vec::new, |w| {
-            w.downcast_mut::<Wired<U::In>>()
-                .expect("the graph check matched the input type")
-                .take_rx(index)
-        });
+        let rx = inputs
+            .into_iter()
+            .flat_map(|w| {
+                w.downcast_mut::<Wired<U::In>>()
+                    .expect("the graph check matched the input type")
+                    .take_rx(index)
+            })
+            .collect();
         let tx = outputs.map_or_else(Vec::new, |w| {
             w.downcast_mut::<Wired<U::Out>>()
                 .expect("the graph check matched the output type")
