@@ -181,7 +181,7 @@ pub fn cost(tech: &Tech, arch: &ArchConfig, datapath: Datapath, work: &Work) -> 
     let area_mm2: f64 = out.iter().map(|u| u.area_mm2).sum();
     let frame_us = work.cycles.total.0 as f64 / work.cycles.clock_mhz;
     // mW × µs = nJ.
-    let leakage_pj = tech.leakage.mw_per_mm2 * area_mm2 * frame_us * 1e3;
+    let leakage_pj = tech.logic_leakage.mw_per_mm2 * area_mm2 * frame_us * 1e3;
     let energy_pj = out.iter().map(|u| u.energy_pj).sum::<f64>() + leakage_pj;
     let mut kinds: Vec<UnitKind> = units.iter().map(|u| u.kind).collect();
     kinds.dedup();
