@@ -64,8 +64,9 @@ fn report(dir: &std::path::Path) -> serde_json::Value {
 }
 
 /// A timed report prices every unit it instantiates, and the parts add up: the total area
-/// and energy are the units' sums, a FIFO's share is within its unit's, and the frame
-/// buffer's energy is its bytes at the DRAM figure.
+/// and energy are the units' sums, a FIFO's share is within its unit's, every FIFO bit
+/// leaks 100 mW per MB over the frame, and the frame buffer's energy is its bytes at the
+/// DDR4 figure, its FIFO's traffic and its FIFO's leakage.
 #[test]
 fn a_timed_report_prices_every_unit() {
     let root = env!("CARGO_MANIFEST_DIR");
@@ -95,13 +96,34 @@ fn a_timed_report_prices_every_unit() {
             assert!(u["fifo_area_mm2"].as_f64().unwrap() <= u["area_mm2"].as_f64().unwrap());
             assert!(u["energy_pj"].as_f64().unwrap() > 0.0, "{u}");
         }
+        let tech = &cost["tech"];
+        assert_eq!(tech["name"], "45nm");
+        assert_eq!(tech["dram_kind"], "ddr4");
+        assert_eq!(tech["dram_pj_per_byte"], 162.5);
+        // µs of the frame, and each unit's FIFO bits from their area (0.69 µm² a bit).
+        let cycles = &r["cycles"];
+        let frame_us = cycles["total"].as_f64().unwrap() / cycles["clock_mhz"].as_f64().unwrap();
+        let mut leakage = 0.0;
+        for u in units {
+            let bits = u["fifo_area_mm2"].as_f64().unwrap() * 1e6 / 0.69;
+            let expected = 100.0 * bits / (8.0 * 1048576.0) * frame_us * 1e3;
+            let got = u["fifo_leakage_pj"].as_f64().unwrap();
+            assert!((got - expected).abs() <= 1e-9 * expected, "{u}");
+            leakage += got;
+        }
+        assert!(leakage > 0.0);
+        assert!((cost["sram_leakage_pj"].as_f64().unwrap() - leakage).abs() < 1e-9 * leakage);
+        assert_eq!(cost["logic_leakage_pj"], 0.0);
         let fb = units.iter().find(|u| u["name"] == "FrameBuffer").unwrap();
         let dram = cost["framebuffer_bytes"].as_f64().unwrap() * 162.5;
-        let fifo = fb["fifo_energy_pj"].as_f64().unwrap();
+        let fifo = fb["fifo_energy_pj"].as_f64().unwrap() + fb["fifo_leakage_pj"].as_f64().unwrap();
         assert!((fb["energy_pj"].as_f64().unwrap() - fifo - dram).abs() < 1e-6 * dram);
-        assert!(std::fs::read_to_string(out.join("report.txt"))
-            .unwrap()
-            .contains("\ncost      "));
+        let text = std::fs::read_to_string(out.join("report.txt")).unwrap();
+        assert!(text.contains("\ncost      "), "{text}");
+        assert!(
+            text.contains("as ddr4 DRAM at 162.5 pJ/B; SRAM leakage "),
+            "{text}"
+        );
         let _ = std::fs::remove_dir_all(&out);
     }
 }
@@ -206,6 +228,36 @@ fn every_shipped_technology_file_loads() {
     assert_eq!(t7.dram.kind, DramKind::Hbm2);
     assert!((250.0..=450.0).contains(&(t7.dram.pj_per_byte * 8.0)));
     assert!(t7.sram.leakage_mw_per_mb < t45.sram.leakage_mw_per_mb);
+}
+
+/// A 7 nm frame says which technology and which DRAM priced it, in report.json's
+/// `cost.tech` and in report.txt.
+#[test]
+fn a_report_names_its_technology_and_dram_kind() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let out = temp_dir("7nm");
+    let o = run(
+        &[
+            "render",
+            "traces/sphere24.json",
+            "--tech",
+            "sim/tech/7nm.json",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        root,
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let tech = &report(&out)["cost"]["tech"];
+    assert_eq!(tech["name"], "7nm");
+    assert_eq!(tech["node_nm"], 7.0);
+    assert_eq!(tech["dram_kind"], "hbm2");
+    assert_eq!(tech["dram_pj_per_byte"], 43.75);
+    let text = std::fs::read_to_string(out.join("report.txt")).unwrap();
+    assert!(text.contains("(technology 7nm; "), "{text}");
+    assert!(text.contains("as hbm2 DRAM at 43.75 pJ/B"), "{text}");
+    assert!(String::from_utf8_lossy(&o.stdout).contains("cost (7nm, hbm2 DRAM)"));
+    let _ = std::fs::remove_dir_all(&out);
 }
 
 /// A change made to a technology file's JSON.
