@@ -7,14 +7,19 @@
 //! - **FIFO area.** A unit owns its input FIFOs: one link per producer instance, each
 //!   `fifo_depth` entries of the producing unit's `OUT_WORDS` datapath words.
 //! - **Energy.** Operations times their energy; every item through a FIFO is written once
-//!   and read once; every byte through the frame-buffer port is a DRAM byte; plus leakage
-//!   over the frame's time when the technology file gives a figure.
+//!   and read once; every byte through the frame-buffer port is a DRAM byte; every bit
+//!   stored on chip leaks for the whole frame at the SRAM's leakage per MB; the datapaths
+//!   leak at the logic figure per mm² (0 in the shipped files: not modelled).
+//! - **On-chip SRAM.** Every buffer the model stores on chip is priced by one function,
+//!   [`price_sram`]: area per bit, energy per 64 bits moved, leakage per bit stored over the
+//!   frame. The FIFOs are the only such buffers today; a vertex cache or a parameter buffer
+//!   priced later goes through it too.
 //!
 //! A kind's operations are shared among its instances in proportion to the items each
 //! took in.
 
 use super::counted::OpTable;
-use super::tech::Tech;
+use super::tech::{DramKind, Sram, Tech};
 use crate::config::ArchConfig;
 use crate::datapath::{Datapath, OPS};
 use crate::graph::UnitKind;
@@ -24,12 +29,17 @@ use serde::Serialize;
 /// `cost` in report.json: what the unit would cost in silicon for this frame.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct CostReport {
-    /// The technology file's name.
-    pub tech: String,
+    /// The technology file that priced the frame.
+    pub tech: TechUsed,
     /// Die area of the instantiated units: datapaths and FIFOs \[mm²\].
     pub area_mm2: f64,
     /// Energy of the frame: operations, FIFO traffic, frame-buffer bytes, leakage \[pJ\].
     pub energy_pj: f64,
+    /// The part of `energy_pj` that is the on-chip SRAM's leakage over the frame \[pJ\].
+    pub sram_leakage_pj: f64,
+    /// The part of `energy_pj` that is the datapaths' leakage over the frame (0 with the
+    /// shipped technology files: not modelled) \[pJ\].
+    pub logic_leakage_pj: f64,
     /// Average power over the frame at the architecture's clock; null for an empty frame
     /// \[mW\].
     pub power_mw: Option<f64>,
@@ -39,6 +49,19 @@ pub struct CostReport {
     pub units: Vec<UnitCost>,
     /// The operations each kind performed, counted by the code that does them.
     pub ops: Vec<KindOps>,
+}
+
+/// `cost.tech` in report.json: which technology file priced the frame.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct TechUsed {
+    /// The file's name (`45nm`).
+    pub name: String,
+    /// Its process node \[nm\].
+    pub node_nm: f64,
+    /// The DRAM the frame-buffer bytes were priced as.
+    pub dram_kind: DramKind,
+    /// That DRAM's energy per byte \[pJ\].
+    pub dram_pj_per_byte: f64,
 }
 
 /// One unit instance's cost.
@@ -54,6 +77,8 @@ pub struct UnitCost {
     pub fifo_area_mm2: f64,
     /// The part of the energy in its input FIFOs' writes and reads \[pJ\].
     pub fifo_energy_pj: f64,
+    /// The part of the energy its input FIFOs leak over the frame \[pJ\].
+    pub fifo_leakage_pj: f64,
     /// Functional units of each class its datapath needs \[units\].
     pub functional_units: OpCounts,
 }
@@ -125,6 +150,40 @@ pub struct Work<'a> {
     pub framebuffer_bytes: u64,
 }
 
+/// Bits in a MB of SRAM (2^20 bytes), the unit of [`Sram::leakage_mw_per_mb`].
+pub const BITS_PER_MB: f64 = 8.0 * 1_048_576.0;
+
+/// What an on-chip SRAM array costs this frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SramCost {
+    /// Its area \[µm²\].
+    pub area_um2: f64,
+    /// Its reads and writes \[pJ\].
+    pub access_pj: f64,
+    /// Its leakage over the frame \[pJ\].
+    pub leakage_pj: f64,
+}
+
+impl std::ops::AddAssign for SramCost {
+    fn add_assign(&mut self, c: SramCost) {
+        self.area_um2 += c.area_um2;
+        self.access_pj += c.access_pj;
+        self.leakage_pj += c.leakage_pj;
+    }
+}
+
+/// The one price of on-chip storage: an array of `bits_stored` bits through which
+/// `bits_moved` bits were written or read, powered for `frame_us` microseconds.
+pub fn price_sram(sram: &Sram, bits_stored: f64, bits_moved: f64, frame_us: f64) -> SramCost {
+    let leakage_mw = sram.leakage_mw_per_mb * bits_stored / BITS_PER_MB;
+    SramCost {
+        area_um2: bits_stored * sram.area_um2_per_bit,
+        access_pj: bits_moved / 64.0 * sram.access_pj_per_64_bits,
+        // mW × µs = nJ.
+        leakage_pj: leakage_mw * frame_us * 1e3,
+    }
+}
+
 /// The cost of `work` on `arch` in `datapath`, priced by `tech`.
 pub fn cost(tech: &Tech, arch: &ArchConfig, datapath: Datapath, work: &Work) -> CostReport {
     let units = &work.cycles.units;
@@ -132,9 +191,11 @@ pub fn cost(tech: &Tech, arch: &ArchConfig, datapath: Datapath, work: &Work) -> 
         Datapath::F32 => 32.0,
         Datapath::F64 => 64.0,
     };
+    let frame_us = work.cycles.total.0 as f64 / work.cycles.clock_mhz;
     let of_kind = |kind: UnitKind| units.iter().filter(move |u| u.kind == kind);
     let instances = |kind: UnitKind| of_kind(kind).count() as u64;
     let mut out = Vec::with_capacity(units.len());
+    let mut logic_leakage_pj = 0.0;
     for u in units {
         let ops = work.ops.of(u.kind);
         let busy: u64 = of_kind(u.kind).map(|v| v.busy.0).sum();
@@ -155,40 +216,50 @@ pub fn cost(tech: &Tech, arch: &ArchConfig, datapath: Datapath, work: &Work) -> 
             area_um2 += fus[k] as f64 * um2;
             energy_pj += ops[k] as f64 * share * pj;
         }
-        // Input FIFOs: one link from every producer instance.
-        let (mut fifo_um2, mut fifo_pj) = (0.0, 0.0);
+        // mW/mm² × mm² × µs = nJ.
+        let logic_leak_pj = tech.logic_leakage.mw_per_mm2 * area_um2 * 1e-6 * frame_us * 1e3;
+        logic_leakage_pj += logic_leak_pj;
+        // Input FIFOs: one link from every producer instance, each item written and read.
+        let mut fifo = SramCost::default();
         for (b, link) in arch.links.boundaries().filter(|(b, _)| b.to == u.kind) {
             let producers = instances(b.from);
             let bits = pipeline::out_words(b.from) as f64 * word_bits;
-            fifo_um2 +=
-                (producers * link.fifo_depth as u64) as f64 * bits * tech.sram.area_um2_per_bit;
-            if producers > 0 {
-                fifo_pj += 2.0 * u.items_in as f64 * bits / 64.0 * tech.sram.access_pj_per_64_bits;
-            }
+            let stored = (producers * link.fifo_depth as u64) as f64 * bits;
+            let moved = if producers > 0 {
+                2.0 * u.items_in as f64 * bits
+            } else {
+                0.0
+            };
+            fifo += price_sram(&tech.sram, stored, moved, frame_us);
         }
         if u.kind == UnitKind::FrameBuffer {
             energy_pj += work.framebuffer_bytes as f64 * tech.dram.pj_per_byte;
         }
         out.push(UnitCost {
             name: u.name.clone(),
-            area_mm2: (area_um2 + fifo_um2) * 1e-6,
-            energy_pj: energy_pj + fifo_pj,
-            fifo_area_mm2: fifo_um2 * 1e-6,
-            fifo_energy_pj: fifo_pj,
+            area_mm2: (area_um2 + fifo.area_um2) * 1e-6,
+            energy_pj: energy_pj + logic_leak_pj + fifo.access_pj + fifo.leakage_pj,
+            fifo_area_mm2: fifo.area_um2 * 1e-6,
+            fifo_energy_pj: fifo.access_pj,
+            fifo_leakage_pj: fifo.leakage_pj,
             functional_units: OpCounts::from_array(fus),
         });
     }
     let area_mm2: f64 = out.iter().map(|u| u.area_mm2).sum();
-    let frame_us = work.cycles.total.0 as f64 / work.cycles.clock_mhz;
-    // mW × µs = nJ.
-    let leakage_pj = tech.leakage.mw_per_mm2 * area_mm2 * frame_us * 1e3;
-    let energy_pj = out.iter().map(|u| u.energy_pj).sum::<f64>() + leakage_pj;
+    let energy_pj: f64 = out.iter().map(|u| u.energy_pj).sum();
     let mut kinds: Vec<UnitKind> = units.iter().map(|u| u.kind).collect();
     kinds.dedup();
     CostReport {
-        tech: tech.name.clone(),
+        tech: TechUsed {
+            name: tech.name.clone(),
+            node_nm: tech.node_nm,
+            dram_kind: tech.dram.kind,
+            dram_pj_per_byte: tech.dram.pj_per_byte,
+        },
         area_mm2,
         energy_pj,
+        sram_leakage_pj: out.iter().map(|u| u.fifo_leakage_pj).sum(),
+        logic_leakage_pj,
         // pJ / µs = µW.
         power_mw: (frame_us > 0.0).then(|| energy_pj / frame_us * 1e-3),
         framebuffer_bytes: work.framebuffer_bytes,
@@ -200,5 +271,91 @@ pub fn cost(tech: &Tech, arch: &ArchConfig, datapath: Datapath, work: &Work) -> 
                 ops: OpCounts::from_array(work.ops.of(k)),
             })
             .collect(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::datapath::Op;
+    use crate::pipeline::{Cycle, UnitCycles};
+
+    /// A megabyte stored for 2 µs at 45 nm leaks 100 mW × 2 µs = 200 nJ; two 64-bit
+    /// accesses cost 2 × 10 pJ.
+    #[test]
+    fn an_sram_array_leaks_its_power_over_the_frame() {
+        let t = Tech::default_45nm();
+        let c = price_sram(&t.sram, BITS_PER_MB, 128.0, 2.0);
+        assert_eq!(c.leakage_pj, 200_000.0);
+        assert_eq!(c.access_pj, 20.0);
+        assert_eq!(c.area_um2, BITS_PER_MB * 0.69);
+        let idle = price_sram(&t.sram, 0.0, 0.0, 2.0);
+        assert_eq!(idle, SramCost::default());
+    }
+
+    fn unit(name: &str, kind: UnitKind, busy: u64, items_in: u64) -> UnitCycles {
+        UnitCycles {
+            name: name.to_string(),
+            kind,
+            busy: Cycle(busy),
+            starved: Cycle(0),
+            blocked: Cycle(0),
+            items_in,
+            items_out: items_in,
+            max_fifo_occupancy: 1,
+        }
+    }
+
+    /// A ROP and the frame buffer over 1 000 cycles at 500 MHz (2 µs): the frame buffer's
+    /// FIFO (one ROP's link) leaks for the whole frame, whatever passed through it; the
+    /// parts add up to the totals; logic leakage is charged on the datapath area only.
+    #[test]
+    fn leakage_is_charged_per_unit_and_in_the_totals() {
+        let mut tech = Tech::default_45nm();
+        let arch = ArchConfig::default();
+        let mut ops = OpTable::default();
+        ops.add(UnitKind::Rop, Op::Mul, 400);
+        let cycles = CycleReport {
+            total: Cycle(1000),
+            clock_mhz: 500.0,
+            fps: None,
+            bottleneck: None,
+            units: vec![
+                unit("Rop[0]", UnitKind::Rop, 200, 100),
+                unit("FrameBuffer", UnitKind::FrameBuffer, 100, 100),
+            ],
+        };
+        let work = Work {
+            ops: &ops,
+            cycles: &cycles,
+            framebuffer_bytes: 1000,
+        };
+        let c = cost(&tech, &arch, Datapath::F32, &work);
+        let link = arch.links.get(UnitKind::Rop, UnitKind::FrameBuffer);
+        let item_bits = pipeline::out_words(UnitKind::Rop) as f64 * 32.0;
+        let stored = link.fifo_depth as f64 * item_bits;
+        let fb = &c.units[1];
+        let expected = price_sram(&tech.sram, stored, 2.0 * 100.0 * item_bits, 2.0);
+        assert_eq!(fb.fifo_leakage_pj, expected.leakage_pj);
+        assert!(fb.fifo_leakage_pj > 0.0);
+        assert_eq!(fb.fifo_energy_pj, expected.access_pj);
+        assert_eq!(
+            fb.energy_pj,
+            1000.0 * 162.5 + expected.access_pj + expected.leakage_pj
+        );
+        let sum: f64 = c.units.iter().map(|u| u.fifo_leakage_pj).sum();
+        assert_eq!(c.sram_leakage_pj, sum);
+        assert_eq!(
+            c.energy_pj,
+            c.units.iter().map(|u| u.energy_pj).sum::<f64>()
+        );
+        assert_eq!(c.logic_leakage_pj, 0.0);
+        assert_eq!(c.tech.dram_kind, DramKind::Ddr4);
+        // 1 mW/mm² of logic: the ROP's two multipliers (400 over 200 busy cycles), 2 µs.
+        tech.logic_leakage.mw_per_mm2 = 1.0;
+        let leaky = cost(&tech, &arch, Datapath::F32, &work);
+        let logic = 2.0 * 7700.0 * 1e-6 * 2.0 * 1e3;
+        assert!((leaky.logic_leakage_pj - logic).abs() < 1e-9, "{leaky:?}");
+        assert!((leaky.energy_pj - c.energy_pj - logic).abs() < 1e-6);
     }
 }

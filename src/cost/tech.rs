@@ -1,7 +1,8 @@
 //! The technology file (`sim/tech/*.json`, `--tech FILE`): energy per operation \[pJ\] and
-//! area per functional unit \[µm²\] for the f32, f64 and fixed-point datapaths, SRAM per bit
-//! and per access, DRAM energy per byte. Every figure is required (no defaults: a cost
-//! nobody wrote down is not a cost), finite and not negative; each group carries a `note`
+//! area per functional unit \[µm²\] for the f32, f64 and fixed-point datapaths; on-chip SRAM
+//! per bit, per access and its leakage per MB; the DRAM's kind and energy per byte; logic
+//! leakage per mm². Every figure is required (no defaults: a cost nobody wrote down is not a
+//! cost), finite and above 0 (the two leakages: 0 or above); each group carries a `note`
 //! citing its source, and the file a `source` (DESIGN.md §12).
 
 use crate::datapath::{Datapath, Op};
@@ -47,7 +48,7 @@ pub struct IntUnits {
     pub note: String,
 }
 
-/// On-die SRAM: the FIFOs.
+/// On-die SRAM: every on-chip buffer the model prices (the FIFOs today).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Sram {
@@ -55,25 +56,50 @@ pub struct Sram {
     pub access_pj_per_64_bits: f64,
     /// Area per stored bit, array overhead included \[µm²\].
     pub area_um2_per_bit: f64,
+    /// Static power of the arrays per MB stored (2^20 bytes), drawn for the whole frame
+    /// \[mW/MB\].
+    pub leakage_mw_per_mb: f64,
     /// Where the figures come from.
     pub note: String,
+}
+
+/// Which DRAM the frame buffer is: the rows of Jouppi et al. 2021, Table 2.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DramKind {
+    /// DDR3 or DDR4 on a DIMM (Table 2's "DDR3/4" row).
+    Ddr4,
+    /// Stacked HBM2 beside the die (Table 2's "HBM2" row).
+    Hbm2,
+}
+
+impl DramKind {
+    /// Its name in technology files and reports (`ddr4`).
+    pub fn name(self) -> &'static str {
+        match self {
+            DramKind::Ddr4 => "ddr4",
+            DramKind::Hbm2 => "hbm2",
+        }
+    }
 }
 
 /// Off-chip DRAM: the frame buffer.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Dram {
+    /// The memory the figure is for.
+    pub kind: DramKind,
     /// Energy per byte read or written \[pJ\].
     pub pj_per_byte: f64,
     /// Where the figure comes from.
     pub note: String,
 }
 
-/// Static power.
+/// Static power of the logic (datapaths), apart from the SRAM's.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct Leakage {
-    /// Leakage power per mm² of modelled area \[mW/mm²\] (0: not modelled).
+pub struct LogicLeakage {
+    /// Leakage power per mm² of datapath area \[mW/mm²\] (0: not modelled).
     pub mw_per_mm2: f64,
     /// Where the figure comes from, or why it is 0.
     pub note: String,
@@ -95,12 +121,12 @@ pub struct Tech {
     pub f64: FloatUnits,
     /// Fixed-point units.
     pub int32: IntUnits,
-    /// FIFO storage.
+    /// On-chip buffers (the FIFOs).
     pub sram: Sram,
     /// Frame-buffer memory.
     pub dram: Dram,
-    /// Static power.
-    pub leakage: Leakage,
+    /// Static power of the datapaths (the SRAM's is in `sram`).
+    pub logic_leakage: LogicLeakage,
 }
 
 impl Tech {
@@ -166,14 +192,18 @@ impl Tech {
         )?;
         positive("sram.area_um2_per_bit", self.sram.area_um2_per_bit)?;
         positive("dram.pj_per_byte", self.dram.pj_per_byte)?;
-        let leak = self.leakage.mw_per_mm2;
-        if !(leak.is_finite() && leak >= 0.0) {
-            return Err(Error::invalid(
-                file,
-                "leakage.mw_per_mm2",
-                leak,
-                "must be a finite number, 0 or above",
-            ));
+        for (field, leak) in [
+            ("sram.leakage_mw_per_mb", self.sram.leakage_mw_per_mb),
+            ("logic_leakage.mw_per_mm2", self.logic_leakage.mw_per_mm2),
+        ] {
+            if !(leak.is_finite() && leak >= 0.0) {
+                return Err(Error::invalid(
+                    file,
+                    field,
+                    leak,
+                    "must be a finite number, 0 or above",
+                ));
+            }
         }
         Ok(())
     }
@@ -234,6 +264,88 @@ mod tests {
         assert_eq!(t.op(Datapath::F32, Op::Mul), (3.7, 7700.0));
         assert_eq!(t.op(Datapath::F32, Op::IntAdd), (0.1, 137.0));
         assert_eq!(t.sram.access_pj_per_64_bits, 10.0);
+        assert_eq!(t.sram.leakage_mw_per_mb, 100.0);
+        assert_eq!(t.dram.kind, DramKind::Ddr4);
+        assert_eq!(t.dram.pj_per_byte, 1300.0 / 8.0);
+        assert_eq!(t.logic_leakage.mw_per_mm2, 0.0);
+    }
+
+    #[test]
+    fn the_sram_leakage_is_required_a_number_and_not_negative() {
+        let e = refused(|v| {
+            v["sram"]
+                .as_object_mut()
+                .unwrap()
+                .remove("leakage_mw_per_mb");
+        });
+        assert!(
+            matches!(&e, Error::Parse { field, message, .. }
+            if field == "sram" && message.contains("missing field `leakage_mw_per_mb`")),
+            "{e}"
+        );
+        let e = refused(|v| v["sram"]["leakage_mw_per_mb"] = "100".into());
+        assert!(
+            matches!(&e, Error::Parse { field, message, .. }
+            if field == "sram.leakage_mw_per_mb" && message.contains("invalid type")),
+            "{e}"
+        );
+        let e = refused(|v| v["sram"]["leakage_mw_per_mb"] = (-1.0).into());
+        assert!(
+            matches!(&e, Error::Invalid { field, .. } if field == "sram.leakage_mw_per_mb"),
+            "{e}"
+        );
+        // 0 is a figure (no leakage), as for the logic.
+        let mut v: serde_json::Value = serde_json::from_str(DEFAULT_TECH_JSON).unwrap();
+        v["sram"]["leakage_mw_per_mb"] = 0.0.into();
+        assert!(Tech::from_json(&v.to_string(), "t.json").is_ok());
+    }
+
+    #[test]
+    fn the_dram_kind_is_required_and_one_of_the_known_kinds() {
+        let e = refused(|v| {
+            v["dram"].as_object_mut().unwrap().remove("kind");
+        });
+        assert!(
+            matches!(&e, Error::Parse { field, message, .. }
+            if field == "dram" && message.contains("missing field `kind`")),
+            "{e}"
+        );
+        assert!(e.to_string().contains("`dram`"), "{e}");
+        for kind in [serde_json::json!("gddr6"), "DDR4".into(), 4.into()] {
+            let e = refused(|v| v["dram"]["kind"] = kind.clone());
+            assert!(
+                matches!(&e, Error::Parse { field, .. } if field == "dram.kind"),
+                "{kind}: {e}"
+            );
+            assert!(e.to_string().contains("`dram.kind`"), "{e}");
+        }
+        let mut v: serde_json::Value = serde_json::from_str(DEFAULT_TECH_JSON).unwrap();
+        v["dram"]["kind"] = "hbm2".into();
+        let t = Tech::from_json(&v.to_string(), "t.json").unwrap();
+        assert_eq!((t.dram.kind, t.dram.kind.name()), (DramKind::Hbm2, "hbm2"));
+    }
+
+    /// A file written before the logic's leakage was named as such: its `leakage` group is
+    /// refused by name, and a file without `logic_leakage` is refused naming it.
+    #[test]
+    fn the_logic_leakage_group_is_required_under_its_name() {
+        let e = refused(|v| {
+            let o = v.as_object_mut().unwrap();
+            let old = o.remove("logic_leakage").unwrap();
+            o.insert("leakage".into(), old);
+        });
+        assert!(
+            matches!(&e, Error::Parse { field, message, .. }
+            if field == "leakage" && message.contains("unknown field")),
+            "{e}"
+        );
+        let e = refused(|v| {
+            v.as_object_mut().unwrap().remove("logic_leakage");
+        });
+        assert!(
+            e.to_string().contains("missing field `logic_leakage`"),
+            "{e}"
+        );
     }
 
     fn refused(edit: impl Fn(&mut serde_json::Value)) -> Error {
@@ -262,8 +374,8 @@ mod tests {
             matches!(&e, Error::Invalid { field, .. } if field == "dram.pj_per_byte"),
             "{e}"
         );
-        let e = refused(|v| v["leakage"]["mw_per_mm2"] = (-0.5).into());
-        assert!(matches!(&e, Error::Invalid { field, .. } if field == "leakage.mw_per_mm2"));
+        let e = refused(|v| v["logic_leakage"]["mw_per_mm2"] = (-0.5).into());
+        assert!(matches!(&e, Error::Invalid { field, .. } if field == "logic_leakage.mw_per_mm2"));
         // JSON has no NaN or infinity: 1e999 overflows the parser, refused as a parse error.
         let mut text = DEFAULT_TECH_JSON.replace("\"add_pj\": 0.9", "\"add_pj\": 1e999");
         assert!(Tech::from_json(&text, "t.json").is_err());

@@ -256,19 +256,24 @@ fn cost_section(c: &CostReport) -> (&'static str, String) {
                 format!("{:.4}", u.fifo_area_mm2),
                 format!("{:.3}", u.energy_pj * 1e-6),
                 format!("{:.3}", u.fifo_energy_pj * 1e-6),
+                format!("{:.3}", u.fifo_leakage_pj * 1e-6),
                 super::text::functional_units(&u.functional_units),
             ]
         })
         .collect();
     let head = format!(
-        "{:.3} mm², {:.1} µJ this frame{} (technology {}; {} frame-buffer bytes charged as DRAM)",
+        "{:.3} mm², {:.1} µJ this frame{} (technology {}; {} frame-buffer bytes charged as {} DRAM at {} pJ/B; SRAM leakage {:.3} µJ, logic leakage {:.3} µJ)",
         c.area_mm2,
         c.energy_pj * 1e-6,
         c.power_mw
             .map(|p| format!(" = {p:.0} mW at the clock"))
             .unwrap_or_default(),
-        c.tech,
-        c.framebuffer_bytes
+        c.tech.name,
+        c.framebuffer_bytes,
+        c.tech.dram_kind.name(),
+        c.tech.dram_pj_per_byte,
+        c.sram_leakage_pj * 1e-6,
+        c.logic_leakage_pj * 1e-6
     );
     (
         "Cost: area and energy (DESIGN.md §12)",
@@ -280,6 +285,7 @@ fn cost_section(c: &CostReport) -> (&'static str, String) {
                     "of it FIFO mm²",
                     "energy µJ",
                     "of it FIFO µJ",
+                    "of it FIFO leakage µJ",
                     "functional units",
                 ],
                 &rows,

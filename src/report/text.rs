@@ -186,29 +186,34 @@ cost      n/a ({why})"
         let _ = writeln!(
             t,
             "
-cost      {:.3} mm2, {:.1} uJ this frame{} (technology {}; {} frame-buffer bytes as DRAM)",
+cost      {:.3} mm2, {:.1} uJ this frame{} (technology {}; {} frame-buffer bytes as {} DRAM at {} pJ/B; SRAM leakage {:.3} uJ, logic leakage {:.3} uJ)",
             c.area_mm2,
             c.energy_pj * 1e-6,
             c.power_mw
                 .map(|p| format!(" = {p:.0} mW at the clock"))
                 .unwrap_or_default(),
-            c.tech,
-            c.framebuffer_bytes
+            c.tech.name,
+            c.framebuffer_bytes,
+            c.tech.dram_kind.name(),
+            c.tech.dram_pj_per_byte,
+            c.sram_leakage_pj * 1e-6,
+            c.logic_leakage_pj * 1e-6
         );
         let _ = writeln!(
             t,
-            "  {:<22} {:>9} {:>9} {:>10} {:>9}  functional units",
-            "unit", "mm2", "fifo mm2", "uJ", "fifo uJ"
+            "  {:<22} {:>9} {:>9} {:>10} {:>9} {:>9}  functional units",
+            "unit", "mm2", "fifo mm2", "uJ", "fifo uJ", "leak uJ"
         );
         for u in &c.units {
             let _ = writeln!(
                 t,
-                "  {:<22} {:>9.4} {:>9.4} {:>10.3} {:>9.3}  {}",
+                "  {:<22} {:>9.4} {:>9.4} {:>10.3} {:>9.3} {:>9.3}  {}",
                 u.name,
                 u.area_mm2,
                 u.fifo_area_mm2,
                 u.energy_pj * 1e-6,
                 u.fifo_energy_pj * 1e-6,
+                u.fifo_leakage_pj * 1e-6,
                 functional_units(&u.functional_units)
             );
         }
@@ -393,8 +398,9 @@ cost      {:.3} mm2, {:.1} uJ this frame{} (technology {}; {} frame-buffer bytes
         if let Some(c) = &self.cost {
             let _ = writeln!(
                 t,
-                "cost ({}): {:.3} mm2, {:.1} uJ a frame{}",
-                c.tech,
+                "cost ({}, {} DRAM): {:.3} mm2, {:.1} uJ a frame{}",
+                c.tech.name,
+                c.tech.dram_kind.name(),
                 c.area_mm2,
                 c.energy_pj * 1e-6,
                 c.power_mw

@@ -5,6 +5,7 @@
 use crate::support::binary::{files_in, run};
 use crate::support::{golden, scenes};
 use lembo_sim::camera::View;
+use lembo_sim::cost::tech::DramKind;
 use lembo_sim::cost::{lembo_ops, triangle_ops};
 use lembo_sim::datapath::Datapath;
 use lembo_sim::datapath::{Op, OPS};
@@ -63,8 +64,9 @@ fn report(dir: &std::path::Path) -> serde_json::Value {
 }
 
 /// A timed report prices every unit it instantiates, and the parts add up: the total area
-/// and energy are the units' sums, a FIFO's share is within its unit's, and the frame
-/// buffer's energy is its bytes at the DRAM figure.
+/// and energy are the units' sums, a FIFO's share is within its unit's, every FIFO bit
+/// leaks 100 mW per MB over the frame, and the frame buffer's energy is its bytes at the
+/// DDR4 figure, its FIFO's traffic and its FIFO's leakage.
 #[test]
 fn a_timed_report_prices_every_unit() {
     let root = env!("CARGO_MANIFEST_DIR");
@@ -94,13 +96,34 @@ fn a_timed_report_prices_every_unit() {
             assert!(u["fifo_area_mm2"].as_f64().unwrap() <= u["area_mm2"].as_f64().unwrap());
             assert!(u["energy_pj"].as_f64().unwrap() > 0.0, "{u}");
         }
+        let tech = &cost["tech"];
+        assert_eq!(tech["name"], "45nm");
+        assert_eq!(tech["dram_kind"], "ddr4");
+        assert_eq!(tech["dram_pj_per_byte"], 162.5);
+        // µs of the frame, and each unit's FIFO bits from their area (0.69 µm² a bit).
+        let cycles = &r["cycles"];
+        let frame_us = cycles["total"].as_f64().unwrap() / cycles["clock_mhz"].as_f64().unwrap();
+        let mut leakage = 0.0;
+        for u in units {
+            let bits = u["fifo_area_mm2"].as_f64().unwrap() * 1e6 / 0.69;
+            let expected = 100.0 * bits / (8.0 * 1048576.0) * frame_us * 1e3;
+            let got = u["fifo_leakage_pj"].as_f64().unwrap();
+            assert!((got - expected).abs() <= 1e-9 * expected, "{u}");
+            leakage += got;
+        }
+        assert!(leakage > 0.0);
+        assert!((cost["sram_leakage_pj"].as_f64().unwrap() - leakage).abs() < 1e-9 * leakage);
+        assert_eq!(cost["logic_leakage_pj"], 0.0);
         let fb = units.iter().find(|u| u["name"] == "FrameBuffer").unwrap();
-        let dram = cost["framebuffer_bytes"].as_f64().unwrap() * 244.0;
-        let fifo = fb["fifo_energy_pj"].as_f64().unwrap();
+        let dram = cost["framebuffer_bytes"].as_f64().unwrap() * 162.5;
+        let fifo = fb["fifo_energy_pj"].as_f64().unwrap() + fb["fifo_leakage_pj"].as_f64().unwrap();
         assert!((fb["energy_pj"].as_f64().unwrap() - fifo - dram).abs() < 1e-6 * dram);
-        assert!(std::fs::read_to_string(out.join("report.txt"))
-            .unwrap()
-            .contains("\ncost      "));
+        let text = std::fs::read_to_string(out.join("report.txt")).unwrap();
+        assert!(text.contains("\ncost      "), "{text}");
+        assert!(
+            text.contains("as ddr4 DRAM at 162.5 pJ/B; SRAM leakage "),
+            "{text}"
+        );
         let _ = std::fs::remove_dir_all(&out);
     }
 }
@@ -200,6 +223,92 @@ fn every_shipped_technology_file_loads() {
         let (e7, a7) = t7.op(Datapath::F32, op);
         assert!(e7 < e45 && a7 < a45, "{op:?}");
     }
+    // Jouppi et al. 2021, Table 2: an 8 KB SRAM access of 64 bits, HBM2's range.
+    assert_eq!(t7.sram.access_pj_per_64_bits, 7.5);
+    assert_eq!(t7.dram.kind, DramKind::Hbm2);
+    assert!((250.0..=450.0).contains(&(t7.dram.pj_per_byte * 8.0)));
+    assert!(t7.sram.leakage_mw_per_mb < t45.sram.leakage_mw_per_mb);
+}
+
+/// A 7 nm frame says which technology and which DRAM priced it, in report.json's
+/// `cost.tech` and in report.txt.
+#[test]
+fn a_report_names_its_technology_and_dram_kind() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let out = temp_dir("7nm");
+    let o = run(
+        &[
+            "render",
+            "traces/sphere24.json",
+            "--tech",
+            "sim/tech/7nm.json",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        root,
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let tech = &report(&out)["cost"]["tech"];
+    assert_eq!(tech["name"], "7nm");
+    assert_eq!(tech["node_nm"], 7.0);
+    assert_eq!(tech["dram_kind"], "hbm2");
+    assert_eq!(tech["dram_pj_per_byte"], 43.75);
+    let text = std::fs::read_to_string(out.join("report.txt")).unwrap();
+    assert!(text.contains("(technology 7nm; "), "{text}");
+    assert!(text.contains("as hbm2 DRAM at 43.75 pJ/B"), "{text}");
+    assert!(String::from_utf8_lossy(&o.stdout).contains("cost (7nm, hbm2 DRAM)"));
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+/// A change made to a technology file's JSON.
+type Edit = fn(&mut serde_json::Value);
+
+/// A technology file without one of the fields issue 35 added (or with a DRAM kind the
+/// simulator does not know) is refused naming the field, exit 2, before any work: nothing
+/// is written.
+#[test]
+fn a_technology_file_without_a_new_field_is_refused_naming_it() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dir = temp_dir("new-fields");
+    let text = std::fs::read_to_string(root.join("sim/tech/45nm.json")).unwrap();
+    let edits: [(&str, Edit); 4] = [
+        ("leakage_mw_per_mb", |v| {
+            v["sram"]
+                .as_object_mut()
+                .unwrap()
+                .remove("leakage_mw_per_mb");
+        }),
+        ("missing field `kind`", |v| {
+            v["dram"].as_object_mut().unwrap().remove("kind");
+        }),
+        ("`dram.kind`", |v| v["dram"]["kind"] = "gddr6".into()),
+        ("logic_leakage", |v| {
+            v.as_object_mut().unwrap().remove("logic_leakage");
+        }),
+    ];
+    for (i, (named, edit)) in edits.into_iter().enumerate() {
+        let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        edit(&mut v);
+        let bad = dir.join(format!("bad{i}.json"));
+        std::fs::write(&bad, v.to_string()).unwrap();
+        let out = dir.join(format!("out{i}"));
+        let o = run(
+            &[
+                "render",
+                "traces/sphere24.json",
+                "--tech",
+                bad.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+            ],
+            root,
+        );
+        assert_eq!(o.status.code(), Some(2), "{named}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains(named), "{named}: {err}");
+        assert!(files_in(&out).is_empty(), "{named}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A technology file with a bad figure is refused naming the field, exit 2, nothing
