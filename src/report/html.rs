@@ -261,18 +261,29 @@ fn cost_section(c: &CostReport) -> (&'static str, String) {
         })
         .collect();
     let head = format!(
-        "{:.3} mm², {:.1} µJ this frame{} (technology {}; {} frame-buffer bytes charged as DRAM)",
+        "{:.3} mm², {:.1} µJ this frame{} (technology {}; {} frame-buffer bytes{} charged as DRAM)",
         c.area_mm2,
         c.energy_pj * 1e-6,
         c.power_mw
             .map(|p| format!(" = {p:.0} mW at the clock"))
             .unwrap_or_default(),
         c.tech,
-        c.framebuffer_bytes
+        c.framebuffer_bytes,
+        if c.blend.is_some() {
+            format!(" and {} accumulation bytes", c.accumulation_bytes)
+        } else {
+            String::new()
+        }
     );
+    let blend = c
+        .blend
+        .as_ref()
+        .map(|b| para(&super::text::blend_cost(b)))
+        .unwrap_or_default();
     (
         "Cost: area and energy (DESIGN.md §12)",
         para(&head)
+            + &blend
             + &table(
                 &[
                     "unit",

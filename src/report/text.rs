@@ -3,7 +3,7 @@
 //! is what `report.json` says; each section of `report.txt` has its own writer below.
 
 use super::Report;
-use crate::cost::model::OpCounts;
+use crate::cost::model::{BlendCost, OpCounts};
 use crate::datapath::OPS;
 use crate::pipeline::Cycle;
 use std::fmt::Write as _;
@@ -171,30 +171,29 @@ impl Report {
     /// The unit's area and energy, instance by instance (DESIGN.md §12).
     fn write_cost(&self, t: &mut String) {
         let Some(c) = &self.cost else {
-            let why = if self.cycles.is_none() {
-                "functional mode"
-            } else {
-                "discoid scene"
-            };
-            let _ = writeln!(
-                t,
-                "
-cost      n/a ({why})"
-            );
+            let _ = writeln!(t, "\ncost      n/a (functional mode)");
             return;
         };
         let _ = writeln!(
             t,
             "
-cost      {:.3} mm2, {:.1} uJ this frame{} (technology {}; {} frame-buffer bytes as DRAM)",
+cost      {:.3} mm2, {:.1} uJ this frame{} (technology {}; {} frame-buffer bytes{} as DRAM)",
             c.area_mm2,
             c.energy_pj * 1e-6,
             c.power_mw
                 .map(|p| format!(" = {p:.0} mW at the clock"))
                 .unwrap_or_default(),
             c.tech,
-            c.framebuffer_bytes
+            c.framebuffer_bytes,
+            if c.blend.is_some() {
+                format!(" and {} accumulation bytes", c.accumulation_bytes)
+            } else {
+                String::new()
+            }
         );
+        if let Some(b) = &c.blend {
+            let _ = writeln!(t, "  {}", blend_cost(b));
+        }
         let _ = writeln!(
             t,
             "  {:<22} {:>9} {:>9} {:>10} {:>9}  functional units",
@@ -388,7 +387,7 @@ cost      {:.3} mm2, {:.1} uJ this frame{} (technology {}; {} frame-buffer bytes
         };
     }
 
-    /// The summary's cost line, for a timed surface run.
+    /// The summary's cost line, for a timed run.
     fn summarise_cost(&self, t: &mut String) {
         if let Some(c) = &self.cost {
             let _ = writeln!(
@@ -401,6 +400,9 @@ cost      {:.3} mm2, {:.1} uJ this frame{} (technology {}; {} frame-buffer bytes
                     .map(|p| format!(", {p:.0} mW"))
                     .unwrap_or_default()
             );
+            if let Some(b) = &c.blend {
+                let _ = writeln!(t, "{}", blend_cost(b));
+            }
         }
     }
 
@@ -424,4 +426,19 @@ cost      {:.3} mm2, {:.1} uJ this frame{} (technology {}; {} frame-buffer bytes
                 .unwrap_or_default()
         );
     }
+}
+
+/// The blend units' cost in a sentence: what the precision modes trade (DESIGN.md §12).
+pub fn blend_cost(b: &BlendCost) -> String {
+    format!(
+        "blend units {} (priced as {}): {:.4} mm2, {} per fragment blended; accumulation {} bytes a pixel, {:.1} uJ as DRAM",
+        b.mode,
+        b.priced_as,
+        b.area_mm2,
+        b.energy_pj_per_fragment
+            .map(|e| format!("{e:.2} pJ"))
+            .unwrap_or_else(|| "n/a".into()),
+        b.accumulation_bytes_per_pixel,
+        b.accumulation_energy_pj * 1e-6
+    )
 }
