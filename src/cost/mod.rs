@@ -4,7 +4,9 @@
 //!
 //! The counting runs ([`lembo_ops`], [`triangle_ops`]) are the functional driver's
 //! single-threaded frame ([`draw_in_order`]) in a counting datapath, with a sink that charges
-//! the ROP's operations to it (`ChargedToRop`); each stage charges its own kind.
+//! the ROP's operations to it (`ChargedToRop`); each stage charges its own kind. A discoid
+//! scene's ([`discoid_ops`]) is the functional model's passes in counting words, whose
+//! discoid sink charges the ROP itself, the blend the blend units and the resolve the ROPs.
 
 pub mod counted;
 pub mod model;
@@ -12,6 +14,8 @@ pub mod tech;
 
 use crate::camera::View;
 use crate::datapath::{Datapath, Real};
+use crate::discoid::blend::BlendMode;
+use crate::discoid::render::{render_discoids_in, DiscoidFrame};
 use crate::error::Result;
 use crate::graph::UnitKind;
 use crate::raster::driver::draw_in_order;
@@ -124,4 +128,41 @@ fn triangle_ops_in<R: Real>(
         })
     });
     (frame.expect("the triangle path records no error"), ops)
+}
+
+/// A discoid scene's frame drawn by the functional model in counting words, with the
+/// operations of each kind: both passes through the path's units (the ROP's discoid work
+/// charged to the ROP), the blend in the blend ALU's counting `f32` charged to the blend
+/// units, the resolve to the ROPs. The same image as
+/// [`crate::discoid::render::render_discoids`] (the counting words do the same IEEE
+/// operations; `tests/integration/cost.rs`).
+pub fn discoid_ops(
+    scene: &Scene,
+    view: &View,
+    tol: impl Into<Tolerance>,
+    datapath: Datapath,
+    blend: (BlendMode, f64),
+) -> Result<(DiscoidFrame, OpTable)> {
+    let tol = tol.into();
+    match datapath {
+        Datapath::F32 => discoid_ops_in::<f32>(scene, view, tol, blend),
+        Datapath::F64 => discoid_ops_in::<f64>(scene, view, tol, blend),
+    }
+}
+
+fn discoid_ops_in<R: Real>(
+    scene: &Scene,
+    view: &View,
+    tol: Tolerance,
+    blend: (BlendMode, f64),
+) -> Result<(DiscoidFrame, OpTable)> {
+    let first = if scene.lembo_count() > 0 {
+        UnitKind::Setup
+    } else {
+        UnitKind::TriangleSetup
+    };
+    let (frame, ops) = counting(first, || {
+        render_discoids_in::<Counted<R>, Counted<f32>>(scene, view, tol, blend, false)
+    });
+    Ok((frame?, ops))
 }

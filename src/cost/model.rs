@@ -7,13 +7,21 @@
 //! - **FIFO area.** A unit owns its input FIFOs: one link per producer instance, each
 //!   `fifo_depth` entries of the producing unit's `OUT_WORDS` datapath words.
 //! - **Energy.** Operations times their energy; every item through a FIFO is written once
-//!   and read once; every byte through the frame-buffer port is a DRAM byte; every bit
-//!   stored on chip leaks for the whole frame at the SRAM's leakage per MB; the datapaths
-//!   leak at the logic figure per mm² (0 in the shipped files: not modelled).
+//!   and read once; every byte through the frame-buffer port is a DRAM byte (a discoid
+//!   frame's accumulation target included); every bit stored on chip leaks for the whole
+//!   frame at the SRAM's leakage per MB; the datapaths leak at the logic figure per mm² (0
+//!   in the shipped files: not modelled).
 //! - **On-chip SRAM.** Every buffer the model stores on chip is priced by one function,
 //!   [`price_sram`]: area per bit, energy per 64 bits moved, leakage per bit stored over the
 //!   frame. The FIFOs are the only such buffers today; a vertex cache or a parameter buffer
 //!   priced later goes through it too.
+//! - **Blend units** (a discoid frame). They sit inside their ROPs: their busy cycles are
+//!   their share of the ROP's, a kept fragment's `blend.cycles_per_fragment_<mode>`
+//!   ([`BlendWork::units`]), which the ROPs' own datapaths are sized without; they have
+//!   no FIFO of their own. Their operations are the
+//!   blend ALU's, counted in `f32`, and priced at the width of the mode's stored word
+//!   ([`blend_figures`]): rgba8 on 8-bit fixed-point units, f16 on half-precision ones, f32
+//!   on single-precision ones.
 //!
 //! A kind's operations are shared among its instances in proportion to the items each
 //! took in.
@@ -21,9 +29,10 @@
 use super::counted::OpTable;
 use super::tech::{DramKind, Sram, Tech};
 use crate::config::ArchConfig;
-use crate::datapath::{Datapath, OPS};
-use crate::graph::UnitKind;
-use crate::pipeline::{self, CycleReport};
+use crate::datapath::{Datapath, Op, OPS};
+use crate::discoid::blend::BlendMode;
+use crate::graph::{UnitKind, KINDS};
+use crate::pipeline::{self, CycleReport, UnitCycles};
 use serde::Serialize;
 
 /// `cost` in report.json: what the unit would cost in silicon for this frame.
@@ -43,8 +52,15 @@ pub struct CostReport {
     /// Average power over the frame at the architecture's clock; null for an empty frame
     /// \[mW\].
     pub power_mw: Option<f64>,
-    /// The frame's bytes through the frame-buffer port, priced as DRAM \[bytes\].
+    /// The frame's bytes through the frame-buffer port, priced as DRAM, without the
+    /// discoid accumulation target's \[bytes\].
     pub framebuffer_bytes: u64,
+    /// The discoid accumulation target's bytes through the frame-buffer port, priced as
+    /// DRAM beside `framebuffer_bytes`: a read and a write per fragment blended and the
+    /// resolve's read per pixel; 0 without discoids \[bytes\].
+    pub accumulation_bytes: u64,
+    /// The blend units, for a discoid frame; null otherwise.
+    pub blend: Option<BlendCost>,
     /// Each instance, in dataflow order.
     pub units: Vec<UnitCost>,
     /// The operations each kind performed, counted by the code that does them.
@@ -81,6 +97,30 @@ pub struct UnitCost {
     pub fifo_leakage_pj: f64,
     /// Functional units of each class its datapath needs \[units\].
     pub functional_units: OpCounts,
+}
+
+/// `cost.blend`: what a discoid frame's blend units and accumulation target cost, for
+/// holding the precision modes side by side (their instances are among `units`).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct BlendCost {
+    /// The precision mode: `rgba8`, `f16` or `f32`.
+    pub mode: String,
+    /// The technology file's group the blend units are priced with: `int8`, `f16` or
+    /// `f32` ([`blend_figures`]).
+    pub priced_as: String,
+    /// Fragments the blend units blended \[fragments\].
+    pub fragments: u64,
+    /// The blend units' area, summed over the instances \[mm²\].
+    pub area_mm2: f64,
+    /// Their operations' energy this frame \[pJ\].
+    pub energy_pj: f64,
+    /// That energy per fragment blended; null when none was \[pJ\].
+    pub energy_pj_per_fragment: Option<f64>,
+    /// The accumulation target's bytes per pixel (`BlendMode::bytes_per_pixel`) \[bytes\].
+    pub accumulation_bytes_per_pixel: u64,
+    /// The accumulation bytes' energy at the DRAM figure, part of the frame-buffer port's
+    /// \[pJ\].
+    pub accumulation_energy_pj: f64,
 }
 
 /// Counts per operation class (report order of [`OPS`]).
@@ -146,8 +186,33 @@ pub struct Work<'a> {
     pub ops: &'a OpTable,
     /// The timed run's per-unit accounting.
     pub cycles: &'a CycleReport,
-    /// Bytes through the frame-buffer port.
+    /// Bytes through the frame-buffer port, the accumulation target's apart.
     pub framebuffer_bytes: u64,
+    /// The discoid accumulation target's bytes through the frame-buffer port.
+    pub accumulation_bytes: u64,
+    /// The blend units' work, for a discoid frame.
+    pub blend: Option<BlendWork<'a>>,
+}
+
+/// What a discoid frame's blend units did.
+pub struct BlendWork<'a> {
+    /// Their precision mode.
+    pub mode: BlendMode,
+    /// Each blend unit's accounting: busy for its fragments at the mode's rate, the
+    /// fragments it blended as items in (`pipeline::discoid::DiscoidTimed::blend_units`).
+    pub units: &'a [UnitCycles],
+}
+
+/// The technology group a blend unit of `mode` is priced with, and one operation's energy
+/// \[pJ\] and area \[µm²\] of class `op` there: the width of the word the mode stores. The
+/// model computes every mode's update in `f32` (the image is that of an `f32` blend ALU
+/// storing the mode's words); the counts follow the hardware, a unit as wide as its words.
+pub fn blend_figures(tech: &Tech, mode: BlendMode, op: Op) -> (&'static str, (f64, f64)) {
+    match mode {
+        BlendMode::Rgba8 => ("int8", tech.int8_op(op)),
+        BlendMode::F16 => ("f16", tech.f16_op(op)),
+        BlendMode::F32 => ("f32", tech.op(Datapath::F32, op)),
+    }
 }
 
 /// Bits in a MB of SRAM (2^20 bytes), the unit of [`Sram::leakage_mw_per_mb`].
@@ -186,7 +251,14 @@ pub fn price_sram(sram: &Sram, bits_stored: f64, bits_moved: f64, frame_us: f64)
 
 /// The cost of `work` on `arch` in `datapath`, priced by `tech`.
 pub fn cost(tech: &Tech, arch: &ArchConfig, datapath: Datapath, work: &Work) -> CostReport {
-    let units = &work.cycles.units;
+    // The timed units and the blend units inside their ROPs, in dataflow order.
+    let mut units: Vec<&UnitCycles> = work.cycles.units.iter().collect();
+    units.extend(work.blend.iter().flat_map(|b| b.units));
+    units.sort_by_key(|u| KINDS.iter().position(|&k| k == u.kind));
+    let price = |kind: UnitKind, op: Op| match &work.blend {
+        Some(b) if kind == UnitKind::BlendUnit => blend_figures(tech, b.mode, op).1,
+        _ => tech.op(datapath, op),
+    };
     let word_bits = match datapath {
         Datapath::F32 => 32.0,
         Datapath::F64 => 64.0,
@@ -196,9 +268,19 @@ pub fn cost(tech: &Tech, arch: &ArchConfig, datapath: Datapath, work: &Work) -> 
     let instances = |kind: UnitKind| of_kind(kind).count() as u64;
     let mut out = Vec::with_capacity(units.len());
     let mut logic_leakage_pj = 0.0;
-    for u in units {
+    for &u in &units {
         let ops = work.ops.of(u.kind);
-        let busy: u64 = of_kind(u.kind).map(|v| v.busy.0).sum();
+        // The kind's own busy cycles: those of the units inside it (a ROP's blend units,
+        // whose cycles its ROP's include) are theirs.
+        let hosted: u64 = units
+            .iter()
+            .filter(|v| v.kind.inside() == Some(u.kind))
+            .map(|v| v.busy.0)
+            .sum();
+        let busy = of_kind(u.kind)
+            .map(|v| v.busy.0)
+            .sum::<u64>()
+            .saturating_sub(hosted);
         let items: u64 = of_kind(u.kind).map(|v| v.items_in).sum();
         let share = if items > 0 {
             u.items_in as f64 / items as f64
@@ -212,7 +294,7 @@ pub fn cost(tech: &Tech, arch: &ArchConfig, datapath: Datapath, work: &Work) -> 
                 continue;
             }
             fus[k] = ops[k].div_ceil(busy.max(1));
-            let (pj, um2) = tech.op(datapath, op);
+            let (pj, um2) = price(u.kind, op);
             area_um2 += fus[k] as f64 * um2;
             energy_pj += ops[k] as f64 * share * pj;
         }
@@ -233,7 +315,8 @@ pub fn cost(tech: &Tech, arch: &ArchConfig, datapath: Datapath, work: &Work) -> 
             fifo += price_sram(&tech.sram, stored, moved, frame_us);
         }
         if u.kind == UnitKind::FrameBuffer {
-            energy_pj += work.framebuffer_bytes as f64 * tech.dram.pj_per_byte;
+            let bytes = work.framebuffer_bytes + work.accumulation_bytes;
+            energy_pj += bytes as f64 * tech.dram.pj_per_byte;
         }
         out.push(UnitCost {
             name: u.name.clone(),
@@ -249,6 +332,26 @@ pub fn cost(tech: &Tech, arch: &ArchConfig, datapath: Datapath, work: &Work) -> 
     let energy_pj: f64 = out.iter().map(|u| u.energy_pj).sum();
     let mut kinds: Vec<UnitKind> = units.iter().map(|u| u.kind).collect();
     kinds.dedup();
+    let blend = work.blend.as_ref().map(|b| {
+        let priced = units
+            .iter()
+            .zip(&out)
+            .filter(|(u, _)| u.kind == UnitKind::BlendUnit);
+        let (area_mm2, energy_pj) = priced.clone().fold((0.0, 0.0), |(a, e), (_, c)| {
+            (a + c.area_mm2, e + c.energy_pj)
+        });
+        let fragments: u64 = priced.map(|(u, _)| u.items_in).sum();
+        BlendCost {
+            mode: b.mode.name().to_string(),
+            priced_as: blend_figures(tech, b.mode, Op::Add).0.to_string(),
+            fragments,
+            area_mm2,
+            energy_pj,
+            energy_pj_per_fragment: (fragments > 0).then(|| energy_pj / fragments as f64),
+            accumulation_bytes_per_pixel: b.mode.bytes_per_pixel(),
+            accumulation_energy_pj: work.accumulation_bytes as f64 * tech.dram.pj_per_byte,
+        }
+    });
     CostReport {
         tech: TechUsed {
             name: tech.name.clone(),
@@ -263,6 +366,8 @@ pub fn cost(tech: &Tech, arch: &ArchConfig, datapath: Datapath, work: &Work) -> 
         // pJ / µs = µW.
         power_mw: (frame_us > 0.0).then(|| energy_pj / frame_us * 1e-3),
         framebuffer_bytes: work.framebuffer_bytes,
+        accumulation_bytes: work.accumulation_bytes,
+        blend,
         units: out,
         ops: kinds
             .into_iter()
@@ -329,6 +434,8 @@ mod tests {
             ops: &ops,
             cycles: &cycles,
             framebuffer_bytes: 1000,
+            accumulation_bytes: 0,
+            blend: None,
         };
         let c = cost(&tech, &arch, Datapath::F32, &work);
         let link = arch.links.get(UnitKind::Rop, UnitKind::FrameBuffer);

@@ -1,8 +1,9 @@
 //! The technology file (`sim/tech/*.json`, `--tech FILE`): energy per operation \[pJ\] and
-//! area per functional unit \[µm²\] for the f32, f64 and fixed-point datapaths; on-chip SRAM
-//! per bit, per access and its leakage per MB; the DRAM's kind and energy per byte; logic
-//! leakage per mm². Every figure is required (no defaults: a cost nobody wrote down is not a
-//! cost), finite and above 0 (the two leakages: 0 or above); each group carries a `note`
+//! area per functional unit \[µm²\] for the f32, f64 and fixed-point datapaths (and the
+//! discoid blend units' f16 and 8-bit fixed-point units); on-chip SRAM per bit, per access
+//! and its leakage per MB; the DRAM's kind and energy per byte; logic leakage per mm².
+//! Every figure is required (no defaults: a cost nobody wrote down is not a cost), finite
+//! and above 0 (the two leakages: 0 or above); each group carries a `note`
 //! citing its source, and the file a `source` (DESIGN.md §12).
 
 use crate::datapath::{Datapath, Op};
@@ -44,6 +45,23 @@ pub struct IntUnits {
     pub mul_pj: f64,
     pub add_um2: f64,
     pub mul_um2: f64,
+    /// Where the figures come from.
+    pub note: String,
+}
+
+/// The 8-bit fixed-point units of the rgba8 blend units (Piranda et al. 2006 Table 1: unorm8
+/// averages, Σβ in nibble sums): an adder (adds, compares, roundings and the saturating
+/// nibble adds), a multiplier and a divider.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct Int8Units {
+    pub add_pj: f64,
+    pub mul_pj: f64,
+    pub div_pj: f64,
+    pub add_um2: f64,
+    pub mul_um2: f64,
+    pub div_um2: f64,
     /// Where the figures come from.
     pub note: String,
 }
@@ -119,8 +137,12 @@ pub struct Tech {
     pub f32: FloatUnits,
     /// Units of the f64 datapath.
     pub f64: FloatUnits,
+    /// Half-precision units: the f16 blend units.
+    pub f16: FloatUnits,
     /// Fixed-point units.
     pub int32: IntUnits,
+    /// 8-bit fixed-point units: the rgba8 blend units.
+    pub int8: Int8Units,
     /// On-chip buffers (the FIFOs).
     pub sram: Sram,
     /// Frame-buffer memory.
@@ -186,6 +208,12 @@ impl Tech {
         ] {
             positive(&format!("int32.{name}"), x)?;
         }
+        for (name, x) in self.f16.figures() {
+            positive(&format!("f16.{name}"), x)?;
+        }
+        for (name, x) in self.int8.figures() {
+            positive(&format!("int8.{name}"), x)?;
+        }
         positive(
             "sram.access_pj_per_64_bits",
             self.sram.access_pj_per_64_bits,
@@ -233,6 +261,48 @@ impl Tech {
     }
 }
 
+impl Tech {
+    /// Energy \[pJ\] and area \[µm²\] of one operation of class `op` on the half-precision
+    /// units (the integer classes on the 32-bit fixed-point units, as [`Tech::op`]).
+    pub fn f16_op(&self, op: Op) -> (f64, f64) {
+        let f = &self.f16;
+        match op {
+            Op::Add => (f.add_pj, f.add_um2),
+            Op::Mul => (f.mul_pj, f.mul_um2),
+            Op::Div | Op::Other => (f.div_pj, f.div_um2),
+            Op::Sqrt => (f.sqrt_pj, f.sqrt_um2),
+            Op::Cmp => (f.cmp_pj, f.cmp_um2),
+            Op::Round => (f.round_pj, f.round_um2),
+            Op::IntAdd | Op::IntMul => self.op(Datapath::F32, op),
+        }
+    }
+
+    /// Energy \[pJ\] and area \[µm²\] of one operation of class `op` on the 8-bit
+    /// fixed-point units: adds, compares and roundings on the adder, multiplies on the
+    /// multiplier, divides (and anything else) on the divider.
+    pub fn int8_op(&self, op: Op) -> (f64, f64) {
+        let i = &self.int8;
+        match op {
+            Op::Add | Op::Cmp | Op::Round | Op::IntAdd => (i.add_pj, i.add_um2),
+            Op::Mul | Op::IntMul => (i.mul_pj, i.mul_um2),
+            Op::Div | Op::Sqrt | Op::Other => (i.div_pj, i.div_um2),
+        }
+    }
+}
+
+impl Int8Units {
+    fn figures(&self) -> [(&'static str, f64); 6] {
+        [
+            ("add_pj", self.add_pj),
+            ("mul_pj", self.mul_pj),
+            ("div_pj", self.div_pj),
+            ("add_um2", self.add_um2),
+            ("mul_um2", self.mul_um2),
+            ("div_um2", self.div_um2),
+        ]
+    }
+}
+
 impl FloatUnits {
     fn figures(&self) -> [(&'static str, f64); 12] {
         [
@@ -268,6 +338,45 @@ mod tests {
         assert_eq!(t.dram.kind, DramKind::Ddr4);
         assert_eq!(t.dram.pj_per_byte, 1300.0 / 8.0);
         assert_eq!(t.logic_leakage.mw_per_mm2, 0.0);
+        // The blend units' narrower figures: Horowitz's 16-bit float and 8-bit integer ones.
+        assert_eq!(t.f16_op(Op::Add), (0.4, 1360.0));
+        assert_eq!(t.f16_op(Op::Mul), (1.1, 1640.0));
+        assert_eq!(t.int8_op(Op::Add), (0.03, 36.0));
+        assert_eq!(t.int8_op(Op::IntAdd), (0.03, 36.0));
+        assert_eq!(t.int8_op(Op::Mul), (0.2, 282.0));
+    }
+
+    /// The blend units' groups are required like every other: a file without one, or with
+    /// a bad figure in one, is refused naming it.
+    #[test]
+    fn the_blend_units_groups_are_required() {
+        for group in ["f16", "int8"] {
+            let e = refused(|v| {
+                v.as_object_mut().unwrap().remove(group);
+            });
+            assert!(
+                matches!(&e, Error::Parse { message, .. } if message.contains(group)),
+                "{e}"
+            );
+        }
+        let e = refused(|v| {
+            v["int8"].as_object_mut().unwrap().remove("div_um2");
+        });
+        assert!(
+            matches!(&e, Error::Parse { field, message, .. }
+            if field == "int8" && message.contains("div_um2")),
+            "{e}"
+        );
+        let e = refused(|v| v["f16"]["mul_pj"] = 0.0.into());
+        assert!(
+            matches!(&e, Error::Invalid { field, .. } if field == "f16.mul_pj"),
+            "{e}"
+        );
+        let e = refused(|v| v["int8"]["add_um2"] = (-36.0).into());
+        assert!(
+            matches!(&e, Error::Invalid { field, .. } if field == "int8.add_um2"),
+            "{e}"
+        );
     }
 
     #[test]

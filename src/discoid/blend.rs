@@ -43,6 +43,18 @@
 //! divides once at the end (equation 4 directly): the reference the modes' errors are
 //! measured against.
 //!
+//! **Counting** (DESIGN.md §12). The arithmetic is written once over the blend ALU's word
+//! `W` ([`BlendMode::blend_in`], [`BlendMode::resolve_in`]): `f32` for every image, and a
+//! counting `f32` for the cost model's counting run, the same IEEE operations in the same
+//! order. What a word operation does is counted by the word: per fragment of a float mode
+//! the zero test of β, S_old + β and per average two multiplies, an add and a divide. In
+//! rgba8 the same update is counted on the word, and the integer work beside it: the
+//! beta code's zero test, the two saturating nibble adds and the recombination 16·B + A of
+//! each Σβ decoded. Not counted, as conversions everywhere are not: widening a stored f16
+//! or unorm8 word to the ALU word (`R / 255`, Σβ's scale 1/256), and the store's rounding
+//! back (f16 rounding; unorm8's clamp, scale by 255 and rounding, as the shader's colour
+//! quantisation is not counted).
+//!
 //! What this does not model: where the fragments come from (the depth and culling tests of
 //! the accumulation pass), the time a blend takes (a timed model charges
 //! [`BlendMode::bytes_per_fragment`]), and two details of the paper's GPU encoding that a
@@ -51,6 +63,7 @@
 //! decodes B·16 + A from unorm values (scaling Σβ by 256/255, a factor that cancels in the
 //! averages). We keep the integer nibbles the paper describes.
 
+use crate::datapath::{Op, Real};
 use half::f16;
 use serde::{Deserialize, Serialize};
 
@@ -79,21 +92,33 @@ impl BlendMode {
         }
     }
 
-    /// Accumulation-target bytes one accumulated fragment moves (read + write): rgba8 8,
-    /// f16 16 (RGBA16F), f32 32 (RGBA32F). The float modes use three of the four channels;
-    /// the target is four-channel as a GPU's is.
-    pub fn bytes_per_fragment(self) -> u64 {
+    /// Accumulation-target bytes of one pixel: four channels of the mode's stored word,
+    /// rgba8 4 (Table 1's RGBA8), f16 8 (RGBA16F), f32 16 (RGBA32F). The float modes use
+    /// three of the four channels; the target is four-channel as a GPU's is \[bytes\].
+    pub fn bytes_per_pixel(self) -> u64 {
         match self {
-            BlendMode::Rgba8 => 2 * 4,
-            BlendMode::F16 => 2 * 4 * 2,
-            BlendMode::F32 => 2 * 4 * 4,
+            BlendMode::Rgba8 => 4,
+            BlendMode::F16 => 4 * 2,
+            BlendMode::F32 => 4 * 4,
         }
+    }
+
+    /// Accumulation-target bytes one accumulated fragment moves: its pixel read and
+    /// written, rgba8 8, f16 16, f32 32 \[bytes\].
+    pub fn bytes_per_fragment(self) -> u64 {
+        2 * self.bytes_per_pixel()
     }
 
     /// Blends one fragment into `px` by equation (5)'s incremental form:
     /// F_new = (F_old·S_old + β·F_t) / S_new, S_new = S_old + β, for F = diffuse and
     /// specular (see the module doc for each mode's words and rounding).
     pub fn blend(self, px: &mut Accum, f: BlendInput) -> Blended {
+        self.blend_in::<f32>(px, f)
+    }
+
+    /// [`Self::blend`] with the blend ALU's word `W`: `f32`, or a counting `f32` that gives
+    /// the same bits and counts the operations (see the module doc).
+    pub fn blend_in<W: Real>(self, px: &mut Accum, f: BlendInput) -> Blended {
         debug_assert!(
             [f.beta, f.diffuse, f.specular]
                 .iter()
@@ -103,25 +128,40 @@ impl BlendMode {
         let input = [f.beta as f32, f.diffuse as f32, f.specular as f32];
         match self {
             BlendMode::F32 => {
-                if let Some(words) = update_f32(px.f32, input) {
+                if let Some(words) = update::<W>(px.f32, input) {
                     px.f32 = words;
                 }
                 Blended { saturated: false }
             }
             BlendMode::F16 => {
-                if let Some(words) = update_f32(px.f16.map(f16::to_f32), input) {
+                if let Some(words) = update::<W>(px.f16.map(f16::to_f32), input) {
                     px.f16 = words.map(f16::from_f32);
                 }
                 Blended { saturated: false }
             }
-            BlendMode::Rgba8 => blend_rgba8(&mut px.rgba8, beta_code(f.beta), input),
+            BlendMode::Rgba8 => blend_rgba8::<W>(&mut px.rgba8, beta_code(f.beta), input),
         }
     }
 
     /// The resolved averages (diffuse, specular) = (Σβ cos α / Σβ, Σβ cos^N γ / Σβ), or None
     /// when nothing was accumulated (Σβ = 0).
     pub fn resolve(self, px: &Accum) -> Option<(f64, f64)> {
-        if self.sum_beta(px) == 0.0 {
+        self.resolve_in::<f32>(px)
+    }
+
+    /// [`Self::resolve`] with the blend ALU's word `W`: the stored averages are read as
+    /// they are (equation 5 divided by Σβ as the fragments arrived), so the resolve's one
+    /// operation is Σβ's zero test: a compare of the word in the float modes, the
+    /// recombination 16·B + A and an integer test in rgba8.
+    pub fn resolve_in<W: Real>(self, px: &Accum) -> Option<(f64, f64)> {
+        let empty = match self {
+            BlendMode::F32 | BlendMode::F16 => W::of(self.sum_beta(px)) == W::zero(),
+            BlendMode::Rgba8 => {
+                W::count_beside(Op::IntAdd, 2);
+                self.sum_beta(px) == 0.0
+            }
+        };
+        if empty {
             return None;
         }
         Some(match self {
@@ -139,7 +179,7 @@ impl BlendMode {
         match self {
             BlendMode::F32 => f64::from(px.f32[2]),
             BlendMode::F16 => f64::from(px.f16[2]),
-            BlendMode::Rgba8 => f64::from(decode_sum(px.rgba8)),
+            BlendMode::Rgba8 => f64::from(decode_sum::<f32>(px.rgba8)),
         }
     }
 }
@@ -243,44 +283,65 @@ pub fn beta_code(beta: f64) -> u8 {
     (256.0 * beta).round().min(255.0) as u8
 }
 
-/// Equation (5) in f32 on the words [F_diffuse, F_specular, S] with the fragment's
+/// An `f32` as the blend ALU's word (exact: the word is an `f32`).
+#[inline(always)]
+fn word<W: Real>(x: f32) -> W {
+    W::of(f64::from(x))
+}
+
+/// The blend ALU's word back as the `f32` it holds (exact).
+#[inline(always)]
+fn f32_of<W: Real>(w: W) -> f32 {
+    w.f64() as f32
+}
+
+/// Equation (5) in the ALU's word on [F_diffuse, F_specular, S] with the fragment's
 /// [β, diffuse, specular]; None when β = 0 (nothing changes).
-fn update_f32(words: [f32; 3], input: [f32; 3]) -> Option<[f32; 3]> {
-    let [fd, fs, s_old] = words;
-    let [beta, d, s] = input;
-    if beta == 0.0 {
+fn update<W: Real>(words: [f32; 3], input: [f32; 3]) -> Option<[f32; 3]> {
+    let [fd, fs, s_old] = words.map(word::<W>);
+    let [beta, d, s] = input.map(word::<W>);
+    if beta == W::zero() {
         return None;
     }
     let s_new = s_old + beta;
-    Some([
-        (fd * s_old + beta * d) / s_new,
-        (fs * s_old + beta * s) / s_new,
-        s_new,
-    ])
+    Some(
+        [
+            (fd * s_old + beta * d) / s_new,
+            (fs * s_old + beta * s) / s_new,
+            s_new,
+        ]
+        .map(f32_of),
+    )
 }
 
-/// Σβ of an rgba8 pixel: (16·B + A)/256.
-fn decode_sum(rgba: [u8; 4]) -> f32 {
-    (16.0 * f32::from(rgba[2]) + f32::from(rgba[3])) / 256.0
+/// Σβ of an rgba8 pixel, (16·B + A)/256: the recombination of the nibble sums is an
+/// integer add (counted); the scale by 1/256 places Σβ's fixed point (a conversion).
+fn decode_sum<W: Real>(rgba: [u8; 4]) -> W {
+    W::count_beside(Op::IntAdd, 1);
+    word((16.0 * f32::from(rgba[2]) + f32::from(rgba[3])) / 256.0)
 }
 
 /// Table 1's update of the bytes [R, G, B, A] by a fragment of beta code `b` and interest
 /// values `input[1..]` (see the module doc).
-fn blend_rgba8(rgba: &mut [u8; 4], b: u8, input: [f32; 3]) -> Blended {
+fn blend_rgba8<W: Real>(rgba: &mut [u8; 4], b: u8, input: [f32; 3]) -> Blended {
+    // The zero test of the 8-bit code.
+    W::count_beside(Op::IntAdd, 1);
     if b == 0 {
         return Blended { saturated: false };
     }
-    let s_old = decode_sum(*rgba);
+    let s_old = decode_sum::<W>(*rgba);
+    // Two 8-bit saturating adds (the saturation is the adder's carry out).
+    W::count_beside(Op::IntAdd, 2);
     let (hi, lo) = pack_beta(b);
     let (new_b, b_over) = rgba[2].overflowing_add(hi);
     let (new_a, a_over) = rgba[3].overflowing_add(lo);
     rgba[2] = if b_over { u8::MAX } else { new_b };
     rgba[3] = if a_over { u8::MAX } else { new_a };
-    let s_new = decode_sum(*rgba);
-    let beta = f32::from(b) / 256.0;
+    let s_new = decode_sum::<W>(*rgba);
+    let beta = word::<W>(f32::from(b) / 256.0);
     for (channel, value) in [(0, input[1]), (1, input[2])] {
-        let old = f32::from(rgba[channel]) / 255.0;
-        let avg = (old * s_old + beta * value) / s_new;
+        let old = word::<W>(f32::from(rgba[channel]) / 255.0);
+        let avg = f32_of((old * s_old + beta * word(value)) / s_new);
         rgba[channel] = (255.0 * avg.clamp(0.0, 1.0)).round() as u8;
     }
     Blended {
@@ -348,6 +409,92 @@ mod tests {
             let json = serde_json::to_string(&mode).unwrap();
             assert_eq!(json, format!("\"{}\"", mode.name()));
             assert_eq!(serde_json::from_str::<BlendMode>(&json).unwrap(), mode);
+        }
+    }
+
+    /// The accumulation target's bytes per pixel are four channels of the word each mode
+    /// stores (the float modes use three of them), and a fragment reads and writes one.
+    #[test]
+    fn bytes_per_pixel_are_four_channels_of_the_stored_word() {
+        let px = Accum::default();
+        let stored = [
+            (
+                BlendMode::Rgba8,
+                std::mem::size_of_val(&px.rgba8_bytes()) / 4,
+            ),
+            (BlendMode::F16, std::mem::size_of_val(&px.f16_words()) / 3),
+            (BlendMode::F32, std::mem::size_of_val(&px.f32_words()) / 3),
+        ];
+        for (mode, word_bytes) in stored {
+            assert_eq!(mode.bytes_per_pixel(), 4 * word_bytes as u64, "{mode:?}");
+            assert_eq!(mode.bytes_per_fragment(), 2 * mode.bytes_per_pixel());
+        }
+        assert_eq!(BlendMode::ALL.map(BlendMode::bytes_per_pixel), [4, 8, 16]);
+    }
+
+    /// Counted per fragment, as the module doc says: a float mode's zero test of β, its
+    /// S_old + β and two averages of two multiplies, an add and a divide each; rgba8 the
+    /// same averages (its S_new is the nibble adds') and five integer operations: the
+    /// code's zero test, two saturating nibble adds, two Σβ recombinations. A β that
+    /// changes nothing costs its zero test. The resolve's Σβ test is a compare, or in
+    /// rgba8 a recombination and an integer test.
+    #[test]
+    fn the_blend_alu_counts_equation_5_per_mode() {
+        use crate::cost::counted::{counting, Counted};
+        use crate::graph::UnitKind::BlendUnit;
+        type C = Counted<f32>;
+        let f = frag(0.5, 0.25, 0.75);
+        for (mode, blend, resolve) in [
+            (
+                BlendMode::F32,
+                [3, 4, 2, 0, 1, 0, 0, 0, 0],
+                [0, 0, 0, 0, 1, 0, 0, 0, 0],
+            ),
+            (
+                BlendMode::F16,
+                [3, 4, 2, 0, 1, 0, 0, 0, 0],
+                [0, 0, 0, 0, 1, 0, 0, 0, 0],
+            ),
+            (
+                BlendMode::Rgba8,
+                [2, 4, 2, 0, 0, 0, 0, 5, 0],
+                [0, 0, 0, 0, 0, 0, 0, 2, 0],
+            ),
+        ] {
+            let mut px = Accum::default();
+            let (_, ops) = counting(BlendUnit, || mode.blend_in::<C>(&mut px, f));
+            assert_eq!(ops.of(BlendUnit), blend, "{mode:?} blend");
+            let (r, ops) = counting(BlendUnit, || mode.resolve_in::<C>(&px));
+            assert!(r.is_some());
+            assert_eq!(ops.of(BlendUnit), resolve, "{mode:?} resolve");
+            let (_, ops) = counting(BlendUnit, || {
+                mode.blend_in::<C>(&mut px, frag(0.0, 1.0, 1.0))
+            });
+            let zero_test = if mode == BlendMode::Rgba8 { 7 } else { 4 };
+            assert_eq!(ops.of(BlendUnit).iter().sum::<u64>(), 1, "{mode:?}");
+            assert_eq!(ops.of(BlendUnit)[zero_test], 1, "{mode:?}");
+        }
+    }
+
+    /// The counting word blends and resolves every mode to the same bits.
+    #[test]
+    fn counting_the_blend_changes_no_bit() {
+        use crate::cost::counted::Counted;
+        let mut rng = Rng(0x5eed_0003);
+        for _ in 0..5_000 {
+            let frags = rng.stream();
+            for mode in BlendMode::ALL {
+                let (plain, counted) = (&mut Accum::default(), &mut Accum::default());
+                for &f in &frags {
+                    let a = mode.blend(plain, f);
+                    let b = mode.blend_in::<Counted<f32>>(counted, f);
+                    assert_eq!((a, *plain), (b, *counted), "{mode:?}");
+                }
+                assert_eq!(
+                    mode.resolve(plain),
+                    mode.resolve_in::<Counted<f32>>(counted)
+                );
+            }
         }
     }
 

@@ -32,8 +32,9 @@ use super::blend::{Accum, BlendInput, BlendMode, ExactAccum};
 use super::texture::{BetaTexture, TEXTURE_SIZE};
 use super::{BetaShape, Discoid};
 use crate::camera::View;
-use crate::datapath::{Datapath, Real};
+use crate::datapath::{Datapath, Op, Real};
 use crate::error::{Error, Result};
+use crate::graph::UnitKind;
 use crate::lembo::tessellate::Triangle;
 use crate::lembo::{eval3, Quadratic};
 use crate::raster::fragment::FragmentSink;
@@ -404,7 +405,7 @@ impl DiscoidTarget {
             report: BlendReport {
                 mode: mode.name().to_string(),
                 bytes_per_fragment: mode.bytes_per_fragment(),
-                accumulation_buffer_bytes: n as u64 * mode.bytes_per_fragment() / 2,
+                accumulation_buffer_bytes: n as u64 * mode.bytes_per_pixel(),
                 threshold,
                 ..BlendReport::default()
             },
@@ -413,13 +414,19 @@ impl DiscoidTarget {
 }
 
 impl DiscoidTarget {
-    /// Blends the pending fragments, pixel by pixel in primitive order.
-    pub fn blend_in_order(&mut self) {
+    /// Blends the pending fragments, pixel by pixel in primitive order, with the blend
+    /// ALU's word `B` (`f32`, or a counting `f32` charged to the blend units).
+    pub fn blend_in_order<B: Real>(&mut self) {
+        B::charge(UnitKind::BlendUnit);
         let mut pending = std::mem::take(&mut self.kept);
         pending.sort_unstable_by_key(|p| (p.idx, p.id, p.st));
         for p in &pending {
             let idx = p.idx as usize;
-            if self.mode.blend(&mut self.accum[idx], p.input).saturated {
+            if self
+                .mode
+                .blend_in::<B>(&mut self.accum[idx], p.input)
+                .saturated
+            {
                 self.report.saturations += 1;
             }
             self.exact[idx].add(p.input);
@@ -486,8 +493,33 @@ pub fn evaluate<R: Real>(
 /// (`depth`, `winner`). Only fragments facing the eye, inside their discoid and inside the
 /// depth range count; ties go to the smaller id, so the result does not depend on order.
 #[inline]
-pub fn depth_pass_wins<R>(e: &Evaluated<R>, id: u32, depth: f32, winner: u32) -> bool {
-    e.facing && e.beta > 0.0 && depth_test(e.z, id, depth, winner)
+pub fn depth_pass_wins<R: Real>(e: &Evaluated<R>, id: u32, depth: f32, winner: u32) -> bool {
+    if !(e.facing && e.beta > 0.0) {
+        return false;
+    }
+    // The depth test's compare (on the stored f32 depth, beside the datapath), as the
+    // surface ROP counts it.
+    R::count_beside(Op::Cmp, 1);
+    depth_test(e.z, id, depth, winner)
+}
+
+/// Counts the accumulation pass's depth tests as the datapath would do them: they run in
+/// `f64` beside it ([`View::linear_depth`]). The depth range is two compares; the threshold
+/// test linear_depth(z) > linear_depth(depth) + t is two linear depths (in perspective
+/// 2 z - 1, (f + n) - ndc (f - n) and 2 f n over it: 2 multiplies, 2 adds and a divide
+/// each; orthographic n + z (f - n): a multiply and an add), the threshold's add and a
+/// compare.
+#[inline(always)]
+fn count_threshold_test<R: Real>(view: &View) {
+    let (mul, add, div) = if view.orthographic {
+        (1, 1, 0)
+    } else {
+        (2, 2, 1)
+    };
+    R::count_beside(Op::Mul, 2 * mul);
+    R::count_beside(Op::Add, 2 * add + 1);
+    R::count_beside(Op::Div, 2 * div);
+    R::count_beside(Op::Cmp, 2 + 1);
 }
 
 /// The accumulation pass's tests on fragment `e` at a pixel whose depth pass left
@@ -505,22 +537,26 @@ pub fn accumulation_keeps<R: Real>(
 ) -> Option<BlendInput> {
     if !e.facing {
         report.culled_backface += 1;
-    } else if e.beta <= 0.0 {
+        return None;
+    }
+    if e.beta <= 0.0 {
         report.discarded_beta_zero += 1;
-    } else if !(0.0..=1.0).contains(&e.z)
+        return None;
+    }
+    count_threshold_test::<R>(view);
+    if !(0.0..=1.0).contains(&e.z)
         || winner == NO_PRIMITIVE
         || view.linear_depth(e.z as f64) > view.linear_depth(depth as f64) + threshold
     {
         report.discarded_threshold += 1;
-    } else {
-        let (cos_a, cos_g_n) = shader.shader().terms(e.normal, e.to_eye);
-        return Some(BlendInput {
-            beta: e.beta,
-            diffuse: cos_a.f64(),
-            specular: cos_g_n.f64(),
-        });
+        return None;
     }
-    None
+    let (cos_a, cos_g_n) = shader.shader().terms(e.normal, e.to_eye);
+    Some(BlendInput {
+        beta: e.beta,
+        diffuse: cos_a.f64(),
+        specular: cos_g_n.f64(),
+    })
 }
 
 /// The ROP's work on one discoid fragment at pixel `idx` in `pass`, on a whole-frame
@@ -589,24 +625,28 @@ impl<R: Real> FragmentSink<R> for Sink<'_, R> {
         v: R,
         z: R,
     ) {
-        let Some(f) = self.table.lembo_fragment(l, u, v, z) else {
-            return;
-        };
-        let idx = (j * self.target.width + i) as usize;
-        process(
-            self.pass,
-            self.target,
-            self.table,
-            self.shader,
-            self.view,
-            idx,
-            &f,
-        );
+        // The ROP's work, as the timed ROP does it (a counting datapath charges it there);
+        // then the charge goes back to the rasterizer that called.
+        R::charge(UnitKind::Rop);
+        if let Some(f) = self.table.lembo_fragment(l, u, v, z) {
+            let idx = (j * self.target.width + i) as usize;
+            process(
+                self.pass,
+                self.target,
+                self.table,
+                self.shader,
+                self.view,
+                idx,
+                &f,
+            );
+        }
+        R::charge(UnitKind::FragmentRasterizer);
     }
 }
 
 impl<R: Real> TriangleSink<R> for Sink<'_, R> {
     fn fragment(&mut self, t: &ScreenTriangle<R>, i: u32, j: u32, tf: &TriangleFragment<R>) {
+        R::charge(UnitKind::Rop);
         let f = self.table.planar_fragment(t, tf);
         let idx = (j * self.target.width + i) as usize;
         process(
@@ -618,32 +658,31 @@ impl<R: Real> TriangleSink<R> for Sink<'_, R> {
             idx,
             &f,
         );
+        R::charge(UnitKind::TriangleRasterizer);
     }
 }
 
 /// The resolve pass: the image, and the error and hole counters in the target's report.
-pub fn resolve<R: Real>(
+/// The ROPs resolve (the timed model's resolve pass): each pixel's Σβ test in the blend
+/// ALU's word `B`, equation (6) in the datapath's `R`; a counting run charges both to the
+/// ROP. The blend error beside them is the simulator's measurement, in `f64`, not counted.
+pub fn resolve<R: Real, B: Real>(
     target: &mut DiscoidTarget,
     table: &DiscoidTable<R>,
     shader: &FragmentShader<R>,
     background: [u8; 3],
     height: u32,
 ) -> FrameBuffer {
+    R::charge(UnitKind::Rop);
+    B::charge(UnitKind::Rop);
     let width = target.width;
     let mut fb = FrameBuffer::new(width, height, background, target.normal.is_some());
     let s = shader.shader();
-    let luminance = |d: f64, g: f64| {
-        s.ka.f64()
-            + s.kd.f64() * d
-            + if s.ks > R::zero() {
-                s.ks.f64() * g
-            } else {
-                0.0
-            }
-    };
+    let (ka, kd, ks) = (s.ka.f64(), s.kd.f64(), s.ks.f64().max(0.0));
+    let luminance = |d: f64, g: f64| ka + kd * d + if ks > 0.0 { ks * g } else { 0.0 };
     let (mut max, mut sum, mut n) = (0.0f64, 0.0f64, 0u64);
     for idx in 0..fb.color.len() {
-        let Some((d, g)) = target.mode.resolve(&target.accum[idx]) else {
+        let Some((d, g)) = target.mode.resolve_in::<B>(&target.accum[idx]) else {
             continue;
         };
         let color = table.color(target.winner[idx]).map(R::of);
@@ -748,18 +787,21 @@ pub fn render_discoids(
     (mode, threshold): (BlendMode, f64),
     keep_normals: bool,
 ) -> Result<DiscoidFrame> {
+    let settings = (mode, threshold);
     match datapath {
-        Datapath::F32 => passes::<f32>(scene, view, tol, mode, threshold, keep_normals),
-        Datapath::F64 => passes::<f64>(scene, view, tol, mode, threshold, keep_normals),
+        Datapath::F32 => render_discoids_in::<f32, f32>(scene, view, tol, settings, keep_normals),
+        Datapath::F64 => render_discoids_in::<f64, f32>(scene, view, tol, settings, keep_normals),
     }
 }
 
-fn passes<R: Real>(
+/// [`render_discoids`] in the datapath word `R` with the blend ALU's word `B` (`f32` for
+/// an image; the cost model's counting run gives counting words, which draw the same
+/// bits).
+pub fn render_discoids_in<R: Real, B: Real>(
     scene: &Scene,
     view: &View,
     tol: Tolerance,
-    mode: BlendMode,
-    threshold: f64,
+    (mode, threshold): (BlendMode, f64),
     keep_normals: bool,
 ) -> Result<DiscoidFrame> {
     check_scene(scene)?;
@@ -785,9 +827,9 @@ fn passes<R: Real>(
         render_triangles::<R, _>(&table.planar, view, &mut sink, &mut c);
         counts = c;
     }
-    target.blend_in_order();
+    target.blend_in_order::<B>();
     let background = scene.background.map(to_u8::<f64>);
-    let framebuffer = resolve(&mut target, &table, &shader, background, vp.height);
+    let framebuffer = resolve::<R, B>(&mut target, &table, &shader, background, vp.height);
     counts.fragments_passed_depth = target.report.fragments_accumulated;
     counts.pixels_covered = framebuffer.covered() as u64;
     Ok(DiscoidFrame {

@@ -1,6 +1,7 @@
 //! A discoid scene's render (DESIGN.md §4): the three passes, timed or functional, their
-//! report, and with `--reference` the blended image measured against the surface the
-//! discoids stand for.
+//! report, a timed frame's cost (DESIGN.md §12) from a counting run whose image must equal
+//! it, and with `--reference` the blended image measured against the surface the discoids
+//! stand for.
 
 use super::reference::reference_scene;
 use super::reference::Measured;
@@ -8,6 +9,8 @@ use super::route::{sim_options, Model, PathRun, LEMBO_BYTES};
 use super::sections::{host, scene_info, settings};
 use super::validate::RenderJob;
 use crate::camera::View;
+use crate::config::ArchConfig;
+use crate::cost::{self, model::CostReport};
 use crate::discoid;
 use crate::error::{Error, Result};
 use crate::pipeline;
@@ -34,7 +37,7 @@ pub(super) fn run_discoids(
 ) -> Result<PathRun> {
     let threshold = job.threshold.unwrap_or(scene.discoid_threshold);
     let t0 = Instant::now();
-    let (framebuffer, counts, blend, units, cycles) = match model {
+    let (framebuffer, counts, blend, units, cycles, cost) = match model {
         Model::Timed(arch) => {
             let t = pipeline::discoid::run_discoid_timed(
                 scene,
@@ -54,8 +57,16 @@ pub(super) fn run_discoids(
                     },
                 )?,
             )?;
+            let cost = discoid_cost(job, scene, view, arch, threshold, &t)?;
             let blend = BlendSection::new(t.blend, Some(t.passes));
-            (t.framebuffer, t.counts, blend, t.units, Some(t.cycles))
+            (
+                t.framebuffer,
+                t.counts,
+                blend,
+                t.units,
+                Some(t.cycles),
+                Some(cost),
+            )
         }
         Model::Functional => {
             let f = discoid::render::render_discoids_functional(
@@ -71,6 +82,7 @@ pub(super) fn run_discoids(
                 f.counts,
                 BlendSection::new(f.blend, None),
                 Vec::new(),
+                None,
                 None,
             )
         }
@@ -125,7 +137,7 @@ pub(super) fn run_discoids(
         units,
         counts,
         cycles: cycles.clone(),
-        cost: None,
+        cost,
         arch: model.arch().cloned(),
         accuracy: measured.as_ref().map(|m| m.accuracy.clone()),
         blend: Some(blend),
@@ -144,6 +156,43 @@ pub(super) fn run_discoids(
         error_map: measured.map(|m| m.error_map),
         trace: None,
     })
+}
+
+/// The cost of a timed discoid frame (DESIGN.md §12): the functional passes again in
+/// counting words for the operations of each kind (their image must equal the timed one),
+/// priced with the timed passes' busy cycles and items, the blend units' share of their
+/// ROPs', and the bytes through the frame-buffer port, the accumulation target's apart.
+fn discoid_cost(
+    job: &RenderJob,
+    scene: &Scene,
+    view: &View,
+    arch: &ArchConfig,
+    threshold: f64,
+    timed: &pipeline::discoid::DiscoidTimed,
+) -> Result<CostReport> {
+    let (frame, ops) = cost::discoid_ops(
+        scene,
+        view,
+        job.tolerance(),
+        job.datapath,
+        (job.blend, threshold),
+    )?;
+    if frame.framebuffer.color != timed.framebuffer.color {
+        return Err(Error::Internal(
+            "the counting run's discoid image differs from the timed one".into(),
+        ));
+    }
+    let work = cost::model::Work {
+        ops: &ops,
+        cycles: &timed.cycles,
+        framebuffer_bytes: timed.port_bytes.framebuffer,
+        accumulation_bytes: timed.port_bytes.accumulation,
+        blend: Some(cost::model::BlendWork {
+            mode: job.blend,
+            units: &timed.blend_units,
+        }),
+    };
+    Ok(cost::model::cost(&job.tech()?, arch, job.datapath, &work))
 }
 
 /// A discoid image measured against the surface its discoids stand for: the functional

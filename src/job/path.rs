@@ -175,6 +175,8 @@ fn cost_of(
         ops: &ops,
         cycles,
         framebuffer_bytes,
+        accumulation_bytes: 0,
+        blend: None,
     };
     Ok(cost::model::cost(&job.tech()?, arch, job.datapath, &work))
 }

@@ -10,9 +10,15 @@
 //! reordering hardware is not modelled.
 //!
 //! Resolve cost: each ROP reads and resolves the pixels of its tiles at
-//! `rop.fragments_per_cycle`, and the frame-buffer port moves half the mode's
-//! bytes per fragment (one read of the accumulation target) and a 4-byte colour write per
-//! pixel; the pass takes the longer of the two.
+//! `rop.fragments_per_cycle`, and the frame-buffer port moves the mode's bytes per pixel
+//! (one read of the accumulation target) and a 4-byte colour write per pixel; the pass
+//! takes the longer of the two.
+//!
+//! The blend units work inside their ROPs (`graph::UnitKind::BlendUnit`): a kept fragment
+//! costs its ROP `blend.cycles_per_fragment_<mode>` more, so their cycles are the ROPs'
+//! and `cycles.units` does not list them; [`DiscoidTimed::blend_units`] gives each its
+//! share (busy for its ROP's kept fragments at that rate), which the cost model sizes the
+//! blend units by.
 
 use super::{run_in, Cycle, CycleReport, DiscoidPass, Source, UnitCycles, UnitInstance, UnitKind};
 use crate::camera::{View, Viewport};
@@ -20,7 +26,7 @@ use crate::config::ArchConfig;
 use crate::datapath::{Datapath, Real};
 use crate::discoid::blend::BlendMode;
 use crate::discoid::render::{
-    check_scene, resolve, BlendReport, DiscoidTable, DiscoidTarget, Pass,
+    check_scene, resolve, BlendReport, DiscoidTable, DiscoidTarget, KeptFragment, Pass,
 };
 use crate::error::{Error, Result};
 use crate::raster::Counts;
@@ -31,6 +37,7 @@ use crate::scene::Scene;
 use crate::tolerance::Tolerance;
 
 use super::tiles::RopTiles;
+use super::units::rop::blend_cycles;
 use super::SimOptions;
 
 /// What the timed discoid passes produced.
@@ -47,6 +54,25 @@ pub struct DiscoidTimed {
     pub blend: BlendReport,
     /// Each pass's frame cycles.
     pub passes: PassCycles,
+    /// Each ROP's blend unit over the frame: busy for the fragments its ROP kept at
+    /// `blend.cycles_per_fragment_<mode>`, starved the rest (cycles inside its ROP's busy
+    /// ones, so not in `cycles.units`); `items_in` are the fragments it blended.
+    pub blend_units: Vec<UnitCycles>,
+    /// The bytes the passes moved through the frame-buffer port.
+    pub port_bytes: PortBytes,
+}
+
+/// The bytes a discoid frame moves through the frame-buffer port, as the ROPs and the
+/// resolve charge the port for them \[bytes\].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PortBytes {
+    /// Depth and colour: the depth pass's depth reads for every fragment and depth writes
+    /// for every winner, the accumulation pass's depth reads for every fragment, and the
+    /// resolve's colour write per pixel.
+    pub framebuffer: u64,
+    /// The accumulation target: a read and a write of the pixel per kept fragment
+    /// (`BlendMode::bytes_per_fragment`) and the resolve's read per pixel.
+    pub accumulation: u64,
 }
 
 /// The frame cycles of each timed discoid pass.
@@ -126,6 +152,7 @@ fn passes<R: Real>(
     let first = pass(Pass::Depth, &[], &[])?;
     let (depth, winner) = (first.framebuffer.depth, first.framebuffer.primitive);
     let second = pass(Pass::Accumulate, &depth, &winner)?;
+    let blended = blended_per_rop(arch, view.viewport, second.discoid.as_ref());
 
     let vp = view.viewport;
     let mut target = DiscoidTarget::new(vp.width, vp.height, mode, threshold);
@@ -138,16 +165,27 @@ fn passes<R: Real>(
         r.discarded_beta_zero = counters.discarded_beta_zero;
         r.discarded_threshold = counters.discarded_threshold;
     }
-    target.blend_in_order();
+    target.blend_in_order::<f32>();
     let shader = FragmentShader::<R>::new(&scene.light, view);
     let background = scene.background.map(to_u8::<f64>);
-    let framebuffer = resolve(&mut target, &table, &shader, background, vp.height);
+    let framebuffer = resolve::<R, f32>(&mut target, &table, &shader, background, vp.height);
 
     let (rop_busy, port_busy) = resolve_cost(arch, vp, mode);
+    let fbc = &arch.framebuffer;
+    let resolve_bytes = resolve_bytes(vp, mode);
+    let port_bytes = PortBytes {
+        framebuffer: first.counts.fragments * fbc.bytes_per_fragment_tested
+            + first.counts.fragments_passed_depth * fbc.bytes_per_fragment_tested
+            + second.counts.fragments * fbc.bytes_per_fragment_tested
+            + resolve_bytes.framebuffer,
+        accumulation: target.report.fragments_accumulated * mode.bytes_per_fragment()
+            + resolve_bytes.accumulation,
+    };
     let resolve_total = rop_busy.iter().copied().max().unwrap_or(0).max(port_busy);
     let (c1, c2) = (first.cycles, second.cycles);
     let units = merged_units(&c1, &c2, &rop_busy, port_busy, resolve_total);
     let total = c1.total + c2.total + resolve_total;
+    let blend_units = blend_unit_cycles(arch, mode, &blended, total);
     let bottleneck = units
         .iter()
         .fold(None::<&UnitCycles>, |best, u| match best {
@@ -180,7 +218,53 @@ fn passes<R: Real>(
         },
         blend,
         passes,
+        blend_units,
+        port_bytes,
     })
+}
+
+/// The fragments each ROP's blend unit blends: the accumulation pass's kept fragments in
+/// the ROP's tiles.
+fn blended_per_rop(
+    arch: &ArchConfig,
+    vp: Viewport,
+    kept: Option<&(Vec<KeptFragment>, BlendReport)>,
+) -> Vec<u64> {
+    let tiles = RopTiles::new(vp.width, vp.height, arch.rop.tile_px, arch.rop.count);
+    let mut blended = vec![0u64; arch.rop.count as usize];
+    for f in kept.into_iter().flat_map(|(k, _)| k) {
+        let (i, j) = (f.idx % vp.width, f.idx / vp.width);
+        blended[tiles.owner(i, j).0] += 1;
+    }
+    blended
+}
+
+/// Each blend unit's accounting over the frame of `total` cycles: busy for its fragments
+/// at the mode's rate, starved otherwise (DiscoidTimed::blend_units).
+fn blend_unit_cycles(
+    arch: &ArchConfig,
+    mode: BlendMode,
+    blended: &[u64],
+    total: Cycle,
+) -> Vec<UnitCycles> {
+    let rate = blend_cycles(&arch.blend, mode);
+    blended
+        .iter()
+        .enumerate()
+        .map(|(k, &n)| {
+            let busy = Cycle(n * rate);
+            UnitCycles {
+                name: format!("{}[{k}]", UnitKind::BlendUnit.name()),
+                kind: UnitKind::BlendUnit,
+                busy,
+                starved: Cycle(total - busy),
+                blocked: Cycle::ZERO,
+                items_in: n,
+                items_out: 0,
+                max_fifo_occupancy: 0,
+            }
+        })
+        .collect()
 }
 
 /// The resolve pass's busy cycles: each ROP's (its tiles' pixels at its fragment rate)
@@ -197,9 +281,23 @@ fn resolve_cost(arch: &ArchConfig, vp: Viewport, mode: BlendMode) -> (Vec<u64>, 
         .iter()
         .map(|p| p.div_ceil(arch.rop.fragments_per_cycle))
         .collect();
-    let bytes = vp.pixels() as u64 * (mode.bytes_per_fragment() / 2 + 4);
-    let port_busy = bytes.div_ceil(arch.framebuffer.bytes_per_cycle);
+    let bytes = resolve_bytes(vp, mode);
+    let port_busy =
+        (bytes.framebuffer + bytes.accumulation).div_ceil(arch.framebuffer.bytes_per_cycle);
     (rop_busy, port_busy)
+}
+
+/// The colour bytes the resolve writes per pixel (RGBA8) \[bytes\].
+const RESOLVE_COLOR_BYTES: u64 = 4;
+
+/// The resolve pass's bytes through the frame-buffer port: every pixel's accumulation
+/// target read and its colour written.
+fn resolve_bytes(vp: Viewport, mode: BlendMode) -> PortBytes {
+    let pixels = vp.pixels() as u64;
+    PortBytes {
+        framebuffer: pixels * RESOLVE_COLOR_BYTES,
+        accumulation: pixels * mode.bytes_per_pixel(),
+    }
 }
 
 /// Each unit's accounting over the three passes: the depth and accumulation passes' sums,

@@ -36,8 +36,8 @@ pub struct Report {
     pub counts: Counts,
     /// Cycle accounting of the timed pipeline; null in functional mode.
     pub cycles: Option<CycleReport>,
-    /// Area and energy of the instantiated units for this frame (DESIGN.md §12); null in
-    /// functional mode and for discoid scenes.
+    /// Area and energy of the instantiated units for this frame (DESIGN.md §12), a discoid
+    /// scene's blend units and accumulation target included; null in functional mode.
     pub cost: Option<CostReport>,
     /// Accuracy against the exact reference; null without `--reference`.
     pub accuracy: Option<Accuracy>,

@@ -3,7 +3,7 @@
 //! is what `report.json` says; each section of `report.txt` has its own writer below.
 
 use super::Report;
-use crate::cost::model::OpCounts;
+use crate::cost::model::{BlendCost, OpCounts};
 use crate::datapath::OPS;
 use crate::pipeline::Cycle;
 use std::fmt::Write as _;
@@ -171,22 +171,13 @@ impl Report {
     /// The unit's area and energy, instance by instance (DESIGN.md §12).
     fn write_cost(&self, t: &mut String) {
         let Some(c) = &self.cost else {
-            let why = if self.cycles.is_none() {
-                "functional mode"
-            } else {
-                "discoid scene"
-            };
-            let _ = writeln!(
-                t,
-                "
-cost      n/a ({why})"
-            );
+            let _ = writeln!(t, "\ncost      n/a (functional mode)");
             return;
         };
         let _ = writeln!(
             t,
             "
-cost      {:.3} mm2, {:.1} uJ this frame{} (technology {}; {} frame-buffer bytes as {} DRAM at {} pJ/B; SRAM leakage {:.3} uJ, logic leakage {:.3} uJ)",
+cost      {:.3} mm2, {:.1} uJ this frame{} (technology {}; {} frame-buffer bytes{} as {} DRAM at {} pJ/B; SRAM leakage {:.3} uJ, logic leakage {:.3} uJ)",
             c.area_mm2,
             c.energy_pj * 1e-6,
             c.power_mw
@@ -194,11 +185,19 @@ cost      {:.3} mm2, {:.1} uJ this frame{} (technology {}; {} frame-buffer bytes
                 .unwrap_or_default(),
             c.tech.name,
             c.framebuffer_bytes,
+            if c.blend.is_some() {
+                format!(" and {} accumulation bytes", c.accumulation_bytes)
+            } else {
+                String::new()
+            },
             c.tech.dram_kind.name(),
             c.tech.dram_pj_per_byte,
             c.sram_leakage_pj * 1e-6,
             c.logic_leakage_pj * 1e-6
         );
+        if let Some(b) = &c.blend {
+            let _ = writeln!(t, "  {}", blend_cost(b));
+        }
         let _ = writeln!(
             t,
             "  {:<22} {:>9} {:>9} {:>10} {:>9} {:>9}  functional units",
@@ -393,7 +392,7 @@ cost      {:.3} mm2, {:.1} uJ this frame{} (technology {}; {} frame-buffer bytes
         };
     }
 
-    /// The summary's cost line, for a timed surface run.
+    /// The summary's cost line, for a timed run.
     fn summarise_cost(&self, t: &mut String) {
         if let Some(c) = &self.cost {
             let _ = writeln!(
@@ -407,6 +406,9 @@ cost      {:.3} mm2, {:.1} uJ this frame{} (technology {}; {} frame-buffer bytes
                     .map(|p| format!(", {p:.0} mW"))
                     .unwrap_or_default()
             );
+            if let Some(b) = &c.blend {
+                let _ = writeln!(t, "{}", blend_cost(b));
+            }
         }
     }
 
@@ -430,4 +432,19 @@ cost      {:.3} mm2, {:.1} uJ this frame{} (technology {}; {} frame-buffer bytes
                 .unwrap_or_default()
         );
     }
+}
+
+/// The blend units' cost in a sentence: what the precision modes trade (DESIGN.md §12).
+pub fn blend_cost(b: &BlendCost) -> String {
+    format!(
+        "blend units {} (priced as {}): {:.4} mm2, {} per fragment blended; accumulation {} bytes a pixel, {:.1} uJ as DRAM",
+        b.mode,
+        b.priced_as,
+        b.area_mm2,
+        b.energy_pj_per_fragment
+            .map(|e| format!("{e:.2} pJ"))
+            .unwrap_or_else(|| "n/a".into()),
+        b.accumulation_bytes_per_pixel,
+        b.accumulation_energy_pj * 1e-6
+    )
 }

@@ -356,6 +356,49 @@ fn a_directory_of_another_spec_is_not_resumed() {
     );
 }
 
+/// A discoid sweep over the blend modes is priced like any timed sweep: results.csv's area
+/// and energy are filled for every mode, and the narrower modes cost less.
+#[test]
+fn a_discoid_sweep_has_area_and_energy() {
+    let tmp = tempfile::tempdir().unwrap();
+    let scene = manifest().join("traces/discoid_sphere20.json");
+    let spec = tmp.path().join("blend.json");
+    std::fs::write(
+        &spec,
+        format!(
+            r#"{{"name": "blend", "scenes": [{:?}], "viewport": [64, 64], "reference": false,
+                "grid": [{{"blend": ["rgba8", "f16", "f32"]}}]}}"#,
+            scene.to_string_lossy()
+        ),
+    )
+    .unwrap();
+    let dir = tmp.path().join("out");
+    ok(&sweep(
+        &[
+            "sweep",
+            spec.to_str().unwrap(),
+            "--out",
+            dir.to_str().unwrap(),
+        ],
+        &[],
+        tmp.path(),
+    ));
+    let table = masked(&dir).csv;
+    let column = |name: &str| table[0].iter().position(|h| h == name).unwrap();
+    let (blend, area, energy) = (column("blend"), column("area_mm2"), column("energy_pj"));
+    let mut by_mode: Vec<(String, f64, f64)> = table[1..]
+        .iter()
+        .map(|row| {
+            let number = |k: usize| row[k].parse::<f64>().unwrap_or_else(|_| panic!("{row:?}"));
+            (row[blend].clone(), number(area), number(energy))
+        })
+        .collect();
+    by_mode.sort_by(|a, b| a.1.total_cmp(&b.1));
+    let modes: Vec<&str> = by_mode.iter().map(|(m, _, _)| m.as_str()).collect();
+    assert_eq!(modes, ["rgba8", "f16", "f32"], "smallest first");
+    assert!(by_mode.windows(2).all(|w| w[0].2 < w[1].2), "{by_mode:?}");
+}
+
 #[test]
 fn every_committed_spec_is_valid() {
     let dir = manifest().join("sim/sweeps");
