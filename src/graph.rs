@@ -386,10 +386,10 @@ pub enum GraphError {
         /// The unit without the port.
         kind: UnitKind,
     },
-    /// Two boundaries leave one kind (a unit has one output crossbar; it may have several
-    /// input crossbars, merged as one set of ports).
+    /// Two boundaries join the same two kinds (a kind may feed several kinds and be fed
+    /// by several, but by one crossbar each).
     Fanned {
-        /// The kind.
+        /// The producing kind.
         kind: UnitKind,
         /// The first boundary.
         first: &'static str,
@@ -440,7 +440,7 @@ impl std::fmt::Display for GraphError {
                 second,
             } => write!(
                 f,
-                "{} writes to two boundaries, {first} and {second}",
+                "{} feeds one kind by two boundaries, {first} and {second}",
                 kind.name()
             ),
             GraphError::ItemMismatch {

@@ -6,10 +6,12 @@
 //! kind as the architecture says and makes each boundary's typed links. Each host thread
 //! then takes its units' bodies from the plan ([`Plan::bodies`]).
 //!
-//! A kind writes to one boundary but may read from several (a memory port fed by the ROPs
-//! and by a geometry fetch): its input ports are every feeding boundary's links, boundary
-//! by boundary in the graph's order, each boundary's producers in order, all merged by
-//! (arrival, port) as one crossbar's are.
+//! A kind may read from several boundaries and write to several, all of its one item type
+//! (a memory port fed by the ROPs and by a geometry fetch, a geometry fetch feeding the
+//! setup engines and the memory port): its input ports are every feeding boundary's
+//! links, boundary by boundary in the graph's order, each boundary's producers in order,
+//! all merged by (arrival, port) as one crossbar's are; its output ports likewise, each
+//! boundary's a contiguous group ([`super::runtime::Ctx::group`]).
 
 use super::runtime::executor::UnitFuture;
 use super::runtime::{partition, LinkSpec, SimOptions};
@@ -31,8 +33,8 @@ pub struct Ports {
     body: Vec<usize>,
     /// Each kind's input boundaries, in the graph's order; none for a source.
     input: Vec<Vec<usize>>,
-    /// Each kind's output boundary, None for a sink.
-    output: Vec<Option<usize>>,
+    /// Each kind's output boundaries, in the graph's order; none for a sink.
+    output: Vec<Vec<usize>>,
 }
 
 /// Checks `graph` against the units' declarations in `R`'s datapath; the wiring it implies.
@@ -55,7 +57,7 @@ fn check_with<R: Real>(
     }
     let at = |kind: UnitKind| kinds.iter().position(|&k| k == kind);
     let mut input: Vec<Vec<usize>> = vec![Vec::new(); kinds.len()];
-    let mut output: Vec<Option<usize>> = vec![None; kinds.len()];
+    let mut output: Vec<Vec<usize>> = vec![Vec::new(); kinds.len()];
     for (bi, b) in graph.boundaries.iter().enumerate() {
         let (Some(p), Some(c)) = (at(b.from), at(b.to)) else {
             // A boundary of another path.
@@ -79,14 +81,14 @@ fn check_with<R: Real>(
                 read: read.1,
             });
         }
-        if let Some(first) = output[p] {
+        if let Some(&first) = output[p].iter().find(|&&o| graph.boundaries[o].to == b.to) {
             return Err(GraphError::Fanned {
                 kind: b.from,
                 first: graph.boundaries[first].key,
                 second: b.key,
             });
         }
-        output[p] = Some(bi);
+        output[p].push(bi);
         input[c].push(bi);
     }
     for (i, &kind) in kinds.iter().enumerate() {
@@ -94,7 +96,7 @@ fn check_with<R: Real>(
         if unit.input().is_some() && input[i].is_empty() {
             return Err(GraphError::Unfed { kind });
         }
-        if unit.output().is_some() && output[i].is_none() {
+        if unit.output().is_some() && output[i].is_empty() {
             return Err(GraphError::Undrained { kind });
         }
     }
@@ -151,18 +153,22 @@ impl Plan {
         let mut crossbars: Vec<Option<(usize, Box<dyn Any + Send + Sync>)>> =
             graph.boundaries.iter().map(|_| None).collect();
         for (p, out) in ports.output.iter().enumerate() {
-            let Some(bi) = *out else { continue };
-            let b = &graph.boundaries[bi];
-            let link = arch
-                .links
-                .by_key(b.key)
-                .ok_or(GraphError::NoLink { boundary: b.key })?;
-            let spec = LinkSpec {
-                fifo_depth: link.fifo_depth,
-                latency_cycles: link.latency_cycles,
-            };
-            let xb = bodies[ports.body[p]].crossbar(&units, b.to, &thread, spec);
-            crossbars[bi] = Some((p, xb));
+            // Each boundary's links take the producer's next ports.
+            let mut port_base = 0;
+            for &bi in out {
+                let b = &graph.boundaries[bi];
+                let link = arch
+                    .links
+                    .by_key(b.key)
+                    .ok_or(GraphError::NoLink { boundary: b.key })?;
+                let spec = LinkSpec {
+                    fifo_depth: link.fifo_depth,
+                    latency_cycles: link.latency_cycles,
+                };
+                let xb = bodies[ports.body[p]].crossbar(&units, b.to, &thread, spec, port_base);
+                port_base += units.iter().filter(|u| u.kind == b.to).count();
+                crossbars[bi] = Some((p, xb));
+            }
         }
         Ok(Plan {
             units,
@@ -199,26 +205,25 @@ impl Plan {
                 .iter()
                 .position(|&k| k == self.units[g].kind)
                 .expect("every unit is of a kind of the plan");
-            let (input, output) = (&self.ports.input[k], self.ports.output[k]);
-            let mut rx: Vec<(usize, Box<dyn Any>)> = input
-                .iter()
-                .filter_map(|&b| wired[b].take().map(|w| (b, w)))
-                .collect();
-            let mut tx = output.and_then(|b| wired[b].take());
+            let take = |wired: &mut Vec<Option<Box<dyn Any>>>, boundaries: &[usize]| {
+                boundaries
+                    .iter()
+                    .filter_map(|&b| wired[b].take().map(|w| (b, w)))
+                    .collect::<Vec<_>>()
+            };
+            let mut rx = take(&mut wired, &self.ports.input[k]);
+            let mut tx = take(&mut wired, &self.ports.output[k]);
             futures.push(bodies[self.ports.body[k]].spawn(
                 host,
                 g,
                 g - self.first[k],
                 rx.iter_mut().map(|(_, w)| w.as_mut()).collect(),
-                tx.as_deref_mut(),
+                tx.iter_mut().map(|(_, w)| w.as_mut()).collect(),
                 run,
                 trace,
             ));
-            for (b, w) in rx {
+            for (b, w) in rx.into_iter().chain(tx) {
                 wired[b] = Some(w);
-            }
-            if let Some(b) = output {
-                wired[b] = tx;
             }
         }
         futures
@@ -261,15 +266,15 @@ mod tests {
                 ports.input[0].is_empty(),
                 "{path:?}: the first unit is a source"
             );
-            assert_eq!(
-                ports.output[n - 1],
-                None,
+            assert!(
+                ports.output[n - 1].is_empty(),
                 "{path:?}: the last unit is a sink"
             );
             for i in 0..n - 1 {
-                let b = &BOUNDARIES[ports.output[i].unwrap()];
+                assert_eq!(ports.output[i].len(), 1);
+                let b = &BOUNDARIES[ports.output[i][0]];
                 assert_eq!((b.from, b.to), (ports.kinds[i], ports.kinds[i + 1]));
-                assert_eq!(ports.input[i + 1], [ports.output[i].unwrap()]);
+                assert_eq!(ports.input[i + 1], ports.output[i]);
             }
         }
     }
@@ -350,7 +355,7 @@ mod tests {
         let ports = check(&both, &BOUNDARIES).unwrap();
         let keys: Vec<&str> = ports.input[8].iter().map(|&b| BOUNDARIES[b].key).collect();
         assert_eq!(keys, ["rasterizer_to_rop", "triangle_rasterizer_to_rop"]);
-        // A unit writes to one boundary: a second one out of Setup is refused.
+        // Two boundaries between the same two kinds would make two crossbars of one pair.
         let mut twice = BOUNDARIES.to_vec();
         twice.insert(1, boundary("setup_to_minmax_again", Setup, MinMax));
         assert_eq!(

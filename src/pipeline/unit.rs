@@ -183,19 +183,22 @@ pub trait Elaborate<R: Real> {
     fn output(&self) -> Option<(TypeId, &'static str)>;
     /// [`Unit::OUT_WORDS`].
     fn out_words(&self) -> u32;
-    /// The crossbar of its output links to every instance of `to` (a `Crossbar<Out>`).
+    /// The crossbar of its output links to every instance of `to` (a `Crossbar<Out>`),
+    /// its links each producer's output ports from `port_base` on.
     fn crossbar(
         &self,
         units: &[UnitInstance],
         to: UnitKind,
         thread: &[usize],
         spec: LinkSpec,
+        port_base: usize,
     ) -> Box<dyn Any + Send + Sync>;
     /// One host thread's ends of `xb`, one of this unit's crossbars (a `Wired<Out>`).
     fn wire(&self, host: &mut HostWiring, xb: &(dyn Any + Send + Sync)) -> Box<dyn Any>;
     /// The body of unit `g`, instance `index` of its kind, with its inputs taken from
     /// `inputs` (a `Wired<In>` per feeding boundary, in the graph's order: its ports, one
-    /// boundary's after another's) and its outputs from `outputs` (a `Wired<Out>`).
+    /// boundary's after another's) and its outputs from `outputs` (a `Wired<Out>` per
+    /// boundary it feeds, likewise).
     #[allow(clippy::too_many_arguments)]
     fn spawn<'a>(
         &self,
@@ -203,7 +206,7 @@ pub trait Elaborate<R: Real> {
         g: usize,
         index: usize,
         inputs: Vec<&mut dyn Any>,
-        outputs: Option<&mut dyn Any>,
+        outputs: Vec<&mut dyn Any>,
         run: &'a Run<'a, R>,
         trace: Option<usize>,
     ) -> UnitFuture<'a, Finished>;
@@ -253,8 +256,16 @@ impl<R: Real, U: Unit<R>> Elaborate<R> for Spec<U> {
         to: UnitKind,
         thread: &[usize],
         spec: LinkSpec,
+        port_base: usize,
     ) -> Box<dyn Any + Send + Sync> {
-        Box::new(Crossbar::<U::Out>::new(units, U::KIND, to, thread, spec))
+        Box::new(Crossbar::<U::Out>::new(
+            units,
+            U::KIND,
+            to,
+            thread,
+            spec,
+            port_base,
+        ))
     }
 
     fn wire(&self, host: &mut HostWiring, xb: &(dyn Any + Send + Sync)) -> Box<dyn Any> {
@@ -270,7 +281,7 @@ impl<R: Real, U: Unit<R>> Elaborate<R> for Spec<U> {
         g: usize,
         index: usize,
         inputs: Vec<&mut dyn Any>,
-        outputs: Option<&mut dyn Any>,
+        outputs: Vec<&mut dyn Any>,
         run: &'a Run<'a, R>,
         trace: Option<usize>,
     ) -> UnitFuture<'a, Finished> {
@@ -284,11 +295,16 @@ impl<R: Real, U: Unit<R>> Elaborate<R> for Spec<U> {
                     .take_rx(index)
             })
             .collect();
-        let tx = outputs.map_or_else(Vec::new, |w| {
-            w.downcast_mut::<Wired<U::Out>>()
+        let mut groups = Vec::with_capacity(outputs.len());
+        let mut tx = Vec::new();
+        for w in outputs {
+            let links = w
+                .downcast_mut::<Wired<U::Out>>()
                 .expect("the graph check matched the output type")
-                .take_tx(index)
-        });
-        U::spawn(host.ctx(g, rx, tx, trace), run, index)
+                .take_tx(index);
+            groups.push(tx.len()..tx.len() + links.len());
+            tx.extend(links);
+        }
+        U::spawn(host.ctx(g, rx, tx, groups, trace), run, index)
     }
 }

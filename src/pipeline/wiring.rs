@@ -19,6 +19,9 @@ pub struct Crossbar<T> {
     producers: Range<usize>,
     consumers: Range<usize>,
     spec: LinkSpec,
+    /// The producers' first output port on this crossbar (the ports of the boundaries
+    /// they feed before it come first).
+    port_base: usize,
     /// By producer position * consumers + consumer position.
     remote: Vec<Option<RemoteParts<T>>>,
 }
@@ -26,13 +29,14 @@ pub struct Crossbar<T> {
 impl<T> Crossbar<T> {
     /// The crossbar from every instance of `from` to every instance of `to` among `units`
     /// (global indices, each kind's instances contiguous), with unit `g` on host thread
-    /// `thread[g]`.
+    /// `thread[g]`, its links each producer's output ports from `port_base` on.
     pub fn new(
         units: &[UnitInstance],
         from: UnitKind,
         to: UnitKind,
         thread: &[usize],
         spec: LinkSpec,
+        port_base: usize,
     ) -> Self {
         let of = |kind: UnitKind| {
             let first = units.iter().position(|u| u.kind == kind).unwrap_or(0);
@@ -49,6 +53,7 @@ impl<T> Crossbar<T> {
             producers,
             consumers,
             spec,
+            port_base,
             remote,
         }
     }
@@ -137,7 +142,7 @@ impl<'p> HostWiring<'p> {
                 };
                 let ends = Ends {
                     producer: self.local[p].unwrap_or(u32::MAX),
-                    port: ci as u32,
+                    port: (xb.port_base + ci) as u32,
                     consumer: self.local[c].unwrap_or(u32::MAX),
                     from: p as u32,
                 };
@@ -177,15 +182,17 @@ impl<'p> HostWiring<'p> {
         Wired { tx, rx }
     }
 
-    /// The context of unit `g` (of this thread) with these links.
+    /// The context of unit `g` (of this thread) with these links, its output ports in
+    /// `groups` (one per boundary it feeds).
     pub fn ctx<I, O>(
         &self,
         g: usize,
         inputs: Vec<Rx<I>>,
         outputs: Vec<Tx<O>>,
+        groups: Vec<Range<usize>>,
         trace: Option<usize>,
     ) -> Ctx<I, O> {
         let u = self.local[g].expect("a unit of this thread");
-        Ctx::new(self.core.clone(), u, inputs, outputs, trace)
+        Ctx::new(self.core.clone(), u, inputs, outputs, trace).with_groups(groups)
     }
 }

@@ -75,6 +75,9 @@ pub struct Ctx<I, O> {
     unit: u32,
     inputs: Vec<Rx<I>>,
     outputs: Vec<Tx<O>>,
+    /// The output ports by the boundary they lead to, in the graph's order (one group, all
+    /// ports, unless the unit feeds several kinds).
+    groups: Vec<std::ops::Range<usize>>,
     /// Cycles from an op's last cycle to its output being ready.
     latency: u64,
     now: Cycle,
@@ -103,6 +106,7 @@ impl<I, O> Ctx<I, O> {
             core,
             unit,
             inputs,
+            groups: std::iter::once(0..outputs.len()).collect(),
             outputs,
             latency,
             now: Cycle::ZERO,
@@ -113,9 +117,27 @@ impl<I, O> Ctx<I, O> {
         }
     }
 
+    /// These output ports grouped by the boundary they lead to, in the graph's order.
+    pub fn with_groups(mut self, groups: Vec<std::ops::Range<usize>>) -> Self {
+        debug_assert_eq!(
+            groups.iter().map(|g| g.len()).sum::<usize>(),
+            self.outputs.len()
+        );
+        if !groups.is_empty() {
+            self.groups = groups;
+        }
+        self
+    }
+
     /// Number of output ports.
     pub fn outputs(&self) -> usize {
         self.outputs.len()
+    }
+
+    /// The output ports to the `i`-th kind this unit feeds (in the graph's order of its
+    /// boundaries): a unit feeding several kinds addresses each through its group.
+    pub fn group(&self, i: usize) -> std::ops::Range<usize> {
+        self.groups[i].clone()
     }
 
     /// The port after `port`, round-robin (without a division per item).
