@@ -17,6 +17,9 @@ use serde::{Deserialize, Serialize};
 /// The kinds of unit, in dataflow order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize)]
 pub enum UnitKind {
+    /// Reads the scene's primitives from memory through the memory port and deals them to
+    /// the setup engines in batches.
+    GeometryFetch,
     /// Projects lembos and sets up their screen quadratics (Martinelli 2006 section 4).
     Setup,
     /// Finds a lembo's y range (section 5).
@@ -43,7 +46,8 @@ pub enum UnitKind {
 }
 
 /// Every kind, in dataflow order.
-pub const KINDS: [UnitKind; 11] = [
+pub const KINDS: [UnitKind; 12] = [
+    UnitKind::GeometryFetch,
     UnitKind::Setup,
     UnitKind::MinMax,
     UnitKind::IntervalManager,
@@ -73,6 +77,7 @@ impl UnitKind {
     const fn info(self) -> KindInfo {
         use UnitKind::*;
         let (name, replicated, inside) = match self {
+            GeometryFetch => ("GeometryFetch", false, None),
             Setup => ("Setup", false, None),
             MinMax => ("MinMax", false, None),
             IntervalManager => ("IntervalManager", false, None),
@@ -129,6 +134,7 @@ impl Path {
         use UnitKind::*;
         match self {
             Path::Lembo => &[
+                GeometryFetch,
                 Setup,
                 MinMax,
                 IntervalManager,
@@ -138,7 +144,13 @@ impl Path {
                 Rop,
                 FrameBuffer,
             ],
-            Path::Triangle => &[TriangleSetup, TriangleRasterizer, Rop, FrameBuffer],
+            Path::Triangle => &[
+                GeometryFetch,
+                TriangleSetup,
+                TriangleRasterizer,
+                Rop,
+                FrameBuffer,
+            ],
         }
     }
 }
@@ -187,12 +199,12 @@ pub struct Boundary {
     pub default: LinkConfig,
 }
 
-/// Every boundary of both paths, in dataflow order (the lembo path's, then the triangle
-/// path's): the one place a link is named and given its defaults. Dispatch: every producer
+/// Every boundary of both paths (the lembo path's in dataflow order, then the triangle
+/// path's, then the geometry fetch's): the one place a link is named and given its defaults. Dispatch: every producer
 /// sends round-robin over its links, except into the ROPs, which are chosen by the screen
 /// tile of the item (`units::rop::RopTiles`); every consumer merges its inputs by
 /// (arrival, port) (DESIGN.md §3).
-pub const BOUNDARIES: [Boundary; 9] = {
+pub const BOUNDARIES: [Boundary; 11] = {
     use UnitKind::*;
     const fn b(
         key: &'static str,
@@ -253,6 +265,19 @@ pub const BOUNDARIES: [Boundary; 9] = {
         ),
         // Depth 64, latency 2: as rasterizer_to_rop; an item is a quad-row piece.
         b("triangle_rasterizer_to_rop", TriangleRasterizer, Rop, 64, 2),
+        // Depth 4, latency 40: a batch read from DRAM reaches its setup engine 80 ns after
+        // the read was issued at 500 MHz (a DRAM access latency, row miss, of DDR4); four
+        // batches in flight per engine keep it fed across that latency down to batches of
+        // about 10 primitives at a cycle each.
+        b("fetch_to_setup", GeometryFetch, Setup, 4, 40),
+        // As fetch_to_setup, a batch of triangles to its triangle setup engine.
+        b(
+            "fetch_to_triangle_setup",
+            GeometryFetch,
+            TriangleSetup,
+            4,
+            40,
+        ),
     ]
 };
 

@@ -494,6 +494,9 @@ impl ArchConfig {
     /// sits in each ROP, so it has the ROPs' count and latency.
     pub fn unit(&self, kind: UnitKind) -> (u32, u64) {
         match kind {
+            // The geometry fetch's time is the memory port's rate and the DRAM latency of
+            // its links (`fetch_to_setup`).
+            UnitKind::GeometryFetch => (1, 1),
             UnitKind::Setup => (self.setup.count, self.setup.latency_cycles),
             UnitKind::MinMax => (self.minmax.count, self.minmax.latency_cycles),
             UnitKind::IntervalManager => (
@@ -792,7 +795,7 @@ mod tests {
         assert_eq!(load("baseline.json"), ArchConfig::default());
         assert_eq!(ArchConfig::baseline(), ArchConfig::default());
         ArchConfig::default().validate("default").unwrap();
-        assert_eq!(ArchConfig::default().units(), 3 + 2 + 2 + 4 + 4 + 1);
+        assert_eq!(ArchConfig::default().units(), 1 + 3 + 2 + 2 + 4 + 4 + 1);
     }
 
     #[test]
@@ -803,7 +806,7 @@ mod tests {
         assert_eq!(config.subsegmenter.count, 1);
         assert_eq!(config.rasterizer.count, 1);
         assert_eq!(config.rop.count, 1);
-        assert_eq!(config.units(), 8);
+        assert_eq!(config.units(), 9);
         for ((name, link), (_, default)) in config.links.all().into_iter().zip(defaults.links.all())
         {
             assert_eq!(link.fifo_depth, 1, "{name}");
@@ -839,10 +842,13 @@ mod tests {
         assert_eq!(config.subsegmenter.count, 4);
         assert_eq!(config.rasterizer.count, 8);
         assert_eq!(config.rop.count, 4);
-        assert_eq!(config.units(), 3 + 4 + 4 + 8 + 4 + 1);
+        assert_eq!(config.units(), 1 + 3 + 4 + 4 + 8 + 4 + 1);
         for ((name, link), (_, default)) in config.links.all().into_iter().zip(defaults.links.all())
         {
-            let depth = if name == "rop_to_framebuffer" { 32 } else { 64 };
+            let depth = match name {
+                "rop_to_framebuffer" => 32,
+                _ => 64,
+            };
             assert_eq!(link.fifo_depth, depth, "{name}");
             assert_eq!(link.latency_cycles, default.latency_cycles, "{name}");
         }

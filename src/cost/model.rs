@@ -59,6 +59,9 @@ pub struct CostReport {
     /// DRAM beside `framebuffer_bytes`: a read and a write per fragment blended and the
     /// resolve's read per pixel; 0 without discoids \[bytes\].
     pub accumulation_bytes: u64,
+    /// The primitives the geometry fetch read through the port (every pass's), priced as
+    /// DRAM beside `framebuffer_bytes` \[bytes\].
+    pub geometry_bytes: u64,
     /// The blend units, for a discoid frame; null otherwise.
     pub blend: Option<BlendCost>,
     /// Each instance, in dataflow order.
@@ -190,6 +193,8 @@ pub struct Work<'a> {
     pub framebuffer_bytes: u64,
     /// The discoid accumulation target's bytes through the frame-buffer port.
     pub accumulation_bytes: u64,
+    /// The geometry fetch's bytes through the port.
+    pub geometry_bytes: u64,
     /// The blend units' work, for a discoid frame.
     pub blend: Option<BlendWork<'a>>,
 }
@@ -318,6 +323,9 @@ pub fn cost(tech: &Tech, arch: &ArchConfig, datapath: Datapath, work: &Work) -> 
             let bytes = work.framebuffer_bytes + work.accumulation_bytes;
             energy_pj += bytes as f64 * tech.dram.pj_per_byte;
         }
+        if u.kind == UnitKind::GeometryFetch {
+            energy_pj += work.geometry_bytes as f64 * tech.dram.pj_per_byte;
+        }
         out.push(UnitCost {
             name: u.name.clone(),
             area_mm2: (area_um2 + fifo.area_um2) * 1e-6,
@@ -367,6 +375,7 @@ pub fn cost(tech: &Tech, arch: &ArchConfig, datapath: Datapath, work: &Work) -> 
         power_mw: (frame_us > 0.0).then(|| energy_pj / frame_us * 1e-3),
         framebuffer_bytes: work.framebuffer_bytes,
         accumulation_bytes: work.accumulation_bytes,
+        geometry_bytes: work.geometry_bytes,
         blend,
         units: out,
         ops: kinds
@@ -435,6 +444,7 @@ mod tests {
             cycles: &cycles,
             framebuffer_bytes: 1000,
             accumulation_bytes: 0,
+            geometry_bytes: 0,
             blend: None,
         };
         let c = cost(&tech, &arch, Datapath::F32, &work);

@@ -13,6 +13,13 @@
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
+/// Bytes of a planar discoid as it is stored in memory and fetched: centre, normal and
+/// radius in f32.
+pub const PLANAR_DISCOID_BYTES: u64 = 7 * 4;
+/// Bytes of a curved discoid as it is stored in memory and fetched: a lembo and six
+/// texture-coordinate pairs in f32.
+pub const CURVED_DISCOID_BYTES: u64 = crate::lembo::LEMBO_BYTES + 6 * 2 * 4;
+
 pub mod blend;
 pub mod render;
 pub mod shapes;

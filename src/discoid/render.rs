@@ -124,6 +124,10 @@ impl TriangleSource for PlanarDiscoids {
         2
     }
 
+    fn bytes(&self) -> u64 {
+        super::PLANAR_DISCOID_BYTES * self.items.len() as u64
+    }
+
     fn chunk(&self, c: usize, out: &mut Vec<Triangle>) {
         let (d, color, _) = &self.items[c];
         let q = d.corners();

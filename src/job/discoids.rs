@@ -5,7 +5,7 @@
 
 use super::reference::reference_scene;
 use super::reference::Measured;
-use super::route::{sim_options, Model, PathRun, LEMBO_BYTES};
+use super::route::{sim_options, Model, PathRun};
 use super::sections::{host, scene_info, settings};
 use super::validate::RenderJob;
 use crate::camera::View;
@@ -21,10 +21,7 @@ use crate::rop::FrameBuffer;
 use crate::scene::Scene;
 use std::time::Instant;
 
-/// Bytes of a planar discoid: centre, normal and radius in f32.
-pub const PLANAR_DISCOID_BYTES: u64 = 7 * 4;
-/// Bytes of a curved discoid: a lembo and six texture-coordinate pairs in f32.
-pub const CURVED_DISCOID_BYTES: u64 = LEMBO_BYTES + 6 * 2 * 4;
+pub use crate::discoid::{CURVED_DISCOID_BYTES, PLANAR_DISCOID_BYTES};
 
 /// A discoid scene's three passes (Piranda et al. 2006): timed on `arch`, or functional. With both,
 /// the timed image is checked against the functional one.
@@ -187,6 +184,7 @@ fn discoid_cost(
         cycles: &timed.cycles,
         framebuffer_bytes: timed.port_bytes.framebuffer,
         accumulation_bytes: timed.port_bytes.accumulation,
+        geometry_bytes: timed.port_bytes.geometry,
         blend: Some(cost::model::BlendWork {
             mode: job.blend,
             units: &timed.blend_units,

@@ -176,6 +176,8 @@ fn cost_of(
         cycles,
         framebuffer_bytes,
         accumulation_bytes: 0,
+        // The geometry fetch read the path's primitives once.
+        geometry_bytes: primitives(scene, route, counts).bytes,
         blend: None,
     };
     Ok(cost::model::cost(&job.tech()?, arch, job.datapath, &work))

@@ -167,8 +167,7 @@ fn check_applies(job: &RenderJob, scene: &Scene) -> Result<()> {
     Ok(())
 }
 
-/// Bytes of one lembo as the Setup unit reads it: six points and six normals in f32.
-pub const LEMBO_BYTES: u64 = 6 * 2 * 3 * 4;
+pub use crate::lembo::LEMBO_BYTES;
 
 /// One path's run on a loaded scene: what `render` writes, and what `compare` puts side by
 /// side.

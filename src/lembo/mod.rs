@@ -25,6 +25,10 @@ pub mod tessellate;
 use crate::datapath::Real;
 use glam::DVec3;
 
+/// Bytes of one lembo as it is stored in memory and fetched for Setup: six points and six
+/// normals in f32.
+pub const LEMBO_BYTES: u64 = 6 * 2 * 3 * 4;
+
 /// The six reference points of the domain, in the paper's order A, B, C, D, E, F.
 pub const REFERENCE_UV: [(f64, f64); 6] = [
     (0.0, 0.0),

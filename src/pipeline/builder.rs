@@ -254,8 +254,9 @@ mod tests {
         }
     }
 
-    /// Both paths' graphs check in both datapaths: sources and sinks where Figure 5 has
-    /// them, every other unit fed and drained by the boundary from and to its neighbour.
+    /// Both paths' graphs check in both datapaths: the geometry fetch the source, the
+    /// frame-buffer port the sink, every other unit fed and drained by the boundary from
+    /// and to its neighbour.
     #[test]
     fn builder_accepts_both_paths() {
         for path in [Path::Lembo, Path::Triangle] {
@@ -270,10 +271,18 @@ mod tests {
                 ports.output[n - 1].is_empty(),
                 "{path:?}: the last unit is a sink"
             );
+            let ends = |bs: &[usize]| -> Vec<(UnitKind, UnitKind)> {
+                bs.iter()
+                    .map(|&b| (BOUNDARIES[b].from, BOUNDARIES[b].to))
+                    .collect()
+            };
+            assert_eq!(ports.kinds[0], GeometryFetch);
             for i in 0..n - 1 {
                 assert_eq!(ports.output[i].len(), 1);
-                let b = &BOUNDARIES[ports.output[i][0]];
-                assert_eq!((b.from, b.to), (ports.kinds[i], ports.kinds[i + 1]));
+                assert_eq!(
+                    ends(&ports.output[i]),
+                    [(ports.kinds[i], ports.kinds[i + 1])]
+                );
                 assert_eq!(ports.input[i + 1], ports.output[i]);
             }
         }
@@ -341,6 +350,7 @@ mod tests {
         // Both rasterizers into the ROPs: a ROP reads from both boundaries, its ports the
         // lembo rasterizers' then the triangle rasterizers'.
         let both = [
+            GeometryFetch,
             Setup,
             MinMax,
             IntervalManager,
@@ -353,7 +363,7 @@ mod tests {
             FrameBuffer,
         ];
         let ports = check(&both, &BOUNDARIES).unwrap();
-        let keys: Vec<&str> = ports.input[8].iter().map(|&b| BOUNDARIES[b].key).collect();
+        let keys: Vec<&str> = ports.input[9].iter().map(|&b| BOUNDARIES[b].key).collect();
         assert_eq!(keys, ["rasterizer_to_rop", "triangle_rasterizer_to_rop"]);
         // Two boundaries between the same two kinds would make two crossbars of one pair.
         let mut twice = BOUNDARIES.to_vec();
@@ -419,7 +429,7 @@ mod tests {
     #[test]
     fn out_words_are_the_hardware_items() {
         let words: Vec<u32> = BOUNDARIES.iter().map(|b| out_words(b.from)).collect();
-        assert_eq!(words, [40, 42, 8, 6, 8, 6, 3, 42, 10]);
+        assert_eq!(words, [40, 42, 8, 6, 8, 6, 3, 42, 10, 3, 3]);
         assert_eq!(out_words(FrameBuffer), 0);
         assert_eq!(out_words(BlendUnit), 0);
     }
@@ -444,6 +454,7 @@ mod tests {
         assert_eq!(
             names,
             [
+                "GeometryFetch",
                 "Setup",
                 "MinMax",
                 "IntervalManager",
@@ -462,13 +473,14 @@ mod tests {
             ]
         );
         assert_eq!(plan.threads, 2);
-        assert_eq!(plan.latency[0], arch.setup.latency_cycles);
+        assert_eq!(plan.latency[1], arch.setup.latency_cycles);
         let linked: Vec<&str> = BOUNDARIES
             .iter()
             .zip(&plan.crossbars)
             .filter(|(_, xb)| xb.is_some())
             .map(|(b, _)| b.key)
             .collect();
-        assert_eq!(linked, &crate::graph::LINK_KEYS[..7]);
+        let keys = &crate::graph::LINK_KEYS;
+        assert_eq!(linked, [&keys[..7], &["fetch_to_setup"]].concat());
     }
 }

@@ -73,6 +73,9 @@ pub struct PortBytes {
     /// The accumulation target: a read and a write of the pixel per kept fragment
     /// (`BlendMode::bytes_per_fragment`) and the resolve's read per pixel.
     pub accumulation: u64,
+    /// The discoids the geometry fetch read, once a pass (DRAM bytes, read at the port's
+    /// rate by the fetch itself, not through the frame-buffer port's time).
+    pub geometry: u64,
 }
 
 /// The frame cycles of each timed discoid pass.
@@ -180,6 +183,10 @@ fn passes<R: Real>(
             + resolve_bytes.framebuffer,
         accumulation: target.report.fragments_accumulated * mode.bytes_per_fragment()
             + resolve_bytes.accumulation,
+        geometry: 2 * match source {
+            Source::Triangles(t) => t.bytes(),
+            Source::Lembos => scene.lembo_count() as u64 * crate::discoid::CURVED_DISCOID_BYTES,
+        },
     };
     let resolve_total = rop_busy.iter().copied().max().unwrap_or(0).max(port_busy);
     let (c1, c2) = (first.cycles, second.cycles);
@@ -297,6 +304,7 @@ fn resolve_bytes(vp: Viewport, mode: BlendMode) -> PortBytes {
     PortBytes {
         framebuffer: pixels * RESOLVE_COLOR_BYTES,
         accumulation: pixels * mode.bytes_per_pixel(),
+        geometry: 0,
     }
 }
 

@@ -126,9 +126,27 @@ pub enum RopItem<R> {
     Triangle(TrianglePiece<R>),
 }
 
-/// Frame-buffer traffic of one span \[bytes\] (a ROP to the frame-buffer port).
+/// One transaction through the memory port: a ROP's frame-buffer traffic for one span, or
+/// a geometry fetch of a batch of primitives (which goes to the port and, as the data read,
+/// to the setup engine it is dealt to).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct WriteBurst {
-    /// Bytes moved: depth reads, colour and depth writes \[bytes\].
+pub struct MemAccess {
+    /// Bytes moved: a ROP's depth reads and colour and depth writes, or the primitives'
+    /// bytes read \[bytes\].
     pub bytes: u64,
+    /// The first primitive read (its index in submission order); 0 for a ROP's traffic.
+    pub first: u32,
+    /// Primitives read, from `first` on; 0 for a ROP's traffic.
+    pub count: u32,
+}
+
+impl MemAccess {
+    /// A ROP's frame-buffer traffic of `bytes`.
+    pub fn frame(bytes: u64) -> Self {
+        MemAccess {
+            bytes,
+            first: 0,
+            count: 0,
+        }
+    }
 }

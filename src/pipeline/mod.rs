@@ -27,7 +27,6 @@
 //! and each path only its own.
 
 pub mod builder;
-pub mod deal;
 pub mod discoid;
 pub mod items;
 pub mod runtime;
@@ -56,7 +55,7 @@ use runtime::executor::{Board, HostThread, Recoveries, Stop};
 use runtime::trace;
 use serde::Serialize;
 use tiles::{RopTiles, SharedFrame};
-use unit::{Finished, LemboTable, NoTriangles, Run};
+use unit::{FetchPlan, Finished, LemboTable, NoTriangles, Run};
 use wiring::HostWiring;
 
 /// The cycle accounting of one unit over the frame \[cycles\].
@@ -203,6 +202,22 @@ fn run_in<R: Real>(
             arch,
             k: R::of(tol.k),
             perspective_tol: tol.perspective,
+            fetch: match (path, source) {
+                (Path::Triangle, Source::Triangles(t)) => FetchPlan {
+                    primitives: t.chunks() as u64 * t.per_chunk(),
+                    bytes: t.bytes(),
+                    batch: arch.triangle_setup.batch,
+                },
+                _ => FetchPlan {
+                    primitives: n_lembos as u64,
+                    bytes: n_lembos as u64
+                        * match discoid {
+                            Some(_) => crate::discoid::CURVED_DISCOID_BYTES,
+                            None => crate::lembo::LEMBO_BYTES,
+                        },
+                    batch: arch.setup.batch,
+                },
+            },
             lembos: LemboTable::new(match path {
                 Path::Lembo => n_lembos,
                 Path::Triangle => 0,
@@ -457,6 +472,7 @@ mod tests {
         let tol = Tolerance::from(0.5);
         let arch = ArchConfig::default();
         let both = [
+            GeometryFetch,
             Setup,
             MinMax,
             IntervalManager,

@@ -109,6 +109,31 @@ impl TriangleSource for NoTriangles {
     fn chunk(&self, _: usize, out: &mut Vec<crate::lembo::tessellate::Triangle>) {
         out.clear();
     }
+
+    fn bytes(&self) -> u64 {
+        0
+    }
+}
+
+/// What the geometry fetch reads: `primitives` in submission order, `bytes` in all, in
+/// batches of `batch` (the path's setup engines' `batch`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FetchPlan {
+    /// Primitives \[lembos or triangles\].
+    pub primitives: u64,
+    /// Their bytes in memory \[bytes\].
+    pub bytes: u64,
+    /// Primitives per batch dealt to one setup engine.
+    pub batch: u32,
+}
+
+impl FetchPlan {
+    /// The bytes of primitives `first..end`: their share of the whole, so that batches add
+    /// up to the bytes stored (an indexed mesh's shared vertices are read once).
+    pub fn bytes_of(&self, first: u64, end: u64) -> u64 {
+        let at = |p: u64| (self.bytes as u128 * p as u128 / self.primitives.max(1) as u128) as u64;
+        at(end) - at(first)
+    }
 }
 
 /// What the ROPs need for a discoid pass.
@@ -140,6 +165,8 @@ pub struct Run<'a, R> {
     pub k: R,
     /// Setup's perspective tolerance \[pixels\]; None: the paper's Setup.
     pub perspective_tol: Option<f64>,
+    /// What the geometry fetch reads.
+    pub fetch: FetchPlan,
     /// The lembo table Setup fills.
     pub lembos: LemboTable<R>,
     /// The triangles this run draws (none on the lembo path).

@@ -262,7 +262,7 @@ fn cost_section(c: &CostReport) -> (&'static str, String) {
         })
         .collect();
     let head = format!(
-        "{:.3} mm², {:.1} µJ this frame{} (technology {}; {} frame-buffer bytes{} charged as {} DRAM at {} pJ/B; SRAM leakage {:.3} µJ, logic leakage {:.3} µJ)",
+        "{:.3} mm², {:.1} µJ this frame{} (technology {}; {} frame-buffer bytes{}, {} geometry bytes fetched, charged as {} DRAM at {} pJ/B; SRAM leakage {:.3} µJ, logic leakage {:.3} µJ)",
         c.area_mm2,
         c.energy_pj * 1e-6,
         c.power_mw
@@ -275,6 +275,7 @@ fn cost_section(c: &CostReport) -> (&'static str, String) {
         } else {
             String::new()
         },
+        c.geometry_bytes,
         c.tech.dram_kind.name(),
         c.tech.dram_pj_per_byte,
         c.sram_leakage_pj * 1e-6,

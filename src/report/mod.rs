@@ -15,7 +15,7 @@ pub mod html;
 pub mod text;
 
 /// Version of the `report.json` layout; bumped when a field changes meaning or moves.
-pub const SCHEMA_VERSION: u32 = 7;
+pub const SCHEMA_VERSION: u32 = 8;
 
 /// Everything a run reports.
 #[derive(Clone, Debug, Serialize)]

@@ -177,7 +177,7 @@ impl Report {
         let _ = writeln!(
             t,
             "
-cost      {:.3} mm2, {:.1} uJ this frame{} (technology {}; {} frame-buffer bytes{} as {} DRAM at {} pJ/B; SRAM leakage {:.3} uJ, logic leakage {:.3} uJ)",
+cost      {:.3} mm2, {:.1} uJ this frame{} (technology {}; {} frame-buffer bytes{}, {} geometry bytes fetched, as {} DRAM at {} pJ/B; SRAM leakage {:.3} uJ, logic leakage {:.3} uJ)",
             c.area_mm2,
             c.energy_pj * 1e-6,
             c.power_mw
@@ -190,6 +190,7 @@ cost      {:.3} mm2, {:.1} uJ this frame{} (technology {}; {} frame-buffer bytes
             } else {
                 String::new()
             },
+            c.geometry_bytes,
             c.tech.dram_kind.name(),
             c.tech.dram_pj_per_byte,
             c.sram_leakage_pj * 1e-6,

@@ -255,11 +255,11 @@ mod tests {
         ];
         let text = String::from_utf8(csv_bytes(&records).unwrap()).unwrap();
         let lines: Vec<&str> = text.lines().collect();
-        assert_eq!(lines[0], "index,scene,k,tess,cycles_total,fps,bottleneck,area_mm2,energy_pj,util.Rop,acc.psnr_db,primitives,primitive_bytes,fragments,lembo_pieces,blend.error_mean,blend.error_max,wall_seconds");
-        assert_eq!(lines[1], "0,s,1.0,,10,5.0,Rop,1.5,20.0,0.5,,2,8,3,4,,,0.5");
+        assert_eq!(lines[0], "index,scene,k,tess,cycles_total,fps,bottleneck,area_mm2,energy_pj,util.Rop,acc.psnr_db,primitives,primitive_bytes,geometry_bytes,fragments,lembo_pieces,blend.error_mean,blend.error_max,wall_seconds");
+        assert_eq!(lines[1], "0,s,1.0,,10,5.0,Rop,1.5,20.0,0.5,,2,8,,3,4,,,0.5");
         assert_eq!(
             lines[2],
-            "1,\"s, \"\"quoted\"\"\",,2,,,,,,,40.0,2,8,3,,,,0.25"
+            "1,\"s, \"\"quoted\"\"\",,2,,,,,,,40.0,2,8,,3,,,,0.25"
         );
     }
 }

@@ -312,6 +312,7 @@ pub fn csv_bytes(records: &[Value]) -> Result<Vec<u8>> {
         [
             "primitives",
             "primitive_bytes",
+            "geometry_bytes",
             "fragments",
             "lembo_pieces",
             "blend.error_mean",
@@ -354,6 +355,7 @@ pub fn csv_bytes(records: &[Value]) -> Result<Vec<u8>> {
         row.extend(metrics.iter().map(|m| cell(report["accuracy"].get(m))));
         row.push(cell(report["primitives"].get("count")));
         row.push(cell(report["primitives"].get("bytes")));
+        row.push(cell(report["cost"].get("geometry_bytes")));
         row.push(cell(report["counts"].get("fragments")));
         row.push(cell(report["counts"].get("lembo_pieces")));
         row.push(cell(report["blend"].get("error_mean")));

@@ -278,7 +278,7 @@ fn timed_run_reports_units_and_writes_a_timeline() {
     assert_eq!(report["arch"]["name"], "wide");
     assert_eq!(
         report["units"].as_array().unwrap().len(),
-        3 + 4 + 4 + 8 + 4 + 1
+        1 + 3 + 4 + 4 + 8 + 4 + 1
     );
     let units = report["cycles"]["units"].as_array().unwrap();
     let total = report["cycles"]["total"].as_u64().unwrap();
@@ -361,10 +361,10 @@ fn threads_draw_the_same_functional_frame() {
 #[test]
 fn host_threads_change_nothing_simulated() {
     assert_refused(&["render", "--host-threads", "0"], "--host-threads");
-    // The baseline's lembo path has 16 units.
-    assert_refused(&["render", "--host-threads", "17"], "16 units");
-    // compare needs a unit per thread on both paths: the baseline's triangle path has 7.
-    assert_refused(&["compare", "--host-threads", "8"], "7 units");
+    // The baseline's lembo path has 17 units.
+    assert_refused(&["render", "--host-threads", "18"], "17 units");
+    // compare needs a unit per thread on both paths: the baseline's triangle path has 8.
+    assert_refused(&["compare", "--host-threads", "9"], "8 units");
     let dir = tempfile::tempdir().unwrap();
     let s = scene_file(dir.path(), "s.json", GOOD);
     let mut reports = Vec::new();
@@ -728,6 +728,7 @@ fn triangle_render_reports_quads_and_triangle_units() {
     assert_eq!(
         names,
         [
+            "GeometryFetch",
             "TriangleSetup",
             "TriangleRasterizer[0]",
             "Rop[0]",

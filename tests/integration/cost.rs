@@ -95,7 +95,8 @@ fn counting_changes_no_discoid_pixel() {
                                 | UnitKind::BlendUnit
                         ),
                     };
-                    let charged = on_path && kind != UnitKind::FrameBuffer;
+                    let charged =
+                        on_path && !matches!(kind, UnitKind::FrameBuffer | UnitKind::GeometryFetch);
                     assert_eq!(total > 0, charged, "{what} {kind:?}: {:?}", ops.of(kind));
                     assert_eq!(ops.get(kind, Op::Other), 0, "{what} {kind:?}");
                 }
@@ -148,6 +149,7 @@ fn discoid_port_bytes_are_the_ports_traffic() {
                 bytes.framebuffer + bytes.accumulation,
                 "{name} {mode:?}"
             );
+            assert!(bytes.geometry > 0);
             let pixels = 96 * 96;
             assert_eq!(
                 bytes.accumulation,
@@ -365,6 +367,7 @@ fn operations_are_charged_to_the_kinds_that_do_them() {
                 | UnitKind::TriangleRasterizer
                 | UnitKind::BlendUnit
                 | UnitKind::FrameBuffer
+                | UnitKind::GeometryFetch
         );
         assert_eq!(total > 0, expected, "{kind:?}: {:?}", ops.of(kind));
         assert_eq!(ops.get(kind, Op::Other), 0);

@@ -296,7 +296,7 @@ fn timed_near_clipping_draws_the_functional_image_and_charges_its_pieces() {
                 );
                 assert_eq!(tc.triangles_clipped, fc.triangles_clipped, "{what}");
                 assert_eq!(tc.fragments, fc.fragments, "{what}");
-                let setup = &timed.cycles.units[0];
+                let setup = &timed.cycles.units[1];
                 assert_eq!(setup.kind, UnitKind::TriangleSetup);
                 assert_eq!(
                     setup.busy.0,

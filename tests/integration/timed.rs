@@ -369,7 +369,7 @@ fn replicated_setup_engines_deal_batches_and_draw_the_same_pixels() {
     one.triangle_rasterizer.count = 4;
     let single = run(&one);
     assert_eq!(single.cycles.bottleneck.as_deref(), Some("TriangleSetup"));
-    for (n, batch) in [(2, 32), (4, 32), (4, 1), (3, 100)] {
+    for (n, batch) in [(2, 32), (4, 32), (4, 16), (3, 100)] {
         let mut a = one.clone();
         a.triangle_setup.count = n;
         a.triangle_setup.batch = batch;

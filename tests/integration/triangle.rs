@@ -124,7 +124,7 @@ fn clipped_triangles_are_drawn_the_same_timed_and_functional_and_cost_their_piec
                     assert_eq!(t.counts.triangles_clipped, f.counts.triangles_clipped);
                     assert_eq!(t.counts.quads, f.counts.quads, "{what}");
                     assert_eq!(t.counts.fragments, f.counts.fragments, "{what}");
-                    let setup = &t.cycles.units[0];
+                    let setup = &t.cycles.units[1];
                     assert_eq!(setup.kind, UnitKind::TriangleSetup);
                     let per_triangle = a.triangle_setup.cycles_per_triangle;
                     assert_eq!(
@@ -147,6 +147,7 @@ fn triangle_path_instantiates_only_triangle_units_and_is_deterministic() {
     assert_eq!(
         kinds,
         [
+            UnitKind::GeometryFetch,
             UnitKind::TriangleSetup,
             UnitKind::TriangleRasterizer,
             UnitKind::Rop,

@@ -2,14 +2,15 @@
 //! writes share one port of `framebuffer.bytes_per_cycle`. The frame ends when the last
 //! write has gone through it.
 //!
-//! Input: [`WriteBurst`]s from every ROP, merged by (arrival, port). Output: none.
-//! Cost: ceil(bytes / bytes_per_cycle) per burst (at least one cycle). Not modelled:
-//! DRAM pages, refresh, compression, caches.
+//! Input: [`MemAccess`]es from every ROP, merged by (arrival, port). Output: none. Cost:
+//! ceil(bytes / bytes_per_cycle) per access (at least one cycle). Not modelled: DRAM pages,
+//! refresh, compression, caches, and the geometry fetch's share of the port
+//! (`fetch.rs`).
 
 use crate::config::FrameBufferConfig;
 use crate::datapath::Real;
 use crate::graph::UnitKind;
-use crate::pipeline::items::WriteBurst;
+use crate::pipeline::items::MemAccess;
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::{ceil_div, Ctx};
 use crate::pipeline::unit::{Finished, Run, Unit};
@@ -20,7 +21,7 @@ pub struct FrameBuffer;
 
 impl<R: Real> Unit<R> for FrameBuffer {
     const KIND: UnitKind = UnitKind::FrameBuffer;
-    type In = WriteBurst;
+    type In = MemAccess;
     type Out = ();
     // A sink: no output links.
     const OUT_WORDS: u32 = 0;
@@ -34,9 +35,9 @@ impl<R: Real> Unit<R> for FrameBuffer {
     }
 }
 
-/// The frame-buffer port's body: every write burst through the port at its byte rate.
-pub async fn run(mut ctx: Ctx<WriteBurst, ()>, cfg: &FrameBufferConfig) -> Finished {
-    while let Some(WriteBurst { bytes }) = ctx.next_input().await {
+/// The memory port's body: every access through the port at its byte rate.
+pub async fn run(mut ctx: Ctx<MemAccess, ()>, cfg: &FrameBufferConfig) -> Finished {
+    while let Some(MemAccess { bytes, .. }) = ctx.next_input().await {
         ctx.work(ceil_div(bytes, cfg.bytes_per_cycle).max(1));
     }
     Finished::new(ctx, Counts::default())

@@ -7,6 +7,7 @@
 //! Adding a unit: its kind in [`crate::graph`] (and the boundaries that reach it), its
 //! configuration section in [`crate::config`], its file here, and its line in [`bodies`].
 
+pub mod fetch;
 pub mod framebuffer;
 pub mod interval_manager;
 pub mod minmax;
@@ -28,6 +29,7 @@ pub fn bodies<R: Real>() -> Vec<Box<dyn Elaborate<R>>> {
         Box::new(Spec::<U>::new())
     }
     vec![
+        entry::<R, fetch::GeometryFetch>(),
         entry::<R, setup::Setup>(),
         entry::<R, minmax::MinMax>(),
         entry::<R, interval_manager::IntervalManager>(),

@@ -5,7 +5,7 @@
 //! [`FragmentSpan`]s, or [`TrianglePiece`](crate::pipeline::items::TrianglePiece)s in the triangle path. For each fragment: its
 //! depth (from the lembo's depth quadratic, or the triangle's plane), the depth test on
 //! (z, id) (the winner does not depend on arrival order), and for a fragment that passes,
-//! Phong shading (Piranda et al. 2006 equation 6) and the write. Output: one [`WriteBurst`] per
+//! Phong shading (Piranda et al. 2006 equation 6) and the write. Output: one [`MemAccess`] per
 //! item to the frame-buffer memory port: depth reads for every fragment tested, colour and depth
 //! writes for every fragment that passed.
 //!
@@ -24,7 +24,7 @@ use crate::discoid::render::{
     accumulation_keeps, depth_pass_wins, evaluate, BlendReport, DiscoidFragment, KeptFragment, Pass,
 };
 use crate::graph::UnitKind;
-use crate::pipeline::items::{FragmentSpan, RopItem, WriteBurst};
+use crate::pipeline::items::{FragmentSpan, MemAccess, RopItem};
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::{ceil_div, Ctx};
 use crate::pipeline::tiles::RopPixels;
@@ -39,12 +39,12 @@ pub struct Rop;
 impl<R: Real> Unit<R> for Rop {
     const KIND: UnitKind = UnitKind::Rop;
     type In = RopItem<R>;
-    type Out = WriteBurst;
+    type Out = MemAccess;
     // A write request: address and colour with depth.
     const OUT_WORDS: u32 = 3;
 
     fn spawn<'a>(
-        ctx: Ctx<RopItem<R>, WriteBurst>,
+        ctx: Ctx<RopItem<R>, MemAccess>,
         run: &'a Run<'a, R>,
         index: usize,
     ) -> UnitFuture<'a, Finished> {
@@ -134,10 +134,7 @@ fn discoid_fragment<R: Real>(
 }
 
 /// A ROP's body: depth-tests, shades and writes the fragments it is given into its pixels.
-pub async fn run<R: Real>(
-    mut ctx: Ctx<RopItem<R>, WriteBurst>,
-    rop: RopContext<'_, R>,
-) -> Finished {
+pub async fn run<R: Real>(mut ctx: Ctx<RopItem<R>, MemAccess>, rop: RopContext<'_, R>) -> Finished {
     let RopContext {
         cfg,
         memory: fbc,
@@ -243,7 +240,7 @@ pub async fn run<R: Real>(
         ctx.emit(
             ceil_div(n, cfg.fragments_per_cycle) + extra,
             0,
-            WriteBurst { bytes },
+            MemAccess::frame(bytes),
         )
         .await;
     }

@@ -2,10 +2,9 @@
 //! points, rebuilds the screen-space coefficients of x, y and depth with the paper's linear
 //! transform, and culls lembos outside the viewport or behind the eye (one cull test each).
 //!
-//! Input: the scene's lembos, read from memory in scene order (the unit is the source, so
-//! it is never starved until it runs out); with `setup.count` instances, each reads the
-//! batches of `setup.batch` lembos dealt to it ([`Deal`]). Output: [`LemboReady`] per
-//! visible lembo to the MinMax units, round-robin; the
+//! Input: the batches of lembos the geometry fetch ([`super::fetch`]) read from memory and
+//! dealt to this engine ([`MemAccess`]: the first lembo and the count), in scene order.
+//! Output: [`LemboReady`] per visible lembo to the MinMax units, round-robin; the
 //! [`ScreenLembo`](crate::raster::setup::ScreenLembo) itself goes to the pipeline's lembo
 //! table, as a hardware setup unit writes a primitive's coefficients into a parameter
 //! buffer that later stages index.
@@ -16,15 +15,13 @@
 //!
 //! Cost: `setup.cycles_per_lembo` busy cycles per lembo, culled or not, and as many again
 //! per sub-patch a split examines; a further piece of a split lembo is emitted at 1 cycle
-//! (it was computed with the split). The result is ready `setup.latency_cycles` later. Not
-//! modelled: the memory traffic of fetching the lembos.
+//! (it was computed with the split). The result is ready `setup.latency_cycles` later.
 
 use crate::camera::View;
 use crate::config::SetupConfig;
 use crate::datapath::Real;
 use crate::graph::UnitKind;
-use crate::pipeline::deal::Deal;
-use crate::pipeline::items::{LemboReady, PieceId};
+use crate::pipeline::items::{LemboReady, MemAccess, PieceId};
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::Ctx;
 use crate::pipeline::unit::{Finished, LemboTable, Run, Unit};
@@ -37,21 +34,20 @@ pub struct Setup;
 
 impl<R: Real> Unit<R> for Setup {
     const KIND: UnitKind = UnitKind::Setup;
-    type In = ();
+    type In = MemAccess;
     type Out = LemboReady;
     // The screen lembo: x, y, z and the normal as six-coefficient quadratics (36 words),
     // its colour (3) and id (1).
     const OUT_WORDS: u32 = 40;
 
     fn spawn<'a>(
-        ctx: Ctx<(), LemboReady>,
+        ctx: Ctx<MemAccess, LemboReady>,
         run: &'a Run<'a, R>,
-        index: usize,
+        _: usize,
     ) -> UnitFuture<'a, Finished> {
         Box::pin(self::run(
             ctx,
             &run.arch.setup,
-            index,
             run.scene,
             run.view,
             run.perspective_tol,
@@ -60,12 +56,11 @@ impl<R: Real> Unit<R> for Setup {
     }
 }
 
-/// Setup's body: instance `index`'s lembos of `scene` (its batches, [`Deal`]) in
-/// order, projected (and split or clipped) into `table`.
+/// Setup's body: the batches of lembos of `scene` the geometry fetch dealt it, in order,
+/// projected (and split or clipped) into `table`.
 pub async fn run<R: Real>(
-    mut ctx: Ctx<(), LemboReady>,
+    mut ctx: Ctx<MemAccess, LemboReady>,
     cfg: &SetupConfig,
-    index: usize,
     scene: &Scene,
     view: &View,
     perspective_tol: Option<f64>,
@@ -76,37 +71,39 @@ pub async fn run<R: Real>(
     let mut pieces = Vec::new();
     // Pieces to the MinMax units, round-robin.
     let mut next_port = 0;
-    let mine = Deal::new(index, cfg.count, cfg.batch);
-    for (id, (lembo, color)) in scene
-        .lembos()
-        .enumerate()
-        .filter(|(id, _)| mine.takes(*id as u64))
-    {
-        counts.lembos += 1;
-        match setup_pieces::<R>(id as u32, lembo, color, view, perspective_tol, &mut pieces) {
-            Ok(split) => {
-                counts.add_split(split, pieces.len());
-                // Each sub-patch examined is set up as a lembo is (six points evaluated,
-                // hull tested); the lembo's own cost comes with its first emission.
-                let n = pieces.len();
-                table.set(id, std::mem::take(&mut pieces));
-                let mut owed = cost * (1 + split.examined as u64);
-                for piece in 0..n {
-                    let id = PieceId {
-                        lembo: id as u32,
-                        piece: piece as u32,
-                    };
-                    ctx.emit(owed.max(1), next_port, LemboReady { id }).await;
-                    next_port = ctx.next_port(next_port);
-                    owed = 0;
+    // The batches come in submission order: one pass over the scene's lembos.
+    let mut lembos = scene.lembos().enumerate().peekable();
+    while let Some(MemAccess { first, count, .. }) = ctx.next_input().await {
+        let end = first as usize + count as usize;
+        while lembos.next_if(|(id, _)| *id < first as usize).is_some() {}
+        while let Some((id, (lembo, color))) = lembos.next_if(|(id, _)| *id < end) {
+            counts.lembos += 1;
+            match setup_pieces::<R>(id as u32, lembo, color, view, perspective_tol, &mut pieces) {
+                Ok(split) => {
+                    counts.add_split(split, pieces.len());
+                    // Each sub-patch examined is set up as a lembo is (six points
+                    // evaluated, hull tested); the lembo's own cost comes with its first
+                    // emission.
+                    let n = pieces.len();
+                    table.set(id, std::mem::take(&mut pieces));
+                    let mut owed = cost * (1 + split.examined as u64);
+                    for piece in 0..n {
+                        let id = PieceId {
+                            lembo: id as u32,
+                            piece: piece as u32,
+                        };
+                        ctx.emit(owed.max(1), next_port, LemboReady { id }).await;
+                        next_port = ctx.next_port(next_port);
+                        owed = 0;
+                    }
+                    if n == 0 {
+                        ctx.work(owed);
+                    }
                 }
-                if n == 0 {
-                    ctx.work(owed);
+                Err(cull) => {
+                    counts.add_cull(cull);
+                    ctx.work(cost);
                 }
-            }
-            Err(cull) => {
-                counts.add_cull(cull);
-                ctx.work(cost);
             }
         }
     }

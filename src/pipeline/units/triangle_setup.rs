@@ -4,25 +4,23 @@
 //! fixed point, sets up the integer edge functions and the perspective-correct attribute
 //! planes, and culls (one test per triangle, or per piece of a clipped one).
 //!
-//! Input: the triangles (the tessellated scene), in their source's order (the unit is the
-//! source: the Tessellator's output is read from memory, so the unit is never starved until
-//! it runs out); with `triangle_setup.count` instances, each reads the batches of
-//! `triangle_setup.batch` triangles dealt to it ([`Deal`]). Output: each set-up triangle,
-//! or each piece of a clipped one (with its parent's id), round-robin to the triangle
-//! rasterizers.
+//! Input: the batches of triangles (the tessellated scene, an indexed mesh in memory) the
+//! geometry fetch ([`super::fetch`]) read and dealt to this engine ([`MemAccess`]: the first
+//! triangle and the count), in the source's order. Output: each set-up triangle, or each
+//! piece of a clipped one (with its parent's id), round-robin to the triangle rasterizers.
 //!
 //! Cost: `triangle_setup.cycles_per_triangle` busy cycles per triangle, culled or not, plus
 //! `triangle_setup.cycles_per_clipped_piece` per triangle of a clipped triangle's fan
 //! (clipped at the near or far plane, the guard band, or both: one fan), culled or not (the fan's culled triangles are spent before its first piece is emitted);
 //! a result is ready `triangle_setup.latency_cycles` after the operation that produces it.
-//! Not modelled: vertex fetch and the post-transform vertex cache (each triangle's three
-//! vertices are transformed here).
+//! Not modelled: the post-transform vertex cache (each triangle's three vertices are
+//! transformed here; the fetch reads each shared vertex once).
 
 use crate::camera::View;
 use crate::config::TriangleSetupConfig;
 use crate::datapath::Real;
 use crate::graph::UnitKind;
-use crate::pipeline::deal::Deal;
+use crate::pipeline::items::MemAccess;
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::Ctx;
 use crate::pipeline::unit::{Finished, Run, Unit};
@@ -35,7 +33,7 @@ pub struct TriangleSetup;
 
 impl<R: Real> Unit<R> for TriangleSetup {
     const KIND: UnitKind = UnitKind::TriangleSetup;
-    type In = ();
+    type In = MemAccess;
     type Out = Arc<ScreenTriangle<R>>;
     // The set-up triangle: edge functions (12), depths and 1/w (6), normals and positions
     // over w (18), bounding box (4), area and id.
@@ -44,24 +42,22 @@ impl<R: Real> Unit<R> for TriangleSetup {
     fn spawn<'a>(
         ctx: Ctx<Self::In, Self::Out>,
         run: &'a Run<'a, R>,
-        index: usize,
+        _: usize,
     ) -> UnitFuture<'a, Finished> {
         Box::pin(self::run(
             ctx,
             &run.arch.triangle_setup,
-            index,
             run.triangles,
             run.view,
         ))
     }
 }
 
-/// TriangleSetup's body: instance `index`'s triangles of the source (its batches,
-/// [`Deal`]) in order, set up (clipped and fanned where needed).
+/// TriangleSetup's body: the batches of the source's triangles the geometry fetch dealt it,
+/// in order, set up (clipped and fanned where needed).
 pub async fn run<R: Real>(
-    mut ctx: Ctx<(), Arc<ScreenTriangle<R>>>,
+    mut ctx: Ctx<MemAccess, Arc<ScreenTriangle<R>>>,
     cfg: &TriangleSetupConfig,
-    index: usize,
     source: &dyn TriangleSource,
     view: &View,
 ) -> Finished {
@@ -70,18 +66,17 @@ pub async fn run<R: Real>(
     let mut counts = Counts::default();
     let (mut triangles, mut pieces) = (Vec::new(), Vec::new());
     let mut next = 0;
-    let mine = Deal::new(index, cfg.count, cfg.batch);
-    let per_chunk = source.per_chunk();
-    for c in 0..source.chunks() {
-        let first = c as u64 * per_chunk;
-        if !mine.takes_any(first, per_chunk) {
-            continue;
-        }
-        source.chunk(c, &mut triangles);
-        for (k, t) in triangles.iter().enumerate() {
-            if !mine.takes(first + k as u64) {
-                continue;
+    let per_chunk = source.per_chunk().max(1);
+    // The chunk in `triangles`, if any.
+    let mut held = None;
+    while let Some(MemAccess { first, count, .. }) = ctx.next_input().await {
+        for t in first as u64..first as u64 + count as u64 {
+            let (c, k) = ((t / per_chunk) as usize, (t % per_chunk) as usize);
+            if held != Some(c) {
+                source.chunk(c, &mut triangles);
+                held = Some(c);
             }
+            let t = &triangles[k];
             let id = source.id(c, k);
             let outcome = setup::<R>(id, &t.positions, &t.normals, t.color, view, &mut pieces);
             outcome.count(&mut counts);

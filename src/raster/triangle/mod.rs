@@ -80,6 +80,9 @@ pub trait TriangleSource: Sync {
     fn per_chunk(&self) -> u64;
     /// The triangles of chunk `c`, in order, into `out` (cleared first).
     fn chunk(&self, c: usize, out: &mut Vec<Triangle>);
+    /// Bytes of the source as stored in memory and fetched (an indexed mesh: its vertices
+    /// and its indices).
+    fn bytes(&self) -> u64;
     /// The id of the first triangle (ids of other primitives drawn in the same frame come
     /// before it).
     fn first_id(&self) -> u32 {
@@ -102,6 +105,10 @@ impl TriangleSource for Tessellation<'_> {
 
     fn chunk(&self, c: usize, out: &mut Vec<Triangle>) {
         self.lembo_triangles(c, out);
+    }
+
+    fn bytes(&self) -> u64 {
+        Tessellation::bytes(self)
     }
 }
 
