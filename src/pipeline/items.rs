@@ -126,9 +126,8 @@ pub enum RopItem<R> {
     Triangle(TrianglePiece<R>),
 }
 
-/// One transaction through the memory port: a ROP's frame-buffer traffic for one span, or
-/// a geometry fetch of a batch of primitives (which goes to the port and, as the data read,
-/// to the setup engine it is dealt to).
+/// One memory transaction: a ROP's frame-buffer traffic for one span (to the frame-buffer
+/// port), or a geometry fetch's batch of primitives (to the setup engine it is dealt to).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct MemAccess {
     /// Bytes moved: a ROP's depth reads and colour and depth writes, or the primitives'

@@ -10,7 +10,7 @@
 //! `fetch_to_triangle_setup`) `.latency_cycles` later: the DRAM latency.
 //!
 //! Cost: ceil(bytes / `framebuffer.bytes_per_cycle`) busy cycles per batch: reads at the
-//! memory port's peak rate; the bytes are priced as DRAM with the frame buffer's. Not
+//! memory port's peak rate; the bytes are priced as DRAM on this unit. Not
 //! modelled: contention with the ROPs' frame-buffer traffic for the port (each has the
 //! port's whole rate; DESIGN.md §11 says why), caches (every primitive is read once a
 //! pass).
@@ -46,8 +46,8 @@ impl<R: Real> Unit<R> for GeometryFetch {
     }
 }
 
-/// The fetch's body: the primitives of `plan`, a batch at a time, to the port and to the
-/// setup engines in turn, at `bytes_per_cycle`.
+/// The fetch's body: the primitives of `plan`, a batch at a time, to the setup engines in
+/// turn, read at `bytes_per_cycle`.
 pub async fn run(mut ctx: Ctx<(), MemAccess>, plan: FetchPlan, bytes_per_cycle: u64) -> Finished {
     // Its first boundary leads to the path's setup engines (a graph with both paths' setup
     // engines feeds the second kind nothing).
