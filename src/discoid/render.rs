@@ -618,6 +618,23 @@ struct Sink<'a, R> {
     view: &'a View,
 }
 
+impl<R: Real> Sink<'_, R> {
+    /// Fragment `f` at pixel (i, j) through this pass.
+    #[inline]
+    fn put(&mut self, i: u32, j: u32, f: &DiscoidFragment<R>) {
+        let idx = (j * self.target.width + i) as usize;
+        process(
+            self.pass,
+            self.target,
+            self.table,
+            self.shader,
+            self.view,
+            idx,
+            f,
+        );
+    }
+}
+
 impl<R: Real> FragmentSink<R> for Sink<'_, R> {
     fn fragment(
         &mut self,
@@ -633,16 +650,7 @@ impl<R: Real> FragmentSink<R> for Sink<'_, R> {
         // then the charge goes back to the rasterizer that called.
         R::charge(UnitKind::Rop);
         if let Some(f) = self.table.lembo_fragment(l, u, v, z) {
-            let idx = (j * self.target.width + i) as usize;
-            process(
-                self.pass,
-                self.target,
-                self.table,
-                self.shader,
-                self.view,
-                idx,
-                &f,
-            );
+            self.put(i, j, &f);
         }
         R::charge(UnitKind::FragmentRasterizer);
     }
@@ -652,16 +660,7 @@ impl<R: Real> TriangleSink<R> for Sink<'_, R> {
     fn fragment(&mut self, t: &ScreenTriangle<R>, i: u32, j: u32, tf: &TriangleFragment<R>) {
         R::charge(UnitKind::Rop);
         let f = self.table.planar_fragment(t, tf);
-        let idx = (j * self.target.width + i) as usize;
-        process(
-            self.pass,
-            self.target,
-            self.table,
-            self.shader,
-            self.view,
-            idx,
-            &f,
-        );
+        self.put(i, j, &f);
         R::charge(UnitKind::TriangleRasterizer);
     }
 }

@@ -349,19 +349,11 @@ mod tests {
         );
         // Both rasterizers into the ROPs: a ROP reads from both boundaries, its ports the
         // lembo rasterizers' then the triangle rasterizers'.
-        let both = [
-            GeometryFetch,
-            Setup,
-            MinMax,
-            IntervalManager,
-            Segmenter,
-            Subsegmenter,
-            FragmentRasterizer,
-            TriangleSetup,
-            TriangleRasterizer,
-            Rop,
-            FrameBuffer,
-        ];
+        // Every kind with a body of its own: both paths' units.
+        let both: Vec<UnitKind> = crate::graph::KINDS
+            .into_iter()
+            .filter(|k| k.inside().is_none())
+            .collect();
         let ports = check(&both, &BOUNDARIES).unwrap();
         let keys: Vec<&str> = ports.input[9].iter().map(|&b| BOUNDARIES[b].key).collect();
         assert_eq!(keys, ["rasterizer_to_rop", "triangle_rasterizer_to_rop"]);

@@ -471,19 +471,11 @@ mod tests {
         let view = View::new(&scene.camera, scene.viewport);
         let tol = Tolerance::from(0.5);
         let arch = ArchConfig::default();
-        let both = [
-            GeometryFetch,
-            Setup,
-            MinMax,
-            IntervalManager,
-            Segmenter,
-            Subsegmenter,
-            FragmentRasterizer,
-            TriangleSetup,
-            TriangleRasterizer,
-            Rop,
-            FrameBuffer,
-        ];
+        // Every kind with a body of its own: both paths' units.
+        let both: Vec<UnitKind> = crate::graph::KINDS
+            .into_iter()
+            .filter(|k| k.inside().is_none())
+            .collect();
         let graph = Graph {
             kinds: &both,
             boundaries: &BOUNDARIES,

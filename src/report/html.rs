@@ -261,26 +261,7 @@ fn cost_section(c: &CostReport) -> (&'static str, String) {
             ]
         })
         .collect();
-    let head = format!(
-        "{:.3} mm², {:.1} µJ this frame{} (technology {}; {} frame-buffer bytes{}, {} geometry bytes fetched, charged as {} DRAM at {} pJ/B; SRAM leakage {:.3} µJ, logic leakage {:.3} µJ)",
-        c.area_mm2,
-        c.energy_pj * 1e-6,
-        c.power_mw
-            .map(|p| format!(" = {p:.0} mW at the clock"))
-            .unwrap_or_default(),
-        c.tech.name,
-        c.framebuffer_bytes,
-        if c.blend.is_some() {
-            format!(" and {} accumulation bytes", c.accumulation_bytes)
-        } else {
-            String::new()
-        },
-        c.geometry_bytes,
-        c.tech.dram_kind.name(),
-        c.tech.dram_pj_per_byte,
-        c.sram_leakage_pj * 1e-6,
-        c.logic_leakage_pj * 1e-6
-    );
+    let head = super::text::cost_head(c, "mm²", "µJ", "charged as");
     let blend = c
         .blend
         .as_ref()

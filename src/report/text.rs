@@ -3,7 +3,7 @@
 //! is what `report.json` says; each section of `report.txt` has its own writer below.
 
 use super::Report;
-use crate::cost::model::{BlendCost, OpCounts};
+use crate::cost::model::{BlendCost, CostReport, OpCounts};
 use crate::datapath::OPS;
 use crate::pipeline::Cycle;
 use std::fmt::Write as _;
@@ -174,28 +174,7 @@ impl Report {
             let _ = writeln!(t, "\ncost      n/a (functional mode)");
             return;
         };
-        let _ = writeln!(
-            t,
-            "
-cost      {:.3} mm2, {:.1} uJ this frame{} (technology {}; {} frame-buffer bytes{}, {} geometry bytes fetched, as {} DRAM at {} pJ/B; SRAM leakage {:.3} uJ, logic leakage {:.3} uJ)",
-            c.area_mm2,
-            c.energy_pj * 1e-6,
-            c.power_mw
-                .map(|p| format!(" = {p:.0} mW at the clock"))
-                .unwrap_or_default(),
-            c.tech.name,
-            c.framebuffer_bytes,
-            if c.blend.is_some() {
-                format!(" and {} accumulation bytes", c.accumulation_bytes)
-            } else {
-                String::new()
-            },
-            c.geometry_bytes,
-            c.tech.dram_kind.name(),
-            c.tech.dram_pj_per_byte,
-            c.sram_leakage_pj * 1e-6,
-            c.logic_leakage_pj * 1e-6
-        );
+        let _ = writeln!(t, "\ncost      {}", cost_head(c, "mm2", "uJ", "as"));
         if let Some(b) = &c.blend {
             let _ = writeln!(t, "  {}", blend_cost(b));
         }
@@ -433,6 +412,31 @@ cost      {:.3} mm2, {:.1} uJ this frame{} (technology {}; {} frame-buffer bytes
                 .unwrap_or_default()
         );
     }
+}
+
+/// The cost section's first sentence: area, energy, power, the technology and the DRAM
+/// bytes it priced; `mm2`, `uj` and `charged` spelled for the page (text or HTML).
+pub fn cost_head(c: &CostReport, mm2: &str, uj: &str, charged: &str) -> String {
+    format!(
+        "{:.3} {mm2}, {:.1} {uj} this frame{} (technology {}; {} frame-buffer bytes{}, {} geometry bytes fetched, {charged} {} DRAM at {} pJ/B; SRAM leakage {:.3} {uj}, logic leakage {:.3} {uj})",
+        c.area_mm2,
+        c.energy_pj * 1e-6,
+        c.power_mw
+            .map(|p| format!(" = {p:.0} mW at the clock"))
+            .unwrap_or_default(),
+        c.tech.name,
+        c.framebuffer_bytes,
+        if c.blend.is_some() {
+            format!(" and {} accumulation bytes", c.accumulation_bytes)
+        } else {
+            String::new()
+        },
+        c.geometry_bytes,
+        c.tech.dram_kind.name(),
+        c.tech.dram_pj_per_byte,
+        c.sram_leakage_pj * 1e-6,
+        c.logic_leakage_pj * 1e-6
+    )
 }
 
 /// The blend units' cost in a sentence: what the precision modes trade (DESIGN.md §12).

@@ -556,41 +556,31 @@ fn a_bad_technology_file_is_refused_naming_the_field() {
     let bad = dir.join("bad.json");
     std::fs::write(&bad, text.replace("\"mul_pj\": 3.7", "\"mul_pj\": -3.7")).unwrap();
     let out = dir.join("out");
-    let o = run(
-        &[
-            "render",
-            "traces/sphere24.json",
-            "--tech",
-            bad.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ],
-        root,
-    );
-    assert_eq!(o.status.code(), Some(2));
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(err.contains("f32.mul_pj"), "{err}");
-    assert!(files_in(&out).is_empty());
+    // `render SCENE --tech bad.json` exits 2 naming `field`, and writes nothing.
+    let refused = |scene: &str, field: &str| {
+        let o = run(
+            &[
+                "render",
+                scene,
+                "--tech",
+                bad.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+            ],
+            root,
+        );
+        assert_eq!(o.status.code(), Some(2));
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains(field), "{err}");
+        assert!(files_in(&out).is_empty());
+    };
+    refused("traces/sphere24.json", "f32.mul_pj");
     // The blend units' groups are required too: a file from before them is refused,
     // naming the one missing, on a discoid scene as on any other.
     let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
     v.as_object_mut().unwrap().remove("int8");
     std::fs::write(&bad, v.to_string()).unwrap();
-    let o = run(
-        &[
-            "render",
-            "traces/discoid_sphere20.json",
-            "--tech",
-            bad.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ],
-        root,
-    );
-    assert_eq!(o.status.code(), Some(2));
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(err.contains("int8"), "{err}");
-    assert!(files_in(&out).is_empty());
+    refused("traces/discoid_sphere20.json", "int8");
     let o = run(
         &[
             "render",

@@ -306,9 +306,9 @@ fn order_free(counts: &lembo_sim::raster::Counts) -> lembo_sim::raster::Counts {
 
 /// Replicated setup engines (`setup.count`, `triangle_setup.count`), each dealt batches of
 /// primitives in submission order, draw the functional model's pixels with the same counts
-/// on both paths whatever the count and batch; each engine takes its batches (the item
-/// counts of `batch`-sized deals differ by at most a batch), and where setup bounds the
-/// frame (the triangle path at n = 4) more engines take fewer cycles.
+/// on both paths whatever the count and batch; each triangle engine is busy exactly one
+/// cycle for each triangle of its batches, and where setup bounds the frame (the triangle
+/// path at n = 4) more engines take fewer cycles.
 #[test]
 fn replicated_setup_engines_deal_batches_and_draw_the_same_pixels() {
     use lembo_sim::lembo::tessellate::Tessellation;
