@@ -32,6 +32,12 @@ pub enum UnitKind {
     Subsegmenter,
     /// Generates fragments along subsegments (section 5.3).
     FragmentRasterizer,
+    /// The triangle path's on-chip tessellator: a lembo's n² domain triangles and their
+    /// domain points (the `onchip` triangle source).
+    Tessellator,
+    /// Evaluates each new domain point's position and normal from its lembo's quadratic
+    /// functions (the `onchip` triangle source).
+    DomainEval,
     /// The triangle path's setup.
     TriangleSetup,
     /// The triangle path's quad rasterizer.
@@ -46,7 +52,7 @@ pub enum UnitKind {
 }
 
 /// Every kind, in dataflow order.
-pub const KINDS: [UnitKind; 12] = [
+pub const KINDS: [UnitKind; 14] = [
     UnitKind::GeometryFetch,
     UnitKind::Setup,
     UnitKind::MinMax,
@@ -54,6 +60,8 @@ pub const KINDS: [UnitKind; 12] = [
     UnitKind::Segmenter,
     UnitKind::Subsegmenter,
     UnitKind::FragmentRasterizer,
+    UnitKind::Tessellator,
+    UnitKind::DomainEval,
     UnitKind::TriangleSetup,
     UnitKind::TriangleRasterizer,
     UnitKind::Rop,
@@ -84,6 +92,8 @@ impl UnitKind {
             Segmenter => ("Segmenter", true, None),
             Subsegmenter => ("Subsegmenter", true, None),
             FragmentRasterizer => ("FragmentRasterizer", true, None),
+            Tessellator => ("Tessellator", false, None),
+            DomainEval => ("DomainEval", false, None),
             TriangleSetup => ("TriangleSetup", false, None),
             TriangleRasterizer => ("TriangleRasterizer", true, None),
             Rop => ("Rop", true, None),
@@ -128,12 +138,38 @@ pub enum Path {
     Triangle,
 }
 
-impl Path {
-    /// The kinds this path instantiates, in dataflow order.
-    pub fn kinds(self) -> &'static [UnitKind] {
-        use UnitKind::*;
+/// Where the triangle path's triangles come from: the architecture's `tessellation.source`
+/// (DESIGN.md §5).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum TessSource {
+    /// A mesh tessellated ahead of the frame and stored in memory: the geometry fetch reads
+    /// its indices and, through a post-transform vertex cache, its vertices.
+    #[default]
+    Memory,
+    /// The lembos themselves, read from memory and tessellated on chip: a Tessellator makes
+    /// each lembo's domain triangles and a DomainEval evaluates their vertices (the DX11
+    /// tessellator and domain-shader split).
+    OnChip,
+}
+
+impl TessSource {
+    /// Its name in architecture files and reports (`memory`, `onchip`).
+    pub fn name(self) -> &'static str {
         match self {
-            Path::Lembo => &[
+            TessSource::Memory => "memory",
+            TessSource::OnChip => "onchip",
+        }
+    }
+}
+
+impl Path {
+    /// The kinds this path instantiates when the triangle path's triangles come from
+    /// `source`, in dataflow order.
+    pub fn kinds(self, source: TessSource) -> &'static [UnitKind] {
+        use UnitKind::*;
+        match (self, source) {
+            (Path::Lembo, _) => &[
                 GeometryFetch,
                 Setup,
                 MinMax,
@@ -144,8 +180,17 @@ impl Path {
                 Rop,
                 FrameBuffer,
             ],
-            Path::Triangle => &[
+            (Path::Triangle, TessSource::Memory) => &[
                 GeometryFetch,
+                TriangleSetup,
+                TriangleRasterizer,
+                Rop,
+                FrameBuffer,
+            ],
+            (Path::Triangle, TessSource::OnChip) => &[
+                GeometryFetch,
+                Tessellator,
+                DomainEval,
                 TriangleSetup,
                 TriangleRasterizer,
                 Rop,
@@ -197,14 +242,28 @@ pub struct Boundary {
     pub to: UnitKind,
     /// The link each of its crossbar's links has unless the architecture says otherwise.
     pub default: LinkConfig,
+    /// The triangle source whose graphs alone wire it, when its two kinds meet in graphs of
+    /// both sources but it belongs to one (the fetch feeds the triangle setup engines
+    /// directly only from a mesh in memory); None: every graph with both kinds.
+    pub only: Option<TessSource>,
+}
+
+impl Boundary {
+    /// Whether a graph of `kinds`, its triangles from `source`, wires this boundary.
+    pub fn wired_in(&self, kinds: &[UnitKind], source: TessSource) -> bool {
+        kinds.contains(&self.from)
+            && kinds.contains(&self.to)
+            && self.only.is_none_or(|only| only == source)
+    }
 }
 
 /// Every boundary of both paths (the lembo path's in dataflow order, then the triangle
-/// path's, then the geometry fetch's): the one place a link is named and given its defaults. Dispatch: every producer
+/// path's, then the geometry fetch's, then the on-chip tessellation's): the one place a
+/// link is named and given its defaults. Dispatch: every producer
 /// sends round-robin over its links, except into the ROPs, which are chosen by the screen
 /// tile of the item (`units::rop::RopTiles`); every consumer merges its inputs by
 /// (arrival, port) (DESIGN.md §3).
-pub const BOUNDARIES: [Boundary; 11] = {
+pub const BOUNDARIES: [Boundary; 14] = {
     use UnitKind::*;
     const fn b(
         key: &'static str,
@@ -218,6 +277,7 @@ pub const BOUNDARIES: [Boundary; 11] = {
             from,
             to,
             default: LinkConfig::new(depth, latency),
+            only: None,
         }
     }
     [
@@ -270,13 +330,32 @@ pub const BOUNDARIES: [Boundary; 11] = {
         // batches in flight per engine keep it fed across that latency down to batches of
         // about 10 primitives at a cycle each.
         b("fetch_to_setup", GeometryFetch, Setup, 4, 40),
-        // As fetch_to_setup, a batch of triangles to its triangle setup engine.
+        // As fetch_to_setup, a batch of triangles to its triangle setup engine, from a mesh
+        // in memory (on-chip tessellation feeds the engines from its domain evaluators).
+        Boundary {
+            only: Some(TessSource::Memory),
+            ..b(
+                "fetch_to_triangle_setup",
+                GeometryFetch,
+                TriangleSetup,
+                4,
+                40,
+            )
+        },
+        // As fetch_to_setup, a batch of lembos to its tessellator.
+        b("fetch_to_tessellator", GeometryFetch, Tessellator, 4, 40),
+        // Depth 8, latency 1: a lembo's tessellation (its lattice of domain points), a wide
+        // entry like setup_to_minmax's.
+        b("tessellator_to_domain_eval", Tessellator, DomainEval, 8, 1),
+        // Depth 32, latency 1: batches of a lembo's evaluated triangles to the setup
+        // engines, narrow entries (the vertices sit in the domain evaluator's output
+        // buffer, as a DX11 domain shader's do).
         b(
-            "fetch_to_triangle_setup",
-            GeometryFetch,
+            "domain_eval_to_triangle_setup",
+            DomainEval,
             TriangleSetup,
-            4,
-            40,
+            32,
+            1,
         ),
     ]
 };
@@ -306,10 +385,10 @@ pub struct UnitInstance {
     pub kind: UnitKind,
 }
 
-/// The kinds `path` instantiates, in dataflow order, with the [`DISCOID_KINDS`] whose host
-/// is on the path when the scene has discoids.
-pub fn kinds(path: Path, discoids: bool) -> Vec<UnitKind> {
-    let mut kinds = path.kinds().to_vec();
+/// The kinds `path` instantiates (its triangles from `source`), in dataflow order, with the
+/// [`DISCOID_KINDS`] whose host is on the path when the scene has discoids.
+pub fn kinds(path: Path, source: TessSource, discoids: bool) -> Vec<UnitKind> {
+    let mut kinds = path.kinds(source).to_vec();
     if discoids {
         let hosted = DISCOID_KINDS
             .iter()
@@ -339,10 +418,10 @@ pub fn instances(kinds: &[UnitKind], count: impl Fn(UnitKind) -> u32) -> Vec<Uni
     units
 }
 
-/// How many units `path` instantiates when kind `k` has `count(k)` instances, saturating
-/// (so that an unvalidated count cannot overflow).
-pub fn instance_count(path: Path, count: impl Fn(UnitKind) -> u32) -> u32 {
-    path.kinds()
+/// How many units `path` instantiates (its triangles from `source`) when kind `k` has
+/// `count(k)` instances, saturating (so that an unvalidated count cannot overflow).
+pub fn instance_count(path: Path, source: TessSource, count: impl Fn(UnitKind) -> u32) -> u32 {
+    path.kinds(source)
         .iter()
         .map(|&k| count(k))
         .fold(0, u32::saturating_add)
@@ -358,24 +437,29 @@ pub struct Graph<'g> {
     pub kinds: &'g [UnitKind],
     /// The boundaries.
     pub boundaries: &'g [Boundary],
+    /// Where its triangles come from, for the boundaries of one source ([`Boundary::only`]).
+    pub source: TessSource,
 }
 
 impl Graph<'static> {
-    /// The graph of `path`: its kinds and [`BOUNDARIES`].
-    pub fn of(path: Path) -> Self {
+    /// The graph of `path` with the triangle path's triangles from `source`: its kinds and
+    /// [`BOUNDARIES`].
+    pub fn of(path: Path, source: TessSource) -> Self {
         Graph {
-            kinds: path.kinds(),
+            kinds: path.kinds(source),
             boundaries: &BOUNDARIES,
+            source,
         }
     }
 }
 
 impl Graph<'_> {
-    /// The boundaries with both ends among the graph's kinds: its links.
+    /// The boundaries with both ends among the graph's kinds (and of its source, if of
+    /// one): its links.
     pub fn wired(&self) -> impl Iterator<Item = &Boundary> + '_ {
         self.boundaries
             .iter()
-            .filter(|b| self.kinds.contains(&b.from) && self.kinds.contains(&b.to))
+            .filter(|b| b.wired_in(self.kinds, self.source))
     }
 }
 
@@ -495,8 +579,13 @@ mod tests {
     /// graph is a chain of crossbars), and every boundary joins kinds of one path.
     #[test]
     fn graph_boundaries_chain_each_path() {
-        for path in [Path::Lembo, Path::Triangle] {
-            for pair in path.kinds().windows(2) {
+        let graphs = [
+            Path::Lembo.kinds(TessSource::Memory),
+            Path::Triangle.kinds(TessSource::Memory),
+            Path::Triangle.kinds(TessSource::OnChip),
+        ];
+        for kinds in graphs {
+            for pair in kinds.windows(2) {
                 assert!(
                     BOUNDARIES
                         .iter()
@@ -506,9 +595,9 @@ mod tests {
             }
         }
         for b in BOUNDARIES {
-            assert!([Path::Lembo, Path::Triangle]
+            assert!(graphs
                 .iter()
-                .any(|p| p.kinds().contains(&b.from) && p.kinds().contains(&b.to)));
+                .any(|k| k.contains(&b.from) && k.contains(&b.to)));
             assert_eq!(
                 boundary(b.from, b.to),
                 LINK_KEYS.iter().position(|k| *k == b.key)

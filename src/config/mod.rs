@@ -24,7 +24,7 @@
 //! crossbar, and DRAM timing beyond a bandwidth-limited port.
 
 use crate::error::{read_text_file, Error, Result};
-use crate::graph::{self, Path as UnitPath, UnitInstance, UnitKind};
+use crate::graph::{self, Path as UnitPath, TessSource, UnitInstance, UnitKind};
 
 mod links;
 use crate::json::parse_strict;
@@ -51,6 +51,9 @@ pub const MAX_BYTES: u64 = 4096;
 pub const MAX_BATCH: u32 = 65_536;
 /// The largest accepted FIFO depth \[items\]. Deeper FIFOs would only cost host memory.
 pub const MAX_FIFO_DEPTH: u32 = 4096;
+/// The largest accepted post-transform vertex cache \[entries\]. GPUs' hold tens to a few
+/// hundred; beyond this the host's cache lookups would only cost time.
+pub const MAX_VERTEX_CACHE: u32 = 4096;
 /// The largest accepted clock \[MHz\].
 pub const MAX_CLOCK_MHZ: f64 = 100_000.0;
 /// The longest accepted configuration name \[characters\].
@@ -78,6 +81,14 @@ pub struct ArchConfig {
     pub subsegmenter: SubsegmenterConfig,
     /// The fragment generators (replicated); defaults in [`RasterizerConfig`].
     pub rasterizer: RasterizerConfig,
+    /// Where the triangle path's triangles come from, and the vertex cache of a mesh in
+    /// memory; defaults in [`TessellationConfig`].
+    pub tessellation: TessellationConfig,
+    /// The on-chip tessellators (the `onchip` source); defaults in [`TessellatorConfig`].
+    pub tessellator: TessellatorConfig,
+    /// The on-chip domain evaluators (the `onchip` source); defaults in
+    /// [`DomainEvalConfig`].
+    pub domain_eval: DomainEvalConfig,
     /// The triangle path's setup unit (one instance); defaults in [`TriangleSetupConfig`].
     pub triangle_setup: TriangleSetupConfig,
     /// The triangle path's edge-function rasterizers (replicated); defaults in
@@ -220,6 +231,64 @@ pub struct RasterizerConfig {
     pub fragments_per_cycle: u64,
 }
 
+/// Where the triangle path's triangles come from (DESIGN.md §5, "Tessellation paid for").
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+#[serde(default, deny_unknown_fields)]
+pub struct TessellationConfig {
+    /// `memory`: a mesh tessellated before the frame, read by the geometry fetch as
+    /// indices and, on a vertex cache miss, vertices; `onchip`: the lembos are read and
+    /// tessellated by Tessellator and DomainEval units. Default `memory`.
+    pub source: TessSource,
+    /// Entries of each triangle setup engine's post-transform vertex cache (FIFO
+    /// replacement, one per engine, so a batch dealt to another engine starts cold), with
+    /// the `memory` source \[vertices\]. Default 32: the size of the FIFO caches of GPUs
+    /// of the papers' era (Hoppe's 1999 simulation of them used 12 to 24 entries), and
+    /// enough to hold the two lattice rows a tessellated lembo's triangles straddle up to
+    /// n = 15.
+    pub vertex_cache_entries: u32,
+}
+
+/// Tessellator (the `onchip` source): makes a lembo's n² domain triangles (their
+/// connectivity and their (n + 1)(n + 2)/2 domain points), as the fixed-function
+/// tessellator of a DX11 GPU does. Replicable: the geometry fetch deals batches of
+/// lembos to the instances in submission order. Item: one lembo.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+#[serde(default, deny_unknown_fields)]
+pub struct TessellatorConfig {
+    /// Number of instances. Default 1.
+    pub count: u32,
+    /// Lembos per batch dealt to one instance \[primitives\]. Default 4: a batch of four
+    /// 144-byte lembos is nine cycles of the memory port.
+    pub batch: u32,
+    /// Cycles from accepting a lembo to its first domain points being ready \[cycles\].
+    /// Default 8: the lattice step (a reciprocal of n) and the first row's indices.
+    pub latency_cycles: u64,
+    /// Initiation interval per triangle generated \[cycles\]. Default 1: a DX11
+    /// tessellator emits about one triangle (with its new domain point) per clock.
+    pub cycles_per_triangle: u64,
+}
+
+/// DomainEval (the `onchip` source): evaluates each domain point of a lembo's tessellation,
+/// position and unit normal, from the lembo's quadratic functions (the DX11 domain
+/// shader's work), and passes the lembo's triangles in batches of `triangle_setup.batch`
+/// to the triangle setup engines in turn. Replicable: the tessellators deal lembos to the
+/// instances round-robin. Item: one vertex evaluated.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+#[serde(default, deny_unknown_fields)]
+pub struct DomainEvalConfig {
+    /// Number of instances. Default 1.
+    pub count: u32,
+    /// Cycles from accepting a lembo to its first vertices being ready \[cycles\]. Default
+    /// 16: the six quadratic basis functions (about 4 stages), two weighted sums of six
+    /// vectors (about 6) and the normal's normalisation (a reciprocal square root, about 6).
+    pub latency_cycles: u64,
+    /// Initiation interval per vertex evaluated \[cycles\]. Default 1: one fully pipelined
+    /// evaluator. Each lembo's (n + 1)(n + 2)/2 points are evaluated: patches are
+    /// independent, so a point on an edge two lembos share is evaluated by both, as a domain
+    /// shader does.
+    pub cycles_per_vertex: u64,
+}
+
 /// TriangleSetup (the triangle path, DESIGN.md §5): projects a triangle's three vertices,
 /// snaps them to 16.8 fixed point and sets up the integer edge functions and the
 /// perspective-correct attribute planes. Replicable: triangles are dealt to the instances
@@ -241,6 +310,13 @@ pub struct TriangleSetupConfig {
     /// Initiation interval per triangle \[cycles\]. Default 1: DESIGN.md §5's "setup 1 triangle
     /// per cycle", the rate of GPUs of the papers' era and since.
     pub cycles_per_triangle: u64,
+    /// Culled triangles disposed of per `cycles_per_triangle` \[triangles\]: a triangle
+    /// culled whole (back-facing, outside the view, or covering no pixel centre), not
+    /// clipped, leaves the engine after its cull test without edge-function or plane setup,
+    /// so an engine can cull faster than it sets up. Default 1 (culled triangles cost
+    /// what drawn ones do, the papers' era); GPUs since cull 2 a clock per engine (AMD's
+    /// RDNA whitepaper, 2019) and measure about 1.7 times the drawn rate on culled ones.
+    pub culled_per_cycle: u64,
     /// Further busy cycles per piece of a clipped triangle \[cycles\]: a triangle crossing
     /// the near or far plane, or with a vertex beyond the 16.8 range (±32767 pixels), is
     /// clipped against the two depth planes and the four guard-band planes (those it
@@ -350,6 +426,9 @@ impl Default for ArchConfig {
             segmenter: SegmenterConfig::default(),
             subsegmenter: SubsegmenterConfig::default(),
             rasterizer: RasterizerConfig::default(),
+            tessellation: TessellationConfig::default(),
+            tessellator: TessellatorConfig::default(),
+            domain_eval: DomainEvalConfig::default(),
             triangle_setup: TriangleSetupConfig::default(),
             triangle_rasterizer: TriangleRasterizerConfig::default(),
             rop: RopConfig::default(),
@@ -430,7 +509,38 @@ impl Default for TriangleSetupConfig {
             batch: 32,
             latency_cycles: 20,
             cycles_per_triangle: 1,
+            culled_per_cycle: 1,
             cycles_per_clipped_piece: 1,
+        }
+    }
+}
+
+impl Default for TessellationConfig {
+    fn default() -> TessellationConfig {
+        TessellationConfig {
+            source: TessSource::Memory,
+            vertex_cache_entries: 32,
+        }
+    }
+}
+
+impl Default for TessellatorConfig {
+    fn default() -> TessellatorConfig {
+        TessellatorConfig {
+            count: 1,
+            batch: 4,
+            latency_cycles: 8,
+            cycles_per_triangle: 1,
+        }
+    }
+}
+
+impl Default for DomainEvalConfig {
+    fn default() -> DomainEvalConfig {
+        DomainEvalConfig {
+            count: 1,
+            latency_cycles: 16,
+            cycles_per_vertex: 1,
         }
     }
 }
@@ -506,6 +616,8 @@ impl ArchConfig {
             UnitKind::Segmenter => (self.segmenter.count, self.segmenter.latency_cycles),
             UnitKind::Subsegmenter => (self.subsegmenter.count, self.subsegmenter.latency_cycles),
             UnitKind::FragmentRasterizer => (self.rasterizer.count, self.rasterizer.latency_cycles),
+            UnitKind::Tessellator => (self.tessellator.count, self.tessellator.latency_cycles),
+            UnitKind::DomainEval => (self.domain_eval.count, self.domain_eval.latency_cycles),
             UnitKind::TriangleSetup => (
                 self.triangle_setup.count,
                 self.triangle_setup.latency_cycles,
@@ -528,19 +640,24 @@ impl ArchConfig {
     /// [`ArchConfig::instances`], with the units a scene with discoids adds when `discoids`
     /// ([`graph::DISCOID_KINDS`]).
     pub fn instances_with(&self, path: UnitPath, discoids: bool) -> Vec<(UnitInstance, u64)> {
-        graph::instances(&graph::kinds(path, discoids), |k| self.unit(k).0)
-            .into_iter()
-            .map(|u| {
-                let latency = self.unit(u.kind).1;
-                (u, latency)
-            })
-            .collect()
+        graph::instances(
+            &graph::kinds(path, self.tessellation.source, discoids),
+            |k| self.unit(k).0,
+        )
+        .into_iter()
+        .map(|u| {
+            let latency = self.unit(u.kind).1;
+            (u, latency)
+        })
+        .collect()
     }
 
     /// Unit instances of the lembo path (saturating, so that an unvalidated configuration
     /// cannot overflow).
     pub fn units(&self) -> u32 {
-        graph::instance_count(UnitPath::Lembo, |k| self.unit(k).0)
+        graph::instance_count(UnitPath::Lembo, self.tessellation.source, |k| {
+            self.unit(k).0
+        })
     }
 
     /// The FIFO entries of every link `units` instantiate: each boundary's crossbar has one
@@ -549,8 +666,10 @@ impl ArchConfig {
     /// counts entries, not bytes \[entries\].
     pub fn fifo_entries(&self, units: &[UnitInstance]) -> u64 {
         let count = |kind: UnitKind| units.iter().filter(|u| u.kind == kind).count() as u64;
+        let kinds: Vec<UnitKind> = units.iter().map(|u| u.kind).collect();
         self.links
             .boundaries()
+            .filter(|(b, _)| b.wired_in(&kinds, self.tessellation.source))
             .map(|(b, link)| count(b.from) * count(b.to) * link.fifo_depth as u64)
             .sum()
     }
@@ -623,11 +742,33 @@ impl ArchConfig {
         )?;
         check.fragments_per_cycle("rasterizer.fragments_per_cycle", ras.fragments_per_cycle)?;
 
+        check.range(
+            "tessellation.vertex_cache_entries",
+            self.tessellation.vertex_cache_entries.into(),
+            MAX_VERTEX_CACHE.into(),
+            "entries (a post-transform cache holds at least one vertex)",
+        )?;
+        let tess = &self.tessellator;
+        check.count("tessellator.count", tess.count)?;
+        check.batch("tessellator.batch", tess.batch)?;
+        check.cycles("tessellator.latency_cycles", tess.latency_cycles)?;
+        check.cycles("tessellator.cycles_per_triangle", tess.cycles_per_triangle)?;
+        let de = &self.domain_eval;
+        check.count("domain_eval.count", de.count)?;
+        check.cycles("domain_eval.latency_cycles", de.latency_cycles)?;
+        check.cycles("domain_eval.cycles_per_vertex", de.cycles_per_vertex)?;
+
         let ts = &self.triangle_setup;
         check.count("triangle_setup.count", ts.count)?;
         check.batch("triangle_setup.batch", ts.batch)?;
         check.cycles("triangle_setup.latency_cycles", ts.latency_cycles)?;
         check.cycles("triangle_setup.cycles_per_triangle", ts.cycles_per_triangle)?;
+        check.range(
+            "triangle_setup.culled_per_cycle",
+            ts.culled_per_cycle,
+            MAX_FRAGMENTS_PER_CYCLE,
+            "culled triangles per cycle",
+        )?;
         check.cycles(
             "triangle_setup.cycles_per_clipped_piece",
             ts.cycles_per_clipped_piece,

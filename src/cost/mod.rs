@@ -10,6 +10,7 @@
 
 pub mod counted;
 pub mod model;
+pub mod onchip;
 pub mod tech;
 
 use crate::camera::View;

@@ -271,6 +271,7 @@ pub fn cost(tech: &Tech, arch: &ArchConfig, datapath: Datapath, work: &Work) -> 
     let frame_us = work.cycles.total.0 as f64 / work.cycles.clock_mhz;
     let of_kind = |kind: UnitKind| units.iter().filter(move |u| u.kind == kind);
     let instances = |kind: UnitKind| of_kind(kind).count() as u64;
+    let kinds: Vec<UnitKind> = units.iter().map(|u| u.kind).collect();
     let mut out = Vec::with_capacity(units.len());
     let mut logic_leakage_pj = 0.0;
     for &u in &units {
@@ -308,7 +309,11 @@ pub fn cost(tech: &Tech, arch: &ArchConfig, datapath: Datapath, work: &Work) -> 
         logic_leakage_pj += logic_leak_pj;
         // Input FIFOs: one link from every producer instance, each item written and read.
         let mut fifo = SramCost::default();
-        for (b, link) in arch.links.boundaries().filter(|(b, _)| b.to == u.kind) {
+        let wired = arch
+            .links
+            .boundaries()
+            .filter(|(b, _)| b.to == u.kind && b.wired_in(&kinds, arch.tessellation.source));
+        for (b, link) in wired {
             let producers = instances(b.from);
             let bits = pipeline::out_words(b.from) as f64 * word_bits;
             let stored = (producers * link.fifo_depth as u64) as f64 * bits;

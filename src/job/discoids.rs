@@ -134,6 +134,12 @@ pub(super) fn run_discoids(
         units,
         counts,
         cycles: cycles.clone(),
+        fetch: cost.as_ref().map(|c| pipeline::FetchReport {
+            source: "discoids",
+            primitives: planar + curved,
+            bytes: c.geometry_bytes,
+            vertex_cache: None,
+        }),
         cost,
         arch: model.arch().cloned(),
         accuracy: measured.as_ref().map(|m| m.accuracy.clone()),

@@ -11,6 +11,7 @@ use crate::camera::View;
 use crate::config::ArchConfig;
 use crate::cost::{self, model::CostReport};
 use crate::error::{Error, Result};
+use crate::graph::TessSource;
 use crate::pipeline::{self, CycleReport, Source};
 use crate::raster;
 use crate::reference::oracle::ReferenceImage;
@@ -46,13 +47,14 @@ pub fn run_path(
     };
     let counts = drawn.counts();
     let primitives = primitives(scene, &route, &counts);
-    let (framebuffer, units, cycles, trace) = match drawn {
-        Drawn::Functional(f) => (f.framebuffer, Vec::new(), None, None),
+    let (framebuffer, units, cycles, trace, fetch) = match drawn {
+        Drawn::Functional(f) => (f.framebuffer, Vec::new(), None, None, None),
         Drawn::Timed { timed, .. } => (
             timed.framebuffer,
             timed.units,
             Some(timed.cycles),
             timed.trace,
+            timed.fetch,
         ),
     };
     let cost = match (model, &cycles) {
@@ -65,6 +67,7 @@ pub fn run_path(
             cycles,
             &counts,
             &framebuffer,
+            fetch.map_or(0, |f| f.bytes),
         )?),
         _ => None,
     };
@@ -107,6 +110,7 @@ pub fn run_path(
             h
         },
         cycles,
+        fetch,
         cost,
         arch: model.arch().cloned(),
         accuracy: measured.as_ref().map(|m| m.accuracy.clone()),
@@ -147,7 +151,8 @@ fn primitives(scene: &Scene, route: &Route, counts: &raster::Counts) -> Primitiv
 /// The cost of a timed lembo or triangle frame (DESIGN.md §12): the functional model runs
 /// again in a counting datapath for the operations of each kind (its image must equal the
 /// timed one, so counting cannot have changed what was drawn), priced with the timed run's
-/// busy cycles and items and the bytes through the frame-buffer port.
+/// busy cycles and items, the bytes through the frame-buffer port and the `geometry_bytes`
+/// the geometry fetch read.
 #[allow(clippy::too_many_arguments)]
 fn cost_of(
     job: &RenderJob,
@@ -158,11 +163,15 @@ fn cost_of(
     cycles: &CycleReport,
     counts: &raster::Counts,
     timed: &FrameBuffer,
+    geometry_bytes: u64,
 ) -> Result<CostReport> {
-    let (frame, ops) = match route {
+    let (frame, mut ops) = match route {
         Route::Triangles(t) => cost::triangle_ops(scene, view, t, job.datapath),
         _ => cost::lembo_ops(scene, view, job.tolerance(), job.datapath)?,
     };
+    if let (Route::Triangles(t), TessSource::OnChip) = (route, arch.tessellation.source) {
+        cost::onchip::tessellation_ops(t, &mut ops);
+    }
     if frame.framebuffer.color != timed.color {
         return Err(Error::Internal(
             "the counting run's image differs from the timed one".into(),
@@ -176,8 +185,7 @@ fn cost_of(
         cycles,
         framebuffer_bytes,
         accumulation_bytes: 0,
-        // The geometry fetch read the path's primitives once.
-        geometry_bytes: primitives(scene, route, counts).bytes,
+        geometry_bytes,
         blend: None,
     };
     Ok(cost::model::cost(&job.tech()?, arch, job.datapath, &work))

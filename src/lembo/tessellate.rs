@@ -28,15 +28,18 @@
 //! - interior points are [`Lembo::position_at`] and [`Lembo::unit_normal_at`].
 //!
 //! Not modelled here: the time a hardware tessellator takes (that belongs to the timed
-//! pipeline), adaptive (variable-step) subdivision, and the vertex cache of a GPU; the byte
-//! count is that of an ideal indexed mesh in which every shared vertex is stored once.
+//! pipeline: `pipeline::units::tessellator`) and adaptive (variable-step) subdivision.
+//! [`Tessellation::bytes`] is the size of the indexed mesh in which every shared vertex is
+//! stored once; what a geometry fetch reads of it depends on its vertex cache, which reads
+//! [`Tessellation::lembo_vertex_ids`].
 
 use super::construct::canonical_order;
 use super::Lembo;
 use crate::scene::Scene;
 use glam::DVec3;
 use std::cmp::Ordering;
-use std::collections::HashSet;
+use std::collections::HashMap;
+use std::sync::OnceLock;
 
 /// A triangle of the triangle path, in world space.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -62,6 +65,89 @@ pub struct Tessellation<'a> {
     lembos: Vec<(&'a Lembo, [f64; 3])>,
     /// Lattice steps per domain edge.
     n: u32,
+    /// The indexed mesh's vertex numbering, made on first use.
+    index: OnceLock<MeshIndex>,
+}
+
+/// The vertex numbering of the tessellation as an indexed mesh: the distinct corners
+/// first, then each distinct edge's n - 1 inner points (from its canonical start), then
+/// each lembo's interior points. Two lembos sharing a corner or an edge (same bits, the
+/// keys of [`Tessellation::vertex_count`]) share its vertices' indices, as in a mesh that
+/// stores each vertex once.
+#[derive(Clone, Debug)]
+struct MeshIndex {
+    /// Each lembo's corners A, B, C: their indices.
+    corners: Vec<[u64; 3]>,
+    /// Each lembo's edges AB, AC, BC (in `EDGES` order): the edge's number among the
+    /// distinct edges, and whether its canonical start is the edge's second end.
+    edges: Vec<[(u64, bool); 3]>,
+    /// Distinct corners.
+    corner_count: u64,
+    /// Distinct edges.
+    edge_count: u64,
+    /// Vertices in all.
+    vertices: u64,
+}
+
+impl MeshIndex {
+    fn new(lembos: &[(&Lembo, [f64; 3])], n: u32) -> MeshIndex {
+        let mut corner_ids = HashMap::new();
+        let mut edge_ids = HashMap::new();
+        let mut corners = Vec::with_capacity(lembos.len());
+        let mut edges = Vec::with_capacity(lembos.len());
+        for (l, _) in lembos {
+            corners.push(std::array::from_fn(|k| {
+                let (p, nrm) = corner(l, k);
+                let next = corner_ids.len() as u64;
+                *corner_ids.entry(key_bits([p, nrm])).or_insert(next)
+            }));
+            edges.push(EDGES.map(|edge| {
+                let (swapped, [p, m, q]) = canonical_edge(l, edge);
+                let next = edge_ids.len() as u64;
+                let id = *edge_ids
+                    .entry(key_bits([p.0, p.1, m.0, m.1, q.0, q.1]))
+                    .or_insert(next);
+                (id, swapped)
+            }));
+        }
+        let (corner_count, edge_count) = (corner_ids.len() as u64, edge_ids.len() as u64);
+        let steps = u64::from(n) - 1;
+        let interior = steps * steps.saturating_sub(1) / 2;
+        MeshIndex {
+            corners,
+            edges,
+            corner_count,
+            edge_count,
+            vertices: corner_count + edge_count * steps + lembos.len() as u64 * interior,
+        }
+    }
+
+    /// The index of lattice point (a, b) of lembo `l` at level n.
+    fn vertex(&self, l: usize, n: u32, a: u32, b: u32) -> u64 {
+        debug_assert!(a + b <= n);
+        let steps = u64::from(n) - 1;
+        let on_edge = |e: usize, step: u32| {
+            let (id, swapped) = self.edges[l][e];
+            let i = if swapped { n - step } else { step };
+            self.corner_count + id * steps + u64::from(i) - 1
+        };
+        match (a, b) {
+            (0, 0) => self.corners[l][0],
+            (a, 0) if a == n => self.corners[l][1],
+            (0, b) if b == n => self.corners[l][2],
+            // Steps from the edge's first end in EDGES: A for AB and AC, B for BC.
+            (a, 0) => on_edge(0, a),
+            (0, b) => on_edge(1, b),
+            (_, b) if a + b == n => on_edge(2, b),
+            (a, b) => {
+                // Interior rows b = 1..n-2 hold n - 1 - b points each, a = 1..n-b-1.
+                let (a, b, n) = (u64::from(a), u64::from(b), u64::from(n));
+                let before = (b - 1) * (n - 1) - (b - 1) * b / 2;
+                let interior = steps * steps.saturating_sub(1) / 2;
+                self.corner_count + self.edge_count * steps + l as u64 * interior + before + (a - 1)
+            }
+        }
+    }
 }
 
 /// A lattice point evaluated: position [world units] and unit normal.
@@ -75,6 +161,7 @@ impl<'a> Tessellation<'a> {
         Tessellation {
             lembos: scene.lembos().collect(),
             n,
+            index: OnceLock::new(),
         }
     }
 
@@ -184,21 +271,32 @@ impl<'a> Tessellation<'a> {
     /// This is the number of distinct vertices the triangles hold unless two different keys
     /// happen to produce the same bits (e.g. two edges whose normals differ only in length).
     pub fn vertex_count(&self) -> u64 {
-        let mut corners = HashSet::new();
-        let mut edges = HashSet::new();
-        for (l, _) in &self.lembos {
-            for k in 0..3 {
-                let (p, nrm) = corner(l, k);
-                corners.insert(key_bits([p, nrm]));
-            }
-            for edge in EDGES {
-                let (_, [p, m, q]) = canonical_edge(l, edge);
-                edges.insert(key_bits([p.0, p.1, m.0, m.1, q.0, q.1]));
+        self.index().vertices
+    }
+
+    /// The indexed mesh's vertex numbering ([`MeshIndex`]), made on first use from the
+    /// lembos' construction points alone (no vertex is evaluated).
+    fn index(&self) -> &MeshIndex {
+        self.index
+            .get_or_init(|| MeshIndex::new(&self.lembos, self.n))
+    }
+
+    /// The vertex indices of lembo `lembo`'s n² triangles in the indexed mesh, in the local
+    /// order of [`Tessellation::lembo_triangles`], into `out` (cleared first): what a
+    /// geometry fetch reads from the index buffer, for its vertex cache.
+    pub fn lembo_vertex_ids(&self, lembo: usize, out: &mut Vec<[u64; 3]>) {
+        let index = self.index();
+        let n = self.n;
+        let id = |a: u32, b: u32| index.vertex(lembo, n, a, b);
+        out.clear();
+        for b in 0..n {
+            for a in 0..n - b {
+                out.push([id(a, b), id(a + 1, b), id(a, b + 1)]);
+                if a + b + 1 < n {
+                    out.push([id(a + 1, b), id(a + 1, b + 1), id(a, b + 1)]);
+                }
             }
         }
-        let steps = u64::from(self.n) - 1;
-        let interior = steps * steps.saturating_sub(1) / 2;
-        corners.len() as u64 + edges.len() as u64 * steps + self.lembos.len() as u64 * interior
     }
 
     /// Bytes of the tessellated mesh as an indexed mesh: vertex_count * VERTEX_BYTES +
@@ -326,24 +424,33 @@ mod tests {
         }
     }
 
+    /// The index buffer numbers the vertices the triangles hold one to one: a generated
+    /// vertex's bits have one index and an index one vertex's bits, and the indices are
+    /// exactly 0..vertex_count.
     #[test]
     fn tessellate_vertex_count_equals_distinct_generated_vertices_so_no_cracks() {
-        let mut out = Vec::new();
-        for (name, levels) in [("sphere24", 1..=4), ("bunny", 1..=2)] {
+        let (mut out, mut ids) = (Vec::new(), Vec::new());
+        for (name, levels) in [("sphere24", 1..=4), ("bunny", 1..=2), ("bunny", 5..=5)] {
             let scene = trace(name);
             for n in levels {
                 let tess = Tessellation::new(&scene, n);
-                let mut distinct = HashSet::new();
+                let mut distinct = HashMap::new();
+                let mut by_id = HashMap::new();
                 for l in 0..scene.lembo_count() {
                     tess.lembo_triangles(l, &mut out);
-                    for t in &out {
-                        for k in 0..3 {
-                            distinct.insert(key_bits([t.positions[k], t.normals[k]]));
+                    tess.lembo_vertex_ids(l, &mut ids);
+                    assert_eq!(ids.len(), out.len());
+                    for (t, id) in out.iter().zip(&ids) {
+                        for (k, &i) in id.iter().enumerate() {
+                            let key = key_bits([t.positions[k], t.normals[k]]);
+                            assert_eq!(*distinct.entry(key).or_insert(i), i, "{name}");
+                            assert_eq!(*by_id.entry(i).or_insert(key), key, "{name}");
                         }
                     }
                 }
                 let count = tess.vertex_count();
                 assert_eq!(count, distinct.len() as u64, "{name} at n = {n}");
+                assert!(by_id.keys().all(|&i| i < count), "{name} at n = {n}");
                 assert_eq!(
                     tess.bytes(),
                     count * VERTEX_BYTES + tess.len() * INDEX_BYTES_PER_TRIANGLE

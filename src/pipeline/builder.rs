@@ -63,6 +63,10 @@ fn check_with<R: Real>(
             // A boundary of another path.
             continue;
         };
+        if !b.wired_in(kinds, graph.source) {
+            // A boundary of the other triangle source.
+            continue;
+        }
         if p >= c {
             return Err(GraphError::BackEdge { boundary: b.key });
         }
@@ -242,7 +246,7 @@ pub fn out_words(kind: UnitKind) -> u32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::graph::{Boundary, LinkConfig, Path, BOUNDARIES};
+    use crate::graph::{Boundary, LinkConfig, Path, TessSource, BOUNDARIES};
     use UnitKind::*;
 
     fn boundary(key: &'static str, from: UnitKind, to: UnitKind) -> Boundary {
@@ -251,17 +255,24 @@ mod tests {
             from,
             to,
             default: LinkConfig::default(),
+            only: None,
         }
     }
 
-    /// Both paths' graphs check in both datapaths: the geometry fetch the source, the
-    /// frame-buffer port the sink, every other unit fed and drained by the boundary from
-    /// and to its neighbour.
+    /// Both paths' graphs (the triangle path's with either source) check in both
+    /// datapaths: the geometry fetch the source, the frame-buffer port the sink, every
+    /// other unit fed and drained by the boundary from and to its neighbour (the fetch
+    /// feeds the triangle setup engines directly only from a mesh in memory).
     #[test]
     fn builder_accepts_both_paths() {
-        for path in [Path::Lembo, Path::Triangle] {
-            let ports = check::<f32>(&Graph::of(path)).unwrap();
-            assert_eq!(check::<f64>(&Graph::of(path)).unwrap(), ports);
+        let graphs = [
+            (Path::Lembo, TessSource::Memory),
+            (Path::Triangle, TessSource::Memory),
+            (Path::Triangle, TessSource::OnChip),
+        ];
+        for (path, source) in graphs {
+            let ports = check::<f32>(&Graph::of(path, source)).unwrap();
+            assert_eq!(check::<f64>(&Graph::of(path, source)).unwrap(), ports);
             let n = ports.kinds.len();
             assert!(
                 ports.input[0].is_empty(),
@@ -292,9 +303,13 @@ mod tests {
     /// error that names it.
     #[test]
     fn builder_refuses_a_miswired_graph_with_a_named_error() {
-        let lembo = Path::Lembo.kinds();
+        let lembo = Path::Lembo.kinds(TessSource::Memory);
         let check = |kinds: &[UnitKind], boundaries: &[Boundary]| {
-            check::<f32>(&Graph { kinds, boundaries })
+            check::<f32>(&Graph {
+                kinds,
+                boundaries,
+                source: TessSource::Memory,
+            })
         };
         // A boundary left out: the segmenters' output goes nowhere.
         let without: Vec<Boundary> = BOUNDARIES
@@ -355,7 +370,8 @@ mod tests {
             .filter(|k| k.inside().is_none())
             .collect();
         let ports = check(&both, &BOUNDARIES).unwrap();
-        let keys: Vec<&str> = ports.input[9].iter().map(|&b| BOUNDARIES[b].key).collect();
+        let rop = both.iter().position(|&k| k == Rop).unwrap();
+        let keys: Vec<&str> = ports.input[rop].iter().map(|&b| BOUNDARIES[b].key).collect();
         assert_eq!(keys, ["rasterizer_to_rop", "triangle_rasterizer_to_rop"]);
         // Two boundaries between the same two kinds would make two crossbars of one pair.
         let mut twice = BOUNDARIES.to_vec();
@@ -399,8 +415,9 @@ mod tests {
             })
             .collect();
         let graph = Graph {
-            kinds: Path::Lembo.kinds(),
+            kinds: Path::Lembo.kinds(TessSource::Memory),
             boundaries: &renamed,
+            source: TessSource::Memory,
         };
         let e = Plan::new::<f32>(&graph, &ArchConfig::default(), &SimOptions::default())
             .err()
@@ -421,7 +438,7 @@ mod tests {
     #[test]
     fn out_words_are_the_hardware_items() {
         let words: Vec<u32> = BOUNDARIES.iter().map(|b| out_words(b.from)).collect();
-        assert_eq!(words, [40, 42, 8, 6, 8, 6, 3, 42, 10, 3, 3]);
+        assert_eq!(words, [40, 42, 8, 6, 8, 6, 3, 42, 10, 3, 3, 3, 37, 3]);
         assert_eq!(out_words(FrameBuffer), 0);
         assert_eq!(out_words(BlendUnit), 0);
     }
@@ -434,7 +451,7 @@ mod tests {
         arch.segmenter.count = 3;
         arch.rop.count = 2;
         let plan = Plan::new::<f64>(
-            &Graph::of(Path::Lembo),
+            &Graph::of(Path::Lembo, TessSource::Memory),
             &arch,
             &SimOptions {
                 host_threads: 2,

@@ -126,6 +126,14 @@ pub enum RopItem<R> {
     Triangle(TrianglePiece<R>),
 }
 
+/// A lembo to tessellate on chip (a Tessellator to a DomainEval): its domain triangles are
+/// the triangle source's chunk `lembo`, their domain points the lattice of its level.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Patch {
+    /// The lembo: the chunk of the triangle source.
+    pub lembo: u32,
+}
+
 /// One memory transaction: a ROP's frame-buffer traffic for one span (to the frame-buffer
 /// port), or a geometry fetch's batch of primitives (to the setup engine it is dealt to).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

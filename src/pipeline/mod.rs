@@ -38,14 +38,14 @@ pub mod wiring;
 pub use crate::graph::{Path, UnitInstance, UnitKind};
 pub use builder::out_words;
 pub use runtime::{Cycle, SimOptions};
-pub use unit::{DiscoidPass, Source};
+pub use unit::{DiscoidPass, FetchReport, Source, VertexCacheCounts};
 
 use crate::camera::View;
 use crate::config::ArchConfig;
 use crate::datapath::{Datapath, Real};
 use crate::discoid::render::{BlendReport, KeptFragment};
 use crate::error::{Error, Result};
-use crate::graph::{self, Graph};
+use crate::graph::{self, Graph, TessSource};
 use crate::raster::Counts;
 use crate::rop::FrameBuffer;
 use crate::scene::Scene;
@@ -117,6 +117,8 @@ pub struct TimedFrame {
     pub trace: Option<String>,
     /// An accumulation pass's kept fragments and counters, over all ROPs.
     pub discoid: Option<(Vec<KeptFragment>, BlendReport)>,
+    /// What the geometry fetch read; None for an empty frame.
+    pub fetch: Option<FetchReport>,
     /// How often the executor needed a recovery (host statistics).
     pub recoveries: Recoveries,
 }
@@ -188,10 +190,16 @@ fn run_in<R: Real>(
             },
             trace: None,
             discoid: None,
+            fetch: None,
             recoveries: Recoveries::default(),
         });
     };
-    let plan = Plan::new::<R>(graph.unwrap_or(&Graph::of(path)), arch, options)?;
+    // A discoid pass's triangles are planar discoids in memory, whatever the tessellation.
+    let tess = match discoid {
+        Some(_) => TessSource::Memory,
+        None => arch.tessellation.source,
+    };
+    let plan = Plan::new::<R>(graph.unwrap_or(&Graph::of(path, tess)), arch, options)?;
     let discoids = discoid.is_some();
     let trace_cap = options.trace_event_cap / plan.units.len();
     let trace = options.trace.then_some(trace_cap);
@@ -202,11 +210,22 @@ fn run_in<R: Real>(
             arch,
             k: R::of(tol.k),
             perspective_tol: tol.perspective,
-            fetch: match (path, source) {
-                (Path::Triangle, Source::Triangles(t)) => FetchPlan {
+            fetch: match (path, source, tess) {
+                (Path::Triangle, Source::Triangles(t), TessSource::Memory) => FetchPlan {
                     primitives: t.chunks() as u64 * t.per_chunk(),
                     bytes: t.bytes(),
                     batch: arch.triangle_setup.batch,
+                    // A vertex cache for a source that is an indexed mesh.
+                    vertex_cache: t
+                        .vertex_ids(0, &mut Vec::new())
+                        .then_some(arch.tessellation.vertex_cache_entries),
+                },
+                // The lembos themselves, read for the on-chip tessellators.
+                (Path::Triangle, Source::Triangles(t), TessSource::OnChip) => FetchPlan {
+                    primitives: t.chunks() as u64,
+                    bytes: t.chunks() as u64 * crate::lembo::LEMBO_BYTES,
+                    batch: arch.tessellator.batch,
+                    vertex_cache: None,
                 },
                 _ => FetchPlan {
                     primitives: n_lembos as u64,
@@ -216,6 +235,7 @@ fn run_in<R: Real>(
                             None => crate::lembo::LEMBO_BYTES,
                         },
                     batch: arch.setup.batch,
+                    vertex_cache: None,
                 },
             },
             lembos: LemboTable::new(match path {
@@ -263,10 +283,16 @@ fn run_in<R: Real>(
     results.sort_by_key(|(u, _)| *u);
     let mut frame = finish(arch, fb, plan.units, results, options, trace_cap)?;
     frame.recoveries = recoveries;
+    if let Some(fetch) = frame.fetch.as_mut() {
+        fetch.source = match path {
+            Path::Lembo => "lembos",
+            Path::Triangle => tess.name(),
+        };
+    }
     if discoids {
         // The blend units sit in the ROPs: listed (and priced) with the units, their cycles
         // the ROPs'.
-        frame.units = graph::instances(&graph::kinds(path, true), |k| arch.unit(k).0);
+        frame.units = graph::instances(&graph::kinds(path, tess, true), |k| arch.unit(k).0);
     }
     Ok(frame)
 }
@@ -384,21 +410,40 @@ fn finish(
         return Err(e);
     }
 
-    let total = results
+    let mut total = results
         .iter()
         .map(|(_, f)| f.stats.end)
         .max()
         .unwrap_or(Cycle::ZERO);
+    // One memory port (DESIGN.md §3): the frame-buffer port's busy cycles are the ROPs'
+    // traffic and the geometry fetch's reads, and the frame lasts at least as long.
+    let of_kind = |kind: UnitKind| {
+        results
+            .iter()
+            .filter(|(u, _)| units[*u].kind == kind)
+            .map(|(_, f)| f.stats.busy)
+            .sum::<u64>()
+    };
+    let reads = of_kind(UnitKind::GeometryFetch);
+    total = total.max(Cycle(of_kind(UnitKind::FrameBuffer) + reads));
     let mut counts = Counts::default();
+    let mut fetch = None;
     let mut unit_cycles = Vec::with_capacity(units.len());
     for (u, f) in &results {
         counts += f.counts;
+        fetch = fetch.or(f.fetch);
         let st = &f.stats;
+        // The port's reads for the fetch, taken from its idle cycles.
+        let reads = if units[*u].kind == UnitKind::FrameBuffer {
+            reads
+        } else {
+            0
+        };
         unit_cycles.push(UnitCycles {
             name: units[*u].name.clone(),
             kind: units[*u].kind,
-            busy: Cycle(st.busy),
-            starved: Cycle(st.starved + (total - st.end)),
+            busy: Cycle(st.busy + reads),
+            starved: Cycle((st.starved + (total - st.end)).saturating_sub(reads)),
             blocked: Cycle(st.blocked),
             items_in: st.items_in,
             items_out: st.items_out,
@@ -450,6 +495,7 @@ fn finish(
         cycles,
         trace,
         discoid,
+        fetch,
         recoveries: Recoveries::default(),
     })
 }
@@ -479,6 +525,7 @@ mod tests {
         let graph = Graph {
             kinds: &both,
             boundaries: &BOUNDARIES,
+            source: TessSource::Memory,
         };
         for threads in [1, 3] {
             let options = SimOptions {

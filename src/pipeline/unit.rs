@@ -42,6 +42,8 @@ pub struct Finished {
     /// A ROP's accumulation-pass output in a discoid pass: the fragments it kept and its
     /// counters.
     pub discoid: Option<(Vec<KeptFragment>, BlendReport)>,
+    /// The geometry fetch's account of what it read.
+    pub fetch: Option<FetchReport>,
 }
 
 impl Finished {
@@ -54,6 +56,7 @@ impl Finished {
             counts,
             error: None,
             discoid: None,
+            fetch: None,
         }
     }
 }
@@ -116,15 +119,46 @@ impl TriangleSource for NoTriangles {
 }
 
 /// What the geometry fetch reads: `primitives` in submission order, `bytes` in all, in
-/// batches of `batch` (the path's setup engines' `batch`).
+/// batches of `batch` (the `batch` of the engines it deals them to).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct FetchPlan {
     /// Primitives \[lembos or triangles\].
     pub primitives: u64,
-    /// Their bytes in memory \[bytes\].
+    /// Their bytes in memory \[bytes\]; with a vertex cache, the whole indexed mesh (what
+    /// a perfect cache would read).
     pub bytes: u64,
-    /// Primitives per batch dealt to one setup engine.
+    /// Primitives per batch dealt to one engine.
     pub batch: u32,
+    /// Entries of each setup engine's post-transform vertex cache, when the primitives are
+    /// the triangles of an indexed mesh: the fetch then reads a triangle's indices and the
+    /// vertices its engine's cache misses, instead of a share of `bytes`.
+    pub vertex_cache: Option<u32>,
+}
+
+/// What the geometry fetch read (report.json `fetch`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct FetchReport {
+    /// What it read: `lembos` (the lembo path, or lembos for on-chip tessellation:
+    /// `onchip`), `memory` (a tessellated mesh) or `discoids`.
+    pub source: &'static str,
+    /// Primitives read \[lembos or triangles\].
+    pub primitives: u64,
+    /// Bytes read from memory \[bytes\].
+    pub bytes: u64,
+    /// The setup engines' post-transform vertex caches, over all engines; None when the
+    /// primitives are not an indexed mesh's triangles.
+    pub vertex_cache: Option<VertexCacheCounts>,
+}
+
+/// The post-transform vertex caches' lookups, summed over the setup engines.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct VertexCacheCounts {
+    /// Entries of each engine's cache \[vertices\].
+    pub entries: u32,
+    /// Vertex references found in the cache.
+    pub hits: u64,
+    /// Vertex references not found: each a vertex read (and transformed).
+    pub misses: u64,
 }
 
 impl FetchPlan {

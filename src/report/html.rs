@@ -237,7 +237,12 @@ fn cycles_section(r: &Report) -> (&'static str, String) {
                     .map(|a| format!(", architecture {}", a.name))
                     .unwrap_or_default()
             );
-            para(&head) + &unit_bars(c)
+            let fetch = r
+                .fetch
+                .as_ref()
+                .map(|f| para(&super::text::fetch_line(f)))
+                .unwrap_or_default();
+            para(&head) + &fetch + &unit_bars(c)
         }
         None => para("n/a: functional mode (no timing model ran)"),
     };

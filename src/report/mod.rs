@@ -6,7 +6,7 @@ use crate::config::ArchConfig;
 use crate::cost::model::CostReport;
 use crate::discoid::render::BlendReport;
 use crate::pipeline::discoid::PassCycles;
-use crate::pipeline::{Cycle, CycleReport, UnitInstance};
+use crate::pipeline::{Cycle, CycleReport, FetchReport, UnitInstance};
 use crate::raster::Counts;
 use crate::reference::metrics::Accuracy;
 use serde::Serialize;
@@ -15,7 +15,7 @@ pub mod html;
 pub mod text;
 
 /// Version of the `report.json` layout; bumped when a field changes meaning or moves.
-pub const SCHEMA_VERSION: u32 = 8;
+pub const SCHEMA_VERSION: u32 = 9;
 
 /// Everything a run reports.
 #[derive(Clone, Debug, Serialize)]
@@ -36,6 +36,10 @@ pub struct Report {
     pub counts: Counts,
     /// Cycle accounting of the timed pipeline; null in functional mode.
     pub cycles: Option<CycleReport>,
+    /// What the geometry fetch read through the memory port: the source, primitives,
+    /// bytes and, for a mesh in memory, the vertex caches' hits and misses; null in
+    /// functional mode.
+    pub fetch: Option<FetchReport>,
     /// Area and energy of the instantiated units for this frame (DESIGN.md §12), a discoid
     /// scene's blend units and accumulation target included; null in functional mode.
     pub cost: Option<CostReport>,

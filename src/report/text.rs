@@ -5,7 +5,7 @@
 use super::Report;
 use crate::cost::model::{BlendCost, CostReport, OpCounts};
 use crate::datapath::OPS;
-use crate::pipeline::Cycle;
+use crate::pipeline::{Cycle, FetchReport};
 use std::fmt::Write as _;
 
 /// Bytes in a mebibyte, for report.txt.
@@ -143,6 +143,9 @@ impl Report {
         );
         if let Some(b) = &c.bottleneck {
             let _ = writeln!(t, "bottleneck {b} (most busy cycles)");
+        }
+        if let Some(f) = &self.fetch {
+            let _ = writeln!(t, "{}", fetch_line(f));
         }
         let _ = writeln!(
             t,
@@ -436,6 +439,29 @@ pub fn cost_head(c: &CostReport, mm2: &str, uj: &str, charged: &str) -> String {
         c.tech.dram_pj_per_byte,
         c.sram_leakage_pj * 1e-6,
         c.logic_leakage_pj * 1e-6
+    )
+}
+
+/// What the geometry fetch read, in a sentence: the source, primitives and bytes, and a
+/// mesh's vertex caches.
+pub fn fetch_line(f: &FetchReport) -> String {
+    let cache = f
+        .vertex_cache
+        .map(|v| {
+            let refs = (v.hits + v.misses).max(1);
+            format!(
+                "; vertex caches of {} entries: {} hits, {} misses ({:.1} % hit, {:.2} vertices read a triangle)",
+                v.entries,
+                v.hits,
+                v.misses,
+                100.0 * v.hits as f64 / refs as f64,
+                v.misses as f64 / f.primitives.max(1) as f64
+            )
+        })
+        .unwrap_or_default();
+    format!(
+        "geometry fetch ({}): {} primitives, {} bytes read through the memory port{cache}",
+        f.source, f.primitives, f.bytes
     )
 }
 

@@ -84,9 +84,13 @@ fn counting_changes_no_discoid_pixel() {
                 for kind in KINDS {
                     let total: u64 = ops.of(kind).iter().sum();
                     let on_path = match path {
-                        UnitKind::FragmentRasterizer => {
-                            !matches!(kind, UnitKind::TriangleSetup | UnitKind::TriangleRasterizer)
-                        }
+                        UnitKind::FragmentRasterizer => !matches!(
+                            kind,
+                            UnitKind::TriangleSetup
+                                | UnitKind::TriangleRasterizer
+                                | UnitKind::Tessellator
+                                | UnitKind::DomainEval
+                        ),
                         _ => matches!(
                             kind,
                             UnitKind::TriangleSetup
@@ -144,9 +148,10 @@ fn discoid_port_bytes_are_the_ports_traffic() {
                 .find(|u| u.kind == UnitKind::FrameBuffer)
                 .unwrap();
             let bytes = timed.port_bytes;
+            // One memory port: the ROPs' traffic and the geometry fetch's reads.
             assert_eq!(
                 port.busy.0,
-                bytes.framebuffer + bytes.accumulation,
+                bytes.framebuffer + bytes.accumulation + bytes.geometry,
                 "{name} {mode:?}"
             );
             assert!(bytes.geometry > 0);
@@ -365,6 +370,8 @@ fn operations_are_charged_to_the_kinds_that_do_them() {
             kind,
             UnitKind::TriangleSetup
                 | UnitKind::TriangleRasterizer
+                | UnitKind::Tessellator
+                | UnitKind::DomainEval
                 | UnitKind::BlendUnit
                 | UnitKind::FrameBuffer
                 | UnitKind::GeometryFetch

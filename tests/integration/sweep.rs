@@ -124,7 +124,7 @@ fn smoke_runs_end_to_end() {
             r["params"],
             serde_json::to_value(&plan.spec.points[run.point].params).unwrap()
         );
-        assert_eq!(r["report"]["schema_version"], 8);
+        assert_eq!(r["report"]["schema_version"], 9);
         // Timed with the reference: cycles, cost and accuracy in every record.
         assert!(r["report"]["cycles"]["total"].as_u64().unwrap() > 0);
         assert!(r["report"]["cost"]["area_mm2"].as_f64().unwrap() > 0.0);

@@ -367,6 +367,8 @@ fn replicated_setup_engines_deal_batches_and_draw_the_same_pixels() {
     };
     let mut one = ArchConfig::default();
     one.triangle_rasterizer.count = 4;
+    // A port wide enough for the mesh's reads, so that the engines bound the frame.
+    one.framebuffer.bytes_per_cycle = 256;
     let single = run(&one);
     assert_eq!(single.cycles.bottleneck.as_deref(), Some("TriangleSetup"));
     for (n, batch) in [(2, 32), (4, 32), (4, 16), (3, 100)] {
@@ -418,8 +420,10 @@ fn replicated_setup_engines_deal_batches_and_draw_the_same_pixels() {
             t.cycles.total,
             single.cycles.total
         );
+        // Beyond that the memory port bounds it (the ROPs' spans, a cycle each at least,
+        // and the mesh's reads): about two thirds of the single engine's frame.
         assert!(
-            t.cycles.total.0 * 10 <= single.cycles.total.0 * 6,
+            t.cycles.total.0 * 10 <= single.cycles.total.0 * 7,
             "{n} setups: {}",
             t.cycles.total
         );

@@ -1,27 +1,35 @@
-//! GeometryFetch (DESIGN.md §3, "Geometry fetch"): reads the scene's primitives (lembos,
-//! or the triangle path's indexed mesh) from memory, in submission order, and deals them
-//! to the setup engines in batches of the path's `setup.batch` or `triangle_setup.batch`
-//! (batch b to engine b mod count: ARCHITECTURE.md, "Front ends"). A batch of triangles
-//! reads its share of the mesh's bytes (each shared vertex once: a perfect post-transform
-//! vertex cache).
+//! GeometryFetch (DESIGN.md §3, "Geometry fetch"): reads the scene's primitives from memory,
+//! in submission order, and deals them in batches (batch b to engine b mod count:
+//! ARCHITECTURE.md, "Front ends") to the engines it feeds: the lembo Setups; the triangle
+//! setup engines, from a mesh tessellated in memory; or the Tessellators, whose lembos are
+//! tessellated on chip (`tessellation.source`).
+//!
+//! A batch of a mesh's triangles reads each triangle's three indices and, through its setup
+//! engine's post-transform vertex cache (FIFO replacement, `tessellation.vertex_cache_entries`
+//! entries, one cache per engine, so a batch starts where that engine's last batch left the
+//! cache), each vertex the cache misses. Other primitives (lembos, a source that is not an
+//! indexed mesh) read their share of the bytes stored.
 //!
 //! Input: none (the unit is the source). Output: per batch one [`MemAccess`] (the first
-//! primitive, the count, the bytes) to the batch's setup engine, `fetch_to_setup` (or
-//! `fetch_to_triangle_setup`) `.latency_cycles` later: the DRAM latency.
+//! primitive, the count, the bytes) to the batch's engine, the link's `latency_cycles`
+//! later (`fetch_to_setup`, `fetch_to_triangle_setup` or `fetch_to_tessellator`: the DRAM
+//! latency).
 //!
 //! Cost: ceil(bytes / `framebuffer.bytes_per_cycle`) busy cycles per batch: reads at the
-//! memory port's peak rate; the bytes are priced as DRAM on this unit. Not
-//! modelled: contention with the ROPs' frame-buffer traffic for the port (each has the
-//! port's whole rate; DESIGN.md §11 says why), caches (every primitive is read once a
-//! pass).
+//! memory port's peak rate; the bytes are priced as DRAM on this unit. The port is shared
+//! with the ROPs' frame-buffer traffic: the frame takes at least the port's cycles for
+//! both (DESIGN.md §3, "One memory port"); how their requests interleave is not modelled.
 
 use crate::datapath::Real;
 use crate::graph::UnitKind;
+use crate::lembo::tessellate::{INDEX_BYTES_PER_TRIANGLE, VERTEX_BYTES};
 use crate::pipeline::items::MemAccess;
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::{ceil_div, Ctx};
-use crate::pipeline::unit::{FetchPlan, Finished, Run, Unit};
+use crate::pipeline::unit::{FetchPlan, FetchReport, Finished, Run, Unit, VertexCacheCounts};
+use crate::raster::triangle::TriangleSource;
 use crate::raster::Counts;
+use std::collections::{HashSet, VecDeque};
 
 /// The geometry fetch.
 pub struct GeometryFetch;
@@ -41,32 +49,55 @@ impl<R: Real> Unit<R> for GeometryFetch {
         Box::pin(self::run(
             ctx,
             run.fetch,
+            run.triangles,
             run.arch.framebuffer.bytes_per_cycle,
         ))
     }
 }
 
-/// The fetch's body: the primitives of `plan`, a batch at a time, to the setup engines in
-/// turn, read at `bytes_per_cycle`.
-pub async fn run(mut ctx: Ctx<(), MemAccess>, plan: FetchPlan, bytes_per_cycle: u64) -> Finished {
-    // Its first boundary leads to the path's setup engines (a graph with both paths' setup
-    // engines feeds the second kind nothing).
+/// The fetch's body: the primitives of `plan`, a batch at a time, to the engines in turn,
+/// read at `bytes_per_cycle`; with a vertex cache, the triangles' vertex indices come from
+/// `source`.
+pub async fn run(
+    mut ctx: Ctx<(), MemAccess>,
+    plan: FetchPlan,
+    source: &dyn TriangleSource,
+    bytes_per_cycle: u64,
+) -> Finished {
+    // Its first boundary leads to the engines (a graph with both paths' setup engines
+    // feeds the second kind nothing).
     let engines = ctx.group(0);
+    let mut caches = plan.vertex_cache.map(|entries| {
+        engines
+            .clone()
+            .map(|_| VertexCache::new(entries as usize))
+            .collect::<Vec<_>>()
+    });
+    let mut indices = MeshIndices::new(source);
+    let mut report = FetchReport {
+        primitives: plan.primitives,
+        ..FetchReport::default()
+    };
     let mut engine = engines.start;
     let mut first = 0;
     while first < plan.primitives {
         let end = (first + plan.batch as u64).min(plan.primitives);
+        let bytes = match caches.as_mut() {
+            Some(caches) => {
+                let cache = &mut caches[engine - engines.start];
+                let misses = indices.misses(first..end, cache);
+                (end - first) * INDEX_BYTES_PER_TRIANGLE + misses * VERTEX_BYTES
+            }
+            None => plan.bytes_of(first, end),
+        };
+        report.bytes += bytes;
         let access = MemAccess {
-            bytes: plan.bytes_of(first, end),
+            bytes,
             first: first as u32,
             count: (end - first) as u32,
         };
-        ctx.emit(
-            ceil_div(access.bytes, bytes_per_cycle).max(1),
-            engine,
-            access,
-        )
-        .await;
+        ctx.emit(ceil_div(bytes, bytes_per_cycle).max(1), engine, access)
+            .await;
         engine = if engine + 1 >= engines.end {
             engines.start
         } else {
@@ -74,5 +105,123 @@ pub async fn run(mut ctx: Ctx<(), MemAccess>, plan: FetchPlan, bytes_per_cycle: 
         };
         first = end;
     }
-    Finished::new(ctx, Counts::default())
+    report.vertex_cache = caches.map(|caches| VertexCacheCounts {
+        entries: plan.vertex_cache.unwrap_or(0),
+        hits: caches.iter().map(|c| c.hits).sum(),
+        misses: caches.iter().map(|c| c.misses).sum(),
+    });
+    let mut finished = Finished::new(ctx, Counts::default());
+    finished.fetch = Some(report);
+    finished
+}
+
+/// The index buffer of an indexed triangle source, read a chunk at a time.
+struct MeshIndices<'a> {
+    source: &'a dyn TriangleSource,
+    per_chunk: u64,
+    /// The chunk in `ids`, if any.
+    held: Option<usize>,
+    ids: Vec<[u64; 3]>,
+}
+
+impl<'a> MeshIndices<'a> {
+    fn new(source: &'a dyn TriangleSource) -> Self {
+        MeshIndices {
+            source,
+            per_chunk: source.per_chunk().max(1),
+            held: None,
+            ids: Vec::new(),
+        }
+    }
+
+    /// Looks up the vertices of triangles `range` in `cache`, in order; the misses.
+    fn misses(&mut self, range: std::ops::Range<u64>, cache: &mut VertexCache) -> u64 {
+        let before = cache.misses;
+        for t in range {
+            let (c, k) = ((t / self.per_chunk) as usize, (t % self.per_chunk) as usize);
+            if self.held != Some(c) {
+                let indexed = self.source.vertex_ids(c, &mut self.ids);
+                debug_assert!(indexed, "a vertex cache needs an indexed source");
+                self.held = Some(c);
+            }
+            for v in self.ids[k] {
+                cache.look_up(v);
+            }
+        }
+        cache.misses - before
+    }
+}
+
+/// A post-transform vertex cache: the last `entries` distinct vertices missed, replaced
+/// first in, first out (a hit does not refresh an entry), as the FIFO caches of GPUs are.
+struct VertexCache {
+    entries: usize,
+    fifo: VecDeque<u64>,
+    /// The vertices in `fifo`, for a large cache (a small one is searched directly).
+    held: HashSet<u64>,
+    hits: u64,
+    misses: u64,
+}
+
+impl VertexCache {
+    /// Up to this many entries the FIFO is searched directly.
+    const SCAN: usize = 64;
+
+    fn new(entries: usize) -> Self {
+        VertexCache {
+            entries,
+            fifo: VecDeque::with_capacity(entries),
+            held: HashSet::new(),
+            hits: 0,
+            misses: 0,
+        }
+    }
+
+    /// Whether vertex `v` is cached; on a miss it enters the cache.
+    fn look_up(&mut self, v: u64) -> bool {
+        let hit = if self.entries <= Self::SCAN {
+            self.fifo.contains(&v)
+        } else {
+            self.held.contains(&v)
+        };
+        if hit {
+            self.hits += 1;
+            return true;
+        }
+        self.misses += 1;
+        if self.fifo.len() == self.entries {
+            let old = self.fifo.pop_front();
+            if self.entries > Self::SCAN {
+                old.map(|o| self.held.remove(&o));
+            }
+        }
+        self.fifo.push_back(v);
+        if self.entries > Self::SCAN {
+            self.held.insert(v);
+        }
+        false
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// FIFO replacement: a vertex stays for `entries` misses after its own, hits or not.
+    #[test]
+    fn vertex_cache_replaces_first_in_first_out() {
+        for entries in [2, VertexCache::SCAN + 1] {
+            let mut c = VertexCache::new(entries);
+            assert!(!c.look_up(7));
+            assert!(c.look_up(7));
+            for v in 0..entries as u64 - 1 {
+                assert!(!c.look_up(100 + v));
+            }
+            // 7 was the oldest entry when the cache filled; a hit did not refresh it.
+            assert!(c.look_up(7));
+            assert!(!c.look_up(1000));
+            assert!(!c.look_up(7), "{entries}: 7 was evicted");
+            assert_eq!((c.hits, c.misses), (2, entries as u64 + 2));
+        }
+    }
 }

@@ -7,6 +7,7 @@
 //! Adding a unit: its kind in [`crate::graph`] (and the boundaries that reach it), its
 //! configuration section in [`crate::config`], its file here, and its line in [`bodies`].
 
+pub mod domain_eval;
 pub mod fetch;
 pub mod framebuffer;
 pub mod interval_manager;
@@ -16,6 +17,7 @@ pub mod rop;
 pub mod segmenter;
 pub mod setup;
 pub mod subsegmenter;
+pub mod tessellator;
 pub mod triangle_rasterizer;
 pub mod triangle_setup;
 
@@ -36,6 +38,8 @@ pub fn bodies<R: Real>() -> Vec<Box<dyn Elaborate<R>>> {
         entry::<R, segmenter::Segmenter>(),
         entry::<R, subsegmenter::Subsegmenter>(),
         entry::<R, rasterizer::FragmentRasterizer>(),
+        entry::<R, tessellator::Tessellator>(),
+        entry::<R, domain_eval::DomainEval>(),
         entry::<R, triangle_setup::TriangleSetup>(),
         entry::<R, triangle_rasterizer::TriangleRasterizer>(),
         entry::<R, rop::Rop>(),

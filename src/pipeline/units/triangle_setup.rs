@@ -4,17 +4,20 @@
 //! fixed point, sets up the integer edge functions and the perspective-correct attribute
 //! planes, and culls (one test per triangle, or per piece of a clipped one).
 //!
-//! Input: the batches of triangles (the tessellated scene, an indexed mesh in memory) the
-//! geometry fetch ([`super::fetch`]) read and dealt to this engine ([`MemAccess`]: the first
-//! triangle and the count), in the source's order. Output: each set-up triangle, or each
+//! Input: the batches of triangles the geometry fetch ([`super::fetch`]) read from a mesh in
+//! memory, or a domain evaluator ([`super::domain_eval`]) made on chip, dealt to this engine
+//! ([`MemAccess`]: the first triangle and the count), in the order they arrive. Output: each set-up triangle, or each
 //! piece of a clipped one (with its parent's id), round-robin to the triangle rasterizers.
 //!
-//! Cost: `triangle_setup.cycles_per_triangle` busy cycles per triangle, culled or not, plus
+//! Cost: `triangle_setup.cycles_per_triangle` busy cycles per triangle drawn or clipped, and
+//! per `triangle_setup.culled_per_cycle` triangles culled whole (a leftover group costs the
+//! full slot at the end), plus
 //! `triangle_setup.cycles_per_clipped_piece` per triangle of a clipped triangle's fan
 //! (clipped at the near or far plane, the guard band, or both: one fan), culled or not (the fan's culled triangles are spent before its first piece is emitted);
 //! a result is ready `triangle_setup.latency_cycles` after the operation that produces it.
-//! Not modelled: the post-transform vertex cache (each triangle's three vertices are
-//! transformed here; the fetch reads each shared vertex once).
+//! The post-transform vertex cache is the fetch's account (it reads the vertices the cache
+//! misses); the functional setup here projects each triangle's three vertices, so its
+//! operation counts are those of a cache that never hits.
 
 use crate::camera::View;
 use crate::config::TriangleSetupConfig;
@@ -63,6 +66,8 @@ pub async fn run<R: Real>(
 ) -> Finished {
     let per_triangle = cfg.cycles_per_triangle;
     let per_piece = cfg.cycles_per_clipped_piece;
+    // Whole culled triangles since the engine last spent `per_triangle` on them.
+    let mut culled = 0;
     let mut counts = Counts::default();
     let (mut triangles, mut pieces) = (Vec::new(), Vec::new());
     let mut next = 0;
@@ -82,7 +87,14 @@ pub async fn run<R: Real>(
             outcome.count(&mut counts);
             let culled_in_fan = outcome.fan.saturating_sub(pieces.len()) as u64;
             let mut cost = per_triangle + per_piece * culled_in_fan;
-            if pieces.is_empty() {
+            if pieces.is_empty() && outcome.fan == 0 {
+                // Culled whole: `culled_per_cycle` of them share the engine's slot.
+                culled += 1;
+                if culled == cfg.culled_per_cycle {
+                    ctx.work(per_triangle);
+                    culled = 0;
+                }
+            } else if pieces.is_empty() {
                 ctx.work(cost);
             }
             for st in pieces.drain(..) {
@@ -94,6 +106,9 @@ pub async fn run<R: Real>(
                 cost = 0;
             }
         }
+    }
+    if culled > 0 {
+        ctx.work(per_triangle);
     }
     Finished::new(ctx, counts)
 }

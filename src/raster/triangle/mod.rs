@@ -83,6 +83,18 @@ pub trait TriangleSource: Sync {
     /// Bytes of the source as stored in memory and fetched (an indexed mesh: its vertices
     /// and its indices).
     fn bytes(&self) -> u64;
+    /// The distinct vertices of one chunk's triangles, which an on-chip domain evaluator
+    /// computes once each. By default three a triangle (no sharing).
+    fn vertices_per_chunk(&self) -> u64 {
+        3 * self.per_chunk()
+    }
+    /// The indexed mesh's vertex indices of chunk `c`'s triangles, in order, into `out`
+    /// (cleared first), for a vertex cache; false (and `out` untouched) for a source that
+    /// is not an indexed mesh.
+    fn vertex_ids(&self, c: usize, out: &mut Vec<[u64; 3]>) -> bool {
+        let _ = (c, out);
+        false
+    }
     /// The id of the first triangle (ids of other primitives drawn in the same frame come
     /// before it).
     fn first_id(&self) -> u32 {
@@ -109,6 +121,17 @@ impl TriangleSource for Tessellation<'_> {
 
     fn bytes(&self) -> u64 {
         Tessellation::bytes(self)
+    }
+
+    fn vertices_per_chunk(&self) -> u64 {
+        // The lattice points of a lembo: (n + 1)(n + 2)/2.
+        let n = u64::from(self.level());
+        (n + 1) * (n + 2) / 2
+    }
+
+    fn vertex_ids(&self, c: usize, out: &mut Vec<[u64; 3]>) -> bool {
+        self.lembo_vertex_ids(c, out);
+        true
     }
 }
 
