@@ -31,6 +31,10 @@ pub trait Real: Float + Debug + Default + Send + Sync + 'static {
     /// triangle path's edge functions); nothing for `f32` and `f64`.
     #[inline(always)]
     fn count_beside(_op: Op, _n: u64) {}
+    /// Counts `n` occurrences of a hardware event ([`Event`]) that a unit priced as built
+    /// is charged for per event (`cost::built`); nothing for `f32` and `f64`.
+    #[inline(always)]
+    fn tally(_event: Event, _n: u64) {}
     /// sqrt(self² + other²) without overflow: [`Float::hypot`], bit for bit.
     #[inline(always)]
     fn length(self, other: Self) -> Self {
@@ -126,6 +130,32 @@ impl Op {
         }
     }
 }
+
+/// The events of the triangle rasterizer's hierarchical walk, as hardware would do it (a
+/// counting datapath tallies them, `Real::tally`): the units priced as built are charged
+/// per event by `cost::built`, where the model computes differently for exactness.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Event {
+    /// A set-up triangle (or a piece of a clipped one) handed to the rasterizer.
+    Triangle,
+    /// A coarse tile of a triangle's bounding box tested against its three edges.
+    Tile,
+    /// A 2x2 quad of a tile that was not rejected, its four pixel centres tested.
+    QuadTested,
+    /// A tested quad with at least one covered pixel centre.
+    QuadCovered,
+    /// A covered pixel centre: a fragment.
+    Fragment,
+}
+
+/// Every event, in the order of `cost::counted::OpTable::events`.
+pub const EVENTS: [Event; 5] = [
+    Event::Triangle,
+    Event::Tile,
+    Event::QuadTested,
+    Event::QuadCovered,
+    Event::Fragment,
+];
 
 /// The datapath selected on the command line.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]

@@ -346,6 +346,24 @@ pub struct TriangleRasterizerConfig {
     /// one, and a triangle that covers no pixel costs one cycle. Default 8: DESIGN.md §5, two
     /// quads per cycle.
     pub pixels_per_cycle: u64,
+    /// Where the reciprocal of the interpolated 1/w is taken for perspective-correct
+    /// attributes: `"quad"` (default; one reciprocal per covered quad, refined per covered
+    /// pixel by a Newton step) or `"pixel"` (one per covered pixel). A pricing choice only
+    /// (`cost::built`, DESIGN.md §12): the model divides exactly, whatever this says.
+    pub reciprocal: Reciprocal,
+}
+
+/// Where the triangle rasterizer takes the reciprocal for perspective-correct attributes
+/// ([`TriangleRasterizerConfig::reciprocal`]).
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum Reciprocal {
+    /// One reciprocal per covered quad, at its upper-left pixel centre; each covered pixel
+    /// refines it by one Newton step, w (2 - w (1/w)_pixel): 2 multiplies and an add.
+    #[default]
+    Quad,
+    /// One reciprocal per covered pixel.
+    Pixel,
 }
 
 /// ROP: depth test and per-fragment Phong shading for the pixels of its screen tiles.
@@ -551,6 +569,7 @@ impl Default for TriangleRasterizerConfig {
             count: 1,
             latency_cycles: 4,
             pixels_per_cycle: 8,
+            reciprocal: Reciprocal::Quad,
         }
     }
 }

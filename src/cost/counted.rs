@@ -16,7 +16,7 @@
 //! `other`, which the extreme method never needs (a test says it stays 0).
 
 use crate::camera::take_projections;
-use crate::datapath::{Op, Real, OPS};
+use crate::datapath::{Event, Op, Real, EVENTS, OPS};
 use crate::graph::{UnitKind, KINDS};
 use num_traits::{Float, Num, NumCast, One, ToPrimitive, Zero};
 use std::cell::Cell;
@@ -29,6 +29,7 @@ const CELLS: usize = OPS.len() * KINDS.len();
 thread_local! {
     static COUNTS: [Cell<u64>; CELLS] = const { [const { Cell::new(0) }; CELLS] };
     static CHARGED: Cell<usize> = const { Cell::new(0) };
+    static EVENT_COUNTS: [Cell<u64>; EVENTS.len()] = const { [const { Cell::new(0) }; EVENTS.len()] };
 }
 
 /// Charges this thread's following operations to `kind` until the next call; returns the
@@ -69,9 +70,10 @@ fn count_projections() {
     }
 }
 
-/// Operation counts per unit kind.
+/// Operation counts per unit kind, and the hardware events the run tallied
+/// ([`Event`], for the units priced as built: `cost::built`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct OpTable([[u64; OPS.len()]; KINDS.len()]);
+pub struct OpTable([[u64; OPS.len()]; KINDS.len()], [u64; EVENTS.len()]);
 
 impl OpTable {
     /// The count of `op` charged to `kind`.
@@ -89,6 +91,21 @@ impl OpTable {
     pub fn of(&self, kind: UnitKind) -> [u64; OPS.len()] {
         self.0[kind_index(kind)]
     }
+
+    /// Sets all of `kind`'s counts, in [`OPS`] order (a unit priced as built).
+    pub fn set(&mut self, kind: UnitKind, ops: [u64; OPS.len()]) {
+        self.0[kind_index(kind)] = ops;
+    }
+
+    /// How many times `event` happened.
+    pub fn events(&self, event: Event) -> u64 {
+        self.1[event as usize]
+    }
+
+    /// Adds `n` occurrences of `event`.
+    pub fn add_events(&mut self, event: Event, n: u64) {
+        self.1[event as usize] += n;
+    }
 }
 
 /// Runs `f` with this thread's counters from zero, charged first to `first`; returns its
@@ -97,6 +114,7 @@ impl OpTable {
 pub fn counting<T>(first: UnitKind, f: impl FnOnce() -> T) -> (T, OpTable) {
     count_projections();
     let saved: Vec<u64> = COUNTS.with(|c| c.iter().map(|x| x.replace(0)).collect());
+    let saved_events: Vec<u64> = EVENT_COUNTS.with(|c| c.iter().map(|x| x.replace(0)).collect());
     let before = charge_to(first);
     let out = f();
     charge_to(before);
@@ -104,6 +122,11 @@ pub fn counting<T>(first: UnitKind, f: impl FnOnce() -> T) -> (T, OpTable) {
     COUNTS.with(|c| {
         for (i, (cell, old)) in c.iter().zip(saved).enumerate() {
             table.0[i / OPS.len()][i % OPS.len()] = cell.replace(old);
+        }
+    });
+    EVENT_COUNTS.with(|c| {
+        for (i, (cell, old)) in c.iter().zip(saved_events).enumerate() {
+            table.1[i] = cell.replace(old);
         }
     });
     (out, table)
@@ -140,6 +163,13 @@ impl<R: Real> Real for Counted<R> {
     #[inline(always)]
     fn count_beside(op: Op, n: u64) {
         count(op, n);
+    }
+    #[inline(always)]
+    fn tally(event: Event, n: u64) {
+        EVENT_COUNTS.with(|c| {
+            let cell = &c[event as usize];
+            cell.set(cell.get() + n)
+        });
     }
 }
 

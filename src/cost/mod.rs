@@ -4,10 +4,13 @@
 //!
 //! The counting runs ([`lembo_ops`], [`triangle_ops`]) are the functional driver's
 //! single-threaded frame ([`draw_in_order`]) in a counting datapath, with a sink that charges
-//! the ROP's operations to it (`ChargedToRop`); each stage charges its own kind. A discoid
+//! the ROP's operations to it (`ChargedToRop`); each stage charges its own kind, and the
+//! triangle rasterizer's walk tallies its hardware events, which [`built`] prices the units
+//! built differently from the model by (applied in [`model::cost`]). A discoid
 //! scene's ([`discoid_ops`]) is the functional model's passes in counting words, whose
 //! discoid sink charges the ROP itself, the blend the blend units and the resolve the ROPs.
 
+pub mod built;
 pub mod counted;
 pub mod model;
 pub mod onchip;

@@ -66,7 +66,9 @@ pub struct CostReport {
     pub blend: Option<BlendCost>,
     /// Each instance, in dataflow order.
     pub units: Vec<UnitCost>,
-    /// The operations each kind performed, counted by the code that does them.
+    /// The operations each kind performed, counted by the code that does them; for the
+    /// units priced as built (the triangle path's), as hardware would do them
+    /// (`cost::built`).
     pub ops: Vec<KindOps>,
 }
 
@@ -185,7 +187,8 @@ pub struct KindOps {
 
 /// What a timed frame did, for its cost.
 pub struct Work<'a> {
-    /// The operations per kind (the counting run).
+    /// The operations per kind and the hardware events (the counting run), before the
+    /// units built differently are priced as built.
     pub ops: &'a OpTable,
     /// The timed run's per-unit accounting.
     pub cycles: &'a CycleReport,
@@ -256,6 +259,8 @@ pub fn price_sram(sram: &Sram, bits_stored: f64, bits_moved: f64, frame_us: f64)
 
 /// The cost of `work` on `arch` in `datapath`, priced by `tech`.
 pub fn cost(tech: &Tech, arch: &ArchConfig, datapath: Datapath, work: &Work) -> CostReport {
+    // The units built differently from the model priced as built (DESIGN.md §12).
+    let ops = super::built::as_built(work.ops, arch.triangle_rasterizer.reciprocal);
     // The timed units and the blend units inside their ROPs, in dataflow order.
     let mut units: Vec<&UnitCycles> = work.cycles.units.iter().collect();
     units.extend(work.blend.iter().flat_map(|b| b.units));
@@ -275,7 +280,7 @@ pub fn cost(tech: &Tech, arch: &ArchConfig, datapath: Datapath, work: &Work) -> 
     let mut out = Vec::with_capacity(units.len());
     let mut logic_leakage_pj = 0.0;
     for &u in &units {
-        let ops = work.ops.of(u.kind);
+        let kind_ops = ops.of(u.kind);
         // The kind's own busy cycles: those of the units inside it (a ROP's blend units,
         // whose cycles its ROP's include) are theirs.
         let hosted: u64 = units
@@ -296,13 +301,13 @@ pub fn cost(tech: &Tech, arch: &ArchConfig, datapath: Datapath, work: &Work) -> 
         let mut fus = [0u64; OPS.len()];
         let (mut area_um2, mut energy_pj) = (0.0, 0.0);
         for (k, &op) in OPS.iter().enumerate() {
-            if ops[k] == 0 {
+            if kind_ops[k] == 0 {
                 continue;
             }
-            fus[k] = ops[k].div_ceil(busy.max(1));
+            fus[k] = kind_ops[k].div_ceil(busy.max(1));
             let (pj, um2) = price(u.kind, op);
             area_um2 += fus[k] as f64 * um2;
-            energy_pj += ops[k] as f64 * share * pj;
+            energy_pj += kind_ops[k] as f64 * share * pj;
         }
         // mW/mm² × mm² × µs = nJ.
         let logic_leak_pj = tech.logic_leakage.mw_per_mm2 * area_um2 * 1e-6 * frame_us * 1e3;
@@ -387,7 +392,7 @@ pub fn cost(tech: &Tech, arch: &ArchConfig, datapath: Datapath, work: &Work) -> 
             .into_iter()
             .map(|k| KindOps {
                 kind: k.name().to_string(),
-                ops: OpCounts::from_array(work.ops.of(k)),
+                ops: OpCounts::from_array(ops.of(k)),
             })
             .collect(),
     }

@@ -210,6 +210,10 @@ impl<R: Real, S: TriangleSink<R>> Draw<R, S> for TrianglePath<'_> {
         _: &mut (),
     ) -> std::result::Result<(), (u32, Error)> {
         R::charge(UnitKind::TriangleRasterizer);
+        // The hardware walk's events, once a triangle: in the band that holds its first row.
+        if lo <= t.bbox[2] {
+            t.tally_walk();
+        }
         // The quads whose top row is in lo..hi: the first starts on the even row at or
         // above lo (a band starts on an even row, so it holds that quad's top row too).
         rasterize_rows(t, lo & !1, hi, sink, counts);

@@ -2,8 +2,8 @@
 //! rule, 2x2 quads, and each covered pixel's perspective-correct [`TriangleFragment`].
 
 use super::setup::{pixel_centre, ScreenTriangle, SUBPIXEL};
-use crate::datapath::Op;
 use crate::datapath::Real;
+use crate::datapath::{Event, Op};
 use crate::raster::counts::Counts;
 
 /// One fragment of a triangle: what the ROP needs to test and shade it.
@@ -161,6 +161,91 @@ impl<R: Real> ScreenTriangle<R> {
             l[0][k] * self.z[0] + l[1][k] * self.z[1] + l[2][k] * self.z[2]
         });
         (l, z)
+    }
+}
+
+/// Side of the coarse tiles a hardware rasterizer tests a triangle's bounding box in, before
+/// its quads \[pixels\]: the ROP interleave tile's default (`rop.tile_px`), so a tile that
+/// survives is one ROP's. Even, so a tile holds whole 2x2 quads.
+pub const COARSE_TILE_PX: u32 = 8;
+
+/// What a hierarchical rasterizer meets walking one triangle ([`ScreenTriangle::walk`]):
+/// the events its operations are priced by (`cost::built`). The model finds coverage in
+/// closed form per row ([`ScreenTriangle::row_span`]); the walk finds the same pixels.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Walk {
+    /// Coarse tiles of the bounding box, each tested against the three edges.
+    pub tiles: u64,
+    /// Quads (2x2, aligned to even coordinates) of the tiles not rejected that meet the
+    /// bounding box: each has its four pixel centres tested.
+    pub quads_tested: u64,
+    /// Tested quads with at least one covered pixel centre (the model's `Counts::quads`).
+    pub quads_covered: u64,
+    /// Covered pixel centres (the model's `Counts::fragments`).
+    pub fragments: u64,
+}
+
+impl<R: Real> ScreenTriangle<R> {
+    /// The hierarchical walk of the bounding box, in [`COARSE_TILE_PX`] tiles aligned to
+    /// the screen: a tile is rejected when one edge is below its fill-rule minimum at the
+    /// tile's pixel centre where that edge is largest (the corner its signs of a and b
+    /// point to: the trivial-reject corner), so no centre of the tile can be inside; each
+    /// quad of a surviving tile that meets the bounding box is tested pixel by pixel, in
+    /// exact integers (the fill rule of [`Self::covers`]), uncounted.
+    pub fn walk(&self) -> Walk {
+        let [i0, i1, j0, j1] = self.bbox;
+        let t = COARSE_TILE_PX;
+        let inside = |i: u32, j: u32| {
+            let (x, y) = pixel_centre(i, j);
+            self.edges.iter().all(|e| e.at(x, y) >= e.min)
+        };
+        let mut walk = Walk::default();
+        for ty in j0 / t..=(j1 - 1) / t {
+            for tx in i0 / t..=(i1 - 1) / t {
+                walk.tiles += 1;
+                let (lo_x, lo_y) = pixel_centre(tx * t, ty * t);
+                let (hi_x, hi_y) = pixel_centre(tx * t + t - 1, ty * t + t - 1);
+                let rejected = self.edges.iter().any(|e| {
+                    let x = if e.a > 0 { hi_x } else { lo_x };
+                    let y = if e.b > 0 { hi_y } else { lo_y };
+                    e.at(x, y) < e.min
+                });
+                if rejected {
+                    continue;
+                }
+                let rows = (ty * t).max(j0 & !1)..(ty * t + t).min(j1);
+                for qj in rows.step_by(2) {
+                    let cols = (tx * t).max(i0 & !1)..(tx * t + t).min(i1);
+                    for qi in cols.step_by(2) {
+                        walk.quads_tested += 1;
+                        let covered = [(0, 0), (1, 0), (0, 1), (1, 1)]
+                            .iter()
+                            .map(|&(di, dj)| (qi + di, qj + dj))
+                            .filter(|&(i, j)| (i0..i1).contains(&i) && (j0..j1).contains(&j))
+                            .filter(|&(i, j)| inside(i, j))
+                            .count() as u64;
+                        walk.quads_covered += (covered > 0) as u64;
+                        walk.fragments += covered;
+                    }
+                }
+            }
+        }
+        walk
+    }
+
+    /// Tallies the triangle's [`Walk`] as hardware events (`Real::tally`; a counting
+    /// datapath keeps them for `cost::built`, other words do nothing).
+    #[inline]
+    pub fn tally_walk(&self) {
+        if !R::COUNTS_OPERATIONS {
+            return;
+        }
+        let w = self.walk();
+        R::tally(Event::Triangle, 1);
+        R::tally(Event::Tile, w.tiles);
+        R::tally(Event::QuadTested, w.quads_tested);
+        R::tally(Event::QuadCovered, w.quads_covered);
+        R::tally(Event::Fragment, w.fragments);
     }
 }
 

@@ -116,6 +116,49 @@ fn row_span_in_closed_form_is_the_pixel_walk() {
     assert!(tested > 3000, "{tested} triangles set up");
 }
 
+/// The hierarchical walk a hardware rasterizer would do finds the model's covered quads and
+/// fragments exactly, on random triangles large and small, slivers and triangles reaching
+/// past the viewport; it tests no more quads than the bounding box holds, and a rejected
+/// tile holds no covered pixel (rejection is exact at the corners, so it only drops tiles
+/// that are wholly outside one edge).
+#[test]
+fn the_hardware_walk_finds_the_models_quads_and_fragments() {
+    use proptest::prelude::RngExt;
+    use proptest::test_runner::{RngAlgorithm, TestRng};
+    let mut rng = TestRng::from_seed(RngAlgorithm::ChaCha, &[5; 32]);
+    let (mut tested, mut rejected_some) = (0, false);
+    for n in 0..3000 {
+        let reach = [300, 4_000, 40_000][n % 3];
+        let p = [0; 3].map(|_| {
+            (
+                rng.random_range(-reach..VP.width as i64 * SUBPIXEL + reach),
+                rng.random_range(-reach..VP.height as i64 * SUBPIXEL + reach),
+            )
+        });
+        let Some(t) = tri(n as u32, p).or_else(|| tri(n as u32, [p[0], p[2], p[1]])) else {
+            continue;
+        };
+        tested += 1;
+        let mut counts = Counts::default();
+        struct Nothing;
+        impl<R: Real> TriangleSink<R> for Nothing {
+            fn fragment(&mut self, _: &ScreenTriangle<R>, _: u32, _: u32, _: &TriangleFragment<R>) {
+            }
+            fn row(&mut self, _: &ScreenTriangle<R>, _: u32, _: u32, _: u32) {}
+        }
+        rasterize(&t, &mut Nothing, &mut counts);
+        let w = t.walk();
+        assert_eq!(w.quads_covered, counts.quads, "{p:?}");
+        assert_eq!(w.fragments, counts.fragments, "{p:?}");
+        let [i0, i1, j0, j1] = t.bbox;
+        let box_quads = ((i1 - 1) / 2 - i0 / 2 + 1) as u64 * ((j1 - 1) / 2 - j0 / 2 + 1) as u64;
+        assert!(w.quads_tested <= box_quads, "{p:?}");
+        assert!(w.quads_covered <= w.quads_tested && w.tiles > 0);
+        rejected_some |= w.quads_tested < box_quads;
+    }
+    assert!(tested > 2000 && rejected_some, "{tested} triangles set up");
+}
+
 /// Pixel centre (i, j) in sub-pixel units.
 fn c(i: i64, j: i64) -> (i64, i64) {
     (i * SUBPIXEL + SUBPIXEL / 2, j * SUBPIXEL + SUBPIXEL / 2)
