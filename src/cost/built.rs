@@ -72,10 +72,25 @@ pub fn setup_per_triangle() -> [u64; OPS.len()] {
     ops(7 * PLANES, 8 * PLANES, 1, 6 + 6 + 2, 6)
 }
 
+/// One vertex's work in the triangle setup, as the model executes it for each corner of
+/// each triangle (`raster::triangle::setup`): its two depth-plane distances (8 multiplies,
+/// 6 adds, 2 compares), its projection (24 multiplies, 15 adds, a reciprocal), its 1/w
+/// and the six attributes over w (a reciprocal, 6 multiplies) and its 16.8 snap (2
+/// roundings). A post-transform vertex cache hit, or a corner whose vertex the domain
+/// evaluator already set up for its patch, does none of it.
+pub fn setup_per_vertex() -> [u64; OPS.len()] {
+    let mut out = ops(21, 38, 2, 0, 0);
+    out[Op::Cmp as usize] = 2;
+    out[Op::Round as usize] = 2;
+    out
+}
+
 /// `counted` with the units priced as built: the triangle rasterizer's operations from
 /// the walk's events, the triangle setup's executed ones plus its planes and steps per
-/// triangle it set up. Kinds and events the run did not touch stay 0.
-pub fn as_built(counted: &OpTable, reciprocal: Reciprocal) -> OpTable {
+/// triangle it set up, less one vertex's work ([`setup_per_vertex`]) for each of the
+/// `reused` triangle corners whose transformed vertex was reused. Kinds and events the run
+/// did not touch stay 0.
+pub fn as_built(counted: &OpTable, reciprocal: Reciprocal, reused: u64) -> OpTable {
     let mut out = *counted;
     let mut raster = [0; OPS.len()];
     for event in crate::datapath::EVENTS {
@@ -89,6 +104,11 @@ pub fn as_built(counted: &OpTable, reciprocal: Reciprocal) -> OpTable {
     let mut setup = counted.of(UnitKind::TriangleSetup);
     for (total, per) in setup.iter_mut().zip(setup_per_triangle()) {
         *total += triangles * per;
+    }
+    // A corner culled before its projection (behind a depth plane) executed less than a
+    // vertex's work: never take away more than was executed.
+    for (total, per) in setup.iter_mut().zip(setup_per_vertex()) {
+        *total = total.saturating_sub(reused * per);
     }
     out.set(UnitKind::TriangleSetup, setup);
     out
@@ -114,7 +134,7 @@ mod tests {
         ] {
             t.add_events(e, n);
         }
-        let q = as_built(&t, Reciprocal::Quad);
+        let q = as_built(&t, Reciprocal::Quad, 0);
         // Adds: 8 a tile, 8 a quad tested, 9 a fragment; multiplies 8 a fragment; a divide
         // a covered quad; 9 fixed-point adds a tile and 24 a quad tested.
         assert_eq!(
@@ -131,7 +151,7 @@ mod tests {
                 0
             ]
         );
-        let p = as_built(&t, Reciprocal::Pixel);
+        let p = as_built(&t, Reciprocal::Pixel, 0);
         assert_eq!(
             p.of(UnitKind::TriangleRasterizer),
             [
@@ -153,6 +173,16 @@ mod tests {
         assert_eq!(q.events(Event::Fragment), 6);
         // Nothing else moves.
         assert_eq!(q.of(UnitKind::Rop), t.of(UnitKind::Rop));
+        // A reused vertex takes one vertex's work from setup, never below 0.
+        let mut setup = t;
+        setup.add(UnitKind::TriangleSetup, Op::Mul, 38);
+        let r = as_built(&setup, Reciprocal::Quad, 1);
+        let mut want = q.of(UnitKind::TriangleSetup);
+        want[Op::Add as usize] -= 21;
+        for op in [Op::Div, Op::Cmp, Op::Round] {
+            want[op as usize] = 0;
+        }
+        assert_eq!(r.of(UnitKind::TriangleSetup), want);
     }
 
     /// A run without triangles (the lembo path) keeps its table.
@@ -160,6 +190,6 @@ mod tests {
     fn a_run_without_triangles_is_unchanged() {
         let mut t = OpTable::default();
         t.add(UnitKind::Segmenter, Op::Mul, 7);
-        assert_eq!(as_built(&t, Reciprocal::Quad), t);
+        assert_eq!(as_built(&t, Reciprocal::Quad, 0), t);
     }
 }

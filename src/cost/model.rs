@@ -198,6 +198,10 @@ pub struct Work<'a> {
     pub accumulation_bytes: u64,
     /// The geometry fetch's bytes through the port.
     pub geometry_bytes: u64,
+    /// Triangle corners whose transformed vertex setup reused (post-transform vertex cache
+    /// hits; on-chip, corners beyond each patch's first use of a point), whose vertex work
+    /// the triangle setup does not do ([`super::built::setup_per_vertex`]).
+    pub vertices_reused: u64,
     /// The blend units' work, for a discoid frame.
     pub blend: Option<BlendWork<'a>>,
 }
@@ -260,7 +264,11 @@ pub fn price_sram(sram: &Sram, bits_stored: f64, bits_moved: f64, frame_us: f64)
 /// The cost of `work` on `arch` in `datapath`, priced by `tech`.
 pub fn cost(tech: &Tech, arch: &ArchConfig, datapath: Datapath, work: &Work) -> CostReport {
     // The units built differently from the model priced as built (DESIGN.md §12).
-    let ops = super::built::as_built(work.ops, arch.triangle_rasterizer.reciprocal);
+    let ops = super::built::as_built(
+        work.ops,
+        arch.triangle_rasterizer.reciprocal,
+        work.vertices_reused,
+    );
     // The timed units and the blend units inside their ROPs, in dataflow order.
     let mut units: Vec<&UnitCycles> = work.cycles.units.iter().collect();
     units.extend(work.blend.iter().flat_map(|b| b.units));
@@ -455,6 +463,7 @@ mod tests {
             framebuffer_bytes: 1000,
             accumulation_bytes: 0,
             geometry_bytes: 0,
+            vertices_reused: 0,
             blend: None,
         };
         let c = cost(&tech, &arch, Datapath::F32, &work);

@@ -191,6 +191,8 @@ fn discoid_cost(
         framebuffer_bytes: timed.port_bytes.framebuffer,
         accumulation_bytes: timed.port_bytes.accumulation,
         geometry_bytes: timed.port_bytes.geometry,
+        // Planar discoids are read whole, without a vertex cache.
+        vertices_reused: 0,
         blend: Some(cost::model::BlendWork {
             mode: job.blend,
             units: &timed.blend_units,

@@ -12,8 +12,9 @@ use crate::config::ArchConfig;
 use crate::cost::{self, model::CostReport};
 use crate::error::{Error, Result};
 use crate::graph::TessSource;
-use crate::pipeline::{self, CycleReport, Source};
+use crate::pipeline::{self, CycleReport, FetchReport, Source};
 use crate::raster;
+use crate::raster::triangle::TriangleSource;
 use crate::reference::oracle::ReferenceImage;
 use crate::report::{Memory, Primitives, Report, SCHEMA_VERSION};
 use crate::rop::FrameBuffer;
@@ -67,7 +68,7 @@ pub fn run_path(
             cycles,
             &counts,
             &framebuffer,
-            fetch.map_or(0, |f| f.bytes),
+            fetch,
         )?),
         _ => None,
     };
@@ -163,14 +164,19 @@ fn cost_of(
     cycles: &CycleReport,
     counts: &raster::Counts,
     timed: &FrameBuffer,
-    geometry_bytes: u64,
+    fetch: Option<FetchReport>,
 ) -> Result<CostReport> {
     let (frame, mut ops) = match route {
         Route::Triangles(t) => cost::triangle_ops(scene, view, t, job.datapath),
         _ => cost::lembo_ops(scene, view, job.tolerance(), job.datapath)?,
     };
+    // The triangle corners whose transformed vertex setup reused: the vertex caches' hits
+    // for a mesh in memory; on chip, each patch's points are set up once.
+    let mut vertices_reused = fetch.and_then(|f| f.vertex_cache).map_or(0, |v| v.hits);
     if let (Route::Triangles(t), TessSource::OnChip) = (route, arch.tessellation.source) {
         cost::onchip::tessellation_ops(t, &mut ops);
+        vertices_reused =
+            (3 * t.len()).saturating_sub(t.lembos() as u64 * TriangleSource::vertices_per_chunk(t));
     }
     if frame.framebuffer.color != timed.color {
         return Err(Error::Internal(
@@ -185,7 +191,8 @@ fn cost_of(
         cycles,
         framebuffer_bytes,
         accumulation_bytes: 0,
-        geometry_bytes,
+        geometry_bytes: fetch.map_or(0, |f| f.bytes),
+        vertices_reused,
         blend: None,
     };
     Ok(cost::model::cost(&job.tech()?, arch, job.datapath, &work))

@@ -371,7 +371,10 @@ mod tests {
             .collect();
         let ports = check(&both, &BOUNDARIES).unwrap();
         let rop = both.iter().position(|&k| k == Rop).unwrap();
-        let keys: Vec<&str> = ports.input[rop].iter().map(|&b| BOUNDARIES[b].key).collect();
+        let keys: Vec<&str> = ports.input[rop]
+            .iter()
+            .map(|&b| BOUNDARIES[b].key)
+            .collect();
         assert_eq!(keys, ["rasterizer_to_rop", "triangle_rasterizer_to_rop"]);
         // Two boundaries between the same two kinds would make two crossbars of one pair.
         let mut twice = BOUNDARIES.to_vec();
