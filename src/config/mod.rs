@@ -1172,6 +1172,47 @@ mod tests {
         assert_eq!(ok.unit(UnitKind::TriangleSetup).0, 4);
     }
 
+    /// The triangle source and its units: an unknown source is a parse error naming the
+    /// field (with the sources it accepts), a zero vertex cache or count is refused.
+    #[test]
+    fn config_tessellation_fields_are_checked_naming_them() {
+        let message = assert_parse_err(
+            r#"{"tessellation": {"source": "disk"}}"#,
+            "tessellation.source",
+        );
+        assert!(message.contains("`memory`") && message.contains("`onchip`"), "{message}");
+        assert_invalid(
+            r#"{"tessellation": {"vertex_cache_entries": 0}}"#,
+            "tessellation.vertex_cache_entries",
+            "0",
+        );
+        assert_invalid(
+            r#"{"tessellation": {"vertex_cache_entries": 4097}}"#,
+            "tessellation.vertex_cache_entries",
+            "4097",
+        );
+        assert_invalid(r#"{"tessellator": {"count": 0}}"#, "tessellator.count", "0");
+        assert_invalid(r#"{"tessellator": {"batch": 0}}"#, "tessellator.batch", "0");
+        assert_invalid(
+            r#"{"domain_eval": {"cycles_per_vertex": 0}}"#,
+            "domain_eval.cycles_per_vertex",
+            "0",
+        );
+        let ok = ArchConfig::from_json(
+            r#"{"tessellation": {"source": "onchip"}, "tessellator": {"count": 3}}"#,
+            "test",
+        )
+        .unwrap();
+        assert_eq!(ok.tessellation.source, TessSource::OnChip);
+        assert_eq!(ok.unit(UnitKind::Tessellator).0, 3);
+        let kinds: Vec<_> = ok
+            .instances(UnitPath::Triangle)
+            .into_iter()
+            .map(|(u, _)| u.kind)
+            .collect();
+        assert!(kinds.contains(&UnitKind::DomainEval) && !kinds.contains(&UnitKind::Setup));
+    }
+
     #[test]
     fn config_out_of_range_costs_are_refused() {
         assert_invalid(

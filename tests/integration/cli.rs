@@ -238,6 +238,20 @@ fn bad_architecture_field_is_refused_by_name() {
             "triangle_setup.count",
         ),
         (r#"{"setup": {"batch": 0}}"#, "setup.batch"),
+        (
+            r#"{"tessellation": {"source": "gpu"}}"#,
+            "tessellation.source",
+        ),
+        (
+            r#"{"tessellation": {"vertex_cache_entries": 0}}"#,
+            "tessellation.vertex_cache_entries",
+        ),
+        (r#"{"tessellator": {"count": 0}}"#, "tessellator.count"),
+        (r#"{"domain_eval": {"count": 65}}"#, "domain_eval.count"),
+        (
+            r#"{"triangle_setup": {"culled_per_cycle": 0}}"#,
+            "triangle_setup.culled_per_cycle",
+        ),
     ] {
         let dir = tempfile::tempdir().unwrap();
         std::fs::write(dir.path().join("a.json"), arch).unwrap();

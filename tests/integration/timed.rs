@@ -429,3 +429,118 @@ fn replicated_setup_engines_deal_batches_and_draw_the_same_pixels() {
         );
     }
 }
+
+/// The triangle path's two sources (DESIGN.md §5): a mesh in memory read through the
+/// setup engines' vertex caches, and the lembos tessellated on chip by Tessellator and
+/// DomainEval units, draw the same pixels with the same counts. The fetch reads 12 bytes
+/// a triangle and 24 a vertex miss from memory, 144 a lembo on chip; the on-chip units
+/// are busy for each lembo's n² triangles and (n + 1)(n + 2)/2 points; the memory port
+/// is busy for the fetch's reads as well as the ROPs'.
+#[test]
+fn both_triangle_sources_draw_the_same_pixels_and_account_their_work() {
+    use lembo_sim::graph::TessSource;
+    use lembo_sim::lembo::tessellate::Tessellation;
+    let s = scene("bunny.json", Some(128));
+    let view = View::new(&s.camera, s.viewport);
+    let n = 3u64;
+    let tess = Tessellation::new(&s, n as u32);
+    let lembos = tess.lembos() as u64;
+    let triangles = tess.len();
+    let run = |a: &ArchConfig| {
+        run_timed(
+            &s,
+            &view,
+            0.5,
+            Datapath::F32,
+            a,
+            Source::Triangles(&tess),
+            &SimOptions::default(),
+        )
+        .expect("timed triangles")
+    };
+    let busy = |t: &TimedFrame, kind: UnitKind| -> u64 {
+        t.cycles
+            .units
+            .iter()
+            .filter(|u| u.kind == kind)
+            .map(|u| u.busy.0)
+            .sum()
+    };
+    let memory = run(&ArchConfig::default());
+    let fetch = memory.fetch.unwrap();
+    assert_eq!(fetch.source, "memory");
+    let cache = fetch.vertex_cache.unwrap();
+    assert_eq!(cache.hits + cache.misses, 3 * triangles);
+    assert!(cache.misses >= tess.vertex_count(), "each vertex missed once at least");
+    assert_eq!(fetch.bytes, 12 * triangles + 24 * cache.misses);
+    // A larger cache misses less, down to the mesh's own vertices.
+    let mut big = ArchConfig::default();
+    big.tessellation.vertex_cache_entries = 4096;
+    let big = run(&big).fetch.unwrap().vertex_cache.unwrap();
+    assert!(big.misses < cache.misses, "{big:?} against {cache:?}");
+    for onchip in [1, 3] {
+        let mut a = ArchConfig::default();
+        a.tessellation.source = TessSource::OnChip;
+        a.tessellator.count = onchip;
+        a.domain_eval.count = onchip;
+        a.triangle_setup.count = 2;
+        a.validate("on chip").unwrap();
+        let t = run(&a);
+        assert!(t.framebuffer.color == memory.framebuffer.color, "{onchip} units");
+        assert_eq!(t.framebuffer.depth, memory.framebuffer.depth);
+        assert_eq!(order_free(&t.counts), order_free(&memory.counts));
+        assert_accounting(&t);
+        let fetch = t.fetch.unwrap();
+        assert_eq!((fetch.source, fetch.bytes), ("onchip", 144 * lembos));
+        assert!(fetch.vertex_cache.is_none());
+        assert_eq!(busy(&t, UnitKind::Tessellator), lembos * n * n);
+        // Each patch's points, spent over its batches (at least a cycle each).
+        let points = lembos * (n + 1) * (n + 2) / 2;
+        let evaluated = busy(&t, UnitKind::DomainEval);
+        assert!(
+            (points..=points + lembos).contains(&evaluated),
+            "{evaluated} cycles for {points} points"
+        );
+        assert_eq!(
+            t.cycles.units.iter().filter(|u| u.kind == UnitKind::Tessellator).count(),
+            onchip as usize
+        );
+        // One memory port.
+        assert!(
+            busy(&t, UnitKind::FrameBuffer) >= busy(&t, UnitKind::GeometryFetch),
+            "the port's busy cycles include the fetch's"
+        );
+        assert!(t.cycles.total.0 >= busy(&t, UnitKind::FrameBuffer));
+    }
+}
+
+/// Issue 35's target: the bunny at n = 16 (512x512) on `sim/arch/gpu.json` (4 triangle
+/// setup engines culling 2 triangles a cycle, 4 triangle rasterizers, the lembos
+/// tessellated on chip by 4 Tessellators and 4 DomainEvals) takes at most a third of the
+/// 940 570 cycles one setup engine took with the mesh free, and setup does not bound it.
+#[test]
+fn on_chip_tessellation_frees_the_triangle_front_end() {
+    use lembo_sim::lembo::tessellate::Tessellation;
+    let s = scene("bunny.json", Some(512));
+    let view = View::new(&s.camera, s.viewport);
+    let tess = Tessellation::new(&s, 16);
+    let gpu = arch("gpu.json");
+    let t = run_timed(
+        &s,
+        &view,
+        0.5,
+        Datapath::F32,
+        &gpu,
+        Source::Triangles(&tess),
+        &SimOptions::default(),
+    )
+    .unwrap();
+    assert!(
+        t.cycles.total.0 * 3 <= 940_570,
+        "{} cycles, bottleneck {:?}",
+        t.cycles.total,
+        t.cycles.bottleneck
+    );
+    let bottleneck = t.cycles.bottleneck.unwrap();
+    assert!(!bottleneck.starts_with("TriangleSetup"), "{bottleneck}");
+}
