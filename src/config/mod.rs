@@ -1180,7 +1180,10 @@ mod tests {
             r#"{"tessellation": {"source": "disk"}}"#,
             "tessellation.source",
         );
-        assert!(message.contains("`memory`") && message.contains("`onchip`"), "{message}");
+        assert!(
+            message.contains("`memory`") && message.contains("`onchip`"),
+            "{message}"
+        );
         assert_invalid(
             r#"{"tessellation": {"vertex_cache_entries": 0}}"#,
             "tessellation.vertex_cache_entries",

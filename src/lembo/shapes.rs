@@ -8,14 +8,21 @@
 //! - `cylinder24`: radius 1, height 2 along y, 12 sides, open ends, 2 triangles per side;
 //! - `surface96`: the height field y = 0.35 sin(1.4 x) cos(1.1 z) over [-2, 2] x [-1.5, 1.5],
 //!   an 8 x 6 grid of 2 triangles per cell.
+//!
+//! And one family for scale, not from the paper: `terrainN` (N from 1 to
+//! [`MAX_TERRAIN_CELLS`]), a height field of three octaves of sines over [-4, 4] x [-4, 4]
+//! on an N x N grid, 2N² triangles (`terrain320`: 204 800 lembos).
 
 use super::construct::TriangleMesh;
 use super::Lembo;
 use glam::DVec3;
 use std::f64::consts::PI;
 
-/// Names accepted by the scene format's `builtin` objects.
+/// Names accepted by the scene format's `builtin` objects, beside the `terrainN` family.
 pub const BUILTIN_NAMES: [&str; 3] = ["sphere24", "cylinder24", "surface96"];
+
+/// The largest N of a `terrainN` builtin: 2N² = 2 097 152 lembos.
+pub const MAX_TERRAIN_CELLS: u32 = 1024;
 
 /// The mesh of a builtin shape, or `None` for an unknown name.
 pub fn builtin_mesh(name: &str) -> Option<TriangleMesh> {
@@ -23,7 +30,15 @@ pub fn builtin_mesh(name: &str) -> Option<TriangleMesh> {
         "sphere24" => Some(sphere_mesh(6, 3)),
         "cylinder24" => Some(cylinder_mesh(12)),
         "surface96" => Some(surface_mesh(8, 6)),
-        _ => None,
+        _ => {
+            // terrainN, N a plain decimal (no sign, no leading zero) within the cap.
+            let n = name.strip_prefix("terrain")?;
+            if n.is_empty() || n.starts_with('0') || !n.bytes().all(|b| b.is_ascii_digit()) {
+                return None;
+            }
+            let n: u32 = n.parse().ok()?;
+            (n <= MAX_TERRAIN_CELLS).then(|| terrain_mesh(n))
+        }
     }
 }
 
@@ -118,9 +133,69 @@ pub fn surface_mesh(nx: u32, nz: u32) -> TriangleMesh {
     m
 }
 
+/// A terrain: y = h(x, z), three octaves of sines over [-4, 4] x [-4, 4], on an `n` x `n`
+/// grid of cells, two triangles a cell, with the height field's exact normals.
+pub fn terrain_mesh(n: u32) -> TriangleMesh {
+    // (amplitude, frequency in x, frequency in z, phase) of each octave.
+    const OCTAVES: [(f64, f64, f64, f64); 3] = [
+        (0.6, 0.7, 0.5, 0.0),
+        (0.2, 1.9, 2.3, 1.0),
+        (0.06, 5.3, 4.7, 2.0),
+    ];
+    let mut m = TriangleMesh::default();
+    for j in 0..=n {
+        for i in 0..=n {
+            let x = -4.0 + 8.0 * i as f64 / n as f64;
+            let z = -4.0 + 8.0 * j as f64 / n as f64;
+            let (mut y, mut dydx, mut dydz) = (0.0, 0.0, 0.0);
+            for (a, fx, fz, p) in OCTAVES {
+                let (sx, cx) = (fx * x + p).sin_cos();
+                let (sz, cz) = (fz * z).sin_cos();
+                y += a * sx * cz;
+                dydx += a * fx * cx * cz;
+                dydz -= a * fz * sx * sz;
+            }
+            m.positions.push(DVec3::new(x, y, z));
+            m.normals.push(DVec3::new(-dydx, 1.0, -dydz).normalize());
+        }
+    }
+    let idx = |i: u32, j: u32| j * (n + 1) + i;
+    for j in 0..n {
+        for i in 0..n {
+            let (a, b, c, d) = (idx(i, j), idx(i + 1, j), idx(i, j + 1), idx(i + 1, j + 1));
+            m.triangles.push([a, c, d]);
+            m.triangles.push([a, d, b]);
+        }
+    }
+    m
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `terrainN` is 2N² lembos for N in 1..=MAX_TERRAIN_CELLS, facing up; other spellings
+    /// are unknown names.
+    #[test]
+    fn terrain_builtins_have_two_triangles_a_cell() {
+        assert_eq!(builtin_lembos("terrain1").unwrap().len(), 2);
+        assert_eq!(builtin_lembos("terrain20").unwrap().len(), 800);
+        let m = builtin_mesh("terrain7").unwrap();
+        for t in &m.triangles {
+            let [a, b, c] = t.map(|i| m.positions[i as usize]);
+            assert!((b - a).cross(c - a).y > 0.0, "{t:?} faces down");
+        }
+        for bad in [
+            "terrain",
+            "terrain0",
+            "terrain007",
+            "terrain+3",
+            "terrain1025",
+            "terrainx",
+        ] {
+            assert!(builtin_mesh(bad).is_none(), "{bad}");
+        }
+    }
 
     #[test]
     fn builtins_have_the_papers_element_counts() {

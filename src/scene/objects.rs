@@ -9,7 +9,7 @@ use super::{
 };
 use crate::error::{Error, Result};
 use crate::lembo::construct::{CollapsedTriangle, TriangleMesh};
-use crate::lembo::shapes::{builtin_mesh, BUILTIN_NAMES};
+use crate::lembo::shapes::{builtin_mesh, BUILTIN_NAMES, MAX_TERRAIN_CELLS};
 use glam::DVec3;
 use std::path::Path;
 
@@ -39,7 +39,10 @@ impl Check<'_> {
                     return Err(self.invalid(
                         format!("{field}.builtin"),
                         format!("{name:?}"),
-                        format!("unknown builtin shape; known: {}", BUILTIN_NAMES.join(", ")),
+                        format!(
+                            "unknown builtin shape; known: {}, terrainN (N from 1 to {MAX_TERRAIN_CELLS})",
+                            BUILTIN_NAMES.join(", ")
+                        ),
                     ));
                 };
                 let mesh = transform_mesh(mesh, transform.as_ref());

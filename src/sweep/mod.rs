@@ -44,6 +44,7 @@
 //! pool, appends, resumption), [`merge`] (`sweep-merge`), [`lock`]. Each imports only files
 //! before it (and `lock`); this file only declares them and re-exports their public items.
 
+mod answer;
 mod grid;
 pub mod lock;
 pub mod merge;

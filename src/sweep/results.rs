@@ -21,6 +21,9 @@ pub const RESULTS_CSV: &str = "results.csv";
 
 /// The copy of the spec in a sweep directory.
 pub const SPEC_JSON: &str = "spec.json";
+/// The lembo path against the triangle path within the spec's area budget
+/// ([`super::answer`]); written when the spec has an `area_budget_mm2`.
+pub const ANSWER_MD: &str = "answer.md";
 
 /// A directory that holds results must hold this spec's.
 pub(super) fn check_same_spec(dir: &Path, spec: &Spec) -> Result<()> {
@@ -195,6 +198,9 @@ pub(super) fn write_final(
         (SPEC_JSON, spec_text.to_vec()),
     ];
     files.extend(plots.iter().map(|(name, svg)| (name.as_str(), svg.clone())));
+    if let Some(answer) = budget.and_then(|b| super::answer::answer_md(&records, b)) {
+        files.push((ANSWER_MD, answer.into_bytes()));
+    }
     let page = page(spec_text, records.len(), &files)?;
     files.push((REPORT_HTML, page.into_bytes()));
     write_files(dir, &files)?;

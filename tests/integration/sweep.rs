@@ -416,6 +416,7 @@ fn every_committed_spec_is_valid() {
         names,
         [
             "equal_area",
+            "fair",
             "perspective",
             "precision",
             "smoke",
@@ -697,8 +698,8 @@ fn table_cases(csv: &str) -> BTreeMap<String, String> {
 
 /// The committed sweep results README and RESULTS quote (`sim/sweeps/results/NAME/`, from
 /// `sim/sweeps/NAME.json`) are what the code computes now: each spec is swept again and its
-/// table (host time aside) and the plots committed beside it must equal the committed
-/// ones. `LEMBO_BLESS=1`
+/// table (host time aside), the plots committed beside it and its `answer.md` (if
+/// committed) must equal the committed ones. `LEMBO_BLESS=1`
 /// rewrites the committed files instead, after printing what changed (then re-read the
 /// quoted figures in README.md and RESULTS.md).
 #[test]
@@ -755,6 +756,11 @@ fn committed_sweep_results_are_what_the_code_computes() {
         };
         let (want_svg, got_svg) = (svgs(&committed), svgs(&out));
         assert!(!want_svg.is_empty(), "{name}: no plot committed");
+        // The answer, when committed, word for word.
+        let answer = committed.join("answer.md").exists();
+        if answer && read(&committed, "answer.md") != read(&out, "answer.md") {
+            differ.push("answer.md differs".to_string());
+        }
         for (plot, bytes) in &want_svg {
             match got_svg.get(plot) {
                 None => differ.push(format!("{plot}: no longer drawn")),
@@ -774,6 +780,9 @@ fn committed_sweep_results_are_what_the_code_computes() {
                 eprintln!("  {d}");
             }
             std::fs::copy(out.join("results.csv"), committed.join("results.csv")).unwrap();
+            if answer {
+                std::fs::copy(out.join("answer.md"), committed.join("answer.md")).unwrap();
+            }
             for plot in want_svg.keys() {
                 match got_svg.contains_key(plot) {
                     true => std::fs::copy(out.join(plot), committed.join(plot)).map(drop),

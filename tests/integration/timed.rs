@@ -471,7 +471,10 @@ fn both_triangle_sources_draw_the_same_pixels_and_account_their_work() {
     assert_eq!(fetch.source, "memory");
     let cache = fetch.vertex_cache.unwrap();
     assert_eq!(cache.hits + cache.misses, 3 * triangles);
-    assert!(cache.misses >= tess.vertex_count(), "each vertex missed once at least");
+    assert!(
+        cache.misses >= tess.vertex_count(),
+        "each vertex missed once at least"
+    );
     assert_eq!(fetch.bytes, 12 * triangles + 24 * cache.misses);
     // A larger cache misses less, down to the mesh's own vertices.
     let mut big = ArchConfig::default();
@@ -486,7 +489,10 @@ fn both_triangle_sources_draw_the_same_pixels_and_account_their_work() {
         a.triangle_setup.count = 2;
         a.validate("on chip").unwrap();
         let t = run(&a);
-        assert!(t.framebuffer.color == memory.framebuffer.color, "{onchip} units");
+        assert!(
+            t.framebuffer.color == memory.framebuffer.color,
+            "{onchip} units"
+        );
         assert_eq!(t.framebuffer.depth, memory.framebuffer.depth);
         assert_eq!(order_free(&t.counts), order_free(&memory.counts));
         assert_accounting(&t);
@@ -502,7 +508,11 @@ fn both_triangle_sources_draw_the_same_pixels_and_account_their_work() {
             "{evaluated} cycles for {points} points"
         );
         assert_eq!(
-            t.cycles.units.iter().filter(|u| u.kind == UnitKind::Tessellator).count(),
+            t.cycles
+                .units
+                .iter()
+                .filter(|u| u.kind == UnitKind::Tessellator)
+                .count(),
             onchip as usize
         );
         // One memory port.
