@@ -24,22 +24,38 @@ pub const BUILTIN_NAMES: [&str; 3] = ["sphere24", "cylinder24", "surface96"];
 /// The largest N of a `terrainN` builtin: 2N² = 2 097 152 lembos.
 pub const MAX_TERRAIN_CELLS: u32 = 1024;
 
+/// The largest number of lembos a scene's builtin shapes may make together: one
+/// `terrain1024`'s. A few bytes of scene file must not ask for more memory than a machine
+/// has.
+pub const MAX_BUILTIN_LEMBOS: u64 = 2 * (MAX_TERRAIN_CELLS as u64) * (MAX_TERRAIN_CELLS as u64);
+
 /// The mesh of a builtin shape, or `None` for an unknown name.
 pub fn builtin_mesh(name: &str) -> Option<TriangleMesh> {
     match name {
         "sphere24" => Some(sphere_mesh(6, 3)),
         "cylinder24" => Some(cylinder_mesh(12)),
         "surface96" => Some(surface_mesh(8, 6)),
-        _ => {
-            // terrainN, N a plain decimal (no sign, no leading zero) within the cap.
-            let n = name.strip_prefix("terrain")?;
-            if n.is_empty() || n.starts_with('0') || !n.bytes().all(|b| b.is_ascii_digit()) {
-                return None;
-            }
-            let n: u32 = n.parse().ok()?;
-            (n <= MAX_TERRAIN_CELLS).then(|| terrain_mesh(n))
-        }
+        _ => terrain_cells(name).map(terrain_mesh),
     }
+}
+
+/// The lembos a builtin shape makes, without making them; `None` for an unknown name.
+pub fn builtin_lembo_count(name: &str) -> Option<u64> {
+    match name {
+        "sphere24" | "cylinder24" => Some(24),
+        "surface96" => Some(96),
+        _ => terrain_cells(name).map(|n| 2 * u64::from(n) * u64::from(n)),
+    }
+}
+
+/// N of a `terrainN` name: a plain decimal (no sign, no leading zero) within the cap.
+fn terrain_cells(name: &str) -> Option<u32> {
+    let n = name.strip_prefix("terrain")?;
+    if n.is_empty() || n.starts_with('0') || !n.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    let n: u32 = n.parse().ok()?;
+    (n <= MAX_TERRAIN_CELLS).then_some(n)
 }
 
 /// The lembos of a builtin shape, or `None` for an unknown name.

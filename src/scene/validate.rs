@@ -13,6 +13,7 @@ use super::{
 use crate::camera::{Camera, Projection, Viewport, MAX_VIEWPORT_SIDE};
 use crate::discoid::Discoid;
 use crate::error::{Error, Result};
+use crate::lembo::shapes::{builtin_lembo_count, MAX_BUILTIN_LEMBOS, MAX_TERRAIN_CELLS};
 use crate::lembo::Lembo;
 use crate::rop::shade::Light;
 use glam::{DMat3, DVec3};
@@ -306,6 +307,22 @@ impl SceneSpec {
         let light = check.light(&self.light.unwrap_or_default())?;
         let background =
             check.color("background", self.background.unwrap_or(DEFAULT_BACKGROUND))?;
+        // The builtin shapes' lembos, counted before any is made.
+        let mut builtin = 0u64;
+        for (i, o) in self.objects.iter().enumerate() {
+            let count = o.builtin.as_deref().and_then(builtin_lembo_count);
+            builtin += count.unwrap_or(0);
+            if builtin > MAX_BUILTIN_LEMBOS {
+                return Err(check.invalid(
+                    format!("objects[{i}].builtin"),
+                    format!("{:?}", o.builtin.as_deref().unwrap_or_default()),
+                    format!(
+                        "the scene's builtin shapes would make {builtin} lembos up to here, \
+                         more than the {MAX_BUILTIN_LEMBOS} accepted (one terrain{MAX_TERRAIN_CELLS})"
+                    ),
+                ));
+            }
+        }
         let mut radii = Vec::new();
         let objects = self
             .objects
