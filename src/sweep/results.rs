@@ -22,7 +22,7 @@ pub const RESULTS_CSV: &str = "results.csv";
 /// The copy of the spec in a sweep directory.
 pub const SPEC_JSON: &str = "spec.json";
 /// The lembo path against the triangle path within the spec's area budget
-/// ([`super::answer`]); written when the spec has an `area_budget_mm2`.
+/// (DESIGN.md §7, "The answer"); written when the spec has an `area_budget_mm2`.
 pub const ANSWER_MD: &str = "answer.md";
 
 /// A directory that holds results must hold this spec's.
