@@ -69,6 +69,7 @@ pub mod lembo;
 pub mod output;
 pub mod pipeline;
 pub mod plot;
+pub mod progress;
 pub mod raster;
 pub mod reference;
 pub mod report;

@@ -442,6 +442,57 @@ fn failed(e: &lembo_sim::error::Error) -> ExitCode {
     ExitCode::from(e.exit_code())
 }
 
+/// After this long a render or compare shows its progress (when stderr is a terminal): a
+/// shorter one ends before a bar would be read.
+const PROGRESS_AFTER: std::time::Duration = std::time::Duration::from_secs(2);
+
+/// Runs `work`, and while it runs, once it has taken [`PROGRESS_AFTER`] and if stderr is a
+/// terminal, a progress bar on stderr: the stage (`lembo_sim::progress`) and its primitives
+/// taken of those to take, cleared when the work ends. Nothing is drawn otherwise, so
+/// captured output and pipes see none of it.
+fn with_progress<T>(work: impl FnOnce() -> T) -> T {
+    use std::io::IsTerminal as _;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    if !std::io::stderr().is_terminal() {
+        return work();
+    }
+    let done = AtomicBool::new(false);
+    std::thread::scope(|s| {
+        s.spawn(|| {
+            let started = std::time::Instant::now();
+            let tick = std::time::Duration::from_millis(200);
+            while started.elapsed() < PROGRESS_AFTER {
+                if done.load(Ordering::Relaxed) {
+                    return;
+                }
+                std::thread::sleep(tick);
+            }
+            let bar = indicatif::ProgressBar::new(1).with_elapsed(started.elapsed());
+            bar.set_style(
+                indicatif::ProgressStyle::with_template("{elapsed_precise} [{wide_bar}] {msg}")
+                    .expect("the template is valid")
+                    .progress_chars("=> "),
+            );
+            while !done.load(Ordering::Relaxed) {
+                // A stage that counts no primitives (the reference, the metrics) shows its
+                // name over an empty bar.
+                let (stage, taken, total) = lembo_sim::progress::snapshot();
+                bar.set_length(total.max(taken).max(1));
+                bar.set_position(taken);
+                bar.set_message(match total {
+                    0 => stage.to_string(),
+                    _ => format!("{stage}: {taken}/{total} primitives"),
+                });
+                std::thread::sleep(tick);
+            }
+            bar.finish_and_clear();
+        });
+        let out = work();
+        done.store(true, Ordering::Relaxed);
+        out
+    })
+}
+
 fn compare(args: CompareArgs) -> ExitCode {
     let job = CompareJob {
         scene: args.scene,
@@ -457,7 +508,7 @@ fn compare(args: CompareArgs) -> ExitCode {
         supersample: args.supersample,
         host_threads: args.host_threads,
     };
-    match run_compare(&job) {
+    match with_progress(|| run_compare(&job)) {
         Ok(out) => {
             let _ = write!(std::io::stdout().lock(), "{}", out.table);
             out!("wrote {} to {}", out.files.join(", "), out.dir.display());
@@ -506,7 +557,7 @@ fn render(args: RenderArgs) -> ExitCode {
         given,
         no_memory_check: args.no_memory_check,
     };
-    match run_render(&job) {
+    match with_progress(|| run_render(&job)) {
         Ok(out) => {
             let _ = write!(std::io::stdout().lock(), "{}", out.report.summary());
             out!("wrote {} to {}", out.files.join(", "), out.dir.display());

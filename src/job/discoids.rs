@@ -33,6 +33,7 @@ pub(super) fn run_discoids(
     reference: Option<(&ReferenceImage, f64)>,
 ) -> Result<PathRun> {
     let threshold = job.threshold.unwrap_or(scene.discoid_threshold);
+    crate::progress::stage("discoid passes");
     let t0 = Instant::now();
     let (framebuffer, counts, blend, units, cycles, cost) = match model {
         Model::Timed(arch) => {

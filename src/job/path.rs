@@ -166,6 +166,7 @@ fn cost_of(
     timed: &FrameBuffer,
     fetch: Option<FetchReport>,
 ) -> Result<CostReport> {
+    crate::progress::stage("pricing (counting run)");
     let (frame, mut ops) = match route {
         Route::Triangles(t) => cost::triangle_ops(scene, view, t, job.datapath),
         _ => cost::lembo_ops(scene, view, job.tolerance(), job.datapath)?,
@@ -257,6 +258,7 @@ fn draw(
     };
     let arch = match model {
         Model::Functional => {
+            crate::progress::stage("functional model");
             let t0 = Instant::now();
             let frame = functional(analyse)?;
             return Ok((Drawn::Functional(frame), t0.elapsed().as_secs_f64()));
@@ -268,6 +270,7 @@ fn draw(
         _ => (pipeline::Path::Lembo, Source::Lembos),
     };
     let options = sim_options(job, arch, path)?;
+    crate::progress::stage("timed pipeline");
     let t0 = Instant::now();
     let timed = pipeline::run_timed(
         scene,
@@ -280,6 +283,7 @@ fn draw(
     )?;
     let wall = t0.elapsed().as_secs_f64();
     let probed = if analyse {
+        crate::progress::stage("functional model, probed");
         let frame = functional(true)?;
         if timed.framebuffer.color != frame.framebuffer.color {
             return Err(Error::Internal(

@@ -44,6 +44,7 @@ fn no_surface(why: String) -> Error {
 /// The exact reference of `scene`'s lembo surfaces, with the wall time it took; for a
 /// discoid scene, pass its [`reference_scene`].
 pub fn render_reference(scene: &Scene, view: &View, supersample: u32) -> (ReferenceImage, f64) {
+    crate::progress::stage("exact reference");
     let t = Instant::now();
     let lembos: Vec<_> = scene.lembos().collect();
     let reference = oracle::render_reference(&oracle::ReferenceInput {
@@ -76,6 +77,7 @@ pub(super) fn measure(
     frame: &raster::Frame,
     (reference, wall): (&ReferenceImage, f64),
 ) -> Measured {
+    crate::progress::stage("accuracy metrics");
     let t1 = Instant::now();
     let accuracy = measure_frame(scene, view, frame, reference, job.path, ids_per_lembo);
     let metrics_wall = t1.elapsed().as_secs_f64();

@@ -204,40 +204,43 @@ fn run_in<R: Real>(
     let trace_cap = options.trace_event_cap / plan.units.len();
     let trace = options.trace.then_some(trace_cap);
     let results: Outcome = {
+        let fetch = match (path, source, tess) {
+            (Path::Triangle, Source::Triangles(t), TessSource::Memory) => FetchPlan {
+                primitives: t.chunks() as u64 * t.per_chunk(),
+                bytes: t.bytes(),
+                batch: arch.triangle_setup.batch,
+                // A vertex cache for a source that is an indexed mesh.
+                vertex_cache: t
+                    .vertex_ids(0, &mut Vec::new())
+                    .then_some(arch.tessellation.vertex_cache_entries),
+            },
+            // The lembos themselves, read for the on-chip tessellators.
+            (Path::Triangle, Source::Triangles(t), TessSource::OnChip) => FetchPlan {
+                primitives: t.chunks() as u64,
+                bytes: t.chunks() as u64 * crate::lembo::LEMBO_BYTES,
+                batch: arch.tessellator.batch,
+                vertex_cache: None,
+            },
+            _ => FetchPlan {
+                primitives: n_lembos as u64,
+                bytes: n_lembos as u64
+                    * match discoid {
+                        Some(_) => crate::discoid::CURVED_DISCOID_BYTES,
+                        None => crate::lembo::LEMBO_BYTES,
+                    },
+                batch: arch.setup.batch,
+                vertex_cache: None,
+            },
+        };
+        // What a person watching sees advance: the primitives fetched.
+        crate::progress::add_total(fetch.primitives);
         let run = Run {
             scene,
             view,
             arch,
             k: R::of(tol.k),
             perspective_tol: tol.perspective,
-            fetch: match (path, source, tess) {
-                (Path::Triangle, Source::Triangles(t), TessSource::Memory) => FetchPlan {
-                    primitives: t.chunks() as u64 * t.per_chunk(),
-                    bytes: t.bytes(),
-                    batch: arch.triangle_setup.batch,
-                    // A vertex cache for a source that is an indexed mesh.
-                    vertex_cache: t
-                        .vertex_ids(0, &mut Vec::new())
-                        .then_some(arch.tessellation.vertex_cache_entries),
-                },
-                // The lembos themselves, read for the on-chip tessellators.
-                (Path::Triangle, Source::Triangles(t), TessSource::OnChip) => FetchPlan {
-                    primitives: t.chunks() as u64,
-                    bytes: t.chunks() as u64 * crate::lembo::LEMBO_BYTES,
-                    batch: arch.tessellator.batch,
-                    vertex_cache: None,
-                },
-                _ => FetchPlan {
-                    primitives: n_lembos as u64,
-                    bytes: n_lembos as u64
-                        * match discoid {
-                            Some(_) => crate::discoid::CURVED_DISCOID_BYTES,
-                            None => crate::lembo::LEMBO_BYTES,
-                        },
-                    batch: arch.setup.batch,
-                    vertex_cache: None,
-                },
-            },
+            fetch,
             lembos: LemboTable::new(match path {
                 Path::Lembo => n_lembos,
                 Path::Triangle => 0,

@@ -143,7 +143,9 @@ pub fn draw_in_order<R: Real, S, P: Draw<R, S>>(
 ) -> Result<()> {
     let (mut scratch, mut buffers) = (P::SetupScratch::default(), P::Buffers::default());
     let (mut pieces, mut rows) = (Vec::new(), Vec::new());
+    crate::progress::add_total(path.primitives() as u64);
     for n in 0..path.primitives() {
+        crate::progress::advance(1);
         pieces.clear();
         rows.clear();
         let keep = |_: &P::Piece, r| rows.push(r);

@@ -506,12 +506,18 @@ where
     P::Piece: RowCost,
 {
     let per_task = per_task(path.primitives(), path.fetched_together(), threads);
+    crate::progress::add_total(path.primitives() as u64);
     draw_frame(
         scene,
         view,
         threads,
         path.primitives().div_ceil(per_task),
-        |task| set_up_task(path, per_task, task),
+        |task| {
+            let set_up = set_up_task(path, per_task, task);
+            let first = task * per_task;
+            crate::progress::advance((path.primitives().min(first + per_task) - first) as u64);
+            set_up
+        },
         |pieces, lo, hi, rows, buffers: &mut P::Buffers| {
             let mut rop = Rop::<R>::band(rows, &scene.light, view, lo);
             let mut c = Counts::default();

@@ -31,7 +31,15 @@ use std::path::Path;
 const LAYERS: &[(&str, &[&str])] = &[
     (
         "leaf types and errors",
-        &["error", "graph", "datapath", "isa", "json", "tolerance"],
+        &[
+            "error",
+            "graph",
+            "datapath",
+            "isa",
+            "json",
+            "tolerance",
+            "progress",
+        ],
     ),
     ("the architecture file", &["config"]),
     (

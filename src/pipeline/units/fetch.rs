@@ -98,6 +98,7 @@ pub async fn run(
         };
         ctx.emit(ceil_div(bytes, bytes_per_cycle).max(1), engine, access)
             .await;
+        crate::progress::advance(end - first);
         engine = if engine + 1 >= engines.end {
             engines.start
         } else {
