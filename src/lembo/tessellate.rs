@@ -305,22 +305,72 @@ impl<'a> Tessellation<'a> {
         self.vertex_count() * VERTEX_BYTES + self.len() * INDEX_BYTES_PER_TRIANGLE
     }
 
-    /// The lattice point (a, b) of lembo `l`: copied at corners, from the edge's own three
-    /// points on domain edges, from the lembo's functions inside.
+    /// The lattice point (a, b) of lembo `l` at this level ([`lattice_vertex`]).
     fn vertex(&self, l: &Lembo, a: u32, b: u32) -> Vertex {
-        let n = self.n;
-        debug_assert!(a + b <= n);
-        match (a, b) {
-            (0, 0) => corner(l, 0),
-            (a, 0) if a == n => corner(l, 1),
-            (0, b) if b == n => corner(l, 2),
-            // Steps counted from the edge's first end in EDGES: A for AB and AC, B for BC.
-            (a, 0) => edge_point(l, EDGES[0], a, n),
-            (0, b) => edge_point(l, EDGES[1], b, n),
-            (_, b) if a + b == n => edge_point(l, EDGES[2], b, n),
-            (a, b) => {
-                let (u, v) = (a as f64 / n as f64, b as f64 / n as f64);
-                (l.position_at(u, v), l.unit_normal_at(u, v))
+        lattice_vertex(l, a, b, self.n)
+    }
+}
+
+/// The lattice point (a, b) of lembo `l` at level n: copied at corners, from the edge's own
+/// three points on domain edges, from the lembo's functions inside (the module's "Shared
+/// edges").
+fn lattice_vertex(l: &Lembo, a: u32, b: u32, n: u32) -> Vertex {
+    debug_assert!(a + b <= n);
+    match (a, b) {
+        (0, 0) => corner(l, 0),
+        (a, 0) if a == n => corner(l, 1),
+        (0, b) if b == n => corner(l, 2),
+        // Steps counted from the edge's first end in EDGES: A for AB and AC, B for BC.
+        (a, 0) => edge_point(l, EDGES[0], a, n),
+        (0, b) => edge_point(l, EDGES[1], b, n),
+        (_, b) if a + b == n => edge_point(l, EDGES[2], b, n),
+        (a, b) => {
+            let (u, v) = (a as f64 / n as f64, b as f64 / n as f64);
+            (l.position_at(u, v), l.unit_normal_at(u, v))
+        }
+    }
+}
+
+/// The largest accepted subdivision of a lembo: 4^5 = 1024 lembos each.
+pub const MAX_SUBDIVIDE: u32 = 5;
+
+/// Lembo `l` subdivided `s` times: 4^s lembos over the same surface, each the quadratic
+/// patch of one triangle of the level-2^s lattice (the tessellation's local order), its six
+/// construction points and unit normals taken from the level-2^(s+1) lattice, so that
+/// neighbours (within `l` and across its edges) share their edge points bit for bit.
+/// A quadratic restricted to a sub-triangle is a quadratic, so the positions are the
+/// parent's; the normals are its unit normals at the six points (the normal function
+/// interpolates them, as a lembo built from a mesh interpolates its vertex normals).
+pub fn subdivide(l: &Lembo, s: u32, out: &mut Vec<Lembo>) {
+    debug_assert!(s <= MAX_SUBDIVIDE);
+    let m = 1u32 << s;
+    let n = 2 * m;
+    let make = |p: [(u32, u32); 6]| {
+        let v = p.map(|(a, b)| lattice_vertex(l, a, b, n));
+        Lembo::new(v.map(|v| v.0), v.map(|v| v.1))
+    };
+    for b in 0..m {
+        for a in 0..m - b {
+            let (a2, b2) = (2 * a, 2 * b);
+            // Up: A (a, b), B (a + 1, b), C (a, b + 1); D, E, F the middles of AB, AC, BC.
+            out.push(make([
+                (a2, b2),
+                (a2 + 2, b2),
+                (a2, b2 + 2),
+                (a2 + 1, b2),
+                (a2, b2 + 1),
+                (a2 + 1, b2 + 1),
+            ]));
+            if a + b + 1 < m {
+                // Down: A (a + 1, b), B (a + 1, b + 1), C (a, b + 1).
+                out.push(make([
+                    (a2 + 2, b2),
+                    (a2 + 2, b2 + 2),
+                    (a2, b2 + 2),
+                    (a2 + 2, b2 + 1),
+                    (a2 + 1, b2 + 1),
+                    (a2 + 1, b2 + 2),
+                ]));
             }
         }
     }
@@ -396,6 +446,45 @@ mod tests {
             }
         }
         t
+    }
+
+    /// A subdivided lembo is 4^s lembos on the parent's surface (positions within rounding
+    /// of the parent's at the same domain point), and neighbours share their corners bit
+    /// for bit: the subdivided closed sphere24 has the corners Euler's formula gives.
+    #[test]
+    fn subdivided_lembos_stay_on_the_surface_without_cracks() {
+        let scene = trace("sphere24");
+        let lembos: Vec<&Lembo> = scene.lembos().map(|(l, _)| l).collect();
+        for s in 0..=2u32 {
+            let m = 1u32 << s;
+            let mut out = Vec::new();
+            for l in &lembos {
+                let first = out.len();
+                subdivide(l, s, &mut out);
+                assert_eq!(out.len() - first, (m * m) as usize);
+                // Each sub-lembo's centre against the parent's at the same point: sub-triangle
+                // t of the level-m lattice, in local order.
+                for (t, sub) in local_lattice(m).iter().zip(&out[first..]) {
+                    let (u, v) = t.iter().fold((0.0, 0.0), |(u, v), &(a, b)| {
+                        (u + a as f64 / (3 * m) as f64, v + b as f64 / (3 * m) as f64)
+                    });
+                    let third = 1.0 / 3.0;
+                    let got = sub.position_at(third, third);
+                    let want = l.position_at(u, v);
+                    assert!(
+                        (got - want).length() < 1e-12,
+                        "s = {s}: {got} against {want}"
+                    );
+                }
+            }
+            let corners: std::collections::HashSet<_> = out
+                .iter()
+                .flat_map(|l| (0..3).map(|k| key_bits([l.points[k]])))
+                .collect();
+            // V - E + F = 2 with F = 24 m², E = 3F/2.
+            let faces = 24 * (m * m) as usize;
+            assert_eq!(corners.len(), 2 + faces / 2, "s = {s}");
+        }
     }
 
     #[test]

@@ -92,6 +92,8 @@ pub(super) struct ObjectSpec {
     pub(super) transform: Option<TransformSpec>,
     /// With `mesh` only: recompute the normals by auto-smooth at this crease angle.
     pub(super) crease_angle_deg: Option<f64>,
+    /// Not with `discoids`: split each lembo into 4^s lembos over the same surface.
+    pub(super) subdivide: Option<u32>,
 }
 
 /// An object's discoids: exactly one source, and the beta texture they carry.

@@ -10,18 +10,27 @@ use super::{
 use crate::error::{Error, Result};
 use crate::lembo::construct::{CollapsedTriangle, TriangleMesh};
 use crate::lembo::shapes::{builtin_mesh, BUILTIN_NAMES, MAX_TERRAIN_CELLS};
+use crate::lembo::tessellate::{subdivide, MAX_SUBDIVIDE};
+use crate::lembo::Lembo;
+
+/// The most lembos a scene with a subdivided object may have: 2^22, room for the bunny
+/// subdivided five times (3 762 176), and within what 24 GiB hold in a timed run (about
+/// 2.3 kB a lembo today).
+pub const MAX_SUBDIVIDED_LEMBOS: u64 = 1 << 22;
 use glam::DVec3;
 use std::path::Path;
 
 impl Check<'_> {
     /// Validates object `i`. `radii` holds the radii of the discoids of the objects before
-    /// it and receives this object's (its length is the scene's discoid count so far).
+    /// it and receives this object's (its length is the scene's discoid count so far);
+    /// `lembos_before` is the lembos of the objects before it, and receives this one's.
     pub(super) fn object(
         &self,
         i: usize,
         o: &ObjectSpec,
         base_dir: &Path,
         radii: &mut Vec<f64>,
+        lembos_before: &mut u64,
     ) -> Result<SceneObject> {
         let field = format!("objects[{i}]");
         let color = self.color(&format!("{field}.color"), o.color.unwrap_or(DEFAULT_COLOR))?;
@@ -120,6 +129,11 @@ impl Check<'_> {
         if let Some(j) = lembos.iter().position(|l| !lembo_in_range(l)) {
             return Err(self.out_of_range(&field, transform.is_some(), j));
         }
+        let lembos = match o.subdivide {
+            None => lembos,
+            Some(s) => self.subdivided(&field, s, discoids.is_some(), lembos, *lembos_before)?,
+        };
+        *lembos_before += lembos.len() as u64;
         Ok(SceneObject {
             label,
             color,
@@ -127,6 +141,50 @@ impl Check<'_> {
             mesh,
             discoids,
         })
+    }
+
+    /// `lembos` subdivided `s` times (`field.subdivide`): each into 4^s over the same
+    /// surface ([`subdivide`]); refused with discoids, beyond [`MAX_SUBDIVIDE`], or when the
+    /// scene's lembos (`before` of the objects before) would exceed
+    /// [`MAX_SUBDIVIDED_LEMBOS`], before the subdivision is made.
+    fn subdivided(
+        &self,
+        field: &str,
+        s: u32,
+        discoids: bool,
+        lembos: Vec<Lembo>,
+        before: u64,
+    ) -> Result<Vec<Lembo>> {
+        let field = format!("{field}.subdivide");
+        if discoids {
+            return Err(self.invalid(
+                field,
+                s,
+                "applies to `builtin`, `lembos` and `mesh` objects (discoids from a mesh have their own `discoids.subdivide`)",
+            ));
+        }
+        if s > MAX_SUBDIVIDE {
+            return Err(self.invalid(
+                field,
+                s,
+                format!("must be 0 to {MAX_SUBDIVIDE} (4^s lembos for each)"),
+            ));
+        }
+        let total = before + lembos.len() as u64 * (1u64 << (2 * s));
+        if total > MAX_SUBDIVIDED_LEMBOS {
+            return Err(self.invalid(
+                field,
+                s,
+                format!(
+                    "would make the scene {total} lembos, more than the {MAX_SUBDIVIDED_LEMBOS} a subdivided scene may have"
+                ),
+            ));
+        }
+        let mut out = Vec::with_capacity((total - before) as usize);
+        for l in &lembos {
+            subdivide(l, s, &mut out);
+        }
+        Ok(out)
     }
 
     /// The error for lembo `j` of the object at `field` being out of range.

@@ -1148,3 +1148,41 @@ fn sphere20_object_puts_its_lembos_in_the_lembo_path() {
     assert_eq!(scene.lembo_count(), n);
     assert_eq!(scene.discoid_count(), n);
 }
+
+/// `subdivide` splits each lembo into 4^s; out of range, on discoids or beyond the scene's
+/// cap, it is refused naming the field, before the subdivision is made.
+#[test]
+fn subdivided_objects_have_four_to_the_s_lembos_each() {
+    let scene = sphere_with(
+        r#"{"builtin": "sphere24"}"#,
+        r#"{"builtin": "sphere24", "subdivide": 2}"#,
+    )
+    .unwrap();
+    assert_eq!(scene.lembo_count(), 24 * 16);
+    let reason = assert_invalid(
+        sphere_with(
+            r#"{"builtin": "sphere24"}"#,
+            r#"{"builtin": "sphere24", "subdivide": 6}"#,
+        ),
+        "objects[0].subdivide",
+    );
+    assert!(reason.contains("0 to 5"), "{reason}");
+    // terrain10 subdivided once is 800 lembos; terrain100 (20 000) subdivided five times
+    // would add 20 480 000.
+    let reason = assert_invalid(
+        sphere_with(
+            r#"{"builtin": "sphere24"}"#,
+            r#"{"builtin": "terrain10", "subdivide": 1}, {"builtin": "terrain100", "subdivide": 5}"#,
+        ),
+        "objects[1].subdivide",
+    );
+    assert!(reason.contains("20480800 lembos"), "{reason}");
+    let reason = assert_invalid(
+        sphere_with(
+            r#"{"builtin": "sphere24"}"#,
+            r#"{"discoids": {"builtin": "sphere20"}, "subdivide": 1}"#,
+        ),
+        "objects[0].subdivide",
+    );
+    assert!(reason.contains("discoids"), "{reason}");
+}

@@ -324,11 +324,12 @@ impl SceneSpec {
             }
         }
         let mut radii = Vec::new();
+        let mut lembos = 0;
         let objects = self
             .objects
             .iter()
             .enumerate()
-            .map(|(i, o)| check.object(i, o, base_dir, &mut radii))
+            .map(|(i, o)| check.object(i, o, base_dir, &mut radii, &mut lembos))
             .collect::<Result<Vec<_>>>()?;
         let discoid_threshold = match self.discoid_threshold {
             Some(t) => {
