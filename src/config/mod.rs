@@ -241,10 +241,9 @@ pub struct TessellationConfig {
     pub source: TessSource,
     /// Entries of each triangle setup engine's post-transform vertex cache (FIFO
     /// replacement, one per engine, so a batch dealt to another engine starts cold), with
-    /// the `memory` source \[vertices\]. Default 32: the size of the FIFO caches of GPUs
-    /// of the papers' era (Hoppe's 1999 simulation of them used 12 to 24 entries), and
-    /// enough to hold the two lattice rows a tessellated lembo's triangles straddle up to
-    /// n = 15.
+    /// the `memory` source \[vertices\]. Default 32: post-transform caches of GPUs of the
+    /// papers' era held tens of entries, and 32 hold the two lattice rows a tessellated
+    /// lembo's triangles straddle up to n = 15.
     pub vertex_cache_entries: u32,
 }
 
