@@ -125,28 +125,12 @@ pub fn cylinder_mesh(sides: u32) -> TriangleMesh {
 
 /// The height field y = 0.35 sin(1.4 x) cos(1.1 z) on an `nx` x `nz` grid of cells.
 pub fn surface_mesh(nx: u32, nz: u32) -> TriangleMesh {
-    let mut m = TriangleMesh::default();
-    let (x0, x1, z0, z1) = (-2.0, 2.0, -1.5, 1.5);
-    for j in 0..=nz {
-        for i in 0..=nx {
-            let x = x0 + (x1 - x0) * i as f64 / nx as f64;
-            let z = z0 + (z1 - z0) * j as f64 / nz as f64;
-            let y = 0.35 * (1.4 * x).sin() * (1.1 * z).cos();
-            let dydx = 0.35 * 1.4 * (1.4 * x).cos() * (1.1 * z).cos();
-            let dydz = -0.35 * 1.1 * (1.4 * x).sin() * (1.1 * z).sin();
-            m.positions.push(DVec3::new(x, y, z));
-            m.normals.push(DVec3::new(-dydx, 1.0, -dydz).normalize());
-        }
-    }
-    let idx = |i: u32, j: u32| j * (nx + 1) + i;
-    for j in 0..nz {
-        for i in 0..nx {
-            let (a, b, c, d) = (idx(i, j), idx(i + 1, j), idx(i, j + 1), idx(i + 1, j + 1));
-            m.triangles.push([a, c, d]);
-            m.triangles.push([a, d, b]);
-        }
-    }
-    m
+    height_field((nx, nz), (-2.0, 2.0, -1.5, 1.5), |x, z| {
+        let y = 0.35 * (1.4 * x).sin() * (1.1 * z).cos();
+        let dydx = 0.35 * 1.4 * (1.4 * x).cos() * (1.1 * z).cos();
+        let dydz = -0.35 * 1.1 * (1.4 * x).sin() * (1.1 * z).sin();
+        (y, dydx, dydz)
+    })
 }
 
 /// A terrain: y = h(x, z), three octaves of sines over [-4, 4] x [-4, 4], on an `n` x `n`
@@ -158,26 +142,40 @@ pub fn terrain_mesh(n: u32) -> TriangleMesh {
         (0.2, 1.9, 2.3, 1.0),
         (0.06, 5.3, 4.7, 2.0),
     ];
+    height_field((n, n), (-4.0, 4.0, -4.0, 4.0), |x, z| {
+        let (mut y, mut dydx, mut dydz) = (0.0, 0.0, 0.0);
+        for (a, fx, fz, p) in OCTAVES {
+            let (sx, cx) = (fx * x + p).sin_cos();
+            let (sz, cz) = (fz * z).sin_cos();
+            y += a * sx * cz;
+            dydx += a * fx * cx * cz;
+            dydz -= a * fz * sx * sz;
+        }
+        (y, dydx, dydz)
+    })
+}
+
+/// The height field y = h(x, z) over `[x0, x1] x [z0, z1]` on an `nx` x `nz` grid of cells,
+/// two triangles a cell facing +y; `h` gives y and its two partial derivatives, from which
+/// the vertex normals are exact.
+fn height_field(
+    (nx, nz): (u32, u32),
+    (x0, x1, z0, z1): (f64, f64, f64, f64),
+    h: impl Fn(f64, f64) -> (f64, f64, f64),
+) -> TriangleMesh {
     let mut m = TriangleMesh::default();
-    for j in 0..=n {
-        for i in 0..=n {
-            let x = -4.0 + 8.0 * i as f64 / n as f64;
-            let z = -4.0 + 8.0 * j as f64 / n as f64;
-            let (mut y, mut dydx, mut dydz) = (0.0, 0.0, 0.0);
-            for (a, fx, fz, p) in OCTAVES {
-                let (sx, cx) = (fx * x + p).sin_cos();
-                let (sz, cz) = (fz * z).sin_cos();
-                y += a * sx * cz;
-                dydx += a * fx * cx * cz;
-                dydz -= a * fz * sx * sz;
-            }
+    for j in 0..=nz {
+        for i in 0..=nx {
+            let x = x0 + (x1 - x0) * i as f64 / nx as f64;
+            let z = z0 + (z1 - z0) * j as f64 / nz as f64;
+            let (y, dydx, dydz) = h(x, z);
             m.positions.push(DVec3::new(x, y, z));
             m.normals.push(DVec3::new(-dydx, 1.0, -dydz).normalize());
         }
     }
-    let idx = |i: u32, j: u32| j * (n + 1) + i;
-    for j in 0..n {
-        for i in 0..n {
+    let idx = |i: u32, j: u32| j * (nx + 1) + i;
+    for j in 0..nz {
+        for i in 0..nx {
             let (a, b, c, d) = (idx(i, j), idx(i + 1, j), idx(i, j + 1), idx(i + 1, j + 1));
             m.triangles.push([a, c, d]);
             m.triangles.push([a, d, b]);
