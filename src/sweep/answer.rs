@@ -16,7 +16,6 @@
 //! (timed runs measured against the reference).
 
 use serde_json::Value;
-use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
 /// One measured run: what the answer reads of its record.
@@ -119,7 +118,8 @@ fn filtered<'a>(runs: &[&'a Run], keep: impl Fn(&Run) -> bool) -> Vec<&'a Run> {
     runs.iter().copied().filter(|r| keep(r)).collect()
 }
 
-/// `a` against `b` as a ratio in words: "2.1x fewer cycles" or "1.3x more cycles".
+/// The lembo path's and the triangle path's figures as a ratio in words: "lembos 2.10x
+/// fewer cycles" or "triangles 1.30x fewer µJ".
 fn ratio(what: &str, lembo: f64, triangle: f64) -> String {
     if lembo <= triangle {
         format!(
@@ -134,11 +134,22 @@ fn ratio(what: &str, lembo: f64, triangle: f64) -> String {
     }
 }
 
-/// The answer page for `records` within `budget_mm2`; None when no scene has measured
-/// runs of both paths.
-pub(super) fn answer_md(records: &[Value], budget_mm2: f64) -> Option<String> {
-    // The parameters every run of a path shares (one value, in every run): left out of
-    // the labels, said once above the tables.
+/// Which of two runs is the more accurate, and by how much, in words.
+fn more_accurate(lembo: &Run, triangle: &Run) -> String {
+    let winner = if lembo.psnr_db >= triangle.psnr_db {
+        "lembos"
+    } else {
+        "triangles"
+    };
+    format!(
+        "{winner} more accurate by {:.1} dB",
+        (lembo.psnr_db - triangle.psnr_db).abs()
+    )
+}
+
+/// The parameters every run of a path shares (one value, in every run), to leave out of
+/// the labels, and the sentences that say them once.
+fn shared_params(records: &[Value]) -> (Vec<(String, Value)>, String) {
     let path_of = |r: &Value| r["params"]["path"].as_str().unwrap_or("lembo").to_string();
     let mut constant: Vec<(String, Value)> = Vec::new();
     let mut shared = String::new();
@@ -158,28 +169,75 @@ pub(super) fn answer_md(records: &[Value], budget_mm2: f64) -> Option<String> {
             let _ = writeln!(shared, "Every {path} run: {}.", same.join(", "));
         }
     }
-    let mut scenes: BTreeMap<usize, (String, Vec<Run>)> = BTreeMap::new();
-    let mut order: Vec<String> = Vec::new();
+    (constant, shared)
+}
+
+/// The measured runs of `records` by scene, scenes in the order they first appear.
+fn by_scene(records: &[Value], constant: &[(String, Value)]) -> Vec<(String, Vec<Run>)> {
+    let mut scenes: Vec<(String, Vec<Run>)> = Vec::new();
     for record in records {
-        let Some(run) = Run::of(record, &constant) else {
+        let Some(run) = Run::of(record, constant) else {
             continue;
         };
-        let scene = record["scene"].as_str().unwrap_or("?").to_string();
-        let at = order.iter().position(|s| *s == scene).unwrap_or_else(|| {
-            order.push(scene.clone());
-            order.len() - 1
-        });
-        scenes
-            .entry(at)
-            .or_insert_with(|| (scene, Vec::new()))
-            .1
-            .push(run);
+        let scene = record["scene"].as_str().unwrap_or("?");
+        match scenes.iter_mut().find(|(s, _)| s == scene) {
+            Some((_, runs)) => runs.push(run),
+            None => scenes.push((scene.to_string(), vec![run])),
+        }
     }
-    let mut area = String::new();
-    let mut error = String::new();
-    let mut energy = String::new();
+    scenes
+}
+
+/// The equal-error row of `scene`: both paths reach `target`; each one's fastest and most
+/// frugal run that does. None when a path has no such run (it cannot happen when `target`
+/// is the lower of their best).
+fn equal_error_row(scene: &str, lembo: &[&Run], triangle: &[&Run], target: f64) -> Option<String> {
+    let (rl, rt) = (
+        filtered(lembo, |r| r.psnr_db >= target),
+        filtered(triangle, |r| r.psnr_db >= target),
+    );
+    let (fl, ft) = (best_by(&rl, fast)?, best_by(&rt, fast)?);
+    let (el, et) = (best_by(&rl, frugal)?, best_by(&rt, frugal)?);
+    Some(format!(
+        "| {scene} | {target:.1} dB | {} | {} | {} | {} | {}; {} |\n",
+        fl.cell(),
+        ft.cell(),
+        el.cell(),
+        et.cell(),
+        ratio("cycles", fl.cycles as f64, ft.cycles as f64),
+        ratio("µJ", el.energy_uj, et.energy_uj),
+    ))
+}
+
+/// The equal-energy row of `scene`: the cap is the least energy at which both paths have
+/// a run; each one's most accurate run within it.
+fn equal_energy_row(scene: &str, lembo: &[&Run], triangle: &[&Run]) -> String {
+    let least = |runs: &[&Run]| runs.iter().map(|r| r.energy_uj).fold(f64::MAX, f64::min);
+    let cap = least(lembo).max(least(triangle));
+    let (sl, st) = (
+        filtered(lembo, |r| r.energy_uj <= cap),
+        filtered(triangle, |r| r.energy_uj <= cap),
+    );
+    let (l, t) = (best_by(&sl, accurate), best_by(&st, accurate));
+    let cell = |r: Option<&Run>| r.map_or("no run within it".to_string(), Run::cell);
+    let comparison = match (l, t) {
+        (Some(l), Some(t)) => more_accurate(l, t),
+        _ => String::new(),
+    };
+    format!(
+        "| {scene} | {cap:.0} µJ | {} | {} | {comparison} |\n",
+        cell(l),
+        cell(t)
+    )
+}
+
+/// The answer page for `records` within `budget_mm2`; None when no scene has measured
+/// runs of both paths.
+pub(super) fn answer_md(records: &[Value], budget_mm2: f64) -> Option<String> {
+    let (constant, shared) = shared_params(records);
+    let (mut area, mut error, mut energy) = (String::new(), String::new(), String::new());
     let mut any = false;
-    for (scene, runs) in scenes.values() {
+    for (scene, runs) in by_scene(records, &constant) {
         let within = |path: &str| -> Vec<&Run> {
             runs.iter()
                 .filter(|r| r.path == path && r.area_mm2 <= budget_mm2)
@@ -194,75 +252,18 @@ pub(super) fn answer_md(records: &[Value], budget_mm2: f64) -> Option<String> {
             continue;
         };
         any = true;
-        let winner = if bl.psnr_db >= bt.psnr_db {
-            "lembos"
-        } else {
-            "triangles"
-        };
         let _ = writeln!(
             area,
-            "| {scene} | {} | {} | {winner} more accurate by {:.1} dB; {}, {} |",
+            "| {scene} | {} | {} | {}; {}, {} |",
             bl.cell(),
             bt.cell(),
-            (bl.psnr_db - bt.psnr_db).abs(),
+            more_accurate(bl, bt),
             ratio("cycles", bl.cycles as f64, bt.cycles as f64),
             ratio("µJ", bl.energy_uj, bt.energy_uj),
         );
-        // Equal error: both reach the lower best.
         let target = bl.psnr_db.min(bt.psnr_db);
-        let (rl, rt) = (
-            filtered(&lembo, |r| r.psnr_db >= target),
-            filtered(&triangle, |r| r.psnr_db >= target),
-        );
-        if let (Some(fl), Some(ft), Some(el), Some(et)) = (
-            best_by(&rl, fast),
-            best_by(&rt, fast),
-            best_by(&rl, frugal),
-            best_by(&rt, frugal),
-        ) {
-            let _ = writeln!(
-                error,
-                "| {scene} | {target:.1} dB | {} | {} | {} | {} | {}; {} |",
-                fl.cell(),
-                ft.cell(),
-                el.cell(),
-                et.cell(),
-                ratio("cycles", fl.cycles as f64, ft.cycles as f64),
-                ratio("µJ", el.energy_uj, et.energy_uj),
-            );
-        }
-        // Equal energy: the least energy at which both paths have a run.
-        let least = |runs: &[&Run]| runs.iter().map(|r| r.energy_uj).fold(f64::MAX, f64::min);
-        let cap = least(&lembo).max(least(&triangle));
-        let (sl, st) = (
-            filtered(&lembo, |r| r.energy_uj <= cap),
-            filtered(&triangle, |r| r.energy_uj <= cap),
-        );
-        match (best_by(&sl, accurate), best_by(&st, accurate)) {
-            (Some(l), Some(t)) => {
-                let _ = writeln!(
-                    energy,
-                    "| {scene} | {cap:.0} µJ | {} | {} | {} more accurate by {:.1} dB |",
-                    l.cell(),
-                    t.cell(),
-                    if l.psnr_db >= t.psnr_db {
-                        "lembos"
-                    } else {
-                        "triangles"
-                    },
-                    (l.psnr_db - t.psnr_db).abs()
-                );
-            }
-            (l, t) => {
-                let cell = |r: Option<&Run>| r.map_or("no run within it".to_string(), Run::cell);
-                let _ = writeln!(
-                    energy,
-                    "| {scene} | {cap:.0} µJ | {} | {} | |",
-                    cell(l),
-                    cell(t)
-                );
-            }
-        }
+        error += &equal_error_row(&scene, &lembo, &triangle, target).unwrap_or_default();
+        energy += &equal_energy_row(&scene, &lembo, &triangle);
     }
     if !any {
         return None;
