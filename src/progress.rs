@@ -17,55 +17,81 @@ struct Progress {
     total: AtomicU64,
 }
 
-static PROGRESS: Progress = Progress {
-    stage: Mutex::new(""),
-    done: AtomicU64::new(0),
-    total: AtomicU64::new(0),
-};
+impl Progress {
+    const fn new() -> Self {
+        Progress {
+            stage: Mutex::new(""),
+            done: AtomicU64::new(0),
+            total: AtomicU64::new(0),
+        }
+    }
+
+    fn stage(&self, name: &'static str) {
+        if let Ok(mut s) = self.stage.lock() {
+            *s = name;
+        }
+        self.done.store(0, Ordering::Relaxed);
+        self.total.store(0, Ordering::Relaxed);
+    }
+
+    fn add_total(&self, n: u64) {
+        self.total.fetch_add(n, Ordering::Relaxed);
+    }
+
+    #[inline]
+    fn advance(&self, n: u64) {
+        self.done.fetch_add(n, Ordering::Relaxed);
+    }
+
+    fn snapshot(&self) -> (&'static str, u64, u64) {
+        let stage = self.stage.lock().map(|s| *s).unwrap_or("");
+        (
+            stage,
+            self.done.load(Ordering::Relaxed),
+            self.total.load(Ordering::Relaxed),
+        )
+    }
+}
+
+/// The process's record.
+static PROGRESS: Progress = Progress::new();
 
 /// Starts stage `name` (`"timed pipeline"`), with nothing done and nothing to do yet.
 pub fn stage(name: &'static str) {
-    if let Ok(mut s) = PROGRESS.stage.lock() {
-        *s = name;
-    }
-    PROGRESS.done.store(0, Ordering::Relaxed);
-    PROGRESS.total.store(0, Ordering::Relaxed);
+    PROGRESS.stage(name);
 }
 
 /// `n` more primitives for this stage to take.
 pub fn add_total(n: u64) {
-    PROGRESS.total.fetch_add(n, Ordering::Relaxed);
+    PROGRESS.add_total(n);
 }
 
 /// `n` primitives taken.
 #[inline]
 pub fn advance(n: u64) {
-    PROGRESS.done.fetch_add(n, Ordering::Relaxed);
+    PROGRESS.advance(n);
 }
 
 /// The stage, the primitives taken and the primitives to take (0: unknown).
 pub fn snapshot() -> (&'static str, u64, u64) {
-    let stage = PROGRESS.stage.lock().map(|s| *s).unwrap_or("");
-    (
-        stage,
-        PROGRESS.done.load(Ordering::Relaxed),
-        PROGRESS.total.load(Ordering::Relaxed),
-    )
+    PROGRESS.snapshot()
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// A stage starts empty; totals and advances add up. (Other tests' renders share the
-    /// record, so only this thread's own additions are checked, as differences.)
+    /// A stage starts empty and counts what is added and taken (on a record of its own:
+    /// the process's is shared with every other test's renders).
     #[test]
     fn a_stage_counts_what_is_added_and_taken() {
-        stage("test");
-        let (_, done0, total0) = snapshot();
-        add_total(10);
-        advance(3);
-        let (_, done, total) = snapshot();
-        assert!(total >= total0 + 10 && done >= done0 + 3);
+        let p = Progress::new();
+        p.add_total(7);
+        p.advance(2);
+        p.stage("test");
+        assert_eq!(p.snapshot(), ("test", 0, 0));
+        p.add_total(10);
+        p.advance(3);
+        assert_eq!(p.snapshot(), ("test", 3, 10));
     }
 }
