@@ -206,22 +206,25 @@ fn run_in<R: Real>(
     let results: Outcome = {
         let fetch = match (path, source, tess) {
             (Path::Triangle, Source::Triangles(t), TessSource::Memory) => FetchPlan {
+                source: TessSource::Memory.name(),
                 primitives: t.chunks() as u64 * t.per_chunk(),
                 bytes: t.bytes(),
                 batch: arch.triangle_setup.batch,
                 // A vertex cache for a source that is an indexed mesh.
                 vertex_cache: t
-                    .vertex_ids(0, &mut Vec::new())
+                    .indexed()
                     .then_some(arch.tessellation.vertex_cache_entries),
             },
             // The lembos themselves, read for the on-chip tessellators.
             (Path::Triangle, Source::Triangles(t), TessSource::OnChip) => FetchPlan {
+                source: TessSource::OnChip.name(),
                 primitives: t.chunks() as u64,
                 bytes: t.chunks() as u64 * crate::lembo::LEMBO_BYTES,
                 batch: arch.tessellator.batch,
                 vertex_cache: None,
             },
             _ => FetchPlan {
+                source: "lembos",
                 primitives: n_lembos as u64,
                 bytes: n_lembos as u64
                     * match discoid {
@@ -286,12 +289,6 @@ fn run_in<R: Real>(
     results.sort_by_key(|(u, _)| *u);
     let mut frame = finish(arch, fb, plan.units, results, options, trace_cap)?;
     frame.recoveries = recoveries;
-    if let Some(fetch) = frame.fetch.as_mut() {
-        fetch.source = match path {
-            Path::Lembo => "lembos",
-            Path::Triangle => tess.name(),
-        };
-    }
     if discoids {
         // The blend units sit in the ROPs: listed (and priced) with the units, their cycles
         // the ROPs'.

@@ -122,6 +122,8 @@ impl TriangleSource for NoTriangles {
 /// batches of `batch` (the `batch` of the engines it deals them to).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct FetchPlan {
+    /// What it reads, as report.json `fetch.source` names it.
+    pub source: &'static str,
     /// Primitives \[lembos or triangles\].
     pub primitives: u64,
     /// Their bytes in memory \[bytes\]; with a vertex cache, the whole indexed mesh (what

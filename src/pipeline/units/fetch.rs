@@ -75,6 +75,7 @@ pub async fn run(
     });
     let mut indices = MeshIndices::new(source);
     let mut report = FetchReport {
+        source: plan.source,
         primitives: plan.primitives,
         ..FetchReport::default()
     };
@@ -141,8 +142,11 @@ impl<'a> MeshIndices<'a> {
         for t in range {
             let (c, k) = ((t / self.per_chunk) as usize, (t % self.per_chunk) as usize);
             if self.held != Some(c) {
-                let indexed = self.source.vertex_ids(c, &mut self.ids);
-                debug_assert!(indexed, "a vertex cache needs an indexed source");
+                debug_assert!(
+                    self.source.indexed(),
+                    "a vertex cache needs an indexed mesh"
+                );
+                self.source.vertex_ids(c, &mut self.ids);
                 self.held = Some(c);
             }
             for v in self.ids[k] {

@@ -88,12 +88,17 @@ pub trait TriangleSource: Sync {
     fn vertices_per_chunk(&self) -> u64 {
         3 * self.per_chunk()
     }
-    /// The indexed mesh's vertex indices of chunk `c`'s triangles, in order, into `out`
-    /// (cleared first), for a vertex cache; false (and `out` untouched) for a source that
-    /// is not an indexed mesh.
-    fn vertex_ids(&self, c: usize, out: &mut Vec<[u64; 3]>) -> bool {
-        let _ = (c, out);
+    /// Whether the source is an indexed mesh, whose vertex indices [`Self::vertex_ids`]
+    /// gives.
+    fn indexed(&self) -> bool {
         false
+    }
+    /// The indexed mesh's vertex indices of chunk `c`'s triangles, in order, into `out`
+    /// (cleared first), for a vertex cache; `out` left empty for a source that is not
+    /// [`Self::indexed`].
+    fn vertex_ids(&self, c: usize, out: &mut Vec<[u64; 3]>) {
+        let _ = c;
+        out.clear();
     }
     /// The id of the first triangle (ids of other primitives drawn in the same frame come
     /// before it).
@@ -129,9 +134,12 @@ impl TriangleSource for Tessellation<'_> {
         (n + 1) * (n + 2) / 2
     }
 
-    fn vertex_ids(&self, c: usize, out: &mut Vec<[u64; 3]>) -> bool {
-        self.lembo_vertex_ids(c, out);
+    fn indexed(&self) -> bool {
         true
+    }
+
+    fn vertex_ids(&self, c: usize, out: &mut Vec<[u64; 3]>) {
+        self.lembo_vertex_ids(c, out);
     }
 }
 
