@@ -1,0 +1,405 @@
+//! The architecture configuration's tests: the shipped files, parse and range errors
+//! naming their fields, the graph's instances.
+
+use super::*;
+use crate::graph::{LinkConfig, BOUNDARIES, LINK_KEYS};
+use std::path::PathBuf;
+
+fn arch_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("sim/arch")
+}
+
+fn load(name: &str) -> ArchConfig {
+    ArchConfig::load(&arch_dir().join(name)).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+/// Asserts a parse error naming `field` and returns its message.
+fn assert_parse_err(text: &str, expected_field: &str) -> String {
+    match ArchConfig::from_json(text, "t.json") {
+        Err(Error::Parse {
+            file,
+            field,
+            message,
+        }) => {
+            assert_eq!(file, "t.json");
+            assert_eq!(field, expected_field, "{message}");
+            message
+        }
+        other => panic!("{text}: expected a parse error, got {other:?}"),
+    }
+}
+
+/// Asserts an invalid-value error naming `field` with `value`.
+fn assert_invalid(text: &str, expected_field: &str, expected_value: &str) {
+    match ArchConfig::from_json(text, "t.json") {
+        Err(Error::Invalid {
+            file, field, value, ..
+        }) => {
+            assert_eq!(file, "t.json");
+            assert_eq!(field, expected_field);
+            assert_eq!(value, expected_value);
+        }
+        other => panic!("{text}: expected an invalid-value error, got {other:?}"),
+    }
+}
+
+#[test]
+fn config_files_load_and_validate() {
+    for name in ["baseline.json", "minimal.json", "wide.json"] {
+        let config = load(name);
+        config.validate(name).unwrap();
+        assert_eq!(format!("{}.json", config.name), name);
+    }
+}
+
+#[test]
+fn config_baseline_file_equals_defaults() {
+    assert_eq!(load("baseline.json"), ArchConfig::default());
+    assert_eq!(ArchConfig::baseline(), ArchConfig::default());
+    ArchConfig::default().validate("default").unwrap();
+    assert_eq!(ArchConfig::default().units(), 1 + 3 + 2 + 2 + 4 + 4 + 1);
+}
+
+#[test]
+fn config_minimal_has_one_of_each_unit_and_depth_one_fifos() {
+    let config = load("minimal.json");
+    let defaults = ArchConfig::default();
+    assert_eq!(config.segmenter.count, 1);
+    assert_eq!(config.subsegmenter.count, 1);
+    assert_eq!(config.rasterizer.count, 1);
+    assert_eq!(config.rop.count, 1);
+    assert_eq!(config.units(), 9);
+    for ((name, link), (_, default)) in config.links.all().into_iter().zip(defaults.links.all()) {
+        assert_eq!(link.fifo_depth, 1, "{name}");
+        assert_eq!(link.latency_cycles, default.latency_cycles, "{name}");
+    }
+    // Everything else is the baseline.
+    let expected = baseline_with("minimal", [1, 1, 1, 1], config.links.clone());
+    assert_eq!(config, expected);
+}
+
+/// The baseline named `name` with the segmenter, subsegmenter, rasterizer and ROP counts
+/// `counts` and the links `links`.
+fn baseline_with(name: &str, counts: [u32; 4], links: LinksConfig) -> ArchConfig {
+    let mut c = ArchConfig {
+        name: name.to_string(),
+        links,
+        ..ArchConfig::default()
+    };
+    [
+        c.segmenter.count,
+        c.subsegmenter.count,
+        c.rasterizer.count,
+        c.rop.count,
+    ] = counts;
+    c
+}
+
+#[test]
+fn config_wide_has_its_counts_and_depths() {
+    let config = load("wide.json");
+    let defaults = ArchConfig::default();
+    assert_eq!(config.segmenter.count, 4);
+    assert_eq!(config.subsegmenter.count, 4);
+    assert_eq!(config.rasterizer.count, 8);
+    assert_eq!(config.rop.count, 4);
+    assert_eq!(config.units(), 1 + 3 + 4 + 4 + 8 + 4 + 1);
+    for ((name, link), (_, default)) in config.links.all().into_iter().zip(defaults.links.all()) {
+        let depth = match name {
+            "rop_to_framebuffer" => 32,
+            _ => 64,
+        };
+        assert_eq!(link.fifo_depth, depth, "{name}");
+        assert_eq!(link.latency_cycles, default.latency_cycles, "{name}");
+    }
+    let mut expected = baseline_with("wide", [4, 4, 8, 4], config.links.clone());
+    expected.triangle_rasterizer.count = 2;
+    assert_eq!(config, expected);
+}
+
+#[test]
+fn config_partial_file_keeps_defaults() {
+    let config = ArchConfig::from_json(r#"{"segmenter": {"count": 3}}"#, "t.json").unwrap();
+    let defaults = ArchConfig::default();
+    assert_eq!(
+        config,
+        ArchConfig {
+            segmenter: SegmenterConfig {
+                count: 3,
+                ..defaults.segmenter.clone()
+            },
+            ..defaults
+        }
+    );
+    assert_eq!(
+        ArchConfig::from_json("{}", "t.json").unwrap(),
+        ArchConfig::default()
+    );
+}
+
+#[test]
+fn config_partial_link_keeps_its_boundary_defaults() {
+    let text = r#"{"links": {"rasterizer_to_rop": {"fifo_depth": 32},
+                             "rop_to_framebuffer": {"latency_cycles": 9}}}"#;
+    let config = ArchConfig::from_json(text, "t.json").unwrap();
+    assert_eq!(config.links, {
+        let mut links = LinksConfig::default();
+        *links.get_mut(UnitKind::FragmentRasterizer, UnitKind::Rop) = LinkConfig::new(32, 2);
+        *links.get_mut(UnitKind::Rop, UnitKind::FrameBuffer) = LinkConfig::new(32, 9);
+        links
+    });
+    assert_parse_err(
+        r#"{"links": {"setup_to_minmax": {"fifo_depth": null}}}"#,
+        "links.setup_to_minmax.fifo_depth",
+    );
+    assert_parse_err(
+        r#"{"links": {"setup_to_minmax": {"fifo_depth": -1}}}"#,
+        "links.setup_to_minmax.fifo_depth",
+    );
+}
+
+/// `links` is keyed by the graph's boundary names: an unknown or repeated name is
+/// refused with its path, and what is written reads back the same, in the graph's order.
+#[test]
+fn config_links_follow_the_unit_graph() {
+    let message = assert_parse_err(r#"{"links": {"setup_to_rop": {}}}"#, "links.setup_to_rop");
+    assert!(
+        message.contains("unknown field `setup_to_rop`, expected one of `setup_to_minmax`"),
+        "{message}"
+    );
+    let message = assert_parse_err(
+        r#"{"links": {"rop_to_framebuffer": {}, "rop_to_framebuffer": {}}}"#,
+        "links",
+    );
+    assert!(
+        message.contains("duplicate field `rop_to_framebuffer`"),
+        "{message}"
+    );
+    let mut links = LinksConfig::default();
+    for (i, link) in links.all_mut().into_iter().enumerate() {
+        *link = LinkConfig::new(i as u32 + 1, 2 * i as u64 + 1);
+    }
+    let json = serde_json::to_string(&links).unwrap();
+    let at: Vec<usize> = LINK_KEYS
+        .iter()
+        .map(|k| json.find(&format!("\"{k}\":")).expect(k))
+        .collect();
+    assert!(at.windows(2).all(|w| w[0] < w[1]), "{json}");
+    let back: LinksConfig = serde_json::from_str(&json).unwrap();
+    assert_eq!(back, links);
+    for b in BOUNDARIES {
+        assert_eq!(
+            *LinksConfig::default().get(b.from, b.to),
+            b.default,
+            "{}",
+            b.key
+        );
+    }
+}
+
+#[test]
+fn config_unknown_field_names_its_path() {
+    let message = assert_parse_err(r#"{"segmenter": {"cnt": 3}}"#, "segmenter.cnt");
+    assert!(message.contains("unknown field `cnt`"), "{message}");
+    assert_parse_err(
+        r#"{"links": {"rasterizer_to_rop": {"depth": 3}}}"#,
+        "links.rasterizer_to_rop.depth",
+    );
+    assert_parse_err(r#"{"clock": 400}"#, "clock");
+}
+
+#[test]
+fn config_wrong_type_and_malformed_json_are_parse_errors() {
+    assert_parse_err(r#"{"segmenter": {"count": -1}}"#, "segmenter.count");
+    assert_parse_err(r#"{"rop": {"tile_px": 8.5}}"#, "rop.tile_px");
+    assert_parse_err(r#"{"clock_mhz": "fast"}"#, "clock_mhz");
+    let message = assert_parse_err("{} {}", "");
+    assert!(message.contains("trailing characters"), "{message}");
+    let message = assert_parse_err("not json", "");
+    assert!(message.contains("line 1 column"), "{message}");
+}
+
+#[test]
+fn config_zero_fifo_depth_is_refused_naming_the_link() {
+    for (name, _) in ArchConfig::default().links.all() {
+        let text = format!(r#"{{"links": {{"{name}": {{"fifo_depth": 0}}}}}}"#);
+        assert_invalid(&text, &format!("links.{name}.fifo_depth"), "0");
+    }
+    assert_invalid(
+        r#"{"links": {"rop_to_framebuffer": {"fifo_depth": 4097}}}"#,
+        "links.rop_to_framebuffer.fifo_depth",
+        "4097",
+    );
+    assert_invalid(
+        r#"{"links": {"setup_to_minmax": {"latency_cycles": 0}}}"#,
+        "links.setup_to_minmax.latency_cycles",
+        "0",
+    );
+}
+
+#[test]
+fn config_zero_unit_count_is_refused_naming_the_unit() {
+    assert_invalid(r#"{"segmenter": {"count": 0}}"#, "segmenter.count", "0");
+    assert_invalid(
+        r#"{"subsegmenter": {"count": 0}}"#,
+        "subsegmenter.count",
+        "0",
+    );
+    assert_invalid(r#"{"rasterizer": {"count": 65}}"#, "rasterizer.count", "65");
+    assert_invalid(r#"{"rop": {"count": 0}}"#, "rop.count", "0");
+    assert_invalid(r#"{"setup": {"count": 0}}"#, "setup.count", "0");
+    assert_invalid(
+        r#"{"triangle_setup": {"count": 65}}"#,
+        "triangle_setup.count",
+        "65",
+    );
+}
+
+#[test]
+fn config_front_end_batch_out_of_range_is_refused_naming_it() {
+    assert_invalid(r#"{"setup": {"batch": 0}}"#, "setup.batch", "0");
+    assert_invalid(
+        r#"{"triangle_setup": {"batch": 65537}}"#,
+        "triangle_setup.batch",
+        "65537",
+    );
+    let ok = ArchConfig::from_json(
+        r#"{"setup": {"count": 64, "batch": 1}, "triangle_setup": {"count": 4, "batch": 65536}}"#,
+        "test",
+    )
+    .unwrap();
+    assert_eq!(ok.unit(UnitKind::Setup).0, 64);
+    assert_eq!(ok.unit(UnitKind::TriangleSetup).0, 4);
+}
+
+/// The triangle source and its units: an unknown source is a parse error naming the
+/// field (with the sources it accepts), a zero vertex cache or count is refused.
+#[test]
+fn config_tessellation_fields_are_checked_naming_them() {
+    let message = assert_parse_err(
+        r#"{"tessellation": {"source": "disk"}}"#,
+        "tessellation.source",
+    );
+    assert!(
+        message.contains("`memory`") && message.contains("`onchip`"),
+        "{message}"
+    );
+    assert_invalid(
+        r#"{"tessellation": {"vertex_cache_entries": 0}}"#,
+        "tessellation.vertex_cache_entries",
+        "0",
+    );
+    assert_invalid(
+        r#"{"tessellation": {"vertex_cache_entries": 4097}}"#,
+        "tessellation.vertex_cache_entries",
+        "4097",
+    );
+    assert_invalid(r#"{"tessellator": {"count": 0}}"#, "tessellator.count", "0");
+    assert_invalid(r#"{"tessellator": {"batch": 0}}"#, "tessellator.batch", "0");
+    assert_invalid(
+        r#"{"domain_eval": {"cycles_per_vertex": 0}}"#,
+        "domain_eval.cycles_per_vertex",
+        "0",
+    );
+    let ok = ArchConfig::from_json(
+        r#"{"tessellation": {"source": "onchip"}, "tessellator": {"count": 3}}"#,
+        "test",
+    )
+    .unwrap();
+    assert_eq!(ok.tessellation.source, TessSource::OnChip);
+    assert_eq!(ok.unit(UnitKind::Tessellator).0, 3);
+    let kinds: Vec<_> = ok
+        .instances(UnitPath::Triangle)
+        .into_iter()
+        .map(|(u, _)| u.kind)
+        .collect();
+    assert!(kinds.contains(&UnitKind::DomainEval) && !kinds.contains(&UnitKind::Setup));
+}
+
+#[test]
+fn config_out_of_range_costs_are_refused() {
+    assert_invalid(
+        r#"{"setup": {"latency_cycles": 0}}"#,
+        "setup.latency_cycles",
+        "0",
+    );
+    assert_invalid(
+        r#"{"interval_manager": {"cycles_per_interval": 1000001}}"#,
+        "interval_manager.cycles_per_interval",
+        "1000001",
+    );
+    assert_invalid(
+        r#"{"rasterizer": {"fragments_per_cycle": 65}}"#,
+        "rasterizer.fragments_per_cycle",
+        "65",
+    );
+    assert_invalid(
+        r#"{"triangle_setup": {"cycles_per_clipped_piece": 0}}"#,
+        "triangle_setup.cycles_per_clipped_piece",
+        "0",
+    );
+    assert_invalid(r#"{"rop": {"tile_px": 0}}"#, "rop.tile_px", "0");
+    assert_invalid(r#"{"rop": {"tile_px": 257}}"#, "rop.tile_px", "257");
+    assert_invalid(
+        r#"{"framebuffer": {"bytes_per_cycle": 0}}"#,
+        "framebuffer.bytes_per_cycle",
+        "0",
+    );
+    assert_invalid(
+        r#"{"framebuffer": {"bytes_per_fragment_written": 4097}}"#,
+        "framebuffer.bytes_per_fragment_written",
+        "4097",
+    );
+}
+
+#[test]
+fn config_clock_must_be_positive_and_finite() {
+    assert_invalid(r#"{"clock_mhz": 0}"#, "clock_mhz", "0");
+    assert_invalid(r#"{"clock_mhz": -500}"#, "clock_mhz", "-500");
+    assert_invalid(r#"{"clock_mhz": 100001}"#, "clock_mhz", "100001");
+    // JSON has no NaN or infinity; too large a literal is a parse error, and a value
+    // built in code is refused by validate.
+    assert_parse_err(r#"{"clock_mhz": 1e400}"#, "clock_mhz");
+    for clock_mhz in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+        let config = ArchConfig {
+            clock_mhz,
+            ..ArchConfig::default()
+        };
+        assert!(matches!(
+            config.validate("code"),
+            Err(Error::Invalid { field, .. }) if field == "clock_mhz"
+        ));
+    }
+    let config = ArchConfig::from_json(r#"{"clock_mhz": 100000}"#, "t.json").unwrap();
+    assert_eq!(config.clock_mhz, 100_000.0);
+}
+
+#[test]
+fn config_name_must_be_short_and_non_empty() {
+    assert_invalid(r#"{"name": ""}"#, "name", r#""""#);
+    let long = "x".repeat(MAX_NAME_CHARS + 1);
+    assert_invalid(
+        &format!(r#"{{"name": "{long}"}}"#),
+        "name",
+        &format!("{long:?}"),
+    );
+    let longest = "é".repeat(MAX_NAME_CHARS);
+    let text = format!(r#"{{"name": "{longest}"}}"#);
+    assert_eq!(
+        ArchConfig::from_json(&text, "t.json").unwrap().name,
+        longest
+    );
+}
+
+#[test]
+fn config_missing_file_is_a_read_error() {
+    let path = arch_dir().join("no_such_arch.json");
+    assert!(matches!(ArchConfig::load(&path), Err(Error::Read { path: p, .. }) if p == path));
+}
+
+#[test]
+fn config_serializes_back_to_itself() {
+    let config = load("wide.json");
+    let text = serde_json::to_string_pretty(&config).unwrap();
+    assert_eq!(ArchConfig::from_json(&text, "round trip").unwrap(), config);
+}
