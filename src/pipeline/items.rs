@@ -5,20 +5,22 @@
 //! consumer reads another type.
 //!
 //! An item is what the simulator passes, which is sometimes less than what the hardware
-//! moves: a lembo travels as its [`PieceId`] while its screen form waits in the lembo
-//! table, where a hardware Setup would write it into a parameter buffer the later stages
-//! index. What the hardware FIFO holds, for its area and energy (DESIGN.md §12), is each
-//! producing unit's [`super::unit::Unit::OUT_WORDS`].
+//! moves: a lembo travels as a [`Piece`], its id and a shared pointer to its screen form,
+//! where a hardware Setup would write that form into a parameter buffer the later stages
+//! index. The screen form lives as long as an item in flight points at it, so a run holds
+//! the set-up lembos in flight, not every lembo of the scene. What the hardware FIFO holds,
+//! for its area and energy (DESIGN.md §12), is each producing unit's
+//! [`super::unit::Unit::OUT_WORDS`].
 
 use crate::raster::fragment::Span;
 use crate::raster::interval::Interval;
+use crate::raster::screen::ScreenLembo;
 use crate::raster::segmenter::Segment;
 use crate::raster::subsegmenter::Subsegment;
 use crate::raster::triangle::ScreenTriangle;
 use std::sync::Arc;
 
-/// An entry of the lembo table: piece `piece` of lembo `lembo` (piece 0 of a lembo Setup
-/// kept whole).
+/// Piece `piece` of lembo `lembo` (piece 0 of a lembo Setup kept whole).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct PieceId {
     /// The lembo's id in the scene.
@@ -27,62 +29,72 @@ pub struct PieceId {
     pub piece: u32,
 }
 
-/// A lembo whose screen-space form is in the lembo table (Setup to MinMax).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct LemboReady {
-    /// The lembo piece, whose screen form Setup put in the shared table.
+/// A set-up lembo piece: its id and its screen form, shared by every item in flight that
+/// comes from it and dropped with the last of them.
+#[derive(Clone, Debug)]
+pub struct Piece<R> {
+    /// Which piece of which lembo.
     pub id: PieceId,
+    /// Its screen form, as Setup made it.
+    pub screen: Arc<ScreenLembo<R>>,
 }
 
-/// The scanlines j0..=j1 of lembo `id` (MinMax to the IntervalManager).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct ScanlineRange {
+/// A set-up lembo piece (Setup to MinMax).
+#[derive(Clone, Debug)]
+pub struct LemboReady<R> {
     /// The lembo piece.
-    pub id: PieceId,
+    pub piece: Piece<R>,
+}
+
+/// The scanlines j0..=j1 of a lembo piece (MinMax to the IntervalManager).
+#[derive(Clone, Debug)]
+pub struct ScanlineRange<R> {
+    /// The lembo piece.
+    pub piece: Piece<R>,
     /// The first scanline it covers.
     pub j0: u32,
     /// The last scanline it covers.
     pub j1: u32,
 }
 
-/// One interval of scanline `j` of lembo `id` (IntervalManager to the Segmenters).
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// One interval of scanline `j` of a lembo piece (IntervalManager to the Segmenters).
+#[derive(Clone, Debug)]
 pub struct ScanInterval<R> {
     /// The lembo piece.
-    pub id: PieceId,
+    pub piece: Piece<R>,
     /// The scanline.
     pub j: u32,
     /// The piece of the curve Y = y_j to walk.
     pub interval: Interval<R>,
 }
 
-/// One chord of scanline `j` of lembo `id` (Segmenter to the Subsegmenters).
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// One chord of scanline `j` of a lembo piece (Segmenter to the Subsegmenters).
+#[derive(Clone, Debug)]
 pub struct ScanSegment<R> {
     /// The lembo piece.
-    pub id: PieceId,
+    pub piece: Piece<R>,
     /// The scanline.
     pub j: u32,
     /// The chord of midpoint error k.
     pub segment: Segment<R>,
 }
 
-/// One subsegment of scanline `j` of lembo `id` (Subsegmenter to the FragmentRasterizers).
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// One subsegment of scanline `j` of a lembo piece (Subsegmenter to the FragmentRasterizers).
+#[derive(Clone, Debug)]
 pub struct ScanSubsegment<R> {
     /// The lembo piece.
-    pub id: PieceId,
+    pub piece: Piece<R>,
     /// The scanline.
     pub j: u32,
     /// The piece of the chord along which x is linear.
     pub subsegment: Subsegment<R>,
 }
 
-/// Fragments of lembo `id` on scanline `j` inside one ROP tile.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// Fragments of a lembo piece on scanline `j` inside one ROP tile.
+#[derive(Clone, Debug)]
 pub struct FragmentSpan<R> {
     /// The lembo piece.
-    pub id: PieceId,
+    pub piece: Piece<R>,
     /// The scanline.
     pub j: u32,
     /// The pixels of one subsegment inside one ROP tile.
@@ -118,7 +130,7 @@ impl<R> TrianglePiece<R> {
 
 /// What a ROP takes: fragments of a lembo or of a triangle inside one of its tiles (a
 /// rasterizer of either path to the ROPs).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 pub enum RopItem<R> {
     /// A lembo's span of fragments.
     Lembo(FragmentSpan<R>),

@@ -55,7 +55,7 @@ use runtime::executor::{Board, HostThread, Recoveries, Stop};
 use runtime::trace;
 use serde::Serialize;
 use tiles::{RopTiles, SharedFrame};
-use unit::{FetchPlan, Finished, LemboTable, NoTriangles, Run};
+use unit::{FetchPlan, Finished, NoTriangles, Run};
 use wiring::HostWiring;
 
 /// The cycle accounting of one unit over the frame \[cycles\].
@@ -244,10 +244,6 @@ fn run_in<R: Real>(
             k: R::of(tol.k),
             perspective_tol: tol.perspective,
             fetch,
-            lembos: LemboTable::new(match path {
-                Path::Lembo => n_lembos,
-                Path::Triangle => 0,
-            }),
             triangles: match source {
                 Source::Triangles(t) => t,
                 Source::Lembos => &NoTriangles,

@@ -1,14 +1,13 @@
 //! What a unit of the timed pipeline is to the builder (after DAM's contexts): a [`Unit`]
 //! declares its kind, the item it reads and the item it writes, the size of its output
 //! items in a FIFO, and how to start its body from a [`Run`]. The body itself sees only its
-//! own context: its links ([`Ctx`]), its configuration section, and what else it needs (the
-//! lembo table, its tolerance, the scene source), never the whole architecture.
+//! own context: its links ([`Ctx`]), its configuration section, and what else it needs (its
+//! tolerance, the scene source), never the whole architecture.
 //!
 //! [`Elaborate`] is the same declaration with the types erased, so that the builder can
 //! take the units of a path from a list, make each boundary's links from its producer's
 //! output type, and refuse a graph whose consumer reads another type before anything runs.
 
-use super::items::PieceId;
 use super::runtime::executor::UnitFuture;
 use super::runtime::trace::Recorder;
 use super::runtime::{Ctx, LinkSpec, UnitStats};
@@ -21,13 +20,11 @@ use crate::discoid::blend::BlendMode;
 use crate::discoid::render::{BlendReport, DiscoidTable, KeptFragment, Pass};
 use crate::error::Error;
 use crate::graph::{UnitInstance, UnitKind};
-use crate::raster::setup::ScreenLembo;
 use crate::raster::triangle::TriangleSource;
 use crate::raster::Counts;
 use crate::scene::Scene;
 use std::any::{type_name, Any, TypeId};
 use std::marker::PhantomData;
-use std::sync::OnceLock;
 
 /// What a unit hands back when it ends.
 pub struct Finished {
@@ -58,32 +55,6 @@ impl Finished {
             discoid: None,
             fetch: None,
         }
-    }
-}
-
-/// Screen-space lembos by id, each whole or as the pieces Setup split it into, filled by
-/// Setup before it sends their ids downstream (empty in the triangle path): the parameter
-/// buffer a hardware Setup writes and the later stages index.
-pub struct LemboTable<R>(Vec<OnceLock<Vec<ScreenLembo<R>>>>);
-
-impl<R> LemboTable<R> {
-    /// A table of `n` lembos, none set up yet.
-    pub fn new(n: usize) -> Self {
-        LemboTable((0..n).map(|_| OnceLock::new()).collect())
-    }
-
-    /// Lembo `lembo`'s pieces, set once, by Setup.
-    pub fn set(&self, lembo: usize, pieces: Vec<ScreenLembo<R>>) {
-        // Each id is set once, by Setup only.
-        let _ = self.0[lembo].set(pieces);
-    }
-
-    /// The screen-space lembo (or piece) `id`, which Setup filled before sending the id.
-    #[inline]
-    pub fn get(&self, id: PieceId) -> &ScreenLembo<R> {
-        &self.0[id.lembo as usize]
-            .get()
-            .expect("Setup fills a lembo's entry before it sends the id")[id.piece as usize]
     }
 }
 
@@ -203,8 +174,6 @@ pub struct Run<'a, R> {
     pub perspective_tol: Option<f64>,
     /// What the geometry fetch reads.
     pub fetch: FetchPlan,
-    /// The lembo table Setup fills.
-    pub lembos: LemboTable<R>,
     /// The triangles this run draws (none on the lembo path).
     pub triangles: &'a dyn TriangleSource,
     /// Which ROP owns each screen tile.

@@ -17,7 +17,7 @@ use crate::graph::UnitKind;
 use crate::pipeline::items::{ScanInterval, ScanlineRange};
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::Ctx;
-use crate::pipeline::unit::{Finished, LemboTable, Run, Unit};
+use crate::pipeline::unit::{Finished, Run, Unit};
 use crate::raster::interval::{intervals, IntervalScratch};
 use crate::raster::Counts;
 
@@ -26,7 +26,7 @@ pub struct IntervalManager;
 
 impl<R: Real> Unit<R> for IntervalManager {
     const KIND: UnitKind = UnitKind::IntervalManager;
-    type In = ScanlineRange;
+    type In = ScanlineRange<R>;
     type Out = ScanInterval<R>;
     // Two roots (u, v), the walk direction (2), the scanline and lembo id.
     const OUT_WORDS: u32 = 8;
@@ -36,29 +36,23 @@ impl<R: Real> Unit<R> for IntervalManager {
         run: &'a Run<'a, R>,
         _: usize,
     ) -> UnitFuture<'a, Finished> {
-        Box::pin(self::run(
-            ctx,
-            &run.arch.interval_manager,
-            &run.lembos,
-            run.k,
-        ))
+        Box::pin(self::run(ctx, &run.arch.interval_manager, run.k))
     }
 }
 
 /// The IntervalManager's body: per lembo piece, per scanline of its range, the intervals,
 /// dispatched round-robin to the segmenters.
 pub async fn run<R: Real>(
-    mut ctx: Ctx<ScanlineRange, ScanInterval<R>>,
+    mut ctx: Ctx<ScanlineRange<R>, ScanInterval<R>>,
     cfg: &IntervalManagerConfig,
-    table: &LemboTable<R>,
     k: R,
 ) -> Finished {
     let mut counts = Counts::default();
     let mut scratch = IntervalScratch::default();
     let mut ivs = Vec::new();
     let mut next_port = 0;
-    while let Some(ScanlineRange { id, j0, j1 }) = ctx.next_input().await {
-        let l = table.get(id);
+    while let Some(ScanlineRange { piece, j0, j1 }) = ctx.next_input().await {
+        let l = &*piece.screen;
         for j in j0..=j1 {
             counts.scanlines += 1;
             ctx.work(cfg.cycles_per_scanline);
@@ -68,7 +62,11 @@ pub async fn run<R: Real>(
                 ctx.emit(
                     cfg.cycles_per_interval,
                     next_port,
-                    ScanInterval { id, j, interval },
+                    ScanInterval {
+                        piece: piece.clone(),
+                        j,
+                        interval,
+                    },
                 )
                 .await;
                 next_port = ctx.next_port(next_port);

@@ -13,7 +13,7 @@ use crate::graph::UnitKind;
 use crate::pipeline::items::{LemboReady, ScanlineRange};
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::Ctx;
-use crate::pipeline::unit::{Finished, LemboTable, Run, Unit};
+use crate::pipeline::unit::{Finished, Run, Unit};
 use crate::raster::{minmax, Counts};
 
 /// The MinMax finder, Figure 5's second box.
@@ -21,8 +21,8 @@ pub struct MinMax;
 
 impl<R: Real> Unit<R> for MinMax {
     const KIND: UnitKind = UnitKind::MinMax;
-    type In = LemboReady;
-    type Out = ScanlineRange;
+    type In = LemboReady<R>;
+    type Out = ScanlineRange<R>;
     // The screen lembo (40) with its first and last scanline (2).
     const OUT_WORDS: u32 = 42;
 
@@ -31,32 +31,25 @@ impl<R: Real> Unit<R> for MinMax {
         run: &'a Run<'a, R>,
         _: usize,
     ) -> UnitFuture<'a, Finished> {
-        Box::pin(self::run(
-            ctx,
-            &run.arch.minmax,
-            &run.lembos,
-            run.view.viewport.height,
-        ))
+        Box::pin(self::run(ctx, &run.arch.minmax, run.view.viewport.height))
     }
 }
 
 /// The MinMax finder's body: per lembo piece, its scanline range (or a cull) on a viewport
 /// `height` pixels high.
 pub async fn run<R: Real>(
-    mut ctx: Ctx<LemboReady, ScanlineRange>,
+    mut ctx: Ctx<LemboReady<R>, ScanlineRange<R>>,
     cfg: &MinMaxConfig,
-    table: &LemboTable<R>,
     height: u32,
 ) -> Finished {
     let cost = cfg.cycles_per_lembo;
     let mut counts = Counts::default();
     // Whole lembos (pieces) to the interval managers, round-robin.
     let mut next_port = 0;
-    while let Some(LemboReady { id }) = ctx.next_input().await {
-        let l = table.get(id);
-        match minmax::scanlines(l, height) {
+    while let Some(LemboReady { piece }) = ctx.next_input().await {
+        match minmax::scanlines(&piece.screen, height) {
             Some((j0, j1)) => {
-                ctx.emit(cost, next_port, ScanlineRange { id, j0, j1 })
+                ctx.emit(cost, next_port, ScanlineRange { piece, j0, j1 })
                     .await;
                 next_port = ctx.next_port(next_port);
             }

@@ -56,7 +56,12 @@ pub async fn run<R: Real>(
     width: u32,
 ) -> Finished {
     let mut counts = Counts::default();
-    while let Some(ScanSubsegment { id, j, subsegment }) = ctx.next_input().await {
+    while let Some(ScanSubsegment {
+        piece,
+        j,
+        subsegment,
+    }) = ctx.next_input().await
+    {
         ctx.work(cfg.cycles_per_subsegment);
         let Some(mut run) = span(&subsegment, width) else {
             continue;
@@ -65,17 +70,14 @@ pub async fn run<R: Real>(
         while !run.is_empty() {
             let (rop, tile_end) = tiles.owner(run.i0, j);
             let n = run.i1.min(tile_end) - run.i0;
-            let piece = Span {
+            let span = Span {
                 i1: run.i0 + n,
                 ..run
             };
             let cycles = ceil_div(n as u64, cfg.fragments_per_cycle);
-            ctx.emit(
-                cycles,
-                rop,
-                RopItem::Lembo(FragmentSpan { id, j, span: piece }),
-            )
-            .await;
+            let piece = piece.clone();
+            ctx.emit(cycles, rop, RopItem::Lembo(FragmentSpan { piece, j, span }))
+                .await;
             run.advance(n);
         }
     }

@@ -28,7 +28,7 @@ use crate::pipeline::items::{FragmentSpan, MemAccess, RopItem};
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::{ceil_div, Ctx};
 use crate::pipeline::tiles::RopPixels;
-use crate::pipeline::unit::{DiscoidPass, Finished, LemboTable, Run, Unit};
+use crate::pipeline::unit::{DiscoidPass, Finished, Run, Unit};
 use crate::raster::Counts;
 use crate::rop::fragment_shader::FragmentShader;
 use crate::rop::rop::Batch;
@@ -58,7 +58,6 @@ impl<R: Real> Unit<R> for Rop {
                 pixels: RopPixels::new(&run.frame, &run.tiles, index, run.view.viewport.width),
                 shader: FragmentShader::<R>::new(&run.scene.light, run.view),
                 view: run.view,
-                lembos: &run.lembos,
                 discoid: run.discoid.as_ref(),
             },
         ))
@@ -66,7 +65,7 @@ impl<R: Real> Unit<R> for Rop {
 }
 
 /// What a ROP works with: its configuration and the frame buffer's, its own pixels, the
-/// shader, the lembo table, and the discoid pass when there is one.
+/// shader, and the discoid pass when there is one.
 pub struct RopContext<'a, R> {
     /// Its rate.
     pub cfg: &'a RopConfig,
@@ -80,8 +79,6 @@ pub struct RopContext<'a, R> {
     pub shader: FragmentShader<R>,
     /// The camera, for the accumulation pass's threshold.
     pub view: &'a View,
-    /// The lembos its spans come from.
-    pub lembos: &'a LemboTable<R>,
     /// The discoid pass it runs; None for ordinary rendering.
     pub discoid: Option<&'a DiscoidPass<'a, R>>,
 }
@@ -142,7 +139,6 @@ pub async fn run<R: Real>(mut ctx: Ctx<RopItem<R>, MemAccess>, rop: RopContext<'
         mut pixels,
         shader,
         view,
-        lembos,
         discoid,
     } = rop;
     let mut counts = Counts::default();
@@ -154,8 +150,8 @@ pub async fn run<R: Real>(mut ctx: Ctx<RopItem<R>, MemAccess>, rop: RopContext<'
     while let Some(item) = ctx.next_input().await {
         let mut passed = 0u64;
         let n = match (item, discoid) {
-            (RopItem::Lembo(FragmentSpan { id, j, span }), None) => {
-                let l = lembos.get(id);
+            (RopItem::Lembo(FragmentSpan { piece, j, span }), None) => {
+                let l = &*piece.screen;
                 let row = pixels.row(span.i0, span.i1, j);
                 batch.begin_lembo(l, &shader, into(&mut pixels));
                 span.walk(|i, u, v| {
@@ -170,8 +166,8 @@ pub async fn run<R: Real>(mut ctx: Ctx<RopItem<R>, MemAccess>, rop: RopContext<'
                 });
                 span.len() as u64
             }
-            (RopItem::Lembo(FragmentSpan { id, j, span }), Some(dp)) => {
-                let l = lembos.get(id);
+            (RopItem::Lembo(FragmentSpan { piece, j, span }), Some(dp)) => {
+                let l = &*piece.screen;
                 let row = pixels.row(span.i0, span.i1, j);
                 span.walk(|i, u, v| {
                     let idx = row + i as usize;

@@ -17,7 +17,7 @@ use crate::graph::UnitKind;
 use crate::pipeline::items::{ScanInterval, ScanSegment};
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::Ctx;
-use crate::pipeline::unit::{Finished, LemboTable, Run, Unit};
+use crate::pipeline::unit::{Finished, Run, Unit};
 use crate::raster::segmenter::segments;
 use crate::raster::{Counts, DEFAULT_SEGMENT_CAP};
 
@@ -36,7 +36,7 @@ impl<R: Real> Unit<R> for Segmenter {
         run: &'a Run<'a, R>,
         _: usize,
     ) -> UnitFuture<'a, Finished> {
-        Box::pin(self::run(ctx, &run.arch.segmenter, &run.lembos, run.k))
+        Box::pin(self::run(ctx, &run.arch.segmenter, run.k))
     }
 }
 
@@ -44,7 +44,6 @@ impl<R: Real> Unit<R> for Segmenter {
 pub async fn run<R: Real>(
     mut ctx: Ctx<ScanInterval<R>, ScanSegment<R>>,
     cfg: &SegmenterConfig,
-    table: &LemboTable<R>,
     k: R,
 ) -> Finished {
     let cost = cfg.cycles_per_segment;
@@ -53,8 +52,8 @@ pub async fn run<R: Real>(
     let mut next_port = 0;
     // The first (lembo, piece, scanline) over the cap, as the functional model meets them.
     let mut cap_error: Option<(u32, u32, u32)> = None;
-    while let Some(ScanInterval { id, j, interval }) = ctx.next_input().await {
-        let l = table.get(id);
+    while let Some(ScanInterval { piece, j, interval }) = ctx.next_input().await {
+        let (l, id) = (&*piece.screen, piece.id);
         segs.clear();
         if segments(
             l,
@@ -72,7 +71,8 @@ pub async fn run<R: Real>(
             continue;
         }
         for &segment in &segs {
-            ctx.emit(cost, next_port, ScanSegment { id, j, segment })
+            let piece = piece.clone();
+            ctx.emit(cost, next_port, ScanSegment { piece, j, segment })
                 .await;
             next_port = ctx.next_port(next_port);
         }

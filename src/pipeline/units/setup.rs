@@ -4,14 +4,13 @@
 //!
 //! Input: the batches of lembos the geometry fetch ([`super::fetch`]) read from memory and
 //! dealt to this engine ([`MemAccess`]: the first lembo and the count), in scene order.
-//! Output: [`LemboReady`] per visible lembo to the MinMax units, round-robin; the
-//! [`ScreenLembo`](crate::raster::setup::ScreenLembo) itself goes to the pipeline's lembo
-//! table, as a hardware setup unit writes a primitive's coefficients into a parameter
-//! buffer that later stages index.
+//! Output: [`LemboReady`] per visible lembo to the MinMax units, round-robin, carrying the
+//! [`ScreenLembo`](crate::raster::setup::ScreenLembo) behind a shared pointer, as a hardware
+//! setup unit writes a primitive's coefficients into a parameter buffer that later stages
+//! index; the screen form is dropped with the last item in flight that points at it.
 //!
 //! A lembo whose hull reaches far beyond the viewport is split into pieces
-//! ([`setup_pieces`]); each piece is a table entry of its own and goes down the pipeline as
-//! a lembo does.
+//! ([`setup_pieces`]); each piece goes down the pipeline as a lembo does.
 //!
 //! Cost: `setup.cycles_per_lembo` busy cycles per lembo, culled or not, and as many again
 //! per sub-patch a split examines; a further piece of a split lembo is emitted at 1 cycle
@@ -21,13 +20,14 @@ use crate::camera::View;
 use crate::config::SetupConfig;
 use crate::datapath::Real;
 use crate::graph::UnitKind;
-use crate::pipeline::items::{LemboReady, MemAccess, PieceId};
+use crate::pipeline::items::{LemboReady, MemAccess, Piece, PieceId};
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::Ctx;
-use crate::pipeline::unit::{Finished, LemboTable, Run, Unit};
+use crate::pipeline::unit::{Finished, Run, Unit};
 use crate::raster::setup::setup_pieces;
 use crate::raster::Counts;
 use crate::scene::Scene;
+use std::sync::Arc;
 
 /// Setup, Figure 5's first box.
 pub struct Setup;
@@ -35,13 +35,13 @@ pub struct Setup;
 impl<R: Real> Unit<R> for Setup {
     const KIND: UnitKind = UnitKind::Setup;
     type In = MemAccess;
-    type Out = LemboReady;
+    type Out = LemboReady<R>;
     // The screen lembo: x, y, z and the normal as six-coefficient quadratics (36 words),
     // its colour (3) and id (1).
     const OUT_WORDS: u32 = 40;
 
     fn spawn<'a>(
-        ctx: Ctx<MemAccess, LemboReady>,
+        ctx: Ctx<MemAccess, LemboReady<R>>,
         run: &'a Run<'a, R>,
         _: usize,
     ) -> UnitFuture<'a, Finished> {
@@ -51,20 +51,18 @@ impl<R: Real> Unit<R> for Setup {
             run.scene,
             run.view,
             run.perspective_tol,
-            &run.lembos,
         ))
     }
 }
 
 /// Setup's body: the batches of lembos of `scene` the geometry fetch dealt it, in order,
-/// projected (and split or clipped) into `table`.
+/// projected (and split or clipped) into pieces.
 pub async fn run<R: Real>(
-    mut ctx: Ctx<MemAccess, LemboReady>,
+    mut ctx: Ctx<MemAccess, LemboReady<R>>,
     cfg: &SetupConfig,
     scene: &Scene,
     view: &View,
     perspective_tol: Option<f64>,
-    table: &LemboTable<R>,
 ) -> Finished {
     let cost = cfg.cycles_per_lembo;
     let mut counts = Counts::default();
@@ -85,14 +83,17 @@ pub async fn run<R: Real>(
                     // evaluated, hull tested); the lembo's own cost comes with its first
                     // emission.
                     let n = pieces.len();
-                    table.set(id, std::mem::take(&mut pieces));
                     let mut owed = cost * (1 + split.examined as u64);
-                    for piece in 0..n {
+                    for (k, screen) in pieces.drain(..).enumerate() {
                         let id = PieceId {
                             lembo: id as u32,
-                            piece: piece as u32,
+                            piece: k as u32,
                         };
-                        ctx.emit(owed.max(1), next_port, LemboReady { id }).await;
+                        let piece = Piece {
+                            id,
+                            screen: Arc::new(screen),
+                        };
+                        ctx.emit(owed.max(1), next_port, LemboReady { piece }).await;
                         next_port = ctx.next_port(next_port);
                         owed = 0;
                     }

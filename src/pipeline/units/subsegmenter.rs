@@ -13,7 +13,7 @@ use crate::graph::UnitKind;
 use crate::pipeline::items::{ScanSegment, ScanSubsegment};
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::Ctx;
-use crate::pipeline::unit::{Finished, LemboTable, Run, Unit};
+use crate::pipeline::unit::{Finished, Run, Unit};
 use crate::raster::subsegmenter::subsegments;
 use crate::raster::Counts;
 
@@ -32,7 +32,7 @@ impl<R: Real> Unit<R> for Subsegmenter {
         run: &'a Run<'a, R>,
         _: usize,
     ) -> UnitFuture<'a, Finished> {
-        Box::pin(self::run(ctx, &run.arch.subsegmenter, &run.lembos, run.k))
+        Box::pin(self::run(ctx, &run.arch.subsegmenter, run.k))
     }
 }
 
@@ -40,20 +40,28 @@ impl<R: Real> Unit<R> for Subsegmenter {
 pub async fn run<R: Real>(
     mut ctx: Ctx<ScanSegment<R>, ScanSubsegment<R>>,
     cfg: &SubsegmenterConfig,
-    table: &LemboTable<R>,
     k: R,
 ) -> Finished {
     let cost = cfg.cycles_per_subsegment;
     let mut counts = Counts::default();
     let mut subs = Vec::new();
     let mut next_port = 0;
-    while let Some(ScanSegment { id, j, segment }) = ctx.next_input().await {
-        let l = table.get(id);
+    while let Some(ScanSegment { piece, j, segment }) = ctx.next_input().await {
+        let l = &*piece.screen;
         subs.clear();
         subsegments(l, &segment, k, &mut subs, &mut counts);
         for &subsegment in &subs {
-            ctx.emit(cost, next_port, ScanSubsegment { id, j, subsegment })
-                .await;
+            let piece = piece.clone();
+            ctx.emit(
+                cost,
+                next_port,
+                ScanSubsegment {
+                    piece,
+                    j,
+                    subsegment,
+                },
+            )
+            .await;
             next_port = ctx.next_port(next_port);
         }
     }
