@@ -1,10 +1,12 @@
 //! One functional frame on several host threads (`--threads N`), bit-identical to the
 //! single-threaded render for every N.
 //!
-//! The frame's threads are the calling thread and N - 1 scoped ones, started for the frame
-//! and joined at its end (`draw_frame`, `on_threads`); they take work by number from shared
-//! counters, so none waits on a scheduler, and meet once, when setup is done, waiting
-//! running rather than asleep (`wait_until`). Setup runs in tasks of up to 64 primitives
+//! The frame is drawn in windows of [`WINDOW_PRIMITIVES`] primitives, one after the other,
+//! so that the set-up pieces held at once are a window's, not the scene's (`draw_frame`).
+//! A window's threads are the calling thread and N - 1 scoped ones, started for the window
+//! and joined at its end (`draw_window`, `on_threads`); they take work by number from shared
+//! counters, so none waits on a scheduler, and meet once, when the window's setup is done,
+//! waiting running rather than asleep (`wait_until`). Setup runs in tasks of up to 64 primitives
 //! (`SetupTasks`; a lembo's triangles in one task), kept in primitive order, keeping every set-up piece with its rows (lembos: minmax's scanline
 //! range; triangles: the bounding box) and a rough cost of drawing each of them
 //! (`RowSpan`). The frame's rows are then cut into bands of an even number of rows (so no
@@ -13,7 +15,8 @@
 //! threads finish together however wrong the estimate (`Bands`). A band walks the pieces that meet
 //! its rows, in drawing order, through the scan-line stages of its own rows only, into its
 //! own rows of the frame buffer (`FrameBuffer::bands_mut`, `Rop::band`), which its thread
-//! also clears.
+//! also clears in the first window. Windows follow drawing order, so a pixel meets its
+//! fragments in the same order whatever the windows.
 //!
 //! Every stage after setup works on one scanline (one row pair for a quad) and a pixel is
 //! only ever written by fragments of its own row, so each pixel meets the same fragments in
@@ -320,11 +323,12 @@ impl<'a, 'fb, T> Bands<'a, 'fb, T> {
         assert!(planned.is_ok(), "one thread plans the bands");
     }
 
-    /// Draws the bands no other thread has taken, each cleared to `background` and then
-    /// drawn by `draw` with this thread's own scratch, until none is left; what each drew.
+    /// Draws the bands no other thread has taken, each cleared to `background` if given and
+    /// then drawn by `draw` with this thread's own scratch, until none is left; what each
+    /// drew.
     fn draw<S: Default>(
         &self,
-        background: [u8; 3],
+        background: Option<[u8; 3]>,
         draw: &impl Fn(&Pieces<'_, T>, u32, u32, FrameRows<'_>, &mut S) -> Band,
     ) -> Vec<Band> {
         let plan = self.plan.get().expect("the bands are planned");
@@ -337,7 +341,9 @@ impl<'a, 'fb, T> Bands<'a, 'fb, T> {
             let mut rows = lock(&plan.rows[b])
                 .take()
                 .expect("a band is taken once, by the thread that drew its number");
-            rows.clear(background);
+            if let Some(background) = background {
+                rows.clear(background);
+            }
             out.push(draw(&plan.pieces, lo, hi, rows, &mut scratch));
         }
     }
@@ -441,29 +447,62 @@ fn gather(mut counts: Counts, drawn: Vec<Band>) -> Result<Counts> {
     Ok(counts)
 }
 
-/// Draws a frame on `threads` threads ([`on_threads`]). They take the `tasks` setup tasks
-/// (`set_up(task)`) by number as they come free, wait until every task is done, and then
-/// take the bands ([`bands`], from the pieces' estimated costs) in order, each drawn by
+/// Draws a frame on `threads` threads ([`on_threads`]), its `tasks` setup tasks
+/// (`set_up(task)`) in windows of `window` tasks, one after the other, so that the set-up
+/// pieces held at once are one window's (module doc). In a window the threads take its setup
+/// tasks by number as they come free, wait until every one is done, and then take the bands
+/// ([`bands`], from the window's pieces' estimated costs) in order, each drawn by
 /// `draw(pieces, lo, hi, rows, scratch)` into its own rows of one frame buffer (cleared by
-/// the band's thread), with the thread's own `scratch`. The counts are setup's in task
-/// order plus the bands'; the result is the frame, or the first error any band met. Which
-/// thread sets up a task or draws a band changes nothing in it.
+/// the band's thread in the first window), with the thread's own `scratch`. Windows follow
+/// drawing order, so every pixel still meets its fragments in the single-threaded order.
+/// The counts are setup's in task order plus the bands'; the result is the frame, or the
+/// first error met, in the first window that met one. Which thread sets up a task or draws a
+/// band changes nothing in it.
 fn draw_frame<T: Send + Sync, S: Default>(
     scene: &Scene,
     view: &View,
     threads: u32,
-    tasks: usize,
+    (tasks, window): (usize, usize),
     set_up: impl Fn(usize) -> SetUp<T> + Sync,
     draw: impl Fn(&Pieces<'_, T>, u32, u32, FrameRows<'_>, &mut S) -> Band + Sync,
 ) -> Result<Frame> {
     let vp = view.viewport;
     let background = scene.background.map(crate::rop::shade::to_u8::<f64>);
     let mut framebuffer = FrameBuffer::zeroed(vp.width, vp.height);
-    let tasks = SetupTasks::new(tasks);
-    let bands = Bands::new(&mut framebuffer);
+    let window = window.max(1);
+    let mut counts = Counts::default();
+    // At least one window, so that an empty scene's frame is cleared.
+    for first in (0..tasks.max(1)).step_by(window) {
+        let run = first..(first + window).min(tasks);
+        let clear = (first == 0).then_some(background);
+        let drawn = draw_window(&mut framebuffer, threads, run, clear, &set_up, &draw)?;
+        // Covered pixels are the frame's: the last window's bands count them over every row.
+        counts.pixels_covered = 0;
+        counts += drawn;
+    }
+    Ok(Frame {
+        framebuffer,
+        counts,
+        probe: None,
+    })
+}
+
+/// One window of [`draw_frame`]: setup tasks `run`, then the bands over every row of
+/// `framebuffer`, each cleared to `clear` first if given; the window's counts.
+fn draw_window<T: Send + Sync, S: Default>(
+    framebuffer: &mut FrameBuffer,
+    threads: u32,
+    run: std::ops::Range<usize>,
+    clear: Option<[u8; 3]>,
+    set_up: &(impl Fn(usize) -> SetUp<T> + Sync),
+    draw: &(impl Fn(&Pieces<'_, T>, u32, u32, FrameRows<'_>, &mut S) -> Band + Sync),
+) -> Result<Counts> {
+    let first = run.start;
+    let tasks = SetupTasks::new(run.len());
+    let bands = Bands::new(framebuffer);
     let (abandoned, gone) = (AtomicBool::new(false), AtomicUsize::new(0));
     let work = || -> Vec<Band> {
-        tasks.run(&set_up);
+        tasks.run(&|task| set_up(first + task));
         if !wait_until(|| tasks.all_done(), &abandoned) {
             return Vec::new();
         }
@@ -471,19 +510,14 @@ fn draw_frame<T: Send + Sync, S: Default>(
         if !wait_until(|| bands.plan.get().is_some(), &abandoned) {
             return Vec::new();
         }
-        bands.draw(background, &draw)
+        bands.draw(clear, draw)
     };
     let drawn = on_threads(threads, work, &abandoned, &gone);
     let plan = bands
         .plan
         .into_inner()
         .expect("every thread but a panicked one plans the bands");
-    let counts = gather(plan.counts, drawn)?;
-    Ok(Frame {
-        framebuffer,
-        counts,
-        probe: None,
-    })
+    gather(plan.counts, drawn)
 }
 
 /// A mutex's value; one poisoned by a panicking thread is still read (the panic itself is
@@ -505,13 +539,34 @@ where
     P: Stages<R> + for<'fb> Draw<R, Rop<'fb, R>>,
     P::Piece: RowCost,
 {
+    render_in_windows(scene, view, path, threads, WINDOW_PRIMITIVES)
+}
+
+/// Most primitives set up before their bands are drawn: the set-up pieces a frame holds at
+/// once (a set-up lembo takes about 500 bytes with its rows, so some 33 MB), while the
+/// threads meet twice a window, a few hundred milliseconds of work apart.
+pub const WINDOW_PRIMITIVES: usize = 1 << 16;
+
+/// [`render_in_bands`] with windows of about `window` primitives (whole setup tasks).
+fn render_in_windows<R: Real, P>(
+    scene: &Scene,
+    view: &View,
+    path: &P,
+    threads: u32,
+    window: usize,
+) -> Result<Frame>
+where
+    P: Stages<R> + for<'fb> Draw<R, Rop<'fb, R>>,
+    P::Piece: RowCost,
+{
     let per_task = per_task(path.primitives(), path.fetched_together(), threads);
     crate::progress::add_total(path.primitives() as u64);
+    let tasks = path.primitives().div_ceil(per_task);
     draw_frame(
         scene,
         view,
         threads,
-        path.primitives().div_ceil(per_task),
+        (tasks, window.div_ceil(per_task)),
         |task| {
             let set_up = set_up_task(path, per_task, task);
             let first = task * per_task;
@@ -537,6 +592,8 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::raster::lembo_path::LemboPath;
+    use crate::raster::triangle::{TrianglePath, TriangleSource};
 
     /// A shipped scene on a small viewport, and its view.
     fn shipped(path: &str) -> (Scene, View) {
@@ -558,7 +615,7 @@ mod tests {
                 &scene,
                 &view,
                 threads,
-                37,
+                (37, 37),
                 |task| {
                     lock(&ran).push(task);
                     tagged(task)
@@ -580,6 +637,50 @@ mod tests {
     }
 
     #[test]
+    fn windows_of_any_size_draw_the_single_threaded_frame() {
+        // The bunny's lembos, and its triangles at level 2, in windows of a primitive to the
+        // whole scene, on 1 to 3 threads: the frame and counts of one thread, bit for bit.
+        let (scene, view) = crate::raster::tests::shipped_at("traces/bunny.json", 160, 128);
+        let tol = crate::tolerance::Tolerance::new(0.5);
+        let tessellation = crate::lembo::tessellate::Tessellation::new(&scene, 2);
+        let bits = |f: &Frame| {
+            let fb = &f.framebuffer;
+            let depth: Vec<u32> = fb.depth.iter().map(|d| d.to_bits()).collect();
+            (fb.color.to_vec(), depth, fb.primitive.to_vec(), f.counts)
+        };
+        let lembos = LemboPath::<f32>::new(&scene, &view, tol.k, tol.perspective, 1 << 16);
+        let triangles = TrianglePath::new(&tessellation, &view);
+        let one = |t: Option<&dyn TriangleSource>| {
+            let frame = crate::raster::render_functional_on(
+                &scene,
+                &view,
+                tol,
+                t,
+                crate::datapath::Datapath::F32,
+                false,
+                1,
+            );
+            bits(&frame.expect("a frame"))
+        };
+        let (lembo_frame, triangle_frame) = (one(None), one(Some(&tessellation)));
+        assert!(lembo_frame.3.fragments > 1000 && triangle_frame.3.fragments > 1000);
+        for threads in [1, 2, 3] {
+            for window in [1, 50, 1000, 1 << 20] {
+                let frame = render_in_windows::<f32, _>(&scene, &view, &lembos, threads, window);
+                assert!(
+                    bits(&frame.unwrap()) == lembo_frame,
+                    "lembos {threads} {window}"
+                );
+                let frame = render_in_windows::<f32, _>(&scene, &view, &triangles, threads, window);
+                assert!(
+                    bits(&frame.unwrap()) == triangle_frame,
+                    "triangles {threads} {window}"
+                );
+            }
+        }
+    }
+
+    #[test]
     fn a_panic_in_setup_reaches_the_caller_and_no_thread_waits_for_it() {
         // On its own thread, so that a frame whose threads wait for ever fails the test.
         let (done, finished) = std::sync::mpsc::channel();
@@ -591,7 +692,7 @@ mod tests {
                         &scene,
                         &view,
                         threads,
-                        9,
+                        (9, 9),
                         |task| {
                             assert_ne!(task, 4, "task 4 fails");
                             tagged(task)
