@@ -1150,7 +1150,10 @@ mod tests {
         .unwrap();
         let far =
             Scene::from_json(&case(Family::Far1e3, 5, 2).scene_json, "t", Path::new(".")).unwrap();
-        let (o, f) = (&ordinary.objects[0].lembos[0], &far.objects[0].lembos[0]);
+        let (o, f) = (
+            &ordinary.objects[0].lembos.get(0),
+            &far.objects[0].lembos.get(0),
+        );
         let shift = f.points[0] - o.points[0];
         assert!((shift.length() - 1e3).abs() < 1e-9, "{shift}");
         for (p, q) in o.points.iter().zip(&f.points) {

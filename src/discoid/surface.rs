@@ -77,8 +77,8 @@ pub fn surface_scene(scene: &Scene) -> Result<Scene, String> {
         *o = SceneObject {
             label: format!("surface of {}", o.label),
             color: o.color,
-            lembos: surface_lembos(&surface),
-            mesh: None,
+            lembos: surface_lembos(&surface).into(),
+            from_mesh: false,
             discoids: None,
         };
     }

@@ -229,7 +229,8 @@ fn measure_discoids(
         ));
     }
     let surface = reference_scene(scene)?;
-    let tracer = oracle::Tracer::new(surface.lembos().map(|(l, _)| l), view);
+    let held: Vec<crate::lembo::Lembo> = surface.lembos().map(|(l, _)| l).collect();
+    let tracer = oracle::Tracer::new(&held, view);
     let accuracy = metrics::measure(&with_normals, reference, &tracer, 0, None, None);
     let metrics_wall = t1.elapsed().as_secs_f64();
     Ok(Measured {

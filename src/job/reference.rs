@@ -46,7 +46,9 @@ fn no_surface(why: String) -> Error {
 pub fn render_reference(scene: &Scene, view: &View, supersample: u32) -> (ReferenceImage, f64) {
     crate::progress::stage("exact reference");
     let t = Instant::now();
-    let lembos: Vec<_> = scene.lembos().collect();
+    // The reference traces every lembo: it holds them all, made (DESIGN.md §7).
+    let held: Vec<(Lembo, [f64; 3])> = scene.lembos().collect();
+    let lembos: Vec<(&Lembo, [f64; 3])> = held.iter().map(|(l, c)| (l, *c)).collect();
     let reference = oracle::render_reference(&oracle::ReferenceInput {
         lembos: &lembos,
         view,
@@ -103,7 +105,8 @@ pub fn measure_frame(
     ids_per_lembo: u64,
 ) -> Accuracy {
     let probe = frame.probe.unwrap_or_default();
-    let tracer = oracle::Tracer::new(scene.lembos().map(|(l, _)| l), view);
+    let held: Vec<Lembo> = scene.lembos().map(|(l, _)| l).collect();
+    let tracer = oracle::Tracer::new(&held, view);
     metrics::measure(
         &frame.framebuffer,
         reference,
@@ -126,13 +129,14 @@ pub fn see_through_px(
     render: &FrameBuffer,
     ids_per_lembo: u64,
 ) -> Option<u64> {
-    if scene.objects.iter().all(|o| o.mesh.is_none()) {
+    if scene.objects.iter().all(|o| !o.from_mesh) {
         return None;
     }
-    let lembos: Vec<(&Lembo, bool)> = scene
+    let held: Vec<(Lembo, bool)> = scene
         .objects
         .iter()
-        .flat_map(|o| o.lembos.iter().map(move |l| (l, o.mesh.is_some())))
+        .flat_map(|o| o.lembos.iter().map(move |l| (l, o.from_mesh)))
         .collect();
+    let lembos: Vec<(&Lembo, bool)> = held.iter().map(|(l, m)| (l, *m)).collect();
     Some(see_through::see_through(&lembos, view, render, ids_per_lembo).total())
 }

@@ -388,59 +388,120 @@ impl TriangleMesh {
     ///
     /// Refuses a triangle two of whose corners weld together.
     pub fn to_lembos(&self) -> Result<Vec<Lembo>, CollapsedTriangle> {
+        let lembos = self.clone().into_lembos()?;
+        Ok((0..lembos.len()).map(|t| lembos.get(t)).collect())
+    }
+
+    /// The lembos of [`Self::to_lembos`], made one at a time on demand from the welded mesh
+    /// ([`MeshLembos`]): what a scene holds of a mesh object.
+    pub fn into_lembos(self) -> Result<MeshLembos, CollapsedTriangle> {
         let weld = self.weld();
         if let Some(c) = self.collapsed(&weld) {
             return Err(c);
         }
         let rep = &weld.representative;
-        let pos = |i: u32| self.positions[rep[i as usize] as usize];
-        let normal = |i: u32| self.normals[i as usize];
-        // Each triangle's own midpoints and mid-normals of AB, AC, BC (D, E, F).
-        let own: Vec<[(DVec3, DVec3); 3]> = self
-            .triangles
-            .iter()
-            .map(|t| {
-                EDGES.map(|(a, b)| edge_midpoint(pos(t[a]), normal(t[a]), pos(t[b]), normal(t[b])))
-            })
-            .collect();
+        let mut mesh = self;
+        for (i, &r) in rep.iter().enumerate() {
+            mesh.positions[i] = mesh.positions[r as usize];
+        }
         // Every (edge key, triangle, edge) sorted by key: the sides of each edge are adjacent.
-        let mut sides: Vec<((u32, u32), u32, u8)> = Vec::with_capacity(3 * self.triangles.len());
-        for (t, tri) in self.triangles.iter().enumerate() {
+        let mut sides: Vec<((u32, u32), u32, u8)> = Vec::with_capacity(3 * mesh.triangles.len());
+        for (t, tri) in mesh.triangles.iter().enumerate() {
             for (k, (a, b)) in EDGES.into_iter().enumerate() {
                 let (ra, rb) = (rep[tri[a] as usize], rep[tri[b] as usize]);
                 sides.push(((ra.min(rb), ra.max(rb)), t as u32, k as u8));
             }
         }
         sides.sort_unstable();
-        let mut mid: Vec<[DVec3; 3]> = own.iter().map(|e| e.map(|(m, _)| m)).collect();
+        let mut shared = Vec::new();
         let mut distinct: Vec<DVec3> = Vec::new();
         for edge in sides.chunk_by(|x, y| x.0 == y.0) {
             distinct.clear();
-            distinct.extend(edge.iter().map(|&(_, t, k)| own[t as usize][k as usize].0));
+            distinct.extend(edge.iter().map(|&(_, t, k)| mesh.own_midpoint(t, k).0));
             distinct.sort_unstable_by(|p, q| canonical_order(*p, *q));
             distinct.dedup_by(|p, q| canonical_order(*p, *q) == Ordering::Equal);
             if distinct.len() < 2 {
                 continue;
             }
-            let shared = shared_midpoint(&distinct);
-            for &(_, t, k) in edge {
-                mid[t as usize][k as usize] = shared;
-            }
+            let mid = shared_midpoint(&distinct);
+            shared.extend(edge.iter().map(|&(_, t, k)| (3 * t as u64 + k as u64, mid)));
         }
-        let unit = |v: DVec3| v.normalize_or_zero();
-        Ok(self
-            .triangles
-            .iter()
-            .zip(own.iter().zip(&mid))
-            .map(|(t, (own, mid))| {
-                let [a, b, c] = t.map(pos);
-                let [na, nb, nc] = t.map(|i| unit(normal(i)));
-                Lembo::new(
-                    [a, b, c, mid[0], mid[1], mid[2]],
-                    [na, nb, nc, own[0].1, own[1].1, own[2].1],
-                )
-            })
-            .collect())
+        shared.sort_unstable_by_key(|&(key, _)| key);
+        Ok(MeshLembos { mesh, shared })
+    }
+
+    /// Triangle `t`'s own midpoint and mid-normal of its edge `k` (AB, AC, BC: D, E, F).
+    fn own_midpoint(&self, t: u32, k: u8) -> (DVec3, DVec3) {
+        let tri = self.triangles[t as usize];
+        let (a, b) = EDGES[k as usize];
+        let (pa, pb) = (tri[a] as usize, tri[b] as usize);
+        edge_midpoint(
+            self.positions[pa],
+            self.normals[pa],
+            self.positions[pb],
+            self.normals[pb],
+        )
+    }
+}
+
+/// A mesh's lembos made on demand, one per triangle ([`TriangleMesh::to_lembos`]): the
+/// welded mesh and the shared midpoints of the edges whose sides compute different ones (a
+/// smooth mesh has none), about 60 bytes a lembo for a mesh of 2 triangles a vertex instead
+/// of a lembo's 576.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshLembos {
+    /// The mesh, its positions welded.
+    mesh: TriangleMesh,
+    /// (3 × triangle + edge, the edge's shared midpoint), sorted, for every side of an edge
+    /// whose sides compute different midpoints.
+    shared: Vec<(u64, DVec3)>,
+}
+
+impl MeshLembos {
+    /// The lembos: one a triangle.
+    pub fn len(&self) -> usize {
+        self.mesh.triangles.len()
+    }
+
+    /// Whether there is none.
+    pub fn is_empty(&self) -> bool {
+        self.mesh.triangles.is_empty()
+    }
+
+    /// The mesh, its positions welded.
+    pub fn mesh(&self) -> &TriangleMesh {
+        &self.mesh
+    }
+
+    /// Lembo `t`, made from triangle `t`: its welded corners and unit corner normals, its
+    /// own edge mid-normals, and each edge's shared midpoint (its own where the sides
+    /// agree).
+    pub fn get(&self, t: usize) -> Lembo {
+        let m = &self.mesh;
+        let tri = m.triangles[t];
+        let own = [0, 1, 2].map(|k| m.own_midpoint(t as u32, k));
+        let mid = [0, 1, 2].map(|k| {
+            let key = 3 * t as u64 + k as u64;
+            match self.shared.binary_search_by_key(&key, |&(key, _)| key) {
+                Ok(at) => self.shared[at].1,
+                Err(_) => own[k as usize].0,
+            }
+        });
+        let [a, b, c] = tri.map(|i| m.positions[i as usize]);
+        let [na, nb, nc] = tri.map(|i| m.normals[i as usize].normalize_or_zero());
+        Lembo::new(
+            [a, b, c, mid[0], mid[1], mid[2]],
+            [na, nb, nc, own[0].1, own[1].1, own[2].1],
+        )
+    }
+
+    /// The heap it holds \[bytes\].
+    pub fn bytes(&self) -> usize {
+        let m = &self.mesh;
+        std::mem::size_of_val(&m.positions[..])
+            + std::mem::size_of_val(&m.normals[..])
+            + std::mem::size_of_val(&m.triangles[..])
+            + std::mem::size_of_val(&self.shared[..])
     }
 }
 

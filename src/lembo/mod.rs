@@ -19,6 +19,8 @@
 //! is plain evaluation at the reference points ([`Quadratic::reference_values`]).
 
 pub mod construct;
+pub mod lattice;
+pub mod set;
 pub mod shapes;
 pub mod tessellate;
 

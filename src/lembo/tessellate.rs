@@ -33,11 +33,10 @@
 //! stored once; what a geometry fetch reads of it depends on its vertex cache, which reads
 //! [`Tessellation::lembo_vertex_ids`].
 
-use super::construct::canonical_order;
+use super::lattice::{canonical_edge, corner, key_bits, lattice_vertex, Vertex, EDGES};
 use super::Lembo;
-use crate::scene::Scene;
+use crate::scene::{LemboIndex, Scene};
 use glam::DVec3;
-use std::cmp::Ordering;
 use std::collections::HashMap;
 use std::sync::OnceLock;
 
@@ -61,8 +60,13 @@ pub const INDEX_BYTES_PER_TRIANGLE: u64 = 12;
 /// A scene's lembos tessellated at level n: n² triangles per lembo, computed on demand.
 #[derive(Clone, Debug)]
 pub struct Tessellation<'a> {
-    /// The scene's lembos in global-id order, with their object's colour.
-    lembos: Vec<(&'a Lembo, [f64; 3])>,
+    /// The scene whose lembos, in global-id order, are tessellated (each made when its
+    /// triangles are asked for).
+    scene: &'a Scene,
+    /// Where its objects' lembos start.
+    starts: LemboIndex,
+    /// How many lembos it has.
+    count: usize,
     /// Lattice steps per domain edge.
     n: u32,
     /// The indexed mesh's vertex numbering, made on first use.
@@ -90,12 +94,13 @@ struct MeshIndex {
 }
 
 impl MeshIndex {
-    fn new(lembos: &[(&Lembo, [f64; 3])], n: u32) -> MeshIndex {
+    fn new(lembos: impl Iterator<Item = Lembo>, count: usize, n: u32) -> MeshIndex {
         let mut corner_ids = HashMap::new();
         let mut edge_ids = HashMap::new();
-        let mut corners = Vec::with_capacity(lembos.len());
-        let mut edges = Vec::with_capacity(lembos.len());
-        for (l, _) in lembos {
+        let mut corners = Vec::with_capacity(count);
+        let mut edges = Vec::with_capacity(count);
+        for l in lembos {
+            let l = &l;
             corners.push(std::array::from_fn(|k| {
                 let (p, nrm) = corner(l, k);
                 let next = corner_ids.len() as u64;
@@ -118,7 +123,7 @@ impl MeshIndex {
             edges,
             corner_count,
             edge_count,
-            vertices: corner_count + edge_count * steps + lembos.len() as u64 * interior,
+            vertices: corner_count + edge_count * steps + count as u64 * interior,
         }
     }
 
@@ -150,16 +155,15 @@ impl MeshIndex {
     }
 }
 
-/// A lattice point evaluated: position [world units] and unit normal.
-type Vertex = (DVec3, DVec3);
-
 impl<'a> Tessellation<'a> {
     /// The tessellation of every lembo of `scene` at level `n` (n steps per domain edge;
     /// n >= 1, validated by the caller).
     pub fn new(scene: &'a Scene, n: u32) -> Self {
         debug_assert!(n >= 1, "tessellation level must be at least 1");
         Tessellation {
-            lembos: scene.lembos().collect(),
+            scene,
+            starts: scene.lembo_index(),
+            count: scene.lembo_count(),
             n,
             index: OnceLock::new(),
         }
@@ -172,17 +176,17 @@ impl<'a> Tessellation<'a> {
 
     /// The number of triangles: lembos × n².
     pub fn len(&self) -> u64 {
-        self.lembos.len() as u64 * self.triangles_per_lembo()
+        self.count as u64 * self.triangles_per_lembo()
     }
 
     /// Whether there are no triangles (the scene has no lembos).
     pub fn is_empty(&self) -> bool {
-        self.lembos.is_empty()
+        self.count == 0
     }
 
     /// Lembos tessellated (the scene's, in scene order).
     pub fn lembos(&self) -> usize {
-        self.lembos.len()
+        self.count
     }
 
     /// Triangles per lembo: n².
@@ -195,7 +199,8 @@ impl<'a> Tessellation<'a> {
     pub fn triangle(&self, id: u64) -> Triangle {
         debug_assert!(id < self.len(), "triangle {id} of {}", self.len());
         let per_lembo = self.triangles_per_lembo();
-        let (lembo, color) = self.lembos[(id / per_lembo) as usize];
+        let (lembo, color) = self.scene.lembo(&self.starts, (id / per_lembo) as usize);
+        let lembo = &lembo;
         let local = id % per_lembo;
         // Row b starts at local index n² - (n - b)², so m = n - b is the smallest m with
         // n² - local <= m²; within the row, up and down triangles alternate.
@@ -220,8 +225,8 @@ impl<'a> Tessellation<'a> {
     /// All n² triangles of lembo `lembo` in local order into `out` (cleared first), each
     /// lattice point evaluated once.
     pub fn lembo_triangles(&self, lembo: usize, out: &mut Vec<Triangle>) {
-        let (l, color) = self.lembos[lembo];
-        let n = self.n;
+        let (l, color) = self.scene.lembo(&self.starts, lembo);
+        let (l, n) = (&l, self.n);
         out.clear();
         out.reserve(self.triangles_per_lembo() as usize);
         let triangle = |p: [Vertex; 3]| Triangle {
@@ -277,8 +282,10 @@ impl<'a> Tessellation<'a> {
     /// The indexed mesh's vertex numbering ([`MeshIndex`]), made on first use from the
     /// lembos' construction points alone (no vertex is evaluated).
     fn index(&self) -> &MeshIndex {
-        self.index
-            .get_or_init(|| MeshIndex::new(&self.lembos, self.n))
+        self.index.get_or_init(|| {
+            let lembos = self.scene.lembos().map(|(l, _)| l);
+            MeshIndex::new(lembos, self.count, self.n)
+        })
     }
 
     /// The vertex indices of lembo `lembo`'s n² triangles in the indexed mesh, in the local
@@ -311,118 +318,10 @@ impl<'a> Tessellation<'a> {
     }
 }
 
-/// The lattice point (a, b) of lembo `l` at level n: copied at corners, from the edge's own
-/// three points on domain edges, from the lembo's functions inside (the module's "Shared
-/// edges").
-fn lattice_vertex(l: &Lembo, a: u32, b: u32, n: u32) -> Vertex {
-    debug_assert!(a + b <= n);
-    match (a, b) {
-        (0, 0) => corner(l, 0),
-        (a, 0) if a == n => corner(l, 1),
-        (0, b) if b == n => corner(l, 2),
-        // Steps counted from the edge's first end in EDGES: A for AB and AC, B for BC.
-        (a, 0) => edge_point(l, EDGES[0], a, n),
-        (0, b) => edge_point(l, EDGES[1], b, n),
-        (_, b) if a + b == n => edge_point(l, EDGES[2], b, n),
-        (a, b) => {
-            let (u, v) = (a as f64 / n as f64, b as f64 / n as f64);
-            (l.position_at(u, v), l.unit_normal_at(u, v))
-        }
-    }
-}
-
-/// The largest accepted subdivision of a lembo: 4^5 = 1024 lembos each.
-pub const MAX_SUBDIVIDE: u32 = 5;
-
-/// Lembo `l` subdivided `s` times: 4^s lembos over the same surface, each the quadratic
-/// patch of one triangle of the level-2^s lattice (the tessellation's local order), its six
-/// construction points and unit normals taken from the level-2^(s+1) lattice, so that
-/// neighbours (within `l` and across its edges) share their edge points bit for bit.
-/// A quadratic restricted to a sub-triangle is a quadratic, so the positions are the
-/// parent's; the normals are its unit normals at the six points (the normal function
-/// interpolates them, as a lembo built from a mesh interpolates its vertex normals).
-pub fn subdivide(l: &Lembo, s: u32, out: &mut Vec<Lembo>) {
-    debug_assert!(s <= MAX_SUBDIVIDE);
-    let m = 1u32 << s;
-    let n = 2 * m;
-    let make = |p: [(u32, u32); 6]| {
-        let v = p.map(|(a, b)| lattice_vertex(l, a, b, n));
-        Lembo::new(v.map(|v| v.0), v.map(|v| v.1))
-    };
-    for b in 0..m {
-        for a in 0..m - b {
-            let (a2, b2) = (2 * a, 2 * b);
-            // Up: A (a, b), B (a + 1, b), C (a, b + 1); D, E, F the middles of AB, AC, BC.
-            out.push(make([
-                (a2, b2),
-                (a2 + 2, b2),
-                (a2, b2 + 2),
-                (a2 + 1, b2),
-                (a2, b2 + 1),
-                (a2 + 1, b2 + 1),
-            ]));
-            if a + b + 1 < m {
-                // Down: A (a + 1, b), B (a + 1, b + 1), C (a, b + 1).
-                out.push(make([
-                    (a2 + 2, b2),
-                    (a2 + 2, b2 + 2),
-                    (a2, b2 + 2),
-                    (a2 + 2, b2 + 1),
-                    (a2 + 1, b2 + 1),
-                    (a2 + 1, b2 + 2),
-                ]));
-            }
-        }
-    }
-}
-
-/// The domain edges as (first end, second end, middle) indices into a lembo's six points:
-/// AB with middle D, AC with middle E, BC with middle F.
-const EDGES: [(usize, usize, usize); 3] = [(0, 1, 3), (0, 2, 4), (1, 2, 5)];
-
-/// Corner `k` (A, B or C): the construction point itself and its normalised normal.
-fn corner(l: &Lembo, k: usize) -> Vertex {
-    (l.points[k], l.normals[k].normalize_or_zero())
-}
-
-/// An edge's (start, middle, end) points with their construction normals, ends in
-/// canonical order, and whether the ends were swapped from the order in [`EDGES`]. The
-/// normals are not normalised, so along the edge they follow the lembo's normal function.
-fn canonical_edge(l: &Lembo, (p, q, m): (usize, usize, usize)) -> (bool, [Vertex; 3]) {
-    let swapped = canonical_order(l.points[p], l.points[q]) == Ordering::Greater;
-    let (p, q) = if swapped { (q, p) } else { (p, q) };
-    (swapped, [p, m, q].map(|k| (l.points[k], l.normals[k])))
-}
-
-/// The point `step` of n along an edge from its first end in [`EDGES`], evaluated from the
-/// canonical start so both lembos sharing the edge run the same arithmetic.
-fn edge_point(l: &Lembo, edge: (usize, usize, usize), step: u32, n: u32) -> Vertex {
-    let (swapped, [p, m, q]) = canonical_edge(l, edge);
-    let i = if swapped { n - step } else { step };
-    let t = i as f64 / n as f64;
-    (
-        quadratic_bezier(p.0, m.0, q.0, t),
-        quadratic_bezier(p.1, m.1, q.1, t).normalize_or_zero(),
-    )
-}
-
-/// The bits of some vectors, a hash key that tells apart every value the output can hold.
-fn key_bits<const N: usize>(vectors: [DVec3; N]) -> [[u64; 3]; N] {
-    vectors.map(|v| v.to_array().map(f64::to_bits))
-}
-
-/// The quadratic through `p` (t = 0), `m` (t = ½) and `q` (t = 1) at `t`, as a Bézier curve
-/// with control point 2m − (p + q)/2. One fixed expression: the crack-freedom of shared
-/// edges rests on both sides evaluating exactly this.
-fn quadratic_bezier(p: DVec3, m: DVec3, q: DVec3, t: f64) -> DVec3 {
-    let control = 2.0 * m - 0.5 * (p + q);
-    let s = 1.0 - t;
-    s * s * p + 2.0 * t * s * control + t * t * q
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::lembo::lattice::subdivide;
     use crate::lembo::REFERENCE_UV;
     use std::path::Path;
 
@@ -454,7 +353,7 @@ mod tests {
     #[test]
     fn subdivided_lembos_stay_on_the_surface_without_cracks() {
         let scene = trace("sphere24");
-        let lembos: Vec<&Lembo> = scene.lembos().map(|(l, _)| l).collect();
+        let lembos: Vec<Lembo> = scene.lembos().map(|(l, _)| l).collect();
         for s in 0..=2u32 {
             let m = 1u32 << s;
             let mut out = Vec::new();
@@ -490,7 +389,7 @@ mod tests {
     #[test]
     fn tessellate_level_one_reproduces_the_mesh_bit_for_bit() {
         let scene = trace("bunny");
-        let mesh = scene.objects[0].mesh.as_ref().unwrap();
+        let mesh = scene.objects[0].mesh().unwrap();
         let tess = Tessellation::new(&scene, 1);
         assert_eq!(tess.len(), mesh.triangles.len() as u64);
         for (id, t) in mesh.triangles.iter().enumerate() {

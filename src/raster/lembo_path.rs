@@ -12,13 +12,17 @@ use crate::camera::View;
 use crate::datapath::Real;
 use crate::error::{Error, Result};
 use crate::graph::UnitKind;
-use crate::lembo::Lembo;
-use crate::scene::Scene;
+use crate::scene::{LemboIndex, Scene};
 
 /// The lembo path over a scene's lembos: what Setup and the walk are given.
 pub struct LemboPath<'a, R> {
-    /// The scene's lembos with their colours, in scene order (a lembo's id is its place).
-    lembos: Vec<(&'a Lembo, [f64; 3])>,
+    /// The scene whose lembos, in scene order (a lembo's id is its place), are drawn, each
+    /// made as Setup takes it.
+    scene: &'a Scene,
+    /// Where its objects' lembos start.
+    starts: LemboIndex,
+    /// How many lembos it has.
+    count: usize,
     view: &'a View,
     /// k, the walk's midpoint error \[pixels\].
     k: R,
@@ -40,7 +44,9 @@ impl<'a, R: Real> LemboPath<'a, R> {
         segment_cap: usize,
     ) -> Self {
         LemboPath {
-            lembos: scene.lembos().collect(),
+            scene,
+            starts: scene.lembo_index(),
+            count: scene.lembo_count(),
             view,
             k: R::of(k),
             perspective,
@@ -55,16 +61,16 @@ impl<R: Real> Stages<R> for LemboPath<'_, R> {
     type Buffers = Buffers<R>;
 
     fn primitives(&self) -> usize {
-        self.lembos.len()
+        self.count
     }
 
     /// Setup of lembo `n` into its pieces (none when it is culled).
     fn set_up(&self, n: usize, _: &mut (), pieces: &mut Vec<ScreenLembo<R>>, counts: &mut Counts) {
-        let (lembo, color) = self.lembos[n];
+        let (lembo, color) = self.scene.lembo(&self.starts, n);
         let first = pieces.len();
         counts.lembos += 1;
         R::charge(UnitKind::Setup);
-        match setup::setup_pieces::<R>(n as u32, lembo, color, self.view, self.perspective, pieces)
+        match setup::setup_pieces::<R>(n as u32, &lembo, color, self.view, self.perspective, pieces)
         {
             Ok(split) => counts.add_split(split, pieces.len() - first),
             Err(cull) => counts.add_cull(cull),

@@ -244,7 +244,7 @@ mod tests {
             "objects": [{"lembos": [{"points": [[0,0,0],[1,0,0],[0,1,0],[0.5,0,0],[0,0.5,0],[0.5,0.5,0]],
                                      "normals": [[0,0,1],[0,0,1],[0,0,1],[0,0,1],[0,0,1],[0,0,1]]}]}]}"#;
         let mut scene = Scene::from_json(text, "probe", Path::new(".")).unwrap();
-        scene.objects[0].lembos = lembos;
+        scene.objects[0].lembos = lembos.into();
         scene
     }
 
@@ -273,7 +273,7 @@ mod tests {
         let ls: Vec<ScreenLembo<f64>> = scene
             .lembos()
             .enumerate()
-            .map(|(id, (l, c))| setup(id as u32, l, c, &view).unwrap())
+            .map(|(id, (l, c))| setup(id as u32, &l, c, &view).unwrap())
             .collect();
         let t = (1.0 - (1.0f64 - 4.0 * 0.075).sqrt()) / 2.0;
         // A point on edge AB of lembo n at canonical t (from P), or in the interior.
@@ -347,7 +347,7 @@ mod tests {
             let ls: Vec<ScreenLembo<f64>> = scene
                 .lembos()
                 .enumerate()
-                .map(|(id, (l, c))| setup(id as u32, l, c, &view).unwrap())
+                .map(|(id, (l, c))| setup(id as u32, &l, c, &view).unwrap())
                 .collect();
             // Scanline 38 (y = 38.5) crosses lembo 0's edge at t = 0.9187 (x = 57.56);
             // lembo 0 to its right, lembo 1 to its left but computing x 1.1 px too far

@@ -44,6 +44,7 @@ pub mod validate;
 use crate::camera::{Camera, Viewport};
 use crate::discoid::DiscoidSet;
 use crate::lembo::construct::TriangleMesh;
+use crate::lembo::set::Lembos;
 use crate::lembo::Lembo;
 use crate::rop::shade::Light;
 use std::path::PathBuf;
@@ -103,11 +104,12 @@ pub struct SceneObject {
     pub label: String,
     /// Material colour, linear RGB in [0, 1].
     pub color: [f64; 3],
-    /// World-space lembos (after the object's transform).
-    pub lembos: Vec<Lembo>,
-    /// World-space triangle mesh for objects given as meshes or builtins (after transform);
-    /// None for inline lembos and discoids.
-    pub mesh: Option<TriangleMesh>,
+    /// World-space lembos (after the object's transform): held, or made on demand from
+    /// the object's mesh ([`Lembos`]).
+    pub lembos: Lembos,
+    /// Whether its lembos stand for a triangle mesh (`mesh` and `builtin` objects), so that
+    /// the see-through metric checks them against their triangles.
+    pub from_mesh: bool,
     /// The object's discoids in world space (None for ordinary objects). Curved discoids'
     /// lembos are `lembos`, in the order of `lembo_texcoords`.
     pub discoids: Option<DiscoidSet>,
@@ -136,12 +138,53 @@ impl Scene {
             .sum()
     }
 
-    /// All lembos in scene order with their object's colour; the index in this order is the
-    /// lembo's global id.
-    pub fn lembos(&self) -> impl Iterator<Item = (&Lembo, [f64; 3])> {
+    /// All lembos in scene order with their object's colour, each made as it is reached;
+    /// the index in this order is the lembo's global id.
+    pub fn lembos(&self) -> impl Iterator<Item = (Lembo, [f64; 3])> + '_ {
         self.objects
             .iter()
             .flat_map(|o| o.lembos.iter().map(move |l| (l, o.color)))
+    }
+
+    /// Where each object's lembos start in scene order, for [`Scene::lembo`].
+    pub fn lembo_index(&self) -> LemboIndex {
+        let mut start = 0;
+        LemboIndex(
+            self.objects
+                .iter()
+                .map(|o| {
+                    let at = start;
+                    start += o.lembos.len();
+                    at
+                })
+                .collect(),
+        )
+    }
+
+    /// Lembo `id` (scene order, below [`Scene::lembo_count`]) with its object's colour,
+    /// made if it is not held; `index` is this scene's [`Scene::lembo_index`].
+    pub fn lembo(&self, index: &LemboIndex, id: usize) -> (Lembo, [f64; 3]) {
+        let o = index.0.partition_point(|&start| start <= id) - 1;
+        let object = &self.objects[o];
+        (object.lembos.get(id - index.0[o]), object.color)
+    }
+
+    /// The heap the scene's lembos take \[bytes\]: the lembos held, and the meshes others
+    /// are made from.
+    pub fn lembo_bytes(&self) -> usize {
+        self.objects.iter().map(|o| o.lembos.bytes()).sum()
+    }
+}
+
+/// Where each object's lembos start in a scene's lembo order ([`Scene::lembo_index`]).
+#[derive(Clone, Debug)]
+pub struct LemboIndex(Vec<usize>);
+
+impl SceneObject {
+    /// The world-space triangle mesh of an object given as a mesh or a builtin (after its
+    /// transform); None for inline lembos and discoids.
+    pub fn mesh(&self) -> Option<&TriangleMesh> {
+        self.lembos.mesh()
     }
 }
 

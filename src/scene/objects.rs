@@ -9,9 +9,9 @@ use super::{
 };
 use crate::error::{Error, Result};
 use crate::lembo::construct::{CollapsedTriangle, TriangleMesh};
+use crate::lembo::lattice::MAX_SUBDIVIDE;
+use crate::lembo::set::Lembos;
 use crate::lembo::shapes::{builtin_mesh, BUILTIN_NAMES, MAX_TERRAIN_CELLS};
-use crate::lembo::tessellate::{subdivide, MAX_SUBDIVIDE};
-use crate::lembo::Lembo;
 
 /// The most lembos a scene with a subdivided object may have: 2^22, room for the bunny
 /// subdivided five times (3 762 176), and within what 24 GiB hold in a timed run (about
@@ -42,7 +42,7 @@ impl Check<'_> {
             Some(a) => Some(self.crease_angle(&field, a, o.mesh.is_some())?),
             None => None,
         };
-        let (label, lembos, mesh, discoids) = match (&o.builtin, &o.lembos, &o.mesh, &o.discoids) {
+        let (label, lembos, discoids) = match (&o.builtin, &o.lembos, &o.mesh, &o.discoids) {
             (Some(name), None, None, None) => {
                 let Some(mesh) = builtin_mesh(name) else {
                     return Err(self.invalid(
@@ -59,14 +59,14 @@ impl Check<'_> {
                 let mesh = mesh.welded();
                 // Only a transform can collapse a builtin's triangle (a scale so small that
                 // positions round together).
-                let lembos = mesh.to_lembos().map_err(|c| {
+                let lembos = mesh.into_lembos().map_err(|c| {
                     self.invalid(
                         format!("{field}.transform"),
                         "(world-space geometry)",
                         format!("builtin {name}: {c}"),
                     )
                 })?;
-                (format!("builtin {name}"), lembos, Some(mesh), None)
+                (format!("builtin {name}"), Lembos::Mesh(lembos), None)
             }
             (None, Some(specs), None, None) => {
                 if specs.is_empty() {
@@ -83,7 +83,7 @@ impl Check<'_> {
                         self.inline_lembo(&format!("{field}.lembos[{j}]"), l, transform.as_ref())
                     })
                     .collect::<Result<Vec<_>>>()?;
-                ("inline lembos".to_string(), lembos, None, None)
+                ("inline lembos".to_string(), Lembos::Held(lembos), None)
             }
             (None, None, Some(path), None) => {
                 let mesh_field = format!("{field}.mesh");
@@ -102,13 +102,13 @@ impl Check<'_> {
                     Some(angle) => mesh.with_crease_angle(angle).map_err(collapsed)?,
                     None => mesh,
                 };
-                let lembos = mesh.to_lembos().map_err(collapsed)?;
-                (format!("mesh {path}"), lembos, Some(mesh), None)
+                let lembos = mesh.into_lembos().map_err(collapsed)?;
+                (format!("mesh {path}"), Lembos::Mesh(lembos), None)
             }
             (None, None, None, Some(spec)) => {
                 let (label, lembos, set) =
                     self.discoids(&field, spec, transform.as_ref(), base_dir, radii)?;
-                (label, lembos, None, Some(set))
+                (label, Lembos::Held(lembos), Some(set))
             }
             _ => {
                 let value = given(&[
@@ -126,7 +126,7 @@ impl Check<'_> {
         };
         // Finite input can still be huge, or become so after the transform; refuse it here
         // rather than let the rasterizer overflow.
-        if let Some(j) = lembos.iter().position(|l| !lembo_in_range(l)) {
+        if let Some(j) = lembos.iter().position(|l| !lembo_in_range(&l)) {
             return Err(self.out_of_range(&field, transform.is_some(), j));
         }
         let lembos = match o.subdivide {
@@ -137,24 +137,24 @@ impl Check<'_> {
         Ok(SceneObject {
             label,
             color,
+            from_mesh: lembos.mesh().is_some(),
             lembos,
-            mesh,
             discoids,
         })
     }
 
     /// `lembos` subdivided `s` times (`field.subdivide`): each into 4^s over the same
-    /// surface ([`subdivide`]); refused with discoids, beyond [`MAX_SUBDIVIDE`], or when the
-    /// scene's lembos (`before` of the objects before) would exceed
-    /// [`MAX_SUBDIVIDED_LEMBOS`], before the subdivision is made.
+    /// surface ([`subdivide`](crate::lembo::lattice::subdivide)), made on demand;
+    /// refused with discoids, beyond [`MAX_SUBDIVIDE`], or when the scene's lembos (`before`
+    /// of the objects before) would exceed [`MAX_SUBDIVIDED_LEMBOS`].
     fn subdivided(
         &self,
         field: &str,
         s: u32,
         discoids: bool,
-        lembos: Vec<Lembo>,
+        lembos: Lembos,
         before: u64,
-    ) -> Result<Vec<Lembo>> {
+    ) -> Result<Lembos> {
         let field = format!("{field}.subdivide");
         if discoids {
             return Err(self.invalid(
@@ -180,11 +180,10 @@ impl Check<'_> {
                 ),
             ));
         }
-        let mut out = Vec::with_capacity((total - before) as usize);
-        for l in &lembos {
-            subdivide(l, s, &mut out);
-        }
-        Ok(out)
+        Ok(Lembos::Subdivided {
+            base: Box::new(lembos),
+            s,
+        })
     }
 
     /// The error for lembo `j` of the object at `field` being out of range.

@@ -115,7 +115,7 @@ fn committed_traces_load_with_their_lembo_counts() {
         assert_eq!(scene.lembos().count(), lembos, "{file}");
         assert_eq!(scene.source.as_deref(), Some(path.as_path()));
         assert_eq!(scene.viewport, DEFAULT_VIEWPORT);
-        assert!(scene.objects.iter().all(|o| o.mesh.is_some()));
+        assert!(scene.objects.iter().all(|o| o.mesh().is_some()));
         assert!(scene.objects.iter().all(|o| o.discoids.is_none()));
         assert_eq!(scene.discoid_count(), 0);
         assert_eq!(scene.discoid_threshold, 0.0);
@@ -453,7 +453,7 @@ fn obj_without_triangles_or_with_bad_indices_is_a_mesh_error() {
 #[test]
 fn obj_quads_are_triangulated_and_normals_computed() {
     let scene = scene_with_obj("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n").unwrap();
-    let mesh = scene.objects[0].mesh.as_ref().unwrap();
+    let mesh = scene.objects[0].mesh().unwrap();
     assert_eq!(mesh.triangles.len(), 2);
     assert!(mesh.normals.iter().all(|n| *n == DVec3::Z));
     assert_eq!(scene.lembo_count(), 2);
@@ -482,7 +482,7 @@ fn split_obj_vertices_are_welded_into_shared_edges() {
          f 1//1 2//1 3//1\nf 5//2 4//2 6//2\n",
     )
     .unwrap();
-    let l = &scene.objects[0].lembos;
+    let l = scene.objects[0].lembos.to_vec();
     assert_eq!(l[0].points[3], l[1].points[3]);
     assert_eq!(l[0].normals[0], DVec3::Z);
     assert_ne!(l[1].normals[0], DVec3::Z);
@@ -499,7 +499,7 @@ fn crease_angle_recomputes_a_meshs_normals() {
         parse(&text)
     };
     let creased = with("40").unwrap();
-    let mesh = creased.objects[0].mesh.as_ref().unwrap();
+    let mesh = creased.objects[0].mesh().unwrap();
     assert_eq!(mesh.triangles.len(), 3674);
     assert!(
         mesh.positions.len() > 1839,
@@ -509,7 +509,7 @@ fn crease_angle_recomputes_a_meshs_normals() {
     // 180 degrees averages every face: the computed normals, one per vertex.
     let all = with("180").unwrap();
     let computed = bunny_mesh().with_computed_normals();
-    let mesh = all.objects[0].mesh.as_ref().unwrap();
+    let mesh = all.objects[0].mesh().unwrap();
     assert_eq!(mesh.positions.len(), 1839);
     for (t, u) in mesh.triangles.iter().zip(&computed.triangles) {
         for (&i, &j) in t.iter().zip(u) {
@@ -539,9 +539,9 @@ const INLINE: &str = r#"{"lembos": [{"points": [[0,0,0],[1,0,0],[0,1,0],[0.5,0,0
 fn inline_lembo_round_trips_through_an_identity_transform() {
     let scene = sphere_with(r#"{"builtin": "sphere24"}"#, INLINE).unwrap();
     let o = &scene.objects[0];
-    assert!(o.mesh.is_none());
+    assert!(o.mesh().is_none());
     assert_eq!(o.label, "inline lembos");
-    let l = &o.lembos[0];
+    let l = &o.lembos.get(0);
     let points = [
         [0.0, 0.0, 0.0],
         [1.0, 0.0, 0.0],
@@ -559,7 +559,7 @@ fn inline_lembo_round_trips_through_an_identity_transform() {
 fn inline_lembo_is_rotated_with_its_normals() {
     let text = INLINE.replace(r#""rotate_deg": [0, 0, 0]"#, r#""rotate_deg": [0, 0, 90]"#);
     let scene = sphere_with(r#"{"builtin": "sphere24"}"#, &text).unwrap();
-    let l = &scene.objects[0].lembos[0];
+    let l = &scene.objects[0].lembos.get(0);
     // 90 degrees about z takes x to y.
     assert!((l.points[1] - DVec3::Y).length() < 1e-15);
     assert!((l.normals[1] - DVec3::new(0.0, 0.0, 2.0)).length() < 1e-15);
@@ -582,13 +582,17 @@ fn transform_scales_then_rotates_then_translates() {
     )
     .unwrap();
     let offset = DVec3::new(1.0, -2.0, 3.0);
-    for (a, b) in plain.objects[0].lembos.iter().zip(&moved.objects[0].lembos) {
+    for (a, b) in plain.objects[0]
+        .lembos
+        .iter()
+        .zip(moved.objects[0].lembos.iter())
+    {
         for k in 0..6 {
             assert!((b.points[k] - (2.0 * a.points[k] + offset)).length() < 1e-12);
             assert!((b.normals[k] - a.normals[k]).length() < 1e-12);
         }
     }
-    let mesh = moved.objects[0].mesh.as_ref().unwrap();
+    let mesh = moved.objects[0].mesh().unwrap();
     assert!((mesh.positions[0] - (2.0 * DVec3::Y + offset)).length() < 1e-12);
     // X first, then Y: a 90-degree turn about x takes +y to +z, then 90 about y takes
     // +z to +x.
@@ -597,7 +601,7 @@ fn transform_scales_then_rotates_then_translates() {
         r#"{"builtin": "sphere24", "transform": {"rotate_deg": [90, 90, 0]}}"#,
     )
     .unwrap();
-    let north = turned.objects[0].mesh.as_ref().unwrap().positions[0];
+    let north = turned.objects[0].mesh().unwrap().positions[0];
     assert!((north - DVec3::X).length() < 1e-12, "{north}");
 }
 
@@ -678,7 +682,7 @@ fn committed_discoid_traces_load_with_their_counts() {
         assert_eq!(scene.viewport, DEFAULT_VIEWPORT);
         assert_eq!(scene.discoid_count(), discoids, "{file}");
         assert_eq!(scene.lembo_count(), lembos, "{file}");
-        assert!(scene.objects.iter().all(|o| o.mesh.is_none()));
+        assert!(scene.objects.iter().all(|o| o.mesh().is_none()));
         for o in &scene.objects {
             let set = o.discoids.as_ref().unwrap();
             assert_eq!(set.beta, BetaShape::Disk);
@@ -946,7 +950,7 @@ fn inline_discoids_are_normalised_and_default_to_the_disk_beta() {
     let scene = with_object(ITEMS).unwrap();
     let o = &scene.objects[0];
     assert_eq!(o.label, "inline discoids");
-    assert!(o.lembos.is_empty() && o.mesh.is_none());
+    assert!(o.lembos.is_empty() && o.mesh().is_none());
     let set = discoid_set(&scene, 0);
     assert_eq!(set.beta, BetaShape::Disk);
     assert!(!set.surfels && set.lembo_texcoords.is_empty());

@@ -37,7 +37,7 @@ fn load(name: &str) -> Scene {
 }
 
 fn mesh(scene: &Scene) -> &TriangleMesh {
-    scene.objects[0].mesh.as_ref().expect("a mesh object")
+    scene.objects[0].mesh().expect("a mesh object")
 }
 
 /// An edge by its two end positions, as bits, in a fixed order.
@@ -116,7 +116,7 @@ fn segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
 fn see_through(scene: &Scene, lembos: Vec<Lembo>, datapath: Datapath) -> SeeThrough {
     let mesh = mesh(scene).clone();
     let mut scene = scene.clone();
-    scene.objects[0].lembos = lembos;
+    scene.objects[0].lembos = lembos.into();
     let view = View::new(&scene.camera, scene.viewport);
     let frame = render_functional(&scene, &view, 0.5, datapath, false).unwrap();
     let fb = &frame.framebuffer;
@@ -214,7 +214,7 @@ fn see_through(scene: &Scene, lembos: Vec<Lembo>, datapath: Datapath) -> SeeThro
 fn shared_edges_have_one_midpoint_and_each_side_keeps_its_normals() {
     for name in CREASED.into_iter().chain(["bunny"]) {
         let scene = load(name);
-        let lembos = &scene.objects[0].lembos;
+        let lembos = &scene.objects[0].lembos.to_vec();
         let mesh = mesh(&scene);
         let edges = lembo_edges(lembos);
         let mut creases = 0;
@@ -256,7 +256,7 @@ fn capped_cylinder_leaked_before_and_is_closed_now() {
     eprintln!("capped_cylinder before: {before:?}");
     assert!(before.interior >= 200, "{before:?}");
     for datapath in [Datapath::F32, Datapath::F64] {
-        let after = see_through(&scene, scene.objects[0].lembos.clone(), datapath);
+        let after = see_through(&scene, scene.objects[0].lembos.to_vec(), datapath);
         eprintln!("capped_cylinder after ({datapath:?}): {after:?}");
         assert_eq!(after.interior, 0, "{after:?}");
     }
@@ -273,7 +273,7 @@ fn bevel_cube_is_closed() {
     assert_eq!(before.interior, 0, "{before:?}");
     assert!(before.covered > 10_000, "{before:?}");
     for datapath in [Datapath::F32, Datapath::F64] {
-        let after = see_through(&scene, scene.objects[0].lembos.clone(), datapath);
+        let after = see_through(&scene, scene.objects[0].lembos.to_vec(), datapath);
         eprintln!("bevel_cube after ({datapath:?}): {after:?}");
         assert_eq!(after.interior, 0, "{after:?}");
     }
@@ -285,7 +285,7 @@ fn creased_bunny_leaked_before_and_is_closed_now() {
     let before = see_through(&scene, independent_lembos(mesh(&scene)), Datapath::F32);
     eprintln!("bunny_creased before: {before:?}");
     assert!(before.interior >= 50, "{before:?}");
-    let after = see_through(&scene, scene.objects[0].lembos.clone(), Datapath::F32);
+    let after = see_through(&scene, scene.objects[0].lembos.to_vec(), Datapath::F32);
     eprintln!("bunny_creased after: {after:?}");
     assert_eq!(after.interior, 0, "{after:?}");
 }

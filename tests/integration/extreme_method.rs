@@ -57,7 +57,7 @@ fn ortho_scene(lembos: Vec<Lembo>) -> Scene {
         "objects": [{"lembos": [{"points": [[0,0,0],[1,0,0],[0,1,0],[0.5,0,0],[0,0.5,0],[0.5,0.5,0]],
                                  "normals": [[0,0,1],[0,0,1],[0,0,1],[0,0,1],[0,0,1],[0,0,1]]}]}]}"#;
     let mut scene = Scene::from_json(text, "extreme_method.rs", Path::new(".")).unwrap();
-    scene.objects[0].lembos = lembos;
+    scene.objects[0].lembos = lembos.into();
     scene
 }
 
@@ -71,7 +71,8 @@ fn view_of(scene: &Scene) -> View {
 }
 
 fn reference(scene: &Scene, view: &View) -> ReferenceImage {
-    let lembos: Vec<(&Lembo, [f64; 3])> = scene.lembos().collect();
+    let held: Vec<(Lembo, [f64; 3])> = scene.lembos().collect();
+    let lembos: Vec<(&Lembo, [f64; 3])> = held.iter().map(|(l, c)| (l, *c)).collect();
     render_reference(&ReferenceInput {
         lembos: &lembos,
         view,
@@ -147,7 +148,7 @@ fn disagreements_beyond(
 /// all, so the pixel-sampled silhouette says nothing about how far a fragment is from it.
 fn distance_to_image(scene: &Scene, i: usize, j: usize) -> f64 {
     let (lembo, color) = scene.lembos().next().unwrap();
-    let l = setup::<f64>(0, lembo, color, &view_of(scene)).unwrap();
+    let l = setup::<f64>(0, &lembo, color, &view_of(scene)).unwrap();
     let n = 2048;
     let (cx, cy) = (i as f64 + 0.5, j as f64 + 0.5);
     let mut d2 = f64::INFINITY;
@@ -278,7 +279,7 @@ fn shared_crossings_agree<R: Real>(scene: &Scene) -> usize {
     let ls: Vec<ScreenLembo<R>> = scene
         .lembos()
         .enumerate()
-        .map(|(id, (l, c))| setup::<R>(id as u32, l, c, &view).unwrap())
+        .map(|(id, (l, c))| setup::<R>(id as u32, &l, c, &view).unwrap())
         .collect();
     let (j0, j1) = ls
         .iter()
@@ -328,7 +329,10 @@ fn fixed_pair() -> Scene {
 fn shared_edge_crossings_are_bit_identical_from_both_sides() {
     let scene = fixed_pair();
     // The shared edge is curved on screen: its middle is off the chord.
-    let (a, b) = (&scene.objects[0].lembos[0], &scene.objects[0].lembos[1]);
+    let (a, b) = (
+        &scene.objects[0].lembos.get(0),
+        &scene.objects[0].lembos.get(1),
+    );
     let chord_mid = 0.5 * (a.points[1] + a.points[2]);
     assert_eq!(a.points[5], b.points[3]);
     assert!(

@@ -779,7 +779,7 @@ fn check_scene(scene: &Scene) -> Result<(), TestCaseError> {
                 j
             );
         }
-        if let Some(m) = &o.mesh {
+        if let Some(m) = o.mesh() {
             prop_assert!(
                 m.positions.iter().chain(&m.normals).all(|p| p.is_finite()),
                 "objects[{}].mesh",

@@ -8,6 +8,7 @@ use lembo_sim::camera::View;
 use lembo_sim::datapath::Datapath;
 use lembo_sim::job::{run_render, see_through_px, RenderJob};
 use lembo_sim::lembo::construct::{lembo_from_triangle, TriangleMesh};
+use lembo_sim::lembo::set::Lembos;
 use lembo_sim::lembo::tessellate::Tessellation;
 use lembo_sim::raster::{render_functional, render_functional_triangles, Frame};
 use lembo_sim::scene::Scene;
@@ -89,8 +90,8 @@ fn cylinder_scene(dir: &Path, side: u32) -> std::path::PathBuf {
 fn unwelded(scene: &Scene) -> Scene {
     let mut s = scene.clone();
     for o in &mut s.objects {
-        if let Some(mesh) = &o.mesh {
-            o.lembos = mesh
+        if let Some(mesh) = o.mesh() {
+            let lembos: Vec<_> = mesh
                 .triangles
                 .iter()
                 .map(|t| {
@@ -98,6 +99,7 @@ fn unwelded(scene: &Scene) -> Scene {
                     lembo_from_triangle(i.map(|i| mesh.positions[i]), i.map(|i| mesh.normals[i]))
                 })
                 .collect();
+            o.lembos = lembos.into();
         }
     }
     s
@@ -236,16 +238,13 @@ fn an_auto_smoothed_bunny_has_no_false_double_hits() {
     // hits on this mesh (written as an OBJ file), pairing them by the edge curve counts
     // none. Built triangle by triangle the creases leak a little (69 pixels); welded, not.
     let mut bunny = trace("bunny.json", None);
-    let mesh = auto_smoothed(bunny.objects[0].mesh.as_ref().unwrap(), 40.0);
-    bunny.objects[0].mesh = Some(mesh);
+    let mesh = auto_smoothed(bunny.objects[0].mesh().unwrap(), 40.0);
+    bunny.objects[0].lembos = Lembos::Mesh(mesh.into_lembos().unwrap());
     let before = unwelded(&bunny);
     let frame = lembo_frame(&before);
     assert_eq!(frame.probe.unwrap().double_hit_pixels, 0);
     assert!(see_through(&before, &frame, 1).unwrap() > 0);
     // Welded: no leak, no double hit.
-    let mesh = bunny.objects[0].mesh.take().unwrap().welded();
-    bunny.objects[0].lembos = mesh.to_lembos().unwrap();
-    bunny.objects[0].mesh = Some(mesh);
     let frame = lembo_frame(&bunny);
     assert_eq!(frame.probe.unwrap().double_hit_pixels, 0);
     assert_eq!(see_through(&bunny, &frame, 1), Some(0));

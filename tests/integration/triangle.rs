@@ -199,7 +199,7 @@ fn silhouette_error_falls_roughly_as_one_over_n_squared() {
 fn a_mesh_at_level_one_is_drawn_as_its_own_triangles() {
     let s = scene("bunny.json", Some(256));
     let t = Tessellation::new(&s, 1);
-    let mesh = s.objects[0].mesh.as_ref().unwrap();
+    let mesh = s.objects[0].mesh().unwrap();
     assert_eq!(t.len(), mesh.triangles.len() as u64);
     assert_eq!(t.vertex_count(), mesh.positions.len() as u64);
     let f = functional(&s, 1, Datapath::F32, true);

@@ -76,7 +76,7 @@ pub async fn run<R: Real>(
         while lembos.next_if(|(id, _)| *id < first as usize).is_some() {}
         while let Some((id, (lembo, color))) = lembos.next_if(|(id, _)| *id < end) {
             counts.lembos += 1;
-            match setup_pieces::<R>(id as u32, lembo, color, view, perspective_tol, &mut pieces) {
+            match setup_pieces::<R>(id as u32, &lembo, color, view, perspective_tol, &mut pieces) {
                 Ok(split) => {
                     counts.add_split(split, pieces.len());
                     // Each sub-patch examined is set up as a lembo is (six points

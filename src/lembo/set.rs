@@ -1,0 +1,148 @@
+//! An object's lembos as a scene holds them: the lembos themselves where there are few
+//! (inline lembos, a discoid sphere's), or what they are made from, each lembo made when it
+//! is asked for (a mesh's lembos, subdivided lembos). A scene of millions of lembos then
+//! holds its mesh, about 60 bytes a lembo, rather than 576 bytes a lembo, and the stages
+//! that read it in order (Setup, the geometry fetch, the tessellator) make each lembo as it
+//! comes (DESIGN.md §7).
+//!
+//! Making a lembo is deterministic: [`Lembos::get`] gives the same lembo, bit for bit, every
+//! time and as [`TriangleMesh::to_lembos`](super::construct::TriangleMesh::to_lembos) and
+//! [`subdivide`](super::lattice::subdivide) give it.
+
+use super::construct::{MeshLembos, TriangleMesh};
+use super::lattice::subdivided;
+use super::Lembo;
+
+/// An object's lembos, held or made on demand.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Lembos {
+    /// The lembos themselves.
+    Held(Vec<Lembo>),
+    /// One lembo a triangle of a mesh, made on demand.
+    Mesh(MeshLembos),
+    /// Each lembo of the base subdivided `s` times, into 4^s lembos made on demand.
+    Subdivided {
+        /// The lembos subdivided.
+        base: Box<Lembos>,
+        /// The subdivision level.
+        s: u32,
+    },
+}
+
+impl Default for Lembos {
+    fn default() -> Self {
+        Lembos::Held(Vec::new())
+    }
+}
+
+impl From<Vec<Lembo>> for Lembos {
+    fn from(lembos: Vec<Lembo>) -> Self {
+        Lembos::Held(lembos)
+    }
+}
+
+impl Lembos {
+    /// How many lembos there are.
+    pub fn len(&self) -> usize {
+        match self {
+            Lembos::Held(v) => v.len(),
+            Lembos::Mesh(m) => m.len(),
+            Lembos::Subdivided { base, s } => base.len() << (2 * s),
+        }
+    }
+
+    /// Whether there is none.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Lembo `i` (`i < len()`), made if it is not held.
+    pub fn get(&self, i: usize) -> Lembo {
+        match self {
+            Lembos::Held(v) => v[i].clone(),
+            Lembos::Mesh(m) => m.get(i),
+            Lembos::Subdivided { base, s } => {
+                let shift = 2 * s;
+                subdivided(&base.get(i >> shift), *s, i & ((1 << shift) - 1))
+            }
+        }
+    }
+
+    /// The lembos in order, each made as it is reached (a subdivided lembo's parent once for
+    /// all its children).
+    pub fn iter(&self) -> impl Iterator<Item = Lembo> + '_ {
+        let (per_parent, s) = match self {
+            Lembos::Subdivided { s, .. } => (1usize << (2 * s), *s),
+            _ => (1, 0),
+        };
+        let mut parent: Option<(usize, Lembo)> = None;
+        (0..self.len()).map(move |i| match self {
+            Lembos::Subdivided { base, .. } => {
+                let p = i / per_parent;
+                if parent.as_ref().is_none_or(|(at, _)| *at != p) {
+                    parent = Some((p, base.get(p)));
+                }
+                let (_, l) = parent.as_ref().expect("the parent was just made");
+                subdivided(l, s, i % per_parent)
+            }
+            _ => self.get(i),
+        })
+    }
+
+    /// Every lembo, made and held (what a test or a small scene's metric wants).
+    pub fn to_vec(&self) -> Vec<Lembo> {
+        self.iter().collect()
+    }
+
+    /// The triangle mesh the lembos were made from, if any (a subdivided mesh's lembos
+    /// included).
+    pub fn mesh(&self) -> Option<&TriangleMesh> {
+        match self {
+            Lembos::Held(_) => None,
+            Lembos::Mesh(m) => Some(m.mesh()),
+            Lembos::Subdivided { base, .. } => base.mesh(),
+        }
+    }
+
+    /// The heap it holds \[bytes\].
+    pub fn bytes(&self) -> usize {
+        match self {
+            Lembos::Held(v) => std::mem::size_of_val(&v[..]),
+            Lembos::Mesh(m) => m.bytes(),
+            Lembos::Subdivided { base, .. } => base.bytes(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::lembo::lattice::subdivide;
+    use crate::lembo::shapes::builtin_mesh;
+
+    #[test]
+    fn made_lembos_are_the_held_ones_bit_for_bit() {
+        let mesh = builtin_mesh("sphere24").expect("a builtin").welded();
+        let held = mesh.to_lembos().expect("lembos");
+        let made = Lembos::Mesh(mesh.clone().into_lembos().expect("lembos"));
+        assert_eq!(made.len(), held.len());
+        assert_eq!(made.to_vec(), held);
+        assert_eq!(made.mesh(), Some(&mesh));
+        assert!(made.bytes() < std::mem::size_of_val(&held[..]) / 4);
+        for s in 0..=2 {
+            let sub = Lembos::Subdivided {
+                base: Box::new(made.clone()),
+                s,
+            };
+            let mut want = Vec::new();
+            for l in &held {
+                subdivide(l, s, &mut want);
+            }
+            assert_eq!(sub.len(), want.len());
+            assert_eq!(sub.to_vec(), want, "s = {s}");
+            for i in [0, 1, want.len() / 3, want.len() - 1] {
+                assert_eq!(sub.get(i), want[i], "s = {s}, lembo {i}");
+            }
+        }
+    }
+}
