@@ -57,7 +57,7 @@ fn stages(c: &mut Criterion) {
     let lembos: Vec<_> = s
         .lembos()
         .enumerate()
-        .filter_map(|(i, (l, col))| setup::setup::<f32>(i as u32, l, col, &view).ok())
+        .filter_map(|(i, (l, col))| setup::setup::<f32>(i as u32, &l, col, &view).ok())
         .collect();
     let work: Vec<(usize, u32)> = lembos
         .iter()
@@ -140,7 +140,7 @@ fn stages(c: &mut Criterion) {
         b.iter(|| {
             let mut rows = 0u64;
             for (i, (l, col)) in s.lembos().enumerate() {
-                if let Ok(sl) = setup::setup::<f32>(i as u32, l, col, &view) {
+                if let Ok(sl) = setup::setup::<f32>(i as u32, &l, col, &view) {
                     if let Some((j0, j1)) = minmax::scanlines(&sl, view.viewport.height) {
                         rows += (j1 - j0 + 1) as u64;
                     }
