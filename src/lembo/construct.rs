@@ -111,6 +111,10 @@ pub fn lembo_from_triangle(p: [DVec3; 3], n: [DVec3; 3]) -> Lembo {
 /// positions to a grid, no pair within the tolerance is ever split by a cell boundary.
 pub const WELD_RELATIVE: f64 = 1e-9;
 
+/// The weld's grid cells, in tolerances: wide enough that most vertices are near no face of
+/// their cell and are compared with their own cell's vertices only.
+const WELD_CELLS: f64 = 64.0;
+
 /// An indexed triangle mesh with one normal per vertex. Vertices at the same position with
 /// different normals (split vertices) make hard edges; [`TriangleMesh::to_lembos`] welds
 /// them so the surface stays closed.
@@ -226,30 +230,59 @@ impl TriangleMesh {
             rep[hi as usize] = lo;
         };
         if tolerance > 0.0 && tolerance.is_finite() {
-            // Cells twice the tolerance wide: two positions within the tolerance are in the
-            // same or adjacent cells whatever the rounding of the cell coordinates.
-            let cell = 2.0 * tolerance;
-            let key = |p: DVec3| ((p - lo) / cell).floor().as_i64vec3().to_array();
-            let mut grid: std::collections::HashMap<[i64; 3], Vec<u32>> =
-                std::collections::HashMap::new();
-            for (i, &p) in self.positions.iter().enumerate() {
-                let k = key(p);
-                for dx in -1..=1 {
-                    for dy in -1..=1 {
-                        for dz in -1..=1 {
-                            let near = [k[0] + dx, k[1] + dy, k[2] + dz];
-                            let Some(others) = grid.get(&near) else {
+            // Cells WELD_CELLS tolerances wide, the vertices sorted by cell: two positions
+            // within the tolerance are in the same cell, or in cells either side of a face
+            // that one of them is within two tolerances of (twice, whatever the rounding of
+            // the cell coordinates). Most vertices are near no face and look in their own
+            // cell only; which pairs are compared changes nothing but the time, as the sets
+            // are those of every pair within the tolerance.
+            let cell = WELD_CELLS * tolerance;
+            let near = 2.0 / WELD_CELLS;
+            let at = |p: DVec3| (p - lo) / cell;
+            let mut sorted: Vec<([i64; 3], u32)> = (self.positions.iter().enumerate())
+                .map(|(i, &p)| (at(p).floor().as_i64vec3().to_array(), i as u32))
+                .collect();
+            sorted.sort_unstable();
+            let run_of = |k: [i64; 3]| {
+                let start = sorted.partition_point(|e| e.0 < k);
+                let end = start + sorted[start..].partition_point(|e| e.0 == k);
+                start..end
+            };
+            // In cell order, so that a cell's vertices are next to one another in memory.
+            let mut run_start = 0;
+            for (e, &(k, i)) in sorted.iter().enumerate() {
+                if sorted[run_start].0 != k {
+                    run_start = e;
+                }
+                let p = self.positions[i as usize];
+                let close = |j: u32| (self.positions[j as usize] - p).length() <= tolerance;
+                for &(_, j) in &sorted[run_start..e] {
+                    if close(j) {
+                        union(&mut rep, i, j);
+                    }
+                }
+                let c = at(p);
+                let f = c - c.floor();
+                // Per axis, a neighbour across a face it is near.
+                let span = |d: usize| {
+                    let lo = if f[d] < near { -1 } else { 0 };
+                    let hi = if f[d] > 1.0 - near { 1 } else { 0 };
+                    lo..=hi
+                };
+                for dx in span(0) {
+                    for dy in span(1) {
+                        for dz in span(2) {
+                            if (dx, dy, dz) == (0, 0, 0) {
                                 continue;
-                            };
-                            for &j in others {
-                                if (self.positions[j as usize] - p).length() <= tolerance {
-                                    union(&mut rep, i as u32, j);
+                            }
+                            for &(_, j) in &sorted[run_of([k[0] + dx, k[1] + dy, k[2] + dz])] {
+                                if close(j) {
+                                    union(&mut rep, i, j);
                                 }
                             }
                         }
                     }
                 }
-                grid.entry(k).or_default().push(i as u32);
             }
         } else {
             let mut seen: std::collections::HashMap<[u64; 3], u32> =
@@ -652,8 +685,9 @@ mod tests {
         let w = m.weld();
         assert!((w.tolerance - tol).abs() < 1e-18);
         assert_eq!(w.representative, [0, 1, 2, 2, 2, 5, 2]);
-        // Across a grid cell boundary (cells are 2 tol wide, from the bounding box's corner).
-        let edge = 2.0 * tol * 100.0;
+        // Across a grid cell boundary (cells are WELD_CELLS tol wide, from the bounding box's
+        // corner).
+        let edge = WELD_CELLS * tol * 100.0;
         let m = TriangleMesh {
             positions: vec![
                 DVec3::ZERO,
@@ -667,6 +701,69 @@ mod tests {
         let welded = m.clone().welded();
         assert_eq!(welded.positions[3], welded.positions[2]);
         assert_eq!(welded.clone().welded().positions, welded.positions);
+    }
+
+    /// The weld's sets are those of every pair within the tolerance, as comparing every pair
+    /// finds them: clusters of points a fraction of a tolerance to two apart, scattered over
+    /// cell faces, edges and corners.
+    #[test]
+    fn the_weld_finds_the_sets_every_pair_finds() {
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut random = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let far = DVec3::splat(1e6);
+        let tol = WELD_RELATIVE * far.length();
+        let cell = WELD_CELLS * tol;
+        let mut positions = vec![DVec3::ZERO, far];
+        for c in 0..300 {
+            // A cluster centre on a cell face, edge or corner, or inside a cell.
+            let snap = |x: f64, on: bool| if on { (x / cell).round() * cell } else { x };
+            let base =
+                DVec3::splat(1000.0) + 40.0 * cell * DVec3::new(random(), random(), random());
+            let centre = DVec3::new(
+                snap(base.x, c % 2 == 0),
+                snap(base.y, c % 3 == 0),
+                snap(base.z, c % 5 == 0),
+            );
+            for _ in 0..4 {
+                let d = DVec3::new(random(), random(), random()) - 0.5;
+                positions.push(centre + d.normalize_or_zero() * (2.0 * tol * random()));
+            }
+        }
+        let m = TriangleMesh {
+            positions,
+            ..Default::default()
+        };
+        let got = m.weld().representative;
+        // Every pair, the lower index the root.
+        let n = m.positions.len();
+        let mut rep: Vec<usize> = (0..n).collect();
+        fn root(rep: &[usize], mut i: usize) -> usize {
+            while rep[i] != i {
+                i = rep[i];
+            }
+            i
+        }
+        for i in 0..n {
+            for j in 0..i {
+                if (m.positions[i] - m.positions[j]).length() <= tol {
+                    let (a, b) = (root(&rep, i), root(&rep, j));
+                    rep[a.max(b)] = a.min(b);
+                }
+            }
+        }
+        let want: Vec<u32> = (0..n).map(|i| root(&rep, i) as u32).collect();
+        let welded = want
+            .iter()
+            .enumerate()
+            .filter(|&(i, &r)| r as usize != i)
+            .count();
+        assert!(welded > 300 && welded < 900, "{welded} welded of {n}");
+        assert_eq!(got, want);
     }
 
     #[test]

@@ -21,11 +21,13 @@ use std::f64::consts::PI;
 /// Names accepted by the scene format's `builtin` objects, beside the `terrainN` family.
 pub const BUILTIN_NAMES: [&str; 3] = ["sphere24", "cylinder24", "surface96"];
 
-/// The largest N of a `terrainN` builtin: 2N² = 2 097 152 lembos.
-pub const MAX_TERRAIN_CELLS: u32 = 1024;
+/// The largest N of a `terrainN` builtin: 2N² = 8 388 608 lembos, which a scene holds as
+/// their mesh (about 60 bytes a lembo, made on demand: [`crate::lembo::set`]); loading it
+/// peaks near 125 bytes a lembo (the weld).
+pub const MAX_TERRAIN_CELLS: u32 = 2048;
 
 /// The largest number of lembos a scene's builtin shapes may make together: one
-/// `terrain1024`'s. A few bytes of scene file must not ask for more memory than a machine
+/// `terrain2048`'s. A few bytes of scene file must not ask for more memory than a machine
 /// has.
 pub const MAX_BUILTIN_LEMBOS: u64 = 2 * (MAX_TERRAIN_CELLS as u64) * (MAX_TERRAIN_CELLS as u64);
 
@@ -204,7 +206,7 @@ mod tests {
             "terrain0",
             "terrain007",
             "terrain+3",
-            "terrain1025",
+            "terrain2049",
             "terrainx",
         ] {
             assert!(builtin_mesh(bad).is_none(), "{bad}");

@@ -13,10 +13,11 @@ use crate::lembo::lattice::MAX_SUBDIVIDE;
 use crate::lembo::set::Lembos;
 use crate::lembo::shapes::{builtin_mesh, BUILTIN_NAMES, MAX_TERRAIN_CELLS};
 
-/// The most lembos a scene with a subdivided object may have: 2^22, room for the bunny
-/// subdivided five times (3 762 176), and within what 24 GiB hold in a timed run (about
-/// 2.3 kB a lembo today).
-pub const MAX_SUBDIVIDED_LEMBOS: u64 = 1 << 22;
+/// The most lembos a scene with a subdivided object may have: 2^23, room for the bunny
+/// subdivided five times (3 762 176) twice over. Subdivided lembos are made on demand from
+/// their parents, so what bounds them is time (about a microsecond a lembo through a
+/// functional frame), not memory.
+pub const MAX_SUBDIVIDED_LEMBOS: u64 = 1 << 23;
 use glam::DVec3;
 use std::path::Path;
 

@@ -381,15 +381,15 @@ fn unknown_builtin_lists_the_known_names() {
 }
 
 /// Builtin terrains are bounded together, before any is made: a few bytes of scene cannot
-/// ask for more lembos than one terrain1024's.
+/// ask for more lembos than one terrain2048's.
 #[test]
 fn builtin_terrains_beyond_the_cap_are_refused_before_they_are_made() {
-    let objects = r#"{"builtin": "terrain1024"}, {"builtin": "terrain1"}"#;
+    let objects = r#"{"builtin": "terrain2048"}, {"builtin": "terrain1"}"#;
     let reason = assert_invalid(
         sphere_with(r#"{"builtin": "sphere24"}"#, objects),
         "objects[1].builtin",
     );
-    assert!(reason.contains("2097154 lembos"), "{reason}");
+    assert!(reason.contains("8388610 lembos"), "{reason}");
 }
 
 #[test]
