@@ -54,10 +54,19 @@ pub(super) fn load_obj(file: &str, field: &str, path: &Path) -> Result<TriangleM
     };
     // Materials are not used: every `mtllib` is skipped.
     let (models, _materials) =
-        tobj::load_obj_buf(&mut std::io::Cursor::new(bytes), &options, |_| {
+        tobj::load_obj_buf(&mut std::io::Cursor::new(&bytes), &options, |_| {
             Err(tobj::LoadError::OpenFileFailed)
         })
-        .map_err(|e| mesh_err(format!("not a valid OBJ file: {e}")))?;
+        .map_err(|e| match first_bad_line(&bytes) {
+            Some((line, text)) => mesh_err(format!("line {line} ({text:?}): not valid OBJ: {e}")),
+            None => mesh_err(format!("not a valid OBJ file: {e}")),
+        })?;
+    // tobj takes a face of two corners (a truncated line) for a line, and drops it.
+    if let Some((line, text)) = first_bad_line(&bytes) {
+        return Err(mesh_err(format!(
+            "line {line} ({text:?}): not valid OBJ (a face needs three corners, each naming a vertex the file gives)"
+        )));
+    }
 
     let mut mesh = TriangleMesh::default();
     let mut all_normals = true;
@@ -114,4 +123,58 @@ pub(super) fn load_obj(file: &str, field: &str, path: &Path) -> Result<TriangleM
     } else {
         Ok(mesh.with_computed_normals())
     }
+}
+
+/// The first line (1-based, with its text) of an OBJ file that is not a well-formed vertex,
+/// normal, texture coordinate or face (a face needs three corners, each naming a vertex the
+/// file gives): where a truncated or hand-broken file went wrong. None when every such line
+/// is well formed.
+fn first_bad_line(bytes: &[u8]) -> Option<(usize, String)> {
+    let text = String::from_utf8_lossy(bytes);
+    let numbers = |rest: &[&str], least: usize| {
+        rest.len() >= least && rest[..least].iter().all(|t| t.parse::<f64>().is_ok())
+    };
+    // Vertices, texture coordinates and normals the file gives.
+    let mut given = [0usize; 3];
+    let mut faces = Vec::new();
+    for (n, line) in text.lines().enumerate() {
+        let mut words = line.split_whitespace();
+        let keyword = words.next().unwrap_or("");
+        let rest: Vec<&str> = words.collect();
+        let ok = match keyword {
+            "v" => numbers(&rest, 3),
+            "vt" => numbers(&rest, 1),
+            "vn" => numbers(&rest, 3),
+            "f" => {
+                faces.push(n);
+                rest.len() >= 3
+            }
+            _ => true,
+        };
+        if !ok {
+            return Some((n + 1, line.to_string()));
+        }
+        if let Some(k) = ["v", "vt", "vn"].iter().position(|&w| w == keyword) {
+            given[k] += 1;
+        }
+    }
+    // A corner is v, v/t, v//n or v/t/n, 1-based (negative: back from the last one).
+    let index = |t: &str, count: usize| {
+        t.parse::<i64>()
+            .is_ok_and(|i| i != 0 && i.unsigned_abs() as usize <= count)
+    };
+    let corner = |c: &str| {
+        let parts: Vec<&str> = c.split('/').collect();
+        parts.len() <= 3
+            && index(parts[0], given[0])
+            && parts
+                .get(1)
+                .is_none_or(|t| t.is_empty() || index(t, given[1]))
+            && parts.get(2).is_none_or(|t| index(t, given[2]))
+    };
+    let lines: Vec<&str> = text.lines().collect();
+    faces
+        .into_iter()
+        .find(|&n| !lines[n].split_whitespace().skip(1).all(corner))
+        .map(|n| (n + 1, lines[n].to_string()))
 }

@@ -450,6 +450,31 @@ fn obj_without_triangles_or_with_bad_indices_is_a_mesh_error() {
     );
 }
 
+/// A file cut short or broken by hand names the line where it went wrong: a vertex cut
+/// mid-number, a face cut to two corners (which tobj alone would drop as a line), a corner
+/// naming a vertex the file does not give, or one that is not a number.
+#[test]
+fn a_truncated_or_malformed_obj_names_the_line() {
+    let head = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\n";
+    for (tail, line) in [
+        ("v 1 1", 6),
+        ("f 2 4", 6),
+        ("f 2 4 3\nf 2 4 5\n", 7),
+        ("f 2/1 4 3\n", 6),
+        ("f 2 4 3x\n", 6),
+        ("vn 0 0\n", 6),
+    ] {
+        let message = assert_mesh_err(scene_with_obj(&format!("{head}{tail}")), "objects[0].mesh");
+        assert!(
+            message.starts_with(&format!("line {line} (")),
+            "{tail:?}: {message}"
+        );
+    }
+    // Negative indices count back from the last vertex given.
+    let scene = scene_with_obj(&format!("{head}f -3 -1 -2\n")).unwrap();
+    assert_eq!(scene.lembo_count(), 2);
+}
+
 #[test]
 fn obj_quads_are_triangulated_and_normals_computed() {
     let scene = scene_with_obj("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n").unwrap();
