@@ -1,7 +1,7 @@
 //! The memory a run is estimated to need, and the refusal, before any work, of a run larger
 //! than the memory available (`--no-memory-check` runs it anyway).
 
-use super::validate::{Mode, RenderJob};
+use super::validate::{Mode, PrimitivePath, RenderJob};
 use crate::error::{Error, Result, COMMAND_LINE};
 use crate::scene::Scene;
 
@@ -18,23 +18,59 @@ const BYTES_PER_PIXEL_REFERENCE: f64 = 175.0;
 
 const BYTES_PER_PIXEL_DISCOIDS: f64 = 160.0;
 
-/// What a run holds whatever its size: the binary, the scene, the thread stacks.
-const BYTES_FIXED: f64 = 64.0 * 1024.0 * 1024.0;
+/// What a run holds whatever its size: the binary, the thread stacks, the functional
+/// frame's window of set-up pieces (`raster::parallel::WINDOW_PRIMITIVES`).
+const BYTES_FIXED: f64 = 96.0 * 1024.0 * 1024.0;
+
+/// Bytes a run holds per lembo besides what the scene holds ([`Scene::lembo_bytes`]): the
+/// growth of peak resident memory from 125 000 to 500 000 lembos (terrain250 and
+/// terrain500 at 256x256, 2026-11-27: 100 bytes a lembo, both modes) less the terrain's
+/// mesh (36), rounded up. A lembo is made when a stage reaches it and its set-up form lives
+/// while an item in flight points at it, so what remains is loading's peak (the weld's
+/// sorted cells, the edges' sides).
+const BYTES_PER_LEMBO: f64 = 80.0;
+
+/// Bytes per lembo of the exact reference, which traces every lembo and so holds them all,
+/// made, with their footprints and tile bins (measured as [`BYTES_PER_LEMBO`]: 1 550 a
+/// lembo in all).
+const BYTES_PER_LEMBO_REFERENCE: f64 = 1600.0;
+
+/// Bytes per lembo of the triangle path: the indexed mesh's vertex numbering that the
+/// geometry fetch's vertex caches read (keys of every distinct corner and edge; measured as
+/// [`BYTES_PER_LEMBO`] at tessellation level 1: 630 a lembo in all).
+const BYTES_PER_LEMBO_TRIANGLES: f64 = 600.0;
 
 /// The memory `job` on `scene` is estimated to need \[bytes\], plus `extra_per_pixel`.
 pub fn memory_estimate(job: &RenderJob, scene: &Scene, extra_per_pixel: f64) -> f64 {
+    let (pixels, primitives) = estimate(job, scene, extra_per_pixel);
+    BYTES_FIXED + pixels + primitives
+}
+
+/// The estimate's two parts \[bytes\]: what grows with the pixels (frame buffers, the
+/// reference's image), and what grows with the lembos (the scene, the reference's
+/// acceleration structure, the triangle path's vertex numbering).
+fn estimate(job: &RenderJob, scene: &Scene, extra_per_pixel: f64) -> (f64, f64) {
     let pixels = scene.viewport.width as f64 * scene.viewport.height as f64;
     let mut per_pixel = match job.mode {
         Mode::Functional => BYTES_PER_PIXEL_FUNCTIONAL,
         Mode::Timed => BYTES_PER_PIXEL_TIMED,
     } + extra_per_pixel;
+    let lembos = scene.lembo_count() as f64;
+    let mut per_lembo = BYTES_PER_LEMBO;
     if job.reference {
         per_pixel += BYTES_PER_PIXEL_REFERENCE;
+        per_lembo += BYTES_PER_LEMBO_REFERENCE;
     }
     if scene.discoid_count() > 0 {
         per_pixel += BYTES_PER_PIXEL_DISCOIDS;
     }
-    BYTES_FIXED + pixels * per_pixel
+    if job.path == PrimitivePath::Triangle {
+        per_lembo += BYTES_PER_LEMBO_TRIANGLES;
+    }
+    (
+        pixels * per_pixel,
+        scene.lembo_bytes() as f64 + lembos * per_lembo,
+    )
 }
 
 /// The environment variable that, when set, replaces the memory the system reports as
@@ -70,12 +106,30 @@ fn system_memory_available() -> Option<f64> {
 }
 
 /// Refuses, before any work, a run estimated to need more memory than is available,
-/// naming `--viewport` and the estimate; `--no-memory-check` runs it anyway. A run estimated
+/// naming the estimate and what makes it large: `--viewport`, or the scene when its lembos
+/// weigh more than its pixels; `--no-memory-check` runs it anyway. A run estimated
 /// at over 1 GiB says so on standard error before it starts.
 pub fn check_memory(job: &RenderJob, scene: &Scene, extra_per_pixel: f64) -> Result<()> {
     let size = format!("{}x{}", scene.viewport.width, scene.viewport.height);
+    let (pixels, primitives) = estimate(job, scene, extra_per_pixel);
+    let need = BYTES_FIXED + pixels + primitives;
+    if primitives > pixels {
+        let lembos = scene.lembo_count();
+        let advice = if job.reference {
+            "render a scene of fewer lembos, or without --reference (which holds every lembo)"
+        } else {
+            "render a scene of fewer lembos"
+        };
+        return check_available(
+            need,
+            job.no_memory_check,
+            ("SCENE", &scene.source_name()),
+            &format!("{lembos} lembos at {size} px: this run"),
+            advice,
+        );
+    }
     check_available(
-        memory_estimate(job, scene, extra_per_pixel),
+        need,
         job.no_memory_check,
         ("--viewport", &size),
         &format!("{size} px: this run"),

@@ -1030,6 +1030,44 @@ fn a_run_larger_than_memory_is_refused_before_it_starts() {
     }
 }
 
+/// A scene whose lembos weigh more than its pixels is refused naming the scene: the exact
+/// reference holds every lembo (about 1.6 kB each), so terrain320's 204 800 lembos with a
+/// reference need about 0.4 GiB at 64x64, and without it far less; nothing is written.
+#[test]
+fn a_scene_too_large_for_memory_is_refused_by_its_lembos() {
+    let terrain = manifest().join("traces/terrain320.json");
+    let terrain = terrain.to_str().unwrap();
+    let args = |reference: bool| {
+        let mut a = vec!["render", terrain, "--viewport", "64x64", "--out", "o"];
+        if reference {
+            a.push("--reference");
+        }
+        a
+    };
+    let small = [("LEMBO_MEMORY_AVAILABLE", "300000000")];
+    for needle in [
+        "field `SCENE` =",
+        "204800 lembos at 64x64 px",
+        "without --reference",
+        "--no-memory-check",
+    ] {
+        assert_refused_with(&args(true), &small, needle);
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let out = bin()
+        .args(args(false))
+        .args(["--mode", "functional"])
+        .envs(small)
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 /// One run, one set (DESIGN.md §7): a folder holds exactly the files of the last run that
 /// wrote it, listed in its manifest.json; a run that writes fewer files removes the ones
 /// of the set it replaces, and leaves files no run wrote.

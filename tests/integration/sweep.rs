@@ -622,7 +622,7 @@ fn the_readme_cluster_recipes_give_the_unsharded_sweep() {
 
 /// Runs that together would need more memory than the machine has are refused before any
 /// run, naming `--jobs` and the estimate; `--no-memory-check` is the way to insist. Two
-/// 2048x2048 runs with their reference need about 1.7 GiB, one about 0.8 GiB: on a machine
+/// 2048x2048 runs with their reference need about 1.8 GiB, one about 0.8 GiB: on a machine
 /// set (`LEMBO_MEMORY_AVAILABLE`) to 1.25 GiB, `--jobs 2` is refused and `--jobs 1` passes
 /// the check (`LEMBO_SWEEP_STOP_AFTER=0` then stops it before any run). Where the machine
 /// itself has less than 90 GB, two 16384x16384 runs (about 100 GiB) are refused on its own
@@ -639,7 +639,7 @@ fn runs_at_once_larger_than_memory_are_refused_before_any_run() {
     let small_machine = ("LEMBO_MEMORY_AVAILABLE", "1342177280");
     for needle in [
         "field `--jobs` = 2",
-        "1.7 GiB (estimate)",
+        "1.8 GiB (estimate)",
         "--no-memory-check",
     ] {
         assert_refused_with(&spec_at(2048), &["--jobs", "2"], &[small_machine], needle);
