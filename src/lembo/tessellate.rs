@@ -22,7 +22,7 @@
 //! - corners are the lembo's construction points, copied (so n = 1 on a mesh-built lembo gives
 //!   back the mesh triangle bit for bit), and its normalised construction normals;
 //! - edge points come from the edge's own three points (ends and middle) and normals, in the
-//!   canonical order of [`canonical_order`] that `construct.rs` also builds midpoints in,
+//!   canonical order of [`canonical_order`](super::construct::canonical_order) that `construct.rs` also builds midpoints in,
 //!   through one fixed Bézier expression; two lembos sharing an edge hold the same three
 //!   points and normals, so they compute the same bits whatever their winding;
 //! - interior points are [`Lembo::position_at`] and [`Lembo::unit_normal_at`].

@@ -31,6 +31,7 @@
 mod chart;
 mod error;
 mod point;
+pub mod scaling;
 
 use crate::error::{Error, Result};
 use chart::{
