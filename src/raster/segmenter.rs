@@ -58,6 +58,48 @@ pub fn segments<R: Real>(
     walk(l, j, k, iv, cap, None, out, counts)
 }
 
+/// [`walk`] compiled for AVX2 where the CPU has it (`isa::kernels`): the same IEEE
+/// operations in the same order, so the same segments (the timed segmenters call it; the
+/// functional model inlines [`walk`] into its own AVX2 scan-line stages).
+#[allow(clippy::too_many_arguments)]
+pub fn walk_dispatched<R: Real>(
+    l: &ScreenLembo<R>,
+    j: u32,
+    k: R,
+    iv: &Interval<R>,
+    cap: usize,
+    reach: Option<f64>,
+    out: &mut Vec<Segment<R>>,
+    counts: &mut Counts,
+) -> Result<(), CapExceeded> {
+    #[cfg(target_arch = "x86_64")]
+    if crate::isa::kernels() == crate::isa::Isa::Avx2 {
+        // SAFETY: `kernels` says AVX2 only where the CPU has it.
+        return unsafe { walk_avx2(l, j, k, iv, cap, reach, out, counts) };
+    }
+    walk(l, j, k, iv, cap, reach, out, counts)
+}
+
+/// [`walk`] compiled for AVX2.
+///
+/// # Safety
+/// The CPU must have AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[allow(clippy::too_many_arguments)]
+unsafe fn walk_avx2<R: Real>(
+    l: &ScreenLembo<R>,
+    j: u32,
+    k: R,
+    iv: &Interval<R>,
+    cap: usize,
+    reach: Option<f64>,
+    out: &mut Vec<Segment<R>>,
+    counts: &mut Counts,
+) -> Result<(), CapExceeded> {
+    walk(l, j, k, iv, cap, reach, out, counts)
+}
+
 /// [`segments`], given the lembo's [`least_reach`] for k (worked out once for all its
 /// intervals): a step sure to reach past the interval end is not made, which changes no
 /// segment (`None`: every step is made).

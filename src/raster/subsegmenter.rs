@@ -30,6 +30,39 @@ pub struct Subsegment<R> {
 /// one per pixel of a 16384-pixel scanline is 16384).
 pub const MAX_SUBSEGMENTS_PER_SEGMENT: u32 = 1 << 15;
 
+/// [`subsegments`] compiled for AVX2 where the CPU has it (`isa::kernels`): the same IEEE
+/// operations in the same order, so the same subsegments (the timed subsegmenters call it).
+pub fn subsegments_dispatched<R: Real>(
+    l: &ScreenLembo<R>,
+    seg: &Segment<R>,
+    k: R,
+    out: &mut Vec<Subsegment<R>>,
+    counts: &mut Counts,
+) {
+    #[cfg(target_arch = "x86_64")]
+    if crate::isa::kernels() == crate::isa::Isa::Avx2 {
+        // SAFETY: `kernels` says AVX2 only where the CPU has it.
+        return unsafe { subsegments_avx2(l, seg, k, out, counts) };
+    }
+    subsegments(l, seg, k, out, counts)
+}
+
+/// [`subsegments`] compiled for AVX2.
+///
+/// # Safety
+/// The CPU must have AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn subsegments_avx2<R: Real>(
+    l: &ScreenLembo<R>,
+    seg: &Segment<R>,
+    k: R,
+    out: &mut Vec<Subsegment<R>>,
+    counts: &mut Counts,
+) {
+    subsegments(l, seg, k, out, counts)
+}
+
 /// Appends the subsegments of `seg` to `out`.
 #[inline(always)]
 pub fn subsegments<R: Real>(

@@ -18,8 +18,9 @@ use crate::pipeline::items::{ScanInterval, ScanSegment};
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::Ctx;
 use crate::pipeline::unit::{Finished, Run, Unit};
-use crate::raster::segmenter::segments;
+use crate::raster::segmenter::{least_reach, walk_dispatched};
 use crate::raster::{Counts, DEFAULT_SEGMENT_CAP};
+use std::sync::Arc;
 
 /// A segmenter, Figure 5's fourth box.
 pub struct Segmenter;
@@ -52,20 +53,23 @@ pub async fn run<R: Real>(
     let mut next_port = 0;
     // The first (lembo, piece, scanline) over the cap, as the functional model meets them.
     let mut cap_error: Option<(u32, u32, u32)> = None;
+    // The last piece's bound on a step's reach (`least_reach`), worked out once for its
+    // intervals, which mostly come one after another; the piece is held so that its
+    // address cannot be another's.
+    let mut reach: Option<(Arc<_>, Option<f64>)> = None;
     while let Some(ScanInterval { piece, j, interval }) = ctx.next_input().await {
         let (l, id) = (&*piece.screen, piece.id);
+        let bound = match &reach {
+            Some((last, bound)) if Arc::ptr_eq(last, &piece.screen) => *bound,
+            _ => {
+                let bound = least_reach(l, k);
+                reach = Some((piece.screen.clone(), bound));
+                bound
+            }
+        };
         segs.clear();
-        if segments(
-            l,
-            j,
-            k,
-            &interval,
-            DEFAULT_SEGMENT_CAP,
-            &mut segs,
-            &mut counts,
-        )
-        .is_err()
-        {
+        let cap = DEFAULT_SEGMENT_CAP;
+        if walk_dispatched(l, j, k, &interval, cap, bound, &mut segs, &mut counts).is_err() {
             let at = (id.lembo, id.piece, j);
             cap_error = Some(cap_error.map_or(at, |e| e.min(at)));
             continue;

@@ -14,7 +14,7 @@ use crate::pipeline::items::{ScanSegment, ScanSubsegment};
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::Ctx;
 use crate::pipeline::unit::{Finished, Run, Unit};
-use crate::raster::subsegmenter::subsegments;
+use crate::raster::subsegmenter::subsegments_dispatched;
 use crate::raster::Counts;
 
 /// A subsegmenter, Figure 5's fifth box.
@@ -49,7 +49,7 @@ pub async fn run<R: Real>(
     while let Some(ScanSegment { piece, j, segment }) = ctx.next_input().await {
         let l = &*piece.screen;
         subs.clear();
-        subsegments(l, &segment, k, &mut subs, &mut counts);
+        subsegments_dispatched(l, &segment, k, &mut subs, &mut counts);
         for &subsegment in &subs {
             let piece = piece.clone();
             ctx.emit(
