@@ -37,6 +37,23 @@ fn assert_refused_with(args: &[&str], env: &[(&str, &str)], needle: &str) {
     );
 }
 
+/// Runs `args` in a fresh directory with the environment variables `env` set, and asserts
+/// that the run succeeded.
+fn assert_runs_with(args: &[&str], env: &[(&str, &str)]) {
+    let dir = tempfile::tempdir().unwrap();
+    let out = bin()
+        .args(args)
+        .envs(env.iter().copied())
+        .current_dir(dir.path())
+        .output()
+        .expect("the binary runs");
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 fn scene_file(dir: &Path, name: &str, text: &str) -> String {
     let p = dir.join(name);
     std::fs::write(&p, text).unwrap();
@@ -999,18 +1016,7 @@ fn a_run_larger_than_memory_is_refused_before_it_starts() {
         assert_refused_with(&at("4096x4096"), &one_gib, needle);
     }
     // The control: the same machine runs a small frame.
-    let dir = tempfile::tempdir().unwrap();
-    let out = bin()
-        .args(at("64x64"))
-        .envs(one_gib)
-        .current_dir(dir.path())
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_runs_with(&at("64x64"), &one_gib);
     for bad in ["lots", "0", "-5", ""] {
         assert_refused_with(
             &at("64x64"),
@@ -1053,19 +1059,9 @@ fn a_scene_too_large_for_memory_is_refused_by_its_lembos() {
     ] {
         assert_refused_with(&args(true), &small, needle);
     }
-    let dir = tempfile::tempdir().unwrap();
-    let out = bin()
-        .args(args(false))
-        .args(["--mode", "functional"])
-        .envs(small)
-        .current_dir(dir.path())
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let mut functional = args(false);
+    functional.extend(["--mode", "functional"]);
+    assert_runs_with(&functional, &small);
 }
 
 /// One run, one set (DESIGN.md §7): a folder holds exactly the files of the last run that
