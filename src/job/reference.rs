@@ -46,7 +46,8 @@ fn no_surface(why: String) -> Error {
 pub fn render_reference(scene: &Scene, view: &View, supersample: u32) -> (ReferenceImage, f64) {
     crate::progress::stage("exact reference");
     let t = Instant::now();
-    // The reference traces every lembo: it holds them all, made (DESIGN.md §7).
+    // The reference traces every lembo: it holds them all, made (DESIGN.md §3, "Streamed
+    // primitives").
     let held: Vec<(Lembo, [f64; 3])> = scene.lembos().collect();
     let lembos: Vec<(&Lembo, [f64; 3])> = held.iter().map(|(l, c)| (l, *c)).collect();
     let reference = oracle::render_reference(&oracle::ReferenceInput {

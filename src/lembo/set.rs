@@ -3,7 +3,7 @@
 //! is asked for (a mesh's lembos, subdivided lembos). A scene of millions of lembos then
 //! holds its mesh, about 60 bytes a lembo, rather than 576 bytes a lembo, and the stages
 //! that read it in order (Setup, the geometry fetch, the tessellator) make each lembo as it
-//! comes (DESIGN.md §7).
+//! comes (DESIGN.md §3, "Streamed primitives").
 //!
 //! Making a lembo is deterministic: [`Lembos::get`] gives the same lembo, bit for bit, every
 //! time and as [`TriangleMesh::to_lembos`](super::construct::TriangleMesh::to_lembos) and

@@ -69,12 +69,12 @@ pub async fn run<R: Real>(
     let mut pieces = Vec::new();
     // Pieces to the MinMax units, round-robin.
     let mut next_port = 0;
-    // The batches come in submission order: one pass over the scene's lembos.
-    let mut lembos = scene.lembos().enumerate().peekable();
+    // Each lembo of the batches dealt to this engine, made as it is taken (the others'
+    // lembos are not made here).
+    let starts = scene.lembo_index();
     while let Some(MemAccess { first, count, .. }) = ctx.next_input().await {
-        let end = first as usize + count as usize;
-        while lembos.next_if(|(id, _)| *id < first as usize).is_some() {}
-        while let Some((id, (lembo, color))) = lembos.next_if(|(id, _)| *id < end) {
+        for id in first as usize..first as usize + count as usize {
+            let (lembo, color) = scene.lembo(&starts, id);
             counts.lembos += 1;
             match setup_pieces::<R>(id as u32, &lembo, color, view, perspective_tol, &mut pieces) {
                 Ok(split) => {
