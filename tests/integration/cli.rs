@@ -14,8 +14,12 @@ fn assert_refused(args: &[&str], needle: &str) {
     assert_refused_with(args, &[], needle);
 }
 
-/// As [`assert_refused`], with the environment variables `env` set.
-fn assert_refused_with(args: &[&str], env: &[(&str, &str)], needle: &str) {
+/// The binary run with `args` and the environment variables `env` in a fresh directory,
+/// which is returned with what it printed (for the files it wrote).
+fn run_in_empty_dir(
+    args: &[&str],
+    env: &[(&str, &str)],
+) -> (std::process::Output, tempfile::TempDir) {
     let dir = tempfile::tempdir().unwrap();
     let out = bin()
         .args(args)
@@ -23,6 +27,12 @@ fn assert_refused_with(args: &[&str], env: &[(&str, &str)], needle: &str) {
         .current_dir(dir.path())
         .output()
         .expect("the binary runs");
+    (out, dir)
+}
+
+/// As [`assert_refused`], with the environment variables `env` set.
+fn assert_refused_with(args: &[&str], env: &[(&str, &str)], needle: &str) {
+    let (out, dir) = run_in_empty_dir(args, env);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
     assert!(
@@ -40,13 +50,7 @@ fn assert_refused_with(args: &[&str], env: &[(&str, &str)], needle: &str) {
 /// Runs `args` in a fresh directory with the environment variables `env` set, and asserts
 /// that the run succeeded.
 fn assert_runs_with(args: &[&str], env: &[(&str, &str)]) {
-    let dir = tempfile::tempdir().unwrap();
-    let out = bin()
-        .args(args)
-        .envs(env.iter().copied())
-        .current_dir(dir.path())
-        .output()
-        .expect("the binary runs");
+    let (out, _dir) = run_in_empty_dir(args, env);
     assert!(
         out.status.success(),
         "{args:?}: {}",
