@@ -13,6 +13,11 @@ use super::construct::{MeshLembos, TriangleMesh};
 use super::lattice::subdivided;
 use super::Lembo;
 
+/// The parent a subdivided lembo was last made from, with the tag and index it was made
+/// for ([`Lembos::get_near`]).
+#[derive(Clone, Debug, Default)]
+pub struct LastParent(Option<(usize, usize, Lembo)>);
+
 /// An object's lembos, held or made on demand.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Lembos {
@@ -68,25 +73,27 @@ impl Lembos {
         }
     }
 
+    /// Lembo `i` as [`Lembos::get`] makes it, a subdivided lembo's parent taken from `last`
+    /// when it was the last one made there for `tag` (the caller's name for these lembos),
+    /// else made and kept there: children taken in order make their parent once.
+    pub fn get_near(&self, i: usize, tag: usize, last: &mut LastParent) -> Lembo {
+        let Lembos::Subdivided { base, s } = self else {
+            return self.get(i);
+        };
+        let shift = 2 * s;
+        let p = i >> shift;
+        let parent = match &mut last.0 {
+            Some((t, q, parent)) if (*t, *q) == (tag, p) => parent,
+            kept => &kept.insert((tag, p, base.get(p))).2,
+        };
+        subdivided(parent, *s, i & ((1 << shift) - 1))
+    }
+
     /// The lembos in order, each made as it is reached (a subdivided lembo's parent once for
     /// all its children).
     pub fn iter(&self) -> impl Iterator<Item = Lembo> + '_ {
-        let (per_parent, s) = match self {
-            Lembos::Subdivided { s, .. } => (1usize << (2 * s), *s),
-            _ => (1, 0),
-        };
-        let mut parent: Option<(usize, Lembo)> = None;
-        (0..self.len()).map(move |i| match self {
-            Lembos::Subdivided { base, .. } => {
-                let p = i / per_parent;
-                if parent.as_ref().is_none_or(|(at, _)| *at != p) {
-                    parent = Some((p, base.get(p)));
-                }
-                let (_, l) = parent.as_ref().expect("the parent was just made");
-                subdivided(l, s, i % per_parent)
-            }
-            _ => self.get(i),
-        })
+        let mut last = LastParent::default();
+        (0..self.len()).map(move |i| self.get_near(i, 0, &mut last))
     }
 
     /// Every lembo, made and held (what a test or a small scene's metric wants).
@@ -142,6 +149,19 @@ mod tests {
             assert_eq!(sub.to_vec(), want, "s = {s}");
             for i in [0, 1, want.len() / 3, want.len() - 1] {
                 assert_eq!(sub.get(i), want[i], "s = {s}, lembo {i}");
+            }
+            // One kept parent shared by two sets under their tags, in no particular order:
+            // each lembo is still its own, whichever parent was kept.
+            let mut last = LastParent::default();
+            for i in [5, 0, 6, want.len() - 1, 5, 1] {
+                let i = i.min(want.len() - 1);
+                assert_eq!(sub.get_near(i, 7, &mut last), want[i], "s = {s}, lembo {i}");
+                assert_eq!(
+                    made.get_near(i % held.len(), 8, &mut last),
+                    held[i % held.len()]
+                );
+                let other = sub.get_near(want.len() - 1 - i, 9, &mut last);
+                assert_eq!(other, want[want.len() - 1 - i]);
             }
         }
     }

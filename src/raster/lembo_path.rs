@@ -12,6 +12,7 @@ use crate::camera::View;
 use crate::datapath::Real;
 use crate::error::{Error, Result};
 use crate::graph::UnitKind;
+use crate::lembo::set::LastParent;
 use crate::scene::{LemboIndex, Scene};
 
 /// The lembo path over a scene's lembos: what Setup and the walk are given.
@@ -57,7 +58,8 @@ impl<'a, R: Real> LemboPath<'a, R> {
 
 impl<R: Real> Stages<R> for LemboPath<'_, R> {
     type Piece = ScreenLembo<R>;
-    type SetupScratch = ();
+    /// A subdivided lembo's parent, made once for its children.
+    type SetupScratch = LastParent;
     type Buffers = Buffers<R>;
 
     fn primitives(&self) -> usize {
@@ -65,8 +67,14 @@ impl<R: Real> Stages<R> for LemboPath<'_, R> {
     }
 
     /// Setup of lembo `n` into its pieces (none when it is culled).
-    fn set_up(&self, n: usize, _: &mut (), pieces: &mut Vec<ScreenLembo<R>>, counts: &mut Counts) {
-        let (lembo, color) = self.scene.lembo(&self.starts, n);
+    fn set_up(
+        &self,
+        n: usize,
+        last: &mut LastParent,
+        pieces: &mut Vec<ScreenLembo<R>>,
+        counts: &mut Counts,
+    ) {
+        let (lembo, color) = self.scene.lembo_near(&self.starts, n, last);
         let first = pieces.len();
         counts.lembos += 1;
         R::charge(UnitKind::Setup);
@@ -285,7 +293,7 @@ mod tests {
         driver::set_up(
             &path,
             all,
-            &mut (),
+            &mut Default::default(),
             &mut pieces,
             keep,
             &mut Counts::default(),

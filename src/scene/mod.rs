@@ -44,7 +44,7 @@ pub mod validate;
 use crate::camera::{Camera, Viewport};
 use crate::discoid::DiscoidSet;
 use crate::lembo::construct::TriangleMesh;
-use crate::lembo::set::Lembos;
+use crate::lembo::set::{LastParent, Lembos};
 use crate::lembo::Lembo;
 use crate::rop::shade::Light;
 use std::path::PathBuf;
@@ -164,9 +164,23 @@ impl Scene {
     /// Lembo `id` (scene order, below [`Scene::lembo_count`]) with its object's colour,
     /// made if it is not held; `index` is this scene's [`Scene::lembo_index`].
     pub fn lembo(&self, index: &LemboIndex, id: usize) -> (Lembo, [f64; 3]) {
+        self.lembo_near(index, id, &mut LastParent::default())
+    }
+
+    /// [`Scene::lembo`] for a caller taking lembos in order: a subdivided lembo's parent is
+    /// kept in `last` and made once for all its children ([`Lembos::get_near`]).
+    pub fn lembo_near(
+        &self,
+        index: &LemboIndex,
+        id: usize,
+        last: &mut LastParent,
+    ) -> (Lembo, [f64; 3]) {
         let o = index.0.partition_point(|&start| start <= id) - 1;
         let object = &self.objects[o];
-        (object.lembos.get(id - index.0[o]), object.color)
+        (
+            object.lembos.get_near(id - index.0[o], o, last),
+            object.color,
+        )
     }
 
     /// The heap the scene's lembos take \[bytes\]: the lembos held, and the meshes others

@@ -20,6 +20,7 @@ use crate::camera::View;
 use crate::config::SetupConfig;
 use crate::datapath::Real;
 use crate::graph::UnitKind;
+use crate::lembo::set::LastParent;
 use crate::pipeline::items::{LemboReady, MemAccess, Piece, PieceId};
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::Ctx;
@@ -71,10 +72,10 @@ pub async fn run<R: Real>(
     let mut next_port = 0;
     // Each lembo of the batches dealt to this engine, made as it is taken (the others'
     // lembos are not made here).
-    let starts = scene.lembo_index();
+    let (starts, mut last) = (scene.lembo_index(), LastParent::default());
     while let Some(MemAccess { first, count, .. }) = ctx.next_input().await {
         for id in first as usize..first as usize + count as usize {
-            let (lembo, color) = scene.lembo(&starts, id);
+            let (lembo, color) = scene.lembo_near(&starts, id, &mut last);
             counts.lembos += 1;
             match setup_pieces::<R>(id as u32, &lembo, color, view, perspective_tol, &mut pieces) {
                 Ok(split) => {
