@@ -1,7 +1,7 @@
 //! An object's lembos as a scene holds them: the lembos themselves where there are few
 //! (inline lembos, a discoid sphere's), or what they are made from, each lembo made when it
 //! is asked for (a mesh's lembos, subdivided lembos). A scene of millions of lembos then
-//! holds its mesh, about 60 bytes a lembo, rather than 576 bytes a lembo, and the stages
+//! holds its mesh, 36 bytes a lembo for a terrain, rather than 576 bytes a lembo, and the stages
 //! that read it in order (Setup, the geometry fetch, the tessellator) make each lembo as it
 //! comes (DESIGN.md §3, "Streamed primitives").
 //!

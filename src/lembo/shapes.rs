@@ -22,8 +22,8 @@ use std::f64::consts::PI;
 pub const BUILTIN_NAMES: [&str; 3] = ["sphere24", "cylinder24", "surface96"];
 
 /// The largest N of a `terrainN` builtin: 2N² = 8 388 608 lembos, which a scene holds as
-/// their mesh (about 60 bytes a lembo, made on demand: [`crate::lembo::set`]); loading it
-/// peaks near 125 bytes a lembo (the weld).
+/// their mesh (36 bytes a lembo, each lembo made on demand: [`crate::lembo::set`]); a run
+/// peaks near 80 bytes a lembo above its frame buffers (RESULTS.md, "How cost grows").
 pub const MAX_TERRAIN_CELLS: u32 = 2048;
 
 /// The largest number of lembos a scene's builtin shapes may make together: one
