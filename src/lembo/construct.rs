@@ -479,8 +479,8 @@ impl TriangleMesh {
 
 /// A mesh's lembos made on demand, one per triangle ([`TriangleMesh::to_lembos`]): the
 /// welded mesh and the shared midpoints of the edges whose sides compute different ones (a
-/// smooth mesh has none), 36 bytes a lembo for a mesh of 2 triangles a vertex (48 a vertex, 12 a triangle) instead
-/// of a lembo's 576.
+/// smooth mesh has none): 36 bytes a lembo for a mesh of 2 triangles a vertex (48 a
+/// vertex, 12 a triangle) instead of a lembo's 576.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MeshLembos {
     /// The mesh, its positions welded.

@@ -1,9 +1,9 @@
 //! An object's lembos as a scene holds them: the lembos themselves where there are few
 //! (inline lembos, a discoid sphere's), or what they are made from, each lembo made when it
 //! is asked for (a mesh's lembos, subdivided lembos). A scene of millions of lembos then
-//! holds its mesh, 36 bytes a lembo for a terrain, rather than 576 bytes a lembo, and the stages
-//! that read it in order (Setup, the geometry fetch, the tessellator) make each lembo as it
-//! comes (DESIGN.md §3, "Streamed primitives").
+//! holds its mesh, 36 bytes a lembo for a terrain, rather than 576 bytes a lembo, and the
+//! stages that read it in order (Setup, the geometry fetch, the tessellator) make each lembo
+//! as it comes (DESIGN.md §3, "Streamed primitives").
 //!
 //! Making a lembo is deterministic: [`Lembos::get`] gives the same lembo, bit for bit, every
 //! time and as [`TriangleMesh::to_lembos`](super::construct::TriangleMesh::to_lembos) and
