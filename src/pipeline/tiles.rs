@@ -119,6 +119,28 @@ impl<'a, 'f> RopPixels<'a, 'f> {
         row
     }
 
+    /// Asks the cache for the depth and winner at pixel index `idx` (usually the pixel
+    /// below a span, which the primitive's next row will test). A hint: it reads nothing,
+    /// so it may name a pixel of another ROP; an index past the frame is ignored.
+    #[inline(always)]
+    pub fn prefetch(&self, idx: usize) {
+        #[cfg(target_arch = "x86_64")]
+        if idx < self.frame.len {
+            use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+            // SAFETY: a prefetch is a hint; it reads nothing and the address is in bounds.
+            unsafe {
+                _mm_prefetch::<_MM_HINT_T0>(self.frame.depth.add(idx) as *const i8);
+                _mm_prefetch::<_MM_HINT_T0>(self.frame.primitive.add(idx) as *const i8);
+            }
+        }
+    }
+
+    /// Pixels a row.
+    #[inline(always)]
+    pub fn width(&self) -> usize {
+        self.width
+    }
+
     /// The depth at pixel index `idx`.
     #[inline(always)]
     pub fn depth(&self, idx: usize) -> f32 {

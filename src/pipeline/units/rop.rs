@@ -153,6 +153,7 @@ pub async fn run<R: Real>(mut ctx: Ctx<RopItem<R>, MemAccess>, rop: RopContext<'
             (RopItem::Lembo(FragmentSpan { piece, j, span }), None) => {
                 let l = &*piece.screen;
                 let row = pixels.row(span.i0, span.i1, j);
+                pixels.prefetch(row + pixels.width() + span.i0 as usize);
                 batch.begin_lembo(l, &shader, into(&mut pixels));
                 span.walk(|i, u, v| {
                     let idx = row + i as usize;
