@@ -23,9 +23,10 @@ use super::core::{Core, Wait};
 use super::cycle::Cycle;
 use super::link::{Rx, Tx};
 use super::trace::{Recorder, State};
-use std::future::poll_fn;
+use std::future::Future;
+use std::pin::Pin;
 use std::rc::Rc;
-use std::task::Poll;
+use std::task::{Context, Poll};
 
 /// Counters of one unit over its life, \[cycles\] unless named otherwise.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -168,18 +169,29 @@ impl<I, O> Ctx<I, O> {
     }
 
     /// Spends `cycles` (>= 1) busy cycles producing `item` for output `port`, then pushes
-    /// it when the FIFO has room (see the module doc for the freeze).
-    pub async fn emit(&mut self, cycles: u64, port: usize, item: O) {
+    /// it when the FIFO has room (see the module doc for the freeze). The op is issued and,
+    /// when the credit is known, the item pushed before this returns; the future then only
+    /// waits for a credit not yet given.
+    #[inline]
+    pub fn emit(&mut self, cycles: u64, port: usize, item: O) -> Emit<'_, I, O> {
         debug_assert!(cycles >= 1);
         let cycles = cycles.max(1);
         let issue = self.now;
         self.work(cycles);
         let ready = issue + (cycles - 1 + self.latency);
-        let credit = match self.outputs[port].credit_needed() {
-            Some(q) => q,
-            None => self.wait_credit(port).await,
-        };
-        let push = ready.max(credit);
+        self.stats.items_out += 1;
+        match self.outputs[port].try_push(ready, item) {
+            Ok(push) => {
+                self.blocked_until(ready, push);
+                Emit(None)
+            }
+            Err(item) => Emit(Some((self, port, ready, item))),
+        }
+    }
+
+    /// An output ready at `ready` was pushed at `push`: the pipeline froze in between.
+    #[inline(always)]
+    fn blocked_until(&mut self, ready: Cycle, push: Cycle) {
         if push > ready {
             let start = self.now;
             self.set_now(start + (push - ready));
@@ -188,72 +200,50 @@ impl<I, O> Ctx<I, O> {
                 t.record(start.0, self.now.0, State::Blocked);
             }
         }
-        self.stats.items_out += 1;
-        self.outputs[port].push(push, item);
-    }
-
-    async fn wait_credit(&mut self, port: usize) -> Cycle {
-        let slot = &self.core.slots[self.unit as usize];
-        let tx = &self.outputs[port];
-        poll_fn(|_| match tx.credit_needed() {
-            Some(q) => Poll::Ready(q),
-            None => {
-                slot.wait.set(Wait::Credit { port: port as u32 });
-                Poll::Pending
-            }
-        })
-        .await
     }
 
     /// The next input item in merge order, after waiting for it (starved cycles); `None`
     /// once every input has ended.
-    pub async fn next_input(&mut self) -> Option<I> {
-        if let Choice::Take(port, arrival) = self.choose() {
-            return Some(self.pop(port, arrival));
-        }
-        poll_fn(|_| match self.choose() {
-            Choice::Take(port, arrival) => Poll::Ready(Some(self.pop(port, arrival))),
-            Choice::Finished => Poll::Ready(None),
-            Choice::Wait(held) => {
-                self.core.park_input(self.unit, held);
-                Poll::Pending
-            }
-        })
-        .await
+    #[inline]
+    pub fn next_input(&mut self) -> NextInput<'_, I, O> {
+        NextInput(self)
     }
 
     /// What the merge can do now: the queued item with the smallest (arrival, port), once
     /// every other input's bound proves nothing earlier can come (or a recovery did).
     #[inline(always)]
     fn choose(&mut self) -> Choice {
+        if let [rx] = &self.inputs[..] {
+            // One input: its head is next.
+            return match rx.head() {
+                Some(a) => Choice::Take(0, a),
+                None if rx.finished() => Choice::Finished,
+                None => Choice::Wait(None),
+            };
+        }
         // One pass: the earliest queued item, and the earliest cached bound of an empty
-        // input (both as (cycle, port), the merge's order).
-        let mut best: Option<(Cycle, usize)> = None;
-        let mut empty: Option<(Cycle, usize)> = None;
-        for (i, rx) in self.inputs.iter().enumerate() {
-            match rx.head() {
-                Some(a) => {
-                    if best.is_none_or(|b| (a, i) < b) {
-                        best = Some((a, i));
-                    }
+        // input (both as (cycle, port), the merge's order: ports come in increasing order,
+        // so only a strictly earlier cycle displaces the one found).
+        let (mut arrival, mut port) = (Cycle::NEVER, usize::MAX);
+        let mut empty = (Cycle::NEVER, usize::MAX);
+        for (i, (rx, &h)) in self.inputs.iter().zip(&self.horizon).enumerate() {
+            let a = rx.head_or_never();
+            if a != Cycle::NEVER {
+                if a < arrival {
+                    (arrival, port) = (a, i);
                 }
-                None => {
-                    let h = (self.horizon[i], i);
-                    if empty.is_none_or(|e| h < e) {
-                        empty = Some(h);
-                    }
-                }
+            } else if h < empty.0 {
+                empty = (h, i);
             }
         }
-        let Some((arrival, port)) = best else {
+        if port == usize::MAX {
             return if self.inputs.iter().all(Rx::finished) {
                 Choice::Finished
             } else {
                 Choice::Wait(None)
             };
-        };
-        if empty.is_none_or(|e| e > (arrival, port))
-            || self.core.slots[self.unit as usize].go.get() == Some(arrival)
+        }
+        if empty > (arrival, port) || self.core.slots[self.unit as usize].go.get() == Some(arrival)
         {
             return Choice::Take(port, arrival);
         }
@@ -299,6 +289,57 @@ impl<I, O> Ctx<I, O> {
         stats.max_fifo_occupancy = self.inputs.iter().map(Rx::max_occupancy).max().unwrap_or(0);
         debug_assert_eq!(stats.busy + stats.starved + stats.blocked, stats.end.0);
         (stats, self.trace.take())
+    }
+}
+
+/// The future of [`Ctx::emit`]: done, or an item waiting for the credit of its port
+/// (with the cycle it was ready).
+pub struct Emit<'a, I, O>(Option<(&'a mut Ctx<I, O>, usize, Cycle, O)>);
+
+// The item is never pinned: it is moved into the FIFO by value.
+impl<I, O> Unpin for Emit<'_, I, O> {}
+
+impl<I, O> Future for Emit<'_, I, O> {
+    type Output = ();
+
+    #[inline]
+    fn poll(self: Pin<&mut Self>, _: &mut Context<'_>) -> Poll<()> {
+        let this = self.get_mut();
+        let Some((ctx, port, _, _)) = &this.0 else {
+            return Poll::Ready(());
+        };
+        let port = *port;
+        let Some(credit) = ctx.outputs[port].credit_needed() else {
+            ctx.core.slots[ctx.unit as usize]
+                .wait
+                .set(Wait::Credit { port: port as u32 });
+            return Poll::Pending;
+        };
+        let (ctx, _, ready, item) = this.0.take().expect("checked above");
+        let push = ready.max(credit);
+        ctx.outputs[port].push(push, item);
+        ctx.blocked_until(ready, push);
+        Poll::Ready(())
+    }
+}
+
+/// The future of [`Ctx::next_input`].
+pub struct NextInput<'a, I, O>(&'a mut Ctx<I, O>);
+
+impl<I, O> Future for NextInput<'_, I, O> {
+    type Output = Option<I>;
+
+    #[inline]
+    fn poll(self: Pin<&mut Self>, _: &mut Context<'_>) -> Poll<Option<I>> {
+        let ctx = &mut *self.get_mut().0;
+        match ctx.choose() {
+            Choice::Take(port, arrival) => Poll::Ready(Some(ctx.pop(port, arrival))),
+            Choice::Finished => Poll::Ready(None),
+            Choice::Wait(held) => {
+                ctx.core.park_input(ctx.unit, held);
+                Poll::Pending
+            }
+        }
     }
 }
 

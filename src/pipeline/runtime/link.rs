@@ -556,6 +556,46 @@ impl<T> Tx<T> {
         }
     }
 
+    /// Pushes `item`, ready at cycle `ready`, at max(ready, the credit it needs) when that
+    /// credit is known: returns the push time, or gives the item back when the item whose
+    /// pop time is the credit has not been popped yet ([`Self::credit_needed`] and
+    /// [`Self::push`] under one look at the FIFO).
+    #[inline]
+    pub fn try_push(&self, ready: Cycle, item: T) -> Result<Cycle, T> {
+        let Tx::Local(l) = self else {
+            let Some(credit) = self.credit_needed() else {
+                return Err(item);
+            };
+            let at = ready.max(credit);
+            self.push(at, item);
+            return Ok(at);
+        };
+        let at = {
+            let mut f = l.fifo.borrow_mut();
+            let depth = l.spec.fifo_depth as u64;
+            let credit = if f.pushed < depth {
+                Cycle::ZERO
+            } else {
+                match f.pops.get(f.pushed - depth) {
+                    Some(q) => q,
+                    None => return Err(item),
+                }
+            };
+            let at = ready.max(credit);
+            debug_assert!(at >= f.last_push && !f.ended);
+            f.last_push = at;
+            f.pushed += 1;
+            let arrival = at + l.spec.latency_cycles;
+            if f.queue.is_empty() {
+                l.head.set(arrival);
+            }
+            f.queue.push_back((arrival, at, item));
+            at
+        };
+        l.core.wake_if_input(l.ends.consumer);
+        Ok(at)
+    }
+
     /// Pushes an item at cycle `at` (the caller checked the credit); wakes the consumer
     /// if it waits for input.
     #[inline]
@@ -628,6 +668,15 @@ impl<T> Rx<T> {
                 (h != Cycle::NEVER).then_some(h)
             }
             Rx::Remote(l) => l.queue.borrow().front().map(|h| h.0),
+        }
+    }
+
+    /// The arrival of the queued head item, [`Cycle::NEVER`] when none is queued.
+    #[inline(always)]
+    pub fn head_or_never(&self) -> Cycle {
+        match self {
+            Rx::Local(l) => l.head.get(),
+            Rx::Remote(l) => l.queue.borrow().front().map_or(Cycle::NEVER, |h| h.0),
         }
     }
 
