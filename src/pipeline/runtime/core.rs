@@ -90,7 +90,8 @@ pub struct Slot {
     pub name: String,
     /// Cycles from an op's last cycle to its output being ready (>= 1).
     pub latency: u64,
-    /// The unit's local clock.
+    /// The unit's local clock, as it last showed it: the unit writes it whenever it yields
+    /// (and when it finishes), so every other unit and the executor read it current.
     pub now: Cell<Cycle>,
     /// What it waits for.
     pub wait: Cell<Wait>,

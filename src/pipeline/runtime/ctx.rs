@@ -87,6 +87,8 @@ pub struct Ctx<I, O> {
     /// Per input: a lower bound on its next arrival, computed when last needed. A bound
     /// stays valid as time goes on, so it is recomputed only when it cannot decide.
     horizon: Vec<Cycle>,
+    /// It waited for input since its last pop (so a recovery may have let it go ahead).
+    parked: bool,
     stats: UnitStats,
     trace: Option<Recorder>,
 }
@@ -113,6 +115,7 @@ impl<I, O> Ctx<I, O> {
             now: Cycle::ZERO,
             last_taken: (Cycle::ZERO, 0),
             horizon: vec![Cycle::ZERO; n],
+            parked: false,
             stats: UnitStats::default(),
             trace: trace_cap.map(Recorder::new),
         }
@@ -154,7 +157,15 @@ impl<I, O> Ctx<I, O> {
     #[inline(always)]
     fn set_now(&mut self, now: Cycle) {
         self.now = now;
-        self.core.slots[self.unit as usize].now.set(now);
+    }
+
+    /// Shows the unit's clock to the executor and the other units' bounds. Done whenever
+    /// the unit yields: while it runs, no other unit of its host thread runs, so only its
+    /// own bound recursion could read its slot, and a clock read early is still a lower
+    /// bound.
+    #[inline(always)]
+    fn publish(&self) {
+        self.core.slots[self.unit as usize].now.set(self.now);
     }
 
     /// Spends `cycles` busy cycles with no output.
@@ -172,7 +183,7 @@ impl<I, O> Ctx<I, O> {
     /// it when the FIFO has room (see the module doc for the freeze). The op is issued and,
     /// when the credit is known, the item pushed before this returns; the future then only
     /// waits for a credit not yet given.
-    #[inline]
+    #[inline(always)]
     pub fn emit(&mut self, cycles: u64, port: usize, item: O) -> Emit<'_, I, O> {
         debug_assert!(cycles >= 1);
         let cycles = cycles.max(1);
@@ -262,7 +273,12 @@ impl<I, O> Ctx<I, O> {
 
     #[inline(always)]
     fn pop(&mut self, port: usize, arrival: Cycle) -> I {
-        self.core.slots[self.unit as usize].go.set(None);
+        // A recovery's go-ahead is given only to a unit parked waiting for input, and is
+        // spent by its next pop.
+        if self.parked {
+            self.parked = false;
+            self.core.slots[self.unit as usize].go.set(None);
+        }
         // Every item a merge takes is the earliest (arrival, port) of all it will ever
         // take, so the taken sequence is sorted: a cheap check of the whole executor.
         if (arrival, port) < self.last_taken {
@@ -280,6 +296,7 @@ impl<I, O> Ctx<I, O> {
     /// Ends every output and returns the unit's counters and timeline. Consumes the
     /// context: a finished unit does nothing more.
     pub fn finish(mut self) -> (UnitStats, Option<Recorder>) {
+        self.publish();
         self.core.slots[self.unit as usize].wait.set(Wait::Done);
         for tx in &self.outputs {
             tx.end();
@@ -310,9 +327,8 @@ impl<I, O> Future for Emit<'_, I, O> {
         };
         let port = *port;
         let Some(credit) = ctx.outputs[port].credit_needed() else {
-            ctx.core.slots[ctx.unit as usize]
-                .wait
-                .set(Wait::Credit { port: port as u32 });
+            ctx.publish();
+            ctx.outputs[port].wait_credit(&ctx.core.slots[ctx.unit as usize]);
             return Poll::Pending;
         };
         let (ctx, _, ready, item) = this.0.take().expect("checked above");
@@ -329,13 +345,15 @@ pub struct NextInput<'a, I, O>(&'a mut Ctx<I, O>);
 impl<I, O> Future for NextInput<'_, I, O> {
     type Output = Option<I>;
 
-    #[inline]
+    #[inline(always)]
     fn poll(self: Pin<&mut Self>, _: &mut Context<'_>) -> Poll<Option<I>> {
         let ctx = &mut *self.get_mut().0;
         match ctx.choose() {
             Choice::Take(port, arrival) => Poll::Ready(Some(ctx.pop(port, arrival))),
             Choice::Finished => Poll::Ready(None),
             Choice::Wait(held) => {
+                ctx.publish();
+                ctx.parked = true;
                 ctx.core.park_input(ctx.unit, held);
                 Poll::Pending
             }

@@ -21,7 +21,7 @@
 //! item n-D, so at most D items and the end are ever in the item channel: host memory is
 //! bounded by the FIFOs.
 
-use super::core::{Core, InputSnap, InputView, Wait};
+use super::core::{Core, InputSnap, InputView, Slot, Wait};
 use super::cycle::{Cycle, Timed};
 use super::signal::Signal;
 use crossbeam_channel::{Receiver, Sender, TryRecvError};
@@ -142,6 +142,9 @@ pub struct LocalLink<T> {
     /// The queued head's arrival, [`Cycle::NEVER`] when the queue is empty: the merge reads
     /// it for every input at every item, without borrowing the queue.
     head: Cell<Cycle>,
+    /// The producer waits for a credit of this link (set by [`Tx::wait_credit`]); the
+    /// next pop gives it and wakes the producer.
+    producer_waits: Cell<bool>,
 }
 
 /// The state of a [`LocalLink`], under one borrow.
@@ -170,6 +173,7 @@ impl<T> LocalLink<T> {
                 ended: false,
             }),
             head: Cell::new(Cycle::NEVER),
+            producer_waits: Cell::new(false),
         }
     }
 }
@@ -194,6 +198,66 @@ pub fn local_link<T: 'static>(
         .borrow_mut()
         .push(link.clone());
     (Tx::Local(link.clone()), Rx::Local(link))
+}
+
+impl<T> LocalLink<T> {
+    /// Pushes `item` at `at` into the FIFO `f` (this link's, borrowed).
+    #[inline(always)]
+    fn push(&self, f: &mut Fifo<T>, at: Cycle, item: T) {
+        debug_assert!(at >= f.last_push && !f.ended);
+        f.last_push = at;
+        f.pushed += 1;
+        let arrival = at + self.spec.latency_cycles;
+        if f.queue.is_empty() {
+            self.head.set(arrival);
+        }
+        f.queue.push_back((arrival, at, item));
+    }
+
+    /// [`Tx::try_push`] on this link.
+    #[inline(always)]
+    fn try_push(&self, ready: Cycle, item: T) -> Result<Cycle, T> {
+        let at = {
+            let mut f = self.fifo.borrow_mut();
+            let depth = self.spec.fifo_depth as u64;
+            let credit = if f.pushed < depth {
+                Cycle::ZERO
+            } else {
+                match f.pops.get(f.pushed - depth) {
+                    Some(q) => q,
+                    None => return Err(item),
+                }
+            };
+            let at = ready.max(credit);
+            self.push(&mut f, at, item);
+            at
+        };
+        self.core.wake_if_input(self.ends.consumer);
+        Ok(at)
+    }
+
+    /// [`Rx::pop`] on this link.
+    #[inline(always)]
+    fn pop(&self, q: Cycle) -> T {
+        let item = {
+            let mut f = self.fifo.borrow_mut();
+            let (arrival, pushed_at, item) = f.queue.pop_front().expect("caller checked");
+            debug_assert!(q >= arrival);
+            self.head.set(f.queue.front().map_or(Cycle::NEVER, |h| h.0));
+            f.pops.pop(pushed_at, q);
+            item
+        };
+        if self.producer_waits.replace(false) {
+            debug_assert_eq!(
+                self.core.slots[self.ends.producer as usize].wait.get(),
+                Wait::Credit {
+                    port: self.ends.port
+                }
+            );
+            self.core.wake(self.ends.producer);
+        }
+        item
+    }
 }
 
 impl<T> InputView for LocalLink<T> {
@@ -461,6 +525,26 @@ impl<T> RemoteRx<T> {
     }
 }
 
+impl<T> RemoteRx<T> {
+    /// [`Rx::pop`] on this half: the credit joins the batch sent back.
+    #[inline(never)]
+    fn pop(&self, q: Cycle) -> T {
+        let (arrival, pushed_at, item) =
+            self.queue.borrow_mut().pop_front().expect("caller checked");
+        debug_assert!(q >= arrival);
+        self.pops.borrow_mut().pop(pushed_at, q);
+        let full = {
+            let mut pending = self.pending_credits.borrow_mut();
+            pending.push(q);
+            pending.len() >= (self.spec.fifo_depth as usize / 2).clamp(1, MAX_BATCH)
+        };
+        if full {
+            self.send_credits();
+        }
+        item
+    }
+}
+
 impl<T> RemoteEnd for RemoteRx<T> {
     fn flush(&self) -> bool {
         self.send_credits()
@@ -560,40 +644,38 @@ impl<T> Tx<T> {
     /// credit is known: returns the push time, or gives the item back when the item whose
     /// pop time is the credit has not been popped yet ([`Self::credit_needed`] and
     /// [`Self::push`] under one look at the FIFO).
-    #[inline]
+    #[inline(always)]
     pub fn try_push(&self, ready: Cycle, item: T) -> Result<Cycle, T> {
-        let Tx::Local(l) = self else {
-            let Some(credit) = self.credit_needed() else {
-                return Err(item);
-            };
-            let at = ready.max(credit);
-            self.push(at, item);
-            return Ok(at);
+        match self {
+            Tx::Local(l) => l.try_push(ready, item),
+            Tx::Remote(_) => self.try_push_remote(ready, item),
+        }
+    }
+
+    #[inline(never)]
+    fn try_push_remote(&self, ready: Cycle, item: T) -> Result<Cycle, T> {
+        let Some(credit) = self.credit_needed() else {
+            return Err(item);
         };
-        let at = {
-            let mut f = l.fifo.borrow_mut();
-            let depth = l.spec.fifo_depth as u64;
-            let credit = if f.pushed < depth {
-                Cycle::ZERO
-            } else {
-                match f.pops.get(f.pushed - depth) {
-                    Some(q) => q,
-                    None => return Err(item),
-                }
-            };
-            let at = ready.max(credit);
-            debug_assert!(at >= f.last_push && !f.ended);
-            f.last_push = at;
-            f.pushed += 1;
-            let arrival = at + l.spec.latency_cycles;
-            if f.queue.is_empty() {
-                l.head.set(arrival);
-            }
-            f.queue.push_back((arrival, at, item));
-            at
-        };
-        l.core.wake_if_input(l.ends.consumer);
+        let at = ready.max(credit);
+        self.push(at, item);
         Ok(at)
+    }
+
+    /// The producer parks until the credit the next push needs is given: the unit's slot
+    /// says so (for bounds, recoveries and reports), and a local link's next pop wakes it.
+    pub fn wait_credit(&self, slot: &Slot) {
+        slot.wait.set(Wait::Credit { port: self.port() });
+        if let Tx::Local(l) = self {
+            l.producer_waits.set(true);
+        }
+    }
+
+    fn port(&self) -> u32 {
+        match self {
+            Tx::Local(l) => l.ends.port,
+            Tx::Remote(l) => l.ends.port,
+        }
     }
 
     /// Pushes an item at cycle `at` (the caller checked the credit); wakes the consumer
@@ -602,17 +684,7 @@ impl<T> Tx<T> {
     pub fn push(&self, at: Cycle, item: T) {
         match self {
             Tx::Local(l) => {
-                {
-                    let mut f = l.fifo.borrow_mut();
-                    debug_assert!(at >= f.last_push && !f.ended);
-                    f.last_push = at;
-                    f.pushed += 1;
-                    let arrival = at + l.spec.latency_cycles;
-                    if f.queue.is_empty() {
-                        l.head.set(arrival);
-                    }
-                    f.queue.push_back((arrival, at, item));
-                }
+                l.push(&mut l.fifo.borrow_mut(), at, item);
                 l.core.wake_if_input(l.ends.consumer);
             }
             Tx::Remote(l) => {
@@ -702,39 +774,11 @@ impl<T> Rx<T> {
 
     /// Pops the head item at cycle `q` (>= its arrival): records the credit (waking a
     /// producer that waits for it) and the FIFO occupancy.
-    #[inline]
+    #[inline(always)]
     pub fn pop(&self, q: Cycle) -> T {
         match self {
-            Rx::Local(l) => {
-                let item = {
-                    let mut f = l.fifo.borrow_mut();
-                    let (arrival, pushed_at, item) = f.queue.pop_front().expect("caller checked");
-                    debug_assert!(q >= arrival);
-                    l.head.set(f.queue.front().map_or(Cycle::NEVER, |h| h.0));
-                    f.pops.pop(pushed_at, q);
-                    item
-                };
-                let p = &l.core.slots[l.ends.producer as usize];
-                if p.wait.get() == (Wait::Credit { port: l.ends.port }) {
-                    l.core.wake(l.ends.producer);
-                }
-                item
-            }
-            Rx::Remote(l) => {
-                let (arrival, pushed_at, item) =
-                    l.queue.borrow_mut().pop_front().expect("caller checked");
-                debug_assert!(q >= arrival);
-                l.pops.borrow_mut().pop(pushed_at, q);
-                let full = {
-                    let mut pending = l.pending_credits.borrow_mut();
-                    pending.push(q);
-                    pending.len() >= (l.spec.fifo_depth as usize / 2).clamp(1, MAX_BATCH)
-                };
-                if full {
-                    l.send_credits();
-                }
-                item
-            }
+            Rx::Local(l) => l.pop(q),
+            Rx::Remote(l) => l.pop(q),
         }
     }
 
