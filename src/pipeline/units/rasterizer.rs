@@ -78,6 +78,10 @@ pub async fn run<R: Real>(
             let piece = piece.clone();
             ctx.emit(cycles, rop, RopItem::Lembo(FragmentSpan { piece, j, span }))
                 .await;
+            if run.i1 <= tile_end {
+                // The last span: no (u, v) to step on to.
+                break;
+            }
             run.advance(n);
         }
     }
