@@ -254,7 +254,9 @@ impl<I, O> Ctx<I, O> {
                 Choice::Wait(None)
             };
         }
-        if empty > (arrival, port) || self.core.slots[self.unit as usize].go.get() == Some(arrival)
+        // (A go-ahead is only ever given to a parked unit.)
+        if empty > (arrival, port)
+            || (self.parked && self.core.slots[self.unit as usize].go.get() == Some(arrival))
         {
             return Choice::Take(port, arrival);
         }

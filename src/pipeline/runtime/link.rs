@@ -80,8 +80,13 @@ struct PopRing {
 }
 
 impl PopRing {
+    /// Entries of the ring for a FIFO of `depth`: a power of two, at least `depth`.
+    fn capacity(depth: u32) -> usize {
+        (depth as usize).next_power_of_two()
+    }
+
     fn new(depth: u32) -> Self {
-        let cap = (depth as u64).next_power_of_two();
+        let cap = Self::capacity(depth) as u64;
         PopRing {
             times: vec![Cycle::ZERO; cap as usize].into_boxed_slice(),
             mask: cap - 1,
@@ -149,8 +154,11 @@ pub struct LocalLink<T> {
 
 /// The state of a [`LocalLink`], under one borrow.
 struct Fifo<T> {
-    /// (arrival = p + L, push time, item).
-    queue: VecDeque<(Cycle, Cycle, T)>,
+    /// The items in the FIFO, oldest first.
+    queue: VecDeque<T>,
+    /// The push times of the last items, by item number in a ring as large as the pop
+    /// times' (at most D items are ever in the FIFO): item n is `pushes[n & pops.mask]`.
+    pushes: Box<[Cycle]>,
     pops: PopRing,
     pushed: u64,
     last_push: Cycle,
@@ -167,6 +175,7 @@ impl<T> LocalLink<T> {
             ends,
             fifo: RefCell::new(Fifo {
                 queue: VecDeque::with_capacity(spec.fifo_depth.min(1024) as usize),
+                pushes: vec![Cycle::ZERO; PopRing::capacity(spec.fifo_depth)].into_boxed_slice(),
                 pops: PopRing::new(spec.fifo_depth),
                 pushed: 0,
                 last_push: Cycle::ZERO,
@@ -206,12 +215,13 @@ impl<T> LocalLink<T> {
     fn push(&self, f: &mut Fifo<T>, at: Cycle, item: T) {
         debug_assert!(at >= f.last_push && !f.ended);
         f.last_push = at;
+        let slot = (f.pushed & f.pops.mask) as usize;
+        f.pushes[slot] = at;
         f.pushed += 1;
-        let arrival = at + self.spec.latency_cycles;
         if f.queue.is_empty() {
-            self.head.set(arrival);
+            self.head.set(at + self.spec.latency_cycles);
         }
-        f.queue.push_back((arrival, at, item));
+        f.queue.push_back(item);
     }
 
     /// [`Tx::try_push`] on this link.
@@ -241,9 +251,14 @@ impl<T> LocalLink<T> {
     fn pop(&self, q: Cycle) -> T {
         let item = {
             let mut f = self.fifo.borrow_mut();
-            let (arrival, pushed_at, item) = f.queue.pop_front().expect("caller checked");
-            debug_assert!(q >= arrival);
-            self.head.set(f.queue.front().map_or(Cycle::NEVER, |h| h.0));
+            let item = f.queue.pop_front().expect("caller checked");
+            let n = f.pops.count;
+            let pushed_at = f.pushes[(n & f.pops.mask) as usize];
+            debug_assert!(q >= pushed_at + self.spec.latency_cycles);
+            self.head.set(match n + 1 < f.pushed {
+                true => f.pushes[((n + 1) & f.pops.mask) as usize] + self.spec.latency_cycles,
+                false => Cycle::NEVER,
+            });
             f.pops.pop(pushed_at, q);
             item
         };
@@ -264,10 +279,10 @@ impl<T> InputView for LocalLink<T> {
     #[inline]
     fn next_arrival(&self, core: &Core) -> Cycle {
         let last_push = {
-            let f = self.fifo.borrow();
-            if let Some(&(arrival, _, _)) = f.queue.front() {
-                return arrival;
+            if self.head.get() != Cycle::NEVER {
+                return self.head.get();
             }
+            let f = self.fifo.borrow();
             if f.ended {
                 return Cycle::NEVER;
             }
@@ -285,7 +300,7 @@ impl<T> InputView for LocalLink<T> {
         InputSnap {
             producer: self.ends.from as usize,
             latency: self.spec.latency_cycles,
-            head: f.queue.front().map(|h| h.0),
+            head: Some(self.head.get()).filter(|&h| h != Cycle::NEVER),
             ended: f.ended,
             last_push: f.last_push,
         }
