@@ -1,6 +1,6 @@
 //! The executor's own cost per item: units that do no model work, so what is measured is
-//! the runtime (links, merges, credits, scheduling). Issue 14's target is 40 ns or less
-//! per item.
+//! the runtime (links, merges, credits, scheduling). Issue 14's target was 40 ns or less
+//! per item, issue 36's is 25 ns (RESULTS.md, "How cost grows").
 //!
 //! - `chain`: a source pushing N items through three forwarding units into a sink (four
 //!   hops per item), FIFO depth 8.
