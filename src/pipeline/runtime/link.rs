@@ -185,35 +185,15 @@ impl<T> LocalLink<T> {
             producer_waits: Cell::new(false),
         }
     }
-}
 
-/// A link between units `ends.producer` and `ends.consumer` of `core`, registered with
-/// both: as the producer's next output (to unit `to`, a global index, for deadlock reports
-/// and recoveries) and as the consumer's next input (for its bounds).
-pub fn local_link<T: 'static>(
-    core: &Rc<Core>,
-    spec: LinkSpec,
-    name: LinkName,
-    ends: Ends,
-    to: usize,
-) -> (Tx<T>, Rx<T>) {
-    core.slots[ends.producer as usize]
-        .consumers
-        .borrow_mut()
-        .push((to, name.consumer.clone()));
-    let link = Rc::new(LocalLink::new(core.clone(), spec, name, ends));
-    core.slots[ends.consumer as usize]
-        .inputs
-        .borrow_mut()
-        .push(link.clone());
-    (Tx::Local(link.clone()), Rx::Local(link))
-}
-
-impl<T> LocalLink<T> {
     /// Pushes `item` at `at` into the FIFO `f` (this link's, borrowed).
     #[inline(always)]
     fn push(&self, f: &mut Fifo<T>, at: Cycle, item: T) {
         debug_assert!(at >= f.last_push && !f.ended);
+        debug_assert!(
+            f.pushed - f.pops.count < self.spec.fifo_depth as u64,
+            "a push past the FIFO's depth"
+        );
         f.last_push = at;
         let slot = (f.pushed & f.pops.mask) as usize;
         f.pushes[slot] = at;
@@ -273,6 +253,28 @@ impl<T> LocalLink<T> {
         }
         item
     }
+}
+
+/// A link between units `ends.producer` and `ends.consumer` of `core`, registered with
+/// both: as the producer's next output (to unit `to`, a global index, for deadlock reports
+/// and recoveries) and as the consumer's next input (for its bounds).
+pub fn local_link<T: 'static>(
+    core: &Rc<Core>,
+    spec: LinkSpec,
+    name: LinkName,
+    ends: Ends,
+    to: usize,
+) -> (Tx<T>, Rx<T>) {
+    core.slots[ends.producer as usize]
+        .consumers
+        .borrow_mut()
+        .push((to, name.consumer.clone()));
+    let link = Rc::new(LocalLink::new(core.clone(), spec, name, ends));
+    core.slots[ends.consumer as usize]
+        .inputs
+        .borrow_mut()
+        .push(link.clone());
+    (Tx::Local(link.clone()), Rx::Local(link))
 }
 
 impl<T> InputView for LocalLink<T> {
@@ -538,9 +540,7 @@ impl<T> RemoteRx<T> {
         self.peer.notify();
         true
     }
-}
 
-impl<T> RemoteRx<T> {
     /// [`Rx::pop`] on this half: the credit joins the batch sent back.
     #[inline(never)]
     fn pop(&self, q: Cycle) -> T {
@@ -667,6 +667,8 @@ impl<T> Tx<T> {
         }
     }
 
+    /// [`Self::try_push`] on a link to another host thread (out of line: the local case is
+    /// the hot one).
     #[inline(never)]
     fn try_push_remote(&self, ready: Cycle, item: T) -> Result<Cycle, T> {
         let Some(credit) = self.credit_needed() else {
