@@ -67,7 +67,8 @@ pub struct SharedFrame<'f> {
 
 // SAFETY: the pointers come from a `&'f mut FrameBuffer` held for 'f, and every access goes
 // through a `RopPixels`, which confines ROP r to the pixels of its own tiles (checked per
-// row); distinct ROPs therefore never access the same element, from any thread.
+// row); distinct ROPs therefore never access the same element, from any thread. (A
+// prefetch, which any unit may ask for, accesses nothing.)
 unsafe impl Send for SharedFrame<'_> {}
 unsafe impl Sync for SharedFrame<'_> {}
 
@@ -80,6 +81,22 @@ impl<'f> SharedFrame<'f> {
             color: fb.color.as_mut_ptr(),
             len: fb.depth.len(),
             _frame: std::marker::PhantomData,
+        }
+    }
+
+    /// Asks the cache for the depth and winner at pixel index `idx`, which a ROP will soon
+    /// test. A hint: it reads nothing (so any unit may give it for any pixel); an index past
+    /// the frame is ignored.
+    #[inline(always)]
+    pub fn prefetch(&self, idx: usize) {
+        #[cfg(target_arch = "x86_64")]
+        if idx < self.len {
+            use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+            // SAFETY: a prefetch is a hint; it reads nothing and the address is in bounds.
+            unsafe {
+                _mm_prefetch::<_MM_HINT_T0>(self.depth.add(idx) as *const i8);
+                _mm_prefetch::<_MM_HINT_T0>(self.primitive.add(idx) as *const i8);
+            }
         }
     }
 }
@@ -120,19 +137,10 @@ impl<'a, 'f> RopPixels<'a, 'f> {
     }
 
     /// Asks the cache for the depth and winner at pixel index `idx` (usually the pixel
-    /// below a span, which the primitive's next row will test). A hint: it reads nothing,
-    /// so it may name a pixel of another ROP; an index past the frame is ignored.
+    /// below a span, which the primitive's next row will test): [`SharedFrame::prefetch`].
     #[inline(always)]
     pub fn prefetch(&self, idx: usize) {
-        #[cfg(target_arch = "x86_64")]
-        if idx < self.frame.len {
-            use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-            // SAFETY: a prefetch is a hint; it reads nothing and the address is in bounds.
-            unsafe {
-                _mm_prefetch::<_MM_HINT_T0>(self.frame.depth.add(idx) as *const i8);
-                _mm_prefetch::<_MM_HINT_T0>(self.frame.primitive.add(idx) as *const i8);
-            }
-        }
+        self.frame.prefetch(idx);
     }
 
     /// Pixels a row.

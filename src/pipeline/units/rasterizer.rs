@@ -8,6 +8,10 @@
 //! A span carries (u, v) at its first pixel and the increments; the ROP walks it with the
 //! same additions, so its fragments are bit-identical to the functional model's.
 //!
+//! On the host, a span's first pixel is asked of the cache as the span is sent
+//! ([`SharedFrame::prefetch`], a hint that reads nothing), so the ROP's depth test finds it
+//! nearer when the span comes out of its FIFO.
+//!
 //! Cost: `rasterizer.cycles_per_subsegment` per subsegment (increment setup), then
 //! ceil(n / fragments_per_cycle) per span of n fragments, ready `latency_cycles` later.
 //! Depth is evaluated from the depth quadratic in the ROP, with the depth test.
@@ -18,7 +22,7 @@ use crate::graph::UnitKind;
 use crate::pipeline::items::{FragmentSpan, RopItem, ScanSubsegment};
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::{ceil_div, Ctx};
-use crate::pipeline::tiles::RopTiles;
+use crate::pipeline::tiles::{RopTiles, SharedFrame};
 use crate::pipeline::unit::{Finished, Run, Unit};
 use crate::raster::fragment::{span, Span};
 use crate::raster::Counts;
@@ -43,6 +47,7 @@ impl<R: Real> Unit<R> for FragmentRasterizer {
             &run.arch.rasterizer,
             &run.tiles,
             run.view.viewport.width,
+            &run.frame,
         ))
     }
 }
@@ -54,6 +59,7 @@ pub async fn run<R: Real>(
     cfg: &RasterizerConfig,
     tiles: &RopTiles,
     width: u32,
+    frame: &SharedFrame<'_>,
 ) -> Finished {
     let mut counts = Counts::default();
     while let Some(ScanSubsegment {
@@ -75,6 +81,7 @@ pub async fn run<R: Real>(
                 ..run
             };
             let cycles = ceil_div(n as u64, cfg.fragments_per_cycle);
+            frame.prefetch(j as usize * width as usize + run.i0 as usize);
             let piece = piece.clone();
             ctx.emit(cycles, rop, RopItem::Lembo(FragmentSpan { piece, j, span }))
                 .await;
