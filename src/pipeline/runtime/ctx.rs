@@ -81,6 +81,7 @@ pub struct Ctx<I, O> {
     groups: Vec<std::ops::Range<usize>>,
     /// Cycles from an op's last cycle to its output being ready.
     latency: u64,
+    /// Its clock, shown in its slot when it yields ([`Self::publish`]).
     now: Cycle,
     /// (arrival, port) of the last item taken: the merge takes items in this order.
     last_taken: (Cycle, usize),
@@ -154,11 +155,6 @@ impl<I, O> Ctx<I, O> {
         }
     }
 
-    #[inline(always)]
-    fn set_now(&mut self, now: Cycle) {
-        self.now = now;
-    }
-
     /// Shows the unit's clock to the executor and the other units' bounds. Done whenever
     /// the unit yields: while it runs, no other unit of its host thread runs, so only its
     /// own bound recursion could read its slot, and a clock read early is still a lower
@@ -172,7 +168,7 @@ impl<I, O> Ctx<I, O> {
     #[inline]
     pub fn work(&mut self, cycles: u64) {
         let start = self.now;
-        self.set_now(start + cycles);
+        self.now = start + cycles;
         self.stats.busy += cycles;
         if let Some(t) = self.trace.as_mut() {
             t.record(start.0, self.now.0, State::Busy);
@@ -205,7 +201,7 @@ impl<I, O> Ctx<I, O> {
     fn blocked_until(&mut self, ready: Cycle, push: Cycle) {
         if push > ready {
             let start = self.now;
-            self.set_now(start + (push - ready));
+            self.now = start + (push - ready);
             self.stats.blocked += push - ready;
             if let Some(t) = self.trace.as_mut() {
                 t.record(start.0, self.now.0, State::Blocked);
@@ -289,7 +285,7 @@ impl<I, O> Ctx<I, O> {
         self.last_taken = (arrival, port);
         if arrival > self.now {
             self.stats.starved += arrival - self.now;
-            self.set_now(arrival);
+            self.now = arrival;
         }
         self.stats.items_in += 1;
         self.inputs[port].pop(self.now)

@@ -751,13 +751,8 @@ impl<T> Rx<T> {
     /// The arrival of the queued head item, if any.
     #[inline]
     pub fn head(&self) -> Option<Cycle> {
-        match self {
-            Rx::Local(l) => {
-                let h = l.head.get();
-                (h != Cycle::NEVER).then_some(h)
-            }
-            Rx::Remote(l) => l.queue.borrow().front().map(|h| h.0),
-        }
+        let h = self.head_or_never();
+        (h != Cycle::NEVER).then_some(h)
     }
 
     /// The arrival of the queued head item, [`Cycle::NEVER`] when none is queued.
