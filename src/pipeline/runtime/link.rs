@@ -143,13 +143,43 @@ pub struct LocalLink<T> {
     spec: LinkSpec,
     name: LinkName,
     ends: Ends,
-    fifo: RefCell<Fifo<T>>,
+    fifo: FifoCell<Fifo<T>>,
     /// The queued head's arrival, [`Cycle::NEVER`] when the queue is empty: the merge reads
     /// it for every input at every item, without borrowing the queue.
     head: Cell<Cycle>,
     /// The producer waits for a credit of this link (set by [`Tx::wait_credit`]); the
     /// next pop gives it and wakes the producer.
     producer_waits: Cell<bool>,
+}
+
+/// The cell of a [`LocalLink`]'s state. Each access borrows it within one method of the
+/// link and calls nothing that could reach the same link meanwhile, and a link never
+/// leaves its host thread (it holds an `Rc`), so borrows never overlap: debug builds check
+/// that as a `RefCell` does; release builds skip the flag, on every push and pop.
+#[cfg(debug_assertions)]
+type FifoCell<T> = RefCell<T>;
+
+#[cfg(not(debug_assertions))]
+struct FifoCell<T>(std::cell::UnsafeCell<T>);
+
+#[cfg(not(debug_assertions))]
+impl<T> FifoCell<T> {
+    fn new(value: T) -> Self {
+        FifoCell(std::cell::UnsafeCell::new(value))
+    }
+
+    #[inline(always)]
+    fn borrow(&self) -> &T {
+        // SAFETY: see the type's doc: no mutable borrow is alive while this one is.
+        unsafe { &*self.0.get() }
+    }
+
+    #[inline(always)]
+    #[allow(clippy::mut_from_ref)]
+    fn borrow_mut(&self) -> &mut T {
+        // SAFETY: see the type's doc: no other borrow is alive while this one is.
+        unsafe { &mut *self.0.get() }
+    }
 }
 
 /// The state of a [`LocalLink`], under one borrow.
@@ -173,7 +203,7 @@ impl<T> LocalLink<T> {
             spec,
             name,
             ends,
-            fifo: RefCell::new(Fifo {
+            fifo: FifoCell::new(Fifo {
                 queue: VecDeque::with_capacity(spec.fifo_depth.min(1024) as usize),
                 pushes: vec![Cycle::ZERO; PopRing::capacity(spec.fifo_depth)].into_boxed_slice(),
                 pops: PopRing::new(spec.fifo_depth),
@@ -208,7 +238,7 @@ impl<T> LocalLink<T> {
     #[inline(always)]
     fn try_push(&self, ready: Cycle, item: T) -> Result<Cycle, T> {
         let at = {
-            let mut f = self.fifo.borrow_mut();
+            let f = &mut *self.fifo.borrow_mut();
             let depth = self.spec.fifo_depth as u64;
             let credit = if f.pushed < depth {
                 Cycle::ZERO
@@ -219,7 +249,7 @@ impl<T> LocalLink<T> {
                 }
             };
             let at = ready.max(credit);
-            self.push(&mut f, at, item);
+            self.push(f, at, item);
             at
         };
         self.core.wake_if_input(self.ends.consumer);
@@ -230,7 +260,7 @@ impl<T> LocalLink<T> {
     #[inline(always)]
     fn pop(&self, q: Cycle) -> T {
         let item = {
-            let mut f = self.fifo.borrow_mut();
+            let f = &mut *self.fifo.borrow_mut();
             let item = f.queue.pop_front().expect("caller checked");
             let n = f.pops.count;
             let pushed_at = f.pushes[(n & f.pops.mask) as usize];
@@ -701,7 +731,7 @@ impl<T> Tx<T> {
     pub fn push(&self, at: Cycle, item: T) {
         match self {
             Tx::Local(l) => {
-                l.push(&mut l.fifo.borrow_mut(), at, item);
+                l.push(&mut *l.fifo.borrow_mut(), at, item);
                 l.core.wake_if_input(l.ends.consumer);
             }
             Tx::Remote(l) => {
