@@ -63,8 +63,8 @@ pub const MAX_BATCH: usize = 64;
 /// The pop times of a link's last items in a ring of a power of two >= D entries: the
 /// credits the producer reads (item n - D's pop time gates push n) and the FIFO's
 /// occupancy. After push n the FIFO holds item n and every earlier item popped after p_n;
-/// pop times are non-decreasing, so the first earlier item still in only moves forward:
-/// a pointer, not a search.
+/// pop times are non-decreasing, so whether it held more than the most so far is one
+/// look at a pop time.
 #[derive(Debug)]
 struct PopRing {
     times: Box<[Cycle]>,
@@ -73,8 +73,6 @@ struct PopRing {
     count: u64,
     /// D - 1: item n - D was popped before p_n, so only the last D - 1 can still be in.
     keep: u64,
-    /// The first item whose pop time is after the current push time.
-    still_in: u64,
     /// Most items in the FIFO at once.
     max: u64,
 }
@@ -92,7 +90,6 @@ impl PopRing {
             mask: cap - 1,
             count: 0,
             keep: depth as u64 - 1,
-            still_in: 0,
             max: 0,
         }
     }
@@ -100,12 +97,18 @@ impl PopRing {
     /// The next item, pushed at `pushed_at`, is popped at `q`.
     #[inline]
     fn pop(&mut self, pushed_at: Cycle, q: Cycle) {
+        // After push n the FIFO held 1 + n - f items, f the first of items n - keep..n
+        // popped after p_n (pop times are sorted). f never moves back, so that is at most
+        // one more than after push n - 1: the most grows, by one, exactly when item
+        // n - max was still in. One look per pop.
         let n = self.count;
-        self.still_in = self.still_in.max(n.saturating_sub(self.keep));
-        while self.still_in < n && self.times[(self.still_in & self.mask) as usize] <= pushed_at {
-            self.still_in += 1;
+        if self.max == 0
+            || (n >= self.max
+                && self.max <= self.keep
+                && self.times[((n - self.max) & self.mask) as usize] > pushed_at)
+        {
+            self.max += 1;
         }
-        self.max = self.max.max(1 + n - self.still_in);
         self.record(q);
     }
 
@@ -893,17 +896,20 @@ mod tests {
 
     #[test]
     fn link_occupancy_of_a_consumer_that_keeps_up_is_one() {
-        let (core, tx, rx) = local(8, 1);
-        for n in 0..6 {
-            tx.push(Cycle(2 * n), 0);
-            rx.pop(Cycle(2 * n + 1));
+        // Popped before the next push, or on the same cycle (the pop goes first).
+        for gap in [1, 2] {
+            let (core, tx, rx) = local(8, 1);
+            for n in 0..6 {
+                tx.push(Cycle(2 * n), 0);
+                rx.pop(Cycle(2 * n + gap));
+            }
+            assert_eq!(rx.max_occupancy(), 1, "popped {gap} after its push");
+            core.clear();
         }
-        assert_eq!(rx.max_occupancy(), 1);
-        core.clear();
     }
 
-    /// The pointer against the definition: after push n, item n and every earlier item
-    /// popped after p_n, for seeded random push and pop times obeying the link's rules.
+    /// The one look per pop against the definition: after push n, item n and every earlier
+    /// item popped after p_n, for seeded random push and pop times obeying the link's rules.
     #[test]
     fn link_occupancy_matches_its_definition() {
         let mut x = 0x9E37_79B9_7F4A_7C15u64;
@@ -913,7 +919,11 @@ mod tests {
             x ^= x << 17;
             x % m
         };
-        for depth in [1u32, 2, 3, 8] {
+        // Small steps make pops and pushes fall on the same cycle (popped first: out).
+        for (depth, push_step, pop_step) in [1u32, 2, 3, 5, 8, 16]
+            .into_iter()
+            .flat_map(|d| [(d, 3, 4), (d, 2, 2)])
+        {
             let (core, tx, rx) = local(depth, 1);
             let (mut p, mut q) = (Vec::new(), Vec::<u64>::new());
             let mut last_q = 0;
@@ -923,10 +933,10 @@ mod tests {
                 } else {
                     0
                 };
-                let push = p.last().copied().unwrap_or(0).max(credit) + rnd(3);
+                let push = p.last().copied().unwrap_or(0).max(credit) + rnd(push_step);
                 p.push(push);
                 tx.push(Cycle(push), 0);
-                last_q = last_q.max(push + 1) + rnd(4);
+                last_q = last_q.max(push + 1) + rnd(pop_step);
                 q.push(last_q);
                 rx.pop(Cycle(last_q));
             }
@@ -934,7 +944,11 @@ mod tests {
                 .map(|n| 1 + (0..n).filter(|&m| q[m] > p[n]).count() as u64)
                 .max()
                 .unwrap();
-            assert_eq!(rx.max_occupancy(), want, "depth {depth}");
+            assert_eq!(
+                rx.max_occupancy(),
+                want,
+                "depth {depth}, steps {push_step} {pop_step}"
+            );
             core.clear();
         }
     }
