@@ -30,6 +30,7 @@ use crate::raster;
 use crate::reference::metrics::Accuracy;
 use crate::reference::montage::{montage, Panel};
 use crate::reference::oracle::ReferenceImage;
+use crate::reference::PixelsPerDegree;
 use crate::report::{html, png_bytes, Report};
 use crate::scene::Scene;
 use crate::tolerance::PerspectiveTol;
@@ -76,6 +77,8 @@ pub struct CompareJob {
     pub viewport: Option<(u32, u32)>,
     /// Reference samples per pixel side for reference.png.
     pub supersample: u32,
+    /// The observer FLIP is computed for.
+    pub flip_ppd: PixelsPerDegree,
     /// Host threads of the timed runs (`--host-threads`).
     pub host_threads: u32,
 }
@@ -94,6 +97,7 @@ impl CompareJob {
             datapath: self.datapath,
             reference: true,
             supersample: self.supersample,
+            flip_ppd: self.flip_ppd,
             viewport: self.viewport,
             mode: Mode::Timed,
             arch: self.arch.clone(),
@@ -210,6 +214,8 @@ fn triangle_accuracy(
         reference,
         PrimitivePath::Triangle,
         t.triangles_per_lembo(),
+        // Only the silhouette is compared here.
+        PixelsPerDegree::default(),
     )
 }
 
@@ -399,8 +405,8 @@ fn images(
         triangle.framebuffer.to_image(),
     );
     let (lembo_error, triangle_error) = (
-        lembo.error_map.as_ref().expect("measured"),
-        triangle.error_map.as_ref().expect("measured"),
+        &lembo.error_maps.as_ref().expect("measured").colour,
+        &triangle.error_maps.as_ref().expect("measured").colour,
     );
     let cycles = |r: &Report| {
         r.cycles

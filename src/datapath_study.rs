@@ -34,6 +34,7 @@ use crate::datapath::Datapath;
 use crate::job::{measure_frame, render_reference, PrimitivePath};
 use crate::lembo::Lembo;
 use crate::raster::render_functional;
+use crate::reference::PixelsPerDegree;
 use crate::rop::FrameBuffer;
 use crate::scene::Scene;
 use glam::{DVec2, DVec3};
@@ -733,7 +734,15 @@ pub fn measure_case(case: &Case, ks: &[f64]) -> CaseResult {
                 }
             };
             let probe = frame.probe.unwrap_or_default();
-            let a = measure_frame(&scene, &view, &frame, &reference, PrimitivePath::Lembo, 1);
+            let a = measure_frame(
+                &scene,
+                &view,
+                &frame,
+                &reference,
+                PrimitivePath::Lembo,
+                1,
+                PixelsPerDegree::default(),
+            );
             let fb = &frame.framebuffer;
             let (winner_diff, shade_diff) = diff_vs_f64(fb, f64_image.as_ref());
             if datapath == Datapath::F64 {

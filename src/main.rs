@@ -5,6 +5,7 @@ use lembo_sim::compare::{run_compare, CompareJob, Tess};
 use lembo_sim::datapath::Datapath;
 use lembo_sim::discoid::blend::BlendMode;
 use lembo_sim::job::{self, run_render, Given, PrimitivePath, RenderJob};
+use lembo_sim::reference::PixelsPerDegree;
 use lembo_sim::sweep::{run_merge, run_sweep, MergeJob, Shard, SweepJob, SweepOutcome};
 use lembo_sim::tolerance::{PerspectiveTol, DEFAULT_K_PX};
 use std::io::Write as _;
@@ -175,6 +176,17 @@ struct RenderArgs {
     /// Reference samples per pixel side for reference.png (metrics use pixel centres).
     #[arg(long, value_name = "N", default_value_t = 1)]
     supersample: u32,
+    /// The observer FLIP (the perceptual error in report.json's accuracy.flip_mean and
+    /// flip.png) is computed for, in pixels per degree of visual angle; with --reference
+    /// [default: 67.02, the reference implementation's 0.7 m wide 3840-pixel monitor seen
+    /// from 0.7 m].
+    #[arg(
+        long,
+        value_name = "PPD",
+        value_parser = parse_flip_ppd,
+        allow_hyphen_values = true
+    )]
+    flip_ppd: Option<PixelsPerDegree>,
     /// Simulation mode.
     #[arg(long, value_enum, default_value = "timed")]
     mode: Mode,
@@ -273,6 +285,17 @@ struct CompareArgs {
     /// Reference samples per pixel side for reference.png (metrics use pixel centres).
     #[arg(long, value_name = "N", default_value_t = 1)]
     supersample: u32,
+    /// The observer FLIP (the perceptual error in report.json's accuracy.flip_mean and
+    /// flip.png) is computed for, in pixels per degree of visual angle; with --reference
+    /// [default: 67.02, the reference implementation's 0.7 m wide 3840-pixel monitor seen
+    /// from 0.7 m].
+    #[arg(
+        long,
+        value_name = "PPD",
+        value_parser = parse_flip_ppd,
+        allow_hyphen_values = true
+    )]
+    flip_ppd: Option<PixelsPerDegree>,
     /// Override the scene's viewport, e.g. 1024x1024.
     #[arg(long, value_name = "WxH", value_parser = parse_viewport)]
     viewport: Option<(u32, u32)>,
@@ -289,6 +312,14 @@ struct CompareArgs {
 
 fn parse_perspective_tol(s: &str) -> Result<PerspectiveTol, String> {
     PerspectiveTol::parse(s)
+}
+
+fn parse_flip_ppd(s: &str) -> Result<PixelsPerDegree, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|e| format!("`{s}` is not a number: {e}"))?;
+    PixelsPerDegree::new(v)
 }
 
 fn parse_tess(s: &str) -> Result<Tess, String> {
@@ -329,6 +360,7 @@ fn default_render() -> RenderArgs {
         datapath: DatapathArg::F32,
         reference: false,
         supersample: 1,
+        flip_ppd: None,
         mode: Mode::Timed,
         arch: None,
         trace_out: None,
@@ -506,6 +538,7 @@ fn compare(args: CompareArgs) -> ExitCode {
         no_memory_check: args.no_memory_check,
         viewport: args.viewport,
         supersample: args.supersample,
+        flip_ppd: args.flip_ppd.unwrap_or_default(),
         host_threads: args.host_threads,
     };
     match with_progress(|| run_compare(&job)) {
@@ -524,6 +557,7 @@ fn render(args: RenderArgs) -> ExitCode {
         perspective_tol: args.perspective_tol.is_some(),
         path: args.path.is_some(),
         blend: args.blend.is_some(),
+        flip_ppd: args.flip_ppd.is_some(),
     };
     let job = RenderJob {
         scene: args.scene,
@@ -533,6 +567,7 @@ fn render(args: RenderArgs) -> ExitCode {
         datapath: datapath(args.datapath),
         reference: args.reference,
         supersample: args.supersample,
+        flip_ppd: args.flip_ppd.unwrap_or_default(),
         viewport: args.viewport,
         mode: match args.mode {
             Mode::Timed => job::Mode::Timed,

@@ -4,7 +4,7 @@
 //! stand for.
 
 use super::reference::reference_scene;
-use super::reference::Measured;
+use super::reference::{ErrorMaps, Measured};
 use super::route::{sim_options, Model, PathRun};
 use super::sections::{host, scene_info, settings};
 use super::validate::RenderJob;
@@ -14,6 +14,7 @@ use crate::cost::{self, model::CostReport};
 use crate::discoid;
 use crate::error::{Error, Result};
 use crate::pipeline;
+use crate::reference::flip::flip_frame;
 use crate::reference::oracle::ReferenceImage;
 use crate::reference::{heatmap, metrics, oracle};
 use crate::report::{BlendSection, Memory, Primitives, Report, SCHEMA_VERSION};
@@ -157,7 +158,7 @@ pub(super) fn run_discoids(
     Ok(PathRun {
         report,
         framebuffer,
-        error_map: measured.map(|m| m.error_map),
+        error_maps: measured.map(|m| m.maps),
         trace: None,
     })
 }
@@ -231,11 +232,15 @@ fn measure_discoids(
     let surface = reference_scene(scene)?;
     let held: Vec<crate::lembo::Lembo> = surface.lembos().map(|(l, _)| l).collect();
     let tracer = oracle::Tracer::new(&held, view);
-    let accuracy = metrics::measure(&with_normals, reference, &tracer, 0, None, None);
+    let flip = flip_frame(&with_normals, reference, job.flip_ppd);
+    let accuracy = metrics::measure(&with_normals, reference, &tracer, 0, None, None, &flip);
     let metrics_wall = t1.elapsed().as_secs_f64();
     Ok(Measured {
         accuracy,
-        error_map: heatmap::error_heatmap(image, reference),
+        maps: ErrorMaps {
+            colour: heatmap::error_heatmap(image, reference),
+            flip: flip.to_image(),
+        },
         reference_wall: wall + metrics_wall,
         metrics_wall,
     })

@@ -24,7 +24,8 @@ pub use discoids::{CURVED_DISCOID_BYTES, PLANAR_DISCOID_BYTES};
 pub use memory::{check_available, check_memory, memory_estimate};
 pub use path::run_path;
 pub use reference::{
-    check_reference_scene, measure_frame, reference_scene, render_reference, see_through_px,
+    check_reference_scene, measure_frame, measure_frame_and_flip, reference_scene,
+    render_reference, see_through_px, ErrorMaps,
 };
 pub use render::{load_arch, load_scene, run_render, RenderOutput};
 pub use route::{check_triangle_budget, Model, PathRun, Route, LEMBO_BYTES, MAX_TRIANGLES};

@@ -121,7 +121,7 @@ pub fn run_path(
     Ok(PathRun {
         report,
         framebuffer,
-        error_map: measured.map(|m| m.error_map),
+        error_maps: measured.map(|m| m.maps),
         trace,
     })
 }

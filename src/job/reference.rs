@@ -7,6 +7,7 @@ use crate::discoid;
 use crate::error::{Error, Result, COMMAND_LINE};
 use crate::lembo::Lembo;
 use crate::raster;
+use crate::reference::flip::{flip_frame, FlipMap, PixelsPerDegree};
 use crate::reference::oracle::ReferenceImage;
 use crate::reference::{heatmap, metrics, oracle, see_through, Accuracy};
 use crate::rop::FrameBuffer;
@@ -60,10 +61,19 @@ pub fn render_reference(scene: &Scene, view: &View, supersample: u32) -> (Refere
     (reference, t.elapsed().as_secs_f64())
 }
 
-/// A measured run's accuracy, error map and the wall time the measuring took.
+/// What a run's image looks like against the reference, for a person to read.
+pub struct ErrorMaps {
+    /// The colour difference and the coverage disagreements (`error.png`,
+    /// [`heatmap::error_heatmap`]).
+    pub colour: image::RgbImage,
+    /// The FLIP map in the reference implementation's colours (`flip.png`).
+    pub flip: image::RgbImage,
+}
+
+/// A measured run's accuracy, error maps and the wall time the measuring took.
 pub(super) struct Measured {
     pub(super) accuracy: Accuracy,
-    pub(super) error_map: image::RgbImage,
+    pub(super) maps: ErrorMaps,
     /// The reference's wall time plus the metrics' \[seconds\].
     pub(super) reference_wall: f64,
     /// The metrics' wall time \[seconds\].
@@ -82,12 +92,22 @@ pub(super) fn measure(
 ) -> Measured {
     crate::progress::stage("accuracy metrics");
     let t1 = Instant::now();
-    let accuracy = measure_frame(scene, view, frame, reference, job.path, ids_per_lembo);
+    let (accuracy, flip) = measure_frame_and_flip(
+        scene,
+        view,
+        frame,
+        reference,
+        job.path,
+        ids_per_lembo,
+        job.flip_ppd,
+    );
     let metrics_wall = t1.elapsed().as_secs_f64();
-    let error_map = heatmap::error_heatmap(&frame.framebuffer, reference);
     Measured {
         accuracy,
-        error_map,
+        maps: ErrorMaps {
+            colour: heatmap::error_heatmap(&frame.framebuffer, reference),
+            flip: flip.to_image(),
+        },
         reference_wall: wall + t1.elapsed().as_secs_f64(),
         metrics_wall,
     }
@@ -96,7 +116,8 @@ pub(super) fn measure(
 /// The accuracy of `frame` (rendered with `analyse`) of `scene` against its `reference`:
 /// the metrics, with the reference traced anew where the sub-pixel silhouette asks, the
 /// fragment probe's counts and the see-through count. `ids_per_lembo` maps the frame's
-/// winner ids to lembo ids: 1 on the lembo path, n² on the triangle path at level n.
+/// winner ids to lembo ids: 1 on the lembo path, n² on the triangle path at level n; FLIP
+/// is computed for the observer `ppd`.
 pub fn measure_frame(
     scene: &Scene,
     view: &View,
@@ -104,11 +125,26 @@ pub fn measure_frame(
     reference: &ReferenceImage,
     path: PrimitivePath,
     ids_per_lembo: u64,
+    ppd: PixelsPerDegree,
 ) -> Accuracy {
+    measure_frame_and_flip(scene, view, frame, reference, path, ids_per_lembo, ppd).0
+}
+
+/// [`measure_frame`], with the FLIP map its `flip_mean` is the mean of.
+pub fn measure_frame_and_flip(
+    scene: &Scene,
+    view: &View,
+    frame: &raster::Frame,
+    reference: &ReferenceImage,
+    path: PrimitivePath,
+    ids_per_lembo: u64,
+    ppd: PixelsPerDegree,
+) -> (Accuracy, FlipMap) {
     let probe = frame.probe.unwrap_or_default();
     let held: Vec<Lembo> = scene.lembos().map(|(l, _)| l).collect();
     let tracer = oracle::Tracer::new(&held, view);
-    metrics::measure(
+    let flip = flip_frame(&frame.framebuffer, reference, ppd);
+    let accuracy = metrics::measure(
         &frame.framebuffer,
         reference,
         &tracer,
@@ -118,7 +154,9 @@ pub fn measure_frame(
             PrimitivePath::Triangle => None,
         },
         see_through_px(scene, view, &frame.framebuffer, ids_per_lembo),
-    )
+        &flip,
+    );
+    (accuracy, flip)
 }
 
 /// The see-through pixels of a render of `scene` (`reference::see_through`): the lembos

@@ -65,6 +65,7 @@ fn render_page(
                 "reference.png" => {
                     "exact reference: each sample's ray against the true lembos, in f64".to_string()
                 }
+                "flip.png" => html::flip_map_caption(report),
                 _ => html::ERROR_MAP_CAPTION.to_string(),
             };
             (*name, caption)
@@ -102,12 +103,13 @@ pub fn run_render(job: &RenderJob) -> Result<RenderOutput> {
 
     let mut files: Vec<(&str, Vec<u8>)> =
         vec![("image.png", png_bytes(&run.framebuffer.to_image()))];
-    if let (Some((reference, _)), Some(error_map)) = (&reference, &run.error_map) {
+    if let (Some((reference, _)), Some(maps)) = (&reference, &run.error_maps) {
         let shown = reference
             .to_image_supersampled()
             .unwrap_or_else(|| reference.to_image());
         files.push(("reference.png", png_bytes(&shown)));
-        files.push(("error.png", png_bytes(error_map)));
+        files.push(("error.png", png_bytes(&maps.colour)));
+        files.push(("flip.png", png_bytes(&maps.flip)));
     }
     let mut report = run.report;
     // The images are encoded: what remains to allocate is the report and the writes.

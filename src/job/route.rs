@@ -176,8 +176,8 @@ pub struct PathRun {
     pub report: Report,
     /// The image (the timed pipeline's, or the functional model's).
     pub framebuffer: FrameBuffer,
-    /// The error heat map against the reference, when one was given.
-    pub error_map: Option<image::RgbImage>,
+    /// The error maps against the reference, when one was given.
+    pub error_maps: Option<super::reference::ErrorMaps>,
     /// Chrome trace-event JSON, when requested.
     pub trace: Option<String>,
 }

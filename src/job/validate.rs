@@ -8,6 +8,7 @@ use crate::datapath::Datapath;
 use crate::discoid::blend::BlendMode;
 use crate::error::{Error, Result, COMMAND_LINE};
 use crate::output::{check_out_dir, check_out_file};
+use crate::reference::PixelsPerDegree;
 use crate::tolerance::{check_k, PerspectiveTol, Tolerance};
 use std::path::PathBuf;
 
@@ -84,6 +85,8 @@ pub struct RenderJob {
     pub reference: bool,
     /// Reference samples per pixel side.
     pub supersample: u32,
+    /// The observer FLIP is computed for (`--flip-ppd`).
+    pub flip_ppd: PixelsPerDegree,
     /// Viewport override (width, height) \[pixels\].
     pub viewport: Option<(u32, u32)>,
     /// Timed pipeline or functional model alone (`--mode`).
@@ -131,6 +134,8 @@ pub struct Given {
     pub path: bool,
     /// `--blend`.
     pub blend: bool,
+    /// `--flip-ppd`.
+    pub flip_ppd: bool,
 }
 
 /// Most host threads a timed run may use (`--host-threads`).
@@ -215,6 +220,14 @@ impl RenderJob {
                     "must name a file",
                 ));
             }
+        }
+        if self.given.flip_ppd && !self.reference {
+            return Err(Error::invalid(
+                COMMAND_LINE,
+                "--flip-ppd",
+                self.flip_ppd.get(),
+                "only meaningful with --reference (FLIP compares the render with it)",
+            ));
         }
         if let Some(t) = self.threshold {
             check_threshold(t)
@@ -301,6 +314,7 @@ mod tests {
             datapath: Datapath::F32,
             reference: false,
             supersample: 1,
+            flip_ppd: PixelsPerDegree::default(),
             viewport: None,
             mode: Mode::Timed,
             arch: None,
@@ -344,6 +358,23 @@ mod tests {
         .unwrap_err();
         let why = check_threshold(-0.5).unwrap_err().to_string();
         assert_eq!(refused(e), ("--threshold".into(), "-0.5".into(), why));
+    }
+
+    #[test]
+    fn flip_ppd_is_refused_without_a_reference() {
+        let with = |reference| RenderJob {
+            reference,
+            flip_ppd: PixelsPerDegree::new(30.0).unwrap(),
+            given: Given {
+                flip_ppd: true,
+                ..Given::default()
+            },
+            ..job()
+        };
+        assert!(with(true).validate().is_ok());
+        let (flag, value, why) = refused(with(false).validate().unwrap_err());
+        assert_eq!((flag.as_str(), value.as_str()), ("--flip-ppd", "30"));
+        assert!(why.contains("--reference"), "{why}");
     }
 
     #[test]

@@ -22,6 +22,24 @@ pub(super) enum Against {
     Energy,
 }
 
+/// What an error plot puts on its y axis.
+#[derive(Clone, Copy)]
+pub(super) enum ErrorAxis {
+    /// RMS colour error from PSNR.
+    Rms,
+    /// Mean FLIP (Andersson et al. 2020).
+    Flip,
+}
+
+impl ErrorAxis {
+    fn y(self, p: &Point) -> Option<f64> {
+        match self {
+            ErrorAxis::Rms => p.rms_error,
+            ErrorAxis::Flip => p.flip_mean,
+        }
+    }
+}
+
 impl Against {
     fn x(self, p: &Point) -> Option<f64> {
         match self {
@@ -31,19 +49,21 @@ impl Against {
     }
 }
 
-/// Plot 1: image error against cycles (`Against::Cycles`, `tradeoff_*`) or energy
-/// (`error_vs_energy_*`), one series per path. Without an area budget, the Pareto front over
+/// Plot 1: image error (RMS colour error, or mean FLIP: `axis`) against cycles
+/// (`Against::Cycles`, `tradeoff_*`, `flip_tradeoff_*`) or energy (`error_vs_energy_*`,
+/// `flip_vs_energy_*`), one series per path. Without an area budget, the Pareto front over
 /// both paths is circled; with one, points whose unit is larger are drawn grey and left
 /// out, and each path gets its own front among the configurations within the budget.
 pub(super) fn error_against(
     scene: &str,
     points: &[Point],
     against: Against,
+    axis: ErrorAxis,
     budget: Option<f64>,
 ) -> Plot {
     let pts: Vec<(&Point, (f64, f64))> = points
         .iter()
-        .filter_map(|p| Some((p, (against.x(p)?, p.rms_error?))))
+        .filter_map(|p| Some((p, (against.x(p)?, axis.y(p)?))))
         .collect();
     if pts.is_empty() {
         return None;
@@ -61,10 +81,14 @@ pub(super) fn error_against(
         Against::Energy => "energy",
     };
     entries.extend(front_entries(budget, measure));
+    let error = match axis {
+        ErrorAxis::Rms => "image error",
+        ErrorAxis::Flip => "FLIP",
+    };
     let title = match budget {
-        None => format!("{scene}: image error against {measure}"),
+        None => format!("{scene}: {error} against {measure}"),
         Some(b) => format!(
-            "{scene}: image error against {measure}, units within {} mm²",
+            "{scene}: {error} against {measure}, units within {} mm²",
             fmt_num(b)
         ),
     };
@@ -86,7 +110,10 @@ pub(super) fn error_against(
         mesh(
             &mut chart,
             x_desc,
-            "RMS colour error 255*10^(-PSNR/20) [0-255], log scale",
+            match axis {
+                ErrorAxis::Rms => "RMS colour error 255*10^(-PSNR/20) [0-255], log scale",
+                ErrorAxis::Flip => "mean FLIP [0-1] (report.json accuracy.flip_mean), log scale",
+            },
         )?;
 
         // The fronts first, so the series' points are drawn over them.

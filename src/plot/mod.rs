@@ -9,6 +9,7 @@
 //! |---|---|---|---|
 //! | `tradeoff_<scene>.svg` | frame time \[cycles\], log | RMS colour error [0-255], log | one per path, and the Pareto front (with an area budget: each path's front within it, larger units grey) |
 //! | `error_vs_energy_<scene>.svg` | energy of the frame \[pJ\], log | RMS colour error [0-255], log | as `tradeoff` |
+//! | `flip_tradeoff_<scene>.svg`, `flip_vs_energy_<scene>.svg` | as `tradeoff`, `error_vs_energy` | mean FLIP [0-1], log | as `tradeoff` (records that carry `accuracy.flip_mean`) |
 //! | `cycles_vs_k_<scene>.svg` | k \[px\], log | frame time \[cycles\] | one per combination of the other varying parameters run at two k or more (lembo path) |
 //! | `cycles_vs_units_<scene>.svg` | unit instances | frame time \[cycles\] | one per varying `arch.*.count`, the other parameters at their most common value (a parameter a point leaves at its default counts as the value its run used) |
 //! | `cycles_vs_fifo_depth_<scene>.svg` | FIFO depth \[entries\], log | frame time \[cycles\] | one per varying `arch.links.*.fifo_depth`, as above |
@@ -38,7 +39,7 @@ use chart::{
     draw_legend, draw_lines, draw_mark, fmt_int, fmt_num, fmt_value, log_axis, log_range, mesh,
     plot_size, svg, Entry, Plot, CHART_HEIGHT, FONT, LEMBO, MARKS, PALETTE, WIDTH,
 };
-use error::{error_against, Against};
+use error::{error_against, Against, ErrorAxis};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 pub use point::pareto_front;
@@ -78,11 +79,19 @@ pub fn plot_files(records: &[Value], budget: Option<f64>) -> Result<Vec<(String,
         let plots = [
             (
                 "tradeoff",
-                error_against(scene, points, Against::Cycles, budget),
+                error_against(scene, points, Against::Cycles, ErrorAxis::Rms, budget),
             ),
             (
                 "error_vs_energy",
-                error_against(scene, points, Against::Energy, budget),
+                error_against(scene, points, Against::Energy, ErrorAxis::Rms, budget),
+            ),
+            (
+                "flip_tradeoff",
+                error_against(scene, points, Against::Cycles, ErrorAxis::Flip, budget),
+            ),
+            (
+                "flip_vs_energy",
+                error_against(scene, points, Against::Energy, ErrorAxis::Flip, budget),
             ),
             ("cycles_vs_k", cycles_vs_k(scene, points)),
             (

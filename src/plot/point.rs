@@ -54,6 +54,9 @@ pub(super) struct Point {
     pub(super) units: Vec<UnitTime>,
     /// RMS colour error 255·10^(−PSNR/20) [0-255]; `None` without a reference.
     pub(super) rms_error: Option<f64>,
+    /// Mean FLIP [0, 1] (report.json `accuracy.flip_mean`); `None` without a reference, or
+    /// for a report from before FLIP was measured.
+    pub(super) flip_mean: Option<f64>,
     /// The run's report, for the value of a parameter its point left at the default.
     pub(super) report: Value,
     /// The frame's energy \[pJ\]; `None` without a cost section.
@@ -118,6 +121,10 @@ impl Point {
             cycles: cycles.filter(|&c| c > 0),
             units,
             rms_error,
+            flip_mean: report
+                .pointer("/accuracy/flip_mean")
+                .and_then(Value::as_f64)
+                .filter(|e| e.is_finite() && *e > 0.0),
             report: report.clone(),
             energy_pj: report.pointer("/cost/energy_pj").and_then(Value::as_f64),
             area_mm2: report.pointer("/cost/area_mm2").and_then(Value::as_f64),

@@ -374,6 +374,40 @@ fn an_area_budget_greys_larger_units_and_draws_a_front_per_path() {
     assert!(!svg.contains("#BEBEBE"));
 }
 
+/// Records that carry FLIP get the error plots again with FLIP on the y axis (a record
+/// without it, the first here, is left out of those only).
+#[test]
+fn flip_gets_its_own_error_plots() {
+    let mut records = sweep();
+    for (i, r) in records.iter_mut().enumerate().skip(1) {
+        let psnr = r["report"]["accuracy"]["psnr_db"].as_f64().unwrap();
+        r["report"]["accuracy"]["flip_mean"] =
+            json!(10f64.powf(-psnr / 20.0) * (1.0 + i as f64 / 100.0));
+    }
+    let files = plot_files(&records, None).unwrap();
+    let names: Vec<&str> = files.iter().map(|(n, _)| n.as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "tradeoff_sphere24.svg",
+            "flip_tradeoff_sphere24.svg",
+            "cycles_vs_k_sphere24.svg",
+            "cycles_vs_units_sphere24.svg",
+            "utilisation_sphere24.svg"
+        ]
+    );
+    let flip = String::from_utf8(files[1].1.clone()).unwrap();
+    for text in [
+        "sphere24: FLIP against cycles",
+        "mean FLIP [0-1] (report.json accuracy.flip_mean), log scale",
+        "lembo path",
+        "triangle path",
+    ] {
+        assert!(has(&flip, text), "flip_tradeoff lacks {text:?}");
+    }
+    // (Records without FLIP at all give no FLIP plot: the next test.)
+}
+
 #[test]
 fn write_plots_draws_every_plot_a_timed_sweep_with_reference_supports() {
     let dir = tempfile::tempdir().unwrap();

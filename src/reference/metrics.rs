@@ -10,6 +10,7 @@
 //! reference is asked about the points in between. Crack pixels (holes inside the
 //! reference coverage) are counted apart and left out of the silhouette error.
 
+use super::flip::FlipMap;
 use super::oracle::ReferenceImage;
 use super::outline::{outline_distances, Misplaced, ReferenceCoverage, SILHOUETTE_RESOLUTION_PX};
 use crate::rop::framebuffer::{FrameBuffer, NO_PRIMITIVE};
@@ -51,6 +52,11 @@ pub struct Accuracy {
     pub psnr_db: f64,
     /// Largest channel difference [0-255].
     pub max_abs_error: u64,
+    /// Mean FLIP of the RGB8 image against the same colours (Andersson et al. 2020, by
+    /// its reference implementation, [`super::flip`]): 0 for identical images, at most 1.
+    pub flip_mean: f64,
+    /// The observer FLIP was computed for \[pixels per degree\].
+    pub flip_pixels_per_degree: f64,
     /// Holes in the render's surface \[pixels\]: pixels the reference covers together with
     /// their 4 neighbours, that the render misses while covering both neighbours of an
     /// opposite pair (left and right, or above and below). A band of misses along the
@@ -107,6 +113,11 @@ impl Accuracy {
                 },
             ),
             ("max_abs_error", format!("{} / 255", self.max_abs_error)),
+            ("flip_mean", format!("{:.4} (0 to 1)", self.flip_mean)),
+            (
+                "flip_pixels_per_degree",
+                format!("{:.2} px/deg", self.flip_pixels_per_degree),
+            ),
             ("crack_pixels", px(self.crack_pixels)),
             ("double_hit_pixels", px(self.double_hit_pixels)),
             (
@@ -131,8 +142,9 @@ impl Accuracy {
 }
 
 /// Measures `render` against `reference`, whose coverage at any screen position `outline`
-/// gives (the reference's [`super::oracle::Tracer`]); the renderer-side counts and the
-/// see-through count are passed through.
+/// gives (the reference's [`super::oracle::Tracer`]); the renderer-side counts, the
+/// see-through count and the FLIP map of the two ([`super::flip::flip_frame`]) are passed
+/// through.
 ///
 /// # Panics
 /// If the two images differ in size, or the render kept no normal buffer
@@ -144,6 +156,7 @@ pub fn measure(
     double_hit_pixels: u64,
     max_scanline_deviation_px: Option<f64>,
     see_through_px: Option<u64>,
+    flip: &FlipMap,
 ) -> Accuracy {
     assert_eq!(
         (render.width, render.height),
@@ -238,6 +251,8 @@ pub fn measure(
         },
         psnr_db,
         max_abs_error: max_abs,
+        flip_mean: flip.mean,
+        flip_pixels_per_degree: flip.ppd.get(),
         crack_pixels: n_crack,
         double_hit_pixels,
         see_through_px,
@@ -419,6 +434,7 @@ impl Transform1d {
 
 #[cfg(test)]
 mod tests {
+    use super::super::flip::{flip_frame, PixelsPerDegree};
     use super::*;
     use crate::reference::oracle::ReferenceHit;
     use glam::DVec3;
@@ -487,13 +503,16 @@ mod tests {
     }
 
     fn measure_disc(render: &FrameBuffer, double_hits: u64, deviation: Option<f64>) -> Accuracy {
+        let reference = reference_disc();
+        let flip = flip_frame(render, &reference, PixelsPerDegree::default());
         measure(
             render,
-            &reference_disc(),
+            &reference,
             &Disc,
             double_hits,
             deviation,
             None,
+            &flip,
         )
     }
 
@@ -642,7 +661,8 @@ mod tests {
             }
         }
         let tracer = Tracer::new(lembos.iter(), &view);
-        let a = measure(&fb, &reference, &tracer, 0, None, None);
+        let flip = flip_frame(&fb, &reference, PixelsPerDegree::default());
+        let a = measure(&fb, &reference, &tracer, 0, None, None, &flip);
         // Column x = 10.5 is the reference's and not the render's, x = 50.5 the reverse:
         // each centre 0.3 px from the reference's outline.
         assert_eq!(
@@ -828,7 +848,8 @@ mod tests {
                 }
             }
             let reference = uniform_reference(w, h, covered);
-            let a = measure(&fb, &reference, &Uniform(covered), 0, None, None);
+            let flip = flip_frame(&fb, &reference, PixelsPerDegree::default());
+            let a = measure(&fb, &reference, &Uniform(covered), 0, None, None, &flip);
             let misplaced = if covered {
                 (a.coverage_false_negative, a.coverage_false_positive)
             } else {
@@ -912,8 +933,8 @@ mod tests {
     fn lines_name_every_field_with_its_unit() {
         let a = measure_disc(&render_disc(16.0), 0, Some(0.0));
         let lines = a.lines();
-        assert_eq!(lines.len(), 16);
         let json = serde_json::to_value(&a).unwrap();
+        assert_eq!(lines.len(), json.as_object().unwrap().len());
         for (name, _) in &lines {
             assert!(json.get(name).is_some(), "{name}");
         }

@@ -6,13 +6,15 @@
 //! hit with the exact normal function; [`metrics`] compares a frame buffer with that image
 //! under the names the report carries, with [`outline`] locating the reference's outline
 //! between pixel centres and [`see_through`] holding the render against the input mesh's
-//! own triangles; [`heatmap`] draws the difference for a person to read;
+//! own triangles; [`flip`] is the perceptual difference (FLIP, by its reference
+//! implementation); [`heatmap`] draws the difference for a person to read;
 //! [`montage`] puts images side by side under their labels.
 //!
 //! Architecture Invariant: this module knows nothing of cycles, units, the extreme method
 //! or the datapath precision. It depends only on the lembo model, the camera, the shading
 //! equation and the frame buffer's layout, so it can judge any renderer.
 
+pub mod flip;
 pub mod heatmap;
 pub mod metrics;
 pub mod montage;
@@ -20,6 +22,7 @@ pub mod oracle;
 pub mod outline;
 pub mod see_through;
 
+pub use flip::{FlipMap, PixelsPerDegree};
 pub use heatmap::{error_heatmap, legend_height};
 pub use metrics::{measure, Accuracy};
 pub use oracle::{

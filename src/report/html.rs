@@ -415,6 +415,25 @@ pub const ERROR_MAP_CAPTION: &str = "error map: black where the render equals th
      channel difference; cyan for pixels only the render covers, green for pixels only the \
      reference covers. The scale is under the image.";
 
+/// The caption of a FLIP map (`flip.png`): what its colours mean, its mean and the observer.
+pub fn flip_map_caption(r: &Report) -> String {
+    let of = r
+        .accuracy
+        .as_ref()
+        .map(|a| {
+            format!(
+                ": mean {:.4}, for an observer at {:.2} pixels per degree",
+                a.flip_mean, a.flip_pixels_per_degree
+            )
+        })
+        .unwrap_or_default();
+    format!(
+        "FLIP map (Andersson et al. 2020, the reference implementation), the perceived \
+         difference from the reference per pixel in the reference's magma ramp: black for \
+         none, through purple and orange to pale yellow for 1{of}."
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

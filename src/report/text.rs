@@ -400,8 +400,9 @@ impl Report {
         let Some(a) = &self.accuracy else { return };
         let _ = writeln!(
             t,
-            "accuracy: PSNR {:.2} dB, coverage +{} / -{} px, silhouette max {:.3} px, cracks {}, double hits {}{}{}",
+            "accuracy: PSNR {:.2} dB, FLIP {:.4}, coverage +{} / -{} px, silhouette max {:.3} px, cracks {}, double hits {}{}{}",
             a.psnr_db,
+            a.flip_mean,
             a.coverage_false_positive,
             a.coverage_false_negative,
             a.silhouette_max_px,

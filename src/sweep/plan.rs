@@ -16,6 +16,7 @@ use crate::job::{
     RenderJob,
 };
 use crate::reference::oracle::ReferenceImage;
+use crate::reference::PixelsPerDegree;
 use crate::report::Report;
 use crate::scene::Scene;
 use crate::tolerance::{PerspectiveTol, DEFAULT_K_PX};
@@ -309,6 +310,7 @@ pub(super) fn render_job(
         // A discoid scene is measured against the surface it stands for, where it says.
         reference: spec.reference && crate::job::check_reference_scene(scene).is_ok(),
         supersample: 1,
+        flip_ppd: PixelsPerDegree::default(),
         viewport: spec.viewport,
         mode: spec.mode,
         // Shown in the report's settings only: the architecture itself is the point's.

@@ -140,6 +140,7 @@ fn reference_run_writes_the_accuracy_names_and_images() {
         files_in(&dir.path().join("o")),
         [
             "error.png",
+            "flip.png",
             "image.png",
             "manifest.json",
             "reference.png",
@@ -502,6 +503,54 @@ fn k_out_of_range_is_refused() {
     }
 }
 
+/// FLIP's observer: a positive finite number of pixels per degree, up to the bound, and
+/// only with a reference to compare with.
+#[test]
+fn bad_flip_pixels_per_degree_is_refused() {
+    for ppd in ["0", "-1", "NaN", "inf", "1e9", "far"] {
+        assert_refused(&["render", "--reference", "--flip-ppd", ppd], "--flip-ppd");
+        assert_refused(&["compare", "--flip-ppd", ppd], "--flip-ppd");
+    }
+    assert_refused(&["render", "--flip-ppd", "30"], "--flip-ppd");
+}
+
+/// The observer given is the one FLIP is computed for: echoed, and changing the figure.
+#[test]
+fn flip_pixels_per_degree_is_used_and_echoed() {
+    let dir = tempfile::tempdir().unwrap();
+    let flip = |ppd: &str| {
+        let out = run(
+            &[
+                "render",
+                "--mode",
+                "functional",
+                "--reference",
+                "--flip-ppd",
+                ppd,
+                "--out",
+                "o",
+            ],
+            dir.path(),
+        );
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let report: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.path().join("o/report.json")).unwrap())
+                .unwrap();
+        let a = &report["accuracy"];
+        assert_eq!(
+            a["flip_pixels_per_degree"].as_f64(),
+            Some(ppd.parse().unwrap())
+        );
+        a["flip_mean"].as_f64().unwrap()
+    };
+    let (near, far) = (flip("10"), flip("200"));
+    assert!(near > 0.0 && far > 0.0 && near != far, "{near} {far}");
+}
+
 #[test]
 fn bad_perspective_tolerance_is_refused() {
     for tol in ["0", "-0.1", "NaN", "inf", "-inf", "fine"] {
@@ -611,7 +660,7 @@ fn help_explains_the_render_flags() {
 }
 
 /// The accuracy names of `render --reference` (DESIGN.md §6).
-const ACCURACY_NAMES: [&str; 14] = [
+const ACCURACY_NAMES: [&str; 16] = [
     "coverage_false_positive",
     "coverage_false_negative",
     "silhouette_max_px",
@@ -622,6 +671,8 @@ const ACCURACY_NAMES: [&str; 14] = [
     "normal_mean_deg",
     "psnr_db",
     "max_abs_error",
+    "flip_mean",
+    "flip_pixels_per_degree",
     "crack_pixels",
     "double_hit_pixels",
     "see_through_px",
@@ -1091,6 +1142,7 @@ fn an_output_folder_holds_one_runs_files() {
     std::fs::write(o.join("notes.txt"), "mine").unwrap();
     let with_reference = [
         "error.png",
+        "flip.png",
         "image.png",
         "manifest.json",
         "notes.txt",
@@ -1133,7 +1185,7 @@ fn an_output_folder_holds_one_runs_files() {
         trace.contains("traceEvents"),
         "the trace, not the old image"
     );
-    assert!(!o.join("error.png").exists());
+    assert!(!o.join("error.png").exists() && !o.join("flip.png").exists());
 }
 
 /// Output paths that cannot be written are usage errors, refused before any work (exit

@@ -91,6 +91,7 @@ fn accuracy(scene: &Scene, frame: &Frame, reference: &ReferenceImage) -> Accurac
         reference,
         PrimitivePath::Lembo,
         1,
+        Default::default(),
     )
 }
 

@@ -219,6 +219,7 @@ fn render_compare_and_sweep_pages_load_whole_in_a_browser() {
             "image.png",
             "reference.png",
             "error.png",
+            "flip.png",
             "../traces out/bunny trace.json",
         ],
     );

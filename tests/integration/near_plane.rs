@@ -19,6 +19,7 @@ use lembo_sim::raster::triangle::{
     render_triangles, ScreenTriangle, TriangleFragment, TriangleSink, TriangleSource,
 };
 use lembo_sim::raster::{render_functional_triangles, Counts, Frame};
+use lembo_sim::reference::flip::flip_frame;
 use lembo_sim::reference::metrics::{measure, Accuracy};
 use lembo_sim::reference::oracle::{self, ReferenceInput};
 use lembo_sim::scene::Scene;
@@ -43,6 +44,7 @@ fn against_reference(s: &Scene, n: u32, datapath: Datapath) -> (Accuracy, Counts
         &reference,
         PrimitivePath::Triangle,
         u64::from(n * n),
+        Default::default(),
     );
     let c = &f.counts;
     eprintln!(
@@ -114,6 +116,7 @@ fn against_facets(s: &Scene, n: u32, datapath: Datapath) -> Accuracy {
         f.probe.unwrap().double_hit_pixels,
         None,
         None,
+        &flip_frame(&f.framebuffer, &reference, Default::default()),
     );
     eprintln!(
         "{} n={n} {datapath:?} against its facets: PSNR {:.2} dB, coverage +{} / -{}, depth {:.2e}",

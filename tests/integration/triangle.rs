@@ -186,6 +186,7 @@ fn silhouette_error_falls_roughly_as_one_over_n_squared() {
                 &reference,
                 PrimitivePath::Triangle,
                 n as u64 * n as u64,
+                Default::default(),
             );
             assert_eq!(a.crack_pixels, 0, "n={n}: a watertight tessellation");
             a.silhouette_max_px
