@@ -9,12 +9,14 @@ use crate::scene::Scene;
 /// at 2048x2048 and 4096x4096 (2026-11-25), rounded up: the functional model's frame buffer
 /// and image; the timed pipeline's shared frame buffer and FIFOs besides; the exact
 /// reference's image, supersampled colours and metrics; a discoid scene's accumulation
-/// target and kept fragments (measured on bunny_discoids at 512x512).
+/// target and kept fragments (measured on bunny_discoids at 512x512). FLIP's working
+/// images add 52 bytes a pixel to the reference's (sphere24 at 2048x2048, functional with
+/// `--reference`, 2026-11-27: 466 MB peak before FLIP, 676 MB with it).
 const BYTES_PER_PIXEL_FUNCTIONAL: f64 = 17.0;
 
 const BYTES_PER_PIXEL_TIMED: f64 = 25.0;
 
-const BYTES_PER_PIXEL_REFERENCE: f64 = 175.0;
+const BYTES_PER_PIXEL_REFERENCE: f64 = 175.0 + 55.0;
 
 const BYTES_PER_PIXEL_DISCOIDS: f64 = 160.0;
 

@@ -639,7 +639,7 @@ fn runs_at_once_larger_than_memory_are_refused_before_any_run() {
     let small_machine = ("LEMBO_MEMORY_AVAILABLE", "1342177280");
     for needle in [
         "field `--jobs` = 2",
-        "1.8 GiB (estimate)",
+        "2.2 GiB (estimate)",
         "--no-memory-check",
     ] {
         assert_refused_with(&spec_at(2048), &["--jobs", "2"], &[small_machine], needle);
