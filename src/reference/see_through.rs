@@ -9,8 +9,13 @@
 //! *see-through* when the render shows there:
 //! - **the background**: no primitive won it;
 //! - **a back face**: the winning fragment's normal faces away from the eye (the render's
-//!   normal buffer, against the pixel centre's ray), i.e. one looks at the inside of the
-//!   surface;
+//!   normal buffer, against the pixel centre's ray) and so does the winning lembo's own
+//!   surface there (its geometric normal, turned to the side of its normal function, where
+//!   the ray meets it first), i.e. one looks at the inside of the surface. The shading
+//!   normal alone does not say so: across a crease a lembo's normal function leans up to
+//!   half the crease angle away from its surface, so a face seen at a grazing angle can
+//!   have its front to the eye and its shading normal turned away (a rock auto-smoothed at
+//!   40 degrees counted up to 313 such pixels at 512x512, `rock_creased` 97);
 //! - **a foreign surface behind T**: the winner shares no corner position with T (a corner
 //!   of the winning lembo equal, bit for bit, to a corner of T; T's own lembo shares all
 //!   three) and its depth is greater than T's at the pixel, i.e. one looks past T at some
@@ -37,6 +42,7 @@
 //! and `lembo * n² + k` on the triangle path at tessellation level n: `ids_per_lembo`
 //! maps it back.
 
+use super::oracle::intersect_ray;
 use crate::camera::View;
 use crate::lembo::Lembo;
 use crate::rop::framebuffer::{FrameBuffer, NO_PRIMITIVE};
@@ -250,6 +256,49 @@ fn share_a_corner(a: &Lembo, b: &Lembo) -> bool {
         .any(|p| b.points[..3].iter().any(|q| bits(*p) == bits(*q)))
 }
 
+/// Whether the surface of `lembo` nearest along the ray `origin + t dir` (t > 0) faces
+/// the ray's origin: its geometric normal (the position's partial derivatives crossed),
+/// turned to the side of the lembo's normal function there, against the ray. Where the
+/// exact solve misses the lembo (a pixel the render covers along the lembo's border, the
+/// f64 ray just outside its domain), the border point nearest the ray stands for it. False
+/// where the normal is degenerate.
+fn surface_faces(lembo: &Lembo, origin: DVec3, dir: DVec3) -> bool {
+    let (u, v) = match intersect_ray(lembo, origin, dir)
+        .iter()
+        .find(|&&(t, _, _)| t > 0.0)
+    {
+        Some(&(_, u, v)) => (u, v),
+        None => border_point_nearest(lembo, origin, dir),
+    };
+    let (pu, pv) = lembo.position_derivatives(u, v);
+    let geometric = pu.cross(pv);
+    let side = lembo.normal_at(u, v);
+    let outward = if geometric.dot(side) < 0.0 {
+        -geometric
+    } else {
+        geometric
+    };
+    outward.dot(-dir) > 0.0
+}
+
+/// The domain point on the border of `lembo` (its three edges, each at 65 points) whose
+/// surface point is nearest the line `origin + t dir`.
+fn border_point_nearest(lembo: &Lembo, origin: DVec3, dir: DVec3) -> (f64, f64) {
+    const STEPS: u32 = 64;
+    let d = dir.normalize_or_zero();
+    let distance = |(u, v): (f64, f64)| {
+        let p = lembo.position_at(u, v) - origin;
+        (p - d * p.dot(d)).length_squared()
+    };
+    (0..=STEPS)
+        .flat_map(|i| {
+            let s = i as f64 / STEPS as f64;
+            [(s, 0.0), (0.0, s), (s, 1.0 - s)]
+        })
+        .min_by(|&a, &b| distance(a).total_cmp(&distance(b)))
+        .expect("the border has points")
+}
+
 /// The see-through pixels of `render` (see the module documentation). `lembos` are the
 /// scene's lembos in id order, marked `true` where built from a mesh triangle; the render's
 /// winner id divided by `ids_per_lembo` is a lembo id.
@@ -291,13 +340,16 @@ pub fn see_through(
             continue;
         }
         let (x, y) = ((k % w) as f64 + 0.5, (k / w) as f64 + 0.5);
-        let to_eye = -view.ray(x, y).1;
+        let (origin, dir) = view.ray(x, y);
         let n = DVec3::from_array(normals[k].map(f64::from));
-        if n.dot(to_eye) < 0.0 {
+        let shown = lembos
+            .get((winner as u64 / ids_per_lembo.max(1)) as usize)
+            .map(|&(l, _)| l);
+        if n.dot(-dir) < 0.0 && !shown.is_some_and(|l| surface_faces(l, origin, dir)) {
             out.back_face += 1;
             continue;
         }
-        let Some((shown, _)) = lembos.get((winner as u64 / ids_per_lembo.max(1)) as usize) else {
+        let Some(shown) = shown else {
             continue;
         };
         let triangle = lembos[t as usize].0;
@@ -350,8 +402,14 @@ mod tests {
             flat([[-40.0, -40.0], [-40.0, 40.0], [40.0, 40.0]], 0.0),
             flat([[-60.0, -60.0], [-55.0, -60.0], [-60.0, -55.0]], -5.0),
             flat([[60.0, 60.0], [55.0, 60.0], [60.0, 55.0]], 1.0),
+            // A surface whose front is turned away from the eye (not from the mesh).
+            lembo_from_triangle(
+                [[-25.0, -35.0], [0.0, -35.0], [-25.0, -10.0]].map(|[x, y]| DVec3::new(x, y, 0.0)),
+                [-DVec3::Z; 3],
+            ),
         ];
-        let marked: Vec<(&Lembo, bool)> = lembos.iter().map(|l| (l, true)).collect();
+        let marked: Vec<(&Lembo, bool)> =
+            lembos.iter().enumerate().map(|(i, l)| (l, i < 4)).collect();
         let depth = view.depth_of(DVec3::ZERO) as f32;
         // The render: the flat square itself, then one pixel of each kind.
         let mut fb = FrameBuffer::new(128, 128, [0; 3], true);
@@ -372,7 +430,8 @@ mod tests {
         };
         let up = [0.0, 0.0, 1.0];
         set(40, 90, NO_PRIMITIVE, 1.0, up); // background
-        set(50, 90, 0, depth, [0.0, 0.0, -1.0]); // back face
+        set(50, 90, 4, depth, [0.0, 0.0, -1.0]); // back face
+        set(45, 90, 0, depth, [0.0, 0.0, -1.0]); // a shading normal turned away: not one
         set(60, 90, 2, depth + 0.05, up); // foreign, behind
         set(70, 90, 3, depth - 0.05, up); // foreign, in front: hides, not see-through
         set(80, 90, 1, depth + 0.05, up); // the neighbour, behind: a smooth patch's sag
@@ -388,5 +447,28 @@ mod tests {
             *id = *id * 4 + 3;
         }
         assert_eq!(see_through(&marked, &view, &fb, 4), s);
+    }
+
+    /// The surface's own facing: its geometric normal on the side of its normal function,
+    /// at the ray's first hit, or at the border point nearest a ray that misses it.
+    #[test]
+    fn surface_faces_asks_the_surface_not_its_shading_normal() {
+        let view = view();
+        let (origin, dir) = view.ray(64.5, 64.5);
+        let up = flat([[-10.0, -10.0], [10.0, -10.0], [0.0, 10.0]], 0.0);
+        assert!(surface_faces(&up, origin, dir));
+        // Normals leaning 80 degrees towards x: the shading normal at the hit still on
+        // the eye's side, the surface too.
+        let tilted = [DVec3::new(0.98, 0.0, 0.17); 3];
+        let leaning = lembo_from_triangle(up.points[..3].try_into().unwrap(), tilted);
+        assert!(surface_faces(&leaning, origin, dir));
+        // Normals past 90 degrees: the lembo says its outside is the other side.
+        let down = lembo_from_triangle(up.points[..3].try_into().unwrap(), [-DVec3::Z; 3]);
+        assert!(!surface_faces(&down, origin, dir));
+        // A ray just outside the triangle: its nearest border point decides.
+        let (o2, d2) = view.ray(64.5 + 11.0, 64.5);
+        assert!(intersect_ray(&up, o2, d2).is_empty());
+        assert!(surface_faces(&up, o2, d2));
+        assert!(!surface_faces(&down, o2, d2));
     }
 }

@@ -170,6 +170,35 @@ fn render_reports_see_through_in_both_reports() {
     assert!(text.contains("see_through_px"), "{text}");
 }
 
+/// A rock of many creases (auto-smoothed at 40 degrees: creases of many angles, corners
+/// where three or more meet, creases ending inside smooth regions) shows no see-through and
+/// no double hit on the lembo path. Before the back-face test asked the winning surface
+/// itself, 97 of its pixels counted: faces seen at a grazing angle whose shading normal,
+/// leaning across a crease, turns away from the eye while the surface faces it.
+#[test]
+fn a_rock_of_many_creases_shows_no_see_through() {
+    let rock = trace("rock_creased.json", None);
+    let frame = lembo_frame(&rock);
+    assert_eq!(see_through(&rock, &frame, 1), Some(0));
+    assert_eq!(frame.probe.unwrap().double_hit_pixels, 0);
+    // The shading normals that misled the old test are there: many covered pixels whose
+    // normal faces away from the eye.
+    let view = View::new(&rock.camera, rock.viewport);
+    let normals = frame.framebuffer.normal.as_ref().unwrap();
+    let w = rock.viewport.width as usize;
+    let away = (0..normals.len())
+        .filter(|&k| frame.framebuffer.primitive[k] != u32::MAX)
+        .filter(|&k| {
+            let (x, y) = ((k % w) as f64 + 0.5, (k / w) as f64 + 0.5);
+            let n = glam::DVec3::from_array(normals[k].map(f64::from));
+            n.dot(-view.ray(x, y).1) < 0.0
+        })
+        .count();
+    assert!(away > 50, "{away}");
+    // The level-1 tessellation is the mesh itself.
+    assert_eq!(see_through(&rock, &triangle_frame(&rock, 1), 1), Some(0));
+}
+
 #[test]
 fn smooth_closed_meshes_show_no_see_through_on_either_path() {
     let bunny = trace("bunny.json", None);
