@@ -285,10 +285,9 @@ struct CompareArgs {
     /// Reference samples per pixel side for reference.png (metrics use pixel centres).
     #[arg(long, value_name = "N", default_value_t = 1)]
     supersample: u32,
-    /// The observer FLIP (the perceptual error in report.json's accuracy.flip_mean and
-    /// flip.png) is computed for, in pixels per degree of visual angle; with --reference
-    /// [default: 67.02, the reference implementation's 0.7 m wide 3840-pixel monitor seen
-    /// from 0.7 m].
+    /// The observer FLIP (the perceptual error in each report's accuracy.flip_mean) is
+    /// computed for, in pixels per degree of visual angle [default: 67.02, the reference
+    /// implementation's 0.7 m wide 3840-pixel monitor seen from 0.7 m].
     #[arg(
         long,
         value_name = "PPD",
