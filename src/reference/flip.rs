@@ -44,7 +44,7 @@ impl PixelsPerDegree {
 
     /// The pixels per degree of a monitor `width_m` wide of `pixels` columns seen from
     /// `distance_m` (the reference implementation's formula).
-    pub fn from_monitor(distance_m: f64, pixels: f64, width_m: f64) -> Self {
+    fn from_monitor(distance_m: f64, pixels: f64, width_m: f64) -> Self {
         PixelsPerDegree(distance_m * (pixels / width_m) * std::f64::consts::PI / 180.0)
     }
 
