@@ -11,6 +11,7 @@ use lembo_sim::lembo::construct::{lembo_from_triangle, TriangleMesh};
 use lembo_sim::lembo::set::Lembos;
 use lembo_sim::lembo::tessellate::Tessellation;
 use lembo_sim::raster::{render_functional, render_functional_triangles, Frame};
+use lembo_sim::rop::framebuffer::NO_PRIMITIVE;
 use lembo_sim::scene::Scene;
 use std::path::Path;
 
@@ -187,10 +188,10 @@ fn a_rock_of_many_creases_shows_no_see_through() {
     let normals = frame.framebuffer.normal.as_ref().unwrap();
     let w = rock.viewport.width as usize;
     let away = (0..normals.len())
-        .filter(|&k| frame.framebuffer.primitive[k] != u32::MAX)
+        .filter(|&k| frame.framebuffer.primitive[k] != NO_PRIMITIVE)
         .filter(|&k| {
             let (x, y) = ((k % w) as f64 + 0.5, (k / w) as f64 + 0.5);
-            let n = glam::DVec3::from_array(normals[k].map(f64::from));
+            let n = DVec3::from_array(normals[k].map(f64::from));
             n.dot(-view.ray(x, y).1) < 0.0
         })
         .count();
