@@ -71,8 +71,6 @@ struct PopRing {
     mask: u64,
     /// Items popped so far (the index of the next).
     count: u64,
-    /// D - 1: item n - D was popped before p_n, so only the last D - 1 can still be in.
-    keep: u64,
     /// Most items in the FIFO at once.
     max: u64,
 }
@@ -89,7 +87,6 @@ impl PopRing {
             times: vec![Cycle::ZERO; cap as usize].into_boxed_slice(),
             mask: cap - 1,
             count: 0,
-            keep: depth as u64 - 1,
             max: 0,
         }
     }
@@ -97,15 +94,14 @@ impl PopRing {
     /// The next item, pushed at `pushed_at`, is popped at `q`.
     #[inline]
     fn pop(&mut self, pushed_at: Cycle, q: Cycle) {
-        // After push n the FIFO held 1 + n - f items, f the first of items n - keep..n
-        // popped after p_n (pop times are sorted). f never moves back, so that is at most
-        // one more than after push n - 1: the most grows, by one, exactly when item
-        // n - max was still in. One look per pop.
+        // After push n the FIFO held 1 + n - f items, f the first earlier item popped
+        // after p_n (pop times are sorted). f never moves back, so that is at most one more
+        // than after push n - 1: the most grows, by one, exactly when item n - max was
+        // still in. One look per pop. Item n - D was out (p_n >= q_(n-D)), so the most
+        // stops at D and the look stays within the ring's last D entries.
         let n = self.count;
         if self.max == 0
-            || (n >= self.max
-                && self.max <= self.keep
-                && self.times[((n - self.max) & self.mask) as usize] > pushed_at)
+            || (n >= self.max && self.times[((n - self.max) & self.mask) as usize] > pushed_at)
         {
             self.max += 1;
         }
