@@ -128,7 +128,7 @@ fn stages(c: &mut Criterion) {
                     &lembos[*i],
                     *j,
                     sub,
-                    view.viewport.width,
+                    fragment::Columns::of(&view),
                     &mut sink,
                     &mut counts,
                 );
@@ -232,7 +232,7 @@ fn more_stages(c: &mut Criterion) {
     }
     g.throughput(Throughput::Elements(s.viewport.pixels() as u64));
     g.bench_function("reference/sphere24_512", |b| {
-        b.iter(|| render_reference(&s, &view, 1))
+        b.iter(|| render_reference(&s, &view, 1, lembo_sim::camera::Samples::ONE))
     });
     g.finish();
 }

@@ -80,11 +80,133 @@ pub struct Camera {
     pub projection: Projection,
 }
 
+/// Samples per pixel of a multisampled render (1, 2, 4 or 8), at Direct3D's standard
+/// sample positions (DESIGN.md §2, "Multisampling").
+///
+/// The standard patterns put each of a pixel's samples on its own row, evenly spaced:
+/// sample row s of n sits (2s + 1 - n) / (2n) pixels below the pixel centre (so the
+/// patterns are n-rooks). A multisampled frame is drawn on the *sample grid*: a view whose
+/// viewport has n times the rows ([`View::with_samples`]), where row r = n j + s holds
+/// sample s of pixel row j, its samples displaced from the column centre i + 0.5 by
+/// [`Samples::row_dx16`] sixteenths of a pixel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(try_from = "u32", into = "u32")]
+pub struct Samples(u32);
+
+impl Samples {
+    /// One sample per pixel, at its centre: the render as it always was.
+    pub const ONE: Samples = Samples(1);
+
+    /// The counts accepted.
+    pub const ACCEPTED: [u32; 4] = [1, 2, 4, 8];
+
+    /// `n` samples per pixel, if it is 1, 2, 4 or 8.
+    pub fn new(n: u32) -> Option<Samples> {
+        Self::ACCEPTED.contains(&n).then_some(Samples(n))
+    }
+
+    /// Samples per pixel.
+    pub fn get(self) -> u32 {
+        self.0
+    }
+
+    /// Direct3D's standard positions of the pattern [1/16 pixel from the pixel centre, y
+    /// down], in Direct3D's sample order (D3D11_STANDARD_MULTISAMPLE_PATTERN).
+    pub fn positions(self) -> &'static [(i8, i8)] {
+        match self.0 {
+            1 => &[(0, 0)],
+            2 => &[(4, 4), (-4, -4)],
+            4 => &[(-2, -6), (6, -2), (-6, 2), (2, 6)],
+            _ => &[
+                (1, -3),
+                (-1, 3),
+                (5, 1),
+                (-3, -5),
+                (-5, 5),
+                (-7, -1),
+                (3, 7),
+                (7, -7),
+            ],
+        }
+    }
+
+    /// The sample of sample row `s` (0 at the top of the pixel): its (dx, dy) [1/16 pixel].
+    fn row_position(self, s: u32) -> (i8, i8) {
+        let n = self.0 as i32;
+        let dy = ((2 * s as i32 + 1 - n) * 8 / n) as i8;
+        *self
+            .positions()
+            .iter()
+            .find(|p| p.1 == dy)
+            .expect("the standard patterns put one sample on each row")
+    }
+
+    /// The horizontal offset from the column centre of the samples on row `row` of the
+    /// sample grid [1/16 pixel]; 0 for one sample.
+    #[inline(always)]
+    pub fn row_dx16(self, row: u32) -> i64 {
+        if self.0 == 1 {
+            return 0;
+        }
+        self.row_position(row % self.0).0 as i64
+    }
+
+    /// Where pixel column i's sample on sample-grid row `row` lies, from i \[pixels\]: 0.5
+    /// plus the row's offset (exact in binary).
+    #[inline(always)]
+    pub fn row_centre_x(self, row: u32) -> f64 {
+        0.5 + self.row_dx16(row) as f64 / 16.0
+    }
+
+    /// The smallest and largest [`Self::row_dx16`] [1/16 pixel].
+    pub fn dx16_range(self) -> (i64, i64) {
+        let dx = self.positions().iter().map(|p| p.0 as i64);
+        (dx.clone().min().unwrap_or(0), dx.max().unwrap_or(0))
+    }
+
+    /// The position of the pixel's first sample row's sample relative to its centre
+    /// \[pixels\]: where a multisampled frame's depth, winner and normal are kept per pixel
+    /// (the accuracy metrics' point, DESIGN.md §6).
+    pub fn first_row_offset(self) -> [f64; 2] {
+        let (dx, dy) = self.row_position(0);
+        [dx as f64 / 16.0, dy as f64 / 16.0]
+    }
+}
+
+impl Default for Samples {
+    fn default() -> Self {
+        Samples::ONE
+    }
+}
+
+impl TryFrom<u32> for Samples {
+    type Error = String;
+    fn try_from(n: u32) -> Result<Self, String> {
+        Samples::new(n).ok_or_else(|| format!("{n}: samples per pixel must be 1, 2, 4 or 8"))
+    }
+}
+
+impl From<Samples> for u32 {
+    fn from(s: Samples) -> u32 {
+        s.0
+    }
+}
+
+impl std::fmt::Display for Samples {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        self.0.fmt(f)
+    }
+}
+
 /// A camera resolved against a viewport: matrices and the viewport transform.
 #[derive(Clone, Copy, Debug)]
 pub struct View {
-    /// The image the camera renders into.
+    /// The image the camera renders into: for a multisampled frame, its sample grid
+    /// ([`View::with_samples`]).
     pub viewport: Viewport,
+    /// The samples per pixel this view's viewport rows are the sample rows of (1: the
+    /// viewport is the image).
+    pub samples: Samples,
     /// The eye's world position.
     pub eye: DVec3,
     /// World to clip.
@@ -143,12 +265,51 @@ impl View {
         let view_proj = proj * view;
         View {
             viewport,
+            samples: Samples::ONE,
             eye,
             view_proj,
             inv_view_proj: view_proj.inverse(),
             orthographic,
             near,
             far,
+        }
+    }
+
+    /// The sample grid of this (one-sample) view with `samples` per pixel: the same camera on a
+    /// viewport of `samples` times the rows (the matrices, and so the aspect ratio, are the
+    /// image's), whose rows are the sample rows ([`Samples`]).
+    pub fn with_samples(&self, samples: Samples) -> View {
+        debug_assert_eq!(self.samples, Samples::ONE, "a sample grid of a sample grid");
+        View {
+            viewport: Viewport {
+                width: self.viewport.width,
+                height: self.viewport.height * samples.get(),
+            },
+            samples,
+            ..*self
+        }
+    }
+
+    /// The view a render of `samples` per pixel draws on: this one with one sample, else its
+    /// sample grid ([`Self::with_samples`]).
+    pub fn grid(&self, samples: Samples) -> View {
+        match samples.get() {
+            1 => *self,
+            _ => self.with_samples(samples),
+        }
+    }
+
+    /// This view with the image moved by (dx, dy) \[pixels\]: its pixel (i, j) sees what this
+    /// view's position (i + 0.5 + dx, j + 0.5 + dy) sees, at the same depth (a translation
+    /// of normalised device coordinates).
+    pub fn translated(&self, [dx, dy]: [f64; 2]) -> View {
+        let (w, h) = (self.viewport.width as f64, self.viewport.height as f64);
+        let shift = DMat4::from_translation(DVec3::new(-2.0 * dx / w, 2.0 * dy / h, 0.0));
+        let view_proj = shift * self.view_proj;
+        View {
+            view_proj,
+            inv_view_proj: view_proj.inverse(),
+            ..*self
         }
     }
 

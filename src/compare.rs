@@ -15,7 +15,7 @@
 //! `compare.json` (both reports, the tessellation search and the cost ratios) and
 //! `compare.txt` (the table printed).
 
-use crate::camera::View;
+use crate::camera::{Samples, View};
 use crate::config::ArchConfig;
 use crate::datapath::Datapath;
 use crate::discoid::blend::BlendMode;
@@ -75,8 +75,12 @@ pub struct CompareJob {
     pub no_memory_check: bool,
     /// Viewport override (width, height) \[pixels\].
     pub viewport: Option<(u32, u32)>,
-    /// Reference samples per pixel side for reference.png.
+    /// Reference samples per pixel side for reference.png (`--supersample`).
     pub supersample: u32,
+    /// Whether `--supersample` was given.
+    pub supersample_given: bool,
+    /// Samples per pixel of both paths (`--samples`).
+    pub samples: Samples,
     /// The observer FLIP is computed for.
     pub flip_ppd: PixelsPerDegree,
     /// Host threads of the timed runs (`--host-threads`).
@@ -97,6 +101,7 @@ impl CompareJob {
             datapath: self.datapath,
             reference: true,
             supersample: self.supersample,
+            samples: self.samples,
             flip_ppd: self.flip_ppd,
             viewport: self.viewport,
             mode: Mode::Timed,
@@ -111,7 +116,10 @@ impl CompareJob {
             // Both paths are measured, so their functional frames are the analysed ones,
             // drawn on one thread.
             threads: None,
-            given: Given::default(),
+            given: Given {
+                supersample: self.supersample_given,
+                ..Given::default()
+            },
             no_memory_check: self.no_memory_check,
         }
     }
@@ -196,18 +204,20 @@ pub struct CompareOutput {
     pub files: Vec<String>,
 }
 
-/// The silhouette error of the triangle path at level `n` against `reference`, from the
-/// functional model (what auto compares).
+/// The silhouette error of the triangle path at level `n` with `samples` per pixel against
+/// `reference`, from the functional model (what auto compares).
 fn triangle_accuracy(
     scene: &Scene,
     view: &View,
     reference: &ReferenceImage,
     n: u32,
     datapath: Datapath,
+    samples: Samples,
 ) -> Accuracy {
     let t = Tessellation::new(scene, n);
-    let frame = raster::render_functional_triangles(scene, view, &t, datapath, true);
-    job::measure_frame(
+    let frame = raster::render_functional_triangles(scene, &view.grid(samples), &t, datapath, true)
+        .resolve(samples);
+    job::measure_frame_and_flip(
         scene,
         view,
         &frame,
@@ -216,7 +226,9 @@ fn triangle_accuracy(
         t.triangles_per_lembo(),
         // Only the silhouette is compared here.
         PixelsPerDegree::default(),
+        samples,
     )
+    .0
 }
 
 /// `--tess auto`: doubling, then bisection (module doc).
@@ -226,10 +238,11 @@ fn auto_level(
     reference: &ReferenceImage,
     target: f64,
     datapath: Datapath,
+    samples: Samples,
 ) -> TessChoice {
     let mut tried: Vec<AutoStep> = Vec::new();
     let mut meets = |n: u32| -> bool {
-        let a = triangle_accuracy(scene, view, reference, n, datapath);
+        let a = triangle_accuracy(scene, view, reference, n, datapath, samples);
         tried.push(AutoStep {
             tess: n,
             triangles: scene.lembo_count() as u64 * (n as u64).pow(2),
@@ -296,6 +309,7 @@ pub fn run_compare(job: &CompareJob) -> Result<CompareOutput> {
             "compare draws a surface scene on the lembo and the triangle path; a discoid scene has neither (render it, with --reference to measure it against its surface)",
         ));
     }
+    job::check_samples(job.samples, &scene, COMMAND_LINE, "--samples")?;
     // Both paths' images and error maps are kept beside the reference's.
     job::check_memory(&lembo_job, &scene, 2.0 * BYTES_PER_PIXEL_IMAGES)?;
     if let Tess::Level(n) = job.tess {
@@ -306,7 +320,12 @@ pub fn run_compare(job: &CompareJob) -> Result<CompareOutput> {
     if let Some(a) = &arch {
         check_host_threads(job, a)?;
     }
-    let (reference, reference_wall) = render_reference(&scene, &view, job.supersample);
+    let (reference, reference_wall) = render_reference(
+        &scene,
+        &view,
+        lembo_job.reference_supersample(),
+        job.samples,
+    );
 
     let lembo = run_path(
         &lembo_job,
@@ -330,6 +349,7 @@ pub fn run_compare(job: &CompareJob) -> Result<CompareOutput> {
             &reference,
             lembo_accuracy.silhouette_max_px,
             job.datapath,
+            job.samples,
         ),
     };
     let triangle_job = job.render_job(PrimitivePath::Triangle, Some(choice.level));

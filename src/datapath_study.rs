@@ -699,7 +699,9 @@ pub fn measure_case(case: &Case, ks: &[f64]) -> CaseResult {
         .map(|p| view.project(p))
         .map(|s| s.x.abs().max(s.y.abs()))
         .fold(0.0, f64::max);
-    let reference = match catch_unwind(AssertUnwindSafe(|| render_reference(&scene, &view, 1))) {
+    let reference = match catch_unwind(AssertUnwindSafe(|| {
+        render_reference(&scene, &view, 1, crate::camera::Samples::ONE)
+    })) {
         Ok(r) => r,
         Err(p) => {
             return CaseResult {

@@ -1,6 +1,7 @@
 //! The `lembo-sim` command: parse, validate, run, print. Everything else is in the library.
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use lembo_sim::camera::Samples;
 use lembo_sim::compare::{run_compare, CompareJob, Tess};
 use lembo_sim::datapath::Datapath;
 use lembo_sim::discoid::blend::BlendMode;
@@ -173,9 +174,18 @@ struct RenderArgs {
     /// Also render the exact f64 reference and report accuracy (reference.png, error.png).
     #[arg(long)]
     reference: bool,
-    /// Reference samples per pixel side for reference.png (metrics use pixel centres).
-    #[arg(long, value_name = "N", default_value_t = 1)]
-    supersample: u32,
+    /// Reference samples per pixel side for reference.png (with one sample per pixel the
+    /// metrics use pixel centres) [default: 1; with --samples above 1, 8: the
+    /// area-averaged colours the resolved image is measured against].
+    #[arg(long, value_name = "N")]
+    supersample: Option<u32>,
+    /// Samples per pixel, 1, 2, 4 or 8, at Direct3D's standard positions: multisample
+    /// anti-aliasing on either path (the scan-line stages walk every sample row, the ROPs
+    /// depth-test and store every sample, and a resolve averages them; triangles are shaded
+    /// once per pixel, lembo fragments once per sample). Cycles, frame-buffer bytes and energy
+    /// grow with it (DESIGN.md §2). Not on discoid scenes.
+    #[arg(long, value_name = "N", default_value = "1", value_parser = parse_samples)]
+    samples: Samples,
     /// The observer FLIP (the perceptual error in report.json's accuracy.flip_mean and
     /// flip.png) is computed for, in pixels per degree of visual angle; with --reference
     /// [default: 67.02, the reference implementation's 0.7 m wide 3840-pixel monitor seen
@@ -282,9 +292,15 @@ struct CompareArgs {
     /// [default: the embedded sim/tech/45nm.json].
     #[arg(long, value_name = "FILE")]
     tech: Option<PathBuf>,
-    /// Reference samples per pixel side for reference.png (metrics use pixel centres).
-    #[arg(long, value_name = "N", default_value_t = 1)]
-    supersample: u32,
+    /// Reference samples per pixel side for reference.png (with one sample per pixel the
+    /// metrics use pixel centres) [default: 1; with --samples above 1, 8: the
+    /// area-averaged colours the resolved images are measured against].
+    #[arg(long, value_name = "N")]
+    supersample: Option<u32>,
+    /// Samples per pixel of both paths, 1, 2, 4 or 8 (multisample anti-aliasing at
+    /// Direct3D's standard positions, as `render --samples`).
+    #[arg(long, value_name = "N", default_value = "1", value_parser = parse_samples)]
+    samples: Samples,
     /// The observer FLIP (the perceptual error in each report's accuracy.flip_mean) is
     /// computed for, in pixels per degree of visual angle [default: 67.02, the reference
     /// implementation's 0.7 m wide 3840-pixel monitor seen from 0.7 m].
@@ -319,6 +335,14 @@ fn parse_flip_ppd(s: &str) -> Result<PixelsPerDegree, String> {
         .parse()
         .map_err(|e| format!("`{s}` is not a number: {e}"))?;
     PixelsPerDegree::new(v)
+}
+
+fn parse_samples(s: &str) -> Result<Samples, String> {
+    let n: u32 = s
+        .trim()
+        .parse()
+        .map_err(|e| format!("`{s}` is not a count: {e}"))?;
+    Samples::try_from(n)
 }
 
 fn parse_tess(s: &str) -> Result<Tess, String> {
@@ -358,7 +382,8 @@ fn default_render() -> RenderArgs {
         perspective_tol: None,
         datapath: DatapathArg::F32,
         reference: false,
-        supersample: 1,
+        supersample: None,
+        samples: Samples::ONE,
         flip_ppd: None,
         mode: Mode::Timed,
         arch: None,
@@ -536,7 +561,9 @@ fn compare(args: CompareArgs) -> ExitCode {
         tech: args.tech,
         no_memory_check: args.no_memory_check,
         viewport: args.viewport,
-        supersample: args.supersample,
+        supersample: args.supersample.unwrap_or(1),
+        supersample_given: args.supersample.is_some(),
+        samples: args.samples,
         flip_ppd: args.flip_ppd.unwrap_or_default(),
         host_threads: args.host_threads,
     };
@@ -557,6 +584,7 @@ fn render(args: RenderArgs) -> ExitCode {
         path: args.path.is_some(),
         blend: args.blend.is_some(),
         flip_ppd: args.flip_ppd.is_some(),
+        supersample: args.supersample.is_some(),
     };
     let job = RenderJob {
         scene: args.scene,
@@ -565,7 +593,8 @@ fn render(args: RenderArgs) -> ExitCode {
         perspective_tol: args.perspective_tol.unwrap_or_default(),
         datapath: datapath(args.datapath),
         reference: args.reference,
-        supersample: args.supersample,
+        supersample: args.supersample.unwrap_or(1),
+        samples: args.samples,
         flip_ppd: args.flip_ppd.unwrap_or_default(),
         viewport: args.viewport,
         mode: match args.mode {

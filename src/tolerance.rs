@@ -48,6 +48,16 @@ impl Tolerance {
         }
     }
 
+    /// These tolerances \[pixels\] in rows of a grid of `rows_per_pixel` rows a pixel (a
+    /// multisampled frame's sample grid): that many times each.
+    pub fn on_grid(self, rows_per_pixel: u32) -> Self {
+        let n = rows_per_pixel as f64;
+        Tolerance {
+            k: self.k * n,
+            perspective: self.perspective.map(|p| p * n),
+        }
+    }
+
     /// k with Setup as the paper has it (`--perspective-tol off`).
     pub fn paper(k: f64) -> Self {
         Tolerance {

@@ -53,14 +53,22 @@ pub fn memory_estimate(job: &RenderJob, scene: &Scene, extra_per_pixel: f64) -> 
 /// acceleration structure, the triangle path's vertex numbering).
 fn estimate(job: &RenderJob, scene: &Scene, extra_per_pixel: f64) -> (f64, f64) {
     let pixels = scene.viewport.width as f64 * scene.viewport.height as f64;
+    // Multisampled, the models' frame buffers hold every sample; the resolved frame is one
+    // more image beside them, and the reference is traced twice (the area-averaged colours,
+    // the hits at a sample), each counted as a whole reference.
+    let samples = job.samples.get() as f64;
     let mut per_pixel = match job.mode {
         Mode::Functional => BYTES_PER_PIXEL_FUNCTIONAL,
         Mode::Timed => BYTES_PER_PIXEL_TIMED,
-    } + extra_per_pixel;
+    } * samples
+        + extra_per_pixel;
+    if samples > 1.0 {
+        per_pixel += BYTES_PER_PIXEL_FUNCTIONAL;
+    }
     let lembos = scene.lembo_count() as f64;
     let mut per_lembo = BYTES_PER_LEMBO;
     if job.reference {
-        per_pixel += BYTES_PER_PIXEL_REFERENCE;
+        per_pixel += BYTES_PER_PIXEL_REFERENCE * if samples > 1.0 { 2.0 } else { 1.0 };
         per_lembo += BYTES_PER_LEMBO_REFERENCE;
     }
     if scene.discoid_count() > 0 {

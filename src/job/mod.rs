@@ -28,7 +28,9 @@ pub use reference::{
     render_reference, see_through_px, ErrorMaps,
 };
 pub use render::{load_arch, load_scene, run_render, RenderOutput};
-pub use route::{check_triangle_budget, Model, PathRun, Route, LEMBO_BYTES, MAX_TRIANGLES};
+pub use route::{
+    check_samples, check_triangle_budget, Model, PathRun, Route, LEMBO_BYTES, MAX_TRIANGLES,
+};
 pub use validate::{
     check_count, check_tess_range, check_threshold, machine_threads, Given, Mode, PrimitivePath,
     RenderJob, MAX_HOST_THREADS, MAX_SUPERSAMPLE, MAX_TESS, MAX_THREADS,

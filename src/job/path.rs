@@ -73,7 +73,7 @@ pub fn run_path(
         _ => None,
     };
     let memory = Memory::new(
-        FrameBuffer::stored_bytes(scene.viewport.width, scene.viewport.height),
+        FrameBuffer::stored_bytes_sampled(scene.viewport.width, scene.viewport.height, job.samples),
         0,
         primitives.bytes,
         model.arch().map(|a| a.fifo_entries(&units)),
@@ -167,10 +167,12 @@ fn cost_of(
     fetch: Option<FetchReport>,
 ) -> Result<CostReport> {
     crate::progress::stage("pricing (counting run)");
+    let grid = grid_view(job, view);
     let (frame, mut ops) = match route {
-        Route::Triangles(t) => cost::triangle_ops(scene, view, t, job.datapath),
-        _ => cost::lembo_ops(scene, view, job.tolerance(), job.datapath)?,
+        Route::Triangles(t) => cost::triangle_ops(scene, &grid, t, job.datapath),
+        _ => cost::lembo_ops(scene, &grid, job.grid_tolerance(), job.datapath)?,
     };
+    let frame = frame.resolve(job.samples);
     // The triangle corners whose transformed vertex setup reused: the vertex caches' hits
     // for a mesh in memory; on chip, each patch's points are set up once.
     let mut vertices_reused = fetch.and_then(|f| f.vertex_cache).map_or(0, |v| v.hits);
@@ -185,8 +187,11 @@ fn cost_of(
         ));
     }
     let fb = &arch.framebuffer;
+    // Multisampled, a fragment is a sample, and the resolve reads them all once.
+    let (w, h) = (scene.viewport.width, scene.viewport.height);
     let framebuffer_bytes = counts.fragments * fb.bytes_per_fragment_tested
-        + counts.fragments_passed_depth * fb.bytes_per_fragment_written;
+        + counts.fragments_passed_depth * fb.bytes_per_fragment_written
+        + FrameBuffer::resolve_bytes(w, h, job.samples);
     let work = cost::model::Work {
         ops: &ops,
         cycles,
@@ -241,6 +246,8 @@ fn draw(
     route: &Route,
     analyse: bool,
 ) -> Result<(Drawn, f64)> {
+    // Multisampled, both models draw the sample grid and the frames are resolved at the end.
+    let grid = grid_view(job, view);
     let functional = |analyse: bool| -> Result<raster::Frame> {
         let triangles = match route {
             Route::Triangles(t) => Some(t as &dyn raster::triangle::TriangleSource),
@@ -248,8 +255,8 @@ fn draw(
         };
         raster::render_functional_on(
             scene,
-            view,
-            job.tolerance(),
+            &grid,
+            job.grid_tolerance(),
             triangles,
             job.datapath,
             analyse,
@@ -260,7 +267,7 @@ fn draw(
         Model::Functional => {
             crate::progress::stage("functional model");
             let t0 = Instant::now();
-            let frame = functional(analyse)?;
+            let frame = functional(analyse)?.resolve(job.samples);
             return Ok((Drawn::Functional(frame), t0.elapsed().as_secs_f64()));
         }
         Model::Timed(arch) => arch,
@@ -274,8 +281,8 @@ fn draw(
     let t0 = Instant::now();
     let timed = pipeline::run_timed(
         scene,
-        view,
-        job.tolerance(),
+        &grid,
+        job.grid_tolerance(),
         job.datapath,
         arch,
         source,
@@ -290,9 +297,19 @@ fn draw(
                 "the timed image differs from the functional one".into(),
             ));
         }
-        Some(frame)
+        Some(frame.resolve(job.samples))
     } else {
         None
     };
+    let timed = pipeline::TimedFrame {
+        framebuffer: timed.framebuffer.resolve(job.samples),
+        ..timed
+    };
     Ok((Drawn::Timed { timed, probed }, wall))
+}
+
+/// The view both models draw `job` on: `view` itself, or with more than one sample per
+/// pixel its sample grid ([`View::with_samples`]).
+pub(super) fn grid_view(job: &RenderJob, view: &View) -> View {
+    view.grid(job.samples)
 }

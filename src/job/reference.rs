@@ -2,7 +2,7 @@
 //! discoids stand for) and a frame's accuracy against it.
 
 use super::validate::{PrimitivePath, RenderJob};
-use crate::camera::View;
+use crate::camera::{Samples, View};
 use crate::discoid;
 use crate::error::{Error, Result, COMMAND_LINE};
 use crate::lembo::Lembo;
@@ -42,23 +42,50 @@ fn no_surface(why: String) -> Error {
     )
 }
 
-/// The exact reference of `scene`'s lembo surfaces, with the wall time it took; for a
-/// discoid scene, pass its [`reference_scene`].
-pub fn render_reference(scene: &Scene, view: &View, supersample: u32) -> (ReferenceImage, f64) {
+/// The exact reference of `scene`'s lembo surfaces for a render of `samples` per pixel,
+/// with the wall time it took; for a discoid scene, pass its [`reference_scene`]. With one
+/// sample, the pixel centres traced (and `supersample`² sub-samples a pixel when above 1);
+/// with more, the area-averaged colours of `supersample`² sub-samples a pixel and the hits
+/// at the pixels' first sample rows' samples ([`ReferenceImage::for_samples`]).
+pub fn render_reference(
+    scene: &Scene,
+    view: &View,
+    supersample: u32,
+    samples: Samples,
+) -> (ReferenceImage, f64) {
     crate::progress::stage("exact reference");
     let t = Instant::now();
     // The reference traces every lembo: it holds them all, made (DESIGN.md §3, "Streamed
     // primitives").
     let held: Vec<(Lembo, [f64; 3])> = scene.lembos().collect();
     let lembos: Vec<(&Lembo, [f64; 3])> = held.iter().map(|(l, c)| (l, *c)).collect();
-    let reference = oracle::render_reference(&oracle::ReferenceInput {
+    let input = oracle::ReferenceInput {
         lembos: &lembos,
         view,
         light: &scene.light,
         background: scene.background,
         supersample,
-    });
+    };
+    let mut reference = oracle::render_reference(&input);
+    if samples != Samples::ONE {
+        let offset = samples.first_row_offset();
+        let at_sample = oracle::render_reference(&oracle::ReferenceInput {
+            view: &view.translated(offset),
+            supersample: 1,
+            ..input
+        });
+        reference = reference.for_samples(at_sample, offset);
+    }
     (reference, t.elapsed().as_secs_f64())
+}
+
+/// The view a reference's hits were traced in: `view`, or moved to where a multisampled
+/// run's reference traced them ([`ReferenceImage::hits_offset_px`]).
+fn hits_view(view: &View, reference: &ReferenceImage) -> View {
+    match reference.hits_offset_px {
+        [0.0, 0.0] => *view,
+        offset => view.translated(offset),
+    }
 }
 
 /// What a run's image looks like against the reference, for a person to read.
@@ -100,6 +127,7 @@ pub(super) fn measure(
         job.path,
         ids_per_lembo,
         job.flip_ppd,
+        job.samples,
     );
     let metrics_wall = t1.elapsed().as_secs_f64();
     Measured {
@@ -127,10 +155,21 @@ pub fn measure_frame(
     ids_per_lembo: u64,
     ppd: PixelsPerDegree,
 ) -> Accuracy {
-    measure_frame_and_flip(scene, view, frame, reference, path, ids_per_lembo, ppd).0
+    measure_frame_and_flip(
+        scene,
+        view,
+        frame,
+        reference,
+        path,
+        ids_per_lembo,
+        ppd,
+        Samples::ONE,
+    )
+    .0
 }
 
 /// [`measure_frame`], with the FLIP map its `flip_mean` is the mean of.
+#[allow(clippy::too_many_arguments)]
 pub fn measure_frame_and_flip(
     scene: &Scene,
     view: &View,
@@ -139,8 +178,12 @@ pub fn measure_frame_and_flip(
     path: PrimitivePath,
     ids_per_lembo: u64,
     ppd: PixelsPerDegree,
+    samples: Samples,
 ) -> (Accuracy, FlipMap) {
     let probe = frame.probe.unwrap_or_default();
+    // Multisampled, the frame keeps each pixel's first sample row's geometry, and the
+    // reference's hits are traced there: so are the outline and the see-through rays.
+    let view = &hits_view(view, reference);
     let held: Vec<Lembo> = scene.lembos().map(|(l, _)| l).collect();
     let tracer = oracle::Tracer::new(&held, view);
     let flip = flip_frame(&frame.framebuffer, reference, ppd);
@@ -150,7 +193,8 @@ pub fn measure_frame_and_flip(
         &tracer,
         probe.double_hit_pixels,
         match path {
-            PrimitivePath::Lembo => Some(probe.max_scanline_deviation_px),
+            // Measured in sample rows, 1/samples of a pixel apart.
+            PrimitivePath::Lembo => Some(probe.max_scanline_deviation_px / samples.get() as f64),
             PrimitivePath::Triangle => None,
         },
         see_through_px(scene, view, &frame.framebuffer, ids_per_lembo),

@@ -4,11 +4,11 @@
 use super::memory::check_memory;
 use super::path::run_path;
 use super::reference::{reference_scene, render_reference};
-use super::route::{check_triangle_budget, Model};
+use super::route::{check_samples, check_triangle_budget, Model};
 use super::validate::{Mode, PrimitivePath, RenderJob};
 use crate::camera::View;
 use crate::config::ArchConfig;
-use crate::error::Result;
+use crate::error::{Result, COMMAND_LINE};
 use crate::output::write_set;
 use crate::report::html::{self, REPORT_HTML};
 use crate::report::{peak_rss_bytes, png_bytes, Report};
@@ -79,6 +79,7 @@ fn render_page(
 pub fn run_render(job: &RenderJob) -> Result<RenderOutput> {
     job.validate()?;
     let scene = load_scene(job)?;
+    check_samples(job.samples, &scene, COMMAND_LINE, "--samples")?;
     check_memory(job, &scene, 0.0)?;
     let view = View::new(&scene.camera, scene.viewport);
     let arch = load_arch(job)?;
@@ -89,7 +90,8 @@ pub fn run_render(job: &RenderJob) -> Result<RenderOutput> {
         true => Some(render_reference(
             reference_scene(&scene)?.as_ref(),
             &view,
-            job.supersample,
+            job.reference_supersample(),
+            job.samples,
         )),
         false => None,
     };

@@ -5,6 +5,7 @@
 
 use super::reference::check_reference_scene;
 use super::validate::{PrimitivePath, RenderJob};
+use crate::camera::{Samples, MAX_VIEWPORT_SIDE};
 use crate::config::ArchConfig;
 use crate::error::{Error, Result, COMMAND_LINE};
 use crate::lembo::tessellate::Tessellation;
@@ -163,6 +164,43 @@ fn check_applies(job: &RenderJob, scene: &Scene) -> Result<()> {
         if set && !applies {
             return Err(Error::invalid(COMMAND_LINE, flag, value, why.as_str()));
         }
+    }
+    check_samples(job.samples, scene, COMMAND_LINE, "--samples")
+}
+
+/// Refuses `samples` per pixel on `scene` where the unit cannot draw them: on a discoid
+/// scene (the blend units keep one accumulation per pixel), and where the sample grid would
+/// have more rows than [`MAX_VIEWPORT_SIDE`] (the rasterizers' fixed-point range). `file`
+/// and `field` name where the value came from.
+pub fn check_samples(samples: Samples, scene: &Scene, file: &str, field: &str) -> Result<()> {
+    if samples == Samples::ONE {
+        return Ok(());
+    }
+    let discoids = scene.discoid_count();
+    if discoids > 0 {
+        return Err(Error::invalid(
+            file,
+            field,
+            samples,
+            format!(
+                "does not apply to {}, a scene of {discoids} discoids: the blend units keep one \
+                 accumulation per pixel and do not multisample",
+                scene.name
+            ),
+        ));
+    }
+    let rows = scene.viewport.height as u64 * samples.get() as u64;
+    if rows > MAX_VIEWPORT_SIDE as u64 {
+        return Err(Error::invalid(
+            file,
+            field,
+            samples,
+            format!(
+                "the sample grid of {}'s {} rows would have {rows} rows; at most \
+                 {MAX_VIEWPORT_SIDE} (samples x viewport height)",
+                scene.name, scene.viewport.height
+            ),
+        ));
     }
     Ok(())
 }

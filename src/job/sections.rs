@@ -62,7 +62,8 @@ pub(super) fn settings(
         tess,
         datapath: job.datapath.name().into(),
         reference,
-        supersample: job.supersample,
+        supersample: job.reference_supersample(),
+        samples: job.samples.get(),
     }
 }
 

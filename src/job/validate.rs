@@ -2,7 +2,7 @@
 //! [`Mode`] and [`Given`]) is validated once, every flag against its range and the flags
 //! that only apply in one mode against that mode, so nothing downstream re-checks it.
 
-use crate::camera::MAX_VIEWPORT_SIDE;
+use crate::camera::{Samples, MAX_VIEWPORT_SIDE};
 use crate::cost::tech::Tech;
 use crate::datapath::Datapath;
 use crate::discoid::blend::BlendMode;
@@ -83,8 +83,11 @@ pub struct RenderJob {
     pub datapath: Datapath,
     /// Whether the exact reference is rendered and the frame measured (`--reference`).
     pub reference: bool,
-    /// Reference samples per pixel side.
+    /// Reference samples per pixel side, as given (`--supersample`; see
+    /// [`RenderJob::reference_supersample`]).
     pub supersample: u32,
+    /// Samples per pixel of the render (`--samples`): multisampling on either path.
+    pub samples: Samples,
     /// The observer FLIP is computed for (`--flip-ppd`).
     pub flip_ppd: PixelsPerDegree,
     /// Viewport override (width, height) \[pixels\].
@@ -136,7 +139,19 @@ pub struct Given {
     pub blend: bool,
     /// `--flip-ppd`.
     pub flip_ppd: bool,
+    /// `--supersample`.
+    pub supersample: bool,
 }
+
+/// The reference's sub-samples per pixel side a multisampled run is measured against when
+/// `--supersample` is not given: 8 x 8, 64 a pixel (DESIGN.md §6: its own error beside the
+/// unit's).
+pub const AA_SUPERSAMPLE: u32 = 8;
+
+/// The fewest sub-samples per pixel side a multisampled run's reference may have: the
+/// area-averaged colour a resolve approximates needs more sub-samples than the 8 a pixel
+/// the unit takes at most.
+pub const MIN_AA_SUPERSAMPLE: u32 = 4;
 
 /// Most host threads a timed run may use (`--host-threads`).
 pub const MAX_HOST_THREADS: u32 = 1024;
@@ -158,9 +173,26 @@ impl RenderJob {
         self.threads.unwrap_or_else(machine_threads)
     }
 
-    /// The lembo path's tolerances: k and Setup's perspective tolerance.
+    /// The lembo path's tolerances: k and Setup's perspective tolerance \[pixels\].
     pub fn tolerance(&self) -> Tolerance {
         self.perspective_tol.with_k(self.k)
+    }
+
+    /// [`Self::tolerance`] in the units of the grid the scan-line stages walk: the sample
+    /// grid's rows are 1/samples of a pixel apart, so both tolerances are that many rows
+    /// (the error stays k pixels across the scan-lines whatever the samples).
+    pub fn grid_tolerance(&self) -> Tolerance {
+        self.tolerance().on_grid(self.samples.get())
+    }
+
+    /// The reference's sub-samples per pixel side: `--supersample`, or for a multisampled
+    /// run without it, [`AA_SUPERSAMPLE`].
+    pub fn reference_supersample(&self) -> u32 {
+        if self.samples != Samples::ONE && !self.given.supersample {
+            AA_SUPERSAMPLE
+        } else {
+            self.supersample
+        }
     }
 
     /// Checks every flag; errors name the flag and the value.
@@ -185,6 +217,7 @@ impl RenderJob {
             MAX_SUPERSAMPLE,
             "samples per pixel side",
         )?;
+        check_aa_supersample(self.samples, self.reference_supersample(), "--supersample")?;
         if let Some((w, h)) = self.viewport {
             for (name, v) in [("--viewport width", w), ("--viewport height", h)] {
                 check_count(name, v, MAX_VIEWPORT_SIDE, "pixels")?;
@@ -285,6 +318,24 @@ pub fn check_threshold(t: f64) -> std::result::Result<f64, &'static str> {
     }
 }
 
+/// With `samples` per pixel above one, the reference's `supersample` sub-samples per pixel
+/// side must be at least [`MIN_AA_SUPERSAMPLE`]; `flag` names where it was given.
+pub fn check_aa_supersample(samples: Samples, supersample: u32, flag: &str) -> Result<()> {
+    if samples != Samples::ONE && supersample < MIN_AA_SUPERSAMPLE {
+        return Err(Error::invalid(
+            COMMAND_LINE,
+            flag,
+            supersample,
+            format!(
+                "with {samples} samples per pixel the image is measured against the \
+                 area-averaged reference, which needs at least {MIN_AA_SUPERSAMPLE} sub-samples \
+                 per pixel side (default {AA_SUPERSAMPLE})"
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// `--tess` must be in 1..=MAX_TESS.
 pub fn check_tess_range(n: u32) -> Result<()> {
     if (1..=MAX_TESS).contains(&n) {
@@ -314,6 +365,7 @@ mod tests {
             datapath: Datapath::F32,
             reference: false,
             supersample: 1,
+            samples: Samples::ONE,
             flip_ppd: PixelsPerDegree::default(),
             viewport: None,
             mode: Mode::Timed,

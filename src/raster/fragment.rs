@@ -11,6 +11,7 @@
 use super::counts::Counts;
 use super::screen::ScreenLembo;
 use super::subsegmenter::Subsegment;
+use crate::camera::{Samples, View};
 use crate::datapath::Real;
 
 /// Receives fragments: the ROP in a render, a probe in tests and accuracy runs.
@@ -107,11 +108,12 @@ impl<R: Real> Span<R> {
     }
 }
 
-/// The pixels of a subsegment inside a viewport `width` pixels wide, if any.
+/// The pixels of a subsegment inside a viewport `width` pixels wide whose samples lie at
+/// i + `centre` on its row (0.5: the pixel centres), if any.
 // `!(a < b)` is deliberate: it also rejects NaN.
 #[allow(clippy::neg_cmp_op_on_partial_ord)]
 #[inline]
-pub fn span<R: Real>(sub: &Subsegment<R>, width: u32) -> Option<Span<R>> {
+pub fn span<R: Real>(sub: &Subsegment<R>, width: u32, centre: f64) -> Option<Span<R>> {
     let (a, b) = if sub.a.x <= sub.b.x {
         (sub.a, sub.b)
     } else {
@@ -121,7 +123,7 @@ pub fn span<R: Real>(sub: &Subsegment<R>, width: u32) -> Option<Span<R>> {
     if !(dx > R::zero()) {
         return None;
     }
-    let half = R::of(0.5);
+    let half = R::of(centre);
     let i0 = (a.x - half).ceil().max(R::zero());
     let i1 = (b.x - half).ceil().min(R::of(width as f64));
     if !(i0 < i1) {
@@ -141,17 +143,52 @@ pub fn span<R: Real>(sub: &Subsegment<R>, width: u32) -> Option<Span<R>> {
     })
 }
 
-/// Rasterizes one subsegment on scanline `j` of a viewport `width` pixels wide.
+/// The columns a scanline's fragments fall in: the viewport's width, and where on each row
+/// of a multisampled frame's sample grid the samples lie ([`Samples`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Columns {
+    /// Viewport width \[pixels\].
+    pub width: u32,
+    /// The samples per pixel whose rows the viewport's rows are.
+    pub samples: Samples,
+}
+
+impl Columns {
+    /// The columns of `view`'s viewport.
+    pub fn of(view: &View) -> Columns {
+        Columns {
+            width: view.viewport.width,
+            samples: view.samples,
+        }
+    }
+
+    /// The columns of a one-sample viewport `width` pixels wide.
+    pub fn plain(width: u32) -> Columns {
+        Columns {
+            width,
+            samples: Samples::ONE,
+        }
+    }
+
+    /// Where column i's sample on row `j` lies, from i \[pixels\]: 0.5 (the centre) with one
+    /// sample.
+    #[inline(always)]
+    pub fn centre(self, j: u32) -> f64 {
+        self.samples.row_centre_x(j)
+    }
+}
+
+/// Rasterizes one subsegment on scanline `j` of the viewport `cols`.
 #[inline]
 pub fn rasterize<R: Real, S: FragmentSink<R>>(
     l: &ScreenLembo<R>,
     j: u32,
     sub: &Subsegment<R>,
-    width: u32,
+    cols: Columns,
     sink: &mut S,
     counts: &mut Counts,
 ) {
-    let Some(span) = span(sub, width) else {
+    let Some(span) = span(sub, cols.width, cols.centre(j)) else {
         return;
     };
     sink.span(l, sub, j, &span);
@@ -182,7 +219,7 @@ mod tests {
         let l = screen_lembo::<f64>(x_linear(), y_plane());
         let (mut sink, mut counts) = (Collect::default(), Counts::default());
         for s in subs {
-            rasterize(&l, 7, s, SIDE, &mut sink, &mut counts);
+            rasterize(&l, 7, s, Columns::plain(SIDE), &mut sink, &mut counts);
         }
         assert_eq!(counts.fragments, sink.0.len() as u64);
         let mut hits = BTreeMap::new();
@@ -214,7 +251,7 @@ mod tests {
             let s = Subsegment { a: p(x1), b: p(x0) };
             let (mut sink, mut counts) = (Collect::default(), Counts::default());
             let ((), ops) = counting(UnitKind::FragmentRasterizer, || {
-                rasterize(&l, 7, &s, SIDE, &mut sink, &mut counts)
+                rasterize(&l, 7, &s, Columns::plain(SIDE), &mut sink, &mut counts)
             });
             assert_eq!(counts.fragments, n);
             let got = [Op::Add, Op::Mul, Op::Div, Op::Cmp, Op::Round, Op::Sqrt]
@@ -269,7 +306,7 @@ mod tests {
     /// the right), and the run's emptiness is its length's.
     #[test]
     fn a_span_is_given_only_where_a_pixel_centre_is_covered() {
-        let at = |x0, x1| span(&sub(x0, x1), SIDE);
+        let at = |x0, x1| span(&sub(x0, x1), SIDE, 0.5);
         assert_eq!(at(10.5, 12.5).map(|s| (s.i0, s.i1)), Some((10, 12)));
         assert!(!at(10.5, 12.5).unwrap().is_empty());
         // No centre inside (10.5 is pixel 10's centre, counted on the left end only).
@@ -320,7 +357,7 @@ mod tests {
             &l,
             7,
             &Subsegment { a: b, b: a },
-            SIDE,
+            Columns::plain(SIDE),
             &mut sink,
             &mut counts,
         );

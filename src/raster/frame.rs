@@ -21,6 +21,17 @@ pub struct Frame {
     pub probe: Option<ProbeReport>,
 }
 
+impl Frame {
+    /// This frame, drawn on the sample grid of `samples` per pixel, resolved into its image
+    /// ([`FrameBuffer::resolve`]); the counts and the probe stay the sample grid's.
+    pub fn resolve(self, samples: crate::camera::Samples) -> Frame {
+        Frame {
+            framebuffer: self.framebuffer.resolve(samples),
+            ..self
+        }
+    }
+}
+
 /// A frame drawn by `draw` into a ROP over a fresh frame buffer (keeping normals when
 /// analysing); `draw` returns the probe's report when it measured one.
 pub fn frame_with<R: Real>(

@@ -5,7 +5,7 @@
 
 use super::counts::Counts;
 use super::driver::{Draw, Stages};
-use super::fragment::{self, FragmentSink};
+use super::fragment::{self, Columns, FragmentSink};
 use super::screen::ScreenLembo;
 use super::{interval, minmax, segmenter, setup, subsegmenter};
 use crate::camera::View;
@@ -107,8 +107,9 @@ impl<R: Real, S: FragmentSink<R>> Draw<R, S> for LemboPath<'_, R> {
         counts: &mut Counts,
         buffers: &mut Buffers<R>,
     ) -> std::result::Result<(), (u32, Error)> {
-        let (width, k, cap) = (self.view.viewport.width, self.k, self.segment_cap);
-        scanlines(l, lo, hi - 1, width, k, cap, sink, counts, buffers)
+        let cols = Columns::of(self.view);
+        let (k, cap) = (self.k, self.segment_cap);
+        scanlines(l, lo, hi - 1, cols, k, cap, sink, counts, buffers)
     }
 }
 
@@ -143,7 +144,7 @@ fn scanlines<R: Real, S: FragmentSink<R>>(
     l: &ScreenLembo<R>,
     j0: u32,
     j1: u32,
-    width: u32,
+    cols: Columns,
     k: R,
     segment_cap: usize,
     sink: &mut S,
@@ -153,9 +154,9 @@ fn scanlines<R: Real, S: FragmentSink<R>>(
     #[cfg(target_arch = "x86_64")]
     if crate::isa::kernels() == crate::isa::Isa::Avx2 {
         // SAFETY: `kernels` says AVX2 only where the CPU has it.
-        return unsafe { scanlines_avx2(l, j0, j1, width, k, segment_cap, sink, counts, b) };
+        return unsafe { scanlines_avx2(l, j0, j1, cols, k, segment_cap, sink, counts, b) };
     }
-    scanlines_as_compiled(l, j0, j1, width, k, segment_cap, sink, counts, b)
+    scanlines_as_compiled(l, j0, j1, cols, k, segment_cap, sink, counts, b)
 }
 
 /// [`scanlines`] compiled for AVX2.
@@ -169,14 +170,14 @@ unsafe fn scanlines_avx2<R: Real, S: FragmentSink<R>>(
     l: &ScreenLembo<R>,
     j0: u32,
     j1: u32,
-    width: u32,
+    cols: Columns,
     k: R,
     segment_cap: usize,
     sink: &mut S,
     counts: &mut Counts,
     b: &mut Buffers<R>,
 ) -> std::result::Result<(), (u32, Error)> {
-    scanlines_as_compiled(l, j0, j1, width, k, segment_cap, sink, counts, b)
+    scanlines_as_compiled(l, j0, j1, cols, k, segment_cap, sink, counts, b)
 }
 
 /// [`scanlines`] for the instruction set its caller is compiled for.
@@ -186,7 +187,7 @@ fn scanlines_as_compiled<R: Real, S: FragmentSink<R>>(
     l: &ScreenLembo<R>,
     j0: u32,
     j1: u32,
-    width: u32,
+    cols: Columns,
     k: R,
     segment_cap: usize,
     sink: &mut S,
@@ -201,7 +202,7 @@ fn scanlines_as_compiled<R: Real, S: FragmentSink<R>>(
         segmenter::least_reach(l, k)
     };
     for j in j0..=j1 {
-        scanline(l, j, width, k, segment_cap, reach, sink, counts, b).map_err(|e| (j, e))?;
+        scanline(l, j, cols, k, segment_cap, reach, sink, counts, b).map_err(|e| (j, e))?;
     }
     Ok(())
 }
@@ -214,7 +215,7 @@ fn scanlines_as_compiled<R: Real, S: FragmentSink<R>>(
 fn scanline<R: Real, S: FragmentSink<R>>(
     l: &ScreenLembo<R>,
     j: u32,
-    width: u32,
+    cols: Columns,
     k: R,
     segment_cap: usize,
     reach: Option<f64>,
@@ -242,7 +243,7 @@ fn scanline<R: Real, S: FragmentSink<R>>(
             subsegmenter::subsegments(l, seg, k, &mut b.subsegments, counts);
             for sub in &b.subsegments {
                 R::charge(UnitKind::FragmentRasterizer);
-                fragment::rasterize(l, j, sub, width, sink, counts);
+                fragment::rasterize(l, j, sub, cols, sink, counts);
             }
         }
     }
@@ -304,8 +305,30 @@ mod tests {
         let (k, cap) = (path.k, path.segment_cap);
         for (l, &(j0, end)) in pieces.iter().zip(&rows) {
             let j1 = end - 1;
-            scanlines(l, j0, j1, 384, k, cap, &mut dispatched, &mut c1, &mut b1).unwrap();
-            scanlines_as_compiled(l, j0, j1, 384, k, cap, &mut compiled, &mut c2, &mut b2).unwrap();
+            scanlines(
+                l,
+                j0,
+                j1,
+                Columns::plain(384),
+                k,
+                cap,
+                &mut dispatched,
+                &mut c1,
+                &mut b1,
+            )
+            .unwrap();
+            scanlines_as_compiled(
+                l,
+                j0,
+                j1,
+                Columns::plain(384),
+                k,
+                cap,
+                &mut compiled,
+                &mut c2,
+                &mut b2,
+            )
+            .unwrap();
         }
         assert!(dispatched.0.len() > 10_000, "{}", dispatched.0.len());
         assert_eq!(c1, c2);

@@ -321,7 +321,14 @@ pub(crate) mod tests {
                 subs.clear();
                 subsegmenter::subsegments(l, seg, k, &mut subs, &mut counts);
                 for sub in &subs {
-                    fragment::rasterize(l, j, sub, SIDE, &mut sink, &mut counts);
+                    fragment::rasterize(
+                        l,
+                        j,
+                        sub,
+                        fragment::Columns::plain(SIDE),
+                        &mut sink,
+                        &mut counts,
+                    );
                 }
             }
         }

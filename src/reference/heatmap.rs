@@ -282,6 +282,7 @@ mod tests {
             height: h,
             supersample: 1,
             hits: vec![None; n],
+            hits_offset_px: [0.0; 2],
             color: vec![[0; 3]; n],
             color_supersampled: None,
             coverage: None,

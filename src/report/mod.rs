@@ -120,6 +120,9 @@ pub struct Settings {
     pub reference: bool,
     /// Reference sub-samples per pixel side (1 = pixel centres only).
     pub supersample: u32,
+    /// Samples per pixel of the render (1: one at each pixel centre; 2, 4 or 8:
+    /// multisampled at Direct3D's standard positions and resolved, DESIGN.md §2).
+    pub samples: u32,
 }
 
 /// Setup's perspective tolerance as a report echoes it: pixels, or the string `"off"`.

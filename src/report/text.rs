@@ -67,13 +67,17 @@ impl Report {
         let st = &self.settings;
         let _ = writeln!(
             t,
-            "settings  mode {}, path {}, {}, datapath {}, reference {}{}",
+            "settings  mode {}, path {}, {}{}, datapath {}, reference {}{}",
             st.mode,
             st.path,
             match (st.k_px, st.tess) {
                 (Some(k), _) => format!("k = {k} px"),
                 (None, Some(n)) => format!("tessellation {n} ({} triangles per lembo)", n * n),
                 (None, None) => String::new(),
+            },
+            match st.samples {
+                1 => String::new(),
+                n => format!(", {n} samples a pixel (multisampled, resolved)"),
             },
             st.datapath,
             if st.reference { "yes" } else { "no" },
@@ -308,10 +312,16 @@ impl Report {
             );
             return;
         }
+        // Multisampled, the viewport is followed by its samples and the counts are the
+        // sample grid's (a fragment is a sample).
+        let px = match r.settings.samples {
+            1 => "px".to_string(),
+            n => format!("px x {n} samples"),
+        };
         let _ = match r.settings.k_px {
             Some(k) => writeln!(
                 t,
-                "{}: {} lembos, {}x{} px, k = {} px, {}: {} scanlines, {} intervals, {} segments, {} subsegments, {} fragments ({} passed depth)",
+                "{}: {} lembos, {}x{} {px}, k = {} px, {}: {} scanlines, {} intervals, {} segments, {} subsegments, {} fragments ({} passed depth)",
                 r.scene.name,
                 r.scene.lembos,
                 r.scene.width,
@@ -327,7 +337,7 @@ impl Report {
             ),
             None => writeln!(
                 t,
-                "{}: {} lembos as {} triangles (tessellation {}), {}x{} px, {}: {} culled, {} quads ({:.1} % efficiency), {} fragments ({} passed depth)",
+                "{}: {} lembos as {} triangles (tessellation {}), {}x{} {px}, {}: {} culled, {} quads ({:.1} % efficiency), {} fragments ({} passed depth)",
                 r.scene.name,
                 r.scene.lembos,
                 c.triangles,

@@ -6,6 +6,7 @@
 //! would hold it. The normal buffer exists only when accuracy is measured.
 
 use super::plane::{fill, Plane};
+use crate::camera::Samples;
 
 /// No primitive has written this pixel.
 pub const NO_PRIMITIVE: u32 = u32::MAX;
@@ -169,6 +170,69 @@ impl FrameBuffer {
     /// Pixels some primitive wrote.
     pub fn covered(&self) -> usize {
         covered(&self.primitive)
+    }
+
+    /// Bytes the frame buffer of a `width` x `height` image with `samples` per pixel holds:
+    /// every sample as [`Self::BYTES_PER_PIXEL`], and with more than one sample the resolved
+    /// RGB8 image beside them \[bytes\].
+    pub fn stored_bytes_sampled(width: u32, height: u32, samples: Samples) -> u64 {
+        let n = samples.get();
+        let resolved = if n > 1 {
+            Self::resolve_bytes_written(width, height)
+        } else {
+            0
+        };
+        Self::stored_bytes(width, height * n) + resolved
+    }
+
+    /// The RGB8 image a resolve writes \[bytes\].
+    fn resolve_bytes_written(width: u32, height: u32) -> u64 {
+        width as u64 * height as u64 * std::mem::size_of::<[u8; 3]>() as u64
+    }
+
+    /// Bytes the resolve of a `width` x `height` image with `samples` per pixel moves through
+    /// the frame-buffer port: every sample's colour read and every pixel's written; none with
+    /// one sample (nothing to resolve) \[bytes\].
+    pub fn resolve_bytes(width: u32, height: u32, samples: Samples) -> u64 {
+        let n = samples.get() as u64;
+        match n {
+            1 => 0,
+            _ => (n + 1) * Self::resolve_bytes_written(width, height),
+        }
+    }
+
+    /// The image of this sample grid of `samples` per pixel (its rows the sample rows,
+    /// [`Samples`]): each pixel's colour the mean of its samples' (a box filter on the stored
+    /// linear RGB8, rounded to nearest), and its depth, winner and normal its first sample
+    /// row's (where the accuracy metrics look, DESIGN.md §6). One sample: the frame itself.
+    pub fn resolve(self, samples: Samples) -> FrameBuffer {
+        let n = samples.get();
+        if n == 1 {
+            return self;
+        }
+        assert_eq!(self.height % n, 0, "a sample grid has whole pixels");
+        let (w, h) = (self.width as usize, (self.height / n) as usize);
+        let mut out = FrameBuffer::new(self.width, self.height / n, [0; 3], self.normal.is_some());
+        for j in 0..h {
+            let first = j * n as usize * w;
+            for i in 0..w {
+                let mut sum = [0u32; 3];
+                for s in 0..n as usize {
+                    let c = self.color[first + s * w + i];
+                    for k in 0..3 {
+                        sum[k] += c[k] as u32;
+                    }
+                }
+                let at = j * w + i;
+                out.color[at] = sum.map(|c| ((c + n / 2) / n) as u8);
+                out.depth[at] = self.depth[first + i];
+                out.primitive[at] = self.primitive[first + i];
+                if let (Some(to), Some(from)) = (out.normal.as_mut(), self.normal.as_ref()) {
+                    to[at] = from[first + i];
+                }
+            }
+        }
+        out
     }
 
     /// The colour buffer as an `image` RGB8 image.

@@ -12,7 +12,7 @@ use super::fragment_shader::FragmentShader;
 use super::framebuffer::{FrameBuffer, FrameRows};
 use super::lanes::{self, three, Lanes, LANES};
 use super::shade::Light;
-use crate::camera::View;
+use crate::camera::{Samples, View};
 use crate::datapath::{Op, Real};
 use crate::lembo::{eval3, Quadratic3};
 use crate::raster::fragment::{self, FragmentSink, Span};
@@ -254,6 +254,19 @@ pub struct Rop<'a, R: Real> {
     /// The frame row that `fb`'s row 0 holds (a band of a frame drawn on several threads).
     row0: u32,
     batch: Box<Batch<R>>,
+    /// Per column, the colour and normal a multisampled triangle (or piece) was last shaded
+    /// with in that column, and at which pixel row: what a counting datapath's ROP shades
+    /// once per pixel and primitive ([`Rop::write_multisampled`]).
+    shaded: Vec<Option<Shaded>>,
+}
+
+/// A pixel's colour and normal as a multisampled triangle was shaded there.
+#[derive(Clone, Copy)]
+struct Shaded {
+    /// The triangle (id) or piece (its first vertex) and the pixel row.
+    tag: (u32, i64, i64, u32),
+    rgb: [u8; 3],
+    normal: [f32; 3],
 }
 
 impl<'a, R: Real> Rop<'a, R> {
@@ -271,6 +284,7 @@ impl<'a, R: Real> Rop<'a, R> {
             passed: 0,
             row0,
             batch: Batch::new(),
+            shaded: Vec::new(),
         }
     }
 
@@ -344,9 +358,50 @@ impl<R: Real> Rop<'_, R> {
     }
 }
 
+impl<R: Real> Rop<'_, R> {
+    /// [`Self::write`] of a sample of a multisampled triangle `t` at column i of sample row
+    /// j, one by one (a counting datapath, a probe's fragments): the depth test per sample,
+    /// and the shading once per pixel and triangle, at the pixel centre (the colour of its
+    /// first sample that passes is kept for the pixel's others: the same colour whichever
+    /// sample it is).
+    fn write_multisampled(&mut self, t: &ScreenTriangle<R>, i: u32, j: u32, z: R) {
+        self.flush();
+        let idx = self.fb.index(i, j - self.row0);
+        let zf = z.f64() as f32;
+        R::count_beside(Op::Cmp, 1);
+        if !self.fb.passes(idx, zf, t.id) {
+            return;
+        }
+        self.passed += 1;
+        let tag = (t.id, t.x[0], t.y[0], j / t.samples.get());
+        if self.shaded.len() <= i as usize {
+            self.shaded.resize(i as usize + 1, None);
+        }
+        let shaded = match self.shaded[i as usize] {
+            Some(s) if s.tag == tag => s,
+            _ => {
+                let f = t.fragment_at(t.shading_weights(i, j), z);
+                let (rgb, n) = self.shader.shade_at(f.normal, f.position, t.color);
+                let s = Shaded {
+                    tag,
+                    rgb,
+                    normal: n.map(|c| c.f64() as f32),
+                };
+                self.shaded[i as usize] = Some(s);
+                s
+            }
+        };
+        self.fb.write(idx, zf, t.id, shaded.rgb, || shaded.normal);
+    }
+}
+
 impl<R: Real> TriangleSink<R> for Rop<'_, R> {
     #[inline]
     fn fragment(&mut self, t: &ScreenTriangle<R>, i: u32, j: u32, f: &TriangleFragment<R>) {
+        if t.samples != Samples::ONE {
+            // Shaded at the pixel centre, not at the sample `f` was interpolated at.
+            return self.write_multisampled(t, i, j, f.z);
+        }
         self.write(t.id, i, j, f.z, |s| {
             s.shade_at(f.normal, f.position, t.color)
         });
@@ -354,12 +409,22 @@ impl<R: Real> TriangleSink<R> for Rop<'_, R> {
 
     #[inline]
     fn covered(&mut self, t: &ScreenTriangle<R>, i: u32, j: u32, l: [R; 3], z: R) {
+        let multisampled = t.samples != Samples::ONE;
         if R::COUNTS_OPERATIONS {
+            if multisampled {
+                return self.write_multisampled(t, i, j, z);
+            }
             let f = t.fragment_at(l, z);
             return TriangleSink::fragment(self, t, i, j, &f);
         }
         self.batch
             .begin_triangle(t, &self.shader, into_rows(&mut self.fb));
+        // Multisampled, every sample of a pixel is shaded at the pixel centre.
+        let l = if multisampled {
+            t.shading_weights(i, j)
+        } else {
+            l
+        };
         self.test(t.id, i, j, z, l);
     }
 
@@ -376,10 +441,17 @@ impl<R: Real> TriangleSink<R> for Rop<'_, R> {
         self.fb.prefetch(a, j + 2 - self.row0);
         self.fb.prefetch(b - 1, j + 2 - self.row0);
         let edges = t.row_edges(j);
+        let multisampled = t.samples != Samples::ONE;
         for i in (a..b).step_by(WEIGHT_LANES) {
             let (l, z) = t.weights_lanes(&edges, i);
             for k in 0..WEIGHT_LANES.min((b - i) as usize) {
-                self.test(t.id, i + k as u32, j, z[k], [l[0][k], l[1][k], l[2][k]]);
+                let i = i + k as u32;
+                // Multisampled, every sample of a pixel is shaded at the pixel centre.
+                let l = match multisampled {
+                    false => [l[0][k], l[1][k], l[2][k]],
+                    true => t.shading_weights(i, j),
+                };
+                self.test(t.id, i, j, z[k], l);
             }
         }
     }

@@ -5,7 +5,7 @@ use super::{
     grid::{reword, set_arch_field},
     spec::{Point, Run, Setting, Shard, Spec, ARCH},
 };
-use crate::camera::View;
+use crate::camera::{Samples, View};
 use crate::config::ArchConfig;
 use crate::datapath::Datapath;
 use crate::discoid::blend::BlendMode;
@@ -310,6 +310,7 @@ pub(super) fn render_job(
         // A discoid scene is measured against the surface it stands for, where it says.
         reference: spec.reference && crate::job::check_reference_scene(scene).is_ok(),
         supersample: 1,
+        samples: Samples::ONE,
         flip_ppd: PixelsPerDegree::default(),
         viewport: spec.viewport,
         mode: spec.mode,

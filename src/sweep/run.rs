@@ -7,6 +7,7 @@ use super::{
     results::{check_same_spec, joined, read_partial, write_final, RESULTS_JSONL, SPEC_JSON},
     spec::{Run, Shard},
 };
+use crate::camera::Samples;
 use crate::error::{Error, Result};
 use crate::job::{check_count, render_reference, PrimitivePath, MAX_HOST_THREADS};
 use crate::output::write_files;
@@ -255,7 +256,7 @@ fn references(
             bar.set_message(format!("reference of {}", scene.name));
             // The plan measures a discoid scene only where it says what surface it stands for.
             let surface = crate::job::reference_scene(scene).expect("checked by the plan");
-            pool.install(|| render_reference(surface.as_ref(), &plan.views[s], 1))
+            pool.install(|| render_reference(surface.as_ref(), &plan.views[s], 1, Samples::ONE))
         }));
     }
     bar.set_message("");

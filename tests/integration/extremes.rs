@@ -167,7 +167,7 @@ fn run_scene(file: &str, expect: &Value) {
         return;
     }
 
-    let (reference, wall) = render_reference(&scene, &view, 1);
+    let (reference, wall) = render_reference(&scene, &view, 1, lembo_sim::camera::Samples::ONE);
     for (path, key) in [
         (PrimitivePath::Lembo, "lembo"),
         (PrimitivePath::Triangle, "triangle"),

@@ -35,7 +35,7 @@ fn functional(s: &Scene, n: u32, datapath: Datapath) -> Frame {
 /// The triangle path at level `n` against the exact reference of the scene's lembos.
 fn against_reference(s: &Scene, n: u32, datapath: Datapath) -> (Accuracy, Counts) {
     let view = View::new(&s.camera, s.viewport);
-    let (reference, _) = render_reference(s, &view, 1);
+    let (reference, _) = render_reference(s, &view, 1, lembo_sim::camera::Samples::ONE);
     let f = functional(s, n, datapath);
     let a = measure_frame(
         s,

@@ -24,7 +24,7 @@ fn job(k: f64, perspective_tol: PerspectiveTol, datapath: Datapath) -> RenderJob
 /// functional, against the exact reference (rendered once).
 fn measure(scene: &Scene, runs: &[(f64, PerspectiveTol, Datapath)]) -> Vec<(Accuracy, Counts)> {
     let view = View::new(&scene.camera, scene.viewport);
-    let (reference, wall) = render_reference(scene, &view, 1);
+    let (reference, wall) = render_reference(scene, &view, 1, lembo_sim::camera::Samples::ONE);
     runs.iter()
         .map(|&(k, tol, datapath)| {
             let run = run_path(

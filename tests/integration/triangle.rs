@@ -174,7 +174,7 @@ fn silhouette_error_falls_roughly_as_one_over_n_squared() {
     // error per doubling; this asks for clearly more).
     let s = scene("sphere24.json", None);
     let view = View::new(&s.camera, s.viewport);
-    let (reference, _) = render_reference(&s, &view, 1);
+    let (reference, _) = render_reference(&s, &view, 1, lembo_sim::camera::Samples::ONE);
     let err: Vec<f64> = [1, 2, 4]
         .iter()
         .map(|&n| {

@@ -24,7 +24,7 @@ use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::{ceil_div, Ctx};
 use crate::pipeline::tiles::{RopTiles, SharedFrame};
 use crate::pipeline::unit::{Finished, Run, Unit};
-use crate::raster::fragment::{span, Span};
+use crate::raster::fragment::{span, Columns, Span};
 use crate::raster::Counts;
 
 /// A fragment rasterizer, Figure 5's sixth box.
@@ -46,19 +46,19 @@ impl<R: Real> Unit<R> for FragmentRasterizer {
             ctx,
             &run.arch.rasterizer,
             &run.tiles,
-            run.view.viewport.width,
+            Columns::of(run.view),
             &run.frame,
         ))
     }
 }
 
-/// A FragmentRasterizer's body: per subsegment, its fragments on a screen `width` pixels
-/// wide in spans, one per ROP tile of `tiles` crossed.
+/// A FragmentRasterizer's body: per subsegment, its fragments on the screen columns `cols`
+/// in spans, one per ROP tile of `tiles` crossed.
 pub async fn run<R: Real>(
     mut ctx: Ctx<ScanSubsegment<R>, RopItem<R>>,
     cfg: &RasterizerConfig,
     tiles: &RopTiles,
-    width: u32,
+    cols: Columns,
     frame: &SharedFrame<'_>,
 ) -> Finished {
     let mut counts = Counts::default();
@@ -69,7 +69,7 @@ pub async fn run<R: Real>(
     }) = ctx.next_input().await
     {
         ctx.work(cfg.cycles_per_subsegment);
-        let Some(mut run) = span(&subsegment, width) else {
+        let Some(mut run) = span(&subsegment, cols.width, cols.centre(j)) else {
             continue;
         };
         counts.fragments += run.len() as u64;
@@ -81,7 +81,7 @@ pub async fn run<R: Real>(
                 ..run
             };
             let cycles = ceil_div(n as u64, cfg.fragments_per_cycle);
-            frame.prefetch(j as usize * width as usize + run.i0 as usize);
+            frame.prefetch(j as usize * cols.width as usize + run.i0 as usize);
             let piece = piece.clone();
             ctx.emit(cycles, rop, RopItem::Lembo(FragmentSpan { piece, j, span }))
                 .await;

@@ -16,7 +16,7 @@
 //! `latency_cycles` later. Not modelled: caches; the frame-buffer port's bandwidth is the
 //! memory model.
 
-use crate::camera::View;
+use crate::camera::{Samples, View};
 use crate::config::{BlendConfig, FrameBufferConfig, RopConfig};
 use crate::datapath::Real;
 use crate::discoid::blend::BlendMode;
@@ -196,6 +196,11 @@ pub async fn run<R: Real>(mut ctx: Ctx<RopItem<R>, MemAccess>, rop: RopContext<'
                         let wins = match discoid {
                             None => {
                                 let (l, z) = t.weights(i, j);
+                                // Multisampled, each sample is shaded at its pixel's centre.
+                                let l = match t.samples == Samples::ONE {
+                                    true => l,
+                                    false => t.shading_weights(i, j),
+                                };
                                 let pass = pixels.test_depth(idx, z.f64() as f32, t.id);
                                 if pass && batch.push(idx, l) {
                                     batch.flush(&shader, into(&mut pixels));

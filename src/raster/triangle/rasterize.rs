@@ -1,7 +1,7 @@
 //! The triangle path's rasterizer: coverage by integer edge functions with the top-left
 //! rule, 2x2 quads, and each covered pixel's perspective-correct [`TriangleFragment`].
 
-use super::setup::{pixel_centre, ScreenTriangle, SUBPIXEL};
+use super::setup::{ScreenTriangle, SUBPIXEL};
 use crate::datapath::Real;
 use crate::datapath::{Event, Op};
 use crate::raster::counts::Counts;
@@ -18,13 +18,18 @@ pub struct TriangleFragment<R> {
 }
 
 impl<R: Real> ScreenTriangle<R> {
-    /// The three edge functions at pixel (i, j)'s centre.
+    /// The three edge functions at pixel (i, j)'s centre (on a sample grid, its sample).
     #[inline(always)]
     pub(super) fn edge_values(&self, i: u32, j: u32) -> [i64; 3] {
+        self.edge_values_at(self.sample_at(i, j))
+    }
+
+    /// The three edge functions at sub-pixel position (px, py).
+    #[inline(always)]
+    fn edge_values_at(&self, (px, py): (i64, i64)) -> [i64; 3] {
         // Three edge functions a x + b y + c.
         R::count_beside(Op::IntMul, 6);
         R::count_beside(Op::IntAdd, 6);
-        let (px, py) = pixel_centre(i, j);
         let [e0, e1, e2] = &self.edges;
         [e0.at(px, py), e1.at(px, py), e2.at(px, py)]
     }
@@ -44,10 +49,26 @@ impl<R: Real> ScreenTriangle<R> {
         self.fragment_at(l, z)
     }
 
-    /// The barycentric weights of pixel (i, j)'s centre and the depth there.
+    /// The barycentric weights of pixel (i, j)'s centre (on a sample grid, its sample) and
+    /// the depth there.
     #[inline(always)]
     pub fn weights(&self, i: u32, j: u32) -> ([R; 3], R) {
-        let e = self.edge_values(i, j);
+        self.weights_of(self.edge_values(i, j))
+    }
+
+    /// The barycentric weights a multisampled triangle is shaded with at column i of sample
+    /// row j: at the centre of the pixel (extrapolated where the centre is outside, as
+    /// multisampling shades; [`ScreenTriangle::shading_point`]), the same for every sample of
+    /// the pixel. With one sample per pixel, [`Self::weights`].
+    #[inline(always)]
+    pub fn shading_weights(&self, i: u32, j: u32) -> [R; 3] {
+        self.weights_of(self.edge_values_at(self.shading_point(i, j)))
+            .0
+    }
+
+    /// The weights and depth of edge-function values `e`.
+    #[inline(always)]
+    fn weights_of(&self, e: [i64; 3]) -> ([R; 3], R) {
         let area = R::of(self.area2 as f64);
         let l = [
             R::of(e[0] as f64) / area,
@@ -84,11 +105,12 @@ impl<R: Real> ScreenTriangle<R> {
             return self.row_span_by_pixels(j);
         }
         // Each edge's half-line of columns, in exact integer arithmetic: E(i) = A i + B
-        // with A = 256 a, B = a 128 + b y + c, covered where E(i) >= min.
-        let (_, py) = pixel_centre(0, j);
+        // with A = 256 a, B = a x0 + b y + c (x0 = 128, column 0's centre, or its sample),
+        // covered where E(i) >= min.
+        let (x0, py) = self.sample_at(0, j);
         let (mut lo, mut hi) = (i0 as i64, i1 as i64);
         for e in &self.edges {
-            let (a, b) = (e.a * SUBPIXEL, e.a * (SUBPIXEL / 2) + e.b * py + e.c);
+            let (a, b) = (e.a * SUBPIXEL, e.a * x0 + e.b * py + e.c);
             let need = e.min - b;
             match a.cmp(&0) {
                 // i >= ceil(need / a)
@@ -128,12 +150,10 @@ impl<R: Real> ScreenTriangle<R> {
     /// `f64`, for [`Self::weights_lanes`].
     #[inline(always)]
     pub fn row_edges(&self, j: u32) -> RowEdges<R> {
-        let (_, py) = pixel_centre(0, j);
+        let (x0, py) = self.sample_at(0, j);
         RowEdges {
             a: self.edges.map(|e| (e.a * SUBPIXEL) as f64),
-            b: self
-                .edges
-                .map(|e| (e.a * (SUBPIXEL / 2) + e.b * py + e.c) as f64),
+            b: self.edges.map(|e| (e.a * x0 + e.b * py + e.c) as f64),
             area: R::of(self.area2 as f64),
         }
     }
@@ -196,15 +216,22 @@ impl<R: Real> ScreenTriangle<R> {
         let [i0, i1, j0, j1] = self.bbox;
         let t = COARSE_TILE_PX;
         let inside = |i: u32, j: u32| {
-            let (x, y) = pixel_centre(i, j);
+            let (x, y) = self.sample_at(i, j);
             self.edges.iter().all(|e| e.at(x, y) >= e.min)
+        };
+        // A tile's samples lie between its corner pixels' centres moved by the pattern's
+        // least and greatest offsets along a row (none with one sample).
+        let (dmin, dmax) = self.samples.dx16_range();
+        let corner = |i: u32, j: u32, d: i64| {
+            let (x, y) = super::setup::pixel_centre(i, j);
+            (x + SUBPIXEL / 16 * d, y)
         };
         let mut walk = Walk::default();
         for ty in j0 / t..=(j1 - 1) / t {
             for tx in i0 / t..=(i1 - 1) / t {
                 walk.tiles += 1;
-                let (lo_x, lo_y) = pixel_centre(tx * t, ty * t);
-                let (hi_x, hi_y) = pixel_centre(tx * t + t - 1, ty * t + t - 1);
+                let (lo_x, lo_y) = corner(tx * t, ty * t, dmin);
+                let (hi_x, hi_y) = corner(tx * t + t - 1, ty * t + t - 1, dmax);
                 let rejected = self.edges.iter().any(|e| {
                     let x = if e.a > 0 { hi_x } else { lo_x };
                     let y = if e.b > 0 { hi_y } else { lo_y };

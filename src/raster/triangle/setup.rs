@@ -2,7 +2,7 @@
 //! (Sutherland-Hodgman on the world triangle), 16.8 snapping, fans, and the edge functions
 //! of a [`ScreenTriangle`].
 
-use crate::camera::{ScreenPoint, View, Viewport};
+use crate::camera::{Samples, ScreenPoint, View, Viewport};
 use crate::datapath::Op;
 use crate::datapath::Real;
 use crate::raster::counts::Counts;
@@ -61,6 +61,26 @@ pub fn pixel_centre(i: u32, j: u32) -> (i64, i64) {
     )
 }
 
+impl<R> ScreenTriangle<R> {
+    /// The sub-pixel position of the sample of column i on sample-grid row j: pixel (i, j)'s
+    /// centre with one sample per pixel, else displaced along the row by the row's offset
+    /// ([`Samples::row_dx16`]).
+    #[inline(always)]
+    pub fn sample_at(&self, i: u32, j: u32) -> (i64, i64) {
+        let (x, y) = pixel_centre(i, j);
+        (x + SUBPIXEL / 16 * self.samples.row_dx16(j), y)
+    }
+
+    /// The sub-pixel position of the centre of the pixel whose sample row j is (row j itself
+    /// with one sample per pixel), column i: where a multisampled triangle is shaded.
+    #[inline(always)]
+    pub fn shading_point(&self, i: u32, j: u32) -> (i64, i64) {
+        let n = self.samples.get();
+        let (x, _) = pixel_centre(i, j);
+        (x, (j / n * n) as i64 * SUBPIXEL + n as i64 * (SUBPIXEL / 2))
+    }
+}
+
 /// Snaps a screen coordinate \[pixels\] to 16.8 fixed point, rounding to nearest.
 #[inline]
 pub fn snap<R: Real>(x: R) -> i64 {
@@ -95,6 +115,9 @@ pub struct ScreenTriangle<R> {
     pub position_w: [[R; 3]; 3],
     /// Material colour, linear RGB.
     pub color: [R; 3],
+    /// The samples per pixel whose sample grid the triangle is set up on (one: the pixel
+    /// centres).
+    pub samples: Samples,
 }
 
 /// Why a triangle produced no [`ScreenTriangle`].
@@ -229,7 +252,7 @@ pub fn setup_onto<R: Real>(
         let x = s.map(|s| snap(R::of(s.x)));
         let y = s.map(|s| snap(R::of(s.y)));
         let v = [0, 1, 2].map(|k| vertex(view, &s[k], positions[k], normals[k]));
-        return match ScreenTriangle::assemble(id, x, y, v, color, view.viewport) {
+        return match ScreenTriangle::assemble(id, x, y, v, color, view.viewport, view.samples) {
             Ok(t) => {
                 out.push(t);
                 SetupOutcome::default()
@@ -508,6 +531,7 @@ pub(super) fn fan<R: Real>(
             [v[a], v[b], v[c]],
             color,
             view.viewport,
+            view.samples,
         ) {
             Ok(t) => out.push(t),
             Err(cull) => all_outside &= cull == TriangleCull::Outside,
@@ -573,7 +597,7 @@ pub struct Vertex<R> {
 
 impl<R: Real> ScreenTriangle<R> {
     /// Orients, bounds and sets up the edge functions of a triangle with snapped vertices
-    /// (x, y) [1/256 pixel].
+    /// (x, y) [1/256 pixel] on `viewport`, the sample grid of `samples` per pixel.
     pub fn assemble(
         id: u32,
         mut x: [i64; 3],
@@ -581,6 +605,7 @@ impl<R: Real> ScreenTriangle<R> {
         mut v: [Vertex<R>; 3],
         color: [R; 3],
         viewport: Viewport,
+        samples: Samples,
     ) -> Result<Self, TriangleCull> {
         // The doubled area (2 multiplies, 5 adds), the three edge functions (2 multiplies and
         // 3 adds each, a compare for the top-left rule) and the bounding box (8 compares).
@@ -599,16 +624,22 @@ impl<R: Real> ScreenTriangle<R> {
             area2 = -area2;
         }
         let (vw, vh) = (viewport.width as i64, viewport.height as i64);
-        // Pixel i's centre 256 i + 128 is inside [lo, hi] for first(lo) <= i <= last(hi).
+        // Pixel i's centre 256 i + 128 is inside [lo, hi] for first(lo) <= i <= last(hi); a
+        // sample displaced by d [1/256 pixel] from it, for first(lo - d) <= i <= last(hi - d).
         let first = |lo: i64| (lo - SUBPIXEL / 2 + SUBPIXEL - 1).div_euclid(SUBPIXEL);
         let last = |hi: i64| (hi - SUBPIXEL / 2).div_euclid(SUBPIXEL);
+        let (dmin, dmax) = samples.dx16_range();
+        let (first_x, last_x) = (
+            |lo: i64| first(lo - SUBPIXEL / 16 * dmax),
+            |hi: i64| last(hi - SUBPIXEL / 16 * dmin),
+        );
         let (xmin, xmax) = (x[0].min(x[1]).min(x[2]), x[0].max(x[1]).max(x[2]));
         let (ymin, ymax) = (y[0].min(y[1]).min(y[2]), y[0].max(y[1]).max(y[2]));
-        let (i0, i1) = (first(xmin).max(0), (last(xmax) + 1).min(vw));
+        let (i0, i1) = (first_x(xmin).max(0), (last_x(xmax) + 1).min(vw));
         let (j0, j1) = (first(ymin).max(0), (last(ymax) + 1).min(vh));
         if i0 >= i1 || j0 >= j1 {
             let outside =
-                last(xmax) < 0 || first(xmin) >= vw || last(ymax) < 0 || first(ymin) >= vh;
+                last_x(xmax) < 0 || first_x(xmin) >= vw || last(ymax) < 0 || first(ymin) >= vh;
             return Err(if outside {
                 TriangleCull::Outside
             } else {
@@ -631,6 +662,7 @@ impl<R: Real> ScreenTriangle<R> {
             normal_w: v.map(|v| v.normal_w),
             position_w: v.map(|v| v.position_w),
             color,
+            samples,
         })
     }
 }

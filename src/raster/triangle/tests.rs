@@ -4,7 +4,7 @@
 mod clip;
 
 use super::*;
-use crate::camera::{Camera, Projection, Viewport};
+use crate::camera::{Camera, Projection, Samples, Viewport};
 use crate::datapath::Datapath;
 use glam::{DVec3, DVec4};
 
@@ -31,6 +31,7 @@ fn tri(id: u32, p: [(i64, i64); 3]) -> Option<ScreenTriangle<f64>> {
         [flat(0.5); 3],
         [1.0; 3],
         VP,
+        Samples::ONE,
     )
     .ok()
 }
@@ -53,6 +54,7 @@ fn tri_in<R: Real>(p: [(i64, i64); 3], viewport: Viewport) -> ScreenTriangle<R> 
         v,
         [R::one(); 3],
         viewport,
+        Samples::ONE,
     )
     .expect("a triangle in view")
 }

@@ -98,9 +98,14 @@ pub struct ReferenceImage {
     pub height: u32,
     /// Sub-samples per pixel side `s` (1 = the pixel centre only).
     pub supersample: u32,
-    /// The hit at each pixel centre (i + 0.5, j + 0.5).
+    /// The hit at each pixel's point (i + 0.5, j + 0.5) + [`Self::hits_offset_px`].
     pub hits: Vec<Option<ReferenceHit>>,
-    /// The pixel centre shaded, the background where nothing is hit.
+    /// Where `hits` were traced from the pixel centres \[pixels\]: (0, 0), or for a
+    /// multisampled run's reference ([`Self::for_samples`]) the offset of the sample a
+    /// resolved frame keeps its depth, winner and normal from.
+    pub hits_offset_px: [f64; 2],
+    /// The colour a render is compared with: the pixel centre shaded (the background where
+    /// nothing is hit), or for a multisampled run's reference the area-averaged colour.
     pub color: Vec<[u8; 3]>,
     /// The mean of the s x s sub-samples' linear colours (a box filter), when s > 1.
     pub color_supersampled: Option<Vec<[u8; 3]>>,
@@ -112,6 +117,27 @@ impl ReferenceImage {
     /// The centre-sample colour buffer as an `image` RGB8 image.
     pub fn to_image(&self) -> image::RgbImage {
         rgb_image(self.width, self.height, &self.color)
+    }
+
+    /// This supersampled reference made the reference of a multisampled render: its hits
+    /// those of `at_sample`, the same scene traced from the pixel centres moved by `offset`
+    /// \[pixels\] (where the resolved frame keeps its depth, winner and normal), and its
+    /// colours the area-averaged ones, which a resolve approximates (DESIGN.md §6).
+    ///
+    /// # Panics
+    /// If this reference is not supersampled, or the two differ in size: bugs of the caller.
+    pub fn for_samples(mut self, at_sample: ReferenceImage, offset: [f64; 2]) -> ReferenceImage {
+        assert_eq!(
+            (self.width, self.height),
+            (at_sample.width, at_sample.height)
+        );
+        self.color = self
+            .color_supersampled
+            .clone()
+            .expect("a multisampled run's reference is supersampled");
+        self.hits = at_sample.hits;
+        self.hits_offset_px = offset;
+        self
     }
 
     /// The box-filtered colour buffer, when supersampled.
@@ -190,6 +216,7 @@ pub fn render_reference(input: &ReferenceInput) -> ReferenceImage {
         height,
         supersample: s,
         hits: Vec::with_capacity(n),
+        hits_offset_px: [0.0; 2],
         color: Vec::with_capacity(n),
         color_supersampled: (s > 1).then(|| Vec::with_capacity(n)),
         coverage: (s > 1).then(|| Vec::with_capacity(n)),

@@ -41,6 +41,7 @@ pub fn render_job(k: f64, datapath: Datapath) -> RenderJob {
         datapath,
         reference: false,
         supersample: 1,
+        samples: Default::default(),
         flip_ppd: Default::default(),
         viewport: None,
         mode: Mode::Functional,
