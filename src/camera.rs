@@ -450,4 +450,65 @@ mod tests {
             assert!(off.length() < 1e-9, "{projection:?}");
         }
     }
+
+    /// Direct3D's standard patterns: one sample on each of n rows, evenly spaced about the
+    /// centre, the rows' offsets along them as the table gives them.
+    #[test]
+    fn samples_are_direct3ds_patterns_one_to_a_row() {
+        for n in [1u32, 2, 4, 8] {
+            let s = Samples::new(n).unwrap();
+            let p = s.positions();
+            assert_eq!(p.len(), n as usize);
+            let mut dy: Vec<i8> = p.iter().map(|p| p.1).collect();
+            dy.sort();
+            let even: Vec<i8> = (0..n as i32)
+                .map(|k| ((2 * k + 1 - n as i32) * 8 / n as i32) as i8)
+                .collect();
+            assert_eq!(dy, even, "{n}");
+            for row in 0..3 * n {
+                let want = p
+                    .iter()
+                    .find(|q| q.1 == even[(row % n) as usize])
+                    .unwrap()
+                    .0;
+                assert_eq!(s.row_dx16(row), want as i64, "{n} row {row}");
+                assert_eq!(s.row_centre_x(row), 0.5 + want as f64 / 16.0);
+            }
+        }
+        assert_eq!(
+            Samples::new(4).unwrap().first_row_offset(),
+            [-0.125, -0.375]
+        );
+        assert_eq!(Samples::new(8).unwrap().dx16_range(), (-7, 7));
+        assert_eq!(Samples::ONE.row_centre_x(5), 0.5);
+        for bad in [0, 3, 16] {
+            assert!(Samples::new(bad).is_none());
+            assert!(Samples::try_from(bad).unwrap_err().contains("1, 2, 4 or 8"));
+        }
+    }
+
+    /// The sample grid is the same camera with n times the rows; a translated view sees at
+    /// its pixel centres what the view sees at the moved points, at the same depth.
+    #[test]
+    fn the_sample_grid_scales_rows_and_a_translated_view_moves_the_pixels() {
+        let v = cam(Projection::Perspective {
+            fovy_deg: 60.0,
+            near: 1.0,
+            far: 10.0,
+        });
+        let grid = v.with_samples(Samples::new(4).unwrap());
+        assert_eq!((grid.viewport.width, grid.viewport.height), (200, 400));
+        let p = DVec3::new(0.3, -0.2, 0.5);
+        let (a, b) = (v.project(p), grid.project(p));
+        assert!((b.x - a.x).abs() < 1e-9 && (b.y - 4.0 * a.y).abs() < 1e-9);
+        assert_eq!(a.depth, b.depth);
+        let moved = v.translated([0.25, -0.375]);
+        let c = moved.project(p);
+        assert!((c.x - (a.x - 0.25)).abs() < 1e-9 && (c.y - (a.y + 0.375)).abs() < 1e-9);
+        assert!((c.depth - a.depth).abs() < 1e-12);
+        let (o1, d1) = moved.ray(10.5, 20.5);
+        let (o2, d2) = v.ray(10.75, 20.125);
+        assert!((o1 - o2).length() < 1e-9 && (d1 - d2).length() < 1e-9);
+        assert_eq!(v.grid(Samples::ONE).viewport, v.viewport);
+    }
 }

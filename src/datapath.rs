@@ -146,15 +146,19 @@ pub enum Event {
     QuadCovered,
     /// A covered pixel centre: a fragment.
     Fragment,
+    /// A covered sample of a multisampled triangle (whose fragments are its samples, and
+    /// whose attributes are worked out once a pixel by the ROP that shades it).
+    Sample,
 }
 
 /// Every event, in the order of `cost::counted::OpTable::events`.
-pub const EVENTS: [Event; 5] = [
+pub const EVENTS: [Event; 6] = [
     Event::Triangle,
     Event::Tile,
     Event::QuadTested,
     Event::QuadCovered,
     Event::Fragment,
+    Event::Sample,
 ];
 
 /// The datapath selected on the command line.

@@ -48,13 +48,13 @@ impl Tolerance {
         }
     }
 
-    /// These tolerances \[pixels\] in rows of a grid of `rows_per_pixel` rows a pixel (a
-    /// multisampled frame's sample grid): that many times each.
+    /// These tolerances on a grid of `rows_per_pixel` rows a pixel (a multisampled frame's
+    /// sample grid): k, a distance across the rows, in rows (that many times k); the
+    /// perspective tolerance stays in pixels (Setup measures its error in pixels).
     pub fn on_grid(self, rows_per_pixel: u32) -> Self {
-        let n = rows_per_pixel as f64;
         Tolerance {
-            k: self.k * n,
-            perspective: self.perspective.map(|p| p * n),
+            k: self.k * rows_per_pixel as f64,
+            ..self
         }
     }
 

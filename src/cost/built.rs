@@ -18,6 +18,7 @@
 //! | a quad tested | step to it (3 adds), the other three pixels (9 adds), 12 fill-rule compares | step to it (8 adds) |
 //! | a quad covered | | `reciprocal: "quad"`: one reciprocal of 1/w (a divide) |
 //! | a fragment | | its lane's plane values (8 adds); `"quad"`: a Newton step from the quad's reciprocal, w (2 - w (1/w)) (2 multiplies, an add), `"pixel"`: a reciprocal (a divide); the six attributes times w (6 multiplies) |
+//! | a sample (multisampled: the fragments are samples) | | its window depth (an add); the pixel's attributes are worked out once, at its centre, by the ROP that shades it, and counted there as executed |
 //!
 //! Uncovered lanes of a covered quad are gated: they spend nothing beyond the coverage test.
 //!
@@ -64,6 +65,9 @@ pub fn rasterizer_per(event: Event, reciprocal: Reciprocal) -> [u64; OPS.len()] 
         Event::QuadCovered => ops(0, 0, quad as u64, 0, 0),
         Event::Fragment if quad => ops(PLANES + 1, 2 + 6, 0, 0, 0),
         Event::Fragment => ops(PLANES, 6, 1, 0, 0),
+        // The sample's window depth, stepped with the edges; the pixel's attributes are the
+        // shading ROP's, once a pixel, counted as executed there.
+        Event::Sample => ops(1, 0, 0, 0, 0),
     }
 }
 

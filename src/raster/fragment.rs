@@ -368,6 +368,47 @@ mod tests {
         }
     }
 
+    /// On a sample grid, a subsegment's fragments are the columns whose sample on its row
+    /// (i + 0.5 + the row's offset) lies in it, with (u, v) interpolated at that sample.
+    #[test]
+    fn on_a_sample_grid_fragments_are_at_the_rows_samples() {
+        let l = screen_lembo::<f64>(x_linear(), y_plane());
+        let (a, b) = (
+            CurvePoint {
+                uv: [0.1, 0.3],
+                x: 10.25,
+                edge: INTERIOR,
+            },
+            CurvePoint {
+                uv: [0.5, 0.1],
+                x: 30.25,
+                edge: INTERIOR,
+            },
+        );
+        let cols = Columns {
+            width: SIDE,
+            samples: Samples::new(4).unwrap(),
+        };
+        // Rows 4 j + s of the 4-sample grid: offsets -2, 6, -6, 2 sixteenths.
+        for (row, dx) in [(28u32, -2.0), (29, 6.0), (30, -6.0), (31, 2.0)] {
+            let (mut sink, mut counts) = (Collect::default(), Counts::default());
+            rasterize(&l, row, &Subsegment { a, b }, cols, &mut sink, &mut counts);
+            let sample = |i: u32| i as f64 + 0.5 + dx / 16.0;
+            let want: Vec<u32> = (0..SIDE)
+                .filter(|&i| (10.25..30.25).contains(&sample(i)))
+                .collect();
+            assert_eq!(
+                sink.0.iter().map(|f| f.0).collect::<Vec<_>>(),
+                want,
+                "row {row}"
+            );
+            for (i, u, _) in sink.0 {
+                let t = (sample(i) - 10.25) / 20.0;
+                assert!((u - (0.1 + 0.4 * t)).abs() < 1e-12, "row {row} column {i}");
+            }
+        }
+    }
+
     fn hits<R: Real>(frags: &[(u32, R, R)]) -> BTreeMap<u32, u32> {
         let mut hits = BTreeMap::new();
         for (i, _, _) in frags {

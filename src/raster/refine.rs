@@ -151,7 +151,7 @@ impl<'a> Surface<'a> {
         }
     }
 
-    /// Whether the error vector (dx, dy) \[pixels\] at world point `p` is longer than the
+    /// Whether the error vector (dx, dy) \[pixels, sample rows\] at world point `p` is longer than the
     /// tolerance, and than the rounding noise of projecting `p` there (far from the origin,
     /// or under extreme zoom, rounding alone can exceed a small tolerance; splitting would
     /// then chase noise to the caps). A vector whose |dx| + |dy| is clearly within the
@@ -159,6 +159,9 @@ impl<'a> Surface<'a> {
     /// length, and the margin of 4 ulps covers the sum's rounding and `hypot`'s (within one
     /// ulp), so the answer is the one `hypot` gives.
     fn exceeds(&self, dx: f64, dy: f64, p: DVec3) -> bool {
+        // On a multisampled frame's sample grid, rows are 1/samples of a pixel apart: the
+        // error is measured in pixels, as the tolerance is.
+        let dy = dy / self.view.samples.get() as f64;
         if dx.abs() + dy.abs() <= self.tol * (1.0 - 4.0 * f64::EPSILON) {
             return false;
         }

@@ -431,4 +431,38 @@ mod tests {
         assert!(!fb.passes(0, 1.01, 0));
         assert!(fb.passes(0, 0.99, 0));
     }
+
+    /// A resolve averages each pixel's samples (rounded to nearest) and keeps its first
+    /// sample row's depth, winner and normal; one sample is the frame itself.
+    #[test]
+    fn a_resolve_averages_the_samples_and_keeps_the_first_rows_geometry() {
+        let four = Samples::new(4).unwrap();
+        let mut grid = FrameBuffer::new(2, 8, [10; 3], true);
+        // Pixel (0, 0): samples rows 0..4 of column 0.
+        for (s, c) in [[0u8, 0, 0], [255, 0, 0], [255, 255, 0], [255, 255, 1]]
+            .iter()
+            .enumerate()
+        {
+            grid.color[s * 2] = *c;
+            grid.depth[s * 2] = 0.25 + s as f32;
+            grid.primitive[s * 2] = 7 + s as u32;
+            grid.normal.as_mut().unwrap()[s * 2] = [s as f32; 3];
+        }
+        let image = grid.clone().resolve(four);
+        assert_eq!((image.width, image.height), (2, 2));
+        // Means rounded to nearest (halves up): 765 / 4 = 191.25 -> 191, 510 / 4 = 127.5 ->
+        // 128, 1 / 4 -> 0.
+        assert_eq!(image.color[0], [191, 128, 0]);
+        assert_eq!((image.depth[0], image.primitive[0]), (0.25, 7));
+        assert_eq!(image.normal.as_ref().unwrap()[0], [0.0; 3]);
+        assert_eq!(image.color[1..], [[10; 3]; 3]);
+        assert_eq!(image.primitive[1], NO_PRIMITIVE);
+        assert_eq!(grid.clone().resolve(Samples::ONE).color, grid.color);
+        assert_eq!(FrameBuffer::resolve_bytes(2, 2, four), 5 * 3 * 4);
+        assert_eq!(FrameBuffer::resolve_bytes(2, 2, Samples::ONE), 0);
+        assert_eq!(
+            FrameBuffer::stored_bytes_sampled(2, 2, four),
+            FrameBuffer::stored_bytes(2, 8) + 12
+        );
+    }
 }

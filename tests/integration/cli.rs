@@ -514,6 +514,40 @@ fn bad_flip_pixels_per_degree_is_refused() {
     assert_refused(&["render", "--flip-ppd", "30"], "--flip-ppd");
 }
 
+/// `--samples`: 1, 2, 4 or 8; not on a discoid scene (the blend units do not multisample),
+/// not past 16384 sample rows, and not against a reference of fewer than 4x4 sub-samples.
+#[test]
+fn bad_samples_are_refused() {
+    for n in ["0", "3", "16", "four"] {
+        assert_refused(&["render", "--samples", n], "--samples");
+        assert_refused(&["compare", "--samples", n], "--samples");
+    }
+    let discoids = manifest().join("traces/discoid_sphere20.json");
+    assert_refused(
+        &["render", discoids.to_str().unwrap(), "--samples", "4"],
+        "do not multisample",
+    );
+    assert_refused(
+        &["render", "--samples", "8", "--viewport", "64x4096"],
+        "32768 rows",
+    );
+    assert_refused(
+        &["compare", "--samples", "8", "--viewport", "64x4096"],
+        "32768 rows",
+    );
+    assert_refused(
+        &[
+            "render",
+            "--samples",
+            "4",
+            "--reference",
+            "--supersample",
+            "2",
+        ],
+        "--supersample",
+    );
+}
+
 /// The observer given is the one FLIP is computed for: echoed, and changing the figure.
 #[test]
 fn flip_pixels_per_degree_is_used_and_echoed() {

@@ -19,6 +19,7 @@ mod extremes;
 mod fuzz;
 mod html;
 mod layers;
+mod multisample;
 mod near_plane;
 mod perspective;
 mod scope;

@@ -272,7 +272,10 @@ impl<R: Real> ScreenTriangle<R> {
         R::tally(Event::Tile, w.tiles);
         R::tally(Event::QuadTested, w.quads_tested);
         R::tally(Event::QuadCovered, w.quads_covered);
-        R::tally(Event::Fragment, w.fragments);
+        match self.samples.get() {
+            1 => R::tally(Event::Fragment, w.fragments),
+            _ => R::tally(Event::Sample, w.fragments),
+        }
     }
 }
 

@@ -161,6 +161,83 @@ fn the_hardware_walk_finds_the_models_quads_and_fragments() {
     assert!(tested > 2000 && rejected_some, "{tested} triangles set up");
 }
 
+/// On the sample grids of 2, 4 and 8 samples a pixel, a triangle covers exactly the samples
+/// whose Direct3D position (read from the pattern's table, each row's sample found by its
+/// vertical offset) is inside it by the fill rule, wherever they are in the viewport (the
+/// bounding box holds them all); the rows in closed form, the pixel walk and the hardware
+/// walk find the same samples.
+#[test]
+fn on_a_sample_grid_a_triangle_covers_the_samples_at_direct3ds_positions() {
+    use proptest::prelude::RngExt;
+    use proptest::test_runner::{RngAlgorithm, TestRng};
+    let mut rng = TestRng::from_seed(RngAlgorithm::ChaCha, &[9; 32]);
+    let mut tested = 0;
+    for n in 0..600 {
+        let samples = Samples::new([2, 4, 8][n % 3]).unwrap();
+        let s = samples.get() as i64;
+        let grid = Viewport {
+            width: 24,
+            height: 24 * s as u32,
+        };
+        let reach = [200, 2_000][n % 2];
+        let p: [(i64, i64); 3] = [0; 3].map(|_| {
+            (
+                rng.random_range(-reach..grid.width as i64 * SUBPIXEL + reach),
+                rng.random_range(-reach..grid.height as i64 * SUBPIXEL + reach),
+            )
+        });
+        let assemble = |p: [(i64, i64); 3]| {
+            ScreenTriangle::<f64>::assemble(
+                n as u32,
+                p.map(|p| p.0),
+                p.map(|p| p.1),
+                [flat(0.5); 3],
+                [1.0; 3],
+                grid,
+                samples,
+            )
+            .ok()
+        };
+        let t = assemble(p).or_else(|| assemble([p[0], p[2], p[1]]));
+        // The samples inside by the fill rule, from the pattern's table.
+        let inside = |i: i64, r: i64| {
+            let dy = ((2 * (r % s) + 1 - s) * 8 / s) as i8;
+            let dx = samples.positions().iter().find(|q| q.1 == dy).unwrap().0 as i64;
+            let (x, y) = (
+                i * SUBPIXEL + SUBPIXEL / 2 + 16 * dx,
+                r * SUBPIXEL + SUBPIXEL / 2,
+            );
+            t.as_ref()
+                .is_some_and(|t| t.edges.iter().all(|e| e.at(x, y) >= e.min))
+        };
+        let mut want = 0u64;
+        for r in 0..grid.height as i64 {
+            for i in 0..grid.width as i64 {
+                if inside(i, r) {
+                    want += 1;
+                    let [i0, i1, j0, j1] = t.as_ref().expect("a covering triangle").bbox;
+                    assert!((i0..i1).contains(&(i as u32)) && (j0..j1).contains(&(r as u32)));
+                }
+            }
+        }
+        let Some(t) = t.as_ref() else { continue };
+        tested += 1;
+        let mut got = 0u64;
+        for r in 0..grid.height {
+            let (a, b) = t.row_span(r);
+            let (c, d) = t.row_span_by_pixels(r);
+            assert_eq!(b.saturating_sub(a), d.saturating_sub(c), "{p:?} row {r}");
+            for i in a..b {
+                assert!(inside(i as i64, r as i64), "{p:?} ({i}, {r})");
+                got += 1;
+            }
+        }
+        assert_eq!(got, want, "{p:?}");
+        assert_eq!(t.walk().fragments, want, "{p:?}");
+    }
+    assert!(tested > 300, "{tested} triangles set up");
+}
+
 /// Pixel centre (i, j) in sub-pixel units.
 fn c(i: i64, j: i64) -> (i64, i64) {
     (i * SUBPIXEL + SUBPIXEL / 2, j * SUBPIXEL + SUBPIXEL / 2)
