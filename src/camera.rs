@@ -89,7 +89,7 @@ pub struct Camera {
 /// viewport has n times the rows ([`View::with_samples`]), where row r = n j + s holds
 /// sample s of pixel row j, its samples displaced from the column centre i + 0.5 by
 /// [`Samples::row_dx16`] sixteenths of a pixel.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 #[serde(try_from = "u32", into = "u32")]
 pub struct Samples(u32);
 

@@ -33,5 +33,5 @@ pub use route::{
 };
 pub use validate::{
     check_count, check_tess_range, check_threshold, machine_threads, Given, Mode, PrimitivePath,
-    RenderJob, MAX_HOST_THREADS, MAX_SUPERSAMPLE, MAX_TESS, MAX_THREADS,
+    RenderJob, AA_SUPERSAMPLE, MAX_HOST_THREADS, MAX_SUPERSAMPLE, MAX_TESS, MAX_THREADS,
 };

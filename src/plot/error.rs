@@ -203,15 +203,17 @@ struct Series {
     mark: Mark,
 }
 
-/// The series of an error plot: a path, split by the datapath and blend mode where they
-/// vary, so points that differ only in those (and often coincide) keep apart by their
-/// marker. A path keeps its colour (`paths` ranks them); its variants take its marker,
-/// then the others in turn. Each series comes with its legend entry.
+/// The series of an error plot: a path, split by the samples a pixel, the datapath and the
+/// blend mode where they vary, so points that differ only in those keep apart by their
+/// marker (with `samples` on an axis, both knobs show: each series one sample count, its
+/// points labelled with k or n). A path keeps its colour (`paths` ranks them); its
+/// variants take its marker, then the others in turn. Each series comes with its legend
+/// entry.
 fn series(pts: &[(&Point, (f64, f64))], paths: &[&str]) -> (Vec<Series>, Vec<Entry>) {
     let all: Vec<&Point> = pts.iter().map(|(p, _)| *p).collect();
     let variant_keys: Vec<String> = varying(&all)
         .into_iter()
-        .filter(|k| k == "datapath" || k == "blend")
+        .filter(|k| k == "samples" || k == "datapath" || k == "blend")
         .collect();
     let mut members: BTreeMap<(String, String), Vec<usize>> = BTreeMap::new();
     for (i, (p, _)) in pts.iter().enumerate() {

@@ -178,6 +178,7 @@ pub(crate) fn used<'a>(report: &'a Value, name: &str) -> Option<&'a Value> {
     let pointer = match name {
         "path" => "/settings/path".to_string(),
         "k" => "/settings/k_px".to_string(),
+        "samples" => "/settings/samples".to_string(),
         "perspective_tol" => "/settings/perspective_tol".to_string(),
         "tess" => "/settings/tess".to_string(),
         "datapath" => "/settings/datapath".to_string(),

@@ -5,6 +5,7 @@
 use super::spec::{
     empty_list, key, too_many, Params, Point, Setting, ARCH, MAX_RUNS, SCENES, SETTINGS,
 };
+use crate::camera::Samples;
 use crate::config::ArchConfig;
 use crate::datapath::Datapath;
 use crate::discoid::blend::BlendMode;
@@ -290,6 +291,15 @@ impl Expander<'_> {
                 check_tess_range(n).map_err(|e| reword(e, file, field))?;
                 Setting::Tess(n)
             }
+            "samples" => {
+                let n = v
+                    .as_u64()
+                    .ok_or_else(|| parse(format!("expected a whole number, found {v}")))?;
+                let n = u32::try_from(n).unwrap_or(u32::MAX);
+                Setting::Samples(
+                    Samples::try_from(n).map_err(|why| Error::invalid(file, field, v, why))?,
+                )
+            }
             "datapath" => Setting::Datapath(match word(&["f32", "f64"])?.as_str() {
                 "f32" => Datapath::F32,
                 _ => Datapath::F64,
@@ -328,6 +338,7 @@ impl Expander<'_> {
                 _ => Value::from("off"),
             },
             Setting::Tess(n) => Value::from(*n),
+            Setting::Samples(n) => Value::from(n.get()),
             Setting::Datapath(d) => Value::from(d.name()),
             Setting::Blend(m) => Value::from(m.name()),
             Setting::Arch(..) => unreachable!("returned above"),

@@ -12,8 +12,8 @@ use crate::discoid::blend::BlendMode;
 use crate::discoid::render::check_scene;
 use crate::error::{parent_dir, read_text_file, Error, Result};
 use crate::job::{
-    check_available, check_triangle_budget, memory_estimate, run_path, Given, Mode, PrimitivePath,
-    RenderJob,
+    check_available, check_samples, check_triangle_budget, memory_estimate, run_path, Given, Mode,
+    PrimitivePath, RenderJob, AA_SUPERSAMPLE,
 };
 use crate::reference::oracle::ReferenceImage;
 use crate::reference::PixelsPerDegree;
@@ -127,7 +127,28 @@ impl Plan {
                 check_triangle_budget(scene, job.tess.unwrap_or(1))
                     .map_err(|e| reword(e, file, &point.field("tess")))?;
             }
+            check_samples(job.samples, scene, file, &point.field("samples"))?;
             jobs.push(job);
+        }
+        // A scene whose measured runs mix sample counts measures them all against one
+        // target, the area-averaged colours (DESIGN.md §6): its one-sample runs' reference
+        // is supersampled as the others' ([`SweepReference::area_averaged`]).
+        for s in 0..scenes.len() {
+            let measured = || {
+                jobs.iter()
+                    .zip(&spec.runs)
+                    .filter(|(j, r)| r.scene == s && j.reference)
+            };
+            if measured().any(|(j, _)| j.samples != Samples::ONE) {
+                let one: Vec<usize> = measured()
+                    .filter(|(j, _)| j.samples == Samples::ONE)
+                    .map(|(_, r)| r.index)
+                    .collect();
+                for i in one {
+                    jobs[i].supersample = AA_SUPERSAMPLE;
+                    jobs[i].given.supersample = true;
+                }
+            }
         }
         Ok(Plan {
             spec,
@@ -181,14 +202,13 @@ impl Plan {
     }
 
     /// Runs one run: its record, one JSON line without the newline.
-    pub(super) fn run(
-        &self,
-        run: &Run,
-        references: &[Option<(ReferenceImage, f64)>],
-    ) -> Result<String> {
+    pub(super) fn run(&self, run: &Run, references: &[SweepReference]) -> Result<String> {
         let job = &self.jobs[run.index];
         let reference = if job.reference {
-            references[run.scene].as_ref().map(|(r, w)| (r, *w))
+            references
+                .iter()
+                .find(|r| (r.scene, r.samples) == (run.scene, job.samples))
+                .map(|r| (&r.image, r.wall))
         } else {
             None
         };
@@ -208,6 +228,30 @@ impl Plan {
             report: &out.report,
         };
         Ok(serde_json::to_string(&record).expect("a record serialises"))
+    }
+}
+
+/// The exact reference of one scene for the runs of one sample count: with more than one
+/// sample a pixel, area-averaged ([`crate::job::render_reference`]); with one, the pixel
+/// centres, or where the scene's runs mix sample counts the area-averaged colours with the
+/// hits at the pixel centres ([`Self::area_averaged`]).
+pub(super) struct SweepReference {
+    /// The scene, an index into the plan's scenes.
+    pub(super) scene: usize,
+    /// The samples a pixel of the runs it measures.
+    pub(super) samples: Samples,
+    /// The image.
+    pub(super) image: ReferenceImage,
+    /// The wall time it took \[seconds\].
+    pub(super) wall: f64,
+}
+
+impl SweepReference {
+    /// Whether the one-sample runs of a scene are measured against the area-averaged
+    /// colours: where the plan made their reference supersampled, because the scene's runs
+    /// mix sample counts.
+    pub(super) fn area_averaged(samples: Samples, supersample: u32) -> bool {
+        samples == Samples::ONE && supersample > 1
     }
 }
 
@@ -272,7 +316,7 @@ pub(super) fn check_applies(spec: &Spec, point: &Point, scene: &Scene, s: usize)
     let scene_name = format!("scenes[{s}] ({})", scene.name);
     for name in point.params.keys() {
         let applies = match name.as_str() {
-            "path" | "tess" => !discoids,
+            "path" | "tess" | "samples" => !discoids,
             "k" | "perspective_tol" => curved,
             "blend" | "threshold" => discoids,
             _ => true,
@@ -337,6 +381,7 @@ pub(super) fn render_job(
             Setting::K(k) => job.k = *k,
             Setting::PerspectiveTol(t) => job.perspective_tol = *t,
             Setting::Tess(n) => job.tess = Some(*n),
+            Setting::Samples(n) => job.samples = *n,
             Setting::Datapath(d) => job.datapath = *d,
             Setting::Blend(m) => job.blend = *m,
             Setting::Threshold(t) => job.threshold = Some(*t),

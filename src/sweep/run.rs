@@ -1,9 +1,10 @@
-//! Running a sweep: the rayon pool of `--jobs` workers, one reference per scene, each
+//! Running a sweep: the rayon pool of `--jobs` workers, one reference per scene and sample
+//! count, each
 //! finished run appended to `results.jsonl` at once, resumption by key, the progress bar.
 
 use super::{
     lock::FolderLock,
-    plan::Plan,
+    plan::{Plan, SweepReference},
     results::{check_same_spec, joined, read_partial, write_final, RESULTS_JSONL, SPEC_JSON},
     spec::{Run, Shard},
 };
@@ -11,7 +12,6 @@ use crate::camera::Samples;
 use crate::error::{Error, Result};
 use crate::job::{check_count, render_reference, PrimitivePath, MAX_HOST_THREADS};
 use crate::output::write_files;
-use crate::reference::oracle::ReferenceImage;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::collections::BTreeMap;
 use std::fmt;
@@ -239,25 +239,40 @@ fn clamp_host_threads(plan: &mut Plan, host_threads: u32) {
     }
 }
 
-/// One exact reference per scene that a pending run measures against, computed before any
-/// run (each is itself parallel over rows on the pool).
+/// One exact reference per scene and sample count that a pending run measures against,
+/// computed before any run (each is itself parallel over rows on the pool).
 fn references(
     plan: &Plan,
     pending: &[&Run],
     pool: &rayon::ThreadPool,
     bar: &ProgressBar,
-) -> Vec<Option<(ReferenceImage, f64)>> {
-    let mut references: Vec<Option<(ReferenceImage, f64)>> = Vec::new();
+) -> Vec<SweepReference> {
+    let mut references: Vec<SweepReference> = Vec::new();
     for (s, scene) in plan.scenes.iter().enumerate() {
-        let needed = pending
+        // Each sample count's reference, as its runs' jobs ask for it.
+        let samples: BTreeMap<Samples, u32> = pending
             .iter()
-            .any(|r| r.scene == s && plan.jobs[r.index].reference);
-        references.push(needed.then(|| {
+            .filter(|r| r.scene == s)
+            .map(|r| &plan.jobs[r.index])
+            .filter(|j| j.reference)
+            .map(|j| (j.samples, j.reference_supersample()))
+            .collect();
+        for (n, supersample) in samples {
             bar.set_message(format!("reference of {}", scene.name));
             // The plan measures a discoid scene only where it says what surface it stands for.
             let surface = crate::job::reference_scene(scene).expect("checked by the plan");
-            pool.install(|| render_reference(surface.as_ref(), &plan.views[s], 1, Samples::ONE))
-        }));
+            let (mut image, wall) =
+                pool.install(|| render_reference(surface.as_ref(), &plan.views[s], supersample, n));
+            if SweepReference::area_averaged(n, supersample) {
+                image = image.with_area_colours();
+            }
+            references.push(SweepReference {
+                scene: s,
+                samples: n,
+                image,
+                wall,
+            });
+        }
     }
     bar.set_message("");
     references
@@ -278,7 +293,7 @@ struct Progress<'a> {
 fn run_pending<'a>(
     plan: &Plan,
     pending: &[&Run],
-    references: &[Option<(ReferenceImage, f64)>],
+    references: &[SweepReference],
     results_path: &Path,
     stop_after: Option<usize>,
     pool: &rayon::ThreadPool,

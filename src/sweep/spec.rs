@@ -3,6 +3,7 @@
 //! their keys) and the runs a shard keeps. The lowest file of the sweep: `grid` expands
 //! into these types and `parse` (`Spec::parse`) builds them; it imports neither.
 
+use crate::camera::Samples;
 use crate::datapath::Datapath;
 use crate::discoid::blend::BlendMode;
 use crate::error::{Error, Result, COMMAND_LINE};
@@ -21,11 +22,12 @@ use std::fmt;
 pub const MAX_RUNS: usize = 100_000;
 
 /// The render settings a point can set, besides `arch.<field>`.
-pub(super) const SETTINGS: [&str; 7] = [
+pub(super) const SETTINGS: [&str; 8] = [
     "path",
     "k",
     "perspective_tol",
     "tess",
+    "samples",
     "datapath",
     "blend",
     "threshold",
@@ -103,6 +105,8 @@ pub(super) enum Setting {
     /// Setup's perspective tolerance: pixels or `"off"`.
     PerspectiveTol(PerspectiveTol),
     Tess(u32),
+    /// Samples per pixel (`--samples`).
+    Samples(Samples),
     Datapath(Datapath),
     Blend(BlendMode),
     Threshold(f64),

@@ -309,6 +309,14 @@ fn bad_specs_are_refused_before_any_run() {
             "field `points[0].perspective_tol`",
         ),
         (r#""points": [{"blend": "f16"}]"#, "has no discoids"),
+        (
+            r#""grid": [{"samples": [1, 3]}]"#,
+            "field `grid[0].samples[1]` = 3",
+        ),
+        (
+            r#""points": [{"samples": "4"}]"#,
+            "field `points[0].samples`",
+        ),
     ] {
         assert_refused(&small_spec(rest), &[], needle);
     }
@@ -397,6 +405,71 @@ fn a_discoid_sweep_has_area_and_energy() {
     let modes: Vec<&str> = by_mode.iter().map(|(m, _, _)| m.as_str()).collect();
     assert_eq!(modes, ["rgba8", "f16", "f32"], "smallest first");
     assert!(by_mode.windows(2).all(|w| w[0].2 < w[1].2), "{by_mode:?}");
+}
+
+/// `samples` on a sweep axis: every run is measured against the area-averaged colours
+/// (one target for all sample counts), the records and the table carry the samples, 4
+/// samples beat 1 at the same k against that target, and the tradeoff plot keeps each
+/// sample count a series of its own.
+#[test]
+fn a_sweep_puts_samples_on_an_axis() {
+    let tmp = tempfile::tempdir().unwrap();
+    let scene = manifest().join("traces/sphere24.json");
+    let spec = tmp.path().join("aa.json");
+    std::fs::write(
+        &spec,
+        format!(
+            r#"{{"name": "aa", "scenes": [{:?}], "viewport": [48, 48],
+                "grid": [{{"samples": [1, 4], "k": [0.25, 1]}},
+                         {{"samples": [1, 4], "path": ["triangle"], "tess": [2, 8]}}]}}"#,
+            scene.to_string_lossy()
+        ),
+    )
+    .unwrap();
+    let dir = tmp.path().join("out");
+    ok(&sweep(
+        &[
+            "sweep",
+            spec.to_str().unwrap(),
+            "--out",
+            dir.to_str().unwrap(),
+        ],
+        &[],
+        tmp.path(),
+    ));
+    let run = masked(&dir);
+    assert_eq!(run.records.len(), 8);
+    for r in &run.records {
+        let samples = r["params"]["samples"].as_u64().unwrap();
+        let settings = &r["report"]["settings"];
+        assert_eq!(settings["samples"].as_u64(), Some(samples));
+        // Every run of a scene whose runs mix sample counts is measured against the
+        // area-averaged colours, 8x8 a pixel: one target for all.
+        assert_eq!(r["report"]["accuracy"]["supersample"].as_u64(), Some(8));
+        assert_eq!(settings["supersample"].as_u64(), Some(8));
+        assert!(r["report"]["cycles"]["total"].as_u64().unwrap() > 0);
+    }
+    let error = |samples: u64, k: f64| {
+        run.records
+            .iter()
+            .find(|r| r["params"]["samples"] == samples && r["params"]["k"] == k)
+            .map(|r| r["report"]["accuracy"]["psnr_db"].as_f64().unwrap())
+            .unwrap()
+    };
+    assert!(error(4, 0.25) > error(1, 0.25), "PSNR at 4 samples against 1");
+    let header = &run.csv[0];
+    assert!(header.iter().any(|h| h == "samples"), "{header:?}");
+    let svg = std::fs::read_to_string(dir.join("tradeoff_sphere24.svg")).unwrap();
+    for series in [
+        "lembo path, samples=1",
+        "lembo path, samples=4",
+        "triangle path, samples=4",
+    ] {
+        assert!(
+            svg.contains(series),
+            "no series `{series}` in the tradeoff plot"
+        );
+    }
 }
 
 #[test]

@@ -140,6 +140,20 @@ impl ReferenceImage {
         self
     }
 
+    /// This supersampled reference with the area-averaged colours as the colours a render is
+    /// compared with, its hits staying at the pixel centres: the target of a one-sample
+    /// render measured beside multisampled ones (a sweep with `samples` on an axis).
+    ///
+    /// # Panics
+    /// If this reference is not supersampled: a bug of the caller.
+    pub fn with_area_colours(mut self) -> ReferenceImage {
+        self.color = self
+            .color_supersampled
+            .clone()
+            .expect("an area-averaged target is supersampled");
+        self
+    }
+
     /// The box-filtered colour buffer, when supersampled.
     pub fn to_image_supersampled(&self) -> Option<image::RgbImage> {
         self.color_supersampled
