@@ -34,6 +34,18 @@ fn covered(primitive: &[u32]) -> usize {
     lanes.iter().map(|&n| n as usize).sum::<usize>() + tail
 }
 
+/// `sum / n` rounded to nearest, halves to even: a resolve's mean of `n` stored samples,
+/// unbiased (halves up would brighten every pixel whose samples differ by an odd sum).
+fn mean_rounded(sum: u32, n: u32) -> u8 {
+    let (q, r) = (sum / n, sum % n);
+    let up = match (2 * r).cmp(&n) {
+        std::cmp::Ordering::Greater => true,
+        std::cmp::Ordering::Equal => q % 2 == 1,
+        std::cmp::Ordering::Less => false,
+    };
+    (q + up as u32) as u8
+}
+
 /// Colour, depth and winner id per pixel, row 0 at the top.
 #[derive(Clone, Debug)]
 pub struct FrameBuffer {
@@ -203,7 +215,7 @@ impl FrameBuffer {
 
     /// The image of this sample grid of `samples` per pixel (its rows the sample rows,
     /// [`Samples`]): each pixel's colour the mean of its samples' (a box filter on the stored
-    /// linear RGB8, rounded to nearest), and its depth, winner and normal its first sample
+    /// linear RGB8, rounded to nearest, halves to even), and its depth, winner and normal its first sample
     /// row's (where the accuracy metrics look, DESIGN.md §6). One sample: the frame itself.
     pub fn resolve(self, samples: Samples) -> FrameBuffer {
         let n = samples.get();
@@ -224,7 +236,7 @@ impl FrameBuffer {
                     }
                 }
                 let at = j * w + i;
-                out.color[at] = sum.map(|c| ((c + n / 2) / n) as u8);
+                out.color[at] = sum.map(|c| mean_rounded(c, n));
                 out.depth[at] = self.depth[first + i];
                 out.primitive[at] = self.primitive[first + i];
                 if let (Some(to), Some(from)) = (out.normal.as_mut(), self.normal.as_ref()) {
@@ -450,14 +462,16 @@ mod tests {
         }
         let image = grid.clone().resolve(four);
         assert_eq!((image.width, image.height), (2, 2));
-        // Means rounded to nearest (halves up): 765 / 4 = 191.25 -> 191, 510 / 4 = 127.5 ->
-        // 128, 1 / 4 -> 0.
+        // Means rounded to nearest, halves to even: 765 / 4 = 191.25 -> 191, 510 / 4 = 127.5
+        // -> 128, 1 / 4 -> 0; and below, 3 / 2 = 1.5 -> 2, 5 / 2 = 2.5 -> 2.
         assert_eq!(image.color[0], [191, 128, 0]);
         assert_eq!((image.depth[0], image.primitive[0]), (0.25, 7));
         assert_eq!(image.normal.as_ref().unwrap()[0], [0.0; 3]);
         assert_eq!(image.color[1..], [[10; 3]; 3]);
         assert_eq!(image.primitive[1], NO_PRIMITIVE);
         assert_eq!(grid.clone().resolve(Samples::ONE).color, grid.color);
+        assert_eq!((mean_rounded(3, 2), mean_rounded(5, 2), mean_rounded(7, 2)), (2, 2, 4));
+        assert_eq!((mean_rounded(2040, 8), mean_rounded(13, 8)), (255, 2));
         assert_eq!(FrameBuffer::resolve_bytes(2, 2, four), 5 * 3 * 4);
         assert_eq!(FrameBuffer::resolve_bytes(2, 2, Samples::ONE), 0);
         assert_eq!(
