@@ -11,7 +11,8 @@
 //! not tried; if none meets the target the largest tried is used and `reached` is false.
 //!
 //! Outputs: `lembo.png`, `triangle.png`, `reference.png`, `lembo_error.png`,
-//! `triangle_error.png`, `montage.png` (the three images and the two error maps, labelled),
+//! `triangle_error.png`, `lembo_flip.png`, `triangle_flip.png` (each path's FLIP map),
+//! `montage.png` (the three images and the two error maps, labelled),
 //! `compare.json` (both reports, the tessellation search and the cost ratios) and
 //! `compare.txt` (the table printed).
 
@@ -287,8 +288,9 @@ fn auto_level(
     }
 }
 
-/// A path's image and error map kept until the end of a compare \[bytes per pixel\].
-const BYTES_PER_PIXEL_IMAGES: f64 = 6.0;
+/// A path's image, error map and FLIP map kept until the end of a compare \[bytes per
+/// pixel\].
+const BYTES_PER_PIXEL_IMAGES: f64 = 9.0;
 
 /// Runs a compare to completion: nothing is written unless everything succeeded.
 pub fn run_compare(job: &CompareJob) -> Result<CompareOutput> {
@@ -407,8 +409,8 @@ fn check_host_threads(job: &CompareJob, arch: &ArchConfig) -> Result<()> {
     Ok(())
 }
 
-/// The files of a compare: each path's image and error map, the reference, the labelled
-/// montage of all five, `compare.json` and `compare.txt`.
+/// The files of a compare: each path's image, error map and FLIP map, the reference, the
+/// labelled montage of the images and error maps, `compare.json` and `compare.txt`.
 fn images(
     job: &CompareJob,
     report: &CompareReport,
@@ -424,10 +426,11 @@ fn images(
         lembo.framebuffer.to_image(),
         triangle.framebuffer.to_image(),
     );
-    let (lembo_error, triangle_error) = (
-        &lembo.error_maps.as_ref().expect("measured").colour,
-        &triangle.error_maps.as_ref().expect("measured").colour,
+    let (lembo_maps, triangle_maps) = (
+        lembo.error_maps.as_ref().expect("measured"),
+        triangle.error_maps.as_ref().expect("measured"),
     );
+    let (lembo_error, triangle_error) = (&lembo_maps.colour, &triangle_maps.colour);
     let cycles = |r: &Report| {
         r.cycles
             .as_ref()
@@ -439,21 +442,25 @@ fn images(
             .as_ref()
             .map(|a| {
                 format!(
-                    "PSNR {:.1} dB\nsilhouette {:.2} px",
-                    a.psnr_db, a.silhouette_max_px
+                    "PSNR {:.1} dB, FLIP {:.4}\nsilhouette {:.2} px",
+                    a.psnr_db, a.flip_mean, a.silhouette_max_px
                 )
             })
             .unwrap_or_default()
     };
+    let samples = match job.samples.get() {
+        1 => String::new(),
+        n => format!(", {n} samples"),
+    };
     let labels = [
         format!(
-            "lembo k={} px\n{} lembos\n{}",
+            "lembo k={} px{samples}\n{} lembos\n{}",
             job.k,
             report.lembo.primitives.count,
             cycles(&report.lembo)
         ),
         format!(
-            "triangle n={}\n{} triangles\n{}",
+            "triangle n={}{samples}\n{} triangles\n{}",
             report.tess.level,
             report.triangle.primitives.count,
             cycles(&report.triangle)
@@ -482,6 +489,8 @@ fn images(
         ("reference.png", png_bytes(&reference_image)),
         ("lembo_error.png", png_bytes(lembo_error)),
         ("triangle_error.png", png_bytes(triangle_error)),
+        ("lembo_flip.png", png_bytes(&lembo_maps.flip)),
+        ("triangle_flip.png", png_bytes(&triangle_maps.flip)),
         ("montage.png", png_bytes(&montage_image)),
         (
             "compare.json",
@@ -650,7 +659,7 @@ pub fn table(r: &CompareReport) -> String {
     t
 }
 
-/// The compare's `report.html`: the five images, the table, and each path's report.
+/// The compare's `report.html`: the seven images, the table, and each path's report.
 fn page(r: &CompareReport) -> String {
     let Table { title, rows, notes } = rows(r);
     let figures: String = [
@@ -667,6 +676,14 @@ fn page(r: &CompareReport) -> String {
         (
             "triangle_error.png",
             format!("triangle {}", html::ERROR_MAP_CAPTION),
+        ),
+        (
+            "lembo_flip.png",
+            format!("lembo path's {}", html::flip_map_caption(&r.lembo)),
+        ),
+        (
+            "triangle_flip.png",
+            format!("triangle path's {}", html::flip_map_caption(&r.triangle)),
         ),
     ]
     .iter()

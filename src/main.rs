@@ -40,7 +40,8 @@ enum Command {
     Render(RenderArgs),
     /// Render a scene as lembos and as tessellated triangles on the same architecture,
     /// measure both against the exact surface, and write lembo.png, triangle.png,
-    /// reference.png, lembo_error.png, triangle_error.png, montage.png, compare.json and
+    /// reference.png, lembo_error.png, triangle_error.png, lembo_flip.png,
+    /// triangle_flip.png, montage.png, compare.json and
     /// compare.txt; print the table (primitives, vertices, bytes, cycles, fragments,
     /// accuracy per path).
     Compare(CompareArgs),

@@ -391,7 +391,7 @@ pub fn render_page(r: &Report, images: &[(&str, String)], trace: Option<&str>) -
         .map(|(file, caption)| figure(file, caption, false))
         .collect();
     let subtitle = format!(
-        "render: {} path, {} mode, {}x{} px{}",
+        "render: {} path, {} mode, {}x{} px{}{}",
         r.settings.path,
         r.settings.mode,
         r.scene.width,
@@ -400,7 +400,11 @@ pub fn render_page(r: &Report, images: &[(&str, String)], trace: Option<&str>) -
             .k_px
             .map(|k| format!(", k = {k} px"))
             .or(r.settings.tess.map(|n| format!(", tessellation {n}")))
-            .unwrap_or_default()
+            .unwrap_or_default(),
+        match r.settings.samples {
+            1 => String::new(),
+            n => format!(", {n} samples a pixel (multisampled, resolved)"),
+        }
     );
     page(
         &format!("lembo-sim: {}", r.scene.name),

@@ -470,7 +470,10 @@ mod tests {
         assert_eq!(image.color[1..], [[10; 3]; 3]);
         assert_eq!(image.primitive[1], NO_PRIMITIVE);
         assert_eq!(grid.clone().resolve(Samples::ONE).color, grid.color);
-        assert_eq!((mean_rounded(3, 2), mean_rounded(5, 2), mean_rounded(7, 2)), (2, 2, 4));
+        assert_eq!(
+            (mean_rounded(3, 2), mean_rounded(5, 2), mean_rounded(7, 2)),
+            (2, 2, 4)
+        );
         assert_eq!((mean_rounded(2040, 8), mean_rounded(13, 8)), (255, 2));
         assert_eq!(FrameBuffer::resolve_bytes(2, 2, four), 5 * 3 * 4);
         assert_eq!(FrameBuffer::resolve_bytes(2, 2, Samples::ONE), 0);

@@ -741,12 +741,14 @@ fn compare_writes_every_file_and_both_reports() {
             "compare.txt",
             "lembo.png",
             "lembo_error.png",
+            "lembo_flip.png",
             "manifest.json",
             "montage.png",
             "reference.png",
             "report.html",
             "triangle.png",
-            "triangle_error.png"
+            "triangle_error.png",
+            "triangle_flip.png"
         ]
     );
     for row in [

@@ -266,6 +266,8 @@ fn render_compare_and_sweep_pages_load_whole_in_a_browser() {
             "reference.png",
             "lembo_error.png",
             "triangle_error.png",
+            "lembo_flip.png",
+            "triangle_flip.png",
         ],
     );
 

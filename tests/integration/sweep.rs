@@ -456,7 +456,10 @@ fn a_sweep_puts_samples_on_an_axis() {
             .map(|r| r["report"]["accuracy"]["psnr_db"].as_f64().unwrap())
             .unwrap()
     };
-    assert!(error(4, 0.25) > error(1, 0.25), "PSNR at 4 samples against 1");
+    assert!(
+        error(4, 0.25) > error(1, 0.25),
+        "PSNR at 4 samples against 1"
+    );
     let header = &run.csv[0];
     assert!(header.iter().any(|h| h == "samples"), "{header:?}");
     let svg = std::fs::read_to_string(dir.join("tradeoff_sphere24.svg")).unwrap();
