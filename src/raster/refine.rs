@@ -151,8 +151,8 @@ impl<'a> Surface<'a> {
         }
     }
 
-    /// Whether the error vector (dx, dy) \[pixels, sample rows\] at world point `p` is longer than the
-    /// tolerance, and than the rounding noise of projecting `p` there (far from the origin,
+    /// Whether the error vector (dx, dy) \[pixels, and rows of the view's grid\] at world
+    /// point `p` is longer than the tolerance, and than the rounding noise of projecting `p` there (far from the origin,
     /// or under extreme zoom, rounding alone can exceed a small tolerance; splitting would
     /// then chase noise to the caps). A vector whose |dx| + |dy| is clearly within the
     /// tolerance is within it without `hypot` (slow in libm): |dx| + |dy| bounds the

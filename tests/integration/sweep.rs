@@ -491,6 +491,7 @@ fn every_committed_spec_is_valid() {
     assert_eq!(
         names,
         [
+            "antialias",
             "equal_area",
             "fair",
             "perspective",

@@ -57,13 +57,20 @@ impl<R: Real> ScreenTriangle<R> {
     }
 
     /// The barycentric weights a multisampled triangle is shaded with at column i of sample
-    /// row j: at the centre of the pixel (extrapolated where the centre is outside, as
-    /// multisampling shades; [`ScreenTriangle::shading_point`]), the same for every sample of
-    /// the pixel. With one sample per pixel, [`Self::weights`].
+    /// row j: at the centre of the pixel ([`ScreenTriangle::shading_point`]), the same for
+    /// every sample of the pixel. A centre outside the triangle has its negative weights
+    /// clamped to 0 and the rest scaled to sum 1 (a point on the triangle's border, as
+    /// centroid sampling aims for): extrapolated attributes could leave the surface, and
+    /// 1/w could reach 0 beside a triangle that runs to the horizon.
     #[inline(always)]
     pub fn shading_weights(&self, i: u32, j: u32) -> [R; 3] {
-        self.weights_of(self.edge_values_at(self.shading_point(i, j)))
-            .0
+        let l = self.weights_of(self.edge_values_at(self.shading_point(i, j))).0;
+        if l.iter().all(|&w| w >= R::zero()) {
+            return l;
+        }
+        let l = l.map(|w| w.max(R::zero()));
+        let sum = l[0] + l[1] + l[2];
+        l.map(|w| w / sum)
     }
 
     /// The weights and depth of edge-function values `e`.

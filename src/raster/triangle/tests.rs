@@ -238,6 +238,43 @@ fn on_a_sample_grid_a_triangle_covers_the_samples_at_direct3ds_positions() {
     assert!(tested > 300, "{tested} triangles set up");
 }
 
+/// A multisampled triangle is shaded at the pixel centre, whichever sample row asks: its
+/// weights there where the centre is inside, clamped onto the triangle where it is not.
+#[test]
+fn a_multisampled_triangle_is_shaded_at_the_pixel_centre_clamped_to_it() {
+    let four = Samples::new(4).unwrap();
+    let grid = Viewport {
+        width: 16,
+        height: 64,
+    };
+    // On the 4-sample grid (rows 4 px a pixel): a triangle whose left edge is x = 5 px.
+    let p = [(5 * SUBPIXEL, 0), (5 * SUBPIXEL, 64 * SUBPIXEL), (16 * SUBPIXEL, 32 * SUBPIXEL)];
+    let t = ScreenTriangle::<f64>::assemble(
+        1,
+        p.map(|p| p.0),
+        p.map(|p| p.1),
+        [flat(0.5); 3],
+        [1.0; 3],
+        grid,
+        four,
+    )
+    .unwrap();
+    // Pixel (8, 3): its sample rows 12..16 all give the weights at (8.5, 14) on the grid.
+    let (x, y) = (8 * SUBPIXEL + SUBPIXEL / 2, 14 * SUBPIXEL);
+    let want = {
+        let e = t.edges.map(|e| e.at(x, y) as f64 / t.area2 as f64);
+        [e[0], e[1], e[2]]
+    };
+    for r in 12..16 {
+        assert_eq!(t.shading_weights(8, r), want, "row {r}");
+    }
+    // Column 4's centre (4.5) is outside: clamped to weights in [0, 1] summing to 1, with
+    // the weight of the vertex opposite the left edge at 0.
+    let l = t.shading_weights(4, 13);
+    assert!(l.iter().all(|w| (0.0..=1.0).contains(w)), "{l:?}");
+    assert!((l.iter().sum::<f64>() - 1.0).abs() < 1e-12 && l.contains(&0.0), "{l:?}");
+}
+
 /// Pixel centre (i, j) in sub-pixel units.
 fn c(i: i64, j: i64) -> (i64, i64) {
     (i * SUBPIXEL + SUBPIXEL / 2, j * SUBPIXEL + SUBPIXEL / 2)
