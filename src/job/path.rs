@@ -167,7 +167,7 @@ fn cost_of(
     fetch: Option<FetchReport>,
 ) -> Result<CostReport> {
     crate::progress::stage("pricing (counting run)");
-    let grid = grid_view(job, view);
+    let grid = view.grid(job.samples);
     let (frame, mut ops) = match route {
         Route::Triangles(t) => cost::triangle_ops(scene, &grid, t, job.datapath),
         _ => cost::lembo_ops(scene, &grid, job.grid_tolerance(), job.datapath)?,
@@ -247,7 +247,7 @@ fn draw(
     analyse: bool,
 ) -> Result<(Drawn, f64)> {
     // Multisampled, both models draw the sample grid and the frames are resolved at the end.
-    let grid = grid_view(job, view);
+    let grid = view.grid(job.samples);
     let functional = |analyse: bool| -> Result<raster::Frame> {
         let triangles = match route {
             Route::Triangles(t) => Some(t as &dyn raster::triangle::TriangleSource),
@@ -306,10 +306,4 @@ fn draw(
         ..timed
     };
     Ok((Drawn::Timed { timed, probed }, wall))
-}
-
-/// The view both models draw `job` on: `view` itself, or with more than one sample per
-/// pixel its sample grid ([`View::with_samples`]).
-pub(super) fn grid_view(job: &RenderJob, view: &View) -> View {
-    view.grid(job.samples)
 }

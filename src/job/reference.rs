@@ -141,7 +141,8 @@ pub(super) fn measure(
     }
 }
 
-/// The accuracy of `frame` (rendered with `analyse`) of `scene` against its `reference`:
+/// The accuracy of `frame` (rendered with `analyse`, one sample a pixel) of `scene` against
+/// its `reference`:
 /// the metrics, with the reference traced anew where the sub-pixel silhouette asks, the
 /// fragment probe's counts and the see-through count. `ids_per_lembo` maps the frame's
 /// winner ids to lembo ids: 1 on the lembo path, n² on the triangle path at level n; FLIP
@@ -168,7 +169,9 @@ pub fn measure_frame(
     .0
 }
 
-/// [`measure_frame`], with the FLIP map its `flip_mean` is the mean of.
+/// [`measure_frame`] of a frame drawn with `samples` per pixel and resolved (against the
+/// reference [`render_reference`] made for them), with the FLIP map its `flip_mean` is the
+/// mean of.
 #[allow(clippy::too_many_arguments)]
 pub fn measure_frame_and_flip(
     scene: &Scene,

@@ -64,7 +64,9 @@ impl<R: Real> ScreenTriangle<R> {
     /// 1/w could reach 0 beside a triangle that runs to the horizon.
     #[inline(always)]
     pub fn shading_weights(&self, i: u32, j: u32) -> [R; 3] {
-        let l = self.weights_of(self.edge_values_at(self.shading_point(i, j))).0;
+        let l = self
+            .weights_of(self.edge_values_at(self.shading_point(i, j)))
+            .0;
         if l.iter().all(|&w| w >= R::zero()) {
             return l;
         }

@@ -248,7 +248,11 @@ fn a_multisampled_triangle_is_shaded_at_the_pixel_centre_clamped_to_it() {
         height: 64,
     };
     // On the 4-sample grid (rows 4 px a pixel): a triangle whose left edge is x = 5 px.
-    let p = [(5 * SUBPIXEL, 0), (5 * SUBPIXEL, 64 * SUBPIXEL), (16 * SUBPIXEL, 32 * SUBPIXEL)];
+    let p = [
+        (5 * SUBPIXEL, 0),
+        (5 * SUBPIXEL, 64 * SUBPIXEL),
+        (16 * SUBPIXEL, 32 * SUBPIXEL),
+    ];
     let t = ScreenTriangle::<f64>::assemble(
         1,
         p.map(|p| p.0),
@@ -272,7 +276,10 @@ fn a_multisampled_triangle_is_shaded_at_the_pixel_centre_clamped_to_it() {
     // the weight of the vertex opposite the left edge at 0.
     let l = t.shading_weights(4, 13);
     assert!(l.iter().all(|w| (0.0..=1.0).contains(w)), "{l:?}");
-    assert!((l.iter().sum::<f64>() - 1.0).abs() < 1e-12 && l.contains(&0.0), "{l:?}");
+    assert!(
+        (l.iter().sum::<f64>() - 1.0).abs() < 1e-12 && l.contains(&0.0),
+        "{l:?}"
+    );
 }
 
 /// Pixel centre (i, j) in sub-pixel units.
