@@ -366,21 +366,17 @@ fn a_directory_of_another_spec_is_not_resumed() {
 
 /// A discoid sweep over the blend modes is priced like any timed sweep: results.csv's area
 /// and energy are filled for every mode, and the narrower modes cost less.
-#[test]
-fn a_discoid_sweep_has_area_and_energy() {
-    let tmp = tempfile::tempdir().unwrap();
-    let scene = manifest().join("traces/discoid_sphere20.json");
-    let spec = tmp.path().join("blend.json");
+/// Writes a spec on the shipped `scene` with the rest of its fields `rest` into `tmp`, runs
+/// it to completion and returns its output folder.
+fn run_spec(tmp: &Path, scene: &str, rest: &str) -> PathBuf {
+    let scene = manifest().join("traces").join(scene);
+    let spec = tmp.join("spec.json");
     std::fs::write(
         &spec,
-        format!(
-            r#"{{"name": "blend", "scenes": [{:?}], "viewport": [64, 64], "reference": false,
-                "grid": [{{"blend": ["rgba8", "f16", "f32"]}}]}}"#,
-            scene.to_string_lossy()
-        ),
+        format!(r#"{{"scenes": [{:?}], {rest}}}"#, scene.to_string_lossy()),
     )
     .unwrap();
-    let dir = tmp.path().join("out");
+    let dir = tmp.join("out");
     ok(&sweep(
         &[
             "sweep",
@@ -389,8 +385,20 @@ fn a_discoid_sweep_has_area_and_energy() {
             dir.to_str().unwrap(),
         ],
         &[],
-        tmp.path(),
+        tmp,
     ));
+    dir
+}
+
+#[test]
+fn a_discoid_sweep_has_area_and_energy() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = run_spec(
+        tmp.path(),
+        "discoid_sphere20.json",
+        r#""name": "blend", "viewport": [64, 64], "reference": false,
+           "grid": [{"blend": ["rgba8", "f16", "f32"]}]"#,
+    );
     let table = masked(&dir).csv;
     let column = |name: &str| table[0].iter().position(|h| h == name).unwrap();
     let (blend, area, energy) = (column("blend"), column("area_mm2"), column("energy_pj"));
@@ -414,29 +422,13 @@ fn a_discoid_sweep_has_area_and_energy() {
 #[test]
 fn a_sweep_puts_samples_on_an_axis() {
     let tmp = tempfile::tempdir().unwrap();
-    let scene = manifest().join("traces/sphere24.json");
-    let spec = tmp.path().join("aa.json");
-    std::fs::write(
-        &spec,
-        format!(
-            r#"{{"name": "aa", "scenes": [{:?}], "viewport": [48, 48],
-                "grid": [{{"samples": [1, 4], "k": [0.25, 1]}},
-                         {{"samples": [1, 4], "path": ["triangle"], "tess": [2, 8]}}]}}"#,
-            scene.to_string_lossy()
-        ),
-    )
-    .unwrap();
-    let dir = tmp.path().join("out");
-    ok(&sweep(
-        &[
-            "sweep",
-            spec.to_str().unwrap(),
-            "--out",
-            dir.to_str().unwrap(),
-        ],
-        &[],
+    let dir = run_spec(
         tmp.path(),
-    ));
+        "sphere24.json",
+        r#""name": "aa", "viewport": [48, 48],
+           "grid": [{"samples": [1, 4], "k": [0.25, 1]},
+                    {"samples": [1, 4], "path": ["triangle"], "tess": [2, 8]}]"#,
+    );
     let run = masked(&dir);
     assert_eq!(run.records.len(), 8);
     for r in &run.records {
