@@ -5,6 +5,7 @@ use super::validate::{PrimitivePath, RenderJob};
 use crate::camera::{Samples, View};
 use crate::discoid;
 use crate::error::{Error, Result, COMMAND_LINE};
+use crate::lembo::tessellate::Tessellation;
 use crate::lembo::Lembo;
 use crate::raster;
 use crate::reference::flip::{flip_frame, FlipMap, PixelsPerDegree};
@@ -224,5 +225,8 @@ pub fn see_through_px(
         .flat_map(|o| o.lembos.iter().map(move |l| (l, o.from_mesh)))
         .collect();
     let lembos: Vec<(&Lembo, bool)> = held.iter().map(|(l, m)| (l, *m)).collect();
-    Some(see_through::see_through(&lembos, view, render, ids_per_lembo).total())
+    // On the triangle path (n² ids a lembo), the tessellation whose triangles were drawn.
+    let level = ids_per_lembo.isqrt() as u32;
+    let triangles = (ids_per_lembo > 1).then(|| Tessellation::new(scene, level));
+    Some(see_through::see_through(&lembos, view, render, ids_per_lembo, triangles.as_ref()).total())
 }

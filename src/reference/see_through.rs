@@ -11,7 +11,8 @@
 //! - **a back face**: the winning fragment's normal faces away from the eye (the render's
 //!   normal buffer, against the pixel centre's ray) and so does the winning lembo's own
 //!   surface there (its geometric normal, turned to the side of its normal function, where
-//!   the ray meets it first), i.e. one looks at the inside of the surface. The shading
+//!   the ray meets it first; on the triangle path, the winning triangle's plane, turned to
+//!   the side of its vertex normals), i.e. one looks at the inside of the surface. The shading
 //!   normal alone does not say so: across a crease a lembo's normal function leans up to
 //!   half the crease angle away from its surface, so a face seen at a grazing angle can
 //!   have its front to the eye and its shading normal turned away (a rock auto-smoothed at
@@ -44,6 +45,7 @@
 
 use super::oracle::intersect_ray;
 use crate::camera::View;
+use crate::lembo::tessellate::Tessellation;
 use crate::lembo::Lembo;
 use crate::rop::framebuffer::{FrameBuffer, NO_PRIMITIVE};
 use glam::{DVec2, DVec3};
@@ -141,11 +143,19 @@ fn flat_mesh(lembos: &[(&Lembo, bool)], view: &View) -> FlatMesh {
 /// Whether the mesh triangle of `l` faces the eye of `view`.
 fn faces_eye(l: &Lembo, view: &View) -> bool {
     let [a, b, c] = [l.points[0], l.points[1], l.points[2]];
-    let mut n = (b - a).cross(c - a);
-    if n.dot(l.normals[0] + l.normals[1] + l.normals[2]) < 0.0 {
-        n = -n;
+    oriented_normal([a, b, c], [l.normals[0], l.normals[1], l.normals[2]])
+        .dot(view.to_eye((a + b + c) / 3.0))
+        > 0.0
+}
+
+/// A flat triangle's geometric normal turned to the side of the sum of its vertex normals.
+fn oriented_normal([a, b, c]: [DVec3; 3], normals: [DVec3; 3]) -> DVec3 {
+    let n = (b - a).cross(c - a);
+    if n.dot(normals[0] + normals[1] + normals[2]) < 0.0 {
+        -n
+    } else {
+        n
     }
-    n.dot(view.to_eye((a + b + c) / 3.0)) > 0.0
 }
 
 /// How far a lembo strays from its flat triangle on screen \[pixels\]: 4/3 of the largest
@@ -301,7 +311,9 @@ fn border_point_nearest(lembo: &Lembo, origin: DVec3, dir: DVec3) -> (f64, f64) 
 
 /// The see-through pixels of `render` (see the module documentation). `lembos` are the
 /// scene's lembos in id order, marked `true` where built from a mesh triangle; the render's
-/// winner id divided by `ids_per_lembo` is a lembo id.
+/// winner id divided by `ids_per_lembo` is a lembo id. A render of the triangle path passes
+/// its `triangles`, whose winner's own plane is then the surface a back face must turn
+/// away (the lembo's surface lies elsewhere than its flat triangles).
 ///
 /// # Panics
 /// If the render kept no normal buffer, or differs in size from the viewport: bugs of the
@@ -311,6 +323,7 @@ pub fn see_through(
     view: &View,
     render: &FrameBuffer,
     ids_per_lembo: u64,
+    triangles: Option<&Tessellation>,
 ) -> SeeThrough {
     assert_eq!(
         (render.width, render.height),
@@ -345,7 +358,15 @@ pub fn see_through(
         let shown = lembos
             .get((winner as u64 / ids_per_lembo.max(1)) as usize)
             .map(|&(l, _)| l);
-        if n.dot(-dir) < 0.0 && !shown.is_some_and(|l| surface_faces(l, origin, dir)) {
+        // The surface drawn there: the winning triangle of a tessellation, else its lembo.
+        let surface_to_eye = match triangles {
+            Some(t) if u64::from(winner) < t.len() => {
+                let tri = t.triangle(u64::from(winner));
+                oriented_normal(tri.positions, tri.normals).dot(-dir) > 0.0
+            }
+            _ => shown.is_some_and(|l| surface_faces(l, origin, dir)),
+        };
+        if n.dot(-dir) < 0.0 && !surface_to_eye {
             out.back_face += 1;
             continue;
         }
@@ -421,7 +442,7 @@ mod tests {
                 fb.normal.as_mut().unwrap()[k] = [0.0, 0.0, 1.0];
             }
         }
-        assert_eq!(see_through(&marked, &view, &fb, 1).total(), 0);
+        assert_eq!(see_through(&marked, &view, &fb, 1, None).total(), 0);
         let mut set = |i: u32, j: u32, id: u32, z: f32, n: [f32; 3]| {
             let k = fb.index(i, j);
             fb.depth[k] = z;
@@ -436,7 +457,7 @@ mod tests {
         set(70, 90, 3, depth - 0.05, up); // foreign, in front: hides, not see-through
         set(80, 90, 1, depth + 0.05, up); // the neighbour, behind: a smooth patch's sag
         set(25, 60, NO_PRIMITIVE, 1.0, up); // within 2 px of the outline
-        let s = see_through(&marked, &view, &fb, 1);
+        let s = see_through(&marked, &view, &fb, 1, None);
         assert_eq!(
             (s.background, s.back_face, s.foreign_behind, s.total()),
             (1, 1, 1, 3),
@@ -446,7 +467,7 @@ mod tests {
         for id in fb.primitive.iter_mut().filter(|p| **p != NO_PRIMITIVE) {
             *id = *id * 4 + 3;
         }
-        assert_eq!(see_through(&marked, &view, &fb, 4), s);
+        assert_eq!(see_through(&marked, &view, &fb, 4, None), s);
     }
 
     /// The surface's own facing: its geometric normal on the side of its normal function,
