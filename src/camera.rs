@@ -130,15 +130,16 @@ impl Samples {
         }
     }
 
-    /// The sample of sample row `s` (0 at the top of the pixel): its (dx, dy) [1/16 pixel].
-    fn row_position(self, s: u32) -> (i8, i8) {
-        let n = self.0 as i32;
-        let dy = ((2 * s as i32 + 1 - n) * 8 / n) as i8;
-        *self
-            .positions()
-            .iter()
-            .find(|p| p.1 == dy)
-            .expect("the standard patterns put one sample on each row")
+    /// The horizontal offsets of the pattern's sample rows, top to bottom [1/16 pixel]: the
+    /// dx of the sample whose dy is (2s + 1 - n) 8 / n, row s (read from [`Self::positions`],
+    /// tested against it).
+    fn row_dx(self) -> &'static [i8] {
+        match self.0 {
+            1 => &[0],
+            2 => &[-4, 4],
+            4 => &[-2, 6, -6, 2],
+            _ => &[7, -3, 1, -7, 5, -1, -5, 3],
+        }
     }
 
     /// The horizontal offset from the column centre of the samples on row `row` of the
@@ -148,7 +149,7 @@ impl Samples {
         if self.0 == 1 {
             return 0;
         }
-        self.row_position(row % self.0).0 as i64
+        self.row_dx()[(row % self.0) as usize] as i64
     }
 
     /// Where pixel column i's sample on sample-grid row `row` lies, from i \[pixels\]: 0.5
@@ -160,7 +161,7 @@ impl Samples {
 
     /// The smallest and largest [`Self::row_dx16`] [1/16 pixel].
     pub fn dx16_range(self) -> (i64, i64) {
-        let dx = self.positions().iter().map(|p| p.0 as i64);
+        let dx = self.row_dx().iter().map(|&d| d as i64);
         (dx.clone().min().unwrap_or(0), dx.max().unwrap_or(0))
     }
 
@@ -168,8 +169,8 @@ impl Samples {
     /// \[pixels\]: where a multisampled frame's depth, winner and normal are kept per pixel
     /// (the accuracy metrics' point, DESIGN.md §6).
     pub fn first_row_offset(self) -> [f64; 2] {
-        let (dx, dy) = self.row_position(0);
-        [dx as f64 / 16.0, dy as f64 / 16.0]
+        let n = self.0 as f64;
+        [self.row_dx()[0] as f64 / 16.0, (1.0 - n) / (2.0 * n)]
     }
 }
 
