@@ -146,6 +146,35 @@ enum DatapathArg {
     F64,
 }
 
+/// The image-quality flags `render` and `compare` share: the samples a pixel, and the
+/// reference and observer the images are measured against.
+#[derive(Args)]
+struct QualityArgs {
+    /// Samples per pixel, 1, 2, 4 or 8, at Direct3D's standard positions: multisample
+    /// anti-aliasing on either path (the scan-line stages walk every sample row, the ROPs
+    /// depth-test and store every sample, and a resolve averages them; triangles are shaded
+    /// once per pixel, lembo fragments once per sample). Cycles, frame-buffer bytes and energy
+    /// grow with it (DESIGN.md §2). Not on discoid scenes.
+    #[arg(long, value_name = "N", default_value = "1", value_parser = parse_samples)]
+    samples: Samples,
+    /// Reference samples per pixel side for reference.png (with one sample per pixel the
+    /// metrics use pixel centres) [default: 1; with --samples above 1, 8: the
+    /// area-averaged colours a resolved image is measured against].
+    #[arg(long, value_name = "N")]
+    supersample: Option<u32>,
+    /// The observer FLIP (the perceptual error in a report's accuracy.flip_mean and its
+    /// FLIP map) is computed for, in pixels per degree of visual angle; render takes it with
+    /// --reference [default: 67.02, the reference implementation's 0.7 m wide 3840-pixel
+    /// monitor seen from 0.7 m].
+    #[arg(
+        long,
+        value_name = "PPD",
+        value_parser = parse_flip_ppd,
+        allow_hyphen_values = true
+    )]
+    flip_ppd: Option<PixelsPerDegree>,
+}
+
 #[derive(Args)]
 struct RenderArgs {
     /// Scene file (JSON, see traces/README.md); the embedded default scene when omitted.
@@ -175,29 +204,8 @@ struct RenderArgs {
     /// Also render the exact f64 reference and report accuracy (reference.png, error.png).
     #[arg(long)]
     reference: bool,
-    /// Reference samples per pixel side for reference.png (with one sample per pixel the
-    /// metrics use pixel centres) [default: 1; with --samples above 1, 8: the
-    /// area-averaged colours the resolved image is measured against].
-    #[arg(long, value_name = "N")]
-    supersample: Option<u32>,
-    /// Samples per pixel, 1, 2, 4 or 8, at Direct3D's standard positions: multisample
-    /// anti-aliasing on either path (the scan-line stages walk every sample row, the ROPs
-    /// depth-test and store every sample, and a resolve averages them; triangles are shaded
-    /// once per pixel, lembo fragments once per sample). Cycles, frame-buffer bytes and energy
-    /// grow with it (DESIGN.md §2). Not on discoid scenes.
-    #[arg(long, value_name = "N", default_value = "1", value_parser = parse_samples)]
-    samples: Samples,
-    /// The observer FLIP (the perceptual error in report.json's accuracy.flip_mean and
-    /// flip.png) is computed for, in pixels per degree of visual angle; with --reference
-    /// [default: 67.02, the reference implementation's 0.7 m wide 3840-pixel monitor seen
-    /// from 0.7 m].
-    #[arg(
-        long,
-        value_name = "PPD",
-        value_parser = parse_flip_ppd,
-        allow_hyphen_values = true
-    )]
-    flip_ppd: Option<PixelsPerDegree>,
+    #[command(flatten)]
+    quality: QualityArgs,
     /// Simulation mode.
     #[arg(long, value_enum, default_value = "timed")]
     mode: Mode,
@@ -293,25 +301,8 @@ struct CompareArgs {
     /// [default: the embedded sim/tech/45nm.json].
     #[arg(long, value_name = "FILE")]
     tech: Option<PathBuf>,
-    /// Reference samples per pixel side for reference.png (with one sample per pixel the
-    /// metrics use pixel centres) [default: 1; with --samples above 1, 8: the
-    /// area-averaged colours the resolved images are measured against].
-    #[arg(long, value_name = "N")]
-    supersample: Option<u32>,
-    /// Samples per pixel of both paths, 1, 2, 4 or 8 (multisample anti-aliasing at
-    /// Direct3D's standard positions, as `render --samples`).
-    #[arg(long, value_name = "N", default_value = "1", value_parser = parse_samples)]
-    samples: Samples,
-    /// The observer FLIP (the perceptual error in each report's accuracy.flip_mean) is
-    /// computed for, in pixels per degree of visual angle [default: 67.02, the reference
-    /// implementation's 0.7 m wide 3840-pixel monitor seen from 0.7 m].
-    #[arg(
-        long,
-        value_name = "PPD",
-        value_parser = parse_flip_ppd,
-        allow_hyphen_values = true
-    )]
-    flip_ppd: Option<PixelsPerDegree>,
+    #[command(flatten)]
+    quality: QualityArgs,
     /// Override the scene's viewport, e.g. 1024x1024.
     #[arg(long, value_name = "WxH", value_parser = parse_viewport)]
     viewport: Option<(u32, u32)>,
@@ -383,9 +374,11 @@ fn default_render() -> RenderArgs {
         perspective_tol: None,
         datapath: DatapathArg::F32,
         reference: false,
-        supersample: None,
-        samples: Samples::ONE,
-        flip_ppd: None,
+        quality: QualityArgs {
+            samples: Samples::ONE,
+            supersample: None,
+            flip_ppd: None,
+        },
         mode: Mode::Timed,
         arch: None,
         trace_out: None,
@@ -562,10 +555,10 @@ fn compare(args: CompareArgs) -> ExitCode {
         tech: args.tech,
         no_memory_check: args.no_memory_check,
         viewport: args.viewport,
-        supersample: args.supersample.unwrap_or(1),
-        supersample_given: args.supersample.is_some(),
-        samples: args.samples,
-        flip_ppd: args.flip_ppd.unwrap_or_default(),
+        supersample: args.quality.supersample.unwrap_or(1),
+        supersample_given: args.quality.supersample.is_some(),
+        samples: args.quality.samples,
+        flip_ppd: args.quality.flip_ppd.unwrap_or_default(),
         host_threads: args.host_threads,
     };
     match with_progress(|| run_compare(&job)) {
@@ -584,8 +577,8 @@ fn render(args: RenderArgs) -> ExitCode {
         perspective_tol: args.perspective_tol.is_some(),
         path: args.path.is_some(),
         blend: args.blend.is_some(),
-        flip_ppd: args.flip_ppd.is_some(),
-        supersample: args.supersample.is_some(),
+        flip_ppd: args.quality.flip_ppd.is_some(),
+        supersample: args.quality.supersample.is_some(),
     };
     let job = RenderJob {
         scene: args.scene,
@@ -594,9 +587,9 @@ fn render(args: RenderArgs) -> ExitCode {
         perspective_tol: args.perspective_tol.unwrap_or_default(),
         datapath: datapath(args.datapath),
         reference: args.reference,
-        supersample: args.supersample.unwrap_or(1),
-        samples: args.samples,
-        flip_ppd: args.flip_ppd.unwrap_or_default(),
+        supersample: args.quality.supersample.unwrap_or(1),
+        samples: args.quality.samples,
+        flip_ppd: args.quality.flip_ppd.unwrap_or_default(),
         viewport: args.viewport,
         mode: match args.mode {
             Mode::Timed => job::Mode::Timed,
