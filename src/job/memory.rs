@@ -55,7 +55,8 @@ fn estimate(job: &RenderJob, scene: &Scene, extra_per_pixel: f64) -> (f64, f64) 
     let pixels = scene.viewport.width as f64 * scene.viewport.height as f64;
     // Multisampled, the models' frame buffers hold every sample; the resolved frame is one
     // more image beside them, and the reference is traced twice (the area-averaged colours,
-    // the hits at a sample), each counted as a whole reference.
+    // the hits at a sample), each counted as a whole reference. These are the measured
+    // per-pixel figures scaled by what a multisampled run holds, not measured themselves.
     let samples = job.samples.get() as f64;
     let mut per_pixel = match job.mode {
         Mode::Functional => BYTES_PER_PIXEL_FUNCTIONAL,
