@@ -47,6 +47,18 @@ fn assert_refused_with(args: &[&str], env: &[(&str, &str)], needle: &str) {
     );
 }
 
+/// Runs `args` (writing into `o`) in `dir`, asserts that the run succeeded and returns the
+/// report.json it wrote.
+fn report_of_run(args: &[&str], dir: &Path) -> serde_json::Value {
+    let out = run(args, dir);
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&std::fs::read(dir.join("o/report.json")).unwrap()).unwrap()
+}
+
 /// Runs `args` in a fresh directory with the environment variables `env` set, and asserts
 /// that the run succeeded.
 fn assert_runs_with(args: &[&str], env: &[(&str, &str)]) {
@@ -289,7 +301,7 @@ fn bad_architecture_field_is_refused_by_name() {
 fn timed_run_reports_units_and_writes_a_timeline() {
     let dir = tempfile::tempdir().unwrap();
     let arch = manifest().join("sim/arch/wide.json");
-    let out = run(
+    let report = report_of_run(
         &[
             "render",
             "--arch",
@@ -303,13 +315,6 @@ fn timed_run_reports_units_and_writes_a_timeline() {
         ],
         dir.path(),
     );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let report: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(dir.path().join("o/report.json")).unwrap()).unwrap();
     assert_eq!(report["settings"]["mode"], "timed");
     assert_eq!(report["arch"]["name"], "wide");
     assert_eq!(
@@ -553,7 +558,7 @@ fn bad_samples_are_refused() {
 fn flip_pixels_per_degree_is_used_and_echoed() {
     let dir = tempfile::tempdir().unwrap();
     let flip = |ppd: &str| {
-        let out = run(
+        let report = report_of_run(
             &[
                 "render",
                 "--mode",
@@ -566,14 +571,6 @@ fn flip_pixels_per_degree_is_used_and_echoed() {
             ],
             dir.path(),
         );
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let report: serde_json::Value =
-            serde_json::from_slice(&std::fs::read(dir.path().join("o/report.json")).unwrap())
-                .unwrap();
         let a = &report["accuracy"];
         assert_eq!(
             a["flip_pixels_per_degree"].as_f64(),
