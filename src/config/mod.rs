@@ -652,6 +652,26 @@ impl ArchConfig {
         }
     }
 
+    /// The architecture field that sets `kind`'s instance count (`"rasterizer.count"`);
+    /// None for a kind that has one instance by construction (the geometry fetch and the
+    /// frame-buffer port). A blend unit sits in each ROP, so the ROPs' count is its.
+    pub fn count_field(kind: UnitKind) -> Option<&'static str> {
+        Some(match kind {
+            UnitKind::GeometryFetch | UnitKind::FrameBuffer => return None,
+            UnitKind::Setup => "setup.count",
+            UnitKind::MinMax => "minmax.count",
+            UnitKind::IntervalManager => "interval_manager.count",
+            UnitKind::Segmenter => "segmenter.count",
+            UnitKind::Subsegmenter => "subsegmenter.count",
+            UnitKind::FragmentRasterizer => "rasterizer.count",
+            UnitKind::Tessellator => "tessellator.count",
+            UnitKind::DomainEval => "domain_eval.count",
+            UnitKind::TriangleSetup => "triangle_setup.count",
+            UnitKind::TriangleRasterizer => "triangle_rasterizer.count",
+            UnitKind::Rop | UnitKind::BlendUnit => "rop.count",
+        })
+    }
+
     /// The units `path` instantiates on this architecture, in dataflow order, with their
     /// latencies \[cycles\].
     pub fn instances(&self, path: UnitPath) -> Vec<(UnitInstance, u64)> {

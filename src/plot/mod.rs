@@ -33,6 +33,7 @@ mod chart;
 mod error;
 mod point;
 pub mod scaling;
+pub mod speedup;
 
 use crate::error::{Error, Result};
 use chart::{

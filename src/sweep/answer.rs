@@ -1,121 +1,262 @@
-//! `answer.md`: the lembo path against the triangle path on each scene of a sweep with an
-//! area budget, three ways (DESIGN.md §7, "The answer"), each run named by its parameters
-//! and its bottleneck:
+//! `answer.md` and its figures: the lembo path against the triangle path on each scene of a
+//! sweep with an area budget (DESIGN.md §7, "The answer"), every run named by its
+//! parameters and the unit that bounds it:
 //!
-//! - **equal area**: each path's most accurate run (highest PSNR) whose unit is within the
-//!   budget, the fastest of equally accurate ones;
-//! - **equal error**: the target is the lower of the two paths' best PSNR within the budget;
-//!   each path's fastest run (fewest cycles) within the budget that reaches it, and, apart,
-//!   its most frugal one (least energy a frame) that reaches it;
+//! - **bracketing**: each series' knob levels (k on the lembo path, n on the triangle path),
+//!   the best PSNR at each, and why it went no further ([`super::bracket`]);
+//! - **speed-up against target error**, on PSNR, mean FLIP and the silhouette error: at each
+//!   target, each path's fewest cycles and least energy within the budget (the monotone
+//!   envelope, [`super::curves`]), and `speedup_<metric>_<scene>.svg` over every level;
+//! - **equal area**: each path's most accurate run (highest PSNR) within the budget, the
+//!   fastest of equally accurate ones;
 //! - **equal energy**: the cap is the least energy a frame at which both paths have a run
-//!   within the area budget (the higher of their least energies); each path's most accurate
-//!   run within the area budget that spends at most that.
+//!   within the budget (the higher of their least energies); each path's most accurate run
+//!   within it.
 //!
-//! Remaining ties go to the run listed first in the sweep. A scene where a path has no measured run
-//! within the budget gets a line saying so. Only runs with both a cost and an accuracy count
-//! (timed runs measured against the reference).
+//! A deciding run is flagged where the answer would be the grid's, not the hardware's: at
+//! the fine end of a series that was not bracketed, at the coarse end of its grid (a
+//! coarser knob might reach the target for less), or bound by a unit whose count the
+//! sweep held at one value. Remaining ties go to the run listed first in the sweep. Only
+//! runs with both a cost and an accuracy count (timed runs measured against the reference).
 
+use super::bracket::{series, Knob, Limits, Measured, Refine, Series, DEFAULT_MARGIN_DB};
+use super::curves::{curve, default_targets, reach, Metric, Targets, METRICS};
+use crate::config::ArchConfig;
+use crate::error::Result;
+use crate::graph::KINDS;
+use crate::job::MAX_TRIANGLES;
+use crate::plot::speedup::{speedup_svg, SpeedupFigure};
+use crate::tolerance::K_RANGE;
 use serde_json::Value;
+use std::collections::BTreeSet;
 use std::fmt::Write as _;
 
-/// One measured run: what the answer reads of its record.
-#[derive(Clone, Debug)]
-struct Run {
-    /// `lembo` or `triangle`.
-    path: String,
-    /// Its parameters, as `name=value` joined by `, ` (the path aside).
-    label: String,
-    cycles: u64,
-    energy_uj: f64,
-    area_mm2: f64,
-    psnr_db: f64,
-    bottleneck: String,
+/// What the answer is made from, besides the records.
+pub(super) struct Ask<'a> {
+    /// The spec's area budget \[mm²\].
+    pub(super) budget_mm2: f64,
+    /// The spec's refinement; None for the grid alone.
+    pub(super) refine: Option<Refine>,
+    /// The spec's targets.
+    pub(super) targets: &'a Targets,
 }
 
-impl Run {
-    /// The run of `record`, its label without the parameters in `constant`.
-    fn of(record: &Value, constant: &[(String, Value)]) -> Option<Run> {
-        let report = &record["report"];
-        let params = record["params"].as_object()?;
-        let path = params
-            .get("path")
-            .and_then(Value::as_str)
-            .unwrap_or("lembo")
-            .to_string();
-        let label = params
-            .iter()
-            .filter(|(name, value)| {
-                name.as_str() != "path" && !constant.iter().any(|(n, v)| n == *name && v == *value)
-            })
-            .map(|(name, value)| {
-                let value = match value {
-                    Value::String(s) => s.clone(),
-                    v => v.to_string(),
-                };
-                format!("{}={value}", name.trim_start_matches("arch."))
-            })
-            .collect::<Vec<_>>()
-            .join(", ");
-        Some(Run {
-            path,
-            label,
-            cycles: report["cycles"]["total"].as_u64()?,
-            energy_uj: report["cost"]["energy_pj"].as_f64()? * 1e-6,
-            area_mm2: report["cost"]["area_mm2"].as_f64()?,
-            psnr_db: report["accuracy"]["psnr_db"].as_f64()?,
-            bottleneck: report["cycles"]["bottleneck"]
-                .as_str()
-                .unwrap_or("none")
+/// `answer.md` and its figures, as (file name, bytes), for `records`; None when no scene
+/// has measured runs of both paths within the budget.
+pub(super) fn answer_files(records: &[Value], ask: &Ask) -> Result<Option<Vec<(String, Vec<u8>)>>> {
+    let runs: Vec<Measured> = records
+        .iter()
+        .filter_map(Measured::of)
+        .filter(|m| m.cycles.is_some() && m.energy_uj.is_some() && m.psnr_db.is_some())
+        .collect();
+    let triangle_ok = |scene: &str, n: u32| {
+        runs.iter()
+            .filter(|m| m.scene == scene)
+            .filter_map(|m| m.lembos)
+            .next()
+            .is_some_and(|l| l.saturating_mul(n as u64 * n as u64) <= MAX_TRIANGLES)
+    };
+    let limits = Limits {
+        refine: ask.refine,
+        budget: Some(ask.budget_mm2),
+        triangle_ok: &triangle_ok,
+    };
+    let all_series = series(&runs, &limits);
+    let (constant, shared) = shared_params(&runs);
+    let margin = ask.refine.map_or(DEFAULT_MARGIN_DB, |r| r.margin_db);
+    let names = Names {
+        runs: &runs,
+        series: &all_series,
+        constant: &constant,
+        margin,
+    };
+
+    let mut scenes: Vec<&str> = Vec::new();
+    for m in &runs {
+        if !scenes.contains(&m.scene.as_str()) {
+            scenes.push(&m.scene);
+        }
+    }
+    let mut figures: Vec<(String, Vec<u8>)> = Vec::new();
+    let (mut area, mut energy, mut bracket) = (String::new(), String::new(), String::new());
+    let mut curves: Vec<String> = vec![String::new(); METRICS.len()];
+    let mut any = false;
+    for scene in scenes {
+        let within = |path: &str| -> Vec<&Measured> {
+            runs.iter()
+                .filter(|m| m.scene == scene && m.path == path && m.within(limits.budget))
+                .collect()
+        };
+        let (lembo, triangle) = (within("lembo"), within("triangle"));
+        for s in all_series.iter().filter(|s| s.scene == scene) {
+            let _ = writeln!(bracket, "{}", names.series_row(s));
+        }
+        let (Some(bl), Some(bt)) = (most_accurate(&lembo), most_accurate(&triangle)) else {
+            let _ = writeln!(
+                area,
+                "| {scene} | no run of both paths within {} mm² | | |",
+                ask.budget_mm2
+            );
+            continue;
+        };
+        any = true;
+        let _ = writeln!(
+            area,
+            "| {scene} | {} | {} | {}; {}, {} |",
+            names.cell_fine(bl),
+            names.cell_fine(bt),
+            more_accurate(bl, bt),
+            ratio("cycles", bl.cycles_f(), bt.cycles_f()),
+            ratio("µJ", bl.uj(), bt.uj()),
+        );
+        energy += &equal_energy_row(scene, &lembo, &triangle, &names);
+        for (i, &metric) in METRICS.iter().enumerate() {
+            let stated = ask.targets.of(metric).map(<[f64]>::to_vec);
+            let targets = stated.unwrap_or_else(|| default_targets(&lembo, &triangle, metric));
+            for t in targets {
+                curves[i] += &names.target_row(scene, metric, t, &lembo, &triangle);
+            }
+            let points = curve(&lembo, &triangle, metric);
+            if points.is_empty() {
+                continue;
+            }
+            let cycles: Vec<(f64, f64)> = points.iter().map(|p| (p.target, p.cycles)).collect();
+            let energy: Vec<(f64, f64)> = points.iter().map(|p| (p.target, p.energy)).collect();
+            let svg = speedup_svg(&SpeedupFigure {
+                scene,
+                metric: metric.title(),
+                higher_is_stricter: metric.higher_is_better(),
+                cycles: &cycles,
+                energy: &energy,
+            })?;
+            figures.push((
+                format!("speedup_{}_{}.svg", metric.name(), file_stem(scene)),
+                svg.into_bytes(),
+            ));
+        }
+    }
+    if !any {
+        return Ok(None);
+    }
+    let budget_mm2 = ask.budget_mm2;
+    let mut page = format!(
+        "# The answer: lembos against triangles\n\n\
+         Made by `lembo-sim sweep` from this directory's runs (DESIGN.md §7): every run whose \
+         unit is within the spec's area budget of {budget_mm2} mm², measured against the exact \
+         reference. A run is named by its parameters and the unit that bounds it. A deciding \
+         run is flagged **unbracketed** where a finer knob was not tried although the error \
+         still improved by {margin} dB or more, **coarse end** where a coarser knob was not \
+         tried and might reach the target for less, and **fixed count** where the unit that \
+         bounds it had one count in every run of its path.\n\n"
+    );
+    if !shared.is_empty() {
+        page += &shared;
+        page += "\n";
+    }
+    page += &format!(
+        "## Bracketing\n\nEach series is a scene's runs of one path that differ only in the \
+         knob and the architecture (their images do not depend on the architecture). \
+         {}\n\n| scene | path | series | levels (best PSNR) | how it ended |\n|---|---|---|---|---|\n",
+        match ask.refine {
+            Some(r) => format!(
+                "Refined beyond the grid (k halved down to {}, n doubled up to {}{}) while the \
+                 finest level gained {} dB or more over the best coarser one; each finer level \
+                 runs on the series' fastest and most frugal architectures at the level before.",
+                r.k_floor,
+                r.tess_cap,
+                r.cycle_cap
+                    .map_or(String::new(), |c| format!(", until a run took over {c} cycles")),
+                r.margin_db
+            ),
+            None => format!(
+                "The spec asks for no refinement (`refine`): a series whose last step still \
+                 gained {margin} dB or more stops at the edge of its grid."
+            ),
+        }
+    );
+    page += &bracket;
+    page += "\n## Speed-up against target error\n\nFor each target, each path's fewest cycles \
+             and least energy with which a run within the budget reaches it (a path reaches a \
+             target at cost C if any of its runs costing at most C reaches it). The figures \
+             (`speedup_<metric>_<scene>.svg`) draw the speed-up at every level a run measured \
+             that both paths reach.\n";
+    for (i, &metric) in METRICS.iter().enumerate() {
+        let how = match ask.targets.of(metric) {
+            Some(_) => "the spec's targets".to_string(),
+            None => "three levels from the runs: the stricter of the two paths' worst, the \
+                     looser of their best, and their middle"
                 .to_string(),
-        })
+        };
+        let _ = write!(
+            page,
+            "\n### {} ({})\n\n| scene | target | lembo, fastest | triangle, fastest | cycles | \
+             lembo, least energy | triangle, least energy | energy |\n|---|---|---|---|---|---|---|---|\n",
+            metric.title(),
+            how
+        );
+        page += &curves[i];
     }
+    page += "\n## At equal area\n\nEach path's most accurate run (PSNR) within the budget (ties: \
+             the fastest).\n\n| scene | lembo | triangle | comparison |\n|---|---|---|---|\n";
+    page += &area;
+    page += "\n## At equal energy\n\nThe energy cap is the least at which both paths have a \
+             run within the budget (the higher of their least energies a frame); each path's \
+             most accurate run within the area budget spending at most that (ties: the \
+             fastest).\n\n| scene | cap | lembo | triangle | comparison |\n|---|---|---|---|---|\n";
+    page += &energy;
+    if !figures.is_empty() {
+        page += "\n## Figures\n\n";
+        for (name, _) in &figures {
+            let _ = writeln!(page, "- [{name}]({name})");
+        }
+    }
+    let mut files = vec![("answer.md".to_string(), page.into_bytes())];
+    files.extend(figures);
+    Ok(Some(files))
+}
 
-    /// The run in a table cell.
-    fn cell(&self) -> String {
-        format!(
-            "{}: {} cycles, {:.0} µJ, {:.1} dB, {:.2} mm², bound by {}",
-            if self.label.is_empty() {
-                "defaults"
+/// A scene's name as a file name's part.
+fn file_stem(scene: &str) -> String {
+    scene
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
             } else {
-                &self.label
-            },
-            self.cycles,
-            self.energy_uj,
-            self.psnr_db,
-            self.area_mm2,
-            self.bottleneck
-        )
+                '_'
+            }
+        })
+        .collect()
+}
+
+impl Measured {
+    fn cycles_f(&self) -> f64 {
+        self.cycles.unwrap_or(u64::MAX) as f64
+    }
+    fn uj(&self) -> f64 {
+        self.energy_uj.unwrap_or(f64::INFINITY)
+    }
+    fn psnr(&self) -> f64 {
+        self.psnr_db.unwrap_or(f64::NEG_INFINITY)
     }
 }
 
-/// The first of `runs` with the largest `key`, compared in order (ties: the earliest).
-fn best_by<'a>(runs: &[&'a Run], key: impl Fn(&Run) -> (f64, f64)) -> Option<&'a Run> {
+/// The first of `runs` with the largest `key` (ties: the earliest).
+fn best_by<'a>(
+    runs: &[&'a Measured],
+    key: impl Fn(&Measured) -> (f64, f64),
+) -> Option<&'a Measured> {
     runs.iter()
         .copied()
-        .fold(None, |best: Option<&Run>, r| match best {
+        .fold(None, |best: Option<&Measured>, r| match best {
             Some(b) if key(b) >= key(r) => Some(b),
             _ => Some(r),
         })
 }
 
 /// Most accurate, then fastest.
-fn accurate(r: &Run) -> (f64, f64) {
-    (r.psnr_db, -(r.cycles as f64))
-}
-
-/// Fastest, then least energy.
-fn fast(r: &Run) -> (f64, f64) {
-    (-(r.cycles as f64), -r.energy_uj)
-}
-
-/// Least energy, then fastest.
-fn frugal(r: &Run) -> (f64, f64) {
-    (-r.energy_uj, -(r.cycles as f64))
-}
-
-/// The runs of `runs` that `keep`.
-fn filtered<'a>(runs: &[&'a Run], keep: impl Fn(&Run) -> bool) -> Vec<&'a Run> {
-    runs.iter().copied().filter(|r| keep(r)).collect()
+fn most_accurate<'a>(runs: &[&'a Measured]) -> Option<&'a Measured> {
+    best_by(runs, |r| (r.psnr(), -r.cycles_f()))
 }
 
 /// The lembo path's and the triangle path's figures as a ratio in words: "lembos 2.10x
@@ -135,32 +276,31 @@ fn ratio(what: &str, lembo: f64, triangle: f64) -> String {
 }
 
 /// Which of two runs is the more accurate, and by how much, in words.
-fn more_accurate(lembo: &Run, triangle: &Run) -> String {
-    let winner = if lembo.psnr_db >= triangle.psnr_db {
+fn more_accurate(lembo: &Measured, triangle: &Measured) -> String {
+    let winner = if lembo.psnr() >= triangle.psnr() {
         "lembos"
     } else {
         "triangles"
     };
     format!(
         "{winner} more accurate by {:.1} dB",
-        (lembo.psnr_db - triangle.psnr_db).abs()
+        (lembo.psnr() - triangle.psnr()).abs()
     )
 }
 
-/// The parameters every run of a path shares (one value, in every run), to leave out of
-/// the labels, and the sentences that say them once.
-fn shared_params(records: &[Value]) -> (Vec<(String, Value)>, String) {
-    let path_of = |r: &Value| r["params"]["path"].as_str().unwrap_or("lembo").to_string();
+/// The parameters every run of a path shares, to leave out of the labels, and the
+/// sentences that say them once.
+fn shared_params(runs: &[Measured]) -> (Vec<(String, Value)>, String) {
     let mut constant: Vec<(String, Value)> = Vec::new();
     let mut shared = String::new();
     for path in ["lembo", "triangle"] {
-        let of_path: Vec<&Value> = records.iter().filter(|r| path_of(r) == path).collect();
-        let Some(first) = of_path.first().and_then(|r| r["params"].as_object()) else {
+        let of_path: Vec<&Measured> = runs.iter().filter(|m| m.path == path).collect();
+        let Some(first) = of_path.first() else {
             continue;
         };
         let mut same: Vec<String> = Vec::new();
-        for (name, value) in first {
-            if name != "path" && of_path.iter().all(|r| r["params"].get(name) == Some(value)) {
+        for (name, value) in &first.params {
+            if name != "path" && of_path.iter().all(|m| m.params.get(name) == Some(value)) {
                 constant.push((name.clone(), value.clone()));
                 same.push(format!("{name} = {value}"));
             }
@@ -172,54 +312,21 @@ fn shared_params(records: &[Value]) -> (Vec<(String, Value)>, String) {
     (constant, shared)
 }
 
-/// The measured runs of `records` by scene, scenes in the order they first appear.
-fn by_scene(records: &[Value], constant: &[(String, Value)]) -> Vec<(String, Vec<Run>)> {
-    let mut scenes: Vec<(String, Vec<Run>)> = Vec::new();
-    for record in records {
-        let Some(run) = Run::of(record, constant) else {
-            continue;
-        };
-        let scene = record["scene"].as_str().unwrap_or("?");
-        match scenes.iter_mut().find(|(s, _)| s == scene) {
-            Some((_, runs)) => runs.push(run),
-            None => scenes.push((scene.to_string(), vec![run])),
-        }
-    }
-    scenes
-}
-
-/// The equal-error row of `scene`: both paths reach `target`; each one's fastest and most
-/// frugal run that does. None when a path has no such run (it cannot happen when `target`
-/// is the lower of their best).
-fn equal_error_row(scene: &str, lembo: &[&Run], triangle: &[&Run], target: f64) -> Option<String> {
-    let (rl, rt) = (
-        filtered(lembo, |r| r.psnr_db >= target),
-        filtered(triangle, |r| r.psnr_db >= target),
-    );
-    let (fl, ft) = (best_by(&rl, fast)?, best_by(&rt, fast)?);
-    let (el, et) = (best_by(&rl, frugal)?, best_by(&rt, frugal)?);
-    Some(format!(
-        "| {scene} | {target:.1} dB | {} | {} | {} | {} | {}; {} |\n",
-        fl.cell(),
-        ft.cell(),
-        el.cell(),
-        et.cell(),
-        ratio("cycles", fl.cycles as f64, ft.cycles as f64),
-        ratio("µJ", el.energy_uj, et.energy_uj),
-    ))
-}
-
-/// The equal-energy row of `scene`: the cap is the least energy at which both paths have
-/// a run; each one's most accurate run within it.
-fn equal_energy_row(scene: &str, lembo: &[&Run], triangle: &[&Run]) -> String {
-    let least = |runs: &[&Run]| runs.iter().map(|r| r.energy_uj).fold(f64::MAX, f64::min);
+/// The equal-energy row of `scene`.
+fn equal_energy_row(
+    scene: &str,
+    lembo: &[&Measured],
+    triangle: &[&Measured],
+    names: &Names,
+) -> String {
+    let least = |runs: &[&Measured]| runs.iter().map(|r| r.uj()).fold(f64::MAX, f64::min);
     let cap = least(lembo).max(least(triangle));
-    let (sl, st) = (
-        filtered(lembo, |r| r.energy_uj <= cap),
-        filtered(triangle, |r| r.energy_uj <= cap),
+    let (kl, kt): (Vec<&Measured>, Vec<&Measured>) = (
+        lembo.iter().copied().filter(|r| r.uj() <= cap).collect(),
+        triangle.iter().copied().filter(|r| r.uj() <= cap).collect(),
     );
-    let (l, t) = (best_by(&sl, accurate), best_by(&st, accurate));
-    let cell = |r: Option<&Run>| r.map_or("no run within it".to_string(), Run::cell);
+    let (l, t) = (most_accurate(&kl), most_accurate(&kt));
+    let cell = |r: Option<&Measured>| r.map_or("no run within it".to_string(), |r| names.cell(r));
     let comparison = match (l, t) {
         (Some(l), Some(t)) => more_accurate(l, t),
         _ => String::new(),
@@ -231,145 +338,210 @@ fn equal_energy_row(scene: &str, lembo: &[&Run], triangle: &[&Run]) -> String {
     )
 }
 
-/// The answer page for `records` within `budget_mm2`; None when no scene has measured
-/// runs of both paths.
-pub(super) fn answer_md(records: &[Value], budget_mm2: f64) -> Option<String> {
-    let (constant, shared) = shared_params(records);
-    let (mut area, mut error, mut energy) = (String::new(), String::new(), String::new());
-    let mut any = false;
-    for (scene, runs) in by_scene(records, &constant) {
-        let within = |path: &str| -> Vec<&Run> {
-            runs.iter()
-                .filter(|r| r.path == path && r.area_mm2 <= budget_mm2)
-                .collect()
-        };
-        let (lembo, triangle) = (within("lembo"), within("triangle"));
-        let (Some(bl), Some(bt)) = (best_by(&lembo, accurate), best_by(&triangle, accurate)) else {
-            let _ = writeln!(
-                area,
-                "| {scene} | no run of both paths within {budget_mm2} mm² | | |"
-            );
-            continue;
-        };
-        any = true;
-        let _ = writeln!(
-            area,
-            "| {scene} | {} | {} | {}; {}, {} |",
-            bl.cell(),
-            bt.cell(),
-            more_accurate(bl, bt),
-            ratio("cycles", bl.cycles as f64, bt.cycles as f64),
-            ratio("µJ", bl.energy_uj, bt.energy_uj),
-        );
-        let target = bl.psnr_db.min(bt.psnr_db);
-        error += &equal_error_row(&scene, &lembo, &triangle, target).unwrap_or_default();
-        energy += &equal_energy_row(&scene, &lembo, &triangle);
-    }
-    if !any {
-        return None;
-    }
-    let mut page = format!(
-        "# The answer: lembos against triangles\n\n\
-         Made by `lembo-sim sweep` from this directory's runs (DESIGN.md §7): every run whose \
-         unit is within the spec's area budget of {budget_mm2} mm², measured against the exact \
-         reference (PSNR). A run is named by its parameters and the unit that bounds it.\n\n"
-    );
-    if !shared.is_empty() {
-        page += &shared;
-        page += "\n";
-    }
-    page += "## At equal area\n\nEach path's most accurate run within the budget (ties: the \
-             fastest).\n\n";
-    page += "| scene | lembo | triangle | comparison |\n|---|---|---|---|\n";
-    page += &area;
-    page += "\n## At equal error\n\nThe target is the lower of the two paths' best PSNR \
-             within the budget; each path's fastest run reaching it (ties: the more frugal), \
-             and its most frugal one (ties: the faster).\n\n";
-    page += "| scene | target | lembo, fastest | triangle, fastest | lembo, least energy | \
-             triangle, least energy | comparison |\n|---|---|---|---|---|---|---|\n";
-    page += &error;
-    page += "\n## At equal energy\n\nThe energy cap is the least at which both paths have a \
-             run within the budget (the higher of their least energies a frame); each path's \
-             most accurate run within the area budget spending at most that (ties: the \
-             fastest).\n\n";
-    page += "| scene | cap | lembo | triangle | comparison |\n|---|---|---|---|---|\n";
-    page += &energy;
-    Some(page)
+/// How runs are named and flagged.
+struct Names<'a> {
+    runs: &'a [Measured],
+    series: &'a [Series],
+    constant: &'a [(String, Value)],
+    margin: f64,
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use serde_json::json;
-
-    fn record(scene: &str, params: Value, cycles: u64, uj: f64, mm2: f64, db: f64) -> Value {
-        json!({
-            "scene": scene,
-            "params": params,
-            "report": {
-                "cycles": {"total": cycles, "bottleneck": "Rop[0]"},
-                "cost": {"energy_pj": uj * 1e6, "area_mm2": mm2},
-                "accuracy": {"psnr_db": db}
-            }
-        })
+impl Names<'_> {
+    /// Its parameters, as `name=value` joined by `, ` (the path and the shared ones aside).
+    fn label(&self, m: &Measured) -> String {
+        let label = m
+            .params
+            .iter()
+            .filter(|(name, value)| {
+                name.as_str() != "path"
+                    && !self.constant.iter().any(|(n, v)| n == *name && v == *value)
+            })
+            .map(|(name, value)| {
+                let value = match value {
+                    Value::String(s) => s.clone(),
+                    v => v.to_string(),
+                };
+                format!("{}={value}", name.trim_start_matches("arch."))
+            })
+            .collect::<Vec<_>>()
+            .join(", ");
+        if label.is_empty() {
+            "defaults".to_string()
+        } else {
+            label
+        }
     }
 
-    /// A hand-worked scene: the budget excludes the most accurate triangle run; equal
-    /// error picks the fastest and the most frugal runs reaching the lower best; equal
-    /// energy caps at the higher of the paths' least energies.
-    #[test]
-    fn the_three_answers_follow_their_definitions() {
-        let records = [
-            record("s", json!({"path": "lembo", "k": 1}), 100, 10.0, 1.0, 40.0),
-            record(
-                "s",
-                json!({"path": "lembo", "k": 0.5}),
-                150,
-                12.0,
-                1.0,
-                45.0,
-            ),
-            record(
-                "s",
-                json!({"path": "triangle", "tess": 4}),
-                80,
-                8.0,
-                1.0,
-                42.0,
-            ),
-            record(
-                "s",
-                json!({"path": "triangle", "tess": 8}),
-                300,
-                30.0,
-                1.5,
-                44.0,
-            ),
-            record(
-                "s",
-                json!({"path": "triangle", "tess": 16}),
-                900,
-                90.0,
-                9.0,
-                60.0,
-            ),
-        ];
-        let page = answer_md(&records, 2.0).unwrap();
-        // Equal area: lembo k = 0.5 (45 dB) against triangle n = 8 (44 dB; n = 16 is 9 mm²).
-        assert!(page.contains("| s | k=0.5: 150 cycles"), "{page}");
-        assert!(page.contains("tess=8: 300 cycles"), "{page}");
-        assert!(page.contains("lembos more accurate by 1.0 dB"), "{page}");
-        // Equal error at 44 dB: lembo k = 0.5 (150 cycles) against triangle n = 8 (300).
-        assert!(page.contains("| s | 44.0 dB | k=0.5: 150"), "{page}");
-        assert!(page.contains("lembos 2.00x fewer cycles"), "{page}");
-        // Equal energy, capped at 10 µJ (the lembo path's least; the triangle path's is 8):
-        // lembo k = 1 (40 dB) against triangle n = 4 (42 dB).
-        assert!(page.contains("| s | 10 µJ | k=1: 100 cycles"), "{page}");
-        assert!(
-            page.contains("triangles more accurate by 2.0 dB |"),
-            "{page}"
+    /// The run in a table cell, with its fixed-count flag.
+    fn cell(&self, m: &Measured) -> String {
+        let mut cell = format!(
+            "{}: {} cycles, {:.0} µJ, {:.1} dB, {:.2} mm², bound by {}",
+            self.label(m),
+            m.cycles.unwrap_or(0),
+            m.uj(),
+            m.psnr(),
+            m.area_mm2.unwrap_or(f64::NAN),
+            m.bottleneck.as_deref().unwrap_or("none")
         );
-        // Without both paths within the budget there is no answer.
-        assert!(answer_md(&records[..2], 2.0).is_none());
+        if let Some(flag) = self.fixed_count(m) {
+            let _ = write!(cell, "; **fixed count**: {flag}");
+        }
+        cell
+    }
+
+    /// The cell of a run chosen for its accuracy: flagged when it sits at the fine end of a
+    /// series that was not bracketed.
+    fn cell_fine(&self, m: &Measured) -> String {
+        let mut cell = self.cell(m);
+        if let Some(s) = self.series_of(m) {
+            if m.knob == s.finest() && !s.stop.bracketed(self.margin) {
+                let _ = write!(
+                    cell,
+                    "; **unbracketed**: {}",
+                    s.stop.describe(self.margin, s.finest())
+                );
+            }
+        }
+        cell
+    }
+
+    /// The cell of a run chosen as the cheapest to reach a target: flagged when it sits at
+    /// the coarse end of its grid and a coarser knob exists.
+    fn cell_coarse(&self, m: &Measured) -> String {
+        let mut cell = self.cell(m);
+        let coarser = self
+            .runs
+            .iter()
+            .filter(|r| r.scene == m.scene && r.path == m.path && r.group() == m.group())
+            .any(|r| coarser_than(r.knob, m.knob));
+        let natural = match m.knob {
+            Knob::Tess(n) => n <= 1,
+            Knob::K(k) => k >= K_RANGE.1,
+        };
+        if !coarser && !natural {
+            let _ = write!(
+                cell,
+                "; **coarse end**: no coarser {} was run on its architecture",
+                m.knob.param()
+            );
+        }
+        cell
+    }
+
+    fn series_of(&self, m: &Measured) -> Option<&Series> {
+        let key = m.series_key();
+        self.series
+            .iter()
+            .find(|s| s.scene == m.scene && s.path == m.path && s.key == key)
+    }
+
+    /// Why a run's bounding unit's count was never varied, if it was not: the count field
+    /// took one value in every run of the scene's path.
+    fn fixed_count(&self, m: &Measured) -> Option<String> {
+        let kind_name = m.bottleneck.as_deref()?.split('[').next()?;
+        let kind = KINDS.iter().find(|k| k.name() == kind_name)?;
+        let field = ArchConfig::count_field(*kind)?;
+        let value = |r: &Measured| -> Value {
+            field
+                .split('.')
+                .try_fold(&r.arch, |at, part| at.get(part))
+                .cloned()
+                .unwrap_or(Value::Null)
+        };
+        let values: BTreeSet<String> = self
+            .runs
+            .iter()
+            .filter(|r| r.scene == m.scene && r.path == m.path)
+            .map(|r| value(r).to_string())
+            .collect();
+        (values.len() == 1).then(|| format!("{field} = {} in every run", value(m)))
+    }
+
+    /// A row of the bracketing table.
+    fn series_row(&self, s: &Series) -> String {
+        let levels = s
+            .levels
+            .iter()
+            .map(|(k, p)| match p {
+                Some(p) => format!("{}: {p:.1} dB", k.label()),
+                None => format!("{}: -", k.label()),
+            })
+            .collect::<Vec<_>>()
+            .join(", ");
+        let key = if s.key.is_empty() {
+            "defaults".to_string()
+        } else {
+            s.key.replace('|', ", ")
+        };
+        format!(
+            "| {} | {} | {key} | {levels} | {} |",
+            s.scene,
+            s.path,
+            s.stop.describe(self.margin, s.finest())
+        )
+    }
+
+    /// A target's row: each path's fastest and most frugal run reaching it, or why not.
+    fn target_row(
+        &self,
+        scene: &str,
+        metric: Metric,
+        target: f64,
+        lembo: &[&Measured],
+        triangle: &[&Measured],
+    ) -> String {
+        let (rl, rt) = (
+            reach(lembo, metric, target),
+            reach(triangle, metric, target),
+        );
+        let missing = |path: &str, runs: &[&Measured]| -> String {
+            let open: Vec<String> = self
+                .series
+                .iter()
+                .filter(|s| s.scene == scene && s.path == path)
+                .filter(|s| {
+                    runs.iter()
+                        .any(|m| self.series_of(m).is_some_and(|x| x.key == s.key))
+                })
+                .filter(|s| !s.stop.bracketed(self.margin))
+                .map(|s| s.stop.describe(self.margin, s.finest()))
+                .collect();
+            if open.is_empty() {
+                format!("not reached (every {path} series bracketed)")
+            } else {
+                format!("not reached; **unbracketed**: {}", open.join("; "))
+            }
+        };
+        let show = metric.show(target);
+        match (rl, rt) {
+            (Some(l), Some(t)) => format!(
+                "| {scene} | {show} | {} | {} | {} | {} | {} | {} |\n",
+                self.cell_coarse(l.fastest),
+                self.cell_coarse(t.fastest),
+                ratio("cycles", l.fastest.cycles_f(), t.fastest.cycles_f()),
+                self.cell_coarse(l.frugal),
+                self.cell_coarse(t.frugal),
+                ratio("µJ", l.frugal.uj(), t.frugal.uj()),
+            ),
+            (l, t) => format!(
+                "| {scene} | {show} | {} | {} | | {} | {} | |\n",
+                l.map_or_else(|| missing("lembo", lembo), |l| self.cell_coarse(l.fastest)),
+                t.map_or_else(
+                    || missing("triangle", triangle),
+                    |t| self.cell_coarse(t.fastest)
+                ),
+                l.map_or(String::new(), |l| self.cell_coarse(l.frugal)),
+                t.map_or(String::new(), |t| self.cell_coarse(t.frugal)),
+            ),
+        }
+    }
+}
+
+/// Whether knob `a` is coarser than `b`.
+fn coarser_than(a: Knob, b: Knob) -> bool {
+    match (a, b) {
+        (Knob::K(a), Knob::K(b)) => a > b,
+        (Knob::Tess(a), Knob::Tess(b)) => a < b,
+        _ => false,
     }
 }

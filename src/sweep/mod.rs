@@ -45,6 +45,8 @@
 //! before it (and `lock`); this file only declares them and re-exports their public items.
 
 mod answer;
+pub mod bracket;
+pub mod curves;
 mod grid;
 pub mod lock;
 pub mod merge;

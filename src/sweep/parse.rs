@@ -1,6 +1,8 @@
 //! `Spec::parse`: a spec file's own fields checked (name, scenes, viewport, mode, area
 //! budget) and its grid blocks and points expanded ([`super::grid`]) into points and runs.
 
+use super::bracket::Refine;
+use super::curves::Targets;
 use super::grid::Expander;
 use super::spec::{check_name, empty_list, key, too_many, ModeSpec, Run, Spec, SpecFile, MAX_RUNS};
 use crate::camera::MAX_VIEWPORT_SIDE;
@@ -69,6 +71,36 @@ impl Spec {
             }
         }
 
+        let refine = match &f.refine {
+            None => None,
+            Some(r) => {
+                if f.reference == Some(false) {
+                    return Err(Error::invalid(
+                        file,
+                        "refine",
+                        "present",
+                        "refinement follows the error against the exact reference; it needs `reference` true",
+                    ));
+                }
+                Some(Refine::from_file(file, r)?)
+            }
+        };
+
+        let targets = match &f.targets {
+            None => Targets::default(),
+            Some(t) => {
+                if f.area_budget_mm2.is_none() {
+                    return Err(Error::invalid(
+                        file,
+                        "targets",
+                        "present",
+                        "the answer's targets need `area_budget_mm2` (the answer compares the paths within it)",
+                    ));
+                }
+                Targets::from_file(file, t)?
+            }
+        };
+
         let mut ex = Expander {
             file,
             scenes: &f.scenes,
@@ -122,6 +154,8 @@ impl Spec {
             reference: f.reference.unwrap_or(true),
             arch: f.arch,
             area_budget_mm2: f.area_budget_mm2,
+            refine,
+            targets,
             points: ex.points,
             runs,
             scenes: f.scenes,

@@ -2,8 +2,9 @@
 //! `RenderJob` built and validated before the first run starts; a run's record.
 
 use super::{
+    bracket::Knob,
     grid::{reword, set_arch_field},
-    spec::{Point, Run, Setting, Shard, Spec, ARCH},
+    spec::{key, too_many, Point, Run, Setting, Shard, Spec, ARCH, MAX_RUNS},
 };
 use crate::camera::{Samples, View};
 use crate::config::ArchConfig;
@@ -22,7 +23,7 @@ use crate::scene::Scene;
 use crate::tolerance::{PerspectiveTol, DEFAULT_K_PX};
 use serde::Serialize;
 use serde_json::Value;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 // ---- The validated plan --------------------------------------------------------------
@@ -190,6 +191,89 @@ impl Plan {
             ),
             "lower --jobs or the spec's viewports",
         )
+    }
+
+    /// Adds refinement runs (DESIGN.md §7, "Bracketing"): each `(from, knob)` is run
+    /// `from`'s point with its accuracy knob set to `knob`, on run `from`'s scene and
+    /// architecture. A run whose key the sweep has is not added again. Returns the added
+    /// runs' indices, which follow every earlier run's.
+    pub(super) fn extend(&mut self, additions: &[(usize, Knob)]) -> Result<Vec<usize>> {
+        let file = self.spec.file.clone();
+        let mut keys: BTreeSet<String> = self.spec.runs.iter().map(|r| r.key.clone()).collect();
+        let mut added = Vec::new();
+        for &(from, knob) in additions {
+            let parent = self.spec.runs[from].clone();
+            let mut point = self.spec.points[parent.point].clone();
+            point.params.insert(knob.param().to_string(), knob.value());
+            point
+                .fields
+                .insert(knob.param().to_string(), "refine".to_string());
+            point
+                .settings
+                .retain(|s| !matches!(s, Setting::K(_) | Setting::Tess(_)));
+            point.settings.push(match knob {
+                Knob::K(k) => Setting::K(k),
+                Knob::Tess(n) => Setting::Tess(n),
+            });
+            point.origin = "refine".to_string();
+            point.scenes = vec![parent.scene];
+            let run_key = key(&self.spec.scenes[parent.scene], &point.params);
+            if !keys.insert(run_key.clone()) {
+                continue;
+            }
+            if self.spec.runs.len() >= MAX_RUNS {
+                return Err(too_many(&file, "refine", self.spec.runs.len() + 1));
+            }
+            let scene = &self.scenes[parent.scene];
+            let parent_job = &self.jobs[from];
+            let mut job = render_job(&self.spec, &point, scene, parent_job.host_threads);
+            // The same target as its series (a scene whose runs mix sample counts).
+            job.supersample = parent_job.supersample;
+            job.given.supersample = parent_job.given.supersample;
+            job.validate()
+                .map_err(|e| reword(e, &file, &point.field(knob.param())))?;
+            if let Knob::Tess(n) = knob {
+                check_triangle_budget(scene, n)
+                    .map_err(|e| reword(e, &file, &point.field("tess")))?;
+            }
+            let p = match self
+                .spec
+                .points
+                .iter()
+                .position(|q| q.params == point.params)
+            {
+                Some(p) => {
+                    let scenes = &mut self.spec.points[p].scenes;
+                    scenes.push(parent.scene);
+                    scenes.sort_unstable();
+                    scenes.dedup();
+                    p
+                }
+                None => {
+                    self.archs.push(self.archs[parent.point].clone());
+                    self.spec.points.push(point);
+                    self.spec.points.len() - 1
+                }
+            };
+            let index = self.spec.runs.len();
+            self.spec.runs.push(Run {
+                index,
+                point: p,
+                scene: parent.scene,
+                key: run_key,
+            });
+            self.jobs.push(job);
+            added.push(index);
+        }
+        Ok(added)
+    }
+
+    /// Whether `scene` (by name) can be tessellated at n triangles a lembo edge.
+    pub(super) fn triangle_ok(&self, scene: &str, n: u32) -> bool {
+        self.scenes
+            .iter()
+            .find(|s| s.name == scene)
+            .is_some_and(|s| check_triangle_budget(s, n).is_ok())
     }
 
     /// The runs of a shard, in index order.

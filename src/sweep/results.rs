@@ -79,16 +79,24 @@ pub(super) fn spec_difference(file: &str, theirs: &Value, ours: &Value, our_file
     )
 }
 
+/// Records of refinement runs read back before their round expanded them: by index,
+/// their key and line.
+pub(super) type Unplaced = BTreeMap<usize, (String, String)>;
+
 /// The records already in `results.jsonl`, by index, and whether a truncated or
-/// unreadable last line was dropped. Each must be a run of this spec and shard.
+/// unreadable last line was dropped. Each must be a run of this spec and shard; with a
+/// `refine` spec, the records beyond the spec's own runs are refinement runs, returned
+/// apart until their round adds them ([`place`]).
 pub(super) fn read_partial(
     path: &Path,
     spec: &Spec,
     shard: Shard,
-) -> Result<(BTreeMap<usize, String>, bool)> {
+) -> Result<(BTreeMap<usize, String>, bool, Unplaced)> {
     let text = match std::fs::read_to_string(path) {
         Ok(t) => t,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok((BTreeMap::new(), false)),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            return Ok((BTreeMap::new(), false, Unplaced::new()))
+        }
         Err(source) => {
             return Err(Error::Read {
                 path: path.to_path_buf(),
@@ -98,6 +106,7 @@ pub(super) fn read_partial(
     };
     let file = path.display().to_string();
     let mut lines = BTreeMap::new();
+    let mut unplaced = Unplaced::new();
     let mut dropped = false;
     let all: Vec<&str> = text.split_inclusive('\n').collect();
     for (n, raw) in all.iter().enumerate() {
@@ -121,6 +130,20 @@ pub(super) fn read_partial(
             });
         };
         let line = line.expect("parsed");
+        if spec.refine.is_some() && index >= spec.runs.len() {
+            if unplaced
+                .insert(index, (key.clone(), line.to_string()))
+                .is_some()
+            {
+                return Err(Error::invalid(
+                    file,
+                    format!("line {}", n + 1),
+                    index,
+                    "a second record of the same run",
+                ));
+            }
+            continue;
+        }
         check_record(&file, n, index, &key, spec, shard)?;
         if lines.insert(index, line.to_string()).is_some() {
             return Err(Error::invalid(
@@ -131,7 +154,50 @@ pub(super) fn read_partial(
             ));
         }
     }
-    Ok((lines, dropped))
+    Ok((lines, dropped, unplaced))
+}
+
+/// Moves the set-aside records of `new` refinement runs into `lines`; a record whose key is
+/// not its run's is refused (the folder holds another sweep's refinement).
+pub(super) fn place(
+    path: &Path,
+    spec: &Spec,
+    new: &[usize],
+    unplaced: &mut Unplaced,
+    lines: &mut BTreeMap<usize, String>,
+) -> Result<()> {
+    for &index in new {
+        let Some((key, line)) = unplaced.remove(&index) else {
+            continue;
+        };
+        let expected = &spec.runs[index].key;
+        if *expected != key {
+            return Err(Error::invalid(
+                path.display().to_string(),
+                format!("run {index}"),
+                key,
+                format!(
+                    "is not refinement run {index} of {} (whose key is {expected}): the records are another sweep's; use another --out",
+                    spec.file
+                ),
+            ));
+        }
+        lines.insert(index, line);
+    }
+    Ok(())
+}
+
+/// Refuses records of refinement runs that no round asked for.
+pub(super) fn check_all_placed(path: &Path, unplaced: &Unplaced) -> Result<()> {
+    match unplaced.iter().next() {
+        None => Ok(()),
+        Some((index, (key, _))) => Err(Error::invalid(
+            path.display().to_string(),
+            format!("run {index}"),
+            key,
+            "a refinement run this spec's rounds do not ask for: the records are another sweep's; use another --out",
+        )),
+    }
 }
 
 /// A record's index and key.
@@ -198,8 +264,20 @@ pub(super) fn write_final(
         (SPEC_JSON, spec_text.to_vec()),
     ];
     files.extend(plots.iter().map(|(name, svg)| (name.as_str(), svg.clone())));
-    if let Some(answer) = budget.and_then(|b| super::answer::answer_md(&records, b)) {
-        files.push((ANSWER_MD, answer.into_bytes()));
+    let targets = super::curves::Targets::of_spec_text(spec_text);
+    let answer = match budget {
+        None => None,
+        Some(budget_mm2) => super::answer::answer_files(
+            &records,
+            &super::answer::Ask {
+                budget_mm2,
+                refine: super::bracket::Refine::of_spec_text(spec_text),
+                targets: &targets,
+            },
+        )?,
+    };
+    for (name, bytes) in answer.iter().flatten() {
+        files.push((name.as_str(), bytes.clone()));
     }
     let page = page(spec_text, records.len(), &files)?;
     files.push((REPORT_HTML, page.into_bytes()));

@@ -3,13 +3,17 @@
 //! finished run appended to `results.jsonl` at once, resumption by key, the progress bar.
 
 use super::{
+    bracket::{next_round, Limits, Measured},
     lock::FolderLock,
     plan::{Plan, SweepReference},
-    results::{check_same_spec, joined, read_partial, write_final, RESULTS_JSONL, SPEC_JSON},
+    results::{
+        check_all_placed, check_same_spec, joined, place, read_partial, write_final, RESULTS_JSONL,
+        SPEC_JSON,
+    },
     spec::{Run, Shard},
 };
 use crate::camera::Samples;
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, COMMAND_LINE};
 use crate::job::{check_count, render_reference, PrimitivePath, MAX_HOST_THREADS};
 use crate::output::write_files;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -144,37 +148,40 @@ pub fn run_sweep(job: &SweepJob) -> std::result::Result<SweepOutcome, SweepError
     job.validate()?;
     let mut plan = Plan::load(&job.spec)?;
     clamp_host_threads(&mut plan, job.host_threads);
-    let spec = &plan.spec;
     let dir = job
         .out
         .clone()
-        .unwrap_or_else(|| Path::new("out").join("sweeps").join(&spec.name));
+        .unwrap_or_else(|| Path::new("out").join("sweeps").join(&plan.spec.name));
     let jobs = job.jobs.unwrap_or_else(|| {
         std::thread::available_parallelism()
             .map(|n| n.get())
             .unwrap_or(1)
             .min(MAX_JOBS)
     });
+    if plan.spec.refine.is_some() && job.shard != Shard::ALL {
+        return Err(Error::invalid(
+            COMMAND_LINE,
+            "--shard",
+            format!("{}/{}", job.shard.index, job.shard.count),
+            format!(
+                "{} has `refine`: its refinement rounds follow the results of every earlier run, so it runs in one process",
+                plan.spec.file
+            ),
+        )
+        .into());
+    }
     let runs = plan.shard_runs(job.shard);
     plan.check_memory(&runs, jobs, job.no_memory_check)?;
+    let mut round: Vec<usize> = runs.iter().map(|r| r.index).collect();
 
     // One writer per folder: a second sweep on it is refused before it reads anything.
     let _lock = FolderLock::acquire(&dir, "sweep", "--out")?;
     let results_path = dir.join(RESULTS_JSONL);
-    check_same_spec(&dir, spec)?;
-    let (mut lines, dropped) = read_partial(&results_path, spec, job.shard)?;
-    write_files(&dir, &[(SPEC_JSON, spec.text.clone().into_bytes())])?;
+    check_same_spec(&dir, &plan.spec)?;
+    let (mut lines, dropped, mut unplaced) = read_partial(&results_path, &plan.spec, job.shard)?;
+    write_files(&dir, &[(SPEC_JSON, plan.spec.text.clone().into_bytes())])?;
     if dropped || !results_path.exists() {
         write_files(&dir, &[(RESULTS_JSONL, joined(&lines))])?;
-    }
-    let skipped = runs.iter().filter(|r| lines.contains_key(&r.index)).count();
-    let pending: Vec<&Run> = runs
-        .iter()
-        .copied()
-        .filter(|r| !lines.contains_key(&r.index))
-        .collect();
-    if job.stop_after == Some(0) && !pending.is_empty() {
-        return Ok(SweepOutcome::Stopped { dir, appended: 0 });
     }
 
     let pool = rayon::ThreadPoolBuilder::new()
@@ -182,37 +189,81 @@ pub fn run_sweep(job: &SweepJob) -> std::result::Result<SweepOutcome, SweepError
         .thread_name(|i| format!("sweep-{i}"))
         .build()
         .map_err(|e| Error::Internal(format!("cannot start the sweep's threads: {e}")))?;
-    let bar = progress_bar(job.progress, pending.len());
-
-    let references = references(&plan, &pending, &pool, &bar);
-
-    let st = run_pending(
-        &plan,
-        &pending,
-        &references,
-        &results_path,
-        job.stop_after,
-        &pool,
-        jobs,
-        &bar,
-        &mut lines,
-    )?;
+    let bar = progress_bar(job.progress, 0);
+    let mut references: Vec<SweepReference> = Vec::new();
+    let (mut total, mut skipped, mut appended) = (0, 0, 0);
+    // The spec's runs, then each refinement round's (DESIGN.md §7, "Bracketing").
+    loop {
+        total += round.len();
+        let pending: Vec<&Run> = round
+            .iter()
+            .map(|&i| &plan.spec.runs[i])
+            .filter(|r| !lines.contains_key(&r.index))
+            .collect();
+        skipped += round.len() - pending.len();
+        let left = job.stop_after.map(|n| n.saturating_sub(appended));
+        if left == Some(0) && !pending.is_empty() {
+            return Ok(SweepOutcome::Stopped { dir, appended });
+        }
+        bar.inc_length(pending.len() as u64);
+        add_references(&plan, &pending, &pool, &bar, &mut references);
+        let st = run_pending(
+            &plan,
+            &pending,
+            &references,
+            &results_path,
+            left,
+            &pool,
+            jobs,
+            &bar,
+            &mut lines,
+        )?;
+        appended += st.appended;
+        if let Some(failure) = st.failure {
+            bar.finish_and_clear();
+            return Err(failure);
+        }
+        if st.stopped && st.appended < pending.len() {
+            bar.finish_and_clear();
+            return Ok(SweepOutcome::Stopped { dir, appended });
+        }
+        let Some(refine) = plan.spec.refine else {
+            break;
+        };
+        let additions = {
+            let measured: Vec<Measured> = lines
+                .values()
+                .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
+                .filter_map(|r| Measured::of(&r))
+                .collect();
+            let triangle_ok = |scene: &str, n: u32| plan.triangle_ok(scene, n);
+            next_round(
+                &measured,
+                &Limits {
+                    refine: Some(refine),
+                    budget: plan.spec.area_budget_mm2,
+                    triangle_ok: &triangle_ok,
+                },
+            )
+        };
+        round = plan.extend(&additions)?;
+        if round.is_empty() {
+            break;
+        }
+        clamp_host_threads(&mut plan, job.host_threads);
+        place(&results_path, &plan.spec, &round, &mut unplaced, &mut lines)?;
+        let new: Vec<&Run> = round.iter().map(|&i| &plan.spec.runs[i]).collect();
+        plan.check_memory(&new, jobs, job.no_memory_check)?;
+    }
     bar.finish_and_clear();
-    if let Some(failure) = st.failure {
-        return Err(failure);
-    }
-    if st.stopped && st.appended < pending.len() {
-        return Ok(SweepOutcome::Stopped {
-            dir,
-            appended: st.appended,
-        });
-    }
+    check_all_placed(&results_path, &unplaced)?;
+    let spec = &plan.spec;
 
     let files = write_final(&dir, spec.text.as_bytes(), &lines)?;
     Ok(SweepOutcome::Done(SweepOutput {
         dir,
         name: spec.name.clone(),
-        runs: runs.len(),
+        runs: total,
         skipped,
         jobs,
         files,
@@ -239,15 +290,16 @@ fn clamp_host_threads(plan: &mut Plan, host_threads: u32) {
     }
 }
 
-/// One exact reference per scene and sample count that a pending run measures against,
-/// computed before any run (each is itself parallel over rows on the pool).
-fn references(
+/// Adds to `references` the exact reference of each scene and sample count that a
+/// pending run measures against and that is not there yet, each computed before the runs
+/// that need it (each is itself parallel over rows on the pool).
+fn add_references(
     plan: &Plan,
     pending: &[&Run],
     pool: &rayon::ThreadPool,
     bar: &ProgressBar,
-) -> Vec<SweepReference> {
-    let mut references: Vec<SweepReference> = Vec::new();
+    references: &mut Vec<SweepReference>,
+) {
     for (s, scene) in plan.scenes.iter().enumerate() {
         // Each sample count's reference, as its runs' jobs ask for it.
         let samples: BTreeMap<Samples, u32> = pending
@@ -258,6 +310,9 @@ fn references(
             .map(|j| (j.samples, j.reference_supersample()))
             .collect();
         for (n, supersample) in samples {
+            if references.iter().any(|r| (r.scene, r.samples) == (s, n)) {
+                continue;
+            }
             bar.set_message(format!("reference of {}", scene.name));
             // The plan measures a discoid scene only where it says what surface it stands for.
             let surface = crate::job::reference_scene(scene).expect("checked by the plan");
@@ -275,7 +330,6 @@ fn references(
         }
     }
     bar.set_message("");
-    references
 }
 
 /// What the workers share, under one lock.

@@ -52,6 +52,8 @@ pub(super) struct SpecFile {
     pub(super) reference: Option<bool>,
     pub(super) arch: Option<String>,
     pub(super) area_budget_mm2: Option<f64>,
+    pub(super) refine: Option<super::bracket::RefineFile>,
+    pub(super) targets: Option<super::curves::TargetsFile>,
     pub(super) grid: Option<Vec<Params>>,
     pub(super) points: Option<Vec<Params>>,
 }
@@ -194,7 +196,12 @@ pub struct Spec {
     /// The area budget the plots hold the configurations to (report.json `cost.area_mm2`)
     /// \[mm²\]; None for no budget.
     pub area_budget_mm2: Option<f64>,
-    /// The points, in expansion order.
+    /// How far refinement rounds take each path's accuracy knob beyond the grid
+    /// (`refine`); None for the grid alone.
+    pub refine: Option<super::bracket::Refine>,
+    /// The target levels the answer tabulates (`targets`).
+    pub targets: super::curves::Targets,
+    /// The points, in expansion order (refinement rounds append theirs).
     pub points: Vec<Point>,
     /// Every (point, scene) pair, point-major.
     pub runs: Vec<Run>,

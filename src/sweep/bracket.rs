@@ -1,0 +1,750 @@
+//! Bracketing each path's accuracy knob (DESIGN.md §7, "Bracketing"): a spec's `refine`
+//! settings, what a run's record says of its knob and error ([`Measured`]), the knob
+//! series of a scene and path ([`series`]) with the reason each one ended ([`Stop`]), and
+//! the next round of refinement runs ([`next_round`]).
+//!
+//! A *series* is the runs of one scene and path that differ only in the accuracy knob (k on
+//! the lembo path, n on the triangle path) and in architecture fields: their images, so
+//! their errors, do not depend on the architecture (timing never changes pixels). A
+//! *group* is a series' runs that share every parameter but the knob (one architecture).
+//!
+//! Refinement rounds: after the spec's own runs, each series whose error still improved by
+//! `margin_db` or more at one of its two finest levels (a gain is a level's best PSNR over
+//! the best of the coarser levels; one step under the margin can be a plateau, so two in a
+//! row end a series), and whose knob has not reached `k_floor` or
+//! `tess_cap` (or whose runs have not passed `cycle_cap` cycles, or the next n the triangle
+//! budget), goes one level finer: k halved (down to the floor) or n doubled (up to the
+//! cap). The finer level is run on the series' fastest and most frugal architectures at
+//! its finest level within the area budget (the ones an equal-error answer there would
+//! name), not on every architecture: the other architectures' cost at the finer level is
+//! not measured. Rounds repeat until no series goes further. Everything depends only on the
+//! records, so a sweep started again recomputes the same rounds.
+
+use crate::error::{Error, Result};
+use crate::tolerance::check_k;
+use serde::Deserialize;
+use serde_json::Value;
+use std::collections::BTreeMap;
+
+// ---- The spec's settings ---------------------------------------------------------------
+
+/// Default `refine.margin_db`: a refinement that gains less PSNR than this ends its series.
+pub const DEFAULT_MARGIN_DB: f64 = 0.5;
+/// Default `refine.k_floor` \[px\].
+pub const DEFAULT_K_FLOOR: f64 = 0.01;
+/// Default `refine.tess_cap`.
+pub const DEFAULT_TESS_CAP: u32 = 64;
+/// The widest margin accepted \[dB\].
+pub const MAX_MARGIN_DB: f64 = 60.0;
+
+/// `refine` as the spec file writes it.
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RefineFile {
+    margin_db: Option<f64>,
+    k_floor: Option<f64>,
+    tess_cap: Option<u32>,
+    cycle_cap: Option<u64>,
+}
+
+/// How far refinement goes (`refine` in a spec).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Refine {
+    /// A series stops when its finest level gained less than this over its best coarser
+    /// one \[dB of PSNR\].
+    pub margin_db: f64,
+    /// The finest k refinement runs \[px\].
+    pub k_floor: f64,
+    /// The largest n refinement runs.
+    pub tess_cap: u32,
+    /// A series stops once a run of it took more cycles than this; None for no cap.
+    pub cycle_cap: Option<u64>,
+}
+
+impl Default for Refine {
+    fn default() -> Refine {
+        Refine {
+            margin_db: DEFAULT_MARGIN_DB,
+            k_floor: DEFAULT_K_FLOOR,
+            tess_cap: DEFAULT_TESS_CAP,
+            cycle_cap: None,
+        }
+    }
+}
+
+impl Refine {
+    /// Checks the file's values; errors name `refine.<field>` of `file`.
+    pub(super) fn from_file(file: &str, f: &RefineFile) -> Result<Refine> {
+        let d = Refine::default();
+        let margin_db = f.margin_db.unwrap_or(d.margin_db);
+        if !(margin_db.is_finite() && (0.0..=MAX_MARGIN_DB).contains(&margin_db)) {
+            return Err(Error::invalid(
+                file,
+                "refine.margin_db",
+                margin_db,
+                format!("must be a PSNR gain in [0, {MAX_MARGIN_DB}] dB"),
+            ));
+        }
+        let k_floor = f.k_floor.unwrap_or(d.k_floor);
+        check_k(k_floor).map_err(|why| Error::invalid(file, "refine.k_floor", k_floor, why))?;
+        let tess_cap = f.tess_cap.unwrap_or(d.tess_cap);
+        crate::job::check_tess_range(tess_cap)
+            .map_err(|e| super::grid::reword(e, file, "refine.tess_cap"))?;
+        if f.cycle_cap == Some(0) {
+            return Err(Error::invalid(
+                file,
+                "refine.cycle_cap",
+                0,
+                "must be a number of cycles above 0 (leave it out for no cap)",
+            ));
+        }
+        Ok(Refine {
+            margin_db,
+            k_floor,
+            tess_cap,
+            cycle_cap: f.cycle_cap,
+        })
+    }
+
+    /// The spec's `refine` read back from its text (checked when the spec was parsed);
+    /// None when it has none.
+    pub(super) fn of_spec_text(spec_text: &[u8]) -> Option<Refine> {
+        let v: Value = serde_json::from_slice(spec_text).ok()?;
+        let f: RefineFile = serde_json::from_value(v.get("refine")?.clone()).ok()?;
+        Refine::from_file("spec", &f).ok()
+    }
+}
+
+// ---- What a record says ----------------------------------------------------------------
+
+/// The accuracy knob of a run.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Knob {
+    /// The lembo path's k \[px\].
+    K(f64),
+    /// The triangle path's tessellation level n.
+    Tess(u32),
+}
+
+impl Knob {
+    /// Finer first: k ascending, n descending.
+    fn fineness(self) -> f64 {
+        match self {
+            Knob::K(k) => -k,
+            Knob::Tess(n) => n as f64,
+        }
+    }
+    /// `k = 0.25` or `n = 16`.
+    pub fn label(self) -> String {
+        match self {
+            Knob::K(k) => format!("k = {k}"),
+            Knob::Tess(n) => format!("n = {n}"),
+        }
+    }
+    /// The parameter's name in a spec.
+    pub fn param(self) -> &'static str {
+        match self {
+            Knob::K(_) => "k",
+            Knob::Tess(_) => "tess",
+        }
+    }
+    /// The parameter's canonical value.
+    pub fn value(self) -> Value {
+        match self {
+            Knob::K(k) => Value::from(k),
+            Knob::Tess(n) => Value::from(n),
+        }
+    }
+}
+
+/// What the answer and the refinement read of one record.
+#[derive(Clone, Debug)]
+pub struct Measured {
+    /// The run's index in the sweep.
+    pub index: usize,
+    /// The scene's name.
+    pub scene: String,
+    /// `lembo` or `triangle`.
+    pub path: &'static str,
+    /// Its knob, as the run used it.
+    pub knob: Knob,
+    /// Its parameters, as the record holds them.
+    pub params: BTreeMap<String, Value>,
+    /// Frame time \[cycles\]; None in functional mode.
+    pub cycles: Option<u64>,
+    /// Energy of the frame \[µJ\].
+    pub energy_uj: Option<f64>,
+    /// The unit's area \[mm²\].
+    pub area_mm2: Option<f64>,
+    /// The unit that bounds the frame.
+    pub bottleneck: Option<String>,
+    /// PSNR against the exact reference \[dB\].
+    pub psnr_db: Option<f64>,
+    /// Mean FLIP \[0-1\].
+    pub flip_mean: Option<f64>,
+    /// The largest distance of a misplaced pixel from the true outline \[px\].
+    pub silhouette_max_px: Option<f64>,
+    /// The architecture the run used, as its report echoes it (null in functional mode).
+    pub arch: Value,
+    /// The scene's lembos (a triangle run's triangles over n²).
+    pub lembos: Option<u64>,
+}
+
+impl Measured {
+    /// The record's figures; None for a record of a discoid scene or without settings.
+    pub fn of(record: &Value) -> Option<Measured> {
+        let report = &record["report"];
+        let settings = &report["settings"];
+        if !report["blend"].is_null() {
+            return None;
+        }
+        let (path, knob) = match settings["path"].as_str()? {
+            "triangle" => (
+                "triangle",
+                Knob::Tess(u32::try_from(settings["tess"].as_u64()?).ok()?),
+            ),
+            _ => ("lembo", Knob::K(settings["k_px"].as_f64()?)),
+        };
+        let params = record["params"]
+            .as_object()
+            .map(|m| m.iter().map(|(k, v)| (k.clone(), v.clone())).collect())
+            .unwrap_or_default();
+        let acc = &report["accuracy"];
+        Some(Measured {
+            index: record["index"].as_u64()? as usize,
+            scene: record["scene"].as_str()?.to_string(),
+            path,
+            knob,
+            params,
+            cycles: report["cycles"]["total"].as_u64(),
+            energy_uj: report["cost"]["energy_pj"].as_f64().map(|e| e * 1e-6),
+            area_mm2: report["cost"]["area_mm2"].as_f64(),
+            bottleneck: report["cycles"]["bottleneck"].as_str().map(str::to_string),
+            psnr_db: acc["psnr_db"].as_f64(),
+            flip_mean: acc["flip_mean"].as_f64(),
+            silhouette_max_px: acc["silhouette_max_px"].as_f64(),
+            arch: report["arch"].clone(),
+            lembos: report["primitives"]["count"].as_u64().map(|c| match knob {
+                Knob::Tess(n) => c / (n as u64 * n as u64).max(1),
+                Knob::K(_) => c,
+            }),
+        })
+    }
+
+    /// Whether the unit fits `budget` (every run fits no budget).
+    pub fn within(&self, budget: Option<f64>) -> bool {
+        match (budget, self.area_mm2) {
+            (None, _) => true,
+            (Some(b), Some(a)) => a <= b,
+            (Some(_), None) => false,
+        }
+    }
+
+    /// The parameters without the knob and the path, as `name=value` joined by `|`: one
+    /// architecture of a series.
+    pub fn group(&self) -> String {
+        self.params_without(|name| name == "path" || name == self.knob.param())
+    }
+
+    /// The parameters that can change the image (not `arch.*`), without the knob: the
+    /// series.
+    pub fn series_key(&self) -> String {
+        self.params_without(|name| {
+            name == "path" || name == self.knob.param() || name.starts_with(super::spec::ARCH)
+        })
+    }
+
+    fn params_without(&self, drop: impl Fn(&str) -> bool) -> String {
+        self.params
+            .iter()
+            .filter(|(name, _)| !drop(name))
+            .map(|(name, value)| format!("{name}={value}"))
+            .collect::<Vec<_>>()
+            .join("|")
+    }
+}
+
+// ---- Series and why each ended ---------------------------------------------------------
+
+/// Why a series' knob went no further.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Stop {
+    /// Its last two levels each gained less than the margin over the best level coarser
+    /// than it: bracketed.
+    Converged {
+        /// The two gains, the finer last \[dB\] (negative: it lost).
+        gains_db: [f64; 2],
+    },
+    /// k reached the floor while the error still improved.
+    Floor,
+    /// n reached the cap while the error still improved.
+    Cap,
+    /// A run of the series took more than the cycle cap.
+    CycleCap {
+        /// The cycles of that run.
+        cycles: u64,
+    },
+    /// The next n would exceed the triangle budget of the scene.
+    TriangleBudget {
+        /// The n refused.
+        next: u32,
+    },
+    /// No run of the series at its finest level carries a PSNR.
+    Unmeasured,
+    /// The spec asks for no refinement and the grid ends here.
+    GridEnd {
+        /// The last (at most two) steps' gains, the finer last \[dB\]; empty with one level.
+        gains_db: Vec<f64>,
+    },
+    /// Not ended: the next round runs this knob.
+    Next(Knob),
+}
+
+impl Stop {
+    /// Whether going further would not have gained more than `margin_db`: the series'
+    /// finest level is an answer, not the edge of a grid. A grid without refinement
+    /// brackets a series whose last two steps each gained less than the margin.
+    pub fn bracketed(&self, margin_db: f64) -> bool {
+        match self {
+            Stop::Converged { .. } => true,
+            Stop::GridEnd { gains_db } => settled(gains_db, margin_db),
+            _ => false,
+        }
+    }
+
+    /// The reason in words, for `answer.md`.
+    pub fn describe(&self, margin_db: f64, finest: Knob) -> String {
+        let further = match finest {
+            Knob::K(_) => "k would have to go lower",
+            Knob::Tess(_) => "n would have to go higher",
+        };
+        match self {
+            Stop::Converged { gains_db: [a, b] } => format!(
+                "bracketed: the last two refinements gained {a:.2} and {b:.2} dB, each under the {margin_db} dB margin"
+            ),
+            Stop::Floor => format!("unbracketed: stopped at the floor {}; {further}", finest.label()),
+            Stop::Cap => format!("unbracketed: stopped at the cap {}; {further}", finest.label()),
+            Stop::CycleCap { cycles } => format!(
+                "unbracketed: stopped by the cycle cap ({cycles} cycles at {}); {further}",
+                finest.label()
+            ),
+            Stop::TriangleBudget { next } => format!(
+                "unbracketed: n = {next} exceeds the triangle budget; {further}"
+            ),
+            Stop::Unmeasured => "unbracketed: no PSNR at the finest level".to_string(),
+            Stop::GridEnd { gains_db } if settled(gains_db, margin_db) => format!(
+                "bracketed by the grid: its last two steps gained {:.2} and {:.2} dB, each under {margin_db} dB",
+                gains_db[0], gains_db[1]
+            ),
+            Stop::GridEnd { gains_db } => match gains_db.last() {
+                Some(g) => format!(
+                    "unbracketed: the grid stops at {} where the last step gained {g:.2} dB (two steps under {margin_db} dB bracket it); {further}",
+                    finest.label()
+                ),
+                None => format!(
+                    "unbracketed: the grid has one level, {}; {further}",
+                    finest.label()
+                ),
+            },
+            Stop::Next(k) => format!("refining: next {}", k.label()),
+        }
+    }
+}
+
+/// Whether the last two gains were each under the margin.
+fn settled(gains: &[f64], margin_db: f64) -> bool {
+    gains.len() >= 2 && gains[gains.len() - 2..].iter().all(|&g| g < margin_db)
+}
+
+/// One scene's runs of one path that differ only in the knob and the architecture.
+#[derive(Clone, Debug)]
+pub struct Series {
+    /// The scene's name.
+    pub scene: String,
+    /// `lembo` or `triangle`.
+    pub path: &'static str,
+    /// The parameters that can change its image (without the knob), `name=value|...`.
+    pub key: String,
+    /// Each level from coarse to fine: the knob and the best PSNR a run of it measured
+    /// (None: none measured).
+    pub levels: Vec<(Knob, Option<f64>)>,
+    /// Why it went no further.
+    pub stop: Stop,
+    /// The runs (indices into the measured list) at its finest level within the budget
+    /// that the next level is run on: the fastest and the most frugal.
+    pub leaders: Vec<usize>,
+}
+
+impl Series {
+    /// The finest level run.
+    pub fn finest(&self) -> Knob {
+        self.levels.last().expect("a series has a level").0
+    }
+    /// The best PSNR any of its levels measured \[dB\].
+    pub fn best_psnr(&self) -> Option<f64> {
+        self.levels
+            .iter()
+            .filter_map(|l| l.1)
+            .fold(None, |b, p| Some(b.map_or(p, |b: f64| b.max(p))))
+    }
+}
+
+/// What [`series`] needs to know beyond the records.
+pub struct Limits<'a> {
+    /// The spec's `refine`; None: the grid alone (its ends are reported, not refined).
+    pub refine: Option<Refine>,
+    /// The spec's area budget \[mm²\].
+    pub budget: Option<f64>,
+    /// Whether a scene (by name) can take n triangles a lembo edge.
+    pub triangle_ok: &'a dyn Fn(&str, u32) -> bool,
+}
+
+/// The series of `runs` (measured runs, any order), each with its stop, in order of
+/// first appearance. Runs over the area budget take no part.
+pub fn series(runs: &[Measured], limits: &Limits) -> Vec<Series> {
+    let mut keyed: Vec<((String, &'static str, String), Vec<usize>)> = Vec::new();
+    for (i, m) in runs.iter().enumerate() {
+        if !m.within(limits.budget) {
+            continue;
+        }
+        let key = (m.scene.clone(), m.path, m.series_key());
+        match keyed.iter_mut().find(|(k, _)| *k == key) {
+            Some((_, v)) => v.push(i),
+            None => keyed.push((key, vec![i])),
+        }
+    }
+    keyed
+        .into_iter()
+        .map(|((scene, path, key), members)| one_series(runs, scene, path, key, &members, limits))
+        .collect()
+}
+
+fn one_series(
+    runs: &[Measured],
+    scene: String,
+    path: &'static str,
+    key: String,
+    members: &[usize],
+    limits: &Limits,
+) -> Series {
+    // Levels from coarse to fine, each with its best PSNR.
+    let mut levels: Vec<(Knob, Option<f64>)> = Vec::new();
+    for &i in members {
+        let m = &runs[i];
+        match levels.iter_mut().find(|(k, _)| *k == m.knob) {
+            Some((_, best)) => {
+                if let Some(p) = m.psnr_db {
+                    *best = Some(best.map_or(p, |b: f64| b.max(p)));
+                }
+            }
+            None => levels.push((m.knob, m.psnr_db)),
+        }
+    }
+    levels.sort_by(|a, b| a.0.fineness().total_cmp(&b.0.fineness()));
+    let finest = levels.last().expect("a series has a run").0;
+    let at_finest: Vec<usize> = members
+        .iter()
+        .copied()
+        .filter(|&i| runs[i].knob == finest)
+        .collect();
+    // The fastest and the most frugal run at the finest level (ties: the first).
+    let pick = |key: &dyn Fn(&Measured) -> f64| {
+        at_finest
+            .iter()
+            .copied()
+            .fold(None, |best: Option<usize>, i| match best {
+                Some(b) if key(&runs[b]) <= key(&runs[i]) => Some(b),
+                _ => Some(i),
+            })
+    };
+    let mut leaders: Vec<usize> = [
+        pick(&|m| m.cycles.map_or(f64::INFINITY, |c| c as f64)),
+        pick(&|m| m.energy_uj.unwrap_or(f64::INFINITY)),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    leaders.dedup();
+    // Each level's PSNR over the best of the coarser ones; the last two count.
+    let mut gains: Vec<f64> = Vec::new();
+    let mut best: Option<f64> = None;
+    for (_, p) in &levels {
+        if let (Some(p), Some(b)) = (p, best) {
+            if (p - b).is_finite() {
+                gains.push(p - b);
+            }
+        }
+        if let Some(p) = p {
+            best = Some(best.map_or(*p, |b| b.max(*p)));
+        }
+    }
+    let gains = gains[gains.len().saturating_sub(2)..].to_vec();
+    let stop = stop_of(runs, finest, &levels, gains, &at_finest, &scene, limits);
+    Series {
+        scene,
+        path,
+        key,
+        levels,
+        stop,
+        leaders,
+    }
+}
+
+fn stop_of(
+    runs: &[Measured],
+    finest: Knob,
+    levels: &[(Knob, Option<f64>)],
+    gains: Vec<f64>,
+    at_finest: &[usize],
+    scene: &str,
+    limits: &Limits,
+) -> Stop {
+    let Some(refine) = limits.refine else {
+        return Stop::GridEnd { gains_db: gains };
+    };
+    if levels.last().and_then(|l| l.1).is_none() {
+        return Stop::Unmeasured;
+    }
+    if let [a, b] = gains[..] {
+        if settled(&gains, refine.margin_db) {
+            return Stop::Converged { gains_db: [a, b] };
+        }
+    }
+    if let Some(cap) = refine.cycle_cap {
+        let most = at_finest.iter().filter_map(|&i| runs[i].cycles).max();
+        if let Some(c) = most.filter(|&c| c > cap) {
+            return Stop::CycleCap { cycles: c };
+        }
+    }
+    match finest {
+        Knob::K(k) => {
+            if k <= refine.k_floor {
+                Stop::Floor
+            } else {
+                Stop::Next(Knob::K((k / 2.0).max(refine.k_floor)))
+            }
+        }
+        Knob::Tess(n) => {
+            if n >= refine.tess_cap {
+                Stop::Cap
+            } else {
+                let next = n.saturating_mul(2).min(refine.tess_cap);
+                if (limits.triangle_ok)(scene, next) {
+                    Stop::Next(Knob::Tess(next))
+                } else {
+                    Stop::TriangleBudget { next }
+                }
+            }
+        }
+    }
+}
+
+/// The runs the next refinement round adds: (the index of the run whose parameters it
+/// copies, the knob it runs at), in the order of the series and their leaders.
+pub fn next_round(runs: &[Measured], limits: &Limits) -> Vec<(usize, Knob)> {
+    series(runs, limits)
+        .iter()
+        .flat_map(|s| match s.stop {
+            Stop::Next(knob) => s
+                .leaders
+                .iter()
+                .map(|&i| (runs[i].index, knob))
+                .collect::<Vec<_>>(),
+            _ => Vec::new(),
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::json;
+
+    /// A measured run of `path` on scene `s` at `knob`, its architecture `arch`.
+    fn run(index: usize, knob: Knob, arch: u64, cycles: u64, uj: f64, psnr: f64) -> Measured {
+        let path = match knob {
+            Knob::K(_) => "lembo",
+            Knob::Tess(_) => "triangle",
+        };
+        let mut params = BTreeMap::new();
+        params.insert("path".to_string(), json!(path));
+        params.insert(knob.param().to_string(), knob.value());
+        params.insert("arch.rop.count".to_string(), json!(arch));
+        Measured {
+            index,
+            scene: "s".into(),
+            path,
+            knob,
+            params,
+            cycles: Some(cycles),
+            energy_uj: Some(uj),
+            area_mm2: Some(arch as f64),
+            bottleneck: None,
+            psnr_db: Some(psnr),
+            flip_mean: None,
+            silhouette_max_px: None,
+            arch: Value::Null,
+            lembos: Some(1000),
+        }
+    }
+
+    fn limits(refine: Option<Refine>, budget: Option<f64>) -> Limits<'static> {
+        Limits {
+            refine,
+            budget,
+            triangle_ok: &|_, n| n <= 64,
+        }
+    }
+
+    #[test]
+    fn a_series_ends_after_two_steps_under_the_margin_not_one() {
+        let refine = Some(Refine::default());
+        // 40 -> 40.2 (a plateau) -> 45: one small step is not the end.
+        let mut runs = vec![
+            run(0, Knob::K(1.0), 1, 100, 1.0, 40.0),
+            run(1, Knob::K(0.5), 1, 110, 1.0, 40.2),
+        ];
+        let s = series(&runs, &limits(refine, None));
+        assert_eq!(s.len(), 1);
+        assert_eq!(s[0].stop, Stop::Next(Knob::K(0.25)));
+        runs.push(run(2, Knob::K(0.25), 1, 120, 1.0, 45.0));
+        runs.push(run(3, Knob::K(0.125), 1, 130, 1.0, 45.3));
+        let s = series(&runs, &limits(refine, None));
+        assert_eq!(s[0].stop, Stop::Next(Knob::K(0.0625)));
+        // A level that loses counts as a gain under the margin (against the best before).
+        runs.push(run(4, Knob::K(0.0625), 1, 140, 1.0, 44.0));
+        let s = series(&runs, &limits(refine, None));
+        match s[0].stop {
+            Stop::Converged { gains_db: [a, b] } => {
+                assert!((a - 0.3).abs() < 1e-9 && (b + 1.3).abs() < 1e-9, "{a} {b}")
+            }
+            ref other => panic!("{other:?}"),
+        }
+        assert!(s[0].stop.bracketed(0.5));
+        assert_eq!(s[0].best_psnr(), Some(45.3));
+    }
+
+    #[test]
+    fn floors_caps_cycle_caps_and_the_triangle_budget_end_a_series_unbracketed() {
+        let r = Refine {
+            k_floor: 0.25,
+            tess_cap: 16,
+            cycle_cap: Some(1_000),
+            ..Refine::default()
+        };
+        let l = limits(Some(r), None);
+        // k halves down to the floor, not past it.
+        let runs = [
+            run(0, Knob::K(1.0), 1, 100, 1.0, 40.0),
+            run(1, Knob::K(0.4), 1, 100, 1.0, 45.0),
+        ];
+        assert_eq!(series(&runs, &l)[0].stop, Stop::Next(Knob::K(0.25)));
+        let runs = [
+            run(0, Knob::K(0.5), 1, 100, 1.0, 40.0),
+            run(1, Knob::K(0.25), 1, 100, 1.0, 45.0),
+        ];
+        let s = &series(&runs, &l)[0];
+        assert_eq!(s.stop, Stop::Floor);
+        assert!(!s.stop.bracketed(0.5));
+        assert!(s.stop.describe(0.5, s.finest()).contains("unbracketed"));
+        // n doubles up to the cap.
+        let runs = [
+            run(0, Knob::Tess(4), 1, 100, 1.0, 40.0),
+            run(1, Knob::Tess(12), 1, 100, 1.0, 45.0),
+        ];
+        assert_eq!(series(&runs, &l)[0].stop, Stop::Next(Knob::Tess(16)));
+        let runs = [
+            run(0, Knob::Tess(8), 1, 100, 1.0, 40.0),
+            run(1, Knob::Tess(16), 1, 100, 1.0, 45.0),
+        ];
+        assert_eq!(series(&runs, &l)[0].stop, Stop::Cap);
+        // A run over the cycle cap ends it.
+        let runs = [
+            run(0, Knob::Tess(2), 1, 100, 1.0, 40.0),
+            run(1, Knob::Tess(4), 1, 1_001, 1.0, 45.0),
+        ];
+        assert_eq!(series(&runs, &l)[0].stop, Stop::CycleCap { cycles: 1_001 });
+        // The next n beyond the scene's triangle budget (64 here).
+        let l = limits(Some(Refine::default()), None);
+        let runs = [
+            run(0, Knob::Tess(32), 1, 100, 1.0, 40.0),
+            run(1, Knob::Tess(48), 1, 100, 1.0, 45.0),
+        ];
+        assert_eq!(
+            series(
+                &runs,
+                &Limits {
+                    triangle_ok: &|_, n| n <= 48,
+                    ..l
+                }
+            )[0]
+            .stop,
+            Stop::TriangleBudget { next: 64 }
+        );
+    }
+
+    #[test]
+    fn a_grid_without_refinement_is_flagged_where_it_stops_early() {
+        let l = limits(None, None);
+        let early = [
+            run(0, Knob::K(1.0), 1, 100, 1.0, 40.0),
+            run(1, Knob::K(0.5), 1, 100, 1.0, 44.0),
+            run(2, Knob::K(0.25), 1, 100, 1.0, 47.0),
+        ];
+        let s = &series(&early, &l)[0];
+        assert!(!s.stop.bracketed(0.5));
+        let said = s.stop.describe(0.5, s.finest());
+        assert!(
+            said.contains("unbracketed") && said.contains("k = 0.25"),
+            "{said}"
+        );
+        let settled = [
+            run(0, Knob::K(1.0), 1, 100, 1.0, 40.0),
+            run(1, Knob::K(0.5), 1, 100, 1.0, 40.1),
+            run(2, Knob::K(0.25), 1, 100, 1.0, 40.2),
+        ];
+        assert!(series(&settled, &l)[0].stop.bracketed(0.5));
+    }
+
+    #[test]
+    fn the_next_round_runs_the_fastest_and_most_frugal_architecture_within_the_budget() {
+        let l = limits(Some(Refine::default()), Some(3.0));
+        let runs = [
+            run(0, Knob::Tess(1), 1, 500, 1.0, 30.0),
+            run(1, Knob::Tess(1), 2, 300, 2.0, 30.0),
+            run(2, Knob::Tess(1), 4, 100, 0.5, 30.0),
+            run(3, Knob::Tess(2), 1, 900, 1.5, 35.0),
+            run(4, Knob::Tess(2), 2, 600, 3.0, 35.0),
+            // Over the budget: not a leader, not in the series.
+            run(5, Knob::Tess(2), 4, 200, 0.5, 35.0),
+        ];
+        let next = next_round(&runs, &l);
+        // Fastest at n = 2 within 3 mm²: arch 2 (run 4); most frugal: arch 1 (run 3).
+        assert_eq!(next, [(4, Knob::Tess(4)), (3, Knob::Tess(4))]);
+        // Images do not depend on the architecture: one series, whatever the counts.
+        assert_eq!(series(&runs, &l).len(), 1);
+    }
+
+    #[test]
+    fn refine_settings_are_checked_naming_their_field() {
+        let check = |text: &str| -> std::result::Result<Refine, String> {
+            let f: RefineFile = serde_json::from_str(text).unwrap();
+            Refine::from_file("s.json", &f).map_err(|e| match e {
+                Error::Invalid { field, .. } | Error::Parse { field, .. } => field,
+                other => other.to_string(),
+            })
+        };
+        assert_eq!(check("{}"), Ok(Refine::default()));
+        for (text, field) in [
+            (r#"{"margin_db": -1}"#, "refine.margin_db"),
+            (r#"{"margin_db": 100}"#, "refine.margin_db"),
+            (r#"{"k_floor": 0}"#, "refine.k_floor"),
+            (r#"{"k_floor": 100}"#, "refine.k_floor"),
+            (r#"{"tess_cap": 0}"#, "refine.tess_cap"),
+            (r#"{"tess_cap": 5000}"#, "refine.tess_cap"),
+            (r#"{"cycle_cap": 0}"#, "refine.cycle_cap"),
+        ] {
+            assert_eq!(check(text), Err(field.to_string()), "{text}");
+        }
+    }
+}
