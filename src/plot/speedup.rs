@@ -155,7 +155,8 @@ pub struct TornadoBar {
 /// A tornado chart: for each parameter a bar from the speed-up at its low value to the
 /// speed-up at its high value, around the base's speed-up, widest first, on a log axis with
 /// 1 (a tie) marked.
-pub fn tornado_svg(title: &str, base: f64, bars: &[TornadoBar]) -> Result<String> {
+/// `measure` names the x axis's ratio (`triangle cycles / lembo cycles`).
+pub fn tornado_svg(title: &str, measure: &str, base: f64, bars: &[TornadoBar]) -> Result<String> {
     let mut order: Vec<&TornadoBar> = bars.iter().collect();
     let width = |b: &TornadoBar| {
         let lo = b.at_low.unwrap_or(base).ln();
@@ -209,7 +210,9 @@ pub fn tornado_svg(title: &str, base: f64, bars: &[TornadoBar]) -> Result<String
             .configure_mesh()
             .disable_y_mesh()
             .y_labels(0)
-            .x_desc("lembo speed-up at the target (triangle cycles / lembo cycles), log scale")
+            .x_desc(format!(
+                "lembo advantage at the target ({measure}), log scale"
+            ))
             .x_label_formatter(&|v| fmt_num(*v))
             .label_style((FONT, 13))
             .axis_desc_style((FONT, 15))

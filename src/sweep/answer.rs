@@ -21,11 +21,13 @@
 
 use super::bracket::{series, Knob, Limits, Measured, Refine, Series, DEFAULT_MARGIN_DB};
 use super::curves::{curve, default_targets, reach, Metric, Targets, METRICS};
+use super::sensitivity::Sensitivity;
 use crate::config::ArchConfig;
 use crate::error::Result;
 use crate::graph::KINDS;
+use crate::job::PrimitivePath;
 use crate::job::MAX_TRIANGLES;
-use crate::plot::speedup::{speedup_svg, SpeedupFigure};
+use crate::plot::speedup::{speedup_svg, tornado_svg, SpeedupFigure, TornadoBar};
 use crate::tolerance::K_RANGE;
 use serde_json::Value;
 use std::collections::BTreeSet;
@@ -39,16 +41,21 @@ pub(super) struct Ask<'a> {
     pub(super) refine: Option<Refine>,
     /// The spec's targets.
     pub(super) targets: &'a Targets,
+    /// The spec's sensitivity study.
+    pub(super) sensitivity: Option<Sensitivity>,
 }
 
 /// `answer.md` and its figures, as (file name, bytes), for `records`; None when no scene
 /// has measured runs of both paths within the budget.
 pub(super) fn answer_files(records: &[Value], ask: &Ask) -> Result<Option<Vec<(String, Vec<u8>)>>> {
-    let runs: Vec<Measured> = records
+    let measured: Vec<Measured> = records
         .iter()
         .filter_map(Measured::of)
         .filter(|m| m.cycles.is_some() && m.energy_uj.is_some() && m.psnr_db.is_some())
         .collect();
+    // The grid's runs; a sensitivity study's variants only answer what flips it.
+    let (variants, runs): (Vec<Measured>, Vec<Measured>) =
+        measured.into_iter().partition(Measured::is_variant);
     let triangle_ok = |scene: &str, n: u32| {
         runs.iter()
             .filter(|m| m.scene == scene)
@@ -79,6 +86,7 @@ pub(super) fn answer_files(records: &[Value], ask: &Ask) -> Result<Option<Vec<(S
     }
     let mut figures: Vec<(String, Vec<u8>)> = Vec::new();
     let (mut area, mut energy, mut bracket) = (String::new(), String::new(), String::new());
+    let mut flips = String::new();
     let mut curves: Vec<String> = vec![String::new(); METRICS.len()];
     let mut any = false;
     for scene in scenes {
@@ -110,6 +118,11 @@ pub(super) fn answer_files(records: &[Value], ask: &Ask) -> Result<Option<Vec<(S
             ratio("µJ", bl.uj(), bt.uj()),
         );
         energy += &equal_energy_row(scene, &lembo, &triangle, &names);
+        if let Some(study) = &ask.sensitivity {
+            let (section, figs) = tornado(scene, study, &lembo, &triangle, &variants, &limits)?;
+            flips += &section;
+            figures.extend(figs);
+        }
         for (i, &metric) in METRICS.iter().enumerate() {
             let stated = ask.targets.of(metric).map(<[f64]>::to_vec);
             let targets = stated.unwrap_or_else(|| default_targets(&lembo, &triangle, metric));
@@ -204,6 +217,20 @@ pub(super) fn answer_files(records: &[Value], ask: &Ask) -> Result<Option<Vec<(S
              most accurate run within the area budget spending at most that (ties: the \
              fastest).\n\n| scene | cap | lembo | triangle | comparison |\n|---|---|---|---|---|\n";
     page += &energy;
+    if let Some(study) = &ask.sensitivity {
+        let (metric, target) = study.target;
+        let _ = write!(
+            page,
+            "\n## What flips it\n\nOne parameter at a time, scaled down and up (or set low and \
+             high) with every other setting at the grid's: the lembo path's advantage at a {} \
+             target of {} (the triangle path's fewest cycles over the lembo path's, and its \
+             least energy over the lembo path's), against the grid's. A variant that \
+             turns the advantage to the other side of 1 is marked **flips**.\n",
+            metric.title(),
+            metric.show(target)
+        );
+        page += &flips;
+    }
     if !figures.is_empty() {
         page += "\n## Figures\n\n";
         for (name, _) in &figures {
@@ -544,4 +571,126 @@ fn coarser_than(a: Knob, b: Knob) -> bool {
         (Knob::Tess(a), Knob::Tess(b)) => a < b,
         _ => false,
     }
+}
+
+/// A scene's part of "What flips it" and its two tornado charts (cycles, energy).
+fn tornado<'a>(
+    scene: &str,
+    study: &Sensitivity,
+    lembo: &[&'a Measured],
+    triangle: &[&'a Measured],
+    variants: &'a [Measured],
+    limits: &Limits,
+) -> Result<(String, Vec<(String, Vec<u8>)>)> {
+    let (metric, target) = study.target;
+    // (cycles, energy) advantage of the lembo path at the target; None where a path does
+    // not reach it.
+    let advantage = |l: &[&Measured], t: &[&Measured]| -> Option<(f64, f64)> {
+        let (rl, rt) = (reach(l, metric, target)?, reach(t, metric, target)?);
+        Some((
+            rt.fastest.cycles_f() / rl.fastest.cycles_f(),
+            rt.frugal.uj() / rl.frugal.uj(),
+        ))
+    };
+    let show = |a: Option<f64>| a.map_or("not reached".to_string(), |a| format!("{a:.2}x"));
+    let Some(base) = advantage(lembo, triangle) else {
+        return Ok((
+            format!(
+                "\n**{scene}**: one of the paths does not reach {} on the grid's runs; no sensitivity.\n",
+                metric.show(target)
+            ),
+            Vec::new(),
+        ));
+    };
+    let mut text = format!(
+        "\n**{scene}** (the grid: {:.2}x cycles, {:.2}x energy)\n\n| parameter | low | high | cycles at low | cycles at high | energy at low | energy at high |\n|---|---|---|---|---|---|---|\n",
+        base.0, base.1
+    );
+    let (mut cycles_bars, mut energy_bars) = (Vec::new(), Vec::new());
+    for p in &study.params {
+        let ends = p.ends();
+        let mut at = [None, None];
+        for (i, tag) in p.tags().iter().enumerate() {
+            let pick = |path: PrimitivePath| -> Vec<&'a Measured> {
+                variants
+                    .iter()
+                    .filter(|m| m.scene == scene && m.path == path.name())
+                    .filter(|m| {
+                        m.params.get(super::sensitivity::PARAM) == Some(&Value::from(tag.as_str()))
+                    })
+                    .filter(|m| m.within(limits.budget))
+                    .collect()
+            };
+            let l = match p.applies(PrimitivePath::Lembo) {
+                true => pick(PrimitivePath::Lembo),
+                false => lembo.to_vec(),
+            };
+            let t = match p.applies(PrimitivePath::Triangle) {
+                true => pick(PrimitivePath::Triangle),
+                false => triangle.to_vec(),
+            };
+            at[i] = advantage(&l, &t);
+        }
+        let flips = |base: f64, v: Option<f64>| {
+            v.is_some_and(|v| (v - 1.0).signum() != (base - 1.0).signum())
+        };
+        let cell = |base: f64, v: Option<f64>| {
+            if flips(base, v) {
+                format!("{} **flips**", show(v))
+            } else {
+                show(v)
+            }
+        };
+        let _ = writeln!(
+            text,
+            "| {} | {} | {} | {} | {} | {} | {} |",
+            p.name,
+            ends[0],
+            ends[1],
+            cell(base.0, at[0].map(|a| a.0)),
+            cell(base.0, at[1].map(|a| a.0)),
+            cell(base.1, at[0].map(|a| a.1)),
+            cell(base.1, at[1].map(|a| a.1)),
+        );
+        for (bars, pick) in [(&mut cycles_bars, 0usize), (&mut energy_bars, 1)] {
+            let get = |a: Option<(f64, f64)>| a.map(|a| if pick == 0 { a.0 } else { a.1 });
+            bars.push(TornadoBar {
+                param: p.name.trim_start_matches("arch.").to_string(),
+                low: ends[0].clone(),
+                high: ends[1].clone(),
+                at_low: get(at[0]),
+                at_high: get(at[1]),
+            });
+        }
+    }
+    let stem = file_stem(scene);
+    let title = |what: &str| {
+        format!(
+            "{scene}: what moves the lembo advantage in {what} at {}",
+            metric.show(target)
+        )
+    };
+    let figures = vec![
+        (
+            format!("tornado_cycles_{stem}.svg"),
+            tornado_svg(
+                &title("cycles"),
+                "triangle cycles / lembo cycles",
+                base.0,
+                &cycles_bars,
+            )?
+            .into_bytes(),
+        ),
+        (
+            format!("tornado_energy_{stem}.svg"),
+            tornado_svg(
+                &title("energy"),
+                "triangle energy / lembo energy",
+                base.1,
+                &energy_bars,
+            )?
+            .into_bytes(),
+        ),
+    ];
+    Ok((text, figures))
 }

@@ -231,6 +231,12 @@ impl Measured {
         })
     }
 
+    /// Whether the run is a sensitivity variant (`super::sensitivity`), not one of the
+    /// grid's.
+    pub fn is_variant(&self) -> bool {
+        self.params.contains_key(super::sensitivity::PARAM)
+    }
+
     /// Whether the unit fits `budget` (every run fits no budget).
     pub fn within(&self, budget: Option<f64>) -> bool {
         match (budget, self.area_mm2) {
@@ -541,7 +547,10 @@ fn stop_of(
 
 /// The runs the next refinement round adds: (the index of the run whose parameters it
 /// copies, the knob it runs at), in the order of the series and their leaders.
+/// Sensitivity variants are not refined: their runs stay at the grid's levels.
 pub fn next_round(runs: &[Measured], limits: &Limits) -> Vec<(usize, Knob)> {
+    let base: Vec<Measured> = runs.iter().filter(|m| !m.is_variant()).cloned().collect();
+    let runs = &base[..];
     series(runs, limits)
         .iter()
         .flat_map(|s| match s.stop {

@@ -89,7 +89,7 @@ impl Metric {
     }
 
     /// The valid range of a target, for the spec's check.
-    fn check(self, v: f64) -> std::result::Result<(), &'static str> {
+    pub(super) fn check_target(self, v: f64) -> std::result::Result<(), &'static str> {
         let ok = v.is_finite()
             && match self {
                 Metric::Psnr => true,
@@ -150,7 +150,7 @@ impl Targets {
                     message: format!("expected a number, found {v}"),
                 })?;
                 metric
-                    .check(x)
+                    .check_target(x)
                     .map_err(|why| Error::invalid(file, &field, v, why))?;
                 values.push(x);
             }

@@ -2,6 +2,7 @@
 //! (`Given`), checked against the render settings and the architecture's shape, and
 //! multiplied out into points (`Expander`).
 
+use super::sensitivity::{Sensitivity, Vary, PARAM};
 use super::spec::{
     empty_list, key, too_many, Params, Point, Setting, ARCH, MAX_RUNS, SCENES, SETTINGS,
 };
@@ -193,11 +194,17 @@ impl Expander<'_> {
             point.settings.push(given.setting);
         }
         self.check_combination(&point)?;
+        self.add_point(origin, point)
+    }
+
+    /// Adds a checked point, or its scenes to an equal point already added.
+    fn add_point(&mut self, origin: &str, point: Point) -> Result<()> {
+        let scenes = point.scenes.clone();
         let k = key("", &point.params);
         match self.by_params.get(&k) {
             Some(&i) => {
                 let known = &mut self.points[i].scenes;
-                known.extend_from_slice(scenes);
+                known.extend_from_slice(&scenes);
                 known.sort_unstable();
                 known.dedup();
             }
@@ -207,6 +214,68 @@ impl Expander<'_> {
                 }
                 self.by_params.insert(k, self.points.len());
                 self.points.push(point);
+            }
+        }
+        Ok(())
+    }
+
+    /// Adds the variants of a sensitivity study (`super::sensitivity`): for each of its
+    /// parameters, a low and a high variant of every point so far of the paths it names.
+    pub(super) fn sensitivity(&mut self, study: &Sensitivity) -> Result<()> {
+        let base: Vec<Point> = self.points.clone();
+        for param in &study.params {
+            if let Some(path) = param.name.strip_prefix(ARCH) {
+                let found = arch_field(&self.arch_shape, path);
+                if !found.is_some_and(Value::is_number) {
+                    return Err(Error::invalid(
+                        self.file,
+                        &param.field,
+                        &param.name,
+                        "must name a number field of the architecture",
+                    ));
+                }
+            }
+            let ends: [(Setting, Option<Given>); 2] = match &param.vary {
+                Vary::Factors(lo, hi) => {
+                    [*lo, *hi].map(|f| (Setting::Scale(param.name.clone(), f), None))
+                }
+                Vary::Values(lo, hi) => {
+                    let given = |v: &Value, end: &str| -> Result<(Setting, Option<Given>)> {
+                        let field = format!("{}.{end}", param.field);
+                        let (setting, canonical) = self.setting(&param.name, v, &field)?;
+                        Ok((
+                            setting.clone(),
+                            Some(Given {
+                                setting,
+                                canonical,
+                                field,
+                            }),
+                        ))
+                    };
+                    [given(lo, "low")?, given(hi, "high")?]
+                }
+            };
+            for point in &base {
+                let path = point.path().unwrap_or(PrimitivePath::Lembo);
+                if !param.applies(path) {
+                    continue;
+                }
+                for ((setting, given), tag) in ends.iter().zip(param.tags()) {
+                    let mut v = point.clone();
+                    v.origin = param.field.clone();
+                    v.params.insert(PARAM.to_string(), Value::from(tag));
+                    v.fields.insert(PARAM.to_string(), param.field.clone());
+                    match given {
+                        Some(g) => {
+                            v.params.insert(param.name.clone(), g.canonical.clone());
+                            v.fields.insert(param.name.clone(), g.field.clone());
+                            v.settings.retain(|s| !same_arch_field(s, &param.name));
+                            v.settings.push(g.setting.clone());
+                        }
+                        None => v.settings.push(setting.clone()),
+                    }
+                    self.add_point(&param.field, v)?;
+                }
             }
         }
         Ok(())
@@ -341,7 +410,7 @@ impl Expander<'_> {
             Setting::Samples(n) => Value::from(n.get()),
             Setting::Datapath(d) => Value::from(d.name()),
             Setting::Blend(m) => Value::from(m.name()),
-            Setting::Arch(..) => unreachable!("returned above"),
+            Setting::Arch(..) | Setting::Scale(..) => unreachable!("returned above"),
         };
         Ok((setting, canonical))
     }
@@ -364,6 +433,11 @@ impl Expander<'_> {
         let back = serde_json::to_value(config).expect("the architecture serialises");
         Ok(arch_field(&back, path).cloned().unwrap_or(Value::Null))
     }
+}
+
+/// Whether `s` sets the architecture field named `name` (`arch.<path>`).
+fn same_arch_field(s: &Setting, name: &str) -> bool {
+    matches!(s, Setting::Arch(p, _) if name.strip_prefix(ARCH) == Some(p.as_str()))
 }
 
 /// Sets the field at `path` (dotted) of an architecture's JSON; the field must exist and

@@ -54,6 +54,7 @@ mod parse;
 pub mod plan;
 pub mod results;
 pub mod run;
+pub mod sensitivity;
 pub mod spec;
 
 pub use lock::{FolderLock, LOCK_FILE};

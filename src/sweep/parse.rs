@@ -4,6 +4,7 @@
 use super::bracket::Refine;
 use super::curves::Targets;
 use super::grid::Expander;
+use super::sensitivity::Sensitivity;
 use super::spec::{check_name, empty_list, key, too_many, ModeSpec, Run, Spec, SpecFile, MAX_RUNS};
 use crate::camera::MAX_VIEWPORT_SIDE;
 use crate::config::ArchConfig;
@@ -130,6 +131,23 @@ impl Spec {
             ex.point(p, point)?;
         }
 
+        let sensitivity = match &f.sensitivity {
+            None => None,
+            Some(sf) => {
+                if f.area_budget_mm2.is_none() {
+                    return Err(Error::invalid(
+                        file,
+                        "sensitivity",
+                        "present",
+                        "the speed-up it reads is the answer's, within `area_budget_mm2`",
+                    ));
+                }
+                let study = Sensitivity::from_file(file, sf)?;
+                ex.sensitivity(&study)?;
+                Some(study)
+            }
+        };
+
         let mut runs = Vec::new();
         for (p, point) in ex.points.iter().enumerate() {
             for &s in &point.scenes {
@@ -156,6 +174,7 @@ impl Spec {
             area_budget_mm2: f.area_budget_mm2,
             refine,
             targets,
+            sensitivity,
             points: ex.points,
             runs,
             scenes: f.scenes,

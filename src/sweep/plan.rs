@@ -3,7 +3,7 @@
 
 use super::{
     bracket::Knob,
-    grid::{reword, set_arch_field},
+    grid::{arch_field, reword, set_arch_field},
     spec::{key, too_many, Point, Run, Setting, Shard, Spec, ARCH, MAX_RUNS},
 };
 use crate::camera::{Samples, View};
@@ -350,6 +350,20 @@ pub(super) fn point_arch(file: &str, base: &ArchConfig, point: &Point) -> Result
             message,
         })?;
     }
+    for (name, factor) in point.scales() {
+        let Some(path) = name.strip_prefix(ARCH) else {
+            continue;
+        };
+        let field = point.field(super::sensitivity::PARAM);
+        let base = arch_field(&value, path).cloned().unwrap_or(Value::Null);
+        let v = super::sensitivity::scaled(&base, factor)
+            .map_err(|why| Error::invalid(file, &field, name, format!("{name} {why}")))?;
+        set_arch_field(&mut value, path, v).map_err(|message| Error::Parse {
+            file: file.into(),
+            field: field.clone(),
+            message,
+        })?;
+    }
     let blame = |arch_field: &str| {
         // The override that set this field, or the point.
         point
@@ -469,7 +483,7 @@ pub(super) fn render_job(
             Setting::Datapath(d) => job.datapath = *d,
             Setting::Blend(m) => job.blend = *m,
             Setting::Threshold(t) => job.threshold = Some(*t),
-            Setting::Arch(..) => {}
+            Setting::Arch(..) | Setting::Scale(..) => {}
         }
     }
     job

@@ -273,6 +273,7 @@ pub(super) fn write_final(
                 budget_mm2,
                 refine: super::bracket::Refine::of_spec_text(spec_text),
                 targets: &targets,
+                sensitivity: super::sensitivity::Sensitivity::of_spec_text(spec_text),
             },
         )?,
     };

@@ -54,6 +54,7 @@ pub(super) struct SpecFile {
     pub(super) area_budget_mm2: Option<f64>,
     pub(super) refine: Option<super::bracket::RefineFile>,
     pub(super) targets: Option<super::curves::TargetsFile>,
+    pub(super) sensitivity: Option<super::sensitivity::SensitivityFile>,
     pub(super) grid: Option<Vec<Params>>,
     pub(super) points: Option<Vec<Params>>,
 }
@@ -114,6 +115,9 @@ pub(super) enum Setting {
     Threshold(f64),
     /// An architecture field: its dotted path (without `arch.`) and value.
     Arch(String, Value),
+    /// A sensitivity variant's parameter scaled by a factor: its sweep name
+    /// (`arch.rop.count`) and the factor; the value is the point's architecture's times it.
+    Scale(String, f64),
 }
 
 /// A point of the parameter space.
@@ -139,6 +143,13 @@ impl Point {
     pub(super) fn path(&self) -> Option<PrimitivePath> {
         self.setting(|s| match s {
             Setting::Path(p) => Some(*p),
+            _ => None,
+        })
+    }
+    /// The parameters a sensitivity variant scales, with their factors.
+    pub(super) fn scales(&self) -> impl Iterator<Item = (&str, f64)> {
+        self.settings.iter().filter_map(|s| match s {
+            Setting::Scale(p, f) => Some((p.as_str(), *f)),
             _ => None,
         })
     }
@@ -201,6 +212,9 @@ pub struct Spec {
     pub refine: Option<super::bracket::Refine>,
     /// The target levels the answer tabulates (`targets`).
     pub targets: super::curves::Targets,
+    /// The one-at-a-time sensitivity study (`sensitivity`), whose variant points follow the
+    /// grid's; None for none.
+    pub sensitivity: Option<super::sensitivity::Sensitivity>,
     /// The points, in expansion order (refinement rounds append theirs).
     pub points: Vec<Point>,
     /// Every (point, scene) pair, point-major.
