@@ -25,7 +25,8 @@ pub struct SpeedupFigure<'a> {
 }
 
 /// The speed-up of the lembo path (the triangle path's cost over the lembo path's) in
-/// cycles and in energy against the target, on a log axis with 1 (a tie) marked. The x
+/// cycles and in energy against the target, on a log axis with 1 (a tie) marked, drawn as
+/// steps: a value holds from the looser level before it up to its own. The x
 /// axis is linear in dB for PSNR and logarithmic for the others; which side is stricter is
 /// said on it.
 pub fn speedup_svg(f: &SpeedupFigure) -> Result<String> {
@@ -108,8 +109,16 @@ pub fn speedup_svg(f: &SpeedupFigure) -> Result<String> {
                         .copied()
                         .filter(|p| !log_x || p.0 > 0.0)
                         .collect();
-                    chart
-                        .draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(2)))?;
+                    // A path's cost is constant between two measured levels and changes at
+                    // the stricter one: a step at each point.
+                    let mut steps: Vec<(f64, f64)> = Vec::with_capacity(2 * pts.len());
+                    for (i, p) in pts.iter().enumerate() {
+                        if i > 0 {
+                            steps.push((pts[i - 1].0, p.1));
+                        }
+                        steps.push(*p);
+                    }
+                    chart.draw_series(LineSeries::new(steps, color.stroke_width(2)))?;
                     for p in &pts {
                         draw_mark(root, chart.backend_coord(p), mark, color)?;
                     }
