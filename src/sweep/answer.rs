@@ -224,8 +224,10 @@ pub(super) fn answer_files(records: &[Value], ask: &Ask) -> Result<Option<Vec<(S
             "\n## What flips it\n\nOne parameter at a time, scaled down and up (or set low and \
              high) with every other setting at the grid's: the lembo path's advantage at a {} \
              target of {} (the triangle path's fewest cycles over the lembo path's, and its \
-             least energy over the lembo path's), against the grid's. A variant that \
-             turns the advantage to the other side of 1 is marked **flips**.\n",
+             least energy over the lembo path's), against the same runs on the spec's \
+             architecture as it is (the grid's points that set no `arch.` field). A variant that \
+             turns the advantage to the other side of 1 is marked **flips**; one whose runs \
+             exceed the area budget is said to.\n",
             metric.title(),
             metric.show(target)
         );
@@ -583,6 +585,14 @@ fn tornado<'a>(
     limits: &Limits,
 ) -> Result<(String, Vec<(String, Vec<u8>)>)> {
     let (metric, target) = study.target;
+    // The grid's runs on the spec's architecture as it is: the points the variants vary.
+    let as_is = |runs: &[&'a Measured]| -> Vec<&'a Measured> {
+        runs.iter()
+            .copied()
+            .filter(|m| !m.params.keys().any(|k| k.starts_with(super::spec::ARCH)))
+            .collect()
+    };
+    let (lembo, triangle) = (&as_is(lembo)[..], &as_is(triangle)[..]);
     // (cycles, energy) advantage of the lembo path at the target; None where a path does
     // not reach it.
     let advantage = |l: &[&Measured], t: &[&Measured]| -> Option<(f64, f64)> {
@@ -603,13 +613,14 @@ fn tornado<'a>(
         ));
     };
     let mut text = format!(
-        "\n**{scene}** (the grid: {:.2}x cycles, {:.2}x energy)\n\n| parameter | low | high | cycles at low | cycles at high | energy at low | energy at high |\n|---|---|---|---|---|---|---|\n",
+        "\n**{scene}** (on the spec's architecture as it is: {:.2}x cycles, {:.2}x energy)\n\n| parameter | low | high | cycles at low | cycles at high | energy at low | energy at high |\n|---|---|---|---|---|---|---|\n",
         base.0, base.1
     );
     let (mut cycles_bars, mut energy_bars) = (Vec::new(), Vec::new());
     for p in &study.params {
         let ends = p.ends();
         let mut at = [None, None];
+        let mut over_budget = [false, false];
         for (i, tag) in p.tags().iter().enumerate() {
             let pick = |path: PrimitivePath| -> Vec<&'a Measured> {
                 variants
@@ -630,12 +641,25 @@ fn tornado<'a>(
                 false => triangle.to_vec(),
             };
             at[i] = advantage(&l, &t);
+            let over = |path: PrimitivePath, kept: &[&Measured]| {
+                p.applies(path)
+                    && kept.is_empty()
+                    && variants.iter().any(|m| {
+                        m.scene == scene
+                            && m.path == path.name()
+                            && m.params.get(super::sensitivity::PARAM)
+                                == Some(&Value::from(tag.as_str()))
+                    })
+            };
+            over_budget[i] = over(PrimitivePath::Lembo, &l) || over(PrimitivePath::Triangle, &t);
         }
         let flips = |base: f64, v: Option<f64>| {
             v.is_some_and(|v| (v - 1.0).signum() != (base - 1.0).signum())
         };
-        let cell = |base: f64, v: Option<f64>| {
-            if flips(base, v) {
+        let cell = |base: f64, v: Option<f64>, over: bool| {
+            if over {
+                "over the area budget".to_string()
+            } else if flips(base, v) {
                 format!("{} **flips**", show(v))
             } else {
                 show(v)
@@ -647,10 +671,10 @@ fn tornado<'a>(
             p.name,
             ends[0],
             ends[1],
-            cell(base.0, at[0].map(|a| a.0)),
-            cell(base.0, at[1].map(|a| a.0)),
-            cell(base.1, at[0].map(|a| a.1)),
-            cell(base.1, at[1].map(|a| a.1)),
+            cell(base.0, at[0].map(|a| a.0), over_budget[0]),
+            cell(base.0, at[1].map(|a| a.0), over_budget[1]),
+            cell(base.1, at[0].map(|a| a.1), over_budget[0]),
+            cell(base.1, at[1].map(|a| a.1), over_budget[1]),
         );
         for (bars, pick) in [(&mut cycles_bars, 0usize), (&mut energy_bars, 1)] {
             let get = |a: Option<(f64, f64)>| a.map(|a| if pick == 0 { a.0 } else { a.1 });

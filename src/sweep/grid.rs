@@ -220,9 +220,23 @@ impl Expander<'_> {
     }
 
     /// Adds the variants of a sensitivity study (`super::sensitivity`): for each of its
-    /// parameters, a low and a high variant of every point so far of the paths it names.
+    /// parameters, a low and a high variant of every point so far that sets no
+    /// architecture field (the spec's architecture as it is), of the paths it names.
     pub(super) fn sensitivity(&mut self, study: &Sensitivity) -> Result<()> {
-        let base: Vec<Point> = self.points.clone();
+        let base: Vec<Point> = self
+            .points
+            .iter()
+            .filter(|p| !p.params.keys().any(|k| k.starts_with(ARCH)))
+            .cloned()
+            .collect();
+        if base.is_empty() {
+            return Err(Error::invalid(
+                self.file,
+                "sensitivity",
+                "present",
+                "varies the points that set no `arch.` field (the spec's architecture as it is); the grid and points have none",
+            ));
+        }
         for param in &study.params {
             if let Some(path) = param.name.strip_prefix(ARCH) {
                 let found = arch_field(&self.arch_shape, path);

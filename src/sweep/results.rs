@@ -314,7 +314,26 @@ fn page(spec_text: &[u8], runs: usize, files: &[(&str, Vec<u8>)]) -> Result<Stri
         .collect::<std::result::Result<Vec<_>, _>>()
         .map_err(csv_err)?;
     let head: Vec<&str> = head.iter().map(String::as_str).collect();
-    let body = html::section(
+    // The answer first, where the spec has an area budget: its text as written, and its
+    // figures among the plots below.
+    let answer = files
+        .iter()
+        .find(|(file, _)| *file == ANSWER_MD)
+        .map(|(_, bytes)| {
+            html::section(
+                "Answer",
+                &(html::para(&format!(
+                    "{ANSWER_MD} as written (its figures, speedup_*.svg and tornado_*.svg, are \
+                     among the plots below)."
+                )) + &format!(
+                    "<pre>{}</pre>\n",
+                    html::escape(&String::from_utf8_lossy(bytes))
+                )),
+            )
+        })
+        .unwrap_or_default();
+    let body = answer
+        + &html::section(
         "Plots",
         &if plots.is_empty() {
             html::para("No parameter varied over more than one value, so there is nothing to plot.")

@@ -877,3 +877,237 @@ fn committed_sweep_results_are_what_the_code_computes() {
     }
     assert!(failures.is_empty(), "{}", failures.join("\n\n"));
 }
+
+/// A spec that refines both paths' knobs on the sphere at 48x48 (about a second), with a
+/// sensitivity study of two parameters; `rest` adds fields.
+fn refine_spec(rest: &str) -> String {
+    let scene = manifest().join("traces/sphere24.json");
+    format!(
+        r#"{{"name": "refine", "scenes": [{:?}], "viewport": [48, 48],
+            "area_budget_mm2": 100,
+            "refine": {{"margin_db": 0.5, "k_floor": 0.05, "tess_cap": 16}},
+            "targets": {{"psnr_db": [30, 35]}},
+            "sensitivity": {{"target": {{"psnr_db": 30}},
+                "params": ["arch.framebuffer.bytes_per_cycle",
+                           {{"param": "arch.interval_manager.count", "path": "lembo", "low": 1, "high": 4}}]}},
+            "grid": [{{"path": ["lembo"], "k": [2, 1]}},
+                     {{"path": ["triangle"], "tess": [1, 2]}},
+                     {{"path": ["lembo"], "k": [2, 1], "arch.rop.count": [2]}}]{rest}}}"#,
+        scene.to_string_lossy()
+    )
+}
+
+fn run_refine(tmp: &Path, name: &str, spec: &str, envs: &[(&str, &str)]) -> (PathBuf, Output) {
+    let path = tmp.join(format!("{name}.json"));
+    std::fs::write(&path, spec).unwrap();
+    let dir = tmp.join(name);
+    let out = sweep(
+        &[
+            "sweep",
+            path.to_str().unwrap(),
+            "--out",
+            dir.to_str().unwrap(),
+            "--jobs",
+            "2",
+        ],
+        envs,
+        tmp,
+    );
+    (dir, out)
+}
+
+/// Refinement goes past the grid's last k and n until each series is bracketed or reaches
+/// the floor or cap, says why each ended, and a sweep stopped inside a refinement round
+/// finishes on rerun as if it had not been stopped.
+#[test]
+fn a_refined_sweep_brackets_each_knob_and_resumes_as_if_uninterrupted() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (whole, out) = run_refine(tmp.path(), "whole", &refine_spec(""), &[]);
+    ok(&out);
+    let m = masked(&whole);
+    let params: Vec<&Value> = m.records.iter().map(|r| &r["params"]).collect();
+    // The grid's 6 points, the variants (2 x 4 lembo and triangle points + 2 x 2 lembo
+    // ones), and refinement beyond k = 1 and n = 2.
+    let finer_k = params
+        .iter()
+        .any(|p| p["k"].as_f64().is_some_and(|k| k < 1.0));
+    let finer_n = params
+        .iter()
+        .any(|p| p["tess"].as_u64().is_some_and(|n| n > 2));
+    assert!(finer_k && finer_n, "{params:?}");
+    // No variant is refined.
+    assert!(params
+        .iter()
+        .filter(|p| p.get("sensitivity").is_some())
+        .all(|p| p["k"].as_f64().is_none_or(|k| k >= 1.0)
+            && p["tess"].as_u64().is_none_or(|n| n <= 2)));
+    let answer = std::fs::read_to_string(whole.join("answer.md")).unwrap();
+    for part in [
+        "## Bracketing",
+        "## Speed-up against target error",
+        "| sphere24 | 30.0 dB |",
+        "## What flips it",
+        "| arch.interval_manager.count | = 1 | = 4 |",
+    ] {
+        assert!(answer.contains(part), "no `{part}` in {answer}");
+    }
+    let bracket: Vec<&str> = answer
+        .lines()
+        .skip_while(|l| !l.starts_with("## Bracketing"))
+        .take_while(|l| !l.starts_with("## Speed-up"))
+        .filter(|l| l.starts_with("| sphere24 |"))
+        .collect();
+    assert_eq!(bracket.len(), 2, "{answer}");
+    for row in &bracket {
+        assert!(
+            row.contains("bracketed: the last two refinements")
+                || row.contains("stopped at the floor k = 0.05")
+                || row.contains("stopped at the cap n = 16"),
+            "{row}"
+        );
+    }
+    for figure in [
+        "speedup_psnr_db_sphere24.svg",
+        "tornado_cycles_sphere24.svg",
+        "tornado_energy_sphere24.svg",
+    ] {
+        assert!(whole.join(figure).exists(), "{figure}");
+    }
+    let html = std::fs::read_to_string(whole.join("report.html")).unwrap();
+    assert!(html.contains("## Bracketing") && html.contains("speedup_psnr_db_sphere24.svg"));
+
+    // Stopped after the grid and its variants and part of the first round, then rerun.
+    let grid_and_variants = m
+        .records
+        .iter()
+        .filter(|r| {
+            r["params"].get("sensitivity").is_some()
+                || r["params"]["k"].as_f64().is_some_and(|k| k >= 1.0)
+                || r["params"]["tess"].as_u64().is_some_and(|n| n <= 2)
+        })
+        .count();
+    let stop = (grid_and_variants + 1).to_string();
+    let (part, out) = run_refine(
+        tmp.path(),
+        "part",
+        &refine_spec(""),
+        &[("LEMBO_SWEEP_STOP_AFTER", &stop)],
+    );
+    assert_eq!(
+        out.status.code(),
+        Some(3),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (again, out) = run_refine(tmp.path(), "part", &refine_spec(""), &[]);
+    ok(&out);
+    assert_eq!(again, part);
+    assert_eq!(masked(&part), m);
+    assert_eq!(
+        std::fs::read(part.join("answer.md")).unwrap(),
+        answer.as_bytes()
+    );
+
+    // A refinement runs in one process: no shards.
+    let (_, out) = run_refine(tmp.path(), "sharded", &refine_spec(""), &[]);
+    ok(&out);
+    let spec = tmp.path().join("sharded.json");
+    let out = sweep(
+        &[
+            "sweep",
+            spec.to_str().unwrap(),
+            "--out",
+            tmp.path().join("shard").to_str().unwrap(),
+            "--shard",
+            "0/2",
+        ],
+        &[],
+        tmp.path(),
+    );
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--shard"));
+}
+
+/// Without `refine`, a grid that stops while the error still improves is flagged in
+/// answer.md where it decides the answer.
+#[test]
+fn a_grid_that_stops_early_is_flagged_unbracketed() {
+    let tmp = tempfile::tempdir().unwrap();
+    let scene = manifest().join("traces/sphere24.json");
+    let spec = format!(
+        r#"{{"name": "early", "scenes": [{:?}], "viewport": [48, 48], "area_budget_mm2": 100,
+            "grid": [{{"path": ["lembo"], "k": [4, 2, 1]}}, {{"path": ["triangle"], "tess": [1, 2, 4]}}]}}"#,
+        scene.to_string_lossy()
+    );
+    let (dir, out) = run_refine(tmp.path(), "early", &spec, &[]);
+    ok(&out);
+    let answer = std::fs::read_to_string(dir.join("answer.md")).unwrap();
+    assert!(
+        answer.contains("unbracketed: the grid stops at n = 4"),
+        "{answer}"
+    );
+    // The most accurate triangle run at equal area is the grid's last n: flagged.
+    let area = answer
+        .lines()
+        .skip_while(|l| !l.starts_with("## At equal area"))
+        .find(|l| l.starts_with("| sphere24 |"))
+        .unwrap();
+    assert!(
+        area.contains("tess=4") && area.contains("**unbracketed**"),
+        "{area}"
+    );
+}
+
+#[test]
+fn bad_answer_settings_are_refused_naming_the_field() {
+    let scene = manifest().join("traces/sphere24.json");
+    let spec = |fields: &str| {
+        format!(
+            r#"{{"name": "bad", "scenes": [{:?}], "viewport": [32, 32], "area_budget_mm2": 10,
+                "grid": [{{"path": ["lembo"], "k": [1]}}], {fields}}}"#,
+            scene.to_string_lossy()
+        )
+    };
+    for (fields, needle) in [
+        (r#""refine": {"k_floor": 0}"#, "field `refine.k_floor` = 0"),
+        (
+            r#""refine": {"tess_cap": 4096}"#,
+            "field `refine.tess_cap` = 4096",
+        ),
+        (
+            r#""refine": {"margin_db": -1}"#,
+            "field `refine.margin_db` = -1",
+        ),
+        (
+            r#""refine": {"cycle_cap": 0}"#,
+            "field `refine.cycle_cap` = 0",
+        ),
+        (r#""refine": {}, "reference": false"#, "field `refine`"),
+        (
+            r#""targets": {"psnr_db": []}"#,
+            "field `targets.psnr_db` = []",
+        ),
+        (
+            r#""targets": {"flip_mean": [0.5, 0]}"#,
+            "field `targets.flip_mean[1]` = 0",
+        ),
+        (
+            r#""sensitivity": {"target": {"psnr_db": 40}, "factors": [0, 2], "params": ["arch.rop.count"]}"#,
+            "field `sensitivity.factors[0]` = 0",
+        ),
+        (
+            r#""sensitivity": {"target": {"psnr_db": 40}, "factors": [0.5, -1], "params": ["arch.rop.count"]}"#,
+            "field `sensitivity.factors[1]` = -1",
+        ),
+        (
+            r#""sensitivity": {"target": {"psnr_db": 40}, "params": ["arch.rop.cnt"]}"#,
+            "field `sensitivity.params[0]`",
+        ),
+        (
+            r#""sensitivity": {"target": {"psnr_db": 40}, "params": [{"param": "arch.setup.count", "factors": [0.3, 2]}]}"#,
+            "is a whole number",
+        ),
+    ] {
+        assert_refused(&spec(fields), &[], needle);
+    }
+}
