@@ -374,10 +374,24 @@ pub(super) fn point_arch(file: &str, base: &ArchConfig, point: &Point) -> Result
             .unwrap_or_else(|| point.origin.clone())
     };
     let arch: ArchConfig = serde_path_to_error::deserialize(value).map_err(|e| {
-        let field = blame(&e.path().to_string());
+        let at = e.path().to_string();
+        // A field a sensitivity variant scaled to a value it does not take.
+        if let Some((name, factor)) = point
+            .scales()
+            .find(|(name, _)| name.strip_prefix(ARCH) == Some(at.as_str()))
+        {
+            return Error::Parse {
+                file: file.into(),
+                field: point.field(super::sensitivity::PARAM),
+                message: format!(
+                    "{name} x{factor}: {}; a field of whole numbers takes only factors that keep it whole: give the parameter's `low` and `high` instead",
+                    e.into_inner()
+                ),
+            };
+        }
         Error::Parse {
             file: file.into(),
-            field,
+            field: blame(&at),
             message: e.into_inner().to_string(),
         }
     })?;

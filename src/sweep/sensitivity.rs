@@ -284,17 +284,17 @@ fn param(file: &str, field: &str, entry: &Value, factors: [f64; 2]) -> Result<Pa
     })
 }
 
-/// The value of `base` scaled by `factor`, of the same type: a whole number must stay
-/// whole. The error says why, for the caller to name the field.
+/// The value of `base` scaled by `factor`: a whole number stays a whole number where the
+/// product is whole, else it becomes a fraction, which the architecture accepts only in a
+/// field that takes fractions (checked when the architecture is read back). The error
+/// says why, for the caller to name the field.
 pub fn scaled(base: &Value, factor: f64) -> std::result::Result<Value, String> {
     if let Some(n) = base.as_u64() {
         let x = n as f64 * factor;
-        if x.fract() != 0.0 || x < 0.0 || x > u64::MAX as f64 {
-            return Err(format!(
-                "is a whole number: {n} x {factor} = {x} is not; give the parameter's `low` and `high` instead"
-            ));
+        if x.fract() == 0.0 && x >= 0.0 && x <= u64::MAX as f64 {
+            return Ok(Value::from(x as u64));
         }
-        return Ok(Value::from(x as u64));
+        return Ok(Value::from(x));
     }
     match base.as_f64() {
         Some(x) => Ok(Value::from(x * factor)),
@@ -389,9 +389,9 @@ mod tests {
     }
 
     #[test]
-    fn whole_numbers_scale_to_whole_numbers_only() {
+    fn whole_numbers_stay_whole_where_the_product_is() {
         assert_eq!(scaled(&Value::from(4u64), 0.5), Ok(Value::from(2u64)));
-        assert!(scaled(&Value::from(1u64), 0.5).is_err());
+        assert_eq!(scaled(&Value::from(1u64), 0.5), Ok(Value::from(0.5)));
         assert_eq!(scaled(&Value::from(64.0), 2.0), Ok(Value::from(128.0)));
         assert!(scaled(&Value::from("memory"), 2.0).is_err());
     }
