@@ -108,7 +108,7 @@ impl CompareJob {
             mode: Mode::Timed,
             arch: self.arch.clone(),
             trace_out: None,
-            tech: self.tech.clone(),
+            tech: self.tech.clone().map(crate::job::TechSource::File),
             path,
             tess,
             blend: BlendMode::Rgba8,

@@ -597,7 +597,7 @@ fn render(args: RenderArgs) -> ExitCode {
         },
         arch: args.arch,
         trace_out: args.trace_out,
-        tech: args.tech,
+        tech: args.tech.map(job::TechSource::File),
         path: match args.path.unwrap_or(PathArg::Lembo) {
             PathArg::Lembo => PrimitivePath::Lembo,
             PathArg::Triangle => PrimitivePath::Triangle,

@@ -27,8 +27,10 @@ use crate::error::{read_text_file, Error, Result};
 use crate::graph::{self, Path as UnitPath, TessSource, UnitInstance, UnitKind};
 
 mod links;
+mod ratio;
 use crate::json::parse_strict;
 pub use links::LinksConfig;
+pub use ratio::Ratio;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -54,6 +56,9 @@ pub const MAX_FIFO_DEPTH: u32 = 4096;
 /// The largest accepted post-transform vertex cache \[entries\]. GPUs' hold tens to a few
 /// hundred; beyond this the host's cache lookups would only cost time.
 pub const MAX_VERTEX_CACHE: u32 = 4096;
+/// The longest accepted frame-buffer access slot \[cycles\]: a DRAM access (row open,
+/// column access, precharge) is tens of cycles at most.
+pub const MAX_ACCESS_CYCLES: u64 = 64;
 /// The largest accepted clock \[MHz\].
 pub const MAX_CLOCK_MHZ: f64 = 100_000.0;
 /// The longest accepted configuration name \[characters\].
@@ -84,6 +89,8 @@ pub struct ArchConfig {
     /// Where the triangle path's triangles come from, and the vertex cache of a mesh in
     /// memory; defaults in [`TessellationConfig`].
     pub tessellation: TessellationConfig,
+    /// What the geometry fetch reads per primitive; defaults in [`FetchConfig`].
+    pub fetch: FetchConfig,
     /// The on-chip tessellators (the `onchip` source); defaults in [`TessellatorConfig`].
     pub tessellator: TessellatorConfig,
     /// The on-chip domain evaluators (the `onchip` source); defaults in
@@ -247,6 +254,44 @@ pub struct TessellationConfig {
     pub vertex_cache_entries: u32,
 }
 
+/// GeometryFetch (DESIGN.md §3, "Geometry fetch"): the bytes of a primitive as it is
+/// stored in memory, read through the memory port (`framebuffer`) at the start of a frame
+/// and priced as DRAM (`cost.geometry_bytes`). Discoids keep their own fixed records.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+#[serde(default, deny_unknown_fields)]
+pub struct FetchConfig {
+    /// Bytes of one lembo as stored and read for Setup or the Tessellators \[bytes\].
+    /// Default 144 (`lembo::LEMBO_BYTES`): six points and six normals in f32.
+    pub bytes_per_lembo: u64,
+    /// Bytes of one vertex of a mesh tessellated in memory, read on each post-transform
+    /// vertex cache miss \[bytes\]. Default 24 (`lembo::tessellate::VERTEX_BYTES`):
+    /// a position and a normal in f32.
+    pub bytes_per_vertex: u64,
+    /// Bytes of one triangle's indices in a mesh tessellated in memory \[bytes\]. Default 12
+    /// (`lembo::tessellate::INDEX_BYTES_PER_TRIANGLE`): three 32-bit indices.
+    pub index_bytes_per_triangle: u64,
+}
+
+impl Default for FetchConfig {
+    fn default() -> FetchConfig {
+        FetchConfig {
+            // The model's storage formats (a unit test holds them equal); `config` imports
+            // only leaves, so the figures are written here.
+            bytes_per_lembo: 144,
+            bytes_per_vertex: 24,
+            index_bytes_per_triangle: 12,
+        }
+    }
+}
+
+impl FetchConfig {
+    /// Bytes of an indexed mesh of `triangles` triangles and `vertices` vertices
+    /// \[bytes\].
+    pub fn mesh_bytes(&self, triangles: u64, vertices: u64) -> u64 {
+        triangles * self.index_bytes_per_triangle + vertices * self.bytes_per_vertex
+    }
+}
+
 /// Tessellator (the `onchip` source): makes a lembo's n² domain triangles (their
 /// connectivity and their (n + 1)(n + 2)/2 domain points), as the fixed-function
 /// tessellator of a DX11 GPU does. Replicable: the geometry fetch deals batches of
@@ -262,9 +307,11 @@ pub struct TessellatorConfig {
     /// Cycles from accepting a lembo to its first domain points being ready \[cycles\].
     /// Default 8: the lattice step (a reciprocal of n) and the first row's indices.
     pub latency_cycles: u64,
-    /// Initiation interval per triangle generated \[cycles\]. Default 1: a DX11
-    /// tessellator emits about one triangle (with its new domain point) per clock.
-    pub cycles_per_triangle: u64,
+    /// Initiation interval per triangle generated \[cycles\], a multiple of 1/64
+    /// ([`Ratio`]: 0.5 is two triangles a cycle); a lembo of t triangles costs
+    /// ceil(t * this) cycles, at least one. Default 1: a DX11 tessellator emits about one
+    /// triangle (with its new domain point) per clock.
+    pub cycles_per_triangle: Ratio,
 }
 
 /// DomainEval (the `onchip` source): evaluates each domain point of a lembo's tessellation,
@@ -281,11 +328,11 @@ pub struct DomainEvalConfig {
     /// 16: the six quadratic basis functions (about 4 stages), two weighted sums of six
     /// vectors (about 6) and the normal's normalisation (a reciprocal square root, about 6).
     pub latency_cycles: u64,
-    /// Initiation interval per vertex evaluated \[cycles\]. Default 1: one fully pipelined
-    /// evaluator. Each lembo's (n + 1)(n + 2)/2 points are evaluated: patches are
-    /// independent, so a point on an edge two lembos share is evaluated by both, as a domain
-    /// shader does.
-    pub cycles_per_vertex: u64,
+    /// Initiation interval per vertex evaluated \[cycles\], a multiple of 1/64 ([`Ratio`]:
+    /// 0.5 is two vertices a cycle). Default 1: one fully pipelined evaluator. Each lembo's
+    /// (n + 1)(n + 2)/2 points are evaluated: patches are independent, so a point on an edge
+    /// two lembos share is evaluated by both, as a domain shader does.
+    pub cycles_per_vertex: Ratio,
 }
 
 /// TriangleSetup (the triangle path, DESIGN.md §5): projects a triangle's three vertices,
@@ -379,9 +426,10 @@ pub struct RopConfig {
     /// Cycles from accepting a span to its write burst being ready \[cycles\]. Default 4: the
     /// depth compare and the shading arithmetic of one fragment, pipelined.
     pub latency_cycles: u64,
-    /// Fragments tested and shaded per cycle; a span of n fragments costs ceil(n / this)
-    /// cycles. Default 1: one depth test and one Phong evaluation per cycle per ROP.
-    pub fragments_per_cycle: u64,
+    /// Fragments tested and shaded per cycle, a multiple of 1/64 ([`Ratio`]: 0.5 is a
+    /// fragment every two cycles); a span of n fragments costs ceil(n / this) cycles.
+    /// Default 1: one depth test and one Phong evaluation per cycle per ROP.
+    pub fragments_per_cycle: Ratio,
     /// Side of a screen interleave tile \[pixels\]: tile (tx, ty) of tile_px x tile_px pixels
     /// goes to ROP (tx + ty) % count. Default 8: 64 pixels, the size of a frame-buffer
     /// memory burst tile; small enough that one lembo covers several tiles and thus several
@@ -422,8 +470,8 @@ impl Default for BlendConfig {
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
 #[serde(default, deny_unknown_fields)]
 pub struct FrameBufferConfig {
-    /// Bytes the port transfers per cycle \[bytes/cycle\]; a burst of b bytes costs
-    /// ceil(b / this) cycles. Default 64: the GeForce 6800 GT the discoid paper measured on
+    /// Bytes the port transfers per cycle \[bytes/cycle\]; with the default
+    /// `access_cycles` of 1 a burst of b bytes costs ceil(b / this) cycles, at least one. Default 64: the GeForce 6800 GT the discoid paper measured on
     /// moves about 32 GB/s, 64 bytes per cycle at the default 500 MHz. Four ROPs at full
     /// rate ask for up to 48 bytes per cycle, so the port limits only wider units.
     pub bytes_per_cycle: u64,
@@ -433,6 +481,36 @@ pub struct FrameBufferConfig {
     /// Bytes moved per fragment that passes the depth test \[bytes\]. Default 8: a 32-bit
     /// RGBA8 colour write and a 32-bit depth write.
     pub bytes_per_fragment_written: u64,
+    /// The port's per-access cost: the length of its transfer slot \[cycles\], a multiple
+    /// of 1/64 ([`Ratio`]). The port moves data in slots of this many cycles, each carrying
+    /// `bytes_per_cycle` * this bytes; an access of b bytes occupies whole slots,
+    /// this * ceil(b / (bytes_per_cycle * this)) cycles, at least one slot (DESIGN.md §3,
+    /// "One memory port"). Fractions of a cycle are kept exactly and whole cycles charged
+    /// as the port's time crosses them. Default 1: every access occupies at least a cycle,
+    /// and a longer one ceil(b / bytes_per_cycle) cycles. It moves no bytes, so it
+    /// changes no energy.
+    pub access_cycles: Ratio,
+}
+
+impl FrameBufferConfig {
+    /// The slots an access of `bytes` occupies: ceil(bytes / (bytes_per_cycle *
+    /// access_cycles)), 0 for no bytes.
+    pub fn slots(&self, bytes: u64) -> u64 {
+        let slot_bytes_den = self.bytes_per_cycle as u128 * self.access_cycles.steps() as u128;
+        (bytes as u128 * Ratio::DEN as u128).div_ceil(slot_bytes_den.max(1)) as u64
+    }
+
+    /// The time `slots` slots take, in 1/[`Ratio::DEN`] cycles.
+    pub fn slot_time(&self, slots: u64) -> u128 {
+        slots as u128 * self.access_cycles.steps() as u128
+    }
+
+    /// Whole cycles of one transfer of `bytes` on an idle port (a resolve pass), 0 for no
+    /// bytes: ceil(bytes / bytes_per_cycle) with the default `access_cycles`.
+    pub fn transfer_cycles(&self, bytes: u64) -> u64 {
+        self.slot_time(self.slots(bytes))
+            .div_ceil(Ratio::DEN as u128) as u64
+    }
 }
 
 impl Default for ArchConfig {
@@ -447,6 +525,7 @@ impl Default for ArchConfig {
             subsegmenter: SubsegmenterConfig::default(),
             rasterizer: RasterizerConfig::default(),
             tessellation: TessellationConfig::default(),
+            fetch: FetchConfig::default(),
             tessellator: TessellatorConfig::default(),
             domain_eval: DomainEvalConfig::default(),
             triangle_setup: TriangleSetupConfig::default(),
@@ -550,7 +629,7 @@ impl Default for TessellatorConfig {
             count: 1,
             batch: 4,
             latency_cycles: 8,
-            cycles_per_triangle: 1,
+            cycles_per_triangle: Ratio::whole(1),
         }
     }
 }
@@ -560,7 +639,7 @@ impl Default for DomainEvalConfig {
         DomainEvalConfig {
             count: 1,
             latency_cycles: 16,
-            cycles_per_vertex: 1,
+            cycles_per_vertex: Ratio::whole(1),
         }
     }
 }
@@ -581,7 +660,7 @@ impl Default for RopConfig {
         RopConfig {
             count: 4,
             latency_cycles: 4,
-            fragments_per_cycle: 1,
+            fragments_per_cycle: Ratio::whole(1),
             tile_px: 8,
         }
     }
@@ -593,6 +672,7 @@ impl Default for FrameBufferConfig {
             bytes_per_cycle: 64,
             bytes_per_fragment_tested: 4,
             bytes_per_fragment_written: 8,
+            access_cycles: Ratio::whole(1),
         }
     }
 }
@@ -783,21 +863,7 @@ impl ArchConfig {
         )?;
         check.fragments_per_cycle("rasterizer.fragments_per_cycle", ras.fragments_per_cycle)?;
 
-        check.range(
-            "tessellation.vertex_cache_entries",
-            self.tessellation.vertex_cache_entries.into(),
-            MAX_VERTEX_CACHE.into(),
-            "entries (a post-transform cache holds at least one vertex)",
-        )?;
-        let tess = &self.tessellator;
-        check.count("tessellator.count", tess.count)?;
-        check.batch("tessellator.batch", tess.batch)?;
-        check.cycles("tessellator.latency_cycles", tess.latency_cycles)?;
-        check.cycles("tessellator.cycles_per_triangle", tess.cycles_per_triangle)?;
-        let de = &self.domain_eval;
-        check.count("domain_eval.count", de.count)?;
-        check.cycles("domain_eval.latency_cycles", de.latency_cycles)?;
-        check.cycles("domain_eval.cycles_per_vertex", de.cycles_per_vertex)?;
+        self.validate_geometry(&check)?;
 
         let ts = &self.triangle_setup;
         check.count("triangle_setup.count", ts.count)?;
@@ -828,7 +894,11 @@ impl ArchConfig {
         let rop = &self.rop;
         check.count("rop.count", rop.count)?;
         check.cycles("rop.latency_cycles", rop.latency_cycles)?;
-        check.fragments_per_cycle("rop.fragments_per_cycle", rop.fragments_per_cycle)?;
+        check.ratio(
+            "rop.fragments_per_cycle",
+            rop.fragments_per_cycle,
+            MAX_FRAGMENTS_PER_CYCLE,
+        )?;
         check.range(
             "rop.tile_px",
             rop.tile_px.into(),
@@ -844,16 +914,7 @@ impl ArchConfig {
         check.cycles("blend.cycles_per_fragment_f16", b.cycles_per_fragment_f16)?;
         check.cycles("blend.cycles_per_fragment_f32", b.cycles_per_fragment_f32)?;
 
-        let fb = &self.framebuffer;
-        check.bytes("framebuffer.bytes_per_cycle", fb.bytes_per_cycle)?;
-        check.bytes(
-            "framebuffer.bytes_per_fragment_tested",
-            fb.bytes_per_fragment_tested,
-        )?;
-        check.bytes(
-            "framebuffer.bytes_per_fragment_written",
-            fb.bytes_per_fragment_written,
-        )?;
+        self.validate_memory(&check)?;
 
         for (name, link) in self.links.all() {
             check.range(
@@ -864,6 +925,62 @@ impl ArchConfig {
             )?;
             check.cycles(&format!("links.{name}.latency_cycles"), link.latency_cycles)?;
         }
+        Ok(())
+    }
+
+    /// [`ArchConfig::validate`]'s checks of where the triangles come from: the vertex
+    /// cache, the on-chip units and the bytes the geometry fetch reads.
+    fn validate_geometry(&self, check: &Check) -> Result<()> {
+        check.range(
+            "tessellation.vertex_cache_entries",
+            self.tessellation.vertex_cache_entries.into(),
+            MAX_VERTEX_CACHE.into(),
+            "entries (a post-transform cache holds at least one vertex)",
+        )?;
+        let tess = &self.tessellator;
+        check.count("tessellator.count", tess.count)?;
+        check.batch("tessellator.batch", tess.batch)?;
+        check.cycles("tessellator.latency_cycles", tess.latency_cycles)?;
+        check.ratio(
+            "tessellator.cycles_per_triangle",
+            tess.cycles_per_triangle,
+            MAX_CYCLES,
+        )?;
+        let de = &self.domain_eval;
+        check.count("domain_eval.count", de.count)?;
+        check.cycles("domain_eval.latency_cycles", de.latency_cycles)?;
+        check.ratio(
+            "domain_eval.cycles_per_vertex",
+            de.cycles_per_vertex,
+            MAX_CYCLES,
+        )?;
+        let fetch = &self.fetch;
+        check.bytes("fetch.bytes_per_lembo", fetch.bytes_per_lembo)?;
+        check.bytes("fetch.bytes_per_vertex", fetch.bytes_per_vertex)?;
+        check.bytes(
+            "fetch.index_bytes_per_triangle",
+            fetch.index_bytes_per_triangle,
+        )?;
+        Ok(())
+    }
+
+    /// [`ArchConfig::validate`]'s checks of the frame-buffer memory port.
+    fn validate_memory(&self, check: &Check) -> Result<()> {
+        let fb = &self.framebuffer;
+        check.bytes("framebuffer.bytes_per_cycle", fb.bytes_per_cycle)?;
+        check.bytes(
+            "framebuffer.bytes_per_fragment_tested",
+            fb.bytes_per_fragment_tested,
+        )?;
+        check.bytes(
+            "framebuffer.bytes_per_fragment_written",
+            fb.bytes_per_fragment_written,
+        )?;
+        check.ratio(
+            "framebuffer.access_cycles",
+            fb.access_cycles,
+            MAX_ACCESS_CYCLES,
+        )?;
         Ok(())
     }
 }
@@ -916,6 +1033,13 @@ impl Check<'_> {
 
     fn bytes(&self, field: &str, value: u64) -> Result<()> {
         self.range(field, value, MAX_BYTES, "bytes")
+    }
+
+    /// `value` must be a multiple of 1/[`Ratio::DEN`] from 1/DEN to `max`.
+    fn ratio(&self, field: &str, value: Ratio, max: u64) -> Result<()> {
+        value
+            .check(max)
+            .map_err(|why| Error::invalid(self.file, field, value, why))
     }
 }
 

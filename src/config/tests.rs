@@ -403,3 +403,107 @@ fn config_serializes_back_to_itself() {
     let text = serde_json::to_string_pretty(&config).unwrap();
     assert_eq!(ArchConfig::from_json(&text, "round trip").unwrap(), config);
 }
+
+/// The sensitivity study's knobs (issue 48): their defaults are today's constants, halved
+/// and doubled values are accepted, and out-of-range or non-1/64 values are refused naming
+/// the field.
+#[test]
+fn config_sensitivity_knobs_default_halve_double_and_refuse() {
+    let d = ArchConfig::default();
+    assert_eq!(d.fetch.bytes_per_lembo, crate::lembo::LEMBO_BYTES);
+    assert_eq!(
+        d.fetch.bytes_per_vertex,
+        crate::lembo::tessellate::VERTEX_BYTES
+    );
+    assert_eq!(
+        d.fetch.index_bytes_per_triangle,
+        crate::lembo::tessellate::INDEX_BYTES_PER_TRIANGLE
+    );
+    assert_eq!(d.framebuffer.access_cycles, Ratio::whole(1));
+    assert_eq!(d.rop.fragments_per_cycle, Ratio::whole(1));
+    assert_eq!(d.tessellator.cycles_per_triangle, Ratio::whole(1));
+    assert_eq!(d.domain_eval.cycles_per_vertex, Ratio::whole(1));
+    for scale in ["0.5", "2"] {
+        let text = format!(
+            r#"{{"framebuffer": {{"access_cycles": {scale}}}, "rop": {{"fragments_per_cycle": {scale}}},
+                "tessellator": {{"cycles_per_triangle": {scale}}},
+                "domain_eval": {{"cycles_per_vertex": {scale}}},
+                "tessellation": {{"vertex_cache_entries": {}}},
+                "fetch": {{"bytes_per_lembo": {}, "bytes_per_vertex": {},
+                           "index_bytes_per_triangle": {}}}}}"#,
+            if scale == "2" { 64 } else { 16 },
+            if scale == "2" { 288 } else { 72 },
+            if scale == "2" { 48 } else { 12 },
+            if scale == "2" { 24 } else { 6 },
+        );
+        let a = ArchConfig::from_json(&text, "t.json").unwrap();
+        assert_eq!(a.rop.fragments_per_cycle.get().to_string(), scale);
+        // Whole values read back as the integers they were before they could be fractions.
+        let back = serde_json::to_value(&a).unwrap();
+        assert_eq!(back["framebuffer"]["access_cycles"].to_string(), scale);
+    }
+    for (text, field, value) in [
+        (
+            r#"{"framebuffer": {"access_cycles": 0}}"#,
+            "framebuffer.access_cycles",
+            "0",
+        ),
+        (
+            r#"{"framebuffer": {"access_cycles": 0.3}}"#,
+            "framebuffer.access_cycles",
+            "0.3",
+        ),
+        (
+            r#"{"framebuffer": {"access_cycles": 65}}"#,
+            "framebuffer.access_cycles",
+            "65",
+        ),
+        (
+            r#"{"rop": {"fragments_per_cycle": 0}}"#,
+            "rop.fragments_per_cycle",
+            "0",
+        ),
+        (
+            r#"{"rop": {"fragments_per_cycle": 65}}"#,
+            "rop.fragments_per_cycle",
+            "65",
+        ),
+        (
+            r#"{"rop": {"fragments_per_cycle": -0.5}}"#,
+            "rop.fragments_per_cycle",
+            "-0.5",
+        ),
+        (
+            r#"{"tessellator": {"cycles_per_triangle": 0.001}}"#,
+            "tessellator.cycles_per_triangle",
+            "0.001",
+        ),
+        (
+            r#"{"domain_eval": {"cycles_per_vertex": 1000001}}"#,
+            "domain_eval.cycles_per_vertex",
+            "1000001",
+        ),
+        (
+            r#"{"fetch": {"bytes_per_lembo": 0}}"#,
+            "fetch.bytes_per_lembo",
+            "0",
+        ),
+        (
+            r#"{"fetch": {"bytes_per_vertex": 4097}}"#,
+            "fetch.bytes_per_vertex",
+            "4097",
+        ),
+        (
+            r#"{"fetch": {"index_bytes_per_triangle": 0}}"#,
+            "fetch.index_bytes_per_triangle",
+            "0",
+        ),
+    ] {
+        assert_invalid(text, field, value);
+    }
+    assert_parse_err(r#"{"fetch": {"bytes": 4}}"#, "fetch.bytes");
+    assert_parse_err(
+        r#"{"rop": {"fragments_per_cycle": "1"}}"#,
+        "rop.fragments_per_cycle",
+    );
+}

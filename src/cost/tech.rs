@@ -172,7 +172,9 @@ impl Tech {
         Ok(tech)
     }
 
-    fn validate(&self, file: &str) -> Result<()> {
+    /// Checks every figure; the first refused is [`Error::Invalid`] naming its dotted field
+    /// path (`dram.pj_per_byte`).
+    pub fn validate(&self, file: &str) -> Result<()> {
         if self.name.is_empty() || self.name.chars().count() > 64 {
             return Err(Error::invalid(
                 file,

@@ -124,7 +124,7 @@ impl TriangleSource for PlanarDiscoids {
         2
     }
 
-    fn bytes(&self) -> u64 {
+    fn bytes(&self, _: &crate::config::FetchConfig) -> u64 {
         super::PLANAR_DISCOID_BYTES * self.items.len() as u64
     }
 

@@ -33,5 +33,6 @@ pub use route::{
 };
 pub use validate::{
     check_count, check_tess_range, check_threshold, machine_threads, Given, Mode, PrimitivePath,
-    RenderJob, AA_SUPERSAMPLE, MAX_HOST_THREADS, MAX_SUPERSAMPLE, MAX_TESS, MAX_THREADS,
+    RenderJob, TechSource, AA_SUPERSAMPLE, MAX_HOST_THREADS, MAX_SUPERSAMPLE, MAX_TESS,
+    MAX_THREADS,
 };

@@ -4,11 +4,11 @@
 
 use super::discoids::run_discoids;
 use super::reference::measure;
-use super::route::{sim_options, Model, PathRun, Route, LEMBO_BYTES};
+use super::route::{sim_options, Model, PathRun, Route};
 use super::sections::{host, scene_info, settings};
 use super::validate::{PrimitivePath, RenderJob};
 use crate::camera::View;
-use crate::config::ArchConfig;
+use crate::config::{ArchConfig, FetchConfig};
 use crate::cost::{self, model::CostReport};
 use crate::error::{Error, Result};
 use crate::graph::TessSource;
@@ -47,7 +47,9 @@ pub fn run_path(
         _ => None,
     };
     let counts = drawn.counts();
-    let primitives = primitives(scene, &route, &counts);
+    // The primitives' sizes: the architecture's, or its defaults for a functional frame.
+    let sizes = model.arch().map(|a| a.fetch.clone()).unwrap_or_default();
+    let primitives = primitives(scene, &route, &counts, &sizes);
     let (framebuffer, units, cycles, trace, fetch) = match drawn {
         Drawn::Functional(f) => (f.framebuffer, Vec::new(), None, None, None),
         Drawn::Timed { timed, .. } => (
@@ -126,14 +128,19 @@ pub fn run_path(
     })
 }
 
-/// The primitives section of a lembo or triangle route's report.
-fn primitives(scene: &Scene, route: &Route, counts: &raster::Counts) -> Primitives {
+/// The primitives section of a lembo or triangle route's report, their bytes at `sizes`.
+fn primitives(
+    scene: &Scene,
+    route: &Route,
+    counts: &raster::Counts,
+    sizes: &FetchConfig,
+) -> Primitives {
     match route {
         Route::Triangles(t) => Primitives {
             kind: "triangle".into(),
             count: t.len(),
             vertices: t.vertex_count(),
-            bytes: t.bytes(),
+            bytes: t.bytes(sizes),
             quad_efficiency: counts.quad_efficiency(),
         },
         _ => {
@@ -142,7 +149,7 @@ fn primitives(scene: &Scene, route: &Route, counts: &raster::Counts) -> Primitiv
                 kind: "lembo".into(),
                 count: lembos,
                 vertices: 6 * lembos,
-                bytes: LEMBO_BYTES * lembos,
+                bytes: sizes.bytes_per_lembo * lembos,
                 quad_efficiency: None,
             }
         }

@@ -98,9 +98,9 @@ pub struct RenderJob {
     pub arch: Option<PathBuf>,
     /// Where to write the Chrome trace-event timeline. Timed mode only.
     pub trace_out: Option<PathBuf>,
-    /// Technology file pricing the unit's area and energy (`--tech`); None for the
-    /// embedded `sim/tech/45nm.json`. Timed mode only.
-    pub tech: Option<PathBuf>,
+    /// Technology pricing the unit's area and energy (`--tech`, or a sweep point's
+    /// `tech.<field>` values); None for the embedded `sim/tech/45nm.json`. Timed mode only.
+    pub tech: Option<TechSource>,
     /// Which primitives the surfaces are drawn as (`--path`).
     pub path: PrimitivePath,
     /// Tessellation level n (n² triangles per lembo); None for the default, 1. Triangle
@@ -298,13 +298,25 @@ impl RenderJob {
         Ok(())
     }
 
-    /// The technology file pricing a timed run's cost: `--tech`, or the embedded 45 nm one.
+    /// The technology pricing a timed run's cost: `--tech`, a sweep point's, or the
+    /// embedded 45 nm one.
     pub fn tech(&self) -> Result<Tech> {
         match &self.tech {
-            Some(path) => Tech::load(path),
+            Some(TechSource::File(path)) => Tech::load(path),
+            Some(TechSource::Given(tech)) => Ok(Tech::clone(tech)),
             None => Ok(Tech::default_45nm()),
         }
     }
+}
+
+/// Where a timed run's technology comes from, besides the embedded 45 nm file.
+#[derive(Clone, Debug)]
+pub enum TechSource {
+    /// A technology file (`--tech`), read when the run is priced.
+    File(PathBuf),
+    /// A technology already validated (a sweep point's: the embedded file with the point's
+    /// `tech.<field>` values).
+    Given(std::sync::Arc<Tech>),
 }
 
 /// Checks a discoid threshold t \[world units\] (`--threshold`, a sweep's `threshold`): it

@@ -14,7 +14,8 @@
 //! Input: a [`Scene`]'s lembos and the level n. Output: [`Triangle`]s in world space, one at
 //! a time by global id ([`Tessellation::triangle`]) or a lembo's n² at once
 //! ([`Tessellation::lembo_triangles`]), and the size of the result as an indexed mesh
-//! ([`Tessellation::vertex_count`], [`Tessellation::bytes`]) without generating it.
+//! ([`Tessellation::vertex_count`], [`Tessellation::len`]; its bytes at the architecture's
+//! sizes, `fetch.*` of the architecture file) without generating it.
 //!
 //! Shared edges: neighbouring lembos must produce bit-identical vertices on their common edge,
 //! or the triangle path shows cracks. So a vertex is never computed from the lembo's
@@ -51,10 +52,12 @@ pub struct Triangle {
     pub color: [f64; 3],
 }
 
-/// Bytes of one vertex of the indexed mesh: an f32 position and an f32 normal \[bytes\].
+/// Bytes of one vertex of the indexed mesh: an f32 position and an f32 normal \[bytes\]; the
+/// default of the architecture's `fetch.bytes_per_vertex`, which the counts use.
 pub const VERTEX_BYTES: u64 = 24;
 
-/// Bytes of one triangle's indices in the indexed mesh: three u32 indices \[bytes\].
+/// Bytes of one triangle's indices in the indexed mesh: three u32 indices \[bytes\]; the
+/// default of the architecture's `fetch.index_bytes_per_triangle`.
 pub const INDEX_BYTES_PER_TRIANGLE: u64 = 12;
 
 /// A scene's lembos tessellated at level n: n² triangles per lembo, computed on demand.
@@ -306,12 +309,6 @@ impl<'a> Tessellation<'a> {
         }
     }
 
-    /// Bytes of the tessellated mesh as an indexed mesh: vertex_count * VERTEX_BYTES +
-    /// len * INDEX_BYTES_PER_TRIANGLE \[bytes\].
-    pub fn bytes(&self) -> u64 {
-        self.vertex_count() * VERTEX_BYTES + self.len() * INDEX_BYTES_PER_TRIANGLE
-    }
-
     /// The lattice point (a, b) of lembo `l` at this level ([`lattice_vertex`]).
     fn vertex(&self, l: &Lembo, a: u32, b: u32) -> Vertex {
         lattice_vertex(l, a, b, self.n)
@@ -439,8 +436,9 @@ mod tests {
                 let count = tess.vertex_count();
                 assert_eq!(count, distinct.len() as u64, "{name} at n = {n}");
                 assert!(by_id.keys().all(|&i| i < count), "{name} at n = {n}");
+                let sizes = crate::config::FetchConfig::default();
                 assert_eq!(
-                    tess.bytes(),
+                    crate::raster::triangle::TriangleSource::bytes(&tess, &sizes),
                     count * VERTEX_BYTES + tess.len() * INDEX_BYTES_PER_TRIANGLE
                 );
             }

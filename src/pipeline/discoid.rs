@@ -184,7 +184,7 @@ fn passes<R: Real>(
         accumulation: target.report.fragments_accumulated * mode.bytes_per_fragment()
             + resolve_bytes.accumulation,
         geometry: 2 * match source {
-            Source::Triangles(t) => t.bytes(),
+            Source::Triangles(t) => t.bytes(&arch.fetch),
             Source::Lembos => scene.lembo_count() as u64 * crate::discoid::CURVED_DISCOID_BYTES,
         },
     };
@@ -286,11 +286,12 @@ fn resolve_cost(arch: &ArchConfig, vp: Viewport, mode: BlendMode) -> (Vec<u64>, 
     }
     let rop_busy: Vec<u64> = owned
         .iter()
-        .map(|p| p.div_ceil(arch.rop.fragments_per_cycle))
+        .map(|&p| arch.rop.fragments_per_cycle.ceil_div(p))
         .collect();
     let bytes = resolve_bytes(vp, mode);
-    let port_busy =
-        (bytes.framebuffer + bytes.accumulation).div_ceil(arch.framebuffer.bytes_per_cycle);
+    let port_busy = arch
+        .framebuffer
+        .transfer_cycles(bytes.framebuffer + bytes.accumulation);
     (rop_busy, port_busy)
 }
 

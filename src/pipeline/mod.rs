@@ -208,7 +208,7 @@ fn run_in<R: Real>(
             (Path::Triangle, Source::Triangles(t), TessSource::Memory) => FetchPlan {
                 source: TessSource::Memory.name(),
                 primitives: t.chunks() as u64 * t.per_chunk(),
-                bytes: t.bytes(),
+                bytes: t.bytes(&arch.fetch),
                 batch: arch.triangle_setup.batch,
                 // A vertex cache for a source that is an indexed mesh.
                 vertex_cache: t
@@ -219,7 +219,7 @@ fn run_in<R: Real>(
             (Path::Triangle, Source::Triangles(t), TessSource::OnChip) => FetchPlan {
                 source: TessSource::OnChip.name(),
                 primitives: t.chunks() as u64,
-                bytes: t.chunks() as u64 * crate::lembo::LEMBO_BYTES,
+                bytes: t.chunks() as u64 * arch.fetch.bytes_per_lembo,
                 batch: arch.tessellator.batch,
                 vertex_cache: None,
             },
@@ -229,7 +229,7 @@ fn run_in<R: Real>(
                 bytes: n_lembos as u64
                     * match discoid {
                         Some(_) => crate::discoid::CURVED_DISCOID_BYTES,
-                        None => crate::lembo::LEMBO_BYTES,
+                        None => arch.fetch.bytes_per_lembo,
                     },
                 batch: arch.setup.batch,
                 vertex_cache: None,

@@ -84,7 +84,7 @@ impl TriangleSource for NoTriangles {
         out.clear();
     }
 
-    fn bytes(&self) -> u64 {
+    fn bytes(&self, _: &crate::config::FetchConfig) -> u64 {
         0
     }
 }

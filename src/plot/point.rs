@@ -184,6 +184,8 @@ pub(crate) fn used<'a>(report: &'a Value, name: &str) -> Option<&'a Value> {
         "datapath" => "/settings/datapath".to_string(),
         "blend" => "/blend/mode".to_string(),
         "threshold" => "/blend/threshold".to_string(),
+        // The one technology figure a report echoes; the others are left empty.
+        "tech.dram.pj_per_byte" => "/cost/tech/dram_pj_per_byte".to_string(),
         arch => format!("/arch/{}", arch.strip_prefix("arch.")?.replace('.', "/")),
     };
     report.pointer(&pointer).filter(|v| !v.is_null())

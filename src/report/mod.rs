@@ -145,9 +145,13 @@ pub struct Primitives {
     /// Vertices the primitive data holds: six control points per lembo (each lembo is read
     /// whole); the distinct vertices of the tessellated mesh for triangles \[vertices\].
     pub vertices: u64,
-    /// Bytes of primitive data in f32: 144 per lembo (six points and six normals); for
-    /// triangles an indexed mesh, 24 per vertex (position and normal) and 12 per triangle
-    /// (three 32-bit indices) \[bytes\].
+    /// Bytes of the primitive data as stored in memory, at the architecture's sizes
+    /// (`fetch.*`; their defaults in functional mode): `fetch.bytes_per_lembo` per lembo
+    /// (144: six points and six normals in f32); for triangles the whole indexed mesh,
+    /// `fetch.bytes_per_vertex` per distinct vertex (24: position and normal) and
+    /// `fetch.index_bytes_per_triangle` per triangle (12: three 32-bit indices). What the
+    /// geometry fetch reads is `fetch.bytes` (a mesh's vertices once per cache miss)
+    /// \[bytes\].
     pub bytes: u64,
     /// Covered pixels over pixels of the quads shaded, fragments / (4 quads); null for
     /// lembos, which are not rasterized in quads.

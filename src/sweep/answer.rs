@@ -589,7 +589,11 @@ fn tornado<'a>(
     let as_is = |runs: &[&'a Measured]| -> Vec<&'a Measured> {
         runs.iter()
             .copied()
-            .filter(|m| !m.params.keys().any(|k| k.starts_with(super::spec::ARCH)))
+            .filter(|m| {
+                !m.params
+                    .keys()
+                    .any(|k| k.starts_with(super::spec::ARCH) || k.starts_with(super::spec::TECH))
+            })
             .collect()
     };
     let (lembo, triangle) = (&as_is(lembo)[..], &as_is(triangle)[..]);

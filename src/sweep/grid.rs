@@ -4,10 +4,11 @@
 
 use super::sensitivity::{Sensitivity, Vary, PARAM};
 use super::spec::{
-    empty_list, key, too_many, Params, Point, Setting, ARCH, MAX_RUNS, SCENES, SETTINGS,
+    empty_list, key, too_many, Params, Point, Setting, ARCH, MAX_RUNS, SCENES, SETTINGS, TECH,
 };
 use crate::camera::Samples;
 use crate::config::ArchConfig;
+use crate::cost::tech::Tech;
 use crate::datapath::Datapath;
 use crate::discoid::blend::BlendMode;
 use crate::error::{Error, Result};
@@ -32,6 +33,9 @@ pub(super) struct Expander<'a> {
     /// `ArchConfig::default()` as JSON: the shape every architecture file has, against
     /// which `arch.<field>` names and value types are checked.
     pub(super) arch_shape: Value,
+    /// The embedded technology file as JSON, against which `tech.<field>` names and value
+    /// types are checked.
+    pub(super) tech_shape: Value,
     pub(super) points: Vec<Point>,
     pub(super) by_params: BTreeMap<String, usize>,
 }
@@ -226,7 +230,11 @@ impl Expander<'_> {
         let base: Vec<Point> = self
             .points
             .iter()
-            .filter(|p| !p.params.keys().any(|k| k.starts_with(ARCH)))
+            .filter(|p| {
+                !p.params
+                    .keys()
+                    .any(|k| k.starts_with(ARCH) || k.starts_with(TECH))
+            })
             .cloned()
             .collect();
         if base.is_empty() {
@@ -234,7 +242,7 @@ impl Expander<'_> {
                 self.file,
                 "sensitivity",
                 "present",
-                "varies the points that set no `arch.` field (the spec's architecture as it is); the grid and points have none",
+                "varies the points that set no `arch.` or `tech.` field (the spec's architecture and technology as they are); the grid and points have none",
             ));
         }
         for param in &study.params {
@@ -246,6 +254,18 @@ impl Expander<'_> {
                         &param.field,
                         &param.name,
                         "must name a number field of the architecture",
+                    ));
+                }
+            }
+            if let Some(path) = param.name.strip_prefix(TECH) {
+                let shape = serde_json::to_value(crate::cost::tech::Tech::default_45nm())
+                    .expect("the technology serialises");
+                if !arch_field(&shape, path).is_some_and(Value::is_number) {
+                    return Err(Error::invalid(
+                        self.file,
+                        &param.field,
+                        &param.name,
+                        "must name a number field of the technology file",
                     ));
                 }
             }
@@ -317,12 +337,16 @@ impl Expander<'_> {
             }
         }
         if self.mode == Mode::Functional {
-            if let Some(name) = point.params.keys().find(|n| n.starts_with(ARCH)) {
+            if let Some(name) = point
+                .params
+                .keys()
+                .find(|n| n.starts_with(ARCH) || n.starts_with(TECH))
+            {
                 return Err(Error::invalid(
                     self.file,
                     point.field(name),
                     &point.params[name],
-                    "architecture fields are only meaningful with mode timed",
+                    "architecture and technology fields are only meaningful with mode timed",
                 ));
             }
         }
@@ -400,18 +424,20 @@ impl Expander<'_> {
             "threshold" => Setting::Threshold(
                 check_threshold(number()?).map_err(|why| Error::invalid(file, field, v, why))?,
             ),
-            _ => match name.strip_prefix(ARCH) {
-                Some(path) => {
+            _ => {
+                if let Some(path) = name.strip_prefix(ARCH) {
                     let canonical = self.arch_value(path, v, field)?;
                     return Ok((Setting::Arch(path.to_string(), v.clone()), canonical));
                 }
-                None => {
-                    return Err(parse(format!(
-                        "unknown parameter `{name}`; expected {}, `arch.<field>` or `scenes`",
-                        SETTINGS.join(", ")
-                    )))
+                if let Some(path) = name.strip_prefix(TECH) {
+                    let canonical = self.tech_value(path, v, field)?;
+                    return Ok((Setting::Tech(path.to_string(), v.clone()), canonical));
                 }
-            },
+                return Err(parse(format!(
+                    "unknown parameter `{name}`; expected {}, `arch.<field>`, `tech.<field>` or `scenes`",
+                    SETTINGS.join(", ")
+                )));
+            }
         };
         let canonical = match &setting {
             Setting::Path(p) => Value::from(p.name()),
@@ -424,7 +450,9 @@ impl Expander<'_> {
             Setting::Samples(n) => Value::from(n.get()),
             Setting::Datapath(d) => Value::from(d.name()),
             Setting::Blend(m) => Value::from(m.name()),
-            Setting::Arch(..) | Setting::Scale(..) => unreachable!("returned above"),
+            Setting::Arch(..) | Setting::Tech(..) | Setting::Scale(..) => {
+                unreachable!("returned above")
+            }
         };
         Ok((setting, canonical))
     }
@@ -447,6 +475,23 @@ impl Expander<'_> {
         let back = serde_json::to_value(config).expect("the architecture serialises");
         Ok(arch_field(&back, path).cloned().unwrap_or(Value::Null))
     }
+
+    /// Checks that `tech.<path>` names a figure of the technology file and `v` has its
+    /// type; returns the value as the file serialises it (its range is checked with the
+    /// point's whole technology, by the plan).
+    fn tech_value(&self, path: &str, v: &Value, field: &str) -> Result<Value> {
+        let parse = |message: String| Error::Parse {
+            file: self.file.into(),
+            field: field.into(),
+            message,
+        };
+        let mut shape = self.tech_shape.clone();
+        set_field(&mut shape, path, v.clone(), "technology").map_err(parse)?;
+        let tech: Tech = serde_path_to_error::deserialize(shape)
+            .map_err(|e| parse(e.into_inner().to_string()))?;
+        let back = serde_json::to_value(tech).expect("the technology serialises");
+        Ok(arch_field(&back, path).cloned().unwrap_or(Value::Null))
+    }
 }
 
 /// Whether `s` sets the architecture field named `name` (`arch.<path>`).
@@ -461,21 +506,32 @@ pub(super) fn set_arch_field(
     path: &str,
     v: Value,
 ) -> std::result::Result<(), String> {
+    set_field(arch, path, v, "architecture")
+}
+
+/// Sets the field at `path` (dotted) of `what`'s JSON (`architecture`, `technology`), as
+/// [`set_arch_field`].
+pub(super) fn set_field(
+    root: &mut Value,
+    path: &str,
+    v: Value,
+    what: &str,
+) -> std::result::Result<(), String> {
     let parts: Vec<&str> = path.split('.').collect();
-    let mut at = arch;
+    let mut at = root;
     for (i, part) in parts.iter().enumerate() {
         let here = parts[..i].join(".");
         let Value::Object(map) = at else {
             return Err(format!(
-                "unknown architecture field `{path}`: `{here}` has no fields"
+                "unknown {what} field `{path}`: `{here}` has no fields"
             ));
         };
         if !map.contains_key(*part) {
             let known: Vec<&str> = map.keys().map(String::as_str).collect();
             return Err(format!(
-                "unknown architecture field `{path}`; {} has: {}",
+                "unknown {what} field `{path}`; {} has: {}",
                 if here.is_empty() {
-                    "the architecture".to_string()
+                    format!("the {what}")
                 } else {
                     format!("`{here}`")
                 },

@@ -141,6 +141,36 @@ mod tests {
         assert_eq!(field_of(e), "grid[0].arch.rop.count[1]");
     }
 
+    /// The sensitivity study's knobs: fractional architecture figures read back as given
+    /// (whole ones as integers), technology figures as the technology file writes them,
+    /// and an unknown technology field or a wrong type named.
+    #[test]
+    fn fractional_arch_and_tech_values_are_canonical() {
+        let s = spec(
+            r#""grid": [{"arch.rop.fragments_per_cycle": [0.5, 2],
+                         "arch.framebuffer.access_cycles": [0.5, 1],
+                         "tech.dram.pj_per_byte": [81.25, 325]}]"#,
+        )
+        .unwrap();
+        assert_eq!(s.points.len(), 8);
+        let p = &s.points[0].params;
+        assert_eq!(p["arch.rop.fragments_per_cycle"], serde_json::json!(0.5));
+        assert_eq!(p["tech.dram.pj_per_byte"], serde_json::json!(81.25));
+        let p = &s.points[7].params;
+        assert_eq!(p["arch.framebuffer.access_cycles"], serde_json::json!(1));
+        assert_eq!(p["tech.dram.pj_per_byte"], serde_json::json!(325.0));
+        let e = spec(r#""points": [{"tech.dram.pj": 1}]"#).unwrap_err();
+        assert!(e.to_string().contains("unknown technology field"), "{e}");
+        assert!(e.to_string().contains("pj_per_byte"), "{e}");
+        assert_eq!(field_of(e), "points[0].tech.dram.pj");
+        let e = spec(r#""grid": [{"tech.dram.pj_per_byte": [1, "x"]}]"#).unwrap_err();
+        assert_eq!(field_of(e), "grid[0].tech.dram.pj_per_byte[1]");
+        let e =
+            spec(r#""mode": "functional", "points": [{"tech.dram.pj_per_byte": 1}]"#).unwrap_err();
+        assert!(e.to_string().contains("mode timed"), "{e}");
+        assert_eq!(field_of(e), "points[0].tech.dram.pj_per_byte");
+    }
+
     #[test]
     fn bad_values_and_combinations_name_their_field() {
         for (rest, field) in [

@@ -8,6 +8,7 @@ use super::sensitivity::Sensitivity;
 use super::spec::{check_name, empty_list, key, too_many, ModeSpec, Run, Spec, SpecFile, MAX_RUNS};
 use crate::camera::MAX_VIEWPORT_SIDE;
 use crate::config::ArchConfig;
+use crate::cost::tech::Tech;
 use crate::error::{Error, Result};
 use crate::job::Mode;
 use crate::json::parse_strict;
@@ -108,6 +109,8 @@ impl Spec {
             mode,
             arch_shape: serde_json::to_value(ArchConfig::default())
                 .expect("the architecture serialises"),
+            tech_shape: serde_json::to_value(Tech::default_45nm())
+                .expect("the technology serialises"),
             points: Vec::new(),
             by_params: BTreeMap::new(),
         };

@@ -3,18 +3,19 @@
 
 use super::{
     bracket::Knob,
-    grid::{arch_field, reword, set_arch_field},
-    spec::{key, too_many, Point, Run, Setting, Shard, Spec, ARCH, MAX_RUNS},
+    grid::{arch_field, reword, set_arch_field, set_field},
+    spec::{key, too_many, Point, Run, Setting, Shard, Spec, ARCH, MAX_RUNS, TECH},
 };
 use crate::camera::{Samples, View};
 use crate::config::ArchConfig;
+use crate::cost::tech::Tech;
 use crate::datapath::Datapath;
 use crate::discoid::blend::BlendMode;
 use crate::discoid::render::check_scene;
 use crate::error::{parent_dir, read_text_file, Error, Result};
 use crate::job::{
     check_available, check_samples, check_triangle_budget, memory_estimate, run_path, Given, Mode,
-    PrimitivePath, RenderJob, AA_SUPERSAMPLE,
+    PrimitivePath, RenderJob, TechSource, AA_SUPERSAMPLE,
 };
 use crate::reference::oracle::ReferenceImage;
 use crate::reference::PixelsPerDegree;
@@ -25,6 +26,7 @@ use serde::Serialize;
 use serde_json::Value;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 // ---- The validated plan --------------------------------------------------------------
 
@@ -104,11 +106,13 @@ impl Plan {
             .collect();
 
         let mut archs = Vec::with_capacity(spec.points.len());
+        let mut techs = Vec::with_capacity(spec.points.len());
         for point in &spec.points {
             archs.push(match &base {
                 None => None,
                 Some(base) => Some(point_arch(file, base, point)?),
             });
+            techs.push(point_tech(file, point)?);
         }
 
         let mut jobs = Vec::with_capacity(spec.runs.len());
@@ -116,7 +120,8 @@ impl Plan {
             let point = &spec.points[run.point];
             let scene = &scenes[run.scene];
             check_applies(&spec, point, scene, run.scene)?;
-            let job = render_job(&spec, point, scene, 1);
+            let mut job = render_job(&spec, point, scene, 1);
+            job.tech = techs[run.point].clone().map(TechSource::Given);
             job.validate().map_err(|e| {
                 let field = match &e {
                     Error::Invalid { field, .. } => field.trim_start_matches("--").to_string(),
@@ -228,6 +233,7 @@ impl Plan {
             let parent_job = &self.jobs[from];
             let mut job = render_job(&self.spec, &point, scene, parent_job.host_threads);
             // The same target as its series (a scene whose runs mix sample counts).
+            job.tech = parent_job.tech.clone();
             job.supersample = parent_job.supersample;
             job.given.supersample = parent_job.given.supersample;
             job.validate()
@@ -405,6 +411,61 @@ pub(super) fn point_arch(file: &str, base: &ArchConfig, point: &Point) -> Result
     Ok(arch)
 }
 
+/// A point's technology: the embedded 45 nm file with the point's `tech.<field>` values,
+/// validated as a technology file is; None when the point sets none (the run then prices
+/// with the embedded file, as `render` without `--tech` does). An error names the spec
+/// field that set the refused value.
+pub(super) fn point_tech(file: &str, point: &Point) -> Result<Option<Arc<Tech>>> {
+    let scales: Vec<(&str, f64)> = point
+        .scales()
+        .filter_map(|(name, f)| Some((name.strip_prefix(TECH)?, f)))
+        .collect();
+    if point.tech_overrides().next().is_none() && scales.is_empty() {
+        return Ok(None);
+    }
+    let mut value = serde_json::to_value(Tech::default_45nm()).expect("the technology serialises");
+    for (path, v) in point.tech_overrides() {
+        set_field(&mut value, path, v.clone(), "technology").map_err(|message| Error::Parse {
+            file: file.into(),
+            field: point.field(&format!("{TECH}{path}")),
+            message,
+        })?;
+    }
+    // A sensitivity variant's technology figure, scaled from the point's.
+    for (path, factor) in scales {
+        let field = point.field(super::sensitivity::PARAM);
+        let base = arch_field(&value, path).cloned().unwrap_or(Value::Null);
+        let v = super::sensitivity::scaled(&base, factor)
+            .map_err(|why| Error::invalid(file, &field, path, format!("{TECH}{path} {why}")))?;
+        set_field(&mut value, path, v, "technology").map_err(|message| Error::Parse {
+            file: file.into(),
+            field,
+            message,
+        })?;
+    }
+    let blame = |tech_field: &str| {
+        point
+            .tech_overrides()
+            .map(|(p, _)| p)
+            .find(|p| *p == tech_field || tech_field.starts_with(&format!("{p}.")))
+            .map(|p| point.field(&format!("{TECH}{p}")))
+            .unwrap_or_else(|| point.origin.clone())
+    };
+    let tech: Tech = serde_path_to_error::deserialize(value).map_err(|e| Error::Parse {
+        file: file.into(),
+        field: blame(&e.path().to_string()),
+        message: e.into_inner().to_string(),
+    })?;
+    tech.validate(file).map_err(|e| {
+        let field = match &e {
+            Error::Invalid { field, .. } => blame(field),
+            _ => point.origin.clone(),
+        };
+        reword(e, file, &field)
+    })?;
+    Ok(Some(Arc::new(tech)))
+}
+
 /// Refuses settings that the scene would ignore, so that no two runs differ only in a
 /// parameter that had no effect.
 pub(super) fn check_applies(spec: &Spec, point: &Point, scene: &Scene, s: usize) -> Result<()> {
@@ -497,7 +558,7 @@ pub(super) fn render_job(
             Setting::Datapath(d) => job.datapath = *d,
             Setting::Blend(m) => job.blend = *m,
             Setting::Threshold(t) => job.threshold = Some(*t),
-            Setting::Arch(..) | Setting::Scale(..) => {}
+            Setting::Arch(..) | Setting::Tech(..) | Setting::Scale(..) => {}
         }
     }
     job

@@ -21,7 +21,7 @@ use std::fmt;
 /// a typo in a grid should be refused rather than expanded.
 pub const MAX_RUNS: usize = 100_000;
 
-/// The render settings a point can set, besides `arch.<field>`.
+/// The render settings a point can set, besides `arch.<field>` and `tech.<field>`.
 pub(super) const SETTINGS: [&str; 8] = [
     "path",
     "k",
@@ -38,6 +38,9 @@ pub(super) const SCENES: &str = "scenes";
 
 /// The prefix of architecture parameters.
 pub(super) const ARCH: &str = "arch.";
+
+/// The prefix of technology parameters (the figures of `sim/tech/45nm.json`).
+pub(super) const TECH: &str = "tech.";
 
 // ---- The file's shape ----------------------------------------------------------------
 
@@ -118,14 +121,16 @@ pub(super) enum Setting {
     /// A sensitivity variant's parameter scaled by a factor: its sweep name
     /// (`arch.rop.count`) and the factor; the value is the point's architecture's times it.
     Scale(String, f64),
+    /// A technology field: its dotted path (without `tech.`) and value.
+    Tech(String, Value),
 }
 
 /// A point of the parameter space.
 #[derive(Clone, Debug)]
 pub struct Point {
     /// Every parameter the point sets, by name, in canonical form (`k` and `threshold` as
-    /// floats, `tess` as an integer, names as strings, architecture fields as the
-    /// architecture serialises them).
+    /// floats, `tess` as an integer, names as strings, architecture and technology fields
+    /// as the architecture and the technology file serialise them).
     pub params: BTreeMap<String, Value>,
     /// The spec's scenes this point runs on, as indices into [`Spec::scenes`], ascending.
     pub scenes: Vec<usize>,
@@ -156,6 +161,12 @@ impl Point {
     pub(super) fn arch_overrides(&self) -> impl Iterator<Item = (&str, &Value)> {
         self.settings.iter().filter_map(|s| match s {
             Setting::Arch(p, v) => Some((p.as_str(), v)),
+            _ => None,
+        })
+    }
+    pub(super) fn tech_overrides(&self) -> impl Iterator<Item = (&str, &Value)> {
+        self.settings.iter().filter_map(|s| match s {
+            Setting::Tech(p, v) => Some((p.as_str(), v)),
             _ => None,
         })
     }

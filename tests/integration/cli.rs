@@ -286,6 +286,34 @@ fn bad_architecture_field_is_refused_by_name() {
             r#"{"triangle_setup": {"culled_per_cycle": 0}}"#,
             "triangle_setup.culled_per_cycle",
         ),
+        (
+            r#"{"framebuffer": {"access_cycles": 0.3}}"#,
+            "framebuffer.access_cycles",
+        ),
+        (
+            r#"{"rop": {"fragments_per_cycle": 0}}"#,
+            "rop.fragments_per_cycle",
+        ),
+        (
+            r#"{"tessellator": {"cycles_per_triangle": 0}}"#,
+            "tessellator.cycles_per_triangle",
+        ),
+        (
+            r#"{"domain_eval": {"cycles_per_vertex": 0.001}}"#,
+            "domain_eval.cycles_per_vertex",
+        ),
+        (
+            r#"{"fetch": {"bytes_per_lembo": 0}}"#,
+            "fetch.bytes_per_lembo",
+        ),
+        (
+            r#"{"fetch": {"bytes_per_vertex": 0}}"#,
+            "fetch.bytes_per_vertex",
+        ),
+        (
+            r#"{"fetch": {"index_bytes_per_triangle": 4097}}"#,
+            "fetch.index_bytes_per_triangle",
+        ),
     ] {
         let dir = tempfile::tempdir().unwrap();
         std::fs::write(dir.path().join("a.json"), arch).unwrap();

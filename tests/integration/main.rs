@@ -18,6 +18,7 @@ mod extreme_method;
 mod extremes;
 mod fuzz;
 mod html;
+mod knobs;
 mod layers;
 mod multisample;
 mod near_plane;

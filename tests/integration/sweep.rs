@@ -317,6 +317,26 @@ fn bad_specs_are_refused_before_any_run() {
             r#""points": [{"samples": "4"}]"#,
             "field `points[0].samples`",
         ),
+        (
+            r#""points": [{"tech.dram.pj_per_byte": -1}]"#,
+            "field `points[0].tech.dram.pj_per_byte` = -1",
+        ),
+        (
+            r#""grid": [{"tech.dram.pj_per_byte": [1, 0]}]"#,
+            "field `grid[0].tech.dram.pj_per_byte[1]` = 0",
+        ),
+        (
+            r#""points": [{"tech.sram.leakage": 1}]"#,
+            "field `points[0].tech.sram.leakage`: unknown technology field",
+        ),
+        (
+            r#""grid": [{"arch.framebuffer.access_cycles": [0.5, 0.3]}]"#,
+            "field `grid[0].arch.framebuffer.access_cycles[1]` = 0.3",
+        ),
+        (
+            r#""points": [{"arch.rop.fragments_per_cycle": 0}]"#,
+            "field `points[0].arch.rop.fragments_per_cycle` = 0",
+        ),
     ] {
         assert_refused(&small_spec(rest), &[], needle);
     }
@@ -1121,4 +1141,57 @@ fn bad_answer_settings_are_refused_naming_the_field() {
     ] {
         assert_refused(&spec(fields), &[], needle);
     }
+}
+
+/// `tech.dram.pj_per_byte` on a sweep axis prices each run with the embedded technology
+/// and that figure: energy moves by exactly the DRAM bytes times the change and nothing
+/// else moves; the figure is a column of results.csv and is echoed in the report.
+#[test]
+fn a_sweep_sets_a_technology_figure() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = run_spec(
+        tmp.path(),
+        "sphere24.json",
+        r#""name": "dram", "viewport": [32, 32], "reference": false,
+           "points": [{}, {"tech.dram.pj_per_byte": 325},
+                      {"path": "triangle", "tess": 2, "tech.dram.pj_per_byte": 162.5},
+                      {"path": "triangle", "tess": 2, "tech.dram.pj_per_byte": 81.25}]"#,
+    );
+    let run = masked(&dir);
+    assert_eq!(run.records.len(), 4);
+    let column = run.csv[0]
+        .iter()
+        .position(|h| h == "tech.dram.pj_per_byte")
+        .expect("a results.csv column");
+    for pair in run.records.chunks(2) {
+        let (a, b) = (&pair[0], &pair[1]);
+        let pj = |r: &serde_json::Value| {
+            let used = r["report"]["cost"]["tech"]["dram_pj_per_byte"].as_f64();
+            let given = r["params"].get("tech.dram.pj_per_byte");
+            assert_eq!(given.map_or(Some(162.5), |g| g.as_f64()), used);
+            used.unwrap()
+        };
+        let cost = |r: &serde_json::Value| r["report"]["cost"].clone();
+        let (ca, cb) = (cost(a), cost(b));
+        let bytes: u64 = ["framebuffer_bytes", "accumulation_bytes", "geometry_bytes"]
+            .iter()
+            .map(|k| ca[*k].as_u64().unwrap())
+            .sum();
+        assert!(ca["geometry_bytes"].as_u64().unwrap() > 0);
+        let want = bytes as f64 * (pj(b) - pj(a));
+        let got = cb["energy_pj"].as_f64().unwrap() - ca["energy_pj"].as_f64().unwrap();
+        assert!(
+            (got - want).abs() <= 1e-9 * cb["energy_pj"].as_f64().unwrap(),
+            "{got} against {want}"
+        );
+        assert_eq!(ca["area_mm2"], cb["area_mm2"]);
+        for k in ["framebuffer_bytes", "accumulation_bytes", "geometry_bytes"] {
+            assert_eq!(ca[k], cb[k], "{k}");
+        }
+        assert_eq!(a["report"]["cycles"], b["report"]["cycles"]);
+        assert_eq!(a["report"]["counts"], b["report"]["counts"]);
+    }
+    // The first point left the figure at the embedded file's: its column says which.
+    let cell = |row: usize| run.csv[row][column].parse::<f64>().unwrap();
+    assert_eq!((cell(1), cell(2)), (162.5, 325.0));
 }

@@ -164,6 +164,13 @@ impl<I, O> Ctx<I, O> {
         self.core.slots[self.unit as usize].now.set(self.now);
     }
 
+    /// The unit's clock, and the arrival of the last item it took: what a unit whose
+    /// operations are shorter than a cycle needs to know whether its last one left part of
+    /// a cycle free for the next (the frame-buffer port, [`crate::pipeline::units::framebuffer`]).
+    pub fn clock(&self) -> (Cycle, Cycle) {
+        (self.now, self.last_taken.0)
+    }
+
     /// Spends `cycles` busy cycles with no output.
     #[inline]
     pub fn work(&mut self, cycles: u64) {

@@ -9,10 +9,11 @@
 //! the batch's triangles (the first and the count; no bytes: they come from this unit's
 //! output buffer, not memory).
 //!
-//! Cost: `domain_eval.cycles_per_vertex` busy cycles per domain point, (n + 1)(n + 2)/2 a
-//! lembo (patches are independent: a point on an edge two lembos share is evaluated by
-//! both), spent batch by batch in proportion to the triangles each batch holds, at least
-//! one cycle a batch; a batch is ready `domain_eval.latency_cycles` after its last point.
+//! Cost: `domain_eval.cycles_per_vertex` busy cycles per domain point (a multiple of 1/64:
+//! 0.5 is two points a cycle), (n + 1)(n + 2)/2 a lembo (patches are independent: a point
+//! on an edge two lembos share is evaluated by both), spent batch by batch in proportion to
+//! the triangles each batch holds (the batch holding the first p points of its lembo ends
+//! at ceil(p * cycles_per_vertex) cycles into the lembo), at least one cycle a batch; a batch is ready `domain_eval.latency_cycles` after its last point.
 //! Not modelled: the output buffer holding a lembo's evaluated vertices until setup reads
 //! them (its area and energy).
 
@@ -69,7 +70,8 @@ pub async fn run(
         let mut done = 0;
         while done < triangles {
             let end = (done + u64::from(batch)).min(triangles);
-            let cycles = (points(end) - points(done)) * cfg.cycles_per_vertex;
+            let rate = cfg.cycles_per_vertex;
+            let cycles = rate.ceil_mul(points(end)) - rate.ceil_mul(points(done));
             let access = MemAccess {
                 bytes: 0,
                 first: (base + done) as u32,

@@ -15,18 +15,24 @@
 //! later (`fetch_to_setup`, `fetch_to_triangle_setup` or `fetch_to_tessellator`: the DRAM
 //! latency).
 //!
-//! Cost: ceil(bytes / `framebuffer.bytes_per_cycle`) busy cycles per batch: reads at the
-//! memory port's peak rate; the bytes are priced as DRAM on this unit. The port is shared
+//! The bytes are the architecture's (`fetch.bytes_per_lembo`; `fetch.bytes_per_vertex` and
+//! `fetch.index_bytes_per_triangle` for a mesh in memory).
+//!
+//! Cost: each batch is one access of the memory port, priced as the frame-buffer port
+//! prices its accesses ([`PortClock`]: whole slots of `framebuffer.access_cycles`, so
+//! ceil(bytes / `framebuffer.bytes_per_cycle`) busy cycles with the default slot), at least
+//! one cycle a batch; the bytes are priced as DRAM on this unit. The port is shared
 //! with the ROPs' frame-buffer traffic: the frame takes at least the port's cycles for
 //! both (DESIGN.md §3, "One memory port"); how their requests interleave is not modelled.
 
+use crate::config::{FetchConfig, FrameBufferConfig};
 use crate::datapath::Real;
 use crate::graph::UnitKind;
-use crate::lembo::tessellate::{INDEX_BYTES_PER_TRIANGLE, VERTEX_BYTES};
 use crate::pipeline::items::MemAccess;
 use crate::pipeline::runtime::executor::UnitFuture;
-use crate::pipeline::runtime::{ceil_div, Ctx};
+use crate::pipeline::runtime::{Ctx, Cycle};
 use crate::pipeline::unit::{FetchPlan, FetchReport, Finished, Run, Unit, VertexCacheCounts};
+use crate::pipeline::units::framebuffer::PortClock;
 use crate::raster::triangle::TriangleSource;
 use crate::raster::Counts;
 use std::collections::{HashSet, VecDeque};
@@ -50,20 +56,23 @@ impl<R: Real> Unit<R> for GeometryFetch {
             ctx,
             run.fetch,
             run.triangles,
-            run.arch.framebuffer.bytes_per_cycle,
+            &run.arch.fetch,
+            &run.arch.framebuffer,
         ))
     }
 }
 
 /// The fetch's body: the primitives of `plan`, a batch at a time, to the engines in turn,
-/// read at `bytes_per_cycle`; with a vertex cache, the triangles' vertex indices come from
-/// `source`.
+/// read through the memory port `port`; with a vertex cache, the triangles' vertex indices
+/// come from `source`, and each triangle's and vertex's bytes are `sizes`'.
 pub async fn run(
     mut ctx: Ctx<(), MemAccess>,
     plan: FetchPlan,
     source: &dyn TriangleSource,
-    bytes_per_cycle: u64,
+    sizes: &FetchConfig,
+    port: &FrameBufferConfig,
 ) -> Finished {
+    let mut port = PortClock::new(port);
     // Its first boundary leads to the engines (a graph with both paths' setup engines
     // feeds the second kind nothing).
     let engines = ctx.group(0);
@@ -80,6 +89,8 @@ pub async fn run(
         ..FetchReport::default()
     };
     let mut engine = engines.start;
+    // The fetch's clock when its last access ended.
+    let mut issued = Cycle::ZERO;
     let mut first = 0;
     while first < plan.primitives {
         let end = (first + plan.batch as u64).min(plan.primitives);
@@ -87,7 +98,7 @@ pub async fn run(
             Some(caches) => {
                 let cache = &mut caches[engine - engines.start];
                 let misses = indices.misses(first..end, cache);
-                (end - first) * INDEX_BYTES_PER_TRIANGLE + misses * VERTEX_BYTES
+                sizes.mesh_bytes(end - first, misses)
             }
             None => plan.bytes_of(first, end),
         };
@@ -97,8 +108,18 @@ pub async fn run(
             first: first as u32,
             count: (end - first) as u32,
         };
-        ctx.emit(ceil_div(bytes, bytes_per_cycle).max(1), engine, access)
-            .await;
+        // The fetch always has its next batch ready: it starts where the port's last slot
+        // ended, unless a full FIFO froze the fetch since (then at its clock). An emit
+        // takes at least a cycle, and the port's time moves to its end.
+        let (now, _) = ctx.clock();
+        let ready = if now == issued { Cycle::ZERO } else { now };
+        let mut cycles = port.access(now, ready, bytes);
+        if cycles == 0 {
+            cycles = 1;
+            port.hold_until(Cycle(now.0 + 1));
+        }
+        issued = Cycle(now.0 + cycles);
+        ctx.emit(cycles, engine, access).await;
         crate::progress::advance(end - first);
         engine = if engine + 1 >= engines.end {
             engines.start

@@ -2,19 +2,25 @@
 //! writes share one port of `framebuffer.bytes_per_cycle`. The frame ends when the last
 //! write has gone through it.
 //!
-//! Input: [`MemAccess`]es from every ROP, merged by (arrival, port). Output: none. Cost:
-//! ceil(bytes / bytes_per_cycle) per access (at least one cycle); with more than one sample
-//! per pixel, the resolve after the last access: every sample's colour read and every
-//! pixel's written, at the same rate. Not modelled: DRAM pages,
-//! refresh, compression, caches, and the geometry fetch's share of the port
-//! (`fetch.rs`).
+//! Input: [`MemAccess`]es from every ROP, merged by (arrival, port). Output: none. Cost: the
+//! port moves data in slots of `framebuffer.access_cycles` cycles, each carrying
+//! `bytes_per_cycle` * `access_cycles` bytes, and an access of b bytes occupies whole
+//! slots, `access_cycles` * ceil(b / (`bytes_per_cycle` * `access_cycles`)) cycles, at
+//! least one slot: with the default slot of one cycle, ceil(b / bytes_per_cycle) cycles, at
+//! least one. A slot may be a fraction of a cycle ([`PortClock`] keeps the port's time
+//! exactly and charges whole cycles as it crosses them). With more than one sample per
+//! pixel, the resolve after the last access: every sample's colour read and every pixel's
+//! written, at the same rate. Not modelled: DRAM pages, refresh, compression, caches, and
+//! the geometry fetch's share of the port (`fetch.rs`, which prices its reads with its own
+//! [`PortClock`]).
 
 use crate::config::FrameBufferConfig;
+use crate::config::Ratio;
 use crate::datapath::Real;
 use crate::graph::UnitKind;
 use crate::pipeline::items::MemAccess;
 use crate::pipeline::runtime::executor::UnitFuture;
-use crate::pipeline::runtime::{ceil_div, Ctx};
+use crate::pipeline::runtime::{Ctx, Cycle};
 use crate::pipeline::unit::{Finished, Run, Unit};
 use crate::raster::Counts;
 
@@ -48,13 +54,122 @@ pub async fn run(
     cfg: &FrameBufferConfig,
     resolve_bytes: u64,
 ) -> Finished {
+    let mut port = PortClock::new(cfg);
     while let Some(MemAccess { bytes, .. }) = ctx.next_input().await {
-        ctx.work(ceil_div(bytes, cfg.bytes_per_cycle).max(1));
+        let (now, arrival) = ctx.clock();
+        ctx.work(port.access(now, arrival, bytes));
     }
     if resolve_bytes > 0 {
         // The resolve reads every sample's colour and writes each pixel once the last
-        // write is in.
-        ctx.work(ceil_div(resolve_bytes, cfg.bytes_per_cycle));
+        // write is in, from where the last access left the port.
+        let (now, _) = ctx.clock();
+        ctx.work(port.access(now, Cycle::ZERO, resolve_bytes));
     }
     Finished::new(ctx, Counts::default())
+}
+
+/// The time of one client of the memory port, kept exactly in 1/[`Ratio::DEN`] cycles so
+/// that slots shorter than a cycle (`framebuffer.access_cycles` < 1) share cycles: an
+/// access starts when it arrives or when the port's last slot ends, whichever is later,
+/// and the unit is charged the whole cycles from its clock to the end of the access's last
+/// slot (0 when that slot ends within a cycle already charged). With whole slots the port's
+/// time is always a whole cycle, and each access costs exactly its slots' cycles.
+pub struct PortClock<'a> {
+    cfg: &'a FrameBufferConfig,
+    /// When the port's last slot ends \[1/DEN cycles\].
+    free: u128,
+}
+
+impl<'a> PortClock<'a> {
+    /// A port that has moved nothing yet.
+    pub fn new(cfg: &'a FrameBufferConfig) -> Self {
+        PortClock { cfg, free: 0 }
+    }
+
+    /// The busy cycles an access of `bytes` adds to a unit whose clock reads `now`, for an
+    /// access that arrived at `arrival` (a unit that sends rather than receives passes its
+    /// clock). At least one slot, even for no bytes.
+    pub fn access(&mut self, now: Cycle, arrival: Cycle, bytes: u64) -> u64 {
+        let den = u128::from(Ratio::DEN);
+        let start = self.free.max(u128::from(arrival.0) * den);
+        self.free = start + self.cfg.slot_time(self.cfg.slots(bytes).max(1));
+        (self.free.div_ceil(den) as u64).saturating_sub(now.0)
+    }
+
+    /// The port is busy at least to the start of cycle `end` (a client charged a whole
+    /// cycle its slot did not fill).
+    pub fn hold_until(&mut self, end: Cycle) {
+        self.free = self.free.max(u128::from(end.0) * u128::from(Ratio::DEN));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Port cycles of a stream of accesses of `bytes`, all waiting at cycle 0, charged as
+    /// the unit would be.
+    fn stream(cfg: &FrameBufferConfig, bytes: &[u64]) -> Vec<u64> {
+        let mut port = PortClock::new(cfg);
+        let mut now = 0;
+        bytes
+            .iter()
+            .map(|&b| {
+                let c = port.access(Cycle(now), Cycle::ZERO, b);
+                now += c;
+                c
+            })
+            .collect()
+    }
+
+    /// The default slot of one cycle reproduces ceil(b / bytes_per_cycle), at least one.
+    #[test]
+    fn port_default_slot_charges_ceil_bytes_over_rate() {
+        let cfg = FrameBufferConfig::default();
+        let bytes: [u64; 7] = [4, 64, 65, 0, 12, 200, 128];
+        let want: Vec<u64> = bytes.iter().map(|&b| b.div_ceil(64).max(1)).collect();
+        assert_eq!(stream(&cfg, &bytes), want);
+        assert_eq!(cfg.transfer_cycles(200), 4);
+        assert_eq!(cfg.transfer_cycles(0), 0);
+    }
+
+    /// Halved and doubled slots on small accesses: 8 accesses of 12 bytes take 8 cycles
+    /// with slots of one cycle, 4 with half-cycle slots (two accesses a cycle) and 16 with
+    /// two-cycle slots; large accesses are limited by the byte rate whatever the slot.
+    #[test]
+    fn port_access_cycles_halved_and_doubled() {
+        let at = |slot: f64| FrameBufferConfig {
+            access_cycles: serde_json::from_str(&slot.to_string()).unwrap(),
+            ..FrameBufferConfig::default()
+        };
+        let small = [12; 8];
+        assert_eq!(stream(&at(1.0), &small).iter().sum::<u64>(), 8);
+        assert_eq!(stream(&at(0.5), &small), [1, 0, 1, 0, 1, 0, 1, 0]);
+        assert_eq!(stream(&at(2.0), &small).iter().sum::<u64>(), 16);
+        // 640 bytes: 10 cycles at 64 bytes a cycle, in slots of 1, 0.5 or 2 cycles.
+        for slot in [1.0, 0.5, 2.0] {
+            assert_eq!(stream(&at(slot), &[640]), [10], "slot {slot}");
+        }
+        // 65 bytes: 2 slots of 64 bytes (2 cycles); 3 slots of 32 (1.5 cycles, 2 charged
+        // on an idle port, the next access finishing the shared cycle); 1 slot of 128 (2).
+        assert_eq!(stream(&at(0.5), &[65, 65]), [2, 1]);
+        assert_eq!(at(0.5).transfer_cycles(65), 2);
+        assert_eq!(at(2.0).transfer_cycles(65), 2);
+        assert_eq!(at(2.0).transfer_cycles(129), 4);
+    }
+
+    /// A half-cycle left free is lost when the port waits for the next access.
+    #[test]
+    fn port_idle_cycle_ends_a_shared_cycle() {
+        let cfg = FrameBufferConfig {
+            access_cycles: serde_json::from_str("0.5").unwrap(),
+            ..FrameBufferConfig::default()
+        };
+        let mut port = PortClock::new(&cfg);
+        assert_eq!(port.access(Cycle(0), Cycle(0), 4), 1);
+        // Arrives at cycle 5, after the port went idle: a fresh cycle.
+        assert_eq!(port.access(Cycle(5), Cycle(5), 4), 1);
+        // Waiting since cycle 3: shares cycle 5 with the access before.
+        assert_eq!(port.access(Cycle(6), Cycle(3), 4), 0);
+    }
 }

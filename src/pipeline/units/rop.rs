@@ -26,7 +26,7 @@ use crate::discoid::render::{
 use crate::graph::UnitKind;
 use crate::pipeline::items::{FragmentSpan, MemAccess, RopItem};
 use crate::pipeline::runtime::executor::UnitFuture;
-use crate::pipeline::runtime::{ceil_div, Ctx};
+use crate::pipeline::runtime::Ctx;
 use crate::pipeline::tiles::RopPixels;
 use crate::pipeline::unit::{DiscoidPass, Finished, Run, Unit};
 use crate::raster::Counts;
@@ -240,7 +240,7 @@ pub async fn run<R: Real>(mut ctx: Ctx<RopItem<R>, MemAccess>, rop: RopContext<'
             ),
         };
         ctx.emit(
-            ceil_div(n, cfg.fragments_per_cycle) + extra,
+            cfg.fragments_per_cycle.ceil_div(n) + extra,
             0,
             MemAccess::frame(bytes),
         )

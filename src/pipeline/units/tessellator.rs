@@ -8,7 +8,9 @@
 //! first lembo and the count). Output: each lembo as a [`Patch`], round-robin to the
 //! domain evaluators.
 //!
-//! Cost: `tessellator.cycles_per_triangle` busy cycles per domain triangle (n² a lembo);
+//! Cost: `tessellator.cycles_per_triangle` busy cycles per domain triangle, a multiple of
+//! 1/64 (0.5: two triangles a cycle), n² a lembo: ceil(n² * cycles_per_triangle), at least
+//! one;
 //! a patch is ready `tessellator.latency_cycles` after its last triangle is issued.
 
 use crate::config::TessellatorConfig;
@@ -54,7 +56,7 @@ pub async fn run(
     let mut next = 0;
     while let Some(MemAccess { first, count, .. }) = ctx.next_input().await {
         for lembo in first..first + count {
-            let cycles = (triangles * cfg.cycles_per_triangle).max(1);
+            let cycles = cfg.cycles_per_triangle.ceil_mul(triangles).max(1);
             ctx.emit(cycles, next, Patch { lembo }).await;
             next = ctx.next_port(next);
         }

@@ -63,6 +63,7 @@ pub mod setup;
 use super::counts::Counts;
 use super::driver::{draw_in_order, Draw, Stages};
 use crate::camera::View;
+use crate::config::FetchConfig;
 use crate::datapath::Real;
 use crate::error::Error;
 use crate::graph::UnitKind;
@@ -80,9 +81,9 @@ pub trait TriangleSource: Sync {
     fn per_chunk(&self) -> u64;
     /// The triangles of chunk `c`, in order, into `out` (cleared first).
     fn chunk(&self, c: usize, out: &mut Vec<Triangle>);
-    /// Bytes of the source as stored in memory and fetched (an indexed mesh: its vertices
-    /// and its indices).
-    fn bytes(&self) -> u64;
+    /// Bytes of the source as stored in memory and fetched: an indexed mesh's vertices and
+    /// indices at `sizes`' bytes each; a source of fixed records (planar discoids) its own.
+    fn bytes(&self, sizes: &FetchConfig) -> u64;
     /// The distinct vertices of one chunk's triangles, which an on-chip domain evaluator
     /// computes once each. By default three a triangle (no sharing).
     fn vertices_per_chunk(&self) -> u64 {
@@ -124,8 +125,8 @@ impl TriangleSource for Tessellation<'_> {
         self.lembo_triangles(c, out);
     }
 
-    fn bytes(&self) -> u64 {
-        Tessellation::bytes(self)
+    fn bytes(&self, sizes: &FetchConfig) -> u64 {
+        sizes.mesh_bytes(self.len(), self.vertex_count())
     }
 
     fn vertices_per_chunk(&self) -> u64 {
