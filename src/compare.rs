@@ -70,6 +70,8 @@ pub struct CompareJob {
     pub datapath: Datapath,
     /// Architecture file; None for the embedded baseline.
     pub arch: Option<PathBuf>,
+    /// Architecture fields set on top of `arch` (`--set`).
+    pub arch_set: Vec<(String, serde_json::Value)>,
     /// Technology file; None for the embedded `sim/tech/45nm.json`.
     pub tech: Option<PathBuf>,
     /// Run even when the memory estimate exceeds the memory available.
@@ -107,6 +109,7 @@ impl CompareJob {
             viewport: self.viewport,
             mode: Mode::Timed,
             arch: self.arch.clone(),
+            arch_set: self.arch_set.clone(),
             trace_out: None,
             tech: self.tech.clone().map(crate::job::TechSource::File),
             path,

@@ -88,3 +88,52 @@ mod tests {
         assert!(message.contains("trailing characters"), "{message}");
     }
 }
+
+/// Sets the field at `path` (dotted) of `what`'s JSON (`architecture`, `technology`); the
+/// field must exist and not be a group of fields. The error says which part is unknown and
+/// what is there. A sweep's `arch.`/`tech.` parameters and `render --set` use it.
+pub(crate) fn set_field(
+    root: &mut serde_json::Value,
+    path: &str,
+    v: serde_json::Value,
+    what: &str,
+) -> std::result::Result<(), String> {
+    use serde_json::Value;
+    let parts: Vec<&str> = path.split('.').collect();
+    let mut at = root;
+    for (i, part) in parts.iter().enumerate() {
+        let here = parts[..i].join(".");
+        let Value::Object(map) = at else {
+            return Err(format!(
+                "unknown {what} field `{path}`: `{here}` has no fields"
+            ));
+        };
+        if !map.contains_key(*part) {
+            let known: Vec<&str> = map.keys().map(String::as_str).collect();
+            return Err(format!(
+                "unknown {what} field `{path}`; {} has: {}",
+                if here.is_empty() {
+                    format!("the {what}")
+                } else {
+                    format!("`{here}`")
+                },
+                known.join(", ")
+            ));
+        }
+        at = map.get_mut(*part).expect("checked");
+    }
+    if let Value::Object(map) = at {
+        let known: Vec<&str> = map.keys().map(String::as_str).collect();
+        return Err(format!(
+            "`{path}` is a group of fields; name one of them: {}",
+            known.join(", ")
+        ));
+    }
+    *at = v;
+    Ok(())
+}
+
+/// The value at `path` (dotted) of a JSON object, if there is one.
+pub(crate) fn field_at<'a>(root: &'a serde_json::Value, path: &str) -> Option<&'a serde_json::Value> {
+    path.split('.').try_fold(root, |at, part| at.get(part))
+}

@@ -213,6 +213,12 @@ struct RenderArgs {
     /// FIFO depths and latencies, clock [default: the embedded sim/arch/baseline.json].
     #[arg(long, value_name = "FILE")]
     arch: Option<PathBuf>,
+    /// Set one architecture field on top of --arch, as FIELD=VALUE with the field's dotted
+    /// path as in a sweep's `arch.` parameters (e.g. --set rasterizer.count=8 --set
+    /// tessellation.source=onchip); repeatable; timed mode only. The value is JSON, or a
+    /// bare word taken as a string.
+    #[arg(long = "set", value_name = "FIELD=VALUE", value_parser = parse_set)]
+    set: Vec<(String, serde_json::Value)>,
     /// Write a Chrome trace-event timeline of unit activity (open in ui.perfetto.dev or
     /// chrome://tracing); coarsened beyond a fixed number of events.
     #[arg(long, value_name = "FILE")]
@@ -296,6 +302,12 @@ struct CompareArgs {
     /// Architecture configuration shared by both paths [default: the embedded baseline].
     #[arg(long, value_name = "FILE")]
     arch: Option<PathBuf>,
+    /// Set one architecture field on top of --arch, as FIELD=VALUE with the field's dotted
+    /// path as in a sweep's `arch.` parameters (e.g. --set rasterizer.count=8 --set
+    /// tessellation.source=onchip); repeatable; timed mode only. The value is JSON, or a
+    /// bare word taken as a string.
+    #[arg(long = "set", value_name = "FIELD=VALUE", value_parser = parse_set)]
+    set: Vec<(String, serde_json::Value)>,
     /// Technology file pricing area and energy (JSON, see sim/tech/README.md): energy per
     /// operation, area per functional unit, SRAM and DRAM, each figure with its source
     /// [default: the embedded sim/tech/45nm.json].
@@ -381,6 +393,7 @@ fn default_render() -> RenderArgs {
         },
         mode: Mode::Timed,
         arch: None,
+        set: Vec::new(),
         trace_out: None,
         tech: None,
         viewport: None,
@@ -552,6 +565,7 @@ fn compare(args: CompareArgs) -> ExitCode {
         tess: args.tess,
         datapath: datapath(args.datapath),
         arch: args.arch,
+        arch_set: args.set,
         tech: args.tech,
         no_memory_check: args.no_memory_check,
         viewport: args.viewport,
@@ -596,6 +610,7 @@ fn render(args: RenderArgs) -> ExitCode {
             Mode::Functional => job::Mode::Functional,
         },
         arch: args.arch,
+        arch_set: args.set,
         trace_out: args.trace_out,
         tech: args.tech.map(job::TechSource::File),
         path: match args.path.unwrap_or(PathArg::Lembo) {
@@ -622,4 +637,18 @@ fn render(args: RenderArgs) -> ExitCode {
         }
         Err(e) => failed(&e),
     }
+}
+
+/// `--set FIELD=VALUE`: the field's dotted path and its value, JSON or a bare word.
+fn parse_set(s: &str) -> Result<(String, serde_json::Value), String> {
+    let (field, value) = s
+        .split_once('=')
+        .ok_or_else(|| format!("expected FIELD=VALUE, found `{s}`"))?;
+    let field = field.trim();
+    if field.is_empty() {
+        return Err(format!("expected FIELD=VALUE, found `{s}`"));
+    }
+    let value = value.trim();
+    let value = serde_json::from_str(value).unwrap_or_else(|_| serde_json::Value::from(value));
+    Ok((field.to_string(), value))
 }

@@ -692,6 +692,31 @@ impl ArchConfig {
         Ok(config)
     }
 
+    /// This architecture with the fields `sets` (dotted path, value) set, validated as an
+    /// architecture file is; an error names `flag` and the field (`--set`).
+    pub fn with_fields(&self, sets: &[(String, serde_json::Value)], flag: &str) -> Result<ArchConfig> {
+        if sets.is_empty() {
+            return Ok(self.clone());
+        }
+        let mut value = serde_json::to_value(self).expect("the architecture serialises");
+        for (path, v) in sets {
+            crate::json::set_field(&mut value, path, v.clone(), "architecture").map_err(
+                |message| Error::Parse {
+                    file: crate::error::COMMAND_LINE.into(),
+                    field: format!("{flag} {path}"),
+                    message,
+                },
+            )?;
+        }
+        let config: ArchConfig = serde_path_to_error::deserialize(value).map_err(|e| Error::Parse {
+            file: crate::error::COMMAND_LINE.into(),
+            field: format!("{flag} {}", e.path()),
+            message: e.into_inner().to_string(),
+        })?;
+        config.validate(&format!("{} ({flag})", crate::error::COMMAND_LINE))?;
+        Ok(config)
+    }
+
     /// The embedded `sim/arch/baseline.json`, equal to [`ArchConfig::default`].
     pub fn baseline() -> ArchConfig {
         // The text is part of the binary and checked by a unit test, so failing here is a

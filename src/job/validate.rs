@@ -96,6 +96,9 @@ pub struct RenderJob {
     pub mode: Mode,
     /// Architecture file; None for the embedded baseline. Timed mode only.
     pub arch: Option<PathBuf>,
+    /// Architecture fields set on top of `arch` (`--set FIELD=VALUE`, dotted paths as in a
+    /// sweep's `arch.` parameters); timed mode only.
+    pub arch_set: Vec<(String, serde_json::Value)>,
     /// Where to write the Chrome trace-event timeline. Timed mode only.
     pub trace_out: Option<PathBuf>,
     /// Technology pricing the unit's area and energy (`--tech`, or a sweep point's
@@ -280,6 +283,7 @@ impl RenderJob {
         if self.mode == Mode::Functional {
             for (flag, set) in [
                 ("--arch", self.arch.is_some()),
+                ("--set", !self.arch_set.is_empty()),
                 ("--trace-out", self.trace_out.is_some()),
                 ("--tech", self.tech.is_some()),
                 ("--host-threads", self.host_threads != 1),
@@ -382,6 +386,7 @@ mod tests {
             viewport: None,
             mode: Mode::Timed,
             arch: None,
+            arch_set: Vec::new(),
             trace_out: None,
             tech: None,
             path: PrimitivePath::Lembo,

@@ -509,51 +509,7 @@ pub(super) fn set_arch_field(
     set_field(arch, path, v, "architecture")
 }
 
-/// Sets the field at `path` (dotted) of `what`'s JSON (`architecture`, `technology`), as
-/// [`set_arch_field`].
-pub(super) fn set_field(
-    root: &mut Value,
-    path: &str,
-    v: Value,
-    what: &str,
-) -> std::result::Result<(), String> {
-    let parts: Vec<&str> = path.split('.').collect();
-    let mut at = root;
-    for (i, part) in parts.iter().enumerate() {
-        let here = parts[..i].join(".");
-        let Value::Object(map) = at else {
-            return Err(format!(
-                "unknown {what} field `{path}`: `{here}` has no fields"
-            ));
-        };
-        if !map.contains_key(*part) {
-            let known: Vec<&str> = map.keys().map(String::as_str).collect();
-            return Err(format!(
-                "unknown {what} field `{path}`; {} has: {}",
-                if here.is_empty() {
-                    format!("the {what}")
-                } else {
-                    format!("`{here}`")
-                },
-                known.join(", ")
-            ));
-        }
-        at = map.get_mut(*part).expect("checked");
-    }
-    if let Value::Object(map) = at {
-        let known: Vec<&str> = map.keys().map(String::as_str).collect();
-        return Err(format!(
-            "`{path}` is a group of fields; name one of them: {}",
-            known.join(", ")
-        ));
-    }
-    *at = v;
-    Ok(())
-}
-
-pub(super) fn arch_field<'a>(arch: &'a Value, path: &str) -> Option<&'a Value> {
-    path.split('.').try_fold(arch, |at, part| at.get(part))
-}
+pub(super) use crate::json::{field_at as arch_field, set_field};
 
 /// The same error, said of another file and field (the spec's, for a check written for
 /// the command line or an architecture file).

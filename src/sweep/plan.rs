@@ -536,6 +536,7 @@ pub(super) fn render_job(
             Mode::Timed => spec.arch.as_ref().map(PathBuf::from),
             Mode::Functional => None,
         },
+        arch_set: Vec::new(),
         trace_out: None,
         tech: None,
         path: PrimitivePath::Lembo,

@@ -1281,3 +1281,53 @@ fn output_paths_of_the_wrong_kind_are_refused_before_any_work() {
         assert!(files_in(&dir.path().join("folder")).is_empty());
     }
 }
+
+/// `--set FIELD=VALUE` sets architecture fields on top of `--arch`, as a sweep's `arch.`
+/// parameters do: the run is the one a sweep point with those values gives (the answer's
+/// rows are reproduced this way); a field that does not exist, a value it does not take,
+/// or the flag in functional mode is refused by name.
+#[test]
+fn set_overrides_architecture_fields_on_the_command_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let gpu = manifest().join("sim/arch/gpu.json");
+    let report = report_of_run(
+        &[
+            "render",
+            "--viewport",
+            "64x64",
+            "--arch",
+            gpu.to_str().unwrap(),
+            "--set",
+            "rasterizer.count=8",
+            "--set",
+            "tessellation.source=memory",
+            "--out",
+            "o",
+        ],
+        dir.path(),
+    );
+    assert_eq!(report["arch"]["rasterizer"]["count"], 8);
+    assert_eq!(report["arch"]["tessellation"]["source"], "memory");
+    // Everything else is the file's.
+    assert_eq!(report["arch"]["interval_manager"]["count"], 4);
+    let rasterizers = report["cycles"]["units"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|u| u["kind"] == "FragmentRasterizer")
+        .count();
+    assert_eq!(rasterizers, 8);
+    for (args, needle) in [
+        (&["render", "--set", "rasterizer.cnt=8"][..], "--set rasterizer.cnt"),
+        (&["render", "--set", "rasterizer.count=0"][..], "rasterizer.count"),
+        (&["render", "--set", "rasterizer.count=x"][..], "--set rasterizer.count"),
+        (&["render", "--set", "rasterizer"][..], "FIELD=VALUE"),
+        (
+            &["render", "--mode", "functional", "--set", "rop.count=2"][..],
+            "--set",
+        ),
+        (&["compare", "--set", "rop.count=0"][..], "rop.count"),
+    ] {
+        assert_refused(args, needle);
+    }
+}

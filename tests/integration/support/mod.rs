@@ -46,6 +46,7 @@ pub fn render_job(k: f64, datapath: Datapath) -> RenderJob {
         viewport: None,
         mode: Mode::Functional,
         arch: None,
+        arch_set: Vec::new(),
         trace_out: None,
         tech: None,
         path: PrimitivePath::Lembo,
