@@ -774,14 +774,7 @@ impl ArchConfig {
         check.count("minmax.count", minmax.count)?;
         check.cycles("minmax.latency_cycles", minmax.latency_cycles)?;
         check.cycles("minmax.cycles_per_lembo", minmax.cycles_per_lembo)?;
-        if minmax.cull_cycles_per_lembo > MAX_CYCLES {
-            return Err(Error::invalid(
-                file,
-                "minmax.cull_cycles_per_lembo",
-                minmax.cull_cycles_per_lembo,
-                format!("must be 0 to {MAX_CYCLES} cycles"),
-            ));
-        }
+        check.at_most_cycles("minmax.cull_cycles_per_lembo", minmax.cull_cycles_per_lembo)?;
 
         let im = &self.interval_manager;
         check.count("interval_manager.count", im.count)?;
@@ -942,6 +935,15 @@ impl Check<'_> {
 
     fn cycles(&self, field: &str, value: u64) -> Result<()> {
         self.range(field, value, MAX_CYCLES, "cycles")
+    }
+
+    /// `value` must be in 0..=[`MAX_CYCLES`] (0: no cycles of its own).
+    fn at_most_cycles(&self, field: &str, value: u64) -> Result<()> {
+        if value <= MAX_CYCLES {
+            return Ok(());
+        }
+        let reason = format!("must be 0 to {MAX_CYCLES} cycles");
+        Err(Error::invalid(self.file, field, value, reason))
     }
 
     fn fragments_per_cycle(&self, field: &str, value: u64) -> Result<()> {
