@@ -220,6 +220,38 @@ pub struct View {
     pub near: f64,
     /// Far plane distance \[world units\].
     pub far: f64,
+    /// The unit direction the camera looks in (eye to target): an orthographic view's rays.
+    pub forward: DVec3,
+    /// Which faces the rasterizers cull (none unless [`View::with_culling`] says so): the
+    /// render state a GPU's cull mode and front face set, resolved once per run from the
+    /// architecture and the scene (DESIGN.md §5, "Back-face culling").
+    pub culling: Culling,
+}
+
+/// The winding of a primitive's corners (A, B, C) as seen from the side it faces:
+/// OpenGL's `glFrontFace`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Winding {
+    /// Counter-clockwise: the front is the side (B - A) x (C - A) points to (a lembo's
+    /// P_u x P_v).
+    Ccw,
+    /// Clockwise: the front is the other side.
+    Cw,
+}
+
+/// Which faces the rasterizers cull.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Culling {
+    /// None: both sides are drawn (and shaded two-sided).
+    #[default]
+    Off,
+    /// Primitives whose every point faces away from the eye, the front being the side
+    /// `front` says.
+    Back {
+        /// The winding of a front face.
+        front: Winding,
+    },
 }
 
 /// A point projected to the viewport.
@@ -273,7 +305,14 @@ impl View {
             orthographic,
             near,
             far,
+            forward: (DVec3::from_array(camera.target) - eye).normalize_or_zero(),
+            culling: Culling::Off,
         }
+    }
+
+    /// This view with the rasterizers culling as `culling` says.
+    pub fn with_culling(&self, culling: Culling) -> View {
+        View { culling, ..*self }
     }
 
     /// The sample grid of this (one-sample) view with `samples` per pixel: the same camera on a

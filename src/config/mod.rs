@@ -152,6 +152,45 @@ pub struct MinMaxConfig {
     /// through a divider that starts two per cycle; the six control points' comparisons
     /// overlap with them.
     pub cycles_per_lembo: u64,
+    /// Whether MinMax culls lembos (and pieces) whose whole surface faces away from the eye
+    /// (DESIGN.md §5, "Back-face culling"): `"off"`, `"on"`, or `"auto"` (default), which
+    /// culls when every object of the scene is a closed, consistently oriented mesh, as a
+    /// GPU culls what the application marks cullable. A scene of discoids refuses `"on"`.
+    pub cull_backfaces: CullBackfaces,
+    /// Further busy cycles per lembo (or piece) for the back-face test when the run culls
+    /// \[cycles\], culled or not; 0 folds the test into `cycles_per_lembo`. Default 2: the
+    /// test's 15 facing coefficients take 36 three-term dot products and 9 cross products
+    /// (about 170 multiplies and 130 adds, `raster::facing`), which MinMax's datapath, sized
+    /// for its divides and compares, issues over two more cycles.
+    pub cull_cycles_per_lembo: u64,
+}
+
+/// Whether a path culls back faces (`minmax.cull_backfaces` on the lembo path,
+/// `triangle_setup.cull_backfaces` on the triangle path; DESIGN.md §5).
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum CullBackfaces {
+    /// Never: both sides are drawn (and shaded two-sided), the model before culling.
+    Off,
+    /// Always; the front is the scene's outward winding when every object is closed,
+    /// else counter-clockwise (OpenGL's default front face).
+    On,
+    /// When every object of the scene is a closed, consistently oriented mesh (every edge
+    /// shared by exactly two triangles running it in opposite directions), the front
+    /// being its outward side.
+    #[default]
+    Auto,
+}
+
+impl CullBackfaces {
+    /// Its name in architecture files and reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            CullBackfaces::Off => "off",
+            CullBackfaces::On => "on",
+            CullBackfaces::Auto => "auto",
+        }
+    }
 }
 
 /// IntervalManager: for each scanline y_j of a lembo, the roots of the three domain edges
@@ -376,6 +415,10 @@ pub struct TriangleSetupConfig {
     /// fan + 2; a plane distance, a divide and a blend each, then the projection) fit in
     /// the three vertex slots per cycle of the transform stage, which the pieces leave idle.
     pub cycles_per_clipped_piece: u64,
+    /// Whether setup culls triangles facing away from the eye by their snapped signed area,
+    /// at `culled_per_cycle` (DESIGN.md §5, "Back-face culling"): `"off"`, `"on"`, or
+    /// `"auto"` (default), as [`MinMaxConfig::cull_backfaces`].
+    pub cull_backfaces: CullBackfaces,
 }
 
 /// TriangleRasterizer (the triangle path, DESIGN.md §5): tests 2x2 pixel quads against the
@@ -555,6 +598,8 @@ impl Default for MinMaxConfig {
             count: 1,
             latency_cycles: 8,
             cycles_per_lembo: 2,
+            cull_backfaces: CullBackfaces::Auto,
+            cull_cycles_per_lembo: 2,
         }
     }
 }
@@ -610,6 +655,7 @@ impl Default for TriangleSetupConfig {
             cycles_per_triangle: 1,
             culled_per_cycle: 1,
             cycles_per_clipped_piece: 1,
+            cull_backfaces: CullBackfaces::Auto,
         }
     }
 }
@@ -853,6 +899,7 @@ impl ArchConfig {
         check.count("minmax.count", minmax.count)?;
         check.cycles("minmax.latency_cycles", minmax.latency_cycles)?;
         check.cycles("minmax.cycles_per_lembo", minmax.cycles_per_lembo)?;
+        check.at_most_cycles("minmax.cull_cycles_per_lembo", minmax.cull_cycles_per_lembo)?;
 
         let im = &self.interval_manager;
         check.count("interval_manager.count", im.count)?;
@@ -1050,6 +1097,15 @@ impl Check<'_> {
 
     fn cycles(&self, field: &str, value: u64) -> Result<()> {
         self.range(field, value, MAX_CYCLES, "cycles")
+    }
+
+    /// `value` must be in 0..=[`MAX_CYCLES`] (0: no cycles of its own).
+    fn at_most_cycles(&self, field: &str, value: u64) -> Result<()> {
+        if value <= MAX_CYCLES {
+            return Ok(());
+        }
+        let reason = format!("must be 0 to {MAX_CYCLES} cycles");
+        Err(Error::invalid(self.file, field, value, reason))
     }
 
     fn fragments_per_cycle(&self, field: &str, value: u64) -> Result<()> {

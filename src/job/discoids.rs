@@ -125,6 +125,7 @@ pub(super) fn run_discoids(
             (curved > 0).then_some(job.k),
             None,
             false,
+            None,
         ),
         primitives: Primitives {
             kind: "discoid".into(),

@@ -11,6 +11,7 @@
 //! scene's passes), `sections` (the report sections every route fills in), `render` (the
 //! command: load, run, write).
 
+mod culling;
 mod discoids;
 mod memory;
 mod path;

@@ -2,6 +2,7 @@
 //! against the reference when there is one, and its report; a timed frame is priced
 //! (DESIGN.md §12) by a counting run whose image must equal it.
 
+use super::culling;
 use super::discoids::run_discoids;
 use super::reference::measure;
 use super::route::{sim_options, Model, PathRun, Route};
@@ -33,8 +34,13 @@ pub fn run_path(
 ) -> Result<PathRun> {
     let route = Route::new(job, scene)?;
     if let Route::Discoids = route {
+        culling::check_discoids(job, scene, model)?;
         return run_discoids(job, scene, view, model, reference);
     }
+    // Every model of the run (functional, timed, counting) draws through this view, so
+    // they cull the same primitives.
+    let (cull, culling) = culling::resolve(scene, view, model, &route);
+    let view = &view.with_culling(cull);
     let (drawn, wall) = draw(job, scene, view, model, &route, reference.is_some())?;
     let measured = match (reference, drawn.probed()) {
         (Some(reference), Some(frame)) => {
@@ -94,6 +100,7 @@ pub fn run_path(
             (job.path == PrimitivePath::Lembo).then_some(job.k),
             tess,
             reference.is_some(),
+            Some(culling),
         ),
         primitives,
         units,

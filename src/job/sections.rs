@@ -4,7 +4,9 @@
 use super::route::Model;
 use super::validate::RenderJob;
 use crate::pipeline::Cycle;
-use crate::report::{peak_rss_bytes, Host, PerspectiveSetting, SceneInfo, Settings};
+use crate::report::{
+    peak_rss_bytes, CullingSetting, Host, PerspectiveSetting, SceneInfo, Settings,
+};
 use crate::scene::Scene;
 
 /// The scene section of a report.
@@ -39,6 +41,7 @@ pub(super) fn settings(
     k_px: Option<f64>,
     tess: Option<u32>,
     reference: bool,
+    culling: Option<CullingSetting>,
 ) -> Settings {
     let perspective_tol = k_px.map(|_| match job.tolerance().perspective {
         Some(px) => PerspectiveSetting::Px(px),
@@ -64,6 +67,7 @@ pub(super) fn settings(
         reference,
         supersample: job.reference_supersample(),
         samples: job.samples.get(),
+        culling,
     }
 }
 

@@ -15,6 +15,10 @@ pub struct Counts {
     pub lembos_culled_behind_eye: u64,
     /// Lembos whose hull lies outside the viewport or depth range (one cull test each).
     pub lembos_culled_outside: u64,
+    /// Lembos (or pieces of a split lembo) MinMax culled as facing away from the eye over
+    /// their whole surface, by the conservative test of `raster::facing` (0 unless the run
+    /// culls back faces: `minmax.cull_backfaces`).
+    pub lembos_culled_backface: u64,
     /// Lembos whose screen map has zero area everywhere (a point, a line or a curve on
     /// screen): they cover no pixel centre and are dropped after the cull test.
     pub lembos_degenerate: u64,
@@ -63,6 +67,10 @@ pub struct Counts {
     /// Triangles dropped because they lie wholly on the eye's side of the near plane
     /// (nearer than it, or behind the eye).
     pub triangles_culled_behind_eye: u64,
+    /// Triangles (or pieces of a clipped one, counted once for the triangle) setup culled as
+    /// facing away from the eye by their snapped signed area (0 unless the run culls back
+    /// faces: `triangle_setup.cull_backfaces`).
+    pub triangles_culled_backface: u64,
     /// Triangles with a vertex beyond the 16.8 guard band (±32767 px), clipped to it and
     /// fanned into pieces that are set up and rasterized as triangles with their parent's id.
     pub triangles_clipped: u64,
@@ -121,6 +129,7 @@ impl std::ops::AddAssign for Counts {
         self.lembos += o.lembos;
         self.lembos_culled_behind_eye += o.lembos_culled_behind_eye;
         self.lembos_culled_outside += o.lembos_culled_outside;
+        self.lembos_culled_backface += o.lembos_culled_backface;
         self.lembos_degenerate += o.lembos_degenerate;
         self.lembos_split += o.lembos_split;
         self.lembo_pieces += o.lembo_pieces;
@@ -142,6 +151,7 @@ impl std::ops::AddAssign for Counts {
         self.folds += o.folds;
         self.triangles += o.triangles;
         self.triangles_culled_behind_eye += o.triangles_culled_behind_eye;
+        self.triangles_culled_backface += o.triangles_culled_backface;
         self.triangles_clipped += o.triangles_clipped;
         self.triangles_clipped_depth += o.triangles_clipped_depth;
         self.triangles_culled_outside += o.triangles_culled_outside;

@@ -7,7 +7,7 @@ use super::counts::Counts;
 use super::driver::{Draw, Stages};
 use super::fragment::{self, Columns, FragmentSink};
 use super::screen::ScreenLembo;
-use super::{interval, minmax, segmenter, setup, subsegmenter};
+use super::{facing, interval, minmax, segmenter, setup, subsegmenter};
 use crate::camera::View;
 use crate::datapath::Real;
 use crate::error::{Error, Result};
@@ -85,9 +85,14 @@ impl<R: Real> Stages<R> for LemboPath<'_, R> {
         }
     }
 
-    /// Minmax: the scanlines the piece crosses.
+    /// Minmax: the back-face cull when the view culls, then the scanlines the piece
+    /// crosses.
     fn rows(&self, l: &ScreenLembo<R>, counts: &mut Counts) -> Option<(u32, u32)> {
         R::charge(UnitKind::MinMax);
+        if facing::faces_away(l, self.view) {
+            counts.lembos_culled_backface += 1;
+            return None;
+        }
         let range = minmax::scanlines(l, self.view.viewport.height);
         if range.is_none() {
             counts.lembos_culled_outside += 1;

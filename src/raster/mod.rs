@@ -15,6 +15,7 @@
 
 pub mod counts;
 pub mod driver;
+pub mod facing;
 pub mod fragment;
 pub mod frame;
 pub mod interval;

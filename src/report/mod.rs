@@ -2,6 +2,7 @@
 //! as they are), `report.txt` and the command's summary lines for people ([`text`], the one
 //! place a report is put into words). The files are written by [`crate::output`].
 
+use crate::camera::Winding;
 use crate::config::ArchConfig;
 use crate::cost::model::CostReport;
 use crate::discoid::render::BlendReport;
@@ -123,6 +124,29 @@ pub struct Settings {
     /// Samples per pixel of the render (1: one at each pixel centre; 2, 4 or 8:
     /// multisampled at Direct3D's standard positions and resolved, DESIGN.md §2).
     pub samples: u32,
+    /// Back-face culling as the run resolved it (DESIGN.md §5); null on a discoid scene,
+    /// whose passes cull back-facing fragments themselves (§4).
+    pub culling: Option<CullingSetting>,
+}
+
+/// Back-face culling as a run resolved it from the architecture's switch and the scene
+/// (DESIGN.md §5, "Back-face culling").
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct CullingSetting {
+    /// The switch of the path drawn (`minmax.cull_backfaces` or
+    /// `triangle_setup.cull_backfaces`): `off`, `on` or `auto`; `off` in functional mode,
+    /// which has no architecture.
+    pub switch: String,
+    /// Whether the run culled back faces.
+    pub culled: bool,
+    /// The winding of a front face when it culled (`ccw`, `cw`), else null.
+    pub front: Option<Winding>,
+    /// The winding facing out of every object when each is a closed, consistently
+    /// oriented mesh; null for a scene that is not.
+    pub closed_outward: Option<Winding>,
+    /// Whether every lembo's control net lies beyond the near plane (`auto` asks it too);
+    /// null when the scene is not closed (not asked).
+    pub beyond_near_plane: Option<bool>,
 }
 
 /// Setup's perspective tolerance as a report echoes it: pixels, or the string `"off"`.

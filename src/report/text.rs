@@ -352,6 +352,27 @@ impl Report {
                 c.fragments_passed_depth
             ),
         };
+        if let Some(cull) = &r.settings.culling {
+            let closed = match cull.closed_outward {
+                Some(w) => format!("closed, out {}", winding(w)),
+                None => "not closed".into(),
+            };
+            let _ = match cull.front {
+                Some(front) => writeln!(
+                    t,
+                    "back-face culling ({}; scene {closed}): front {}, {} lembos and {} triangles culled back-facing",
+                    cull.switch,
+                    winding(front),
+                    c.lembos_culled_backface,
+                    c.triangles_culled_backface
+                ),
+                None => writeln!(
+                    t,
+                    "back-face culling ({}; scene {closed}): none culled back-facing",
+                    cull.switch
+                ),
+            };
+        }
     }
 
     /// The summary's timing line: cycles on the architecture, or the functional model's
@@ -489,4 +510,12 @@ pub fn blend_cost(b: &BlendCost) -> String {
         b.accumulation_bytes_per_pixel,
         b.accumulation_energy_pj * 1e-6
     )
+}
+
+/// A winding as architecture files and reports spell it.
+fn winding(w: crate::camera::Winding) -> &'static str {
+    match w {
+        crate::camera::Winding::Ccw => "ccw",
+        crate::camera::Winding::Cw => "cw",
+    }
 }

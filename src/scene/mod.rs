@@ -33,6 +33,7 @@
 //! Not modelled here: triangles as scene objects, point clouds in formats other than PLY,
 //! and non-uniform scaling (which would need the inverse transpose for normals).
 
+pub mod closed;
 pub mod discoids;
 pub mod format;
 pub mod load;

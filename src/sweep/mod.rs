@@ -125,6 +125,32 @@ mod tests {
         assert_eq!(s.points.len(), 3);
     }
 
+    /// Back-face culling is an architecture field like any other: a point sets it on
+    /// either path, and a value that is not off, on or auto is refused naming the point's
+    /// field.
+    #[test]
+    fn culling_is_an_arch_field_of_a_sweep() {
+        let s = spec(
+            r#""grid": [{"arch.minmax.cull_backfaces": ["off", "on", "auto"],
+                         "arch.triangle_setup.cull_backfaces": ["off"]}]"#,
+        )
+        .unwrap();
+        assert_eq!(s.points.len(), 3);
+        let base = crate::config::ArchConfig::default();
+        let got: Vec<_> = s
+            .points
+            .iter()
+            .map(|p| {
+                let a = plan::point_arch("s.json", &base, p).unwrap();
+                (a.minmax.cull_backfaces, a.triangle_setup.cull_backfaces)
+            })
+            .collect();
+        use crate::config::CullBackfaces::{Auto, Off, On};
+        assert_eq!(got, [(Off, Off), (On, Off), (Auto, Off)]);
+        let e = spec(r#""points": [{"arch.minmax.cull_backfaces": "sometimes"}]"#).unwrap_err();
+        assert_eq!(field_of(e), "points[0].arch.minmax.cull_backfaces");
+    }
+
     #[test]
     fn arch_values_are_canonical_and_unknown_fields_named() {
         let s = spec(r#""points": [{"arch.clock_mhz": 400, "arch.segmenter.count": 4}]"#).unwrap();

@@ -492,6 +492,10 @@ pub(super) fn check_applies(spec: &Spec, point: &Point, scene: &Scene, s: usize)
             "path" | "tess" | "samples" => !discoids,
             "k" | "perspective_tol" => curved,
             "blend" | "threshold" => discoids,
+            // The discoid passes cull back-facing fragments, not whole primitives.
+            "arch.minmax.cull_backfaces" | "arch.triangle_setup.cull_backfaces" => {
+                !(discoids && point.params[name] == "on")
+            }
             _ => true,
         };
         if !applies {

@@ -57,7 +57,7 @@ fn digest(cycles: &CycleReport, counts: &Counts) -> String {
         )
         .unwrap();
     }
-    s + &serde_json::to_string(counts).unwrap()
+    s + &crate::support::counts_before_culling(counts)
 }
 
 /// The digest of one timed run of `scene` on `a` (lembo path, or triangle path at n = 2),

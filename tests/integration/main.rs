@@ -11,6 +11,7 @@ mod atomic;
 mod cli;
 mod cost;
 mod creases;
+mod culling;
 mod cycles_golden;
 mod datapath;
 mod discoid;

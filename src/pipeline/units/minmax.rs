@@ -5,8 +5,17 @@
 //! Input: [`LemboReady`] from Setup. Output: [`ScanlineRange`] to the IntervalManager, or
 //! nothing when the range holds no scanline centre (counted as culled outside).
 //!
-//! Cost: `minmax.cycles_per_lembo` per lembo, ready `minmax.latency_cycles` later.
+//! When the run culls back faces (`minmax.cull_backfaces`, resolved per scene into the
+//! view's [`Culling`](crate::camera::Culling)), MinMax first tests whether the piece faces
+//! away from the eye over its whole surface ([`facing`]) and drops it if so (counted as
+//! culled back-facing): Figure 5's MinMax is the unit that culls, and it holds the piece's
+//! world-space position function that the test needs, after Setup's split, so a piece of a
+//! split lembo is tested on its own.
+//!
+//! Cost: `minmax.cycles_per_lembo` per lembo, and `minmax.cull_cycles_per_lembo` more when
+//! the run culls back faces (the test, culled or not); ready `minmax.latency_cycles` later.
 
+use crate::camera::{Culling, View};
 use crate::config::MinMaxConfig;
 use crate::datapath::Real;
 use crate::graph::UnitKind;
@@ -14,7 +23,7 @@ use crate::pipeline::items::{LemboReady, ScanlineRange};
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::Ctx;
 use crate::pipeline::unit::{Finished, Run, Unit};
-use crate::raster::{minmax, Counts};
+use crate::raster::{facing, minmax, Counts};
 
 /// The MinMax finder, Figure 5's second box.
 pub struct MinMax;
@@ -31,22 +40,29 @@ impl<R: Real> Unit<R> for MinMax {
         run: &'a Run<'a, R>,
         _: usize,
     ) -> UnitFuture<'a, Finished> {
-        Box::pin(self::run(ctx, &run.arch.minmax, run.view.viewport.height))
+        Box::pin(self::run(ctx, &run.arch.minmax, run.view))
     }
 }
 
-/// The MinMax finder's body: per lembo piece, its scanline range (or a cull) on a viewport
-/// `height` pixels high.
+/// The MinMax finder's body: per lembo piece, its back-face cull when `view` culls, then
+/// its scanline range (or a cull) on `view`'s viewport.
 pub async fn run<R: Real>(
     mut ctx: Ctx<LemboReady<R>, ScanlineRange<R>>,
     cfg: &MinMaxConfig,
-    height: u32,
+    view: &View,
 ) -> Finished {
-    let cost = cfg.cycles_per_lembo;
+    let culls = view.culling != Culling::Off;
+    let cost = cfg.cycles_per_lembo + if culls { cfg.cull_cycles_per_lembo } else { 0 };
+    let height = view.viewport.height;
     let mut counts = Counts::default();
     // Whole lembos (pieces) to the interval managers, round-robin.
     let mut next_port = 0;
     while let Some(LemboReady { piece }) = ctx.next_input().await {
+        if facing::faces_away(&piece.screen, view) {
+            counts.lembos_culled_backface += 1;
+            ctx.work(cost);
+            continue;
+        }
         match minmax::scanlines(&piece.screen, height) {
             Some((j0, j1)) => {
                 ctx.emit(cost, next_port, ScanlineRange { piece, j0, j1 })

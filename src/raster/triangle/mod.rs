@@ -52,8 +52,8 @@
 //! the sources of triangles, the path in the driver's terms ([`TrianglePath`]) and
 //! [`render_triangles`].
 //!
-//! Not modelled: back-face culling (the lembo path has none either; both paths shade
-//! two-sided). The lembo path's counterpart of near-plane clipping is Setup's near-plane
+//! Back faces are culled by the sign of the snapped area when the view says so
+//! ([`crate::camera::Culling`], DESIGN.md §5); drawn, both sides are shaded. The lembo path's counterpart of near-plane clipping is Setup's near-plane
 //! split (`refine.rs`), which leaves the near plane itself to the depth test per fragment.
 
 pub mod probe;

@@ -2,7 +2,7 @@
 //! (Sutherland-Hodgman on the world triangle), 16.8 snapping, fans, and the edge functions
 //! of a [`ScreenTriangle`].
 
-use crate::camera::{Samples, ScreenPoint, View, Viewport};
+use crate::camera::{Culling, Samples, ScreenPoint, View, Viewport, Winding};
 use crate::datapath::Op;
 use crate::datapath::Real;
 use crate::raster::counts::Counts;
@@ -129,6 +129,9 @@ pub enum TriangleCull {
     Outside,
     /// Zero area after snapping, or no pixel centre inside the bounding box.
     Degenerate,
+    /// Facing away from the eye (its snapped signed area has the back's sign) when the view
+    /// culls back faces ([`Culling`]).
+    BackFace,
 }
 
 /// The clip rectangle of guard-band clipping: |x| <= `CLIP_PX` and |y| <= `CLIP_PX`
@@ -187,6 +190,7 @@ fn count_cull(cull: TriangleCull, counts: &mut Counts) {
         TriangleCull::BehindEye => counts.triangles_culled_behind_eye += 1,
         TriangleCull::Outside => counts.triangles_culled_outside += 1,
         TriangleCull::Degenerate => counts.triangles_degenerate += 1,
+        TriangleCull::BackFace => counts.triangles_culled_backface += 1,
     }
 }
 
@@ -252,7 +256,17 @@ pub fn setup_onto<R: Real>(
         let x = s.map(|s| snap(R::of(s.x)));
         let y = s.map(|s| snap(R::of(s.y)));
         let v = [0, 1, 2].map(|k| vertex(view, &s[k], positions[k], normals[k]));
-        return match ScreenTriangle::assemble(id, x, y, v, color, view.viewport, view.samples) {
+        let assembled = ScreenTriangle::assemble(
+            id,
+            x,
+            y,
+            v,
+            color,
+            view.viewport,
+            view.samples,
+            view.culling,
+        );
+        return match assembled {
             Ok(t) => {
                 out.push(t);
                 SetupOutcome::default()
@@ -521,7 +535,8 @@ pub(super) fn fan<R: Real>(
     if n < 3 {
         return SetupOutcome::culled(TriangleCull::Degenerate);
     }
-    let (mut all_outside, before) = (true, out.len());
+    // The fan of a strictly convex polygon has one orientation: its pieces face the same way.
+    let (mut all_outside, mut back, before) = (true, false, out.len());
     for k in 1..n - 1 {
         let [a, b, c] = [order[0], order[k], order[k + 1]];
         match ScreenTriangle::assemble(
@@ -532,14 +547,20 @@ pub(super) fn fan<R: Real>(
             color,
             view.viewport,
             view.samples,
+            view.culling,
         ) {
             Ok(t) => out.push(t),
-            Err(cull) => all_outside &= cull == TriangleCull::Outside,
+            Err(cull) => {
+                back |= cull == TriangleCull::BackFace;
+                all_outside &= cull == TriangleCull::Outside;
+            }
         }
     }
     SetupOutcome {
         fan: n - 2,
-        cull: (out.len() == before).then_some(if all_outside {
+        cull: (out.len() == before).then_some(if back {
+            TriangleCull::BackFace
+        } else if all_outside {
             TriangleCull::Outside
         } else {
             TriangleCull::Degenerate
@@ -597,7 +618,10 @@ pub struct Vertex<R> {
 
 impl<R: Real> ScreenTriangle<R> {
     /// Orients, bounds and sets up the edge functions of a triangle with snapped vertices
-    /// (x, y) [1/256 pixel] on `viewport`, the sample grid of `samples` per pixel.
+    /// (x, y) [1/256 pixel] on `viewport`, the sample grid of `samples` per pixel; with
+    /// `culling` on, a triangle whose signed area says it faces away is culled before its
+    /// edge functions are set up.
+    #[allow(clippy::too_many_arguments)]
     pub fn assemble(
         id: u32,
         mut x: [i64; 3],
@@ -606,18 +630,34 @@ impl<R: Real> ScreenTriangle<R> {
         color: [R; 3],
         viewport: Viewport,
         samples: Samples,
+        culling: Culling,
     ) -> Result<Self, TriangleCull> {
-        // The doubled area (2 multiplies, 5 adds), the three edge functions (2 multiplies and
-        // 3 adds each, a compare for the top-left rule) and the bounding box (8 compares).
-        R::count_beside(Op::IntMul, 2 + 6);
-        R::count_beside(Op::IntAdd, 5 + 12 + 8);
+        // The doubled area (2 multiplies, 5 adds); for a triangle not culled for its facing,
+        // the three edge functions (2 multiplies and 3 adds each, a compare for the top-left
+        // rule) and the bounding box (8 compares).
+        R::count_beside(Op::IntMul, 2);
+        R::count_beside(Op::IntAdd, 5);
         let mut area2 = (x[1] - x[0]) * (y[2] - y[0]) - (y[1] - y[0]) * (x[2] - x[0]);
+        // Seen with y down, a triangle counter-clockwise from its front (OpenGL's window
+        // coordinates, y up) has a negative area; the sign test is wiring.
+        let back = match culling {
+            Culling::Off => false,
+            Culling::Back {
+                front: Winding::Ccw,
+            } => area2 > 0,
+            Culling::Back { front: Winding::Cw } => area2 < 0,
+        };
+        if back {
+            return Err(TriangleCull::BackFace);
+        }
+        R::count_beside(Op::IntMul, 6);
+        R::count_beside(Op::IntAdd, 12 + 8);
         if area2 == 0 {
             return Err(TriangleCull::Degenerate);
         }
         if area2 < 0 {
             // Clockwise as seen with y down: swap two vertices so the edge functions are
-            // positive inside (no back-face culling).
+            // positive inside (a face the view does not cull, whichever side it shows).
             x.swap(1, 2);
             y.swap(1, 2);
             v.swap(1, 2);

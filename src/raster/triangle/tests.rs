@@ -4,7 +4,7 @@
 mod clip;
 
 use super::*;
-use crate::camera::{Camera, Projection, Samples, Viewport};
+use crate::camera::{Camera, Culling, Projection, Samples, Viewport, Winding};
 use crate::datapath::Datapath;
 use glam::{DVec3, DVec4};
 
@@ -32,6 +32,7 @@ fn tri(id: u32, p: [(i64, i64); 3]) -> Option<ScreenTriangle<f64>> {
         [1.0; 3],
         VP,
         Samples::ONE,
+        Culling::Off,
     )
     .ok()
 }
@@ -55,6 +56,7 @@ fn tri_in<R: Real>(p: [(i64, i64); 3], viewport: Viewport) -> ScreenTriangle<R> 
         [R::one(); 3],
         viewport,
         Samples::ONE,
+        Culling::Off,
     )
     .expect("a triangle in view")
 }
@@ -195,6 +197,7 @@ fn on_a_sample_grid_a_triangle_covers_the_samples_at_direct3ds_positions() {
                 [1.0; 3],
                 grid,
                 samples,
+                Culling::Off,
             )
             .ok()
         };
@@ -261,6 +264,7 @@ fn a_multisampled_triangle_is_shaded_at_the_pixel_centre_clamped_to_it() {
         [1.0; 3],
         grid,
         four,
+        Culling::Off,
     )
     .unwrap();
     // Pixel (8, 3): its sample rows 12..16 all give the weights at (8.5, 14) on the grid.
@@ -722,4 +726,55 @@ fn perspective_view() -> View {
         },
         VP,
     )
+}
+
+/// Back-face culling by the snapped signed area: a triangle whose corners run clockwise as
+/// the eye sees them is a back face when the front is counter-clockwise, and the reverse;
+/// a culled triangle is counted, and culling nothing draws both.
+#[test]
+fn back_faces_are_culled_by_their_signed_area() {
+    // The eye looks along +z from z = -10: (b - a) x (c - a) = +z points away from it.
+    let view = ortho_view();
+    let z = DVec3::Z;
+    let (a, b, c) = (
+        DVec3::new(1.0, 1.0, 0.0),
+        DVec3::new(9.0, 1.0, 0.0),
+        DVec3::new(1.0, 9.0, 0.0),
+    );
+    let away_from_eye = [a, b, c];
+    let towards_eye = [a, c, b];
+    for (culling, culled) in [
+        (Culling::Off, None),
+        (
+            Culling::Back {
+                front: Winding::Ccw,
+            },
+            Some(away_from_eye),
+        ),
+        (Culling::Back { front: Winding::Cw }, Some(towards_eye)),
+    ] {
+        let view = view.with_culling(culling);
+        for p in [away_from_eye, towards_eye] {
+            let got = setup_one::<f32>(0, &p, &[z; 3], &view).err();
+            let want = (culled == Some(p)).then_some(TriangleCull::BackFace);
+            assert_eq!(got, want, "{culling:?} {p:?}");
+        }
+    }
+    // Counted as back-facing, beside the other culls.
+    let view = view.with_culling(Culling::Back {
+        front: Winding::Ccw,
+    });
+    let mut counts = Counts::default();
+    let mut out = Vec::new();
+    setup::<f32>(0, &away_from_eye, &[z; 3], [1.0; 3], &view, &mut out).count(&mut counts);
+    assert!(out.is_empty());
+    assert_eq!((counts.triangles, counts.triangles_culled_backface), (1, 1));
+    // A clipped triangle's fan faces one way: all its pieces are culled, the triangle
+    // counted once as back-facing.
+    let far = DVec3::new(3e5, 1e6, 0.0);
+    let o = setup::<f32>(0, &[a, b, far], &[z; 3], [1.0; 3], &view, &mut out);
+    assert!(o.fan >= 1 && out.is_empty(), "{o:?}");
+    assert_eq!(o.cull, Some(TriangleCull::BackFace));
+    let o = setup::<f32>(0, &[a, far, b], &[z; 3], [1.0; 3], &view, &mut out);
+    assert!(o.fan >= 1 && o.cull.is_none() && !out.is_empty(), "{o:?}");
 }

@@ -2,7 +2,7 @@
 //! planes, each checked against an exact rasterizer or the rays through pixel centres.
 
 use super::*;
-use crate::camera::Samples;
+use crate::camera::{Culling, Samples};
 
 /// Per pixel: whether an unbounded-precision rasterizer covers it for the triangle with
 /// world vertices `p` (projected, snapped to 1/256 pixel in f64 however far, edge
@@ -173,7 +173,9 @@ fn unclipped_bit_for_bit<R: Real>() {
     });
     let x = s.map(|s| snap(R::of(s.x)));
     let y = s.map(|s| snap(R::of(s.y)));
-    let want = ScreenTriangle::assemble(5, x, y, v, color.map(R::of), VP, Samples::ONE).unwrap();
+    let want =
+        ScreenTriangle::assemble(5, x, y, v, color.map(R::of), VP, Samples::ONE, Culling::Off)
+            .unwrap();
     assert!(want.x.contains(&(CLIP_PX as i64 * SUBPIXEL + 192)));
     let mut out = Vec::new();
     let o = setup::<R>(5, &p, &n, color, &view, &mut out);
