@@ -13,6 +13,7 @@ mod cost;
 mod creases;
 mod cycles_golden;
 mod datapath;
+mod design_point;
 mod discoid;
 mod extreme_method;
 mod extremes;
