@@ -150,6 +150,9 @@ impl Sizing {
     }
 }
 
+/// A rate field's value on the baseline and on the architecture.
+type Rate = (u64, u64);
+
 /// How much faster `kind` runs on `arch` than on the embedded baseline: the largest ratio
 /// among its rate fields (baseline over `arch` for a `cycles_per_*` field, `arch` over
 /// baseline for a `*_per_cycle` one). A field set to 0 cycles (an item that costs no
@@ -160,7 +163,7 @@ pub fn speedup(arch: &ArchConfig, kind: UnitKind, blend: Option<BlendMode>) -> f
     static BASE: OnceLock<ArchConfig> = OnceLock::new();
     let base = BASE.get_or_init(ArchConfig::baseline);
     // (baseline, arch) per field: cycles per item, then items per cycle.
-    let (cycles, per_cycle): (Vec<(u64, u64)>, Vec<(u64, u64)>) = match kind {
+    let (cycles, per_cycle): (Vec<Rate>, Vec<Rate>) = match kind {
         UnitKind::Setup => (
             vec![(base.setup.cycles_per_lembo, arch.setup.cycles_per_lembo)],
             vec![],
