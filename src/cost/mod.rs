@@ -12,6 +12,7 @@
 
 pub mod built;
 pub mod counted;
+pub mod design_point;
 pub mod model;
 pub mod onchip;
 pub mod tech;

@@ -1,9 +1,14 @@
-//! A unit's area and energy from what it did (DESIGN.md §12).
+//! A unit's area and energy (DESIGN.md §12): its area from the architecture, its energy
+//! from what it did this frame.
 //!
-//! - **Datapath area.** A kind that performed `n` operations of a class over `b` busy
-//!   cycles (summed over its instances) needs `ceil(n / b)` functional units of that class
-//!   per instance to sustain the rate its architecture configures: the configured cycles
-//!   per item are what the busy cycles count. A class it never used costs nothing.
+//! - **Datapath area.** An instance of a kind gets, of each operation class, the
+//!   functional units that sustain its configured rate at the design point
+//!   ([`super::design_point`]): the largest operations per busy cycle the kind performed
+//!   over a calibration set at the baseline's rates, scaled by the unit's speed-up over
+//!   them, rounded up. The same on every scene, k, n and sample count: a frame's own
+//!   operations per busy cycle are kept beside the report ([`CostReport::per_busy_cycle`],
+//!   not serialised) for the calibration to take its maximum from. A class the design point
+//!   has no entry for costs nothing.
 //! - **FIFO area.** A unit owns its input FIFOs: one link per producer instance, each
 //!   `fifo_depth` entries of the producing unit's `OUT_WORDS` datapath words.
 //! - **Energy.** Operations times their energy; every item through a FIFO is written once
@@ -17,16 +22,17 @@
 //!   priced later goes through it too.
 //! - **Blend units** (a discoid frame). They sit inside their ROPs: their busy cycles are
 //!   their share of the ROP's, a kept fragment's `blend.cycles_per_fragment_<mode>`
-//!   ([`BlendWork::units`]), which the ROPs' own datapaths are sized without; they have
-//!   no FIFO of their own. Their operations are the
+//!   ([`BlendWork::units`]), which the ROPs' own operations per busy cycle are measured
+//!   without; they have no FIFO of their own. Their operations are the
 //!   blend ALU's, counted in `f32`, and priced at the width of the mode's stored word
 //!   ([`blend_figures`]): rgba8 on 8-bit fixed-point units, f16 on half-precision ones, f32
-//!   on single-precision ones.
+//!   on single-precision ones; their design point is their mode's.
 //!
 //! A kind's operations are shared among its instances in proportion to the items each
 //! took in.
 
 use super::counted::OpTable;
+use super::design_point::{self, DesignPointFile, Sizing};
 use super::tech::{DramKind, Sram, Tech};
 use crate::config::ArchConfig;
 use crate::datapath::{Datapath, Op, OPS};
@@ -34,6 +40,7 @@ use crate::discoid::blend::BlendMode;
 use crate::graph::{UnitKind, KINDS};
 use crate::pipeline::{self, CycleReport, UnitCycles};
 use serde::Serialize;
+use std::collections::BTreeMap;
 
 /// `cost` in report.json: what the unit would cost in silicon for this frame.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -70,6 +77,11 @@ pub struct CostReport {
     /// units priced as built (the triangle path's), as hardware would do them
     /// (`cost::built`).
     pub ops: Vec<KindOps>,
+    /// This frame's operations per busy cycle of each kind that computed, by design-point
+    /// key ([`Sizing::key`]): what the calibration set's maximum is taken over. Not in
+    /// report.json.
+    #[serde(skip)]
+    pub per_busy_cycle: BTreeMap<String, f64>,
 }
 
 /// `cost.tech` in report.json: which technology file priced the frame.
@@ -100,7 +112,8 @@ pub struct UnitCost {
     pub fifo_energy_pj: f64,
     /// The part of the energy its input FIFOs leak over the frame \[pJ\].
     pub fifo_leakage_pj: f64,
-    /// Functional units of each class its datapath needs \[units\].
+    /// Functional units of each class its datapath has: the architecture's, sized for
+    /// its configured rate at the design point (DESIGN.md §12), whatever the frame \[units\].
     pub functional_units: OpCounts,
 }
 
@@ -261,8 +274,36 @@ pub fn price_sram(sram: &Sram, bits_stored: f64, bits_moved: f64, frame_us: f64)
     }
 }
 
-/// The cost of `work` on `arch` in `datapath`, priced by `tech`.
+/// The cost of `work` on `arch` in `datapath`, priced by `tech`, its units sized at the
+/// embedded design point.
 pub fn cost(tech: &Tech, arch: &ArchConfig, datapath: Datapath, work: &Work) -> CostReport {
+    cost_at(tech, arch, datapath, work, design_point::embedded())
+}
+
+/// [`cost`] with the units sized at `design`.
+pub fn cost_at(
+    tech: &Tech,
+    arch: &ArchConfig,
+    datapath: Datapath,
+    work: &Work,
+    design: &DesignPointFile,
+) -> CostReport {
+    let triangles = work
+        .cycles
+        .units
+        .iter()
+        .any(|u| u.kind == UnitKind::TriangleSetup);
+    let sizing = Sizing {
+        datapath,
+        blend: work.blend.as_ref().map(|b| b.mode),
+        reciprocal: arch.triangle_rasterizer.reciprocal,
+        path: if triangles {
+            pipeline::Path::Triangle
+        } else {
+            pipeline::Path::Lembo
+        },
+    };
+    let mut per_busy_cycle = BTreeMap::new();
     // The units built differently from the model priced as built (DESIGN.md §12).
     let ops = super::built::as_built(
         work.ops,
@@ -306,16 +347,18 @@ pub fn cost(tech: &Tech, arch: &ArchConfig, datapath: Datapath, work: &Work) -> 
         } else {
             1.0 / instances(u.kind) as f64
         };
-        let mut fus = [0u64; OPS.len()];
+        let fus = sizing.functional_units(design, arch, u.kind);
         let (mut area_um2, mut energy_pj) = (0.0, 0.0);
         for (k, &op) in OPS.iter().enumerate() {
+            let (pj, um2) = price(u.kind, op);
+            area_um2 += fus[k] as f64 * um2;
             if kind_ops[k] == 0 {
                 continue;
             }
-            fus[k] = kind_ops[k].div_ceil(busy.max(1));
-            let (pj, um2) = price(u.kind, op);
-            area_um2 += fus[k] as f64 * um2;
             energy_pj += kind_ops[k] as f64 * share * pj;
+            if busy > 0 {
+                per_busy_cycle.insert(sizing.key(u.kind, op), kind_ops[k] as f64 / busy as f64);
+            }
         }
         // mW/mm² × mm² × µs = nJ.
         let logic_leak_pj = tech.logic_leakage.mw_per_mm2 * area_um2 * 1e-6 * frame_us * 1e3;
@@ -403,6 +446,7 @@ pub fn cost(tech: &Tech, arch: &ArchConfig, datapath: Datapath, work: &Work) -> 
                 ops: OpCounts::from_array(ops.of(k)),
             })
             .collect(),
+        per_busy_cycle,
     }
 }
 
@@ -466,7 +510,19 @@ mod tests {
             vertices_reused: 0,
             blend: None,
         };
-        let c = cost(&tech, &arch, Datapath::F32, &work);
+        // A design point of two multipliers in the ROP: 400 over 200 busy cycles, as this
+        // frame did.
+        let mut design = DesignPointFile::default();
+        design.entries.insert(
+            "f32 surface Rop/lembo mul".into(),
+            design_point::DesignEntry {
+                per_busy_cycle: 2.0,
+                at: "this test".into(),
+            },
+        );
+        let c = cost_at(&tech, &arch, Datapath::F32, &work, &design);
+        assert_eq!(c.per_busy_cycle["f32 surface Rop/lembo mul"], 2.0);
+        assert_eq!(c.units[0].functional_units.mul, 2);
         let link = arch.links.get(UnitKind::Rop, UnitKind::FrameBuffer);
         let item_bits = pipeline::out_words(UnitKind::Rop) as f64 * 32.0;
         let stored = link.fifo_depth as f64 * item_bits;
@@ -489,7 +545,7 @@ mod tests {
         assert_eq!(c.tech.dram_kind, DramKind::Ddr4);
         // 1 mW/mm² of logic: the ROP's two multipliers (400 over 200 busy cycles), 2 µs.
         tech.logic_leakage.mw_per_mm2 = 1.0;
-        let leaky = cost(&tech, &arch, Datapath::F32, &work);
+        let leaky = cost_at(&tech, &arch, Datapath::F32, &work, &design);
         let logic = 2.0 * 7700.0 * 1e-6 * 2.0 * 1e3;
         assert!((leaky.logic_leakage_pj - logic).abs() < 1e-9, "{leaky:?}");
         assert!((leaky.energy_pj - c.energy_pj - logic).abs() < 1e-6);

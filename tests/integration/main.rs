@@ -14,6 +14,7 @@ mod creases;
 mod culling;
 mod cycles_golden;
 mod datapath;
+mod design_point;
 mod discoid;
 mod extreme_method;
 mod extremes;

@@ -1,0 +1,342 @@
+//! The design point a unit's datapath is sized for (DESIGN.md §12): area is a property of
+//! the architecture, not of the frame drawn on it.
+//!
+//! A unit that must sustain its configured rate (its `cycles_per_*` or `*_per_cycle`
+//! fields) needs, of each operation class, as many functional units as it performs
+//! operations of that class per busy cycle. That figure depends on what it is given to do
+//! (a lembo's scanlines, a triangle's coverage, a span's length), so it is fixed once, at a
+//! stated design point: the largest operations per busy cycle each kind performed over a
+//! calibration set of frames, measured at the embedded baseline architecture's rates and
+//! committed as `src/cost/design_point.json`, which the build embeds.
+//!
+//! - **Entries** are keyed `<datapath> <frames> <unit> <op>`: the datapath (`f32`, `f64`),
+//!   the frames' class (`surface`, or `discoid` for a scene with discoids, whose ROPs do
+//!   the discoid work and host blend units), the unit's kind, with what changes what it
+//!   computes: the triangle rasterizer's reciprocal (`TriangleRasterizer/quad`, `/pixel`),
+//!   the blend unit's mode (`BlendUnit/rgba8`, `/f16`, `/f32`) and the ROP's path
+//!   (`Rop/lembo` works out each fragment's normal from the lembo's (u, v), `Rop/triangle`
+//!   interpolates planes), and the operation class. Each holds the operations per busy cycle and the calibration case
+//!   that set it.
+//! - **Another architecture's rates.** A unit whose rate differs from the baseline's does
+//!   proportionally more (or fewer) operations per busy cycle: the design point is scaled
+//!   by the unit's speed-up over the baseline ([`speedup`]), the largest ratio among its
+//!   rate fields (halving `segmenter.cycles_per_segment` doubles it). A unit with several
+//!   rates is thus sized for the fastest of them, an upper bound when only some change.
+//! - **Functional units** of a class per instance: `ceil(design point x speed-up)`. The
+//!   instance count only multiplies them.
+//! - **The calibration set** is the integration test `design_point` (in
+//!   `tests/integration/design_point.rs`), which re-measures every entry and fails naming
+//!   each that moved; `LEMBO_BLESS=1 cargo test --release --test integration design_point`
+//!   rewrites the file.
+//!
+//! A frame outside the calibration set can do more operations per busy cycle than its
+//! units were sized for: its energy (from its own counts) is right, its area is the
+//! architecture's, and its cycles assume the rate was sustained.
+
+use crate::config::{ArchConfig, Reciprocal};
+use crate::datapath::{Datapath, Op, OPS};
+use crate::discoid::blend::BlendMode;
+use crate::graph::{Path, UnitKind};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::sync::OnceLock;
+
+/// The committed design point, embedded.
+pub const DESIGN_POINT_JSON: &str = include_str!("design_point.json");
+
+/// The file's shape: what it is, how to regenerate it, and its entries.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DesignPointFile {
+    /// What the file is (DESIGN.md §12).
+    pub about: String,
+    /// The command that regenerates it.
+    pub regenerate: String,
+    /// The calibration set, in words.
+    pub calibration: String,
+    /// Every entry, by key (`f32 surface Rop mul`).
+    pub entries: BTreeMap<String, DesignEntry>,
+}
+
+/// One entry: a kind's operations of one class per busy cycle at the design point.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DesignEntry {
+    /// The largest operations per busy cycle over the calibration set \[operations/cycle\].
+    pub per_busy_cycle: f64,
+    /// The calibration case that set it.
+    pub at: String,
+}
+
+/// The embedded design point, parsed once.
+pub fn embedded() -> &'static DesignPointFile {
+    static FILE: OnceLock<DesignPointFile> = OnceLock::new();
+    FILE.get_or_init(|| {
+        // Part of the binary and checked by a unit test: failing here is a build defect.
+        serde_json::from_str(DESIGN_POINT_JSON).expect("the embedded design point parses")
+    })
+}
+
+/// What a frame's unit is sized as: the frames' class and the unit's variant.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Sizing {
+    /// The datapath the frame runs in.
+    pub datapath: Datapath,
+    /// The discoid frames' blend mode; None for a surface frame.
+    pub blend: Option<BlendMode>,
+    /// The triangle rasterizer's reciprocal.
+    pub reciprocal: Reciprocal,
+    /// The path the frame's ROPs serve.
+    pub path: Path,
+}
+
+impl Sizing {
+    /// The entries' key of `kind`'s class `op` (the module's text).
+    pub fn key(&self, kind: UnitKind, op: Op) -> String {
+        let frames = if self.blend.is_some() {
+            "discoid"
+        } else {
+            "surface"
+        };
+        format!(
+            "{} {frames} {} {}",
+            self.datapath.name(),
+            self.unit(kind),
+            op.name()
+        )
+    }
+
+    /// The unit's name in keys: its kind's, with the variant that changes what it
+    /// computes.
+    fn unit(&self, kind: UnitKind) -> String {
+        match (kind, self.blend) {
+            (UnitKind::TriangleRasterizer, _) => format!(
+                "{}/{}",
+                kind.name(),
+                match self.reciprocal {
+                    Reciprocal::Quad => "quad",
+                    Reciprocal::Pixel => "pixel",
+                }
+            ),
+            (UnitKind::BlendUnit, Some(mode)) => format!("{}/{}", kind.name(), mode.name()),
+            (UnitKind::Rop, _) => format!(
+                "{}/{}",
+                kind.name(),
+                match self.path {
+                    Path::Lembo => "lembo",
+                    Path::Triangle => "triangle",
+                }
+            ),
+            _ => kind.name().to_string(),
+        }
+    }
+
+    /// Functional units of each class (in [`OPS`] order) one instance of `kind` needs on
+    /// `arch`, from `design`: the design point scaled by the unit's [`speedup`], rounded up.
+    pub fn functional_units(
+        &self,
+        design: &DesignPointFile,
+        arch: &ArchConfig,
+        kind: UnitKind,
+    ) -> [u64; OPS.len()] {
+        let speed = speedup(arch, kind, self.blend);
+        let mut out = [0; OPS.len()];
+        for (n, &op) in out.iter_mut().zip(OPS.iter()) {
+            if let Some(e) = design.entries.get(&self.key(kind, op)) {
+                *n = (e.per_busy_cycle * speed).ceil() as u64;
+            }
+        }
+        out
+    }
+}
+
+/// A rate field's value on the baseline and on the architecture.
+type Rate = (u64, u64);
+
+/// How much faster `kind` runs on `arch` than on the embedded baseline: the largest ratio
+/// among its rate fields (baseline over `arch` for a `cycles_per_*` field, `arch` over
+/// baseline for a `*_per_cycle` one). A field set to 0 cycles (an item that costs no
+/// cycle) is left out; a kind without a rate field (the geometry fetch and the frame
+/// buffer, which compute nothing) runs at 1. The blend units' rate is their mode's
+/// `cycles_per_fragment_<mode>`.
+pub fn speedup(arch: &ArchConfig, kind: UnitKind, blend: Option<BlendMode>) -> f64 {
+    static BASE: OnceLock<ArchConfig> = OnceLock::new();
+    let base = BASE.get_or_init(ArchConfig::baseline);
+    // (baseline, arch) per field: cycles per item, then items per cycle.
+    let (cycles, per_cycle): (Vec<Rate>, Vec<Rate>) = match kind {
+        UnitKind::Setup => (
+            vec![(base.setup.cycles_per_lembo, arch.setup.cycles_per_lembo)],
+            vec![],
+        ),
+        UnitKind::MinMax => (
+            vec![(base.minmax.cycles_per_lembo, arch.minmax.cycles_per_lembo)],
+            vec![],
+        ),
+        UnitKind::IntervalManager => {
+            let (b, a) = (&base.interval_manager, &arch.interval_manager);
+            (
+                vec![
+                    (b.cycles_per_scanline, a.cycles_per_scanline),
+                    (b.cycles_per_interval, a.cycles_per_interval),
+                ],
+                vec![],
+            )
+        }
+        UnitKind::Segmenter => (
+            vec![(
+                base.segmenter.cycles_per_segment,
+                arch.segmenter.cycles_per_segment,
+            )],
+            vec![],
+        ),
+        UnitKind::Subsegmenter => (
+            vec![(
+                base.subsegmenter.cycles_per_subsegment,
+                arch.subsegmenter.cycles_per_subsegment,
+            )],
+            vec![],
+        ),
+        UnitKind::FragmentRasterizer => (
+            vec![(
+                base.rasterizer.cycles_per_subsegment,
+                arch.rasterizer.cycles_per_subsegment,
+            )],
+            vec![(
+                base.rasterizer.fragments_per_cycle,
+                arch.rasterizer.fragments_per_cycle,
+            )],
+        ),
+        UnitKind::Tessellator => (
+            vec![(
+                base.tessellator.cycles_per_triangle,
+                arch.tessellator.cycles_per_triangle,
+            )],
+            vec![],
+        ),
+        UnitKind::DomainEval => (
+            vec![(
+                base.domain_eval.cycles_per_vertex,
+                arch.domain_eval.cycles_per_vertex,
+            )],
+            vec![],
+        ),
+        UnitKind::TriangleSetup => {
+            let (b, a) = (&base.triangle_setup, &arch.triangle_setup);
+            (
+                vec![
+                    (b.cycles_per_triangle, a.cycles_per_triangle),
+                    (b.cycles_per_clipped_piece, a.cycles_per_clipped_piece),
+                ],
+                vec![(b.culled_per_cycle, a.culled_per_cycle)],
+            )
+        }
+        UnitKind::TriangleRasterizer => (
+            vec![],
+            vec![(
+                base.triangle_rasterizer.pixels_per_cycle,
+                arch.triangle_rasterizer.pixels_per_cycle,
+            )],
+        ),
+        UnitKind::Rop => (
+            vec![],
+            vec![(base.rop.fragments_per_cycle, arch.rop.fragments_per_cycle)],
+        ),
+        UnitKind::BlendUnit => {
+            let of = |c: &ArchConfig| match blend {
+                Some(BlendMode::Rgba8) => c.blend.cycles_per_fragment_rgba8,
+                Some(BlendMode::F16) => c.blend.cycles_per_fragment_f16,
+                Some(BlendMode::F32) | None => c.blend.cycles_per_fragment_f32,
+            };
+            (vec![(of(base), of(arch))], vec![])
+        }
+        UnitKind::GeometryFetch | UnitKind::FrameBuffer => (vec![], vec![]),
+    };
+    let ratios = cycles
+        .iter()
+        .filter(|(b, a)| *a > 0 && *b > 0)
+        .map(|&(b, a)| b as f64 / a as f64)
+        .chain(
+            per_cycle
+                .iter()
+                .filter(|(b, a)| *a > 0 && *b > 0)
+                .map(|&(b, a)| a as f64 / b as f64),
+        );
+    ratios
+        .fold(None, |m: Option<f64>, r| Some(m.map_or(r, |m| m.max(r))))
+        .unwrap_or(1.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The embedded file parses, says how to regenerate it, and holds entries of every
+    /// kind that computes on each path, in both datapaths.
+    #[test]
+    fn the_embedded_design_point_parses_and_covers_both_paths() {
+        let d = embedded();
+        assert!(d.regenerate.contains("LEMBO_BLESS=1"), "{}", d.regenerate);
+        for (dp, path) in [
+            (Datapath::F32, Path::Lembo),
+            (Datapath::F64, Path::Lembo),
+            (Datapath::F32, Path::Triangle),
+            (Datapath::F64, Path::Triangle),
+        ] {
+            let sizing = |datapath| Sizing {
+                datapath,
+                blend: None,
+                reciprocal: Reciprocal::Quad,
+                path,
+            };
+            for kind in [
+                UnitKind::Setup,
+                UnitKind::MinMax,
+                UnitKind::IntervalManager,
+                UnitKind::Segmenter,
+                UnitKind::Subsegmenter,
+                UnitKind::FragmentRasterizer,
+                UnitKind::Tessellator,
+                UnitKind::DomainEval,
+                UnitKind::TriangleSetup,
+                UnitKind::TriangleRasterizer,
+                UnitKind::Rop,
+            ] {
+                let key = sizing(dp).key(kind, Op::Add);
+                let add = d.entries.get(&key);
+                let int_add = d.entries.get(&sizing(dp).key(kind, Op::IntAdd));
+                assert!(add.or(int_add).is_some(), "no {key}");
+            }
+        }
+        for e in d.entries.values() {
+            assert!(
+                e.per_busy_cycle > 0.0 && e.per_busy_cycle.is_finite(),
+                "{e:?}"
+            );
+        }
+    }
+
+    /// The baseline runs every kind at 1; halving a cycles-per-item rate or doubling an
+    /// items-per-cycle one doubles it; a unit with several rates takes the fastest.
+    #[test]
+    fn a_units_speedup_is_its_fastest_rate_over_the_baselines() {
+        let base = ArchConfig::baseline();
+        for kind in crate::graph::KINDS {
+            assert_eq!(speedup(&base, kind, Some(BlendMode::F16)), 1.0, "{kind:?}");
+        }
+        let mut a = base.clone();
+        a.segmenter.cycles_per_segment = 1;
+        a.rop.fragments_per_cycle = 2;
+        a.interval_manager.cycles_per_scanline = 6;
+        a.triangle_setup.culled_per_cycle = 2;
+        a.blend.cycles_per_fragment_f32 = 1;
+        assert_eq!(speedup(&a, UnitKind::Segmenter, None), 2.0);
+        assert_eq!(speedup(&a, UnitKind::Rop, None), 2.0);
+        // Slower scanlines, intervals as before: the intervals' rate holds.
+        assert_eq!(speedup(&a, UnitKind::IntervalManager, None), 1.0);
+        assert_eq!(speedup(&a, UnitKind::TriangleSetup, None), 2.0);
+        assert_eq!(speedup(&a, UnitKind::BlendUnit, Some(BlendMode::F32)), 2.0);
+        assert_eq!(speedup(&a, UnitKind::BlendUnit, Some(BlendMode::F16)), 1.0);
+        a.interval_manager.cycles_per_interval = 4;
+        assert_eq!(speedup(&a, UnitKind::IntervalManager, None), 0.5);
+    }
+}
