@@ -134,6 +134,9 @@ pub(crate) fn set_field(
 }
 
 /// The value at `path` (dotted) of a JSON object, if there is one.
-pub(crate) fn field_at<'a>(root: &'a serde_json::Value, path: &str) -> Option<&'a serde_json::Value> {
+pub(crate) fn field_at<'a>(
+    root: &'a serde_json::Value,
+    path: &str,
+) -> Option<&'a serde_json::Value> {
     path.split('.').try_fold(root, |at, part| at.get(part))
 }

@@ -740,7 +740,11 @@ impl ArchConfig {
 
     /// This architecture with the fields `sets` (dotted path, value) set, validated as an
     /// architecture file is; an error names `flag` and the field (`--set`).
-    pub fn with_fields(&self, sets: &[(String, serde_json::Value)], flag: &str) -> Result<ArchConfig> {
+    pub fn with_fields(
+        &self,
+        sets: &[(String, serde_json::Value)],
+        flag: &str,
+    ) -> Result<ArchConfig> {
         if sets.is_empty() {
             return Ok(self.clone());
         }
@@ -754,11 +758,12 @@ impl ArchConfig {
                 },
             )?;
         }
-        let config: ArchConfig = serde_path_to_error::deserialize(value).map_err(|e| Error::Parse {
-            file: crate::error::COMMAND_LINE.into(),
-            field: format!("{flag} {}", e.path()),
-            message: e.into_inner().to_string(),
-        })?;
+        let config: ArchConfig =
+            serde_path_to_error::deserialize(value).map_err(|e| Error::Parse {
+                file: crate::error::COMMAND_LINE.into(),
+                field: format!("{flag} {}", e.path()),
+                message: e.into_inner().to_string(),
+            })?;
         config.validate(&format!("{} ({flag})", crate::error::COMMAND_LINE))?;
         Ok(config)
     }

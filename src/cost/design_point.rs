@@ -183,11 +183,17 @@ pub fn speedup(arch: &ArchConfig, kind: UnitKind, blend: Option<BlendMode>) -> f
     }
     let (cycles, per_cycle): (Vec<Rate>, Vec<Rate>) = match kind {
         UnitKind::Setup => (
-            vec![(f(base.setup.cycles_per_lembo), f(arch.setup.cycles_per_lembo))],
+            vec![(
+                f(base.setup.cycles_per_lembo),
+                f(arch.setup.cycles_per_lembo),
+            )],
             vec![],
         ),
         UnitKind::MinMax => (
-            vec![(f(base.minmax.cycles_per_lembo), f(arch.minmax.cycles_per_lembo))],
+            vec![(
+                f(base.minmax.cycles_per_lembo),
+                f(arch.minmax.cycles_per_lembo),
+            )],
             vec![],
         ),
         UnitKind::IntervalManager => {
@@ -201,23 +207,41 @@ pub fn speedup(arch: &ArchConfig, kind: UnitKind, blend: Option<BlendMode>) -> f
             )
         }
         UnitKind::Segmenter => (
-            vec![(f(base.segmenter.cycles_per_segment), f(arch.segmenter.cycles_per_segment))],
+            vec![(
+                f(base.segmenter.cycles_per_segment),
+                f(arch.segmenter.cycles_per_segment),
+            )],
             vec![],
         ),
         UnitKind::Subsegmenter => (
-            vec![(f(base.subsegmenter.cycles_per_subsegment), f(arch.subsegmenter.cycles_per_subsegment))],
+            vec![(
+                f(base.subsegmenter.cycles_per_subsegment),
+                f(arch.subsegmenter.cycles_per_subsegment),
+            )],
             vec![],
         ),
         UnitKind::FragmentRasterizer => (
-            vec![(f(base.rasterizer.cycles_per_subsegment), f(arch.rasterizer.cycles_per_subsegment))],
-            vec![(f(base.rasterizer.fragments_per_cycle), f(arch.rasterizer.fragments_per_cycle))],
+            vec![(
+                f(base.rasterizer.cycles_per_subsegment),
+                f(arch.rasterizer.cycles_per_subsegment),
+            )],
+            vec![(
+                f(base.rasterizer.fragments_per_cycle),
+                f(arch.rasterizer.fragments_per_cycle),
+            )],
         ),
         UnitKind::Tessellator => (
-            vec![(f(base.tessellator.cycles_per_triangle), f(arch.tessellator.cycles_per_triangle))],
+            vec![(
+                f(base.tessellator.cycles_per_triangle),
+                f(arch.tessellator.cycles_per_triangle),
+            )],
             vec![],
         ),
         UnitKind::DomainEval => (
-            vec![(f(base.domain_eval.cycles_per_vertex), f(arch.domain_eval.cycles_per_vertex))],
+            vec![(
+                f(base.domain_eval.cycles_per_vertex),
+                f(arch.domain_eval.cycles_per_vertex),
+            )],
             vec![],
         ),
         UnitKind::TriangleSetup => {
@@ -235,11 +259,17 @@ pub fn speedup(arch: &ArchConfig, kind: UnitKind, blend: Option<BlendMode>) -> f
         }
         UnitKind::TriangleRasterizer => (
             vec![],
-            vec![(f(base.triangle_rasterizer.pixels_per_cycle), f(arch.triangle_rasterizer.pixels_per_cycle))],
+            vec![(
+                f(base.triangle_rasterizer.pixels_per_cycle),
+                f(arch.triangle_rasterizer.pixels_per_cycle),
+            )],
         ),
         UnitKind::Rop => (
             vec![],
-            vec![(f(base.rop.fragments_per_cycle), f(arch.rop.fragments_per_cycle))],
+            vec![(
+                f(base.rop.fragments_per_cycle),
+                f(arch.rop.fragments_per_cycle),
+            )],
         ),
         UnitKind::BlendUnit => {
             let of = |c: &ArchConfig| match blend {

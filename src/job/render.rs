@@ -41,7 +41,9 @@ pub fn load_scene(job: &RenderJob) -> Result<Scene> {
 pub fn load_arch(job: &RenderJob) -> Result<Option<ArchConfig>> {
     Ok(match (&job.arch, job.mode) {
         (_, Mode::Functional) => None,
-        (Some(path), Mode::Timed) => Some(ArchConfig::load(path)?.with_fields(&job.arch_set, "--set")?),
+        (Some(path), Mode::Timed) => {
+            Some(ArchConfig::load(path)?.with_fields(&job.arch_set, "--set")?)
+        }
         (None, Mode::Timed) => Some(ArchConfig::baseline().with_fields(&job.arch_set, "--set")?),
     })
 }

@@ -157,8 +157,9 @@ pub(super) fn answer_files(records: &[Value], ask: &Ask) -> Result<Option<Vec<(S
          Made by `lembo-sim sweep` from this directory's runs (DESIGN.md §7): every run whose \
          unit is within the spec's area budget of {budget_mm2} mm², measured against the exact \
          reference. A run is named by its parameters and the unit that bounds it. A deciding \
-         run is flagged **unbracketed** where a finer knob was not tried although the error \
-         still improved by {margin} dB or more, **coarse end** where a coarser knob was not \
+         run is flagged **unbracketed** where it sits at the fine end of a series that was \
+         not bracketed (one of its last two steps still gained {margin} dB or more, and a \
+         finer knob was not run), **coarse end** where a coarser knob was not \
          tried and might reach the target for less, and **fixed count** where the unit that \
          bounds it had one count in every run of its path.\n\n"
     );
@@ -172,8 +173,8 @@ pub(super) fn answer_files(records: &[Value], ask: &Ask) -> Result<Option<Vec<(S
          {}\n\n| scene | path | series | levels (best PSNR) | how it ended |\n|---|---|---|---|---|\n",
         match ask.refine {
             Some(r) => format!(
-                "Refined beyond the grid (k halved down to {}, n doubled up to {}{}) while the \
-                 finest level gained {} dB or more over the best coarser one; each finer level \
+                "Refined beyond the grid (k halved down to {}, n doubled up to {}{}) until the \
+                 last two levels each gained under {} dB over the best coarser one; each finer level \
                  runs on the series' fastest and most frugal architectures at the level before.",
                 r.k_floor,
                 r.tess_cap,
@@ -182,8 +183,8 @@ pub(super) fn answer_files(records: &[Value], ask: &Ask) -> Result<Option<Vec<(S
                 r.margin_db
             ),
             None => format!(
-                "The spec asks for no refinement (`refine`): a series whose last step still \
-                 gained {margin} dB or more stops at the edge of its grid."
+                "The spec asks for no refinement (`refine`): a series whose last two steps \
+                 did not each gain under {margin} dB stops at the edge of its grid."
             ),
         }
     );

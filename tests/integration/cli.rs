@@ -1335,9 +1335,18 @@ fn set_overrides_architecture_fields_on_the_command_line() {
         .count();
     assert_eq!(rasterizers, 8);
     for (args, needle) in [
-        (&["render", "--set", "rasterizer.cnt=8"][..], "--set rasterizer.cnt"),
-        (&["render", "--set", "rasterizer.count=0"][..], "rasterizer.count"),
-        (&["render", "--set", "rasterizer.count=x"][..], "--set rasterizer.count"),
+        (
+            &["render", "--set", "rasterizer.cnt=8"][..],
+            "--set rasterizer.cnt",
+        ),
+        (
+            &["render", "--set", "rasterizer.count=0"][..],
+            "rasterizer.count",
+        ),
+        (
+            &["render", "--set", "rasterizer.count=x"][..],
+            "--set rasterizer.count",
+        ),
         (&["render", "--set", "rasterizer"][..], "FIELD=VALUE"),
         (
             &["render", "--mode", "functional", "--set", "rop.count=2"][..],
