@@ -425,11 +425,9 @@ impl Names<'_> {
         let mut cell = self.cell(m);
         if let Some(s) = self.series_of(m) {
             if m.knob == s.finest() && !s.stop.bracketed(self.margin) {
-                let _ = write!(
-                    cell,
-                    "; **unbracketed**: {}",
-                    s.stop.describe(self.margin, s.finest())
-                );
+                let why = s.stop.describe(self.margin, s.finest());
+                let why = why.strip_prefix("unbracketed: ").unwrap_or(&why);
+                let _ = write!(cell, "; **unbracketed**: {why}");
             }
         }
         cell
@@ -539,6 +537,10 @@ impl Names<'_> {
             if open.is_empty() {
                 format!("not reached (every {path} series bracketed)")
             } else {
+                let open: Vec<&str> = open
+                    .iter()
+                    .map(|w| w.strip_prefix("unbracketed: ").unwrap_or(w))
+                    .collect();
                 format!("not reached; **unbracketed**: {}", open.join("; "))
             }
         };
