@@ -38,57 +38,6 @@ fn parse_error(file: &str, e: serde_path_to_error::Error<serde_json::Error>) -> 
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[derive(Debug, serde::Deserialize)]
-    #[serde(deny_unknown_fields)]
-    struct Outer {
-        inner: Vec<Inner>,
-    }
-
-    #[derive(Debug, serde::Deserialize)]
-    #[serde(deny_unknown_fields)]
-    struct Inner {
-        width: u32,
-    }
-
-    fn parse_field(text: &str) -> (String, String) {
-        match parse_strict::<Outer>(text, "f.json") {
-            Err(Error::Parse {
-                file,
-                field,
-                message,
-            }) => {
-                assert_eq!(file, "f.json");
-                (field, message)
-            }
-            other => panic!("{text} gave {other:?}"),
-        }
-    }
-
-    #[test]
-    fn errors_name_the_field_path_and_trailing_text_is_refused() {
-        let ok: Outer = parse_strict(r#"{"inner": [{"width": 3}]}"#, "f.json").unwrap();
-        assert_eq!(ok.inner[0].width, 3);
-        let (field, message) = parse_field(r#"{"inner": [{"width": 3}, {"width": "x"}]}"#);
-        assert_eq!(field, "inner[1].width");
-        assert!(message.contains("invalid type"), "{message}");
-        let (field, message) = parse_field(r#"{"inner": [{"height": 3}]}"#);
-        assert_eq!(field, "inner[0].height");
-        assert!(message.contains("unknown field"), "{message}");
-        // A syntax error before any field, or text after the value: no path, serde's message
-        // gives the line and column.
-        let (field, message) = parse_field("{,}");
-        assert_eq!(field, "");
-        assert!(message.contains("line 1 column 2"), "{message}");
-        let (field, message) = parse_field(r#"{"inner": []} {}"#);
-        assert_eq!(field, "");
-        assert!(message.contains("trailing characters"), "{message}");
-    }
-}
-
 /// Sets the field at `path` (dotted) of `what`'s JSON (`architecture`, `technology`); the
 /// field must exist and not be a group of fields. The error says which part is unknown and
 /// what is there. A sweep's `arch.`/`tech.` parameters and `render --set` use it.
@@ -139,4 +88,55 @@ pub(crate) fn field_at<'a>(
     path: &str,
 ) -> Option<&'a serde_json::Value> {
     path.split('.').try_fold(root, |at, part| at.get(part))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(Debug, serde::Deserialize)]
+    #[serde(deny_unknown_fields)]
+    struct Outer {
+        inner: Vec<Inner>,
+    }
+
+    #[derive(Debug, serde::Deserialize)]
+    #[serde(deny_unknown_fields)]
+    struct Inner {
+        width: u32,
+    }
+
+    fn parse_field(text: &str) -> (String, String) {
+        match parse_strict::<Outer>(text, "f.json") {
+            Err(Error::Parse {
+                file,
+                field,
+                message,
+            }) => {
+                assert_eq!(file, "f.json");
+                (field, message)
+            }
+            other => panic!("{text} gave {other:?}"),
+        }
+    }
+
+    #[test]
+    fn errors_name_the_field_path_and_trailing_text_is_refused() {
+        let ok: Outer = parse_strict(r#"{"inner": [{"width": 3}]}"#, "f.json").unwrap();
+        assert_eq!(ok.inner[0].width, 3);
+        let (field, message) = parse_field(r#"{"inner": [{"width": 3}, {"width": "x"}]}"#);
+        assert_eq!(field, "inner[1].width");
+        assert!(message.contains("invalid type"), "{message}");
+        let (field, message) = parse_field(r#"{"inner": [{"height": 3}]}"#);
+        assert_eq!(field, "inner[0].height");
+        assert!(message.contains("unknown field"), "{message}");
+        // A syntax error before any field, or text after the value: no path, serde's message
+        // gives the line and column.
+        let (field, message) = parse_field("{,}");
+        assert_eq!(field, "");
+        assert!(message.contains("line 1 column 2"), "{message}");
+        let (field, message) = parse_field(r#"{"inner": []} {}"#);
+        assert_eq!(field, "");
+        assert!(message.contains("trailing characters"), "{message}");
+    }
 }

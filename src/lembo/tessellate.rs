@@ -30,7 +30,7 @@
 //!
 //! Not modelled here: the time a hardware tessellator takes (that belongs to the timed
 //! pipeline: `pipeline::units::tessellator`) and adaptive (variable-step) subdivision.
-//! [`Tessellation::bytes`] is the size of the indexed mesh in which every shared vertex is
+//! The mesh's bytes (`TriangleSource::bytes`) are the size of the indexed mesh in which every shared vertex is
 //! stored once; what a geometry fetch reads of it depends on its vertex cache, which reads
 //! [`Tessellation::lembo_vertex_ids`].
 

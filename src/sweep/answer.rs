@@ -33,6 +33,9 @@ use serde_json::Value;
 use std::collections::BTreeSet;
 use std::fmt::Write as _;
 
+/// A file the answer writes: its name and bytes.
+pub(super) type Figure = (String, Vec<u8>);
+
 /// What the answer is made from, besides the records.
 pub(super) struct Ask<'a> {
     /// The spec's area budget \[mm²\].
@@ -47,7 +50,7 @@ pub(super) struct Ask<'a> {
 
 /// `answer.md` and its figures, as (file name, bytes), for `records`; None when no scene
 /// has measured runs of both paths within the budget.
-pub(super) fn answer_files(records: &[Value], ask: &Ask) -> Result<Option<Vec<(String, Vec<u8>)>>> {
+pub(super) fn answer_files(records: &[Value], ask: &Ask) -> Result<Option<Vec<Figure>>> {
     let measured: Vec<Measured> = records
         .iter()
         .filter_map(Measured::of)
@@ -84,7 +87,7 @@ pub(super) fn answer_files(records: &[Value], ask: &Ask) -> Result<Option<Vec<(S
             scenes.push(&m.scene);
         }
     }
-    let mut figures: Vec<(String, Vec<u8>)> = Vec::new();
+    let mut figures: Vec<Figure> = Vec::new();
     let (mut area, mut energy, mut bracket) = (String::new(), String::new(), String::new());
     let mut flips = String::new();
     let mut curves: Vec<String> = vec![String::new(); METRICS.len()];
@@ -586,7 +589,7 @@ fn tornado<'a>(
     triangle: &[&'a Measured],
     variants: &'a [Measured],
     limits: &Limits,
-) -> Result<(String, Vec<(String, Vec<u8>)>)> {
+) -> Result<(String, Vec<Figure>)> {
     let (metric, target) = study.target;
     // The grid's runs on the spec's architecture as it is: the points the variants vary.
     let as_is = |runs: &[&'a Measured]| -> Vec<&'a Measured> {

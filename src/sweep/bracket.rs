@@ -408,7 +408,9 @@ pub struct Limits<'a> {
 /// The series of `runs` (measured runs, any order), each with its stop, in order of
 /// first appearance. Runs over the area budget take no part.
 pub fn series(runs: &[Measured], limits: &Limits) -> Vec<Series> {
-    let mut keyed: Vec<((String, &'static str, String), Vec<usize>)> = Vec::new();
+    // (scene, path, series key) and the indices of its runs.
+    type Keyed = ((String, &'static str, String), Vec<usize>);
+    let mut keyed: Vec<Keyed> = Vec::new();
     for (i, m) in runs.iter().enumerate() {
         if !m.within(limits.budget) {
             continue;

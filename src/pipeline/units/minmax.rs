@@ -6,7 +6,7 @@
 //! nothing when the range holds no scanline centre (counted as culled outside).
 //!
 //! When the run culls back faces (`minmax.cull_backfaces`, resolved per scene into the
-//! view's [`Culling`](crate::camera::Culling)), MinMax first tests whether the piece faces
+//! view's [`crate::camera::Culling`]), MinMax first tests whether the piece faces
 //! away from the eye over its whole surface ([`facing`]) and drops it if so (counted as
 //! culled back-facing): Figure 5's MinMax is the unit that culls, and it holds the piece's
 //! world-space position function that the test needs, after Setup's split, so a piece of a
