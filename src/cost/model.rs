@@ -401,33 +401,12 @@ pub fn cost_at(
     let energy_pj: f64 = out.iter().map(|u| u.energy_pj).sum();
     let mut kinds: Vec<UnitKind> = units.iter().map(|u| u.kind).collect();
     kinds.dedup();
-    let blend = work.blend.as_ref().map(|b| {
-        let priced = units
-            .iter()
-            .zip(&out)
-            .filter(|(u, _)| u.kind == UnitKind::BlendUnit);
-        let (area_mm2, energy_pj) = priced.clone().fold((0.0, 0.0), |(a, e), (_, c)| {
-            (a + c.area_mm2, e + c.energy_pj)
-        });
-        let fragments: u64 = priced.map(|(u, _)| u.items_in).sum();
-        BlendCost {
-            mode: b.mode.name().to_string(),
-            priced_as: blend_figures(tech, b.mode, Op::Add).0.to_string(),
-            fragments,
-            area_mm2,
-            energy_pj,
-            energy_pj_per_fragment: (fragments > 0).then(|| energy_pj / fragments as f64),
-            accumulation_bytes_per_pixel: b.mode.bytes_per_pixel(),
-            accumulation_energy_pj: work.accumulation_bytes as f64 * tech.dram.pj_per_byte,
-        }
-    });
+    let blend = work
+        .blend
+        .as_ref()
+        .map(|b| blend_cost(tech, b.mode, &units, &out, work.accumulation_bytes));
     CostReport {
-        tech: TechUsed {
-            name: tech.name.clone(),
-            node_nm: tech.node_nm,
-            dram_kind: tech.dram.kind,
-            dram_pj_per_byte: tech.dram.pj_per_byte,
-        },
+        tech: TechUsed::of(tech),
         area_mm2,
         energy_pj,
         sram_leakage_pj: out.iter().map(|u| u.fifo_leakage_pj).sum(),
@@ -447,6 +426,47 @@ pub fn cost_at(
             })
             .collect(),
         per_busy_cycle,
+    }
+}
+
+impl TechUsed {
+    /// What report.json says of the technology that priced the frame.
+    fn of(tech: &Tech) -> TechUsed {
+        TechUsed {
+            name: tech.name.clone(),
+            node_nm: tech.node_nm,
+            dram_kind: tech.dram.kind,
+            dram_pj_per_byte: tech.dram.pj_per_byte,
+        }
+    }
+}
+
+/// The blend units' part of a discoid frame's cost: their area and energy, summed from
+/// the priced units (`out`, in the order of `units`).
+fn blend_cost(
+    tech: &Tech,
+    mode: BlendMode,
+    units: &[&UnitCycles],
+    out: &[UnitCost],
+    accumulation_bytes: u64,
+) -> BlendCost {
+    let priced = units
+        .iter()
+        .zip(out)
+        .filter(|(u, _)| u.kind == UnitKind::BlendUnit);
+    let (area_mm2, energy_pj) = priced.clone().fold((0.0, 0.0), |(a, e), (_, c)| {
+        (a + c.area_mm2, e + c.energy_pj)
+    });
+    let fragments: u64 = priced.map(|(u, _)| u.items_in).sum();
+    BlendCost {
+        mode: mode.name().to_string(),
+        priced_as: blend_figures(tech, mode, Op::Add).0.to_string(),
+        fragments,
+        area_mm2,
+        energy_pj,
+        energy_pj_per_fragment: (fragments > 0).then(|| energy_pj / fragments as f64),
+        accumulation_bytes_per_pixel: mode.bytes_per_pixel(),
+        accumulation_energy_pj: accumulation_bytes as f64 * tech.dram.pj_per_byte,
     }
 }
 

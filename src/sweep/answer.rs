@@ -154,43 +154,7 @@ pub(super) fn answer_files(records: &[Value], ask: &Ask) -> Result<Option<Vec<Fi
     if !any {
         return Ok(None);
     }
-    let budget_mm2 = ask.budget_mm2;
-    let mut page = format!(
-        "# The answer: lembos against triangles\n\n\
-         Made by `lembo-sim sweep` from this directory's runs (DESIGN.md §7): every run whose \
-         unit is within the spec's area budget of {budget_mm2} mm², measured against the exact \
-         reference. A run is named by its parameters and the unit that bounds it. A deciding \
-         run is flagged **unbracketed** where it sits at the fine end of a series that was \
-         not bracketed (one of its last two steps still gained {margin} dB or more, and a \
-         finer knob was not run), **coarse end** where a coarser knob was not \
-         tried and might reach the target for less, and **fixed count** where the unit that \
-         bounds it had one count in every run of its path.\n\n"
-    );
-    if !shared.is_empty() {
-        page += &shared;
-        page += "\n";
-    }
-    page += &format!(
-        "## Bracketing\n\nEach series is a scene's runs of one path that differ only in the \
-         knob and the architecture (their images do not depend on the architecture). \
-         {}\n\n| scene | path | series | levels (best PSNR) | how it ended |\n|---|---|---|---|---|\n",
-        match ask.refine {
-            Some(r) => format!(
-                "Refined beyond the grid (k halved down to {}, n doubled up to {}{}) until the \
-                 last two levels each gained under {} dB over the best coarser one; each finer level \
-                 runs on the series' fastest and most frugal architectures at the level before.",
-                r.k_floor,
-                r.tess_cap,
-                r.cycle_cap
-                    .map_or(String::new(), |c| format!(", until a run took over {c} cycles")),
-                r.margin_db
-            ),
-            None => format!(
-                "The spec asks for no refinement (`refine`): a series whose last two steps \
-                 did not each gain under {margin} dB stops at the edge of its grid."
-            ),
-        }
-    );
+    let mut page = preamble(ask, margin, &shared);
     page += &bracket;
     page += "\n## Speed-up against target error\n\nFor each target, each path's fewest cycles \
              and least energy with which a run within the budget reaches it (a path reaches a \
@@ -246,6 +210,49 @@ pub(super) fn answer_files(records: &[Value], ask: &Ask) -> Result<Option<Vec<Fi
     let mut files = vec![("answer.md".to_string(), page.into_bytes())];
     files.extend(figures);
     Ok(Some(files))
+}
+
+/// answer.md's title, what it is made of, the shared parameters and the bracketing
+/// section's head.
+fn preamble(ask: &Ask, margin: f64, shared: &str) -> String {
+    let budget_mm2 = ask.budget_mm2;
+    let mut page = format!(
+        "# The answer: lembos against triangles\n\n\
+         Made by `lembo-sim sweep` from this directory's runs (DESIGN.md §7): every run whose \
+         unit is within the spec's area budget of {budget_mm2} mm², measured against the exact \
+         reference. A run is named by its parameters and the unit that bounds it. A deciding \
+         run is flagged **unbracketed** where it sits at the fine end of a series that was \
+         not bracketed (one of its last two steps still gained {margin} dB or more, and a \
+         finer knob was not run), **coarse end** where a coarser knob was not \
+         tried and might reach the target for less, and **fixed count** where the unit that \
+         bounds it had one count in every run of its path.\n\n"
+    );
+    if !shared.is_empty() {
+        page += shared;
+        page += "\n";
+    }
+    page += &format!(
+        "## Bracketing\n\nEach series is a scene's runs of one path that differ only in the \
+         knob and the architecture (their images do not depend on the architecture). \
+         {}\n\n| scene | path | series | levels (best PSNR) | how it ended |\n|---|---|---|---|---|\n",
+        match ask.refine {
+            Some(r) => format!(
+                "Refined beyond the grid (k halved down to {}, n doubled up to {}{}) until the \
+                 last two levels each gained under {} dB over the best coarser one; each finer level \
+                 runs on the series' fastest and most frugal architectures at the level before.",
+                r.k_floor,
+                r.tess_cap,
+                r.cycle_cap
+                    .map_or(String::new(), |c| format!(", until a run took over {c} cycles")),
+                r.margin_db
+            ),
+            None => format!(
+                "The spec asks for no refinement (`refine`): a series whose last two steps \
+                 did not each gain under {margin} dB stops at the edge of its grid."
+            ),
+        }
+    );
+    page
 }
 
 /// A scene's name as a file name's part.

@@ -89,7 +89,7 @@ impl Refine {
         check_k(k_floor).map_err(|why| Error::invalid(file, "refine.k_floor", k_floor, why))?;
         let tess_cap = f.tess_cap.unwrap_or(d.tess_cap);
         crate::job::check_tess_range(tess_cap)
-            .map_err(|e| super::grid::reword(e, file, "refine.tess_cap"))?;
+            .map_err(|e| super::names::reword(e, file, "refine.tess_cap"))?;
         if f.cycle_cap == Some(0) {
             return Err(Error::invalid(
                 file,
@@ -234,7 +234,7 @@ impl Measured {
     /// Whether the run is a sensitivity variant (`super::sensitivity`), not one of the
     /// grid's.
     pub fn is_variant(&self) -> bool {
-        self.params.contains_key(super::sensitivity::PARAM)
+        self.params.contains_key(super::names::SENSITIVITY)
     }
 
     /// Whether the unit fits `budget` (every run fits no budget).
@@ -256,7 +256,7 @@ impl Measured {
     /// series.
     pub fn series_key(&self) -> String {
         self.params_without(|name| {
-            name == "path" || name == self.knob.param() || name.starts_with(super::spec::ARCH)
+            name == "path" || name == self.knob.param() || name.starts_with(super::names::ARCH)
         })
     }
 

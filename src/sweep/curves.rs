@@ -139,7 +139,7 @@ impl Targets {
             let Some(list) = list else { continue };
             let field = format!("targets.{}", metric.name());
             if list.is_empty() {
-                return Err(super::spec::empty_list(file, &field));
+                return Err(super::names::empty_list(file, &field));
             }
             let mut values = Vec::with_capacity(list.len());
             for (j, v) in list.iter().enumerate() {

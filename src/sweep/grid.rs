@@ -2,7 +2,8 @@
 //! (`Given`), checked against the render settings and the architecture's shape, and
 //! multiplied out into points (`Expander`).
 
-use super::sensitivity::{Sensitivity, Vary, PARAM};
+use super::names::SENSITIVITY as PARAM;
+use super::sensitivity::{Sensitivity, Vary};
 use super::spec::{
     empty_list, key, too_many, Params, Point, Setting, ARCH, MAX_RUNS, SCENES, SETTINGS, TECH,
 };
@@ -511,21 +512,4 @@ pub(super) fn set_arch_field(
 
 pub(super) use crate::json::{field_at as arch_field, set_field};
 
-/// The same error, said of another file and field (the spec's, for a check written for
-/// the command line or an architecture file).
-pub(super) fn reword(e: Error, file: &str, field: &str) -> Error {
-    match e {
-        Error::Invalid { value, reason, .. } => Error::Invalid {
-            file: file.into(),
-            field: field.into(),
-            value,
-            reason,
-        },
-        Error::Parse { message, .. } => Error::Parse {
-            file: file.into(),
-            field: field.into(),
-            message,
-        },
-        other => other,
-    }
-}
+pub(super) use super::names::reword;

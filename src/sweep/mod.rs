@@ -50,6 +50,7 @@ pub mod curves;
 mod grid;
 pub mod lock;
 pub mod merge;
+mod names;
 mod parse;
 pub mod plan;
 pub mod results;

@@ -73,35 +73,7 @@ impl Spec {
             }
         }
 
-        let refine = match &f.refine {
-            None => None,
-            Some(r) => {
-                if f.reference == Some(false) {
-                    return Err(Error::invalid(
-                        file,
-                        "refine",
-                        "present",
-                        "refinement follows the error against the exact reference; it needs `reference` true",
-                    ));
-                }
-                Some(Refine::from_file(file, r)?)
-            }
-        };
-
-        let targets = match &f.targets {
-            None => Targets::default(),
-            Some(t) => {
-                if f.area_budget_mm2.is_none() {
-                    return Err(Error::invalid(
-                        file,
-                        "targets",
-                        "present",
-                        "the answer's targets need `area_budget_mm2` (the answer compares the paths within it)",
-                    ));
-                }
-                Targets::from_file(file, t)?
-            }
-        };
+        let (refine, targets) = answer_settings(file, &f)?;
 
         let mut ex = Expander {
             file,
@@ -183,4 +155,40 @@ impl Spec {
             scenes: f.scenes,
         })
     }
+}
+
+/// The answer's settings of a spec (`refine`, `targets`), checked: refinement needs the
+/// reference, targets an area budget.
+fn answer_settings(file: &str, f: &SpecFile) -> Result<(Option<Refine>, Targets)> {
+    let refine = match &f.refine {
+        None => None,
+        Some(r) => {
+            if f.reference == Some(false) {
+                return Err(Error::invalid(
+                        file,
+                        "refine",
+                        "present",
+                        "refinement follows the error against the exact reference; it needs `reference` true",
+                    ));
+            }
+            Some(Refine::from_file(file, r)?)
+        }
+    };
+
+    let targets = match &f.targets {
+        None => Targets::default(),
+        Some(t) => {
+            if f.area_budget_mm2.is_none() {
+                return Err(Error::invalid(
+                        file,
+                        "targets",
+                        "present",
+                        "the answer's targets need `area_budget_mm2` (the answer compares the paths within it)",
+                    ));
+            }
+            Targets::from_file(file, t)?
+        }
+    };
+
+    Ok((refine, targets))
 }

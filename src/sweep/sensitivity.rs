@@ -24,14 +24,14 @@
 //! other path.
 
 use super::curves::{Metric, METRICS};
-use super::spec::ARCH;
+use super::names::{ARCH, TECH};
 use crate::error::{Error, Result};
 use crate::job::PrimitivePath;
 use serde::Deserialize;
 use serde_json::Value;
 
 /// The parameter that marks a variant point.
-pub const PARAM: &str = "sensitivity";
+pub use super::names::SENSITIVITY as PARAM;
 
 /// The default factors: halved and doubled.
 pub const DEFAULT_FACTORS: [f64; 2] = [0.5, 2.0];
@@ -160,7 +160,7 @@ impl Sensitivity {
             }
         };
         if f.params.is_empty() {
-            return Err(super::spec::empty_list(file, "sensitivity.params"));
+            return Err(super::names::empty_list(file, "sensitivity.params"));
         }
         let mut params: Vec<Param> = Vec::new();
         for (i, entry) in f.params.iter().enumerate() {
@@ -268,7 +268,7 @@ fn param(file: &str, field: &str, entry: &Value, factors: [f64; 2]) -> Result<Pa
             })
         }
     };
-    if !name.starts_with(ARCH) && !name.starts_with("tech.") {
+    if !name.starts_with(ARCH) && !name.starts_with(TECH) {
         return Err(Error::invalid(
             file,
             field,

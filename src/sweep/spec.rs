@@ -36,11 +36,7 @@ pub(super) const SETTINGS: [&str; 8] = [
 /// A block's or point's scene restriction: not a parameter.
 pub(super) const SCENES: &str = "scenes";
 
-/// The prefix of architecture parameters.
-pub(super) const ARCH: &str = "arch.";
-
-/// The prefix of technology parameters (the figures of `sim/tech/45nm.json`).
-pub(super) const TECH: &str = "tech.";
+pub(super) use super::names::{empty_list, ARCH, TECH};
 
 // ---- The file's shape ----------------------------------------------------------------
 
@@ -295,10 +291,6 @@ pub(super) fn check_name(file: &str, name: &str) -> Result<()> {
             "must be 1 to 64 of A-Z, a-z, 0-9, `_` and `-`: it names the output directory out/sweeps/<name>/",
         ))
     }
-}
-
-pub(super) fn empty_list(file: &str, field: &str) -> Error {
-    Error::invalid(file, field, "[]", "must not be an empty list")
 }
 
 pub(super) fn too_many(file: &str, field: &str, runs: usize) -> Error {

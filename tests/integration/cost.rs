@@ -717,9 +717,10 @@ const BRUNHAVER: (f64, f64) = (4.1 / 3.0, 2.9 / 3.0);
 /// rasterizer on a micropolygon frame, the bunny at n = 6 (about one fragment a
 /// triangle), against Brunhaver et al., at the rate the two units sustain (triangles over
 /// the busier one's busy cycles: the frame itself is bound by the memory port). Energy per
-/// triangle stays within 2x of theirs. Area per throughput stays within 2x once the
-/// attribute planes are taken out (their unit interpolates nothing: its micropolygons
-/// arrive shaded), and within 2.5x with them.
+/// triangle stays within 2x of theirs. Area per throughput, sized at the design point
+/// (issue 48) rather than for this frame, stays within 4x once the attribute planes are
+/// taken out (their unit interpolates nothing: its micropolygons arrive shaded), and within
+/// 5x with them.
 #[test]
 fn a_micropolygon_frame_is_priced_near_brunhaver_et_al() {
     // Calibrated with every triangle set up and rasterized: culling off.
@@ -766,12 +767,18 @@ fn a_micropolygon_frame_is_priced_near_brunhaver_et_al() {
         (0.5..=2.0).contains(&energy_ratio),
         "energy a triangle {energy_ratio:.2}x Brunhaver et al."
     );
+    // Since issue 48 a unit is sized for its architecture's design point, the most
+    // operations a busy cycle over the calibration set (DESIGN.md §12), not for this frame:
+    // the triangle setup's is set by n = 1 on chip, three new vertices a triangle, where
+    // this frame shares them. Its area per throughput is therefore a worst-case design's,
+    // 3.3x theirs without the planes (about 2x when it was this frame's): the bounds below
+    // are that design's, and the energy's stays 2x.
     assert!(
-        (0.5..=2.0).contains(&coverage_ratio),
+        (0.5..=4.0).contains(&coverage_ratio),
         "area per G triangles/s without the planes {coverage_ratio:.2}x Brunhaver et al."
     );
     assert!(
-        (0.5..=2.5).contains(&area_ratio),
+        (0.5..=5.0).contains(&area_ratio),
         "area per G triangles/s {area_ratio:.2}x Brunhaver et al."
     );
     eprintln!(

@@ -1,0 +1,38 @@
+//! The sweep's lowest file: the prefixes and markers of parameter names, and the errors
+//! every spec field's check builds. Imports nothing of the sweep, so the spec's own types
+//! (`spec`) and the answer's settings (`bracket`, `curves`, `sensitivity`) can all use it.
+
+use crate::error::Error;
+
+/// The prefix of architecture parameters.
+pub(super) const ARCH: &str = "arch.";
+
+/// The prefix of technology parameters.
+pub(super) const TECH: &str = "tech.";
+
+/// The parameter that marks a sensitivity variant's point (`arch.rop.count x0.5`).
+pub const SENSITIVITY: &str = "sensitivity";
+
+/// An empty list where one is needed, refused naming its field.
+pub(super) fn empty_list(file: &str, field: &str) -> Error {
+    Error::invalid(file, field, "[]", "must not be an empty list")
+}
+
+/// The same error, said of another file and field (the spec's, for a check written for
+/// the command line or an architecture file).
+pub(super) fn reword(e: Error, file: &str, field: &str) -> Error {
+    match e {
+        Error::Invalid { value, reason, .. } => Error::Invalid {
+            file: file.into(),
+            field: field.into(),
+            value,
+            reason,
+        },
+        Error::Parse { message, .. } => Error::Parse {
+            file: file.into(),
+            field: field.into(),
+            message,
+        },
+        other => other,
+    }
+}
