@@ -19,18 +19,21 @@
 //! sweep held at one value. Remaining ties go to the run listed first in the sweep. Only
 //! runs with both a cost and an accuracy count (timed runs measured against the reference).
 
-use super::bracket::{series, Knob, Limits, Measured, Refine, Series, DEFAULT_MARGIN_DB};
+use super::bracket::{
+    series, Knob, Limits, Measured, Refine, Series, DEFAULT_COST_MARGIN, DEFAULT_MARGIN_DB,
+};
 use super::curves::{curve, default_targets, reach, Metric, Targets, METRICS};
+use super::flips;
+use super::reproduce::render_command;
 use super::sensitivity::Sensitivity;
 use crate::config::ArchConfig;
 use crate::error::Result;
 use crate::graph::KINDS;
-use crate::job::PrimitivePath;
 use crate::job::MAX_TRIANGLES;
-use crate::plot::speedup::{speedup_svg, tornado_svg, SpeedupFigure, TornadoBar};
-use crate::tolerance::K_RANGE;
+use crate::plot::speedup::{speedup_svg, SpeedupFigure};
 use serde_json::Value;
-use std::collections::BTreeSet;
+use std::cell::RefCell;
+use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
 
 /// A file the answer writes: its name and bytes.
@@ -74,11 +77,18 @@ pub(super) fn answer_files(records: &[Value], ask: &Ask) -> Result<Option<Vec<Fi
     let all_series = series(&runs, &limits);
     let (constant, shared) = shared_params(&runs);
     let margin = ask.refine.map_or(DEFAULT_MARGIN_DB, |r| r.margin_db);
+    let commands: BTreeMap<usize, String> = records
+        .iter()
+        .filter_map(|r| Some((r["index"].as_u64()? as usize, render_command(r)?)))
+        .collect();
     let names = Names {
         runs: &runs,
+        commands: &commands,
+        named: RefCell::new(BTreeSet::new()),
         series: &all_series,
         constant: &constant,
         margin,
+        cost_margin: ask.refine.map_or(DEFAULT_COST_MARGIN, |r| r.cost_margin),
     };
 
     let mut scenes: Vec<&str> = Vec::new();
@@ -87,10 +97,10 @@ pub(super) fn answer_files(records: &[Value], ask: &Ask) -> Result<Option<Vec<Fi
             scenes.push(&m.scene);
         }
     }
-    let mut figures: Vec<Figure> = Vec::new();
-    let (mut area, mut energy, mut bracket) = (String::new(), String::new(), String::new());
-    let mut flips = String::new();
-    let mut curves: Vec<String> = vec![String::new(); METRICS.len()];
+    let mut sections = Sections {
+        curves: vec![String::new(); METRICS.len()],
+        ..Sections::default()
+    };
     let mut any = false;
     for scene in scenes {
         let within = |path: &str| -> Vec<&Measured> {
@@ -99,117 +109,179 @@ pub(super) fn answer_files(records: &[Value], ask: &Ask) -> Result<Option<Vec<Fi
                 .collect()
         };
         let (lembo, triangle) = (within("lembo"), within("triangle"));
-        for s in all_series.iter().filter(|s| s.scene == scene) {
-            let _ = writeln!(bracket, "{}", names.series_row(s));
-        }
-        let (Some(bl), Some(bt)) = (most_accurate(&lembo), most_accurate(&triangle)) else {
-            let _ = writeln!(
-                area,
-                "| {scene} | no run of both paths within {} mm² | | |",
-                ask.budget_mm2
-            );
-            continue;
+        let of_scene = Scene {
+            name: scene,
+            lembo: &lembo,
+            triangle: &triangle,
+            variants: &variants,
         };
-        any = true;
-        let _ = writeln!(
-            area,
-            "| {scene} | {} | {} | {}; {}, {} |",
-            names.cell_fine(bl),
-            names.cell_fine(bt),
-            more_accurate(bl, bt),
-            ratio("cycles", bl.cycles_f(), bt.cycles_f()),
-            ratio("µJ", bl.uj(), bt.uj()),
-        );
-        energy += &equal_energy_row(scene, &lembo, &triangle, &names);
-        if let Some(study) = &ask.sensitivity {
-            let (section, figs) = tornado(scene, study, &lembo, &triangle, &variants, &limits)?;
-            flips += &section;
-            figures.extend(figs);
-        }
-        for (i, &metric) in METRICS.iter().enumerate() {
-            let stated = ask.targets.of(metric).map(<[f64]>::to_vec);
-            let targets = stated.unwrap_or_else(|| default_targets(&lembo, &triangle, metric));
-            for t in targets {
-                curves[i] += &names.target_row(scene, metric, t, &lembo, &triangle);
-            }
-            let points = curve(&lembo, &triangle, metric);
-            if points.is_empty() {
-                continue;
-            }
-            let cycles: Vec<(f64, f64)> = points.iter().map(|p| (p.target, p.cycles)).collect();
-            let energy: Vec<(f64, f64)> = points.iter().map(|p| (p.target, p.energy)).collect();
-            let svg = speedup_svg(&SpeedupFigure {
-                scene,
-                metric: metric.title(),
-                higher_is_stricter: metric.higher_is_better(),
-                cycles: &cycles,
-                energy: &energy,
-            })?;
-            figures.push((
-                format!("speedup_{}_{}.svg", metric.name(), file_stem(scene)),
-                svg.into_bytes(),
-            ));
-        }
+        any |= of_scene.write(ask, &names, &limits, &mut sections)?;
     }
     if !any {
         return Ok(None);
     }
-    let mut page = preamble(ask, margin, &shared);
-    page += &bracket;
-    page += "\n## Speed-up against target error\n\nFor each target, each path's fewest cycles \
-             and least energy with which a run within the budget reaches it (a path reaches a \
-             target at cost C if any of its runs costing at most C reaches it). The figures \
-             (`speedup_<metric>_<scene>.svg`) draw the speed-up at every level a run measured \
-             that both paths reach.\n";
-    for (i, &metric) in METRICS.iter().enumerate() {
-        let how = match ask.targets.of(metric) {
-            Some(_) => "the spec's targets".to_string(),
-            None => "three levels from the runs: the stricter of the two paths' worst, the \
-                     looser of their best, and their middle"
-                .to_string(),
-        };
-        let _ = write!(
-            page,
-            "\n### {} ({})\n\n| scene | target | lembo, fastest | triangle, fastest | cycles | \
-             lembo, least energy | triangle, least energy | energy |\n|---|---|---|---|---|---|---|---|\n",
-            metric.title(),
-            how
-        );
-        page += &curves[i];
-    }
-    page += "\n## At equal area\n\nEach path's most accurate run (PSNR) within the budget (ties: \
-             the fastest).\n\n| scene | lembo | triangle | comparison |\n|---|---|---|---|\n";
-    page += &area;
-    page += "\n## At equal energy\n\nThe energy cap is the least at which both paths have a \
-             run within the budget (the higher of their least energies a frame); each path's \
-             most accurate run within the area budget spending at most that (ties: the \
-             fastest).\n\n| scene | cap | lembo | triangle | comparison |\n|---|---|---|---|---|\n";
-    page += &energy;
-    if let Some(study) = &ask.sensitivity {
-        let (metric, target) = study.target;
-        let _ = write!(
-            page,
-            "\n## What flips it\n\nOne parameter at a time, scaled down and up (or set low and \
-             high) with every other setting at the grid's: the lembo path's advantage at a {} \
-             target of {} (the triangle path's fewest cycles over the lembo path's, and its \
-             least energy over the lembo path's), against the same runs on the spec's \
-             architecture as it is (the grid's points that set no `arch.` field). A variant that \
-             turns the advantage to the other side of 1 is marked **flips**; one whose runs \
-             exceed the area budget is said to.\n",
-            metric.title(),
-            metric.show(target)
-        );
-        page += &flips;
-    }
-    if !figures.is_empty() {
-        page += "\n## Figures\n\n";
-        for (name, _) in &figures {
-            let _ = writeln!(page, "- [{name}]({name})");
-        }
-    }
+    let page = sections.page(ask, margin, &shared, &names);
     let mut files = vec![("answer.md".to_string(), page.into_bytes())];
-    files.extend(figures);
+    files.extend(sections.figures);
     Ok(Some(files))
+}
+
+/// answer.md's sections as the scenes fill them, and the figures.
+#[derive(Default)]
+struct Sections {
+    bracket: String,
+    /// One a metric, in [`METRICS`]' order.
+    curves: Vec<String>,
+    area: String,
+    time: String,
+    energy: String,
+    flips: String,
+    figures: Vec<Figure>,
+}
+
+/// One scene's runs within the budget, and the sensitivity variants of every scene.
+struct Scene<'a> {
+    name: &'a str,
+    lembo: &'a [&'a Measured],
+    triangle: &'a [&'a Measured],
+    variants: &'a [Measured],
+}
+
+impl Scene<'_> {
+    /// Adds the scene's rows and figures to `out`; false when it has no run of both paths
+    /// within the budget (its bracketing and equal-area rows say so).
+    fn write(&self, ask: &Ask, names: &Names, limits: &Limits, out: &mut Sections) -> Result<bool> {
+        let (scene, lembo, triangle) = (self.name, self.lembo, self.triangle);
+        for s in names.series.iter().filter(|s| s.scene == scene) {
+            let _ = writeln!(out.bracket, "{}", names.series_row(s));
+        }
+        let (Some(bl), Some(bt)) = (most_accurate(lembo), most_accurate(triangle)) else {
+            let _ = writeln!(
+                out.area,
+                "| {scene} | no run of both paths within {} mm² | | |",
+                ask.budget_mm2
+            );
+            return Ok(false);
+        };
+        let _ = writeln!(
+            out.area,
+            "| {scene} | {} | {} | {}; {}, {} |",
+            names.cell_fine(bl),
+            names.cell_fine(bt),
+            names.verdict(bl, bt),
+            ratio("cycles", bl.cycles_f(), bt.cycles_f()),
+            ratio("µJ", bl.uj(), bt.uj()),
+        );
+        out.time += &equal_cap_row(scene, lembo, triangle, names, Cost::Cycles);
+        out.energy += &equal_cap_row(scene, lembo, triangle, names, Cost::Energy);
+        if let Some(study) = &ask.sensitivity {
+            let (section, figs) =
+                flips::section(scene, study, lembo, triangle, self.variants, limits)?;
+            out.flips += &section;
+            out.figures.extend(figs);
+        }
+        for (i, &metric) in METRICS.iter().enumerate() {
+            let stated = ask.targets.of(metric).map(<[f64]>::to_vec);
+            let targets = stated.unwrap_or_else(|| default_targets(lembo, triangle, metric));
+            for t in targets {
+                out.curves[i] += &names.target_row(scene, metric, t, lembo, triangle);
+            }
+            out.figures.extend(self.speedup_figure(metric)?);
+        }
+        Ok(true)
+    }
+
+    /// `speedup_<metric>_<scene>.svg`; None when no level is reached by both paths.
+    fn speedup_figure(&self, metric: Metric) -> Result<Option<Figure>> {
+        let points = curve(self.lembo, self.triangle, metric);
+        if points.is_empty() {
+            return Ok(None);
+        }
+        let cycles: Vec<(f64, f64)> = points.iter().map(|p| (p.target, p.cycles)).collect();
+        let energy: Vec<(f64, f64)> = points.iter().map(|p| (p.target, p.energy)).collect();
+        let svg = speedup_svg(&SpeedupFigure {
+            scene: self.name,
+            metric: metric.title(),
+            higher_is_stricter: metric.higher_is_better(),
+            cycles: &cycles,
+            energy: &energy,
+        })?;
+        Ok(Some((
+            format!("speedup_{}_{}.svg", metric.name(), file_stem(self.name)),
+            svg.into_bytes(),
+        )))
+    }
+}
+
+impl Sections {
+    /// answer.md: the preamble, then each section with its head.
+    fn page(&self, ask: &Ask, margin: f64, shared: &str, names: &Names) -> String {
+        let mut page = preamble(ask, margin, shared);
+        page += &self.bracket;
+        page += "\n## Speed-up against target error\n\nFor each target, each path's fewest \
+                 cycles and least energy with which a run within the budget reaches it (a path \
+                 reaches a target at cost C if any of its runs costing at most C reaches it). The \
+                 figures (`speedup_<metric>_<scene>.svg`) draw the speed-up at every level a run \
+                 measured that both paths reach.\n";
+        for (i, &metric) in METRICS.iter().enumerate() {
+            let how = match ask.targets.of(metric) {
+                Some(_) => "the spec's targets",
+                None => {
+                    "three levels from the runs: the stricter of the two paths' worst, the \
+                     looser of their best, and their middle"
+                }
+            };
+            let _ = write!(
+                page,
+                "\n### {} ({how})\n\n| scene | target | lembo, fastest | triangle, fastest | \
+                 cycles | lembo, least energy | triangle, least energy | energy |\n\
+                 |---|---|---|---|---|---|---|---|\n",
+                metric.title(),
+            );
+            page += &self.curves[i];
+        }
+        page += "\n## At equal area\n\nEach path's most accurate run (PSNR) within the budget \
+                 (ties: the fastest). Where either sits at the fine end of a series that was not \
+                 bracketed, no winner is named: a finer knob might change the answer.\n\n\
+                 | scene | lembo | triangle | comparison |\n|---|---|---|---|\n";
+        page += &self.area;
+        page += "\n## At equal time\n\nThe cycle cap is the least at which both paths have a \
+                 run within the budget (the higher of their fewest cycles a frame); each path's \
+                 most accurate run within the area budget taking at most that (ties: the \
+                 fastest).\n\n| scene | cap | lembo | triangle | comparison |\n\
+                 |---|---|---|---|---|\n";
+        page += &self.time;
+        page += "\n## At equal energy\n\nThe energy cap is the least at which both paths have \
+                 a run within the budget (the higher of their least energies a frame); each \
+                 path's most accurate run within the area budget spending at most that (ties: \
+                 the fastest).\n\n| scene | cap | lembo | triangle | comparison |\n\
+                 |---|---|---|---|---|\n";
+        page += &self.energy;
+        if let Some(study) = &ask.sensitivity {
+            let (metric, target) = study.target;
+            let _ = write!(
+                page,
+                "\n## What flips it\n\nOne parameter at a time, scaled down and up (or set low \
+                 and high) with every other setting at the grid's: the lembo path's advantage at \
+                 a {} target of {} (the triangle path's fewest cycles over the lembo path's, and \
+                 its least energy over the lembo path's), against the same runs on the spec's \
+                 architecture as it is (the grid's points that set no `arch.` field). A variant \
+                 that turns the advantage to the other side of 1 is marked **flips**; one whose \
+                 runs exceed the area budget is said to.\n",
+                metric.title(),
+                metric.show(target)
+            );
+            page += &self.flips;
+        }
+        page += &names.reproduce();
+        if !self.figures.is_empty() {
+            page += "\n## Figures\n\n";
+            for (name, _) in &self.figures {
+                let _ = writeln!(page, "- [{name}]({name})");
+            }
+        }
+        page
+    }
 }
 
 /// answer.md's title, what it is made of, the shared parameters and the bracketing
@@ -223,9 +295,12 @@ fn preamble(ask: &Ask, margin: f64, shared: &str) -> String {
          reference. A run is named by its parameters and the unit that bounds it. A deciding \
          run is flagged **unbracketed** where it sits at the fine end of a series that was \
          not bracketed (one of its last two steps still gained {margin} dB or more, and a \
-         finer knob was not run), **coarse end** where a coarser knob was not \
-         tried and might reach the target for less, and **fixed count** where the unit that \
-         bounds it had one count in every run of its path.\n\n"
+         finer knob was not run), **coarse end** where it sits at the coarse end of its \
+         architecture's runs and its series' coarse side was not bracketed (the coarsest level \
+         still saved {cost}% or more of the cycles or energy of the level finer than it, and a \
+         coarser knob was not run), and **fixed count** where the unit that bounds it had one \
+         count in every run of its path.\n\n",
+        cost = 100.0 * ask.refine.map_or(DEFAULT_COST_MARGIN, |r| r.cost_margin)
     );
     if !shared.is_empty() {
         page += shared;
@@ -234,17 +309,23 @@ fn preamble(ask: &Ask, margin: f64, shared: &str) -> String {
     page += &format!(
         "## Bracketing\n\nEach series is a scene's runs of one path that differ only in the \
          knob and the architecture (their images do not depend on the architecture). \
-         {}\n\n| scene | path | series | levels (best PSNR) | how it ended |\n|---|---|---|---|---|\n",
+         {}\n\n| scene | path | series | levels (best PSNR) | how the fine end ended | how the coarse end ended |\n|---|---|---|---|---|---|\n",
         match ask.refine {
             Some(r) => format!(
                 "Refined beyond the grid (k halved down to {}, n doubled up to {}{}) until the \
                  last two levels each gained under {} dB over the best coarser one; each finer level \
-                 runs on the series' fastest and most frugal architectures at the level before.",
+                 runs on the series' fastest and most frugal architectures at the level before. \
+                 On the coarse side, k doubled up to {} on the fastest and most frugal \
+                 architectures at the coarsest level, until a coarser level saved under {}% of \
+                 the fewest cycles and of the least energy of the level finer than it (n = 1 is \
+                 the coarsest n there is).",
                 r.k_floor,
                 r.tess_cap,
                 r.cycle_cap
                     .map_or(String::new(), |c| format!(", until a run took over {c} cycles")),
-                r.margin_db
+                r.margin_db,
+                r.k_ceiling,
+                100.0 * r.cost_margin
             ),
             None => format!(
                 "The spec asks for no refinement (`refine`): a series whose last two steps \
@@ -256,7 +337,7 @@ fn preamble(ask: &Ask, margin: f64, shared: &str) -> String {
 }
 
 /// A scene's name as a file name's part.
-fn file_stem(scene: &str) -> String {
+pub(super) fn file_stem(scene: &str) -> String {
     scene
         .chars()
         .map(|c| {
@@ -352,27 +433,61 @@ fn shared_params(runs: &[Measured]) -> (Vec<(String, Value)>, String) {
     (constant, shared)
 }
 
-/// The equal-energy row of `scene`.
-fn equal_energy_row(
+/// The cost an equal-cost row caps.
+#[derive(Clone, Copy)]
+enum Cost {
+    Cycles,
+    Energy,
+}
+
+impl Cost {
+    fn of(self, m: &Measured) -> f64 {
+        match self {
+            Cost::Cycles => m.cycles_f(),
+            Cost::Energy => m.uj(),
+        }
+    }
+    fn show(self, cap: f64) -> String {
+        match self {
+            Cost::Cycles => format!("{cap:.0} cycles"),
+            Cost::Energy => format!("{cap:.0} µJ"),
+        }
+    }
+}
+
+/// The row of `scene` at equal `cost`: the cap is the higher of the two paths' least cost
+/// within the area budget; each path's most accurate run costing at most that.
+fn equal_cap_row(
     scene: &str,
     lembo: &[&Measured],
     triangle: &[&Measured],
     names: &Names,
+    cost: Cost,
 ) -> String {
-    let least = |runs: &[&Measured]| runs.iter().map(|r| r.uj()).fold(f64::MAX, f64::min);
+    let least = |runs: &[&Measured]| runs.iter().map(|r| cost.of(r)).fold(f64::MAX, f64::min);
     let cap = least(lembo).max(least(triangle));
     let (kl, kt): (Vec<&Measured>, Vec<&Measured>) = (
-        lembo.iter().copied().filter(|r| r.uj() <= cap).collect(),
-        triangle.iter().copied().filter(|r| r.uj() <= cap).collect(),
+        lembo
+            .iter()
+            .copied()
+            .filter(|r| cost.of(r) <= cap)
+            .collect(),
+        triangle
+            .iter()
+            .copied()
+            .filter(|r| cost.of(r) <= cap)
+            .collect(),
     );
     let (l, t) = (most_accurate(&kl), most_accurate(&kt));
-    let cell = |r: Option<&Measured>| r.map_or("no run within it".to_string(), |r| names.cell(r));
+    let cell =
+        |r: Option<&Measured>| r.map_or("no run within it".to_string(), |r| names.cell_fine(r));
     let comparison = match (l, t) {
-        (Some(l), Some(t)) => more_accurate(l, t),
+        (Some(l), Some(t)) => names.verdict(l, t),
         _ => String::new(),
     };
     format!(
-        "| {scene} | {cap:.0} µJ | {} | {} | {comparison} |\n",
+        "| {scene} | {} | {} | {} | {comparison} |\n",
+        cost.show(cap),
         cell(l),
         cell(t)
     )
@@ -381,9 +496,14 @@ fn equal_energy_row(
 /// How runs are named and flagged.
 struct Names<'a> {
     runs: &'a [Measured],
+    /// Each run's render command, by run index.
+    commands: &'a BTreeMap<usize, String>,
+    /// The runs a cell has named.
+    named: RefCell<BTreeSet<usize>>,
     series: &'a [Series],
     constant: &'a [(String, Value)],
     margin: f64,
+    cost_margin: f64,
 }
 
 impl Names<'_> {
@@ -414,8 +534,10 @@ impl Names<'_> {
 
     /// The run in a table cell, with its fixed-count flag.
     fn cell(&self, m: &Measured) -> String {
+        self.named.borrow_mut().insert(m.index);
         let mut cell = format!(
-            "{}: {} cycles, {:.0} µJ, {:.1} dB, {:.2} mm², bound by {}",
+            "run {} ({}): {} cycles, {:.0} µJ, {:.1} dB, {:.2} mm², bound by {}",
+            m.index,
             self.label(m),
             m.cycles.unwrap_or(0),
             m.uj(),
@@ -429,22 +551,51 @@ impl Names<'_> {
         cell
     }
 
-    /// The cell of a run chosen for its accuracy: flagged when it sits at the fine end of a
-    /// series that was not bracketed.
+    /// Why a run chosen for its accuracy is not an answer, if it is not: it sits at the fine
+    /// end of a series that was not bracketed (said without the leading "unbracketed: ").
+    fn open_fine(&self, m: &Measured) -> Option<String> {
+        let s = self.series_of(m)?;
+        if m.knob != s.finest() || s.stop.bracketed(self.margin) {
+            return None;
+        }
+        let why = s.stop.describe(self.margin, s.finest());
+        Some(
+            why.strip_prefix("unbracketed: ")
+                .unwrap_or(&why)
+                .to_string(),
+        )
+    }
+
+    /// The cell of a run chosen for its accuracy, flagged where [`Self::open_fine`] says.
     fn cell_fine(&self, m: &Measured) -> String {
         let mut cell = self.cell(m);
-        if let Some(s) = self.series_of(m) {
-            if m.knob == s.finest() && !s.stop.bracketed(self.margin) {
-                let why = s.stop.describe(self.margin, s.finest());
-                let why = why.strip_prefix("unbracketed: ").unwrap_or(&why);
-                let _ = write!(cell, "; **unbracketed**: {why}");
-            }
+        if let Some(why) = self.open_fine(m) {
+            let _ = write!(cell, "; **unbracketed**: {why}");
         }
         cell
     }
 
+    /// Which of the two most accurate runs is the more accurate, in words; no winner where
+    /// either is unbracketed (a finer knob might change the answer).
+    fn verdict(&self, lembo: &Measured, triangle: &Measured) -> String {
+        let open: Vec<&str> = [("lembo", lembo), ("triangle", triangle)]
+            .into_iter()
+            .filter(|(_, m)| self.open_fine(m).is_some())
+            .map(|(path, _)| path)
+            .collect();
+        if open.is_empty() {
+            more_accurate(lembo, triangle)
+        } else {
+            format!(
+                "no winner: the {} path's error still fell at its finest knob",
+                open.join(" and the ")
+            )
+        }
+    }
+
     /// The cell of a run chosen as the cheapest to reach a target: flagged when it sits at
-    /// the coarse end of its grid and a coarser knob exists.
+    /// the coarse end of its architecture's runs and its series' coarse side is not
+    /// bracketed (a coarser knob might reach the target for less).
     fn cell_coarse(&self, m: &Measured) -> String {
         let mut cell = self.cell(m);
         let coarser = self
@@ -452,16 +603,15 @@ impl Names<'_> {
             .iter()
             .filter(|r| r.scene == m.scene && r.path == m.path && r.group() == m.group())
             .any(|r| coarser_than(r.knob, m.knob));
-        let natural = match m.knob {
-            Knob::Tess(n) => n <= 1,
-            Knob::K(k) => k >= K_RANGE.1,
+        let open = match self.series_of(m) {
+            Some(s) => {
+                (!s.coarse.bracketed()).then(|| s.coarse.describe(self.cost_margin, s.coarsest()))
+            }
+            None => Some(format!("no coarser {} was run", m.knob.param())),
         };
-        if !coarser && !natural {
-            let _ = write!(
-                cell,
-                "; **coarse end**: no coarser {} was run on its architecture",
-                m.knob.param()
-            );
+        if let (false, Some(why)) = (coarser, open) {
+            let why = why.strip_prefix("unbracketed: ").unwrap_or(&why);
+            let _ = write!(cell, "; **coarse end**: {why}");
         }
         cell
     }
@@ -495,6 +645,21 @@ impl Names<'_> {
         (values.len() == 1).then(|| format!("{field} = {} in every run", value(m)))
     }
 
+    /// The section that gives each named run's command.
+    fn reproduce(&self) -> String {
+        let mut section = "\n## Reproducing the runs named above\n\nEach run above is \
+                           `lembo-sim render` with these flags, run from the spec's folder \
+                           (the paths are the spec's); compare a row's two runs' report.json \
+                           files.\n\n"
+            .to_string();
+        for index in self.named.borrow().iter() {
+            if let Some(command) = self.commands.get(index) {
+                let _ = writeln!(section, "- run {index}: `{command}`");
+            }
+        }
+        section
+    }
+
     /// A row of the bracketing table.
     fn series_row(&self, s: &Series) -> String {
         let levels = s
@@ -512,10 +677,11 @@ impl Names<'_> {
             s.key.replace('|', ", ")
         };
         format!(
-            "| {} | {} | {key} | {levels} | {} |",
+            "| {} | {} | {key} | {levels} | {} | {} |",
             s.scene,
             s.path,
-            s.stop.describe(self.margin, s.finest())
+            s.stop.describe(self.margin, s.finest()),
+            s.coarse.describe(self.cost_margin, s.coarsest())
         )
     }
 
@@ -586,152 +752,4 @@ fn coarser_than(a: Knob, b: Knob) -> bool {
         (Knob::Tess(a), Knob::Tess(b)) => a < b,
         _ => false,
     }
-}
-
-/// A scene's part of "What flips it" and its two tornado charts (cycles, energy).
-fn tornado<'a>(
-    scene: &str,
-    study: &Sensitivity,
-    lembo: &[&'a Measured],
-    triangle: &[&'a Measured],
-    variants: &'a [Measured],
-    limits: &Limits,
-) -> Result<(String, Vec<Figure>)> {
-    let (metric, target) = study.target;
-    // The grid's runs on the spec's architecture as it is: the points the variants vary.
-    let as_is = |runs: &[&'a Measured]| -> Vec<&'a Measured> {
-        runs.iter()
-            .copied()
-            .filter(|m| {
-                !m.params
-                    .keys()
-                    .any(|k| k.starts_with(super::spec::ARCH) || k.starts_with(super::spec::TECH))
-            })
-            .collect()
-    };
-    let (lembo, triangle) = (&as_is(lembo)[..], &as_is(triangle)[..]);
-    // (cycles, energy) advantage of the lembo path at the target; None where a path does
-    // not reach it.
-    let advantage = |l: &[&Measured], t: &[&Measured]| -> Option<(f64, f64)> {
-        let (rl, rt) = (reach(l, metric, target)?, reach(t, metric, target)?);
-        Some((
-            rt.fastest.cycles_f() / rl.fastest.cycles_f(),
-            rt.frugal.uj() / rl.frugal.uj(),
-        ))
-    };
-    let show = |a: Option<f64>| a.map_or("not reached".to_string(), |a| format!("{a:.2}x"));
-    let Some(base) = advantage(lembo, triangle) else {
-        return Ok((
-            format!(
-                "\n**{scene}**: one of the paths does not reach {} on the grid's runs; no sensitivity.\n",
-                metric.show(target)
-            ),
-            Vec::new(),
-        ));
-    };
-    let mut text = format!(
-        "\n**{scene}** (on the spec's architecture as it is: {:.2}x cycles, {:.2}x energy)\n\n| parameter | low | high | cycles at low | cycles at high | energy at low | energy at high |\n|---|---|---|---|---|---|---|\n",
-        base.0, base.1
-    );
-    let (mut cycles_bars, mut energy_bars) = (Vec::new(), Vec::new());
-    for p in &study.params {
-        let ends = p.ends();
-        let mut at = [None, None];
-        let mut over_budget = [false, false];
-        for (i, tag) in p.tags().iter().enumerate() {
-            let pick = |path: PrimitivePath| -> Vec<&'a Measured> {
-                variants
-                    .iter()
-                    .filter(|m| m.scene == scene && m.path == path.name())
-                    .filter(|m| {
-                        m.params.get(super::sensitivity::PARAM) == Some(&Value::from(tag.as_str()))
-                    })
-                    .filter(|m| m.within(limits.budget))
-                    .collect()
-            };
-            let l = match p.applies(PrimitivePath::Lembo) {
-                true => pick(PrimitivePath::Lembo),
-                false => lembo.to_vec(),
-            };
-            let t = match p.applies(PrimitivePath::Triangle) {
-                true => pick(PrimitivePath::Triangle),
-                false => triangle.to_vec(),
-            };
-            at[i] = advantage(&l, &t);
-            let over = |path: PrimitivePath, kept: &[&Measured]| {
-                p.applies(path)
-                    && kept.is_empty()
-                    && variants.iter().any(|m| {
-                        m.scene == scene
-                            && m.path == path.name()
-                            && m.params.get(super::sensitivity::PARAM)
-                                == Some(&Value::from(tag.as_str()))
-                    })
-            };
-            over_budget[i] = over(PrimitivePath::Lembo, &l) || over(PrimitivePath::Triangle, &t);
-        }
-        let flips = |base: f64, v: Option<f64>| {
-            v.is_some_and(|v| (v - 1.0).signum() != (base - 1.0).signum())
-        };
-        let cell = |base: f64, v: Option<f64>, over: bool| {
-            if over {
-                "over the area budget".to_string()
-            } else if flips(base, v) {
-                format!("{} **flips**", show(v))
-            } else {
-                show(v)
-            }
-        };
-        let _ = writeln!(
-            text,
-            "| {} | {} | {} | {} | {} | {} | {} |",
-            p.name,
-            ends[0],
-            ends[1],
-            cell(base.0, at[0].map(|a| a.0), over_budget[0]),
-            cell(base.0, at[1].map(|a| a.0), over_budget[1]),
-            cell(base.1, at[0].map(|a| a.1), over_budget[0]),
-            cell(base.1, at[1].map(|a| a.1), over_budget[1]),
-        );
-        for (bars, pick) in [(&mut cycles_bars, 0usize), (&mut energy_bars, 1)] {
-            let get = |a: Option<(f64, f64)>| a.map(|a| if pick == 0 { a.0 } else { a.1 });
-            bars.push(TornadoBar {
-                param: p.name.trim_start_matches("arch.").to_string(),
-                low: ends[0].clone(),
-                high: ends[1].clone(),
-                at_low: get(at[0]),
-                at_high: get(at[1]),
-            });
-        }
-    }
-    let stem = file_stem(scene);
-    let title = |what: &str| {
-        format!(
-            "{scene}: what moves the lembo advantage in {what} at {}",
-            metric.show(target)
-        )
-    };
-    let figures = vec![
-        (
-            format!("tornado_cycles_{stem}.svg"),
-            tornado_svg(
-                &title("cycles"),
-                "triangle cycles / lembo cycles",
-                base.0,
-                &cycles_bars,
-            )?
-            .into_bytes(),
-        ),
-        (
-            format!("tornado_energy_{stem}.svg"),
-            tornado_svg(
-                &title("energy"),
-                "triangle energy / lembo energy",
-                base.1,
-                &energy_bars,
-            )?
-            .into_bytes(),
-        ),
-    ];
-    Ok((text, figures))
 }

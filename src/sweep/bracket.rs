@@ -21,7 +21,7 @@
 //! records, so a sweep started again recomputes the same rounds.
 
 use crate::error::{Error, Result};
-use crate::tolerance::check_k;
+use crate::tolerance::{check_k, K_RANGE};
 use serde::Deserialize;
 use serde_json::Value;
 use std::collections::BTreeMap;
@@ -36,6 +36,11 @@ pub const DEFAULT_K_FLOOR: f64 = 0.01;
 pub const DEFAULT_TESS_CAP: u32 = 64;
 /// The widest margin accepted \[dB\].
 pub const MAX_MARGIN_DB: f64 = 60.0;
+/// Default `refine.k_ceiling` \[px\]: the coarsest k refinement runs.
+pub const DEFAULT_K_CEILING: f64 = 16.0;
+/// Default `refine.cost_margin`: a coarser level that saves less than this fraction of the
+/// fewest cycles and of the least energy of the level finer than it ends the coarse side.
+pub const DEFAULT_COST_MARGIN: f64 = 0.02;
 
 /// `refine` as the spec file writes it.
 #[derive(Deserialize, Default)]
@@ -45,6 +50,8 @@ pub(super) struct RefineFile {
     k_floor: Option<f64>,
     tess_cap: Option<u32>,
     cycle_cap: Option<u64>,
+    k_ceiling: Option<f64>,
+    cost_margin: Option<f64>,
 }
 
 /// How far refinement goes (`refine` in a spec).
@@ -59,6 +66,11 @@ pub struct Refine {
     pub tess_cap: u32,
     /// A series stops once a run of it took more cycles than this; None for no cap.
     pub cycle_cap: Option<u64>,
+    /// The coarsest k refinement runs \[px\].
+    pub k_ceiling: f64,
+    /// A coarser level saving less than this fraction of the cost of the level finer than
+    /// it ends a series' coarse side.
+    pub cost_margin: f64,
 }
 
 impl Default for Refine {
@@ -68,6 +80,8 @@ impl Default for Refine {
             k_floor: DEFAULT_K_FLOOR,
             tess_cap: DEFAULT_TESS_CAP,
             cycle_cap: None,
+            k_ceiling: DEFAULT_K_CEILING,
+            cost_margin: DEFAULT_COST_MARGIN,
         }
     }
 }
@@ -98,11 +112,33 @@ impl Refine {
                 "must be a number of cycles above 0 (leave it out for no cap)",
             ));
         }
+        let k_ceiling = f.k_ceiling.unwrap_or(d.k_ceiling.max(k_floor));
+        check_k(k_ceiling)
+            .map_err(|why| Error::invalid(file, "refine.k_ceiling", k_ceiling, why))?;
+        if k_ceiling < k_floor {
+            return Err(Error::invalid(
+                file,
+                "refine.k_ceiling",
+                k_ceiling,
+                format!("must be at least refine.k_floor ({k_floor})"),
+            ));
+        }
+        let cost_margin = f.cost_margin.unwrap_or(d.cost_margin);
+        if !(cost_margin.is_finite() && (0.0..1.0).contains(&cost_margin)) {
+            return Err(Error::invalid(
+                file,
+                "refine.cost_margin",
+                cost_margin,
+                "must be a fraction of a cost in [0, 1)",
+            ));
+        }
         Ok(Refine {
             margin_db,
             k_floor,
             tess_cap,
             cycle_cap: f.cycle_cap,
+            k_ceiling,
+            cost_margin,
         })
     }
 
@@ -357,6 +393,59 @@ impl Stop {
     }
 }
 
+/// Why a series' knob went no coarser: whether a coarser knob might reach a target for
+/// less than its coarsest level does.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Coarse {
+    /// Nothing coarser exists: n = 1, or k at the largest a run accepts.
+    Natural,
+    /// Its coarsest level saved less than the cost margin over the level finer than it, in
+    /// cycles and in energy: bracketed.
+    Settled {
+        /// The larger of the two savings, a fraction of the finer level's cost (negative:
+        /// the coarser level cost more).
+        saving: f64,
+    },
+    /// k reached the ceiling while still saving.
+    Ceiling,
+    /// The spec asks for no refinement and the grid starts here.
+    GridEnd,
+    /// Not ended: the next round runs this knob.
+    Next(Knob),
+}
+
+impl Coarse {
+    /// Whether a coarser knob would not have saved more than the cost margin: a target its
+    /// coarsest level reaches is reached at about the least cost the path can.
+    pub fn bracketed(&self) -> bool {
+        matches!(self, Coarse::Natural | Coarse::Settled { .. })
+    }
+
+    /// The reason in words, for `answer.md`.
+    pub fn describe(&self, cost_margin: f64, coarsest: Knob) -> String {
+        let pct = |f: f64| format!("{:.1}%", 100.0 * f);
+        match self {
+            Coarse::Natural => format!("bracketed: nothing coarser than {} exists", coarsest.label()),
+            Coarse::Settled { saving } => format!(
+                "bracketed: {} saved {} of the cycles or energy of the level finer than it, under the {} margin",
+                coarsest.label(),
+                pct(saving.max(0.0)),
+                pct(cost_margin)
+            ),
+            Coarse::Ceiling => format!(
+                "unbracketed: stopped at the ceiling {} while still saving; k would have to go higher",
+                coarsest.label()
+            ),
+            Coarse::GridEnd => format!(
+                "unbracketed: the grid starts at {} and a coarser level saved more than {} or was not run",
+                coarsest.label(),
+                pct(cost_margin)
+            ),
+            Coarse::Next(k) => format!("refining: next {}", k.label()),
+        }
+    }
+}
+
 /// Whether the last two gains were each under the margin.
 fn settled(gains: &[f64], margin_db: f64) -> bool {
     gains.len() >= 2 && gains[gains.len() - 2..].iter().all(|&g| g < margin_db)
@@ -379,12 +468,21 @@ pub struct Series {
     /// The runs (indices into the measured list) at its finest level within the budget
     /// that the next level is run on: the fastest and the most frugal.
     pub leaders: Vec<usize>,
+    /// Why it went no coarser.
+    pub coarse: Coarse,
+    /// The fastest and the most frugal runs at its coarsest level, that a coarser level is
+    /// run on.
+    pub coarse_leaders: Vec<usize>,
 }
 
 impl Series {
     /// The finest level run.
     pub fn finest(&self) -> Knob {
         self.levels.last().expect("a series has a level").0
+    }
+    /// The coarsest level run.
+    pub fn coarsest(&self) -> Knob {
+        self.levels.first().expect("a series has a level").0
     }
     /// The best PSNR any of its levels measured \[dB\].
     pub fn best_psnr(&self) -> Option<f64> {
@@ -450,29 +548,26 @@ fn one_series(
     }
     levels.sort_by(|a, b| a.0.fineness().total_cmp(&b.0.fineness()));
     let finest = levels.last().expect("a series has a run").0;
-    let at_finest: Vec<usize> = members
-        .iter()
-        .copied()
-        .filter(|&i| runs[i].knob == finest)
-        .collect();
-    // The fastest and the most frugal run at the finest level (ties: the first).
-    let pick = |key: &dyn Fn(&Measured) -> f64| {
-        at_finest
+    let coarsest = levels[0].0;
+    let at = |knob: Knob| -> Vec<usize> {
+        members
             .iter()
             .copied()
-            .fold(None, |best: Option<usize>, i| match best {
-                Some(b) if key(&runs[b]) <= key(&runs[i]) => Some(b),
-                _ => Some(i),
-            })
+            .filter(|&i| runs[i].knob == knob)
+            .collect()
     };
-    let mut leaders: Vec<usize> = [
-        pick(&|m| m.cycles.map_or(f64::INFINITY, |c| c as f64)),
-        pick(&|m| m.energy_uj.unwrap_or(f64::INFINITY)),
-    ]
-    .into_iter()
-    .flatten()
-    .collect();
-    leaders.dedup();
+    let at_finest = at(finest);
+    let leaders = leaders_of(runs, &at_finest);
+    let at_coarsest = at(coarsest);
+    let coarse_leaders = leaders_of(runs, &at_coarsest);
+    let next_coarser = levels.get(1).map(|l| at(l.0));
+    let coarse = coarse_of(
+        runs,
+        coarsest,
+        &at_coarsest,
+        next_coarser.as_deref(),
+        limits,
+    );
     // Each level's PSNR over the best of the coarser ones; the last two count.
     let mut gains: Vec<f64> = Vec::new();
     let mut best: Option<f64> = None;
@@ -495,6 +590,77 @@ fn one_series(
         levels,
         stop,
         leaders,
+        coarse,
+        coarse_leaders,
+    }
+}
+
+/// The fastest and the most frugal of `level`'s runs (ties: the first), once each.
+fn leaders_of(runs: &[Measured], level: &[usize]) -> Vec<usize> {
+    let pick = |key: &dyn Fn(&Measured) -> f64| {
+        level
+            .iter()
+            .copied()
+            .fold(None, |best: Option<usize>, i| match best {
+                Some(b) if key(&runs[b]) <= key(&runs[i]) => Some(b),
+                _ => Some(i),
+            })
+    };
+    let mut leaders: Vec<usize> = [
+        pick(&|m| m.cycles.map_or(f64::INFINITY, |c| c as f64)),
+        pick(&|m| m.energy_uj.unwrap_or(f64::INFINITY)),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    leaders.dedup();
+    leaders
+}
+
+/// Why a series goes no coarser than `coarsest` (its runs `at_coarsest`), or the knob it
+/// goes to; `finer` holds the runs of the level after it, if any.
+fn coarse_of(
+    runs: &[Measured],
+    coarsest: Knob,
+    at_coarsest: &[usize],
+    finer: Option<&[usize]>,
+    limits: &Limits,
+) -> Coarse {
+    let natural = match coarsest {
+        Knob::Tess(n) => n <= 1,
+        Knob::K(k) => k >= K_RANGE.1,
+    };
+    if natural {
+        return Coarse::Natural;
+    }
+    let margin = limits.refine.map_or(DEFAULT_COST_MARGIN, |r| r.cost_margin);
+    let least = |level: &[usize], cost: &dyn Fn(&Measured) -> Option<f64>| {
+        level
+            .iter()
+            .filter_map(|&i| cost(&runs[i]))
+            .fold(None, |b: Option<f64>, c| Some(b.map_or(c, |b| b.min(c))))
+    };
+    let saving = |cost: &dyn Fn(&Measured) -> Option<f64>| -> Option<f64> {
+        let (c, f) = (least(at_coarsest, cost)?, least(finer?, cost)?);
+        (f > 0.0).then(|| 1.0 - c / f)
+    };
+    let savings = [
+        saving(&|m| m.cycles.map(|c| c as f64)),
+        saving(&|m| m.energy_uj),
+    ];
+    if let [Some(a), Some(b)] = savings {
+        if a.max(b) < margin {
+            return Coarse::Settled { saving: a.max(b) };
+        }
+    }
+    let Some(refine) = limits.refine else {
+        return Coarse::GridEnd;
+    };
+    match coarsest {
+        Knob::K(k) if k < refine.k_ceiling => {
+            Coarse::Next(Knob::K((k * 2.0).min(refine.k_ceiling)))
+        }
+        _ => Coarse::Ceiling,
     }
 }
 
@@ -548,22 +714,22 @@ fn stop_of(
 }
 
 /// The runs the next refinement round adds: (the index of the run whose parameters it
-/// copies, the knob it runs at), in the order of the series and their leaders.
-/// Sensitivity variants are not refined: their runs stay at the grid's levels.
+/// copies, the knob it runs at), in the order of the series, each series' finer level
+/// (on its leaders) before its coarser one (on its coarse leaders). Sensitivity variants
+/// are not refined: their runs stay at the grid's levels.
 pub fn next_round(runs: &[Measured], limits: &Limits) -> Vec<(usize, Knob)> {
     let base: Vec<Measured> = runs.iter().filter(|m| !m.is_variant()).cloned().collect();
     let runs = &base[..];
-    series(runs, limits)
-        .iter()
-        .flat_map(|s| match s.stop {
-            Stop::Next(knob) => s
-                .leaders
-                .iter()
-                .map(|&i| (runs[i].index, knob))
-                .collect::<Vec<_>>(),
-            _ => Vec::new(),
-        })
-        .collect()
+    let mut next = Vec::new();
+    for s in series(runs, limits) {
+        if let Stop::Next(knob) = s.stop {
+            next.extend(s.leaders.iter().map(|&i| (runs[i].index, knob)));
+        }
+        if let Coarse::Next(knob) = s.coarse {
+            next.extend(s.coarse_leaders.iter().map(|&i| (runs[i].index, knob)));
+        }
+    }
+    next
 }
 
 #[cfg(test)]
@@ -737,6 +903,67 @@ mod tests {
     }
 
     #[test]
+    fn the_coarse_side_doubles_k_until_a_coarser_level_saves_under_the_margin() {
+        let l = limits(Some(Refine::default()), None);
+        // k = 2 saves 10% of k = 1's cycles: a coarser k might reach a target for less.
+        let mut runs = vec![
+            run(0, Knob::K(2.0), 1, 900, 1.0, 40.0),
+            run(1, Knob::K(2.0), 2, 950, 0.9, 40.0),
+            run(2, Knob::K(1.0), 1, 1000, 1.0, 44.0),
+        ];
+        let s = &series(&runs, &l)[0];
+        assert_eq!(s.coarse, Coarse::Next(Knob::K(4.0)));
+        assert!(!s.coarse.bracketed());
+        // On the coarsest level's fastest (run 0) and most frugal (run 1) architectures,
+        // after the finer level's runs.
+        let next = next_round(&runs, &l);
+        assert_eq!(
+            &next[next.len() - 2..],
+            [(0, Knob::K(4.0)), (1, Knob::K(4.0))]
+        );
+        // k = 4 saves 1% of the cycles and 0% of the energy: settled.
+        runs.push(run(3, Knob::K(4.0), 1, 891, 1.0, 35.0));
+        runs.push(run(4, Knob::K(4.0), 2, 940, 0.9, 35.0));
+        let s = &series(&runs, &l)[0];
+        match s.coarse {
+            Coarse::Settled { saving } => assert!((saving - 0.01).abs() < 1e-9, "{saving}"),
+            ref other => panic!("{other:?}"),
+        }
+        assert!(s.coarse.bracketed());
+        assert_eq!(s.coarsest(), Knob::K(4.0));
+        // One saving under the margin is not enough: both cycles and energy must be.
+        runs[4].energy_uj = Some(0.5);
+        assert_eq!(series(&runs, &l)[0].coarse, Coarse::Next(Knob::K(8.0)));
+        // The ceiling ends it unbracketed; n = 1 and the largest k are the natural ends.
+        let r = Refine {
+            k_ceiling: 4.0,
+            ..Refine::default()
+        };
+        let s = &series(&runs, &limits(Some(r), None))[0];
+        assert_eq!(s.coarse, Coarse::Ceiling);
+        assert!(s
+            .coarse
+            .describe(0.02, s.coarsest())
+            .contains("unbracketed"));
+        let ends = [
+            run(0, Knob::Tess(1), 1, 10, 1.0, 30.0),
+            run(1, Knob::K(K_RANGE.1), 1, 10, 1.0, 30.0),
+        ];
+        for s in series(&ends, &l) {
+            assert_eq!(s.coarse, Coarse::Natural);
+        }
+        // Without refinement, the grid's coarse end is reported, not extended.
+        let grid = [
+            run(0, Knob::K(2.0), 1, 500, 1.0, 40.0),
+            run(1, Knob::K(1.0), 1, 1000, 1.0, 44.0),
+        ];
+        assert_eq!(
+            series(&grid, &limits(None, None))[0].coarse,
+            Coarse::GridEnd
+        );
+    }
+
+    #[test]
     fn refine_settings_are_checked_naming_their_field() {
         let check = |text: &str| -> std::result::Result<Refine, String> {
             let f: RefineFile = serde_json::from_str(text).unwrap();
@@ -754,6 +981,10 @@ mod tests {
             (r#"{"tess_cap": 0}"#, "refine.tess_cap"),
             (r#"{"tess_cap": 5000}"#, "refine.tess_cap"),
             (r#"{"cycle_cap": 0}"#, "refine.cycle_cap"),
+            (r#"{"k_ceiling": 100}"#, "refine.k_ceiling"),
+            (r#"{"k_floor": 1, "k_ceiling": 0.5}"#, "refine.k_ceiling"),
+            (r#"{"cost_margin": 1}"#, "refine.cost_margin"),
+            (r#"{"cost_margin": -0.1}"#, "refine.cost_margin"),
         ] {
             assert_eq!(check(text), Err(field.to_string()), "{text}");
         }

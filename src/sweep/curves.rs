@@ -88,8 +88,16 @@ impl Metric {
         }
     }
 
+    /// A spec's target `v` at `field`, checked: a number in the metric's range.
+    pub(super) fn parse_target(self, file: &str, field: &str, v: &Value) -> Result<f64> {
+        let x = super::names::number(file, field, v)?;
+        self.check_target(x)
+            .map_err(|why| Error::invalid(file, field, v, why))?;
+        Ok(x)
+    }
+
     /// The valid range of a target, for the spec's check.
-    pub(super) fn check_target(self, v: f64) -> std::result::Result<(), &'static str> {
+    fn check_target(self, v: f64) -> std::result::Result<(), &'static str> {
         let ok = v.is_finite()
             && match self {
                 Metric::Psnr => true,
@@ -144,15 +152,7 @@ impl Targets {
             let mut values = Vec::with_capacity(list.len());
             for (j, v) in list.iter().enumerate() {
                 let field = format!("{field}[{j}]");
-                let x = v.as_f64().ok_or_else(|| Error::Parse {
-                    file: file.into(),
-                    field: field.clone(),
-                    message: format!("expected a number, found {v}"),
-                })?;
-                metric
-                    .check_target(x)
-                    .map_err(|why| Error::invalid(file, &field, v, why))?;
-                values.push(x);
+                values.push(metric.parse_target(file, &field, v)?);
             }
             out.lists[i] = Some(values);
         }

@@ -47,12 +47,14 @@
 mod answer;
 pub mod bracket;
 pub mod curves;
+mod flips;
 mod grid;
 pub mod lock;
 pub mod merge;
 mod names;
 mod parse;
 pub mod plan;
+mod reproduce;
 pub mod results;
 pub mod run;
 pub mod sensitivity;

@@ -13,6 +13,15 @@ pub(super) const TECH: &str = "tech.";
 /// The parameter that marks a sensitivity variant's point (`arch.rop.count x0.5`).
 pub const SENSITIVITY: &str = "sensitivity";
 
+/// A spec value that must be a number, or the error naming its field.
+pub(super) fn number(file: &str, field: &str, v: &serde_json::Value) -> Result<f64, Error> {
+    v.as_f64().ok_or_else(|| Error::Parse {
+        file: file.into(),
+        field: field.into(),
+        message: format!("expected a number, found {v}"),
+    })
+}
+
 /// An empty list where one is needed, refused naming its field.
 pub(super) fn empty_list(file: &str, field: &str) -> Error {
     Error::invalid(file, field, "[]", "must not be an empty list")

@@ -5,7 +5,9 @@ use super::bracket::Refine;
 use super::curves::Targets;
 use super::grid::Expander;
 use super::sensitivity::Sensitivity;
-use super::spec::{check_name, empty_list, key, too_many, ModeSpec, Run, Spec, SpecFile, MAX_RUNS};
+use super::spec::{
+    check_name, empty_list, key, too_many, ModeSpec, Point, Run, Spec, SpecFile, MAX_RUNS,
+};
 use crate::camera::MAX_VIEWPORT_SIDE;
 use crate::config::ArchConfig;
 use crate::cost::tech::Tech;
@@ -25,53 +27,8 @@ impl Spec {
         if f.scenes.is_empty() {
             return Err(empty_list(file, "scenes"));
         }
-        let viewport = match f.viewport {
-            Some([w, h]) => {
-                for (i, side) in [w, h].into_iter().enumerate() {
-                    if !(1..=MAX_VIEWPORT_SIDE).contains(&side) {
-                        return Err(Error::invalid(
-                            file,
-                            format!("viewport[{i}]"),
-                            side,
-                            format!("must be in 1..={MAX_VIEWPORT_SIDE} pixels"),
-                        ));
-                    }
-                }
-                Some((w, h))
-            }
-            None => None,
-        };
-        let mode = match f.mode {
-            ModeSpec::Timed => Mode::Timed,
-            ModeSpec::Functional => Mode::Functional,
-        };
-        if mode == Mode::Functional && f.arch.is_some() {
-            return Err(Error::invalid(
-                file,
-                "arch",
-                f.arch.as_deref().unwrap_or_default(),
-                "only meaningful with mode timed",
-            ));
-        }
-
-        if let Some(b) = f.area_budget_mm2 {
-            if mode == Mode::Functional {
-                return Err(Error::invalid(
-                    file,
-                    "area_budget_mm2",
-                    b,
-                    "only meaningful with mode timed (a functional run has no cost)",
-                ));
-            }
-            if !(b.is_finite() && b > 0.0) {
-                return Err(Error::invalid(
-                    file,
-                    "area_budget_mm2",
-                    b,
-                    "must be a finite area above 0 mm2",
-                ));
-            }
-        }
+        let viewport = check_viewport(file, f.viewport)?;
+        let mode = check_mode(file, &f)?;
 
         let (refine, targets) = answer_settings(file, &f)?;
 
@@ -123,20 +80,7 @@ impl Spec {
             }
         };
 
-        let mut runs = Vec::new();
-        for (p, point) in ex.points.iter().enumerate() {
-            for &s in &point.scenes {
-                runs.push(Run {
-                    index: runs.len(),
-                    point: p,
-                    scene: s,
-                    key: key(&f.scenes[s], &point.params),
-                });
-            }
-        }
-        if runs.len() > MAX_RUNS {
-            return Err(too_many(file, "grid", runs.len()));
-        }
+        let runs = runs_of(file, &ex.points, &f.scenes)?;
         Ok(Spec {
             file: file.to_string(),
             text: text.to_string(),
@@ -155,6 +99,79 @@ impl Spec {
             scenes: f.scenes,
         })
     }
+}
+
+/// The spec's `viewport`, checked.
+fn check_viewport(file: &str, viewport: Option<[u32; 2]>) -> Result<Option<(u32, u32)>> {
+    let Some([w, h]) = viewport else {
+        return Ok(None);
+    };
+    for (i, side) in [w, h].into_iter().enumerate() {
+        if !(1..=MAX_VIEWPORT_SIDE).contains(&side) {
+            return Err(Error::invalid(
+                file,
+                format!("viewport[{i}]"),
+                side,
+                format!("must be in 1..={MAX_VIEWPORT_SIDE} pixels"),
+            ));
+        }
+    }
+    Ok(Some((w, h)))
+}
+
+/// The spec's mode, with the fields only a timed sweep may have (`arch`,
+/// `area_budget_mm2`) checked against it.
+fn check_mode(file: &str, f: &SpecFile) -> Result<Mode> {
+    let mode = match f.mode {
+        ModeSpec::Timed => Mode::Timed,
+        ModeSpec::Functional => Mode::Functional,
+    };
+    if mode == Mode::Functional && f.arch.is_some() {
+        return Err(Error::invalid(
+            file,
+            "arch",
+            f.arch.as_deref().unwrap_or_default(),
+            "only meaningful with mode timed",
+        ));
+    }
+    if let Some(b) = f.area_budget_mm2 {
+        if mode == Mode::Functional {
+            return Err(Error::invalid(
+                file,
+                "area_budget_mm2",
+                b,
+                "only meaningful with mode timed (a functional run has no cost)",
+            ));
+        }
+        if !(b.is_finite() && b > 0.0) {
+            return Err(Error::invalid(
+                file,
+                "area_budget_mm2",
+                b,
+                "must be a finite area above 0 mm2",
+            ));
+        }
+    }
+    Ok(mode)
+}
+
+/// Every point's runs, one a scene it names, in order; at most [`MAX_RUNS`].
+fn runs_of(file: &str, points: &[Point], scenes: &[String]) -> Result<Vec<Run>> {
+    let mut runs = Vec::new();
+    for (p, point) in points.iter().enumerate() {
+        for &s in &point.scenes {
+            runs.push(Run {
+                index: runs.len(),
+                point: p,
+                scene: s,
+                key: key(&scenes[s], &point.params),
+            });
+        }
+    }
+    if runs.len() > MAX_RUNS {
+        return Err(too_many(file, "grid", runs.len()));
+    }
+    Ok(runs)
 }
 
 /// The answer's settings of a spec (`refine`, `targets`), checked: refinement needs the

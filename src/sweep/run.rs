@@ -192,6 +192,8 @@ pub fn run_sweep(job: &SweepJob) -> std::result::Result<SweepOutcome, SweepError
     let bar = progress_bar(job.progress, 0);
     let mut references: Vec<SweepReference> = Vec::new();
     let (mut total, mut skipped, mut appended) = (0, 0, 0);
+    // Each record as refinement reads it, by run index.
+    let mut parsed: BTreeMap<usize, Option<Measured>> = BTreeMap::new();
     // The spec's runs, then each refinement round's (DESIGN.md §7, "Bracketing").
     loop {
         total += round.len();
@@ -231,11 +233,17 @@ pub fn run_sweep(job: &SweepJob) -> std::result::Result<SweepOutcome, SweepError
             break;
         };
         let additions = {
-            let measured: Vec<Measured> = lines
-                .values()
-                .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
-                .filter_map(|r| Measured::of(&r))
-                .collect();
+            // Each record is parsed once over the rounds: a round adds a few runs to
+            // thousands.
+            for (index, l) in &lines {
+                if !parsed.contains_key(index) {
+                    let m = serde_json::from_str::<serde_json::Value>(l)
+                        .ok()
+                        .and_then(|r| Measured::of(&r));
+                    parsed.insert(*index, m);
+                }
+            }
+            let measured: Vec<Measured> = parsed.values().flatten().cloned().collect();
             let triangle_ok = |scene: &str, n: u32| plan.triangle_ok(scene, n);
             next_round(
                 &measured,

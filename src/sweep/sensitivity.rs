@@ -122,15 +122,7 @@ impl Sensitivity {
                         )
                     })?;
                 let field = format!("sensitivity.target.{name}");
-                let x = v.as_f64().ok_or_else(|| Error::Parse {
-                    file: file.into(),
-                    field: field.clone(),
-                    message: format!("expected a number, found {v}"),
-                })?;
-                metric
-                    .check_target(x)
-                    .map_err(|why| Error::invalid(file, &field, v, why))?;
-                (metric, x)
+                (metric, metric.parse_target(file, &field, v)?)
             }
             _ => {
                 return Err(Error::invalid(
@@ -191,11 +183,7 @@ impl Sensitivity {
 }
 
 fn check_factor(file: &str, field: &str, v: &Value) -> Result<f64> {
-    let x = v.as_f64().ok_or_else(|| Error::Parse {
-        file: file.into(),
-        field: field.into(),
-        message: format!("expected a number, found {v}"),
-    })?;
+    let x = super::names::number(file, field, v)?;
     if !(x.is_finite() && x > 0.0 && x <= MAX_FACTOR) {
         return Err(Error::invalid(
             file,

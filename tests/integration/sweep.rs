@@ -786,7 +786,7 @@ fn table_cases(csv: &str) -> BTreeMap<String, String> {
         .collect()
 }
 
-/// The committed results checked only with LEMBO_FULL_SWEEPS=1.
+/// The committed results checked only with LEMBO_FULL_CHECKS=1.
 const FULL_ONLY: [&str; 1] = ["fair"];
 
 /// The committed sweep results README and RESULTS quote (`sim/sweeps/results/NAME/`, from
@@ -806,9 +806,9 @@ fn committed_sweep_results_are_what_the_code_computes() {
     assert!(names.len() >= 2, "committed results: {names:?}");
     let bless = golden::blessing();
     // The full answer takes too long for every test run (README.md, "Results", gives its
-    // time): it is checked with LEMBO_FULL_SWEEPS=1, and its reduced form `fair_ci`, the
+    // time): it is checked with LEMBO_FULL_CHECKS=1, and its reduced form `fair_ci`, the
     // same spec on three scenes at 160x160, on every run.
-    let full = std::env::var_os("LEMBO_FULL_SWEEPS").is_some_and(|v| v == "1");
+    let full = crate::support::full_checks();
     let mut failures = Vec::new();
     for name in names
         .iter()
@@ -1006,6 +1006,17 @@ fn a_refined_sweep_brackets_each_knob_and_resumes_as_if_uninterrupted() {
     }
     let html = std::fs::read_to_string(whole.join("report.html")).unwrap();
     assert!(html.contains("## Bracketing") && html.contains("speedup_psnr_db_sphere24.svg"));
+    // The coarse side ended too, and said how: the lembo path's beyond the grid's k = 2
+    // unless k = 2 already saved under the margin, the triangle path's at n = 1.
+    for row in &bracket {
+        assert!(
+            row.ends_with("exists |")
+                || row.contains("of the level finer than it, under the")
+                || row.contains("stopped at the ceiling"),
+            "{row}"
+        );
+    }
+    reproduce_named_runs(tmp.path(), &answer, &m.records);
 
     // Stopped after the grid and its variants and part of the first round, then rerun.
     let grid_and_variants = m
@@ -1059,6 +1070,61 @@ fn a_refined_sweep_brackets_each_knob_and_resumes_as_if_uninterrupted() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("--shard"));
 }
 
+/// Every run answer.md names has its command, and the command, pasted into a shell in the
+/// spec's folder, draws what the sweep measured: the same cycles, area and PSNR (one run of
+/// each path).
+fn reproduce_named_runs(spec_dir: &Path, answer: &str, records: &[Value]) {
+    let named: std::collections::BTreeSet<u64> = answer
+        .split("run ")
+        .skip(1)
+        .filter_map(|rest| {
+            rest.split(|c: char| !c.is_ascii_digit())
+                .next()?
+                .parse()
+                .ok()
+        })
+        .collect();
+    let commands: BTreeMap<u64, &str> = answer
+        .lines()
+        .filter_map(|l| {
+            let rest = l.strip_prefix("- run ")?;
+            let (index, command) = rest.split_once(": `")?;
+            Some((index.parse().ok()?, command.strip_suffix('`')?))
+        })
+        .collect();
+    assert!(!named.is_empty());
+    for index in &named {
+        assert!(commands.contains_key(index), "run {index} has no command");
+    }
+    let record = |index: u64| {
+        records
+            .iter()
+            .find(|r| r["index"] == index)
+            .unwrap_or_else(|| panic!("no record of run {index}"))
+    };
+    for path in ["lembo", "triangle"] {
+        let (index, command) = commands
+            .iter()
+            .find(|(i, _)| record(**i)["params"]["path"] == path)
+            .unwrap_or_else(|| panic!("no {path} run named"));
+        let command = command.replacen("lembo-sim", env!("CARGO_BIN_EXE_lembo-sim"), 1);
+        let out = Command::new("sh")
+            .args(["-c", &command])
+            .current_dir(spec_dir)
+            .output()
+            .unwrap();
+        ok(&out);
+        let report: Value = serde_json::from_str(
+            &std::fs::read_to_string(spec_dir.join(format!("out/run{index}/report.json"))).unwrap(),
+        )
+        .unwrap();
+        let record = &record(*index)["report"];
+        for at in ["/cycles/total", "/cost/area_mm2", "/accuracy/psnr_db"] {
+            assert_eq!(report.pointer(at), record.pointer(at), "run {index}: {at}");
+        }
+    }
+}
+
 /// Without `refine`, a grid that stops while the error still improves is flagged in
 /// answer.md where it decides the answer.
 #[test]
@@ -1085,6 +1151,11 @@ fn a_grid_that_stops_early_is_flagged_unbracketed() {
         .unwrap();
     assert!(
         area.contains("tess=4") && area.contains("**unbracketed**"),
+        "{area}"
+    );
+    // And it names no winner there: a finer n might change which path is more accurate.
+    assert!(
+        area.contains("no winner:") && !area.contains("more accurate"),
         "{area}"
     );
 }
