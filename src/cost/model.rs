@@ -323,30 +323,12 @@ pub fn cost_at(
         Datapath::F64 => 64.0,
     };
     let frame_us = work.cycles.total.0 as f64 / work.cycles.clock_mhz;
-    let of_kind = |kind: UnitKind| units.iter().filter(move |u| u.kind == kind);
-    let instances = |kind: UnitKind| of_kind(kind).count() as u64;
     let kinds: Vec<UnitKind> = units.iter().map(|u| u.kind).collect();
     let mut out = Vec::with_capacity(units.len());
     let mut logic_leakage_pj = 0.0;
     for &u in &units {
         let kind_ops = ops.of(u.kind);
-        // The kind's own busy cycles: those of the units inside it (a ROP's blend units,
-        // whose cycles its ROP's include) are theirs.
-        let hosted: u64 = units
-            .iter()
-            .filter(|v| v.kind.inside() == Some(u.kind))
-            .map(|v| v.busy.0)
-            .sum();
-        let busy = of_kind(u.kind)
-            .map(|v| v.busy.0)
-            .sum::<u64>()
-            .saturating_sub(hosted);
-        let items: u64 = of_kind(u.kind).map(|v| v.items_in).sum();
-        let share = if items > 0 {
-            u.items_in as f64 / items as f64
-        } else {
-            1.0 / instances(u.kind) as f64
-        };
+        let (busy, share) = busy_and_share(&units, u);
         let fus = sizing.functional_units(design, arch, u.kind);
         let (mut area_um2, mut energy_pj) = (0.0, 0.0);
         for (k, &op) in OPS.iter().enumerate() {
@@ -363,23 +345,7 @@ pub fn cost_at(
         // mW/mm² × mm² × µs = nJ.
         let logic_leak_pj = tech.logic_leakage.mw_per_mm2 * area_um2 * 1e-6 * frame_us * 1e3;
         logic_leakage_pj += logic_leak_pj;
-        // Input FIFOs: one link from every producer instance, each item written and read.
-        let mut fifo = SramCost::default();
-        let wired = arch
-            .links
-            .boundaries()
-            .filter(|(b, _)| b.to == u.kind && b.wired_in(&kinds, arch.tessellation.source));
-        for (b, link) in wired {
-            let producers = instances(b.from);
-            let bits = pipeline::out_words(b.from) as f64 * word_bits;
-            let stored = (producers * link.fifo_depth as u64) as f64 * bits;
-            let moved = if producers > 0 {
-                2.0 * u.items_in as f64 * bits
-            } else {
-                0.0
-            };
-            fifo += price_sram(&tech.sram, stored, moved, frame_us);
-        }
+        let fifo = input_fifos(tech, arch, u, &kinds, word_bits, frame_us);
         if u.kind == UnitKind::FrameBuffer {
             let bytes = work.framebuffer_bytes + work.accumulation_bytes;
             energy_pj += bytes as f64 * tech.dram.pj_per_byte;
@@ -427,6 +393,58 @@ pub fn cost_at(
             .collect(),
         per_busy_cycle,
     }
+}
+
+/// Unit `u`'s kind's own busy cycles over `units` (those of the units inside it, a ROP's
+/// blend units whose cycles its ROP's include, are theirs), and `u`'s share of the kind's
+/// work (its items over the kind's; an equal share when no item came in).
+fn busy_and_share(units: &[&UnitCycles], u: &UnitCycles) -> (u64, f64) {
+    let of_kind = || units.iter().filter(|v| v.kind == u.kind);
+    let hosted: u64 = units
+        .iter()
+        .filter(|v| v.kind.inside() == Some(u.kind))
+        .map(|v| v.busy.0)
+        .sum();
+    let busy = of_kind()
+        .map(|v| v.busy.0)
+        .sum::<u64>()
+        .saturating_sub(hosted);
+    let items: u64 = of_kind().map(|v| v.items_in).sum();
+    let share = if items > 0 {
+        u.items_in as f64 / items as f64
+    } else {
+        1.0 / of_kind().count() as f64
+    };
+    (busy, share)
+}
+
+/// Unit `u`'s input FIFOs: one link from every producer instance (of `kinds`, every unit's
+/// kind), each item written and read.
+fn input_fifos(
+    tech: &Tech,
+    arch: &ArchConfig,
+    u: &UnitCycles,
+    kinds: &[UnitKind],
+    word_bits: f64,
+    frame_us: f64,
+) -> SramCost {
+    let mut fifo = SramCost::default();
+    let wired = arch
+        .links
+        .boundaries()
+        .filter(|(b, _)| b.to == u.kind && b.wired_in(kinds, arch.tessellation.source));
+    for (b, link) in wired {
+        let producers = kinds.iter().filter(|&&k| k == b.from).count() as u64;
+        let bits = pipeline::out_words(b.from) as f64 * word_bits;
+        let stored = (producers * link.fifo_depth as u64) as f64 * bits;
+        let moved = if producers > 0 {
+            2.0 * u.items_in as f64 * bits
+        } else {
+            0.0
+        };
+        fifo += price_sram(&tech.sram, stored, moved, frame_us);
+    }
+    fifo
 }
 
 impl TechUsed {

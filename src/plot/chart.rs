@@ -263,14 +263,17 @@ pub(super) fn fmt_int(n: u64) -> String {
     out
 }
 
+/// The smallest and the largest of `values` (infinities when there are none).
+pub(super) fn min_max(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+        (lo.min(v), hi.max(v))
+    })
+}
+
 /// A log axis range around positive values, with a margin of a quarter on either side.
 pub(super) fn log_range(values: impl Iterator<Item = f64>) -> Range<f64> {
-    let (lo, hi) = values
-        .filter(|v| *v > 0.0 && v.is_finite())
-        .fold((f64::INFINITY, 0.0f64), |(lo, hi), v| {
-            (lo.min(v), hi.max(v))
-        });
-    if hi == 0.0 {
+    let (lo, hi) = min_max(values.filter(|v| *v > 0.0 && v.is_finite()));
+    if !hi.is_finite() {
         return 0.1..10.0;
     }
     lo / 1.25..hi * 1.25

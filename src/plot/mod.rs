@@ -38,7 +38,7 @@ pub mod speedup;
 use crate::error::{Error, Result};
 use chart::{
     draw_legend, draw_lines, draw_mark, fmt_int, fmt_num, fmt_value, log_axis, log_range, mesh,
-    plot_size, svg, Entry, Plot, CHART_HEIGHT, FONT, LEMBO, MARKS, PALETTE, WIDTH,
+    min_max, plot_size, svg, Entry, Plot, CHART_HEIGHT, FONT, LEMBO, MARKS, PALETTE, WIDTH,
 };
 use error::{error_against, Against, ErrorAxis};
 use plotters::prelude::*;
@@ -324,8 +324,7 @@ fn cycles_vs_arch(scene: &str, points: &[Point], axis: ArchAxis) -> Plot {
     }
     let (entries, lines): (Vec<Entry>, Vec<Vec<(f64, f64)>>) = series.into_iter().unzip();
     let all = || lines.iter().flatten();
-    let x_lo = all().map(|p| p.0).fold(f64::INFINITY, f64::min);
-    let x_hi = all().map(|p| p.0).fold(f64::NEG_INFINITY, f64::max);
+    let (x_lo, x_hi) = min_max(all().map(|p| p.0));
     let y_max = all().map(|p| p.1).fold(1.0, f64::max);
     let (what, x_desc) = match axis {
         ArchAxis::Counts => ("unit counts", "unit instances [count]"),

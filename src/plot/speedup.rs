@@ -3,7 +3,7 @@
 //! chart ([`tornado_svg`]). Both take plain numbers: the sweep works them out.
 
 use super::chart::{
-    draw_legend, draw_mark, fmt_num, log_axis, log_range, plot_size, svg, Entry, Mark,
+    draw_legend, draw_mark, fmt_num, log_axis, log_range, min_max, plot_size, svg, Entry, Mark,
     CHART_HEIGHT, FONT, LEMBO, PALETTE, TRIANGLE, WIDTH,
 };
 use crate::error::{Error, Result};
@@ -94,11 +94,7 @@ pub fn speedup_svg(f: &SpeedupFigure) -> Result<String> {
                     .label_style((FONT, 13))
                     .axis_desc_style((FONT, 15))
                     .draw()?;
-                let (x0, x1) = xs
-                    .iter()
-                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
-                        (a.min(x), b.max(x))
-                    });
+                let (x0, x1) = min_max(xs.iter().copied());
                 chart.draw_series(LineSeries::new(
                     [(x0, 1.0), (x1, 1.0)],
                     RGBColor(150, 150, 150).stroke_width(1),
@@ -129,11 +125,7 @@ pub fn speedup_svg(f: &SpeedupFigure) -> Result<String> {
             let range = log_range(xs.iter().copied());
             draw!(builder.build_cartesian_2d(log_axis(range), log_axis(ys.clone()))?);
         } else {
-            let (lo, hi) = xs
-                .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
-                    (a.min(x), b.max(x))
-                });
+            let (lo, hi) = min_max(xs.iter().copied());
             let pad = ((hi - lo) * 0.05).max(0.5);
             draw!(builder.build_cartesian_2d((lo - pad)..(hi + pad), log_axis(ys.clone()))?);
         }
