@@ -107,6 +107,12 @@ pub fn fans<R: Real>(s: &Scene, n: u32, view: &View) -> u64 {
     fan
 }
 
+/// Whether the long checks run (`LEMBO_FULL_CHECKS=1`): the full answer sweep and the
+/// whole design-point calibration set, too long for every test run (README.md, "Tests").
+pub fn full_checks() -> bool {
+    std::env::var_os("LEMBO_FULL_CHECKS").is_some_and(|v| v == "1")
+}
+
 /// The step of .ci/run that sets `LEMBO_EXPECT_DEBUG_ASSERTIONS=1` runs with debug
 /// assertions on (the `debug_assert!`s of the runtime and the stages are compiled in), as
 /// it says; the release suite, which does not set it, compiles them out.
