@@ -24,6 +24,7 @@ use super::bracket::{
 };
 use super::curves::{curve, default_targets, reach, Metric, Targets, METRICS};
 use super::flips;
+use super::names::{file_stem, Figure};
 use super::reproduce::render_command;
 use super::sensitivity::Sensitivity;
 use crate::config::ArchConfig;
@@ -36,8 +37,6 @@ use std::cell::RefCell;
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
 
-/// A file the answer writes: its name and bytes.
-pub(super) type Figure = (String, Vec<u8>);
 
 /// What the answer is made from, besides the records.
 pub(super) struct Ask<'a> {
@@ -336,19 +335,6 @@ fn preamble(ask: &Ask, margin: f64, shared: &str) -> String {
     page
 }
 
-/// A scene's name as a file name's part.
-pub(super) fn file_stem(scene: &str) -> String {
-    scene
-        .chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect()
-}
 
 impl Measured {
     fn cycles_f(&self) -> f64 {

@@ -2,10 +2,9 @@
 //! lembo path's advantage on the spec's architecture as it is against each variant's, as a
 //! table and two tornado charts a scene.
 
-use super::answer::{file_stem, Figure};
 use super::bracket::{Limits, Measured};
 use super::curves::{reach, Metric};
-use super::names::{ARCH, SENSITIVITY, TECH};
+use super::names::{file_stem, Figure, ARCH, SENSITIVITY, TECH};
 use super::sensitivity::{Param, Sensitivity};
 use crate::error::Result;
 use crate::job::PrimitivePath;

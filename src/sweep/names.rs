@@ -1,6 +1,7 @@
-//! The sweep's lowest file: the prefixes and markers of parameter names, and the errors
-//! every spec field's check builds. Imports nothing of the sweep, so the spec's own types
-//! (`spec`) and the answer's settings (`bracket`, `curves`, `sensitivity`) can all use it.
+//! The sweep's lowest file: the prefixes and markers of parameter names, the errors every
+//! spec field's check builds, and the names of the files the answer writes. Imports nothing
+//! of the sweep, so the spec's own types (`spec`) and the answer's settings and sections
+//! (`bracket`, `curves`, `sensitivity`, `flips`) can all use it.
 
 use crate::error::Error;
 
@@ -44,4 +45,21 @@ pub(super) fn reword(e: Error, file: &str, field: &str) -> Error {
         },
         other => other,
     }
+}
+
+/// A file the answer writes: its name and bytes.
+pub(super) type Figure = (String, Vec<u8>);
+
+/// A scene's name as a file name's part.
+pub(super) fn file_stem(scene: &str) -> String {
+    scene
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
 }
