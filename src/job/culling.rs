@@ -75,7 +75,12 @@ pub fn resolve(
     let value = model
         .arch()
         .map_or(CullBackfaces::Off, |a| switch(a, route).1);
-    let closed = scene.outward_winding();
+    // Whether the scene is closed is asked only of a switch that reads it: the test sorts
+    // every edge, 1.6 s of a 5 M-lembo functional frame's 11.
+    let closed = match value {
+        CullBackfaces::Off => None,
+        _ => scene.outward_winding(),
+    };
     let beyond = match (value, closed) {
         (CullBackfaces::Auto, Some(_)) => Some(scene.beyond_near_plane(view)),
         _ => None,

@@ -142,7 +142,8 @@ pub struct CullingSetting {
     /// The winding of a front face when it culled (`ccw`, `cw`), else null.
     pub front: Option<Winding>,
     /// The winding facing out of every object when each is a closed, consistently
-    /// oriented mesh; null for a scene that is not.
+    /// oriented mesh; null for a scene that is not, and when the switch is `off` (not
+    /// asked).
     pub closed_outward: Option<Winding>,
     /// Whether every lembo's control net lies beyond the near plane (`auto` asks it too);
     /// null when the scene is not closed (not asked).

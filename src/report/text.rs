@@ -354,13 +354,15 @@ impl Report {
         };
         if let Some(cull) = &r.settings.culling {
             let closed = match cull.closed_outward {
-                Some(w) => format!("closed, out {}", winding(w)),
-                None => "not closed".into(),
+                Some(w) => format!("; scene closed, out {}", winding(w)),
+                // `off` does not ask whether the scene is closed.
+                None if cull.switch == "off" => String::new(),
+                None => "; scene not closed".into(),
             };
             let _ = match cull.front {
                 Some(front) => writeln!(
                     t,
-                    "back-face culling ({}; scene {closed}): front {}, {} lembos and {} triangles culled back-facing",
+                    "back-face culling ({}{closed}): front {}, {} lembos and {} triangles culled back-facing",
                     cull.switch,
                     winding(front),
                     c.lembos_culled_backface,
@@ -368,7 +370,7 @@ impl Report {
                 ),
                 None => writeln!(
                     t,
-                    "back-face culling ({}; scene {closed}): none culled back-facing",
+                    "back-face culling ({}{closed}): none culled back-facing",
                     cull.switch
                 ),
             };
