@@ -37,7 +37,6 @@ use std::cell::RefCell;
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
 
-
 /// What the answer is made from, besides the records.
 pub(super) struct Ask<'a> {
     /// The spec's area budget \[mm²\].
@@ -334,7 +333,6 @@ fn preamble(ask: &Ask, margin: f64, shared: &str) -> String {
     );
     page
 }
-
 
 impl Measured {
     fn cycles_f(&self) -> f64 {
