@@ -3,21 +3,25 @@
 //! parameters and the unit that bounds it:
 //!
 //! - **bracketing**: each series' knob levels (k on the lembo path, n on the triangle path),
-//!   the best PSNR at each, and why it went no further ([`super::bracket`]);
+//!   the best PSNR at each, and why it went no finer and no coarser ([`super::bracket`]);
 //! - **speed-up against target error**, on PSNR, mean FLIP and the silhouette error: at each
 //!   target, each path's fewest cycles and least energy within the budget (the monotone
 //!   envelope, [`super::curves`]), and `speedup_<metric>_<scene>.svg` over every level;
 //! - **equal area**: each path's most accurate run (highest PSNR) within the budget, the
 //!   fastest of equally accurate ones;
-//! - **equal energy**: the cap is the least energy a frame at which both paths have a run
-//!   within the budget (the higher of their least energies); each path's most accurate run
-//!   within it.
+//! - **equal time** and **equal energy**: the cap is the least cycles (energy) a frame at
+//!   which both paths have a run within the budget (the higher of their least); each path's
+//!   most accurate run within it;
+//! - **what flips it** ([`super::flips`]) and **the runs named**, each with its `lembo-sim
+//!   render` command ([`super::reproduce`]).
 //!
 //! A deciding run is flagged where the answer would be the grid's, not the hardware's: at
-//! the fine end of a series that was not bracketed, at the coarse end of its grid (a
-//! coarser knob might reach the target for less), or bound by a unit whose count the
-//! sweep held at one value. Remaining ties go to the run listed first in the sweep. Only
-//! runs with both a cost and an accuracy count (timed runs measured against the reference).
+//! the fine end of a series that was not bracketed (and then the equal-cost rows name no
+//! winner), at the coarse end of its architecture's runs where the series' coarse side was
+//! not bracketed (a coarser knob might reach the target for less), or bound by a unit whose
+//! count the sweep held at one value. Remaining ties go to the run listed first in the
+//! sweep. Only runs with both a cost and an accuracy count (timed runs measured against the
+//! reference).
 
 use super::bracket::{
     series, Knob, Limits, Measured, Refine, Series, DEFAULT_COST_MARGIN, DEFAULT_MARGIN_DB,
