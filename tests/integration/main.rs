@@ -16,6 +16,7 @@ mod cycles_golden;
 mod datapath;
 mod design_point;
 mod discoid;
+mod docs;
 mod extreme_method;
 mod extremes;
 mod fuzz;
