@@ -68,7 +68,8 @@ pub const MAX_NAME_CHARS: usize = 64;
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
 #[serde(default, deny_unknown_fields)]
 pub struct ArchConfig {
-    /// Name of the configuration, shown in reports. Default `"baseline"`.
+    /// Name of the configuration, shown in reports. Default `"baseline"`; a file that
+    /// leaves it out is named by its file name ([`ArchConfig::load`]).
     pub name: String,
     /// Clock of every unit \[MHz\], used only to turn cycles into frames per second. Default
     /// 500: the class of a mid-2000s GPU core (the GeForce 6800 GT of the papers' figures
@@ -724,10 +725,20 @@ impl Default for FrameBufferConfig {
 }
 
 impl ArchConfig {
-    /// Reads, parses and validates an architecture file.
+    /// Reads, parses and validates an architecture file. A file without a `"name"` is named
+    /// by its file name (`my_arch` for `my_arch.json`), not the default `baseline`: it is a
+    /// different architecture, and every output labels it.
     pub fn load(path: &Path) -> Result<ArchConfig> {
         let text = read_text_file(path)?;
-        ArchConfig::from_json(&text, &path.display().to_string())
+        let mut config = ArchConfig::from_json(&text, &path.display().to_string())?;
+        let named =
+            serde_json::from_str::<serde_json::Value>(&text).is_ok_and(|v| v.get("name").is_some());
+        if !named {
+            if let Some(stem) = path.file_stem() {
+                config.name = stem.to_string_lossy().into_owned();
+            }
+        }
+        Ok(config)
     }
 
     /// Parses and validates an architecture from JSON text; `file` is the name used in

@@ -263,6 +263,42 @@ fn check_golden(args: &[&str], name: &str) {
     );
 }
 
+/// An architecture file without a `"name"` is labelled by its file name, not as the
+/// baseline it is not; one with a name keeps it.
+#[test]
+fn an_unnamed_architecture_file_is_labelled_by_its_file_name() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("two_rops.json"), r#"{"rop": {"count": 2}}"#).unwrap();
+    std::fs::write(
+        dir.path().join("named.json"),
+        r#"{"name": "mine", "rop": {"count": 2}}"#,
+    )
+    .unwrap();
+    for (file, name) in [("two_rops.json", "two_rops"), ("named.json", "mine")] {
+        let out = run(
+            &[
+                "render",
+                "--arch",
+                file,
+                "--viewport",
+                "32x32",
+                "--out",
+                "o",
+            ],
+            dir.path(),
+        );
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let report: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.path().join("o/report.json")).unwrap())
+                .unwrap();
+        assert_eq!(report["arch"]["name"], name, "{file}");
+    }
+}
+
 #[test]
 fn bad_architecture_field_is_refused_by_name() {
     for (arch, field) in [
