@@ -3,7 +3,7 @@
 //! finished run appended to `results.jsonl` at once, resumption by key, the progress bar.
 
 use super::{
-    bracket::{next_round, Limits, Measured},
+    bracket::{next_round, Knob, Limits, Measured, Refine},
     lock::FolderLock,
     plan::{Plan, SweepReference},
     results::{
@@ -232,28 +232,7 @@ pub fn run_sweep(job: &SweepJob) -> std::result::Result<SweepOutcome, SweepError
         let Some(refine) = plan.spec.refine else {
             break;
         };
-        let additions = {
-            // Each record is parsed once over the rounds: a round adds a few runs to
-            // thousands.
-            for (index, l) in &lines {
-                if !parsed.contains_key(index) {
-                    let m = serde_json::from_str::<serde_json::Value>(l)
-                        .ok()
-                        .and_then(|r| Measured::of(&r));
-                    parsed.insert(*index, m);
-                }
-            }
-            let measured: Vec<Measured> = parsed.values().flatten().cloned().collect();
-            let triangle_ok = |scene: &str, n: u32| plan.triangle_ok(scene, n);
-            next_round(
-                &measured,
-                &Limits {
-                    refine: Some(refine),
-                    budget: plan.spec.area_budget_mm2,
-                    triangle_ok: &triangle_ok,
-                },
-            )
-        };
+        let additions = refinement_round(&plan, refine, &lines, &mut parsed);
         round = plan.extend(&additions)?;
         if round.is_empty() {
             break;
@@ -277,6 +256,34 @@ pub fn run_sweep(job: &SweepJob) -> std::result::Result<SweepOutcome, SweepError
         files,
         wall_seconds: t0.elapsed().as_secs_f64(),
     }))
+}
+
+/// The next refinement round's additions (DESIGN.md §7, "Bracketing") from the records
+/// so far; `parsed` keeps each record as refinement reads it, by run index, so that each
+/// is parsed once over the rounds (a round adds a few runs to thousands).
+fn refinement_round(
+    plan: &Plan,
+    refine: Refine,
+    lines: &BTreeMap<usize, String>,
+    parsed: &mut BTreeMap<usize, Option<Measured>>,
+) -> Vec<(usize, Knob)> {
+    for (index, l) in lines {
+        parsed.entry(*index).or_insert_with(|| {
+            serde_json::from_str::<serde_json::Value>(l)
+                .ok()
+                .and_then(|r| Measured::of(&r))
+        });
+    }
+    let measured: Vec<Measured> = parsed.values().flatten().cloned().collect();
+    let triangle_ok = |scene: &str, n: u32| plan.triangle_ok(scene, n);
+    next_round(
+        &measured,
+        &Limits {
+            refine: Some(refine),
+            budget: plan.spec.area_budget_mm2,
+            triangle_ok: &triangle_ok,
+        },
+    )
 }
 
 /// At most as many host threads per run as the run has units (points may differ in unit
