@@ -263,6 +263,22 @@ pub(super) fn fmt_int(n: u64) -> String {
     out
 }
 
+/// A chart's builder on `plot` as every plot frames it: its caption at `size` points, a
+/// margin of 20, label areas of 50 (x) and 80 (y).
+pub(super) fn framed<'a, 'b>(
+    plot: &'a Area<'b>,
+    title: &str,
+    size: u32,
+) -> ChartBuilder<'a, 'b, SVGBackend<'b>> {
+    let mut builder = ChartBuilder::on(plot);
+    builder
+        .caption(title, (FONT, size))
+        .margin(20)
+        .x_label_area_size(50)
+        .y_label_area_size(80);
+    builder
+}
+
 /// The smallest and the largest of `values` (infinities when there are none).
 pub(super) fn min_max(values: impl Iterator<Item = f64>) -> (f64, f64) {
     values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {

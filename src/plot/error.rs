@@ -3,8 +3,8 @@
 //! level labels.
 
 use super::chart::{
-    draw_legend, draw_mark, fmt_num, log_axis, log_range, mesh, plot_size, svg, Entry, Mark, Plot,
-    CHART_HEIGHT, FONT, LEMBO, MARKS, PALETTE, TRIANGLE,
+    draw_legend, draw_mark, fmt_num, framed, log_axis, log_range, mesh, plot_size, svg, Entry,
+    Mark, Plot, CHART_HEIGHT, FONT, LEMBO, MARKS, PALETTE, TRIANGLE,
 };
 use super::point::{assignment, pareto_front, varying, Point};
 use plotters::prelude::*;
@@ -98,15 +98,10 @@ pub(super) fn error_against(
     };
     svg(plot_size(&entries), |root| {
         let (plot, legend) = root.split_vertically(CHART_HEIGHT);
-        let mut chart = ChartBuilder::on(&plot)
-            .caption(&title, (FONT, 20))
-            .margin(20)
-            .x_label_area_size(50)
-            .y_label_area_size(80)
-            .build_cartesian_2d(
-                log_axis(log_range(xy.iter().map(|p| p.0))),
-                log_axis(log_range(xy.iter().map(|p| p.1))),
-            )?;
+        let mut chart = framed(&plot, &title, 20).build_cartesian_2d(
+            log_axis(log_range(xy.iter().map(|p| p.0))),
+            log_axis(log_range(xy.iter().map(|p| p.1))),
+        )?;
         mesh(
             &mut chart,
             x_desc,

@@ -37,8 +37,8 @@ pub mod speedup;
 
 use crate::error::{Error, Result};
 use chart::{
-    draw_legend, draw_lines, draw_mark, fmt_int, fmt_num, fmt_value, log_axis, log_range, mesh,
-    min_max, plot_size, svg, Entry, Plot, CHART_HEIGHT, FONT, LEMBO, MARKS, PALETTE, WIDTH,
+    draw_legend, draw_lines, draw_mark, fmt_int, fmt_num, fmt_value, framed, log_axis, log_range,
+    mesh, min_max, plot_size, svg, Entry, Plot, CHART_HEIGHT, FONT, LEMBO, MARKS, PALETTE, WIDTH,
 };
 use error::{error_against, Against, ErrorAxis};
 use plotters::prelude::*;
@@ -213,11 +213,7 @@ fn cycles_vs_k(scene: &str, points: &[Point]) -> Plot {
     let title = format!("{scene}: cycles against k (lembo path)");
     svg(plot_size(&entries), |root| {
         let (plot, legend) = root.split_vertically(CHART_HEIGHT);
-        let mut chart = ChartBuilder::on(&plot)
-            .caption(&title, (FONT, 22))
-            .margin(20)
-            .x_label_area_size(50)
-            .y_label_area_size(80)
+        let mut chart = framed(&plot, &title, 22)
             .build_cartesian_2d(log_axis(log_range(drawn().map(|p| p.0))), 0.0..y_max * 1.1)?;
         chart
             .configure_mesh()
@@ -333,12 +329,7 @@ fn cycles_vs_arch(scene: &str, points: &[Point], axis: ArchAxis) -> Plot {
     let title = format!("{scene}: cycles against {what}");
     svg(plot_size(&entries), |root| {
         let (plot, legend) = root.split_vertically(CHART_HEIGHT);
-        let mut builder = ChartBuilder::on(&plot);
-        builder
-            .caption(&title, (FONT, 22))
-            .margin(20)
-            .x_label_area_size(50)
-            .y_label_area_size(80);
+        let mut builder = framed(&plot, &title, 22);
         match axis {
             ArchAxis::Counts => {
                 let mut chart =

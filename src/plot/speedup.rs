@@ -3,8 +3,8 @@
 //! chart ([`tornado_svg`]). Both take plain numbers: the sweep works them out.
 
 use super::chart::{
-    draw_legend, draw_mark, fmt_num, log_axis, log_range, min_max, plot_size, svg, Entry, Mark,
-    CHART_HEIGHT, FONT, LEMBO, PALETTE, TRIANGLE, WIDTH,
+    draw_legend, draw_mark, fmt_num, framed, log_axis, log_range, min_max, plot_size, svg, Entry,
+    Mark, CHART_HEIGHT, FONT, LEMBO, PALETTE, TRIANGLE, WIDTH,
 };
 use crate::error::{Error, Result};
 use plotters::prelude::*;
@@ -72,12 +72,7 @@ pub fn speedup_svg(f: &SpeedupFigure) -> Result<String> {
     }
     let drawn = svg(plot_size(&entries), |root| {
         let (plot, legend) = root.split_vertically(CHART_HEIGHT);
-        let mut builder = ChartBuilder::on(&plot);
-        builder
-            .caption(&title, (FONT, 22))
-            .margin(20)
-            .x_label_area_size(50)
-            .y_label_area_size(80);
+        let mut builder = framed(&plot, &title, 22);
         let lines = [
             (f.cycles, LEMBO, Mark::Dot),
             (f.energy, PALETTE[0], Mark::Ring),
