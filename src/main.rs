@@ -82,6 +82,12 @@ struct SweepArgs {
     /// when set).
     #[arg(long)]
     no_memory_check: bool,
+    /// Also give the answer for each value of this swept field (answer_by_<FIELD>.md, the
+    /// table of how the answer moves with it, and one answer.md per value under
+    /// by_<FIELD>/): `arch.framebuffer.bytes_per_cycle`, `samples`, `viewport`, ... Needs the
+    /// spec's area_budget_mm2 [default: the spec's `by`, if any].
+    #[arg(long, value_name = "FIELD")]
+    by: Option<String>,
 }
 
 #[derive(Args)]
@@ -92,6 +98,10 @@ struct MergeArgs {
     /// The shards' output directories.
     #[arg(value_name = "SHARD_DIR", required = true)]
     shards: Vec<PathBuf>,
+    /// Also give the answer for each value of this swept field (see `sweep --help`)
+    /// [default: the spec's `by`, if any].
+    #[arg(long, value_name = "FIELD")]
+    by: Option<String>,
 }
 
 /// The test hook's environment variable: stop after this many records (exit status 3).
@@ -454,12 +464,12 @@ fn sweep(args: SweepArgs) -> ExitCode {
         progress: true,
         host_threads: args.host_threads,
         no_memory_check: args.no_memory_check,
+        by: args.by,
     };
     match run_sweep(&job) {
         Ok(SweepOutcome::Done(out)) => {
-            out!(
-                "sweep {}: {} runs{} ({} already done), {} threads, {:.1} s",
-                out.name,
+            let runs = format!(
+                "{}{} ({} already done)",
                 out.runs,
                 if shard == Shard::ALL {
                     String::new()
@@ -467,10 +477,16 @@ fn sweep(args: SweepArgs) -> ExitCode {
                     format!(" in shard {}/{}", shard.index, shard.count)
                 },
                 out.skipped,
-                out.jobs,
-                out.wall_seconds
             );
-            out!("wrote {} to {}", out.files.join(", "), out.dir.display());
+            let time = format!("{:.1} s on {} threads", out.wall_seconds, out.jobs);
+            summary(
+                &out.name,
+                &runs,
+                Some(&time),
+                &out.dir,
+                &out.files,
+                &out.answer,
+            );
             ExitCode::SUCCESS
         }
         Ok(SweepOutcome::Stopped { dir, appended }) => {
@@ -488,14 +504,50 @@ fn sweep_merge(args: MergeArgs) -> ExitCode {
     let job = MergeJob {
         out: args.out,
         shards: args.shards,
+        by: args.by,
     };
     match run_merge(&job) {
         Ok(out) => {
-            out!("sweep {}: {} runs merged", out.name, out.runs);
-            out!("wrote {} to {}", out.files.join(", "), out.dir.display());
+            let runs = format!("{} merged", out.runs);
+            summary(&out.name, &runs, None, &out.dir, &out.files, &out.answer);
             ExitCode::SUCCESS
         }
         Err(e) => failed(&e),
+    }
+}
+
+/// A finished sweep's (or merge's) summary on stdout: runs, failures and time, where the
+/// files are, and the answer's rows where the spec has an area budget.
+fn summary(
+    name: &str,
+    runs: &str,
+    time: Option<&str>,
+    dir: &std::path::Path,
+    files: &[String],
+    answer: &[String],
+) {
+    out!("sweep {name}");
+    out!("  runs     {runs}");
+    // A failed run stops the sweep with its error; a rerun resumes after the runs done.
+    out!("  failed   0");
+    if let Some(time) = time {
+        out!("  time     {time}");
+    }
+    let main: Vec<&str> = ["report.html", "answer.md", "results.csv"]
+        .into_iter()
+        .filter(|f| files.iter().any(|g| g == f))
+        .collect();
+    out!(
+        "  folder   {} ({}; {} files)",
+        dir.display(),
+        main.join(", "),
+        files.len()
+    );
+    if !answer.is_empty() {
+        out!("answer (answer.md):");
+        for line in answer {
+            out!("  {line}");
+        }
     }
 }
 

@@ -31,6 +31,7 @@
 
 mod chart;
 mod error;
+mod field;
 mod point;
 pub mod scaling;
 pub mod speedup;
@@ -43,9 +44,9 @@ use chart::{
 use error::{error_against, Against, ErrorAxis};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
-pub use point::pareto_front;
 pub(crate) use point::used;
-use point::{assignment, varying, Point};
+use point::{assignment, most_common, varying, Point};
+pub use point::{pareto_front, scene_label};
 use serde_json::Value;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
@@ -105,6 +106,13 @@ pub fn plot_files(records: &[Value], budget: Option<f64>) -> Result<Vec<(String,
             ),
             ("utilisation", utilisation(scene, points)),
         ];
+        let fields = field::field_plots(scene, points)
+            .into_iter()
+            .map(|(f, plot)| (format!("vs_{}", field_stem(&f)), plot));
+        let plots = plots
+            .into_iter()
+            .map(|(k, p)| (k.to_string(), p))
+            .chain(fields);
         for (kind, plot) in plots {
             let name = format!("{kind}_{stem}.svg");
             match plot {
@@ -273,11 +281,16 @@ fn held_series(points: &[Point], axis: ArchAxis) -> Vec<(Entry, Vec<(f64, f64)>)
         others.sort_by_key(|k| (k.as_str() != "path", k.as_str()));
         let mut fixed = Vec::new();
         for other in others {
-            let value = most_common(&held, other);
+            let (value, tied) = most_common(&held, other);
             held.retain(|p| p.param(other) == &value);
             // Null is a parameter that does not apply (tess on the lembo path).
             if !value.is_null() {
-                fixed.push(format!("{other}={}", fmt_value(&value)));
+                let mut said = format!("{other}={}", fmt_value(&value));
+                if !tied.is_empty() {
+                    let tied: Vec<String> = tied.iter().map(fmt_value).collect();
+                    said += &format!(" (tied with {})", tied.join(", "));
+                }
+                fixed.push(said);
             }
         }
         let mut line: Vec<(f64, f64)> = held
@@ -453,24 +466,6 @@ fn utilisation(scene: &str, points: &[Point]) -> Plot {
     })
 }
 
-/// The value of `key` most points have; ties go to the one seen first.
-fn most_common(points: &[&Point], key: &str) -> Value {
-    let mut tally: Vec<(Value, usize)> = Vec::new();
-    for p in points {
-        let v = p.param(key);
-        match tally.iter_mut().find(|(seen, _)| seen == v) {
-            Some((_, n)) => *n += 1,
-            None => tally.push((v.clone(), 1)),
-        }
-    }
-    let best = tally.iter().map(|(_, n)| *n).max().unwrap_or(0);
-    tally
-        .into_iter()
-        .find(|(_, n)| *n == best)
-        .map(|(v, _)| v)
-        .unwrap_or(Value::Null)
-}
-
 /// The most characters a 16-point caption holds across a plot.
 const CAPTION_CHARS: usize = 100;
 
@@ -492,7 +487,7 @@ fn describe_apart(p: &Point, pts: &[&Point], varying: &[String]) -> String {
     let apart: Vec<String> = varying
         .iter()
         .filter(|k| !matches!(k.as_str(), "path" | "k" | "tess"))
-        .filter(|k| p.param(k) != &most_common(pts, k))
+        .filter(|k| p.param(k) != &most_common(pts, k).0)
         .cloned()
         .collect();
     describe(p, &apart)
@@ -514,6 +509,16 @@ fn describe(p: &Point, varying: &[String]) -> String {
 
 /// A file-name stem for a scene: ASCII letters, digits, `-`, `_` and `.`, the rest `_`;
 /// `_2`, `_3`, ... if another scene already took it.
+/// A field's name as a file name's part: `arch.framebuffer.bytes_per_cycle` as
+/// `framebuffer_bytes_per_cycle`.
+fn field_stem(field: &str) -> String {
+    field
+        .trim_start_matches("arch.")
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .collect()
+}
+
 fn unique_stem(scene: &str, taken: &mut BTreeSet<String>) -> String {
     let base: String = scene
         .chars()

@@ -36,6 +36,22 @@ pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {
     front
 }
 
+/// The scene a sweep record's figures belong to: its scene's name, and where its point
+/// sets a viewport (a sweep over viewports), the viewport too (`bunny 1024x768`), so that
+/// the plots and the answer keep each viewport's runs apart.
+pub fn scene_label(record: &Value) -> Option<String> {
+    let name = record
+        .get("scene")
+        .and_then(Value::as_str)
+        .or_else(|| record.pointer("/report/scene/name").and_then(Value::as_str))?;
+    Some(
+        match record.pointer("/params/viewport").and_then(Value::as_str) {
+            Some(v) => format!("{name} {v}"),
+            None => name.to_string(),
+        },
+    )
+}
+
 /// One sweep point, as far as the plots use it.
 pub(super) struct Point {
     pub(super) index: u64,
@@ -78,11 +94,7 @@ impl Point {
         let report = record.get("report")?;
         let settings = report.get("settings")?;
         let path = settings.get("path")?.as_str()?.to_string();
-        let scene = record
-            .get("scene")
-            .and_then(Value::as_str)
-            .or_else(|| report.pointer("/scene/name").and_then(Value::as_str))?
-            .to_string();
+        let scene = scene_label(record)?;
         let params = record
             .get("params")
             .and_then(Value::as_object)
@@ -161,6 +173,26 @@ pub(super) fn varying(points: &[&Point]) -> Vec<String> {
         })
         .cloned()
         .collect()
+}
+
+/// The value most of `points` have for `key` (the first met among equals) and the others
+/// as common.
+pub(super) fn most_common(points: &[&Point], key: &str) -> (Value, Vec<Value>) {
+    let mut tally: Vec<(Value, usize)> = Vec::new();
+    for p in points {
+        let v = p.param(key);
+        match tally.iter_mut().find(|(seen, _)| seen == v) {
+            Some((_, n)) => *n += 1,
+            None => tally.push((v.clone(), 1)),
+        }
+    }
+    let best = tally.iter().map(|(_, n)| *n).max().unwrap_or(0);
+    let mut top = tally
+        .into_iter()
+        .filter(|(_, n)| *n == best)
+        .map(|(v, _)| v);
+    let first = top.next().unwrap_or(Value::Null);
+    (first, top.collect())
 }
 
 /// `key=value, ...` for the given parameters of a point.

@@ -393,7 +393,9 @@ fn flip_gets_its_own_error_plots() {
             "flip_tradeoff_sphere24.svg",
             "cycles_vs_k_sphere24.svg",
             "cycles_vs_units_sphere24.svg",
-            "utilisation_sphere24.svg"
+            "utilisation_sphere24.svg",
+            "vs_rasterizer_count_sphere24.svg",
+            "vs_segmenter_count_sphere24.svg"
         ]
     );
     let flip = String::from_utf8(files[1].1.clone()).unwrap();
@@ -418,9 +420,23 @@ fn write_plots_draws_every_plot_a_timed_sweep_with_reference_supports() {
             "tradeoff_sphere24.svg",
             "cycles_vs_k_sphere24.svg",
             "cycles_vs_units_sphere24.svg",
-            "utilisation_sphere24.svg"
+            "utilisation_sphere24.svg",
+            "vs_rasterizer_count_sphere24.svg",
+            "vs_segmenter_count_sphere24.svg"
         ]
     );
+    // Any numeric field that varies gets cycles, energy and PSNR against it, each path
+    // with what it held.
+    let svg = read_svg(dir.path(), "vs_segmenter_count_sphere24.svg");
+    for text in [
+        "sphere24: cycles, energy and PSNR against arch.segmenter.count",
+        "held: lembo: ",
+        "simulated frame time [cycles]",
+        "PSNR against the reference [dB]",
+        "held at the most common value: ",
+    ] {
+        assert!(has(&svg, text), "vs_segmenter_count lacks {text:?}");
+    }
     let svg = read_svg(dir.path(), "tradeoff_sphere24.svg");
     for text in [
         "sphere24: image error against cycles",

@@ -53,9 +53,33 @@ pub(super) struct Ask<'a> {
     pub(super) sensitivity: Option<Sensitivity>,
 }
 
-/// `answer.md` and its figures, as (file name, bytes), for `records`; None when no scene
-/// has measured runs of both paths within the budget.
-pub(super) fn answer_files(records: &[Value], ask: &Ask) -> Result<Option<Vec<Figure>>> {
+/// The answer: its files and each scene's figures.
+pub(super) struct Answer {
+    /// `answer.md` and its figures, as (file name, bytes).
+    pub(super) files: Vec<Figure>,
+    /// Each scene's answer in figures, in the order answer.md lists the scenes.
+    pub(super) headlines: Vec<Headline>,
+}
+
+/// One scene's answer in figures: what the sweep's summary and the table of an answer by
+/// value (`super::by`) show.
+#[derive(Clone, Debug)]
+pub(super) struct Headline {
+    /// The scene, with its viewport where the sweep varies it.
+    pub(super) scene: String,
+    /// At equal area, each path's most accurate run within the budget: (run, cycles,
+    /// PSNR), the lembo path's first; None when either path has none.
+    pub(super) area: Option<[(usize, u64, f64); 2]>,
+    /// The equal-area verdict in words (no winner where a deciding run is unbracketed).
+    pub(super) verdict: String,
+    /// At each PSNR target \[dB\]: the triangle path's fewest cycles over the lembo
+    /// path's, None where either path does not reach it.
+    pub(super) psnr: Vec<(f64, Option<f64>)>,
+}
+
+/// `answer.md` and its figures, and each scene's headline, for `records`; None when no
+/// scene has measured runs of both paths within the budget.
+pub(super) fn answer_files(records: &[Value], ask: &Ask) -> Result<Option<Answer>> {
     let measured: Vec<Measured> = records
         .iter()
         .filter_map(Measured::of)
@@ -125,7 +149,10 @@ pub(super) fn answer_files(records: &[Value], ask: &Ask) -> Result<Option<Vec<Fi
     let page = sections.page(ask, margin, &shared, &names);
     let mut files = vec![("answer.md".to_string(), page.into_bytes())];
     files.extend(sections.figures);
-    Ok(Some(files))
+    Ok(Some(Answer {
+        files,
+        headlines: sections.headlines,
+    }))
 }
 
 /// answer.md's sections as the scenes fill them, and the figures.
@@ -139,6 +166,7 @@ struct Sections {
     energy: String,
     flips: String,
     figures: Vec<Figure>,
+    headlines: Vec<Headline>,
 }
 
 /// One scene's runs within the budget, and the sensitivity variants of every scene.
@@ -163,7 +191,19 @@ impl Scene<'_> {
                 "| {scene} | no run of both paths within {} mm² | | |",
                 ask.budget_mm2
             );
+            out.headlines.push(Headline {
+                scene: scene.to_string(),
+                area: None,
+                verdict: format!("no run of both paths within {} mm²", ask.budget_mm2),
+                psnr: Vec::new(),
+            });
             return Ok(false);
+        };
+        let mut headline = Headline {
+            scene: scene.to_string(),
+            area: Some([bl, bt].map(|m| (m.index, m.cycles.unwrap_or(0), m.psnr()))),
+            verdict: names.verdict(bl, bt),
+            psnr: Vec::new(),
         };
         let _ = writeln!(
             out.area,
@@ -187,9 +227,16 @@ impl Scene<'_> {
             let targets = stated.unwrap_or_else(|| default_targets(lembo, triangle, metric));
             for t in targets {
                 out.curves[i] += &names.target_row(scene, metric, t, lembo, triangle);
+                if metric == Metric::Psnr {
+                    let speedup = reach(lembo, metric, t)
+                        .zip(reach(triangle, metric, t))
+                        .map(|(l, t)| t.fastest.cycles_f() / l.fastest.cycles_f().max(1.0));
+                    headline.psnr.push((t, speedup));
+                }
             }
             out.figures.extend(self.speedup_figure(metric)?);
         }
+        out.headlines.push(headline);
         Ok(true)
     }
 

@@ -198,7 +198,8 @@ impl Knob {
 pub struct Measured {
     /// The run's index in the sweep.
     pub index: usize,
-    /// The scene's name.
+    /// The scene's name, with the viewport where the point sets one
+    /// ([`crate::plot::scene_label`]).
     pub scene: String,
     /// `lembo` or `triangle`.
     pub path: &'static str,
@@ -248,7 +249,7 @@ impl Measured {
         let acc = &report["accuracy"];
         Some(Measured {
             index: record["index"].as_u64()? as usize,
-            scene: record["scene"].as_str()?.to_string(),
+            scene: crate::plot::scene_label(record)?,
             path,
             knob,
             params,
@@ -454,7 +455,8 @@ fn settled(gains: &[f64], margin_db: f64) -> bool {
 /// One scene's runs of one path that differ only in the knob and the architecture.
 #[derive(Clone, Debug)]
 pub struct Series {
-    /// The scene's name.
+    /// The scene's name, with the viewport where the point sets one
+    /// ([`crate::plot::scene_label`]).
     pub scene: String,
     /// `lembo` or `triangle`.
     pub path: &'static str,

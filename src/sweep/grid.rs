@@ -7,7 +7,7 @@ use super::sensitivity::{Sensitivity, Vary};
 use super::spec::{
     empty_list, key, too_many, Params, Point, Setting, ARCH, MAX_RUNS, SCENES, SETTINGS, TECH,
 };
-use crate::camera::Samples;
+use crate::camera::{Samples, MAX_VIEWPORT_SIDE};
 use crate::config::ArchConfig;
 use crate::cost::tech::Tech;
 use crate::datapath::Datapath;
@@ -17,6 +17,41 @@ use crate::job::{check_tess_range, check_threshold, Mode, PrimitivePath};
 use crate::tolerance::{check_k, PerspectiveTol};
 use serde_json::Value;
 use std::collections::{BTreeMap, BTreeSet};
+
+/// The parameter that sets a run's viewport.
+pub(super) const VIEWPORT: &str = "viewport";
+
+/// A viewport as a spec gives it, `[w, h]` or `"WxH"`, each side in
+/// 1..=[`MAX_VIEWPORT_SIDE`] pixels; an error names `field`.
+pub(super) fn viewport(file: &str, field: &str, v: &Value) -> Result<(u32, u32)> {
+    let sides: Option<Vec<u64>> = match v {
+        Value::Array(items) => items.iter().map(Value::as_u64).collect(),
+        Value::String(s) => s
+            .split_once('x')
+            .and_then(|(w, h)| Some(vec![w.parse().ok()?, h.parse().ok()?])),
+        _ => None,
+    };
+    let Some([w, h]) = sides.as_deref().and_then(|s| <[u64; 2]>::try_from(s).ok()) else {
+        return Err(Error::Parse {
+            file: file.into(),
+            field: field.into(),
+            message: format!(
+                "expected a viewport as [width, height] or \"WIDTHxHEIGHT\" in pixels, found {v}"
+            ),
+        });
+    };
+    for side in [w, h] {
+        if !(1..=MAX_VIEWPORT_SIDE as u64).contains(&side) {
+            return Err(Error::invalid(
+                file,
+                field,
+                v,
+                format!("each side must be in 1..={MAX_VIEWPORT_SIDE} pixels"),
+            ));
+        }
+    }
+    Ok((w as u32, h as u32))
+}
 
 /// A parameter value as given: parsed, canonical, and where in the spec.
 #[derive(Clone)]
@@ -39,6 +74,8 @@ pub(super) struct Expander<'a> {
     pub(super) tech_shape: Value,
     pub(super) points: Vec<Point>,
     pub(super) by_params: BTreeMap<String, usize>,
+    /// The spec's `viewport` list where it lists several: every point runs at each.
+    pub(super) viewports: Vec<(Setting, Value, String)>,
 }
 
 impl Expander<'_> {
@@ -199,7 +236,25 @@ impl Expander<'_> {
             point.settings.push(given.setting);
         }
         self.check_combination(&point)?;
-        self.add_point(origin, point)
+        if self.viewports.is_empty() {
+            return self.add_point(origin, point);
+        }
+        if point.params.contains_key(VIEWPORT) {
+            return Err(Error::invalid(
+                self.file,
+                point.field(VIEWPORT),
+                &point.params[VIEWPORT],
+                "the spec's `viewport` lists several viewports, which every point runs at; give the viewports there or here, not both",
+            ));
+        }
+        for (setting, canonical, field) in self.viewports.clone() {
+            let mut at = point.clone();
+            at.params.insert(VIEWPORT.to_string(), canonical);
+            at.fields.insert(VIEWPORT.to_string(), field);
+            at.settings.push(setting);
+            self.add_point(origin, at)?;
+        }
+        Ok(())
     }
 
     /// Adds a checked point, or its scenes to an equal point already added.
@@ -408,6 +463,7 @@ impl Expander<'_> {
                     Samples::try_from(n).map_err(|why| Error::invalid(file, field, v, why))?,
                 )
             }
+            "viewport" => Setting::Viewport(viewport(file, field, v)?),
             "datapath" => Setting::Datapath(match word(&["f32", "f64"])?.as_str() {
                 "f32" => Datapath::F32,
                 _ => Datapath::F64,
@@ -449,6 +505,7 @@ impl Expander<'_> {
             },
             Setting::Tess(n) => Value::from(*n),
             Setting::Samples(n) => Value::from(n.get()),
+            Setting::Viewport((w, h)) => Value::from(format!("{w}x{h}")),
             Setting::Datapath(d) => Value::from(d.name()),
             Setting::Blend(m) => Value::from(m.name()),
             Setting::Arch(..) | Setting::Tech(..) | Setting::Scale(..) => {

@@ -19,6 +19,8 @@ pub struct MergeJob {
     pub out: PathBuf,
     /// The shards' folders, in the order given (the first holding a run wins).
     pub shards: Vec<PathBuf>,
+    /// The swept field to give the answer by value for (`--by`); None for the spec's `by`.
+    pub by: Option<String>,
 }
 
 /// A finished merge, for its summary.
@@ -32,6 +34,8 @@ pub struct MergeOutput {
     pub runs: usize,
     /// The files written, by name.
     pub files: Vec<String>,
+    /// The answer's rows, one line a scene (empty without an area budget).
+    pub answer: Vec<String>,
 }
 
 /// Unions the shards' records into what an unsharded sweep writes. The shards must hold
@@ -112,6 +116,9 @@ pub fn run_merge(job: &MergeJob) -> Result<MergeOutput> {
         }
     }
     let (spec, spec_bytes) = spec.expect("at least one shard");
+    if let Some(by) = &job.by {
+        super::by::check_by(&spec, COMMAND_LINE, "--by", by)?;
+    }
     let missing: Vec<usize> = (0..spec.runs.len())
         .filter(|i| !lines.contains_key(i))
         .collect();
@@ -134,11 +141,12 @@ pub fn run_merge(job: &MergeJob) -> Result<MergeOutput> {
     }
     let lines: BTreeMap<usize, String> = lines.into_iter().map(|(i, (l, _, _))| (i, l)).collect();
     let _lock = FolderLock::acquire(&job.out, "sweep-merge", "--out")?;
-    let files = write_final(&job.out, &spec_bytes, &lines)?;
+    let written = write_final(&job.out, &spec_bytes, &lines, job.by.as_deref())?;
     Ok(MergeOutput {
         dir: job.out.clone(),
         name: spec.name,
         runs: spec.runs.len(),
-        files,
+        files: written.files,
+        answer: written.answer,
     })
 }

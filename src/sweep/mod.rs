@@ -46,6 +46,7 @@
 
 mod answer;
 pub mod bracket;
+mod by;
 pub mod curves;
 mod flips;
 mod grid;
@@ -231,6 +232,96 @@ mod tests {
         }
         let e = Spec::parse(r#"{"name": "t", "scenes": [], "points": [{}]}"#, "s").unwrap_err();
         assert_eq!(field_of(e), "scenes");
+    }
+
+    /// The viewport is an axis like the samples: a grid block's list, a point's value, or
+    /// the spec's list that every point runs at; `[w, h]` and `"WxH"` alike, canonical as
+    /// `"WxH"`; an empty list, a zero side or a viewport given twice refused naming it.
+    #[test]
+    fn viewports_are_an_axis() {
+        let s = spec(r#""grid": [{"viewport": ["64x48", [32, 32]], "k": [1]}]"#).unwrap();
+        let keys: Vec<&str> = s.runs.iter().map(|r| r.key.as_str()).collect();
+        assert_eq!(
+            keys,
+            [
+                r#"a.json|k=1.0|viewport="64x48""#,
+                r#"b.json|k=1.0|viewport="64x48""#,
+                r#"a.json|k=1.0|viewport="32x32""#,
+                r#"b.json|k=1.0|viewport="32x32""#,
+            ]
+        );
+        assert_eq!(s.viewport, None);
+        let s = spec(r#""viewport": [[64, 48], "32x32"], "points": [{"k": 1}, {"k": 2}]"#).unwrap();
+        assert_eq!(s.points.len(), 4);
+        assert_eq!(s.points[1].params["viewport"], "32x32");
+        assert_eq!(s.points[1].field("viewport"), "viewport[1]");
+        // One viewport, in either form, is every scene's, as before: no parameter.
+        for one in ["[64, 48]", "[[64, 48]]", r#""64x48""#] {
+            let s = spec(&format!(r#""viewport": {one}, "points": [{{}}]"#)).unwrap();
+            assert_eq!(s.viewport, Some((64, 48)), "{one}");
+            assert!(s.points[0].params.is_empty());
+        }
+        for (rest, field) in [
+            (r#""viewport": [], "points": [{}]"#, "viewport"),
+            (
+                r#""viewport": [[64, 48], [0, 4]], "points": [{}]"#,
+                "viewport[1]",
+            ),
+            (
+                r#""viewport": [[64, 48], "64x48"], "points": [{}]"#,
+                "viewport[1]",
+            ),
+            (r#""viewport": ["4x4", "8"], "points": [{}]"#, "viewport[1]"),
+            (r#""grid": [{"viewport": []}]"#, "grid[0].viewport"),
+            (r#""grid": [{"viewport": ["0x4"]}]"#, "grid[0].viewport[0]"),
+            (
+                r#""grid": [{"viewport": [[4, 20000]]}]"#,
+                "grid[0].viewport[0]",
+            ),
+            (
+                r#""viewport": ["4x4", "8x8"], "points": [{"viewport": "2x2"}]"#,
+                "points[0].viewport",
+            ),
+        ] {
+            let e = spec(rest)
+                .err()
+                .unwrap_or_else(|| panic!("{rest} accepted"));
+            assert_eq!(field_of(e), field, "{rest}");
+        }
+    }
+
+    /// `by` names a field the spec sweeps (two values or more), not a knob, in a spec
+    /// with an area budget; each refusal names the field and says why.
+    #[test]
+    fn by_names_a_swept_field() {
+        let grid = r#""grid": [{"arch.framebuffer.bytes_per_cycle": [32, 64], "k": [1, 2]}]"#;
+        let s = spec(&format!(
+            r#""area_budget_mm2": 50, "by": "arch.framebuffer.bytes_per_cycle", {grid}"#
+        ))
+        .unwrap();
+        assert_eq!(s.by.as_deref(), Some("arch.framebuffer.bytes_per_cycle"));
+        for (by, budget, why) in [
+            ("k", true, "knobs"),
+            ("arch.rop.count", true, "does not sweep it"),
+            ("arch.framebuffer.bytes_per_cycle", false, "area_budget_mm2"),
+        ] {
+            let budget = if budget {
+                r#""area_budget_mm2": 50,"#
+            } else {
+                ""
+            };
+            let e = spec(&format!(r#"{budget} "by": "{by}", {grid}"#)).unwrap_err();
+            assert!(e.to_string().contains(why), "{by}: {e}");
+            assert_eq!(field_of(e), "by");
+        }
+        let e = spec(&format!(
+            r#""area_budget_mm2": 50, "by": "arch.rop.count", {grid}"#
+        ))
+        .unwrap_err();
+        assert!(
+            e.to_string().contains("arch.framebuffer.bytes_per_cycle"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -3,10 +3,10 @@
 
 use super::bracket::Refine;
 use super::curves::Targets;
-use super::grid::Expander;
+use super::grid::{viewport as viewport_of, Expander};
 use super::sensitivity::Sensitivity;
 use super::spec::{
-    check_name, empty_list, key, too_many, ModeSpec, Point, Run, Spec, SpecFile, MAX_RUNS,
+    check_name, empty_list, key, too_many, ModeSpec, Point, Run, Setting, Spec, SpecFile, MAX_RUNS,
 };
 use crate::camera::MAX_VIEWPORT_SIDE;
 use crate::config::ArchConfig;
@@ -27,7 +27,7 @@ impl Spec {
         if f.scenes.is_empty() {
             return Err(empty_list(file, "scenes"));
         }
-        let viewport = check_viewport(file, f.viewport)?;
+        let viewports = check_viewport(file, f.viewport.as_ref())?;
         let mode = check_mode(file, &f)?;
 
         let (refine, targets) = answer_settings(file, &f)?;
@@ -42,6 +42,20 @@ impl Spec {
                 .expect("the technology serialises"),
             points: Vec::new(),
             by_params: BTreeMap::new(),
+            viewports: match &viewports {
+                Viewports::Each(list) => list
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &(w, h))| {
+                        (
+                            Setting::Viewport((w, h)),
+                            Value::from(format!("{w}x{h}")),
+                            format!("viewport[{i}]"),
+                        )
+                    })
+                    .collect(),
+                _ => Vec::new(),
+            },
         };
         match (&f.grid, &f.points) {
             (None, None) => {
@@ -81,42 +95,86 @@ impl Spec {
         };
 
         let runs = runs_of(file, &ex.points, &f.scenes)?;
-        Ok(Spec {
+        let spec = Spec {
             file: file.to_string(),
             text: text.to_string(),
             value,
             name: f.name,
-            viewport,
+            viewport: match viewports {
+                Viewports::One(vp) => Some(vp),
+                Viewports::Scenes | Viewports::Each(_) => None,
+            },
             mode,
             reference: f.reference.unwrap_or(true),
             arch: f.arch,
             area_budget_mm2: f.area_budget_mm2,
+            by: f.by,
             refine,
             targets,
             sensitivity,
             points: ex.points,
             runs,
             scenes: f.scenes,
-        })
+        };
+        if let Some(by) = &spec.by {
+            super::by::check_by(&spec, file, "by", by)?;
+        }
+        Ok(spec)
     }
 }
 
-/// The spec's `viewport`, checked.
-fn check_viewport(file: &str, viewport: Option<[u32; 2]>) -> Result<Option<(u32, u32)>> {
-    let Some([w, h]) = viewport else {
-        return Ok(None);
-    };
-    for (i, side) in [w, h].into_iter().enumerate() {
-        if !(1..=MAX_VIEWPORT_SIDE).contains(&side) {
-            return Err(Error::invalid(
-                file,
-                format!("viewport[{i}]"),
-                side,
-                format!("must be in 1..={MAX_VIEWPORT_SIDE} pixels"),
-            ));
+/// The spec's `viewport`, checked: one viewport for every scene (`[w, h]`), or a list of
+/// them (`[[w, h], "WxH"]`) that every point runs at, as its `viewport` parameter. A list of
+/// one is the one viewport.
+fn check_viewport(file: &str, viewport: Option<&Value>) -> Result<Viewports> {
+    let one = |field: &str, v: &Value| viewport_of(file, field, v);
+    match viewport {
+        None => Ok(Viewports::Scenes),
+        Some(Value::Array(items)) if items.is_empty() => Err(empty_list(file, "viewport")),
+        Some(Value::Array(items)) if items.iter().all(|v| v.is_number()) => {
+            // One viewport; a side out of range is named by its index.
+            for (i, side) in items.iter().enumerate() {
+                if side
+                    .as_u64()
+                    .is_some_and(|s| s == 0 || s > MAX_VIEWPORT_SIDE as u64)
+                {
+                    return Err(Error::invalid(
+                        file,
+                        format!("viewport[{i}]"),
+                        side,
+                        format!("must be in 1..={MAX_VIEWPORT_SIDE} pixels"),
+                    ));
+                }
+            }
+            Ok(Viewports::One(one("viewport", viewport.expect("matched"))?))
         }
+        Some(Value::Array(items)) => {
+            let mut list: Vec<(u32, u32)> = Vec::new();
+            for (i, v) in items.iter().enumerate() {
+                let field = format!("viewport[{i}]");
+                let vp = one(&field, v)?;
+                if list.contains(&vp) {
+                    return Err(Error::invalid(file, field, v, "is listed twice"));
+                }
+                list.push(vp);
+            }
+            Ok(match list[..] {
+                [vp] => Viewports::One(vp),
+                _ => Viewports::Each(list),
+            })
+        }
+        Some(other) => Ok(Viewports::One(one("viewport", other)?)),
     }
-    Ok(Some((w, h)))
+}
+
+/// What a spec's `viewport` asks for.
+enum Viewports {
+    /// Each scene's own.
+    Scenes,
+    /// One for every scene.
+    One((u32, u32)),
+    /// Every point at each of these.
+    Each(Vec<(u32, u32)>),
 }
 
 /// The spec's mode, with the fields only a timed sweep may have (`arch`,

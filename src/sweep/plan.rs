@@ -38,7 +38,11 @@ pub struct Plan {
     pub spec: Spec,
     /// Its scenes, loaded, in the spec's order.
     pub scenes: Vec<Scene>,
-    pub(super) views: Vec<View>,
+    /// Each scene at each viewport its runs use: the spec's scenes first, in their order
+    /// (frame s is scene s as loaded), then a frame a point's `viewport` asks for.
+    pub(super) frames: Vec<Frame>,
+    /// Each run's frame, by run index.
+    pub(super) frame_of: Vec<usize>,
     /// Each point's architecture; None in functional mode.
     pub(super) archs: Vec<Option<ArchConfig>>,
     /// Each run's job, by index.
@@ -100,9 +104,15 @@ impl Plan {
             }
             scenes.push(scene);
         }
-        let views = scenes
+        let mut frames: Vec<Frame> = scenes
             .iter()
-            .map(|s| View::new(&s.camera, s.viewport))
+            .enumerate()
+            .map(|(s, scene)| Frame {
+                scene: s,
+                viewport: None,
+                own: None,
+                view: View::new(&scene.camera, scene.viewport),
+            })
             .collect();
 
         let mut archs = Vec::with_capacity(spec.points.len());
@@ -116,9 +126,12 @@ impl Plan {
         }
 
         let mut jobs = Vec::with_capacity(spec.runs.len());
+        let mut frame_of = Vec::with_capacity(spec.runs.len());
         for run in &spec.runs {
             let point = &spec.points[run.point];
-            let scene = &scenes[run.scene];
+            let f = frame(&mut frames, &scenes, run.scene, point, file)?;
+            frame_of.push(f);
+            let scene = frames[f].own.as_ref().unwrap_or(&scenes[run.scene]);
             check_applies(&spec, point, scene, run.scene)?;
             let mut job = render_job(&spec, point, scene, 1);
             job.tech = techs[run.point].clone().map(TechSource::Given);
@@ -136,14 +149,14 @@ impl Plan {
             check_samples(job.samples, scene, file, &point.field("samples"))?;
             jobs.push(job);
         }
-        // A scene whose measured runs mix sample counts measures them all against one
+        // A frame whose measured runs mix sample counts measures them all against one
         // target, the area-averaged colours (DESIGN.md §6): its one-sample runs' reference
         // is supersampled as the others' ([`SweepReference::area_averaged`]).
-        for s in 0..scenes.len() {
+        for f in 0..frames.len() {
             let measured = || {
                 jobs.iter()
                     .zip(&spec.runs)
-                    .filter(|(j, r)| r.scene == s && j.reference)
+                    .filter(|(j, r)| frame_of[r.index] == f && j.reference)
             };
             if measured().any(|(j, _)| j.samples != Samples::ONE) {
                 let one: Vec<usize> = measured()
@@ -159,10 +172,22 @@ impl Plan {
         Ok(Plan {
             spec,
             scenes,
-            views,
+            frames,
+            frame_of,
             archs,
             jobs,
         })
+    }
+
+    /// The scene of frame `f`, at its viewport.
+    pub(super) fn frame_scene(&self, f: usize) -> &Scene {
+        let frame = &self.frames[f];
+        frame.own.as_ref().unwrap_or(&self.scenes[frame.scene])
+    }
+
+    /// Run `run`'s scene, at its viewport.
+    pub(super) fn run_scene(&self, run: &Run) -> &Scene {
+        self.frame_scene(self.frame_of[run.index])
     }
 
     /// Refuses, before any run, runs that at `jobs` at once are estimated to need more
@@ -172,8 +197,8 @@ impl Plan {
         let mut estimates: Vec<(f64, usize)> = runs
             .iter()
             .map(|r| {
-                let scene = &self.scenes[r.scene];
-                (memory_estimate(&self.jobs[r.index], scene, 0.0), r.scene)
+                let scene = self.run_scene(r);
+                (memory_estimate(&self.jobs[r.index], scene, 0.0), r.index)
             })
             .collect();
         estimates.sort_by(|a, b| b.0.total_cmp(&a.0));
@@ -182,7 +207,8 @@ impl Plan {
             return Ok(());
         };
         let need: f64 = at_once.iter().map(|(e, _)| e).sum();
-        let v = self.scenes[largest].viewport;
+        let largest = &self.spec.runs[largest];
+        let v = self.run_scene(largest).viewport;
         check_available(
             need,
             insist,
@@ -190,7 +216,7 @@ impl Plan {
             &format!(
                 "{} runs at once (the largest {} at {}x{} px)",
                 at_once.len(),
-                self.spec.scenes[largest],
+                self.spec.scenes[largest.scene],
                 v.width,
                 v.height
             ),
@@ -229,7 +255,8 @@ impl Plan {
             if self.spec.runs.len() >= MAX_RUNS {
                 return Err(too_many(&file, "refine", self.spec.runs.len() + 1));
             }
-            let scene = &self.scenes[parent.scene];
+            let f = self.frame_of[from];
+            let scene = self.frame_scene(f);
             let parent_job = &self.jobs[from];
             let mut job = render_job(&self.spec, &point, scene, parent_job.host_threads);
             // The same target as its series (a scene whose runs mix sample counts).
@@ -269,13 +296,17 @@ impl Plan {
                 key: run_key,
             });
             self.jobs.push(job);
+            self.frame_of.push(f);
             added.push(index);
         }
         Ok(added)
     }
 
-    /// Whether `scene` (by name) can be tessellated at n triangles a lembo edge.
+    /// Whether `scene` (by name, or by label with its viewport:
+    /// [`crate::plot::scene_label`]; a scene's name has no space) can be tessellated at n
+    /// triangles a lembo edge.
     pub(super) fn triangle_ok(&self, scene: &str, n: u32) -> bool {
+        let scene = scene.split_once(' ').map_or(scene, |(name, _)| name);
         self.scenes
             .iter()
             .find(|s| s.name == scene)
@@ -294,18 +325,19 @@ impl Plan {
     /// Runs one run: its record, one JSON line without the newline.
     pub(super) fn run(&self, run: &Run, references: &[SweepReference]) -> Result<String> {
         let job = &self.jobs[run.index];
+        let f = self.frame_of[run.index];
         let reference = if job.reference {
             references
                 .iter()
-                .find(|r| (r.scene, r.samples) == (run.scene, job.samples))
+                .find(|r| (r.frame, r.samples) == (f, job.samples))
                 .map(|r| (&r.image, r.wall))
         } else {
             None
         };
         let mut out = run_path(
             job,
-            &self.scenes[run.scene],
-            &self.views[run.scene],
+            self.frame_scene(f),
+            &self.frames[f].view,
             crate::job::Model::new(self.archs[run.point].as_ref()),
             reference,
         )?;
@@ -321,13 +353,60 @@ impl Plan {
     }
 }
 
+/// One scene at one viewport: the spec's scene as loaded, or a copy at the viewport a
+/// point's `viewport` parameter gives.
+pub(super) struct Frame {
+    /// The scene, an index into the plan's scenes.
+    pub(super) scene: usize,
+    /// The point's viewport; None for the scene as loaded.
+    pub(super) viewport: Option<(u32, u32)>,
+    /// The scene at that viewport; None for the scene as loaded.
+    pub(super) own: Option<Scene>,
+    /// Its view.
+    pub(super) view: View,
+}
+
+/// The frame of scene `s` at `point`'s viewport, added to `frames` when new.
+fn frame(
+    frames: &mut Vec<Frame>,
+    scenes: &[Scene],
+    s: usize,
+    point: &Point,
+    file: &str,
+) -> Result<usize> {
+    let viewport = point.setting(|set| match set {
+        Setting::Viewport(v) => Some(*v),
+        _ => None,
+    });
+    let Some((w, h)) = viewport else {
+        return Ok(s);
+    };
+    if let Some(f) = frames
+        .iter()
+        .position(|f| f.scene == s && f.viewport == viewport)
+    {
+        return Ok(f);
+    }
+    let mut scene = scenes[s].clone();
+    scene
+        .set_viewport(w, h)
+        .map_err(|e| reword(e, file, &point.field(super::grid::VIEWPORT)))?;
+    frames.push(Frame {
+        scene: s,
+        viewport,
+        view: View::new(&scene.camera, scene.viewport),
+        own: Some(scene),
+    });
+    Ok(frames.len() - 1)
+}
+
 /// The exact reference of one scene for the runs of one sample count: with more than one
 /// sample a pixel, area-averaged ([`crate::job::render_reference`]); with one, the pixel
 /// centres, or where the scene's runs mix sample counts the area-averaged colours with the
 /// hits at the pixel centres ([`Self::area_averaged`]).
 pub(super) struct SweepReference {
-    /// The scene, an index into the plan's scenes.
-    pub(super) scene: usize,
+    /// The scene at its viewport, an index into the plan's frames.
+    pub(super) frame: usize,
     /// The samples a pixel of the runs it measures.
     pub(super) samples: Samples,
     /// The image.
@@ -563,6 +642,7 @@ pub(super) fn render_job(
             Setting::Datapath(d) => job.datapath = *d,
             Setting::Blend(m) => job.blend = *m,
             Setting::Threshold(t) => job.threshold = Some(*t),
+            Setting::Viewport(v) => job.viewport = Some(*v),
             Setting::Arch(..) | Setting::Tech(..) | Setting::Scale(..) => {}
         }
     }

@@ -239,13 +239,25 @@ pub(super) fn check_record(
     Err(Error::invalid(file, format!("line {}", n + 1), key, reason))
 }
 
+/// What the final write wrote: the files, and the answer's lines for the summary a sweep
+/// prints.
+pub struct Final {
+    /// The files written, by name (relative to the folder).
+    pub files: Vec<String>,
+    /// The answer's rows in one line a scene (at equal area, and the speed-up at each PSNR
+    /// target), and where the answer by value is; empty without an area budget.
+    pub answer: Vec<String>,
+}
+
 /// Writes the finished directory as one atomic set: results.jsonl in index order,
-/// results.csv, spec.json, the plots and report.html.
+/// results.csv, spec.json, the plots, the answer (with an area budget; by value of `by`,
+/// or the spec's `by`, where given) and report.html.
 pub(super) fn write_final(
     dir: &Path,
     spec_text: &[u8],
     lines: &BTreeMap<usize, String>,
-) -> Result<Vec<String>> {
+    by: Option<&str>,
+) -> Result<Final> {
     let records: Vec<Value> = lines
         .values()
         .map(|l| serde_json::from_str(l).expect("every line was parsed or written as JSON"))
@@ -254,45 +266,111 @@ pub(super) fn write_final(
     // atomic set.
     // The budget as the spec states it (parsed and checked before any run; sweep-merge
     // reads the shards' spec).
-    let budget = serde_json::from_slice::<Value>(spec_text)
-        .ok()
-        .and_then(|v| v.get("area_budget_mm2").and_then(Value::as_f64));
+    let spec: Value = serde_json::from_slice(spec_text).unwrap_or(Value::Null);
+    let budget = spec.get("area_budget_mm2").and_then(Value::as_f64);
+    let by = by.or_else(|| spec.get("by").and_then(Value::as_str));
     let plots = plot_files(&records, budget)?;
-    let mut files: Vec<(&str, Vec<u8>)> = vec![
-        (RESULTS_JSONL, joined(lines)),
-        (RESULTS_CSV, csv_bytes(&records)?),
-        (SPEC_JSON, spec_text.to_vec()),
+    let mut files: Vec<(String, Vec<u8>)> = vec![
+        (RESULTS_JSONL.into(), joined(lines)),
+        (RESULTS_CSV.into(), csv_bytes(&records)?),
+        (SPEC_JSON.into(), spec_text.to_vec()),
     ];
-    files.extend(plots.iter().map(|(name, svg)| (name.as_str(), svg.clone())));
+    files.extend(plots);
     let targets = super::curves::Targets::of_spec_text(spec_text);
-    let answer = match budget {
-        None => None,
-        Some(budget_mm2) => super::answer::answer_files(
-            &records,
-            &super::answer::Ask {
-                budget_mm2,
-                refine: super::bracket::Refine::of_spec_text(spec_text),
-                targets: &targets,
-                sensitivity: super::sensitivity::Sensitivity::of_spec_text(spec_text),
-            },
-        )?,
-    };
-    for (name, bytes) in answer.iter().flatten() {
-        files.push((name.as_str(), bytes.clone()));
+    let mut answer_lines = Vec::new();
+    let mut by_table = None;
+    if let Some(budget_mm2) = budget {
+        let ask = super::answer::Ask {
+            budget_mm2,
+            refine: super::bracket::Refine::of_spec_text(spec_text),
+            targets: &targets,
+            sensitivity: super::sensitivity::Sensitivity::of_spec_text(spec_text),
+        };
+        match super::answer::answer_files(&records, &ask)? {
+            Some(answer) => {
+                answer_lines = answer.headlines.iter().map(summary_line).collect();
+                files.extend(answer.files);
+            }
+            None => answer_lines.push(format!(
+                "answer: no scene has runs of both paths within {budget_mm2} mm²"
+            )),
+        }
+        if let Some(field) = by {
+            let by = super::by::by_files(&records, &ask, field)?;
+            answer_lines.push(format!(
+                "answer by {field}: {} (one answer.md per value under by_{}/)",
+                by.table_file,
+                super::names::file_stem(field)
+            ));
+            files.extend(by.files);
+            by_table = Some((by.table_file, by.table));
+        }
     }
-    let page = page(spec_text, records.len(), &files)?;
-    files.push((REPORT_HTML, page.into_bytes()));
-    write_files(dir, &files)?;
-    Ok(files.iter().map(|(name, _)| name.to_string()).collect())
+    let named: Vec<(&str, Vec<u8>)> = files
+        .iter()
+        .map(|(name, bytes)| (name.as_str(), bytes.clone()))
+        .collect();
+    let page = page(spec_text, records.len(), &named, by_table.as_ref())?;
+    files.push((REPORT_HTML.into(), page.into_bytes()));
+    let named: Vec<(&str, Vec<u8>)> = files
+        .iter()
+        .map(|(name, bytes)| (name.as_str(), bytes.clone()))
+        .collect();
+    write_files(dir, &named)?;
+    Ok(Final {
+        files: files.into_iter().map(|(name, _)| name).collect(),
+        answer: answer_lines,
+    })
+}
+
+/// One scene's answer on one line: at equal area, and the speed-up at each PSNR target.
+fn summary_line(h: &super::answer::Headline) -> String {
+    let area = match h.area {
+        Some([l, t]) => format!(
+            "at equal area lembo run {} ({} cycles, {:.1} dB), triangle run {} ({} cycles, {:.1} dB): {:.2}x the cycles; {}",
+            l.0,
+            l.1,
+            l.2,
+            t.0,
+            t.1,
+            t.2,
+            t.1 as f64 / l.1.max(1) as f64,
+            h.verdict
+        ),
+        None => h.verdict.clone(),
+    };
+    let targets: Vec<String> = h
+        .psnr
+        .iter()
+        .map(|(target, x)| match x {
+            Some(x) => format!("{target:.1} dB {x:.2}x"),
+            None => format!("{target:.1} dB -"),
+        })
+        .collect();
+    if targets.is_empty() {
+        format!("{}: {area}", h.scene)
+    } else {
+        format!(
+            "{}: {area}; speed-up at equal PSNR: {}",
+            h.scene,
+            targets.join(", ")
+        )
+    }
 }
 
 /// The sweep's `report.html`: what was swept, every plot, and results.csv as a table.
-fn page(spec_text: &[u8], runs: usize, files: &[(&str, Vec<u8>)]) -> Result<String> {
+fn page(
+    spec_text: &[u8],
+    runs: usize,
+    files: &[(&str, Vec<u8>)],
+    by: Option<&(String, String)>,
+) -> Result<String> {
     let spec: Value = serde_json::from_slice(spec_text).unwrap_or(Value::Null);
     let name = spec["name"].as_str().unwrap_or("sweep");
+    // The folder's own plots; each value's answer figures stay with its answer.md.
     let plots: String = files
         .iter()
-        .filter(|(file, _)| file.ends_with(".svg"))
+        .filter(|(file, _)| file.ends_with(".svg") && !file.contains('/'))
         .map(|(file, _)| html::figure(file, file, true))
         .collect();
     let csv = files
@@ -322,17 +400,32 @@ fn page(spec_text: &[u8], runs: usize, files: &[(&str, Vec<u8>)]) -> Result<Stri
         .map(|(_, bytes)| {
             html::section(
                 "Answer",
-                &(html::para(&format!(
-                    "{ANSWER_MD} as written (its figures, speedup_*.svg and tornado_*.svg, are \
-                     among the plots below)."
-                )) + &format!(
+                &(format!(
+                    "<p><a href=\"{}\">{ANSWER_MD}</a> as written (its figures, speedup_*.svg \
+                     and tornado_*.svg, are among the plots below).</p>\n",
+                    html::href(ANSWER_MD)
+                ) + &format!(
                     "<pre>{}</pre>\n",
                     html::escape(&String::from_utf8_lossy(bytes))
                 )),
             )
         })
         .unwrap_or_default();
+    let by = by
+        .map(|(file, table)| {
+            html::section(
+                "Answer by value",
+                &(format!(
+                    "<p><a href=\"{}\">{}</a> as written: how the answer moves with the field \
+                     (each value's answer.md is in the folder it names).</p>\n",
+                    html::href(file),
+                    html::escape(file)
+                ) + &format!("<pre>{}</pre>\n", html::escape(table))),
+            )
+        })
+        .unwrap_or_default();
     let body = answer
+        + &by
         + &html::section(
         "Plots",
         &if plots.is_empty() {

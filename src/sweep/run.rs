@@ -50,6 +50,8 @@ pub struct SweepJob {
     /// Run even when the runs at once are estimated to need more memory than is available
     /// (`--no-memory-check`).
     pub no_memory_check: bool,
+    /// The swept field to give the answer by value for (`--by`); None for the spec's `by`.
+    pub by: Option<String>,
 }
 
 /// What a sweep did.
@@ -82,6 +84,8 @@ pub struct SweepOutput {
     pub jobs: usize,
     /// Files written, in the directory.
     pub files: Vec<String>,
+    /// The answer's rows, one line a scene, for the summary (empty without an area budget).
+    pub answer: Vec<String>,
     /// Wall time of the whole sweep \[s\].
     pub wall_seconds: f64,
 }
@@ -170,6 +174,9 @@ pub fn run_sweep(job: &SweepJob) -> std::result::Result<SweepOutcome, SweepError
         )
         .into());
     }
+    if let Some(by) = &job.by {
+        super::by::check_by(&plan.spec, COMMAND_LINE, "--by", by)?;
+    }
     let runs = plan.shard_runs(job.shard);
     plan.check_memory(&runs, jobs, job.no_memory_check)?;
     let mut round: Vec<usize> = runs.iter().map(|r| r.index).collect();
@@ -246,14 +253,15 @@ pub fn run_sweep(job: &SweepJob) -> std::result::Result<SweepOutcome, SweepError
     check_all_placed(&results_path, &unplaced)?;
     let spec = &plan.spec;
 
-    let files = write_final(&dir, spec.text.as_bytes(), &lines)?;
+    let written = write_final(&dir, spec.text.as_bytes(), &lines, job.by.as_deref())?;
     Ok(SweepOutcome::Done(SweepOutput {
         dir,
         name: spec.name.clone(),
         runs: total,
         skipped,
         jobs,
-        files,
+        files: written.files,
+        answer: written.answer,
         wall_seconds: t0.elapsed().as_secs_f64(),
     }))
 }
@@ -291,6 +299,7 @@ fn refinement_round(
 fn clamp_host_threads(plan: &mut Plan, host_threads: u32) {
     for (run, rj) in plan.spec.runs.iter().zip(plan.jobs.iter_mut()) {
         if let Some(arch) = &plan.archs[run.point] {
+            // Its primitives, which no viewport changes.
             let scene = &plan.scenes[run.scene];
             let path = if rj.path == PrimitivePath::Triangle
                 || (scene.discoid_count() > 0 && scene.lembo_count() == 0)
@@ -315,29 +324,35 @@ fn add_references(
     bar: &ProgressBar,
     references: &mut Vec<SweepReference>,
 ) {
-    for (s, scene) in plan.scenes.iter().enumerate() {
+    for f in 0..plan.frames.len() {
+        let scene = plan.frame_scene(f);
         // Each sample count's reference, as its runs' jobs ask for it.
         let samples: BTreeMap<Samples, u32> = pending
             .iter()
-            .filter(|r| r.scene == s)
+            .filter(|r| plan.frame_of[r.index] == f)
             .map(|r| &plan.jobs[r.index])
             .filter(|j| j.reference)
             .map(|j| (j.samples, j.reference_supersample()))
             .collect();
         for (n, supersample) in samples {
-            if references.iter().any(|r| (r.scene, r.samples) == (s, n)) {
+            if references.iter().any(|r| (r.frame, r.samples) == (f, n)) {
                 continue;
             }
-            bar.set_message(format!("reference of {}", scene.name));
+            let v = scene.viewport;
+            bar.set_message(format!(
+                "reference of {} at {}x{}",
+                scene.name, v.width, v.height
+            ));
             // The plan measures a discoid scene only where it says what surface it stands for.
             let surface = crate::job::reference_scene(scene).expect("checked by the plan");
-            let (mut image, wall) =
-                pool.install(|| render_reference(surface.as_ref(), &plan.views[s], supersample, n));
+            let (mut image, wall) = pool.install(|| {
+                render_reference(surface.as_ref(), &plan.frames[f].view, supersample, n)
+            });
             if SweepReference::area_averaged(n, supersample) {
                 image = image.with_area_colours();
             }
             references.push(SweepReference {
-                scene: s,
+                frame: f,
                 samples: n,
                 image,
                 wall,

@@ -22,7 +22,8 @@ use std::fmt;
 pub const MAX_RUNS: usize = 100_000;
 
 /// The render settings a point can set, besides `arch.<field>` and `tech.<field>`.
-pub(super) const SETTINGS: [&str; 8] = [
+pub(super) const SETTINGS: [&str; 9] = [
+    "viewport",
     "path",
     "k",
     "perspective_tol",
@@ -45,12 +46,15 @@ pub(super) use super::names::{empty_list, ARCH, TECH};
 pub(super) struct SpecFile {
     pub(super) name: String,
     pub(super) scenes: Vec<String>,
-    pub(super) viewport: Option<[u32; 2]>,
+    /// One viewport (`[w, h]`), or a list of them (`[[w, h], "WxH", ...]`) that every point
+    /// runs at.
+    pub(super) viewport: Option<Value>,
     #[serde(default)]
     pub(super) mode: ModeSpec,
     pub(super) reference: Option<bool>,
     pub(super) arch: Option<String>,
     pub(super) area_budget_mm2: Option<f64>,
+    pub(super) by: Option<String>,
     pub(super) refine: Option<super::bracket::RefineFile>,
     pub(super) targets: Option<super::curves::TargetsFile>,
     pub(super) sensitivity: Option<super::sensitivity::SensitivityFile>,
@@ -112,6 +116,8 @@ pub(super) enum Setting {
     Datapath(Datapath),
     Blend(BlendMode),
     Threshold(f64),
+    /// The image size (width, height) \[pixels\], canonical as `"WxH"`.
+    Viewport((u32, u32)),
     /// An architecture field: its dotted path (without `arch.`) and value.
     Arch(String, Value),
     /// A sensitivity variant's parameter scaled by a factor: its sweep name
@@ -138,7 +144,7 @@ pub struct Point {
 }
 
 impl Point {
-    fn setting<T>(&self, pick: impl Fn(&Setting) -> Option<T>) -> Option<T> {
+    pub(super) fn setting<T>(&self, pick: impl Fn(&Setting) -> Option<T>) -> Option<T> {
         self.settings.iter().find_map(pick)
     }
     pub(super) fn path(&self) -> Option<PrimitivePath> {
@@ -203,7 +209,8 @@ pub struct Spec {
     pub name: String,
     /// The scenes as the spec writes them (relative to its directory).
     pub scenes: Vec<String>,
-    /// Viewport override for every scene (width, height) \[pixels\].
+    /// Viewport override for every scene (width, height) \[pixels\]; a spec whose
+    /// `viewport` lists several sets each point's `viewport` parameter instead.
     pub viewport: Option<(u32, u32)>,
     /// Timed or functional, for every run.
     pub mode: Mode,
@@ -214,6 +221,8 @@ pub struct Spec {
     /// The area budget the plots hold the configurations to (report.json `cost.area_mm2`)
     /// \[mm²\]; None for no budget.
     pub area_budget_mm2: Option<f64>,
+    /// The swept field the answer is also given by value for (`by`; `super::by`).
+    pub by: Option<String>,
     /// How far refinement rounds take each path's accuracy knob beyond the grid
     /// (`refine`); None for the grid alone.
     pub refine: Option<super::bracket::Refine>,

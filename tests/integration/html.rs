@@ -285,4 +285,53 @@ fn render_compare_and_sweep_pages_load_whole_in_a_browser() {
     let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
     let rows = html.matches("<tr>").count();
     assert_eq!(rows, 19 + 1, "smoke.json's 19 runs and a header");
+
+    // A sweep with an area budget, answered by value: it ends with a summary on stdout,
+    // and its page shows the answer and the table by value, linked.
+    let spec = tmp.path().join("answer.json");
+    std::fs::write(
+        &spec,
+        format!(
+            r#"{{"name": "answer", "scenes": [{:?}], "viewport": [48, 48],
+                "area_budget_mm2": 100, "by": "arch.framebuffer.bytes_per_cycle",
+                "grid": [{{"path": ["lembo"], "k": [2, 1]}}, {{"path": ["triangle"], "tess": [1, 2]}}],
+                "points": [{{"path": "lembo", "k": 1, "arch.framebuffer.bytes_per_cycle": 16}},
+                           {{"path": "triangle", "tess": 2, "arch.framebuffer.bytes_per_cycle": 16}}]}}"#,
+            scene("sphere24.json")
+        ),
+    )
+    .unwrap();
+    let out = run(&["sweep", "answer.json", "--out", "a"], tmp.path());
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    for needle in [
+        "runs",
+        "failed",
+        "time",
+        "answer (answer.md):",
+        "sphere24: at equal area",
+    ] {
+        assert!(
+            stdout.contains(needle),
+            "the summary lacks `{needle}`:\n{stdout}"
+        );
+    }
+    let dir = tmp.path().join("a");
+    let table = "answer_by_arch_framebuffer_bytes_per_cycle.md";
+    check_page(
+        browser,
+        &dir,
+        &["answer.md", table, "speedup_psnr_db_sphere24.svg"],
+    );
+    let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    for part in [
+        "The answer: lembos against triangles",
+        "How the answer moves with",
+    ] {
+        assert!(html.contains(part), "the sweep page has no {part}");
+    }
 }

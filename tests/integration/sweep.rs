@@ -1266,3 +1266,161 @@ fn a_sweep_sets_a_technology_figure() {
     let cell = |row: usize| run.csv[row][column].parse::<f64>().unwrap();
     assert_eq!((cell(1), cell(2)), (162.5, 325.0));
 }
+
+/// The answer by value (issue: "does the answer change if I change X?"): the bunny swept
+/// over four frame-buffer bandwidths with `--by` gives one answer.md per bandwidth and a
+/// table of how the speed-up moves; the sweep ends with a summary on stdout, whose answer
+/// rows are the answer's; a `--by` field the spec does not sweep is refused, naming it.
+#[test]
+fn an_answer_by_bandwidth_gives_one_answer_a_value_and_how_it_moves() {
+    let tmp = tempfile::tempdir().unwrap();
+    let scene = manifest().join("traces/bunny.json");
+    let spec = format!(
+        r#"{{"name": "by", "scenes": [{:?}], "viewport": [64, 64], "area_budget_mm2": 100,
+            "targets": {{"psnr_db": [30]}},
+            "grid": [{{"path": ["lembo"], "k": [2, 1],
+                       "arch.framebuffer.bytes_per_cycle": [8, 16, 32, 64]}},
+                     {{"path": ["triangle"], "tess": [1, 2],
+                       "arch.framebuffer.bytes_per_cycle": [8, 16, 32, 64]}}]}}"#,
+        scene.to_string_lossy()
+    );
+    let path = tmp.path().join("by.json");
+    std::fs::write(&path, &spec).unwrap();
+    let dir = tmp.path().join("out");
+    let field = "arch.framebuffer.bytes_per_cycle";
+    let run = |by: &str| {
+        sweep(
+            &[
+                "sweep",
+                path.to_str().unwrap(),
+                "--out",
+                dir.to_str().unwrap(),
+                "--jobs",
+                "2",
+                "--by",
+                by,
+            ],
+            &[],
+            tmp.path(),
+        )
+    };
+    // Refused before any run, naming the flag and what the spec does sweep.
+    let out = run("arch.rop.count");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("--by") && stderr.contains(field),
+        "{stderr}"
+    );
+    assert!(!dir.join("results.jsonl").exists());
+
+    let out = run(field);
+    ok(&out);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stdout = stdout
+        .split(' ')
+        .filter(|w| !w.is_empty())
+        .collect::<Vec<_>>()
+        .join(" ");
+    // The summary: runs, failures, time, the folder, the answer's row and the table.
+    for needle in [
+        "runs 16 (0 already done)",
+        "failed 0",
+        "time ",
+        "report.html, answer.md, results.csv",
+        "bunny: at equal area lembo run ",
+        "speed-up at equal PSNR: 30.0 dB",
+        "answer_by_arch_framebuffer_bytes_per_cycle.md",
+    ] {
+        assert!(stdout.contains(needle), "no `{needle}` in\n{stdout}");
+    }
+    let table =
+        std::fs::read_to_string(dir.join("answer_by_arch_framebuffer_bytes_per_cycle.md")).unwrap();
+    let records: Vec<Value> = std::fs::read_to_string(dir.join("results.jsonl"))
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let cycles = |i: u64| {
+        records.iter().find(|r| r["index"] == i).unwrap()["report"]["cycles"]["total"]
+            .as_u64()
+            .unwrap()
+    };
+    for bw in [8, 16, 32, 64] {
+        let answer = dir.join(format!(
+            "by_arch_framebuffer_bytes_per_cycle/{bw}/answer.md"
+        ));
+        let answer = std::fs::read_to_string(&answer)
+            .unwrap_or_else(|e| panic!("{}: {e}", answer.display()));
+        // Each value's answer names only runs at that value.
+        let named: Vec<u64> = answer
+            .lines()
+            .filter_map(|l| l.strip_prefix("- run "))
+            .map(|l| l.split(':').next().unwrap().parse().unwrap())
+            .collect();
+        assert!(!named.is_empty(), "{bw}: no run named");
+        for i in &named {
+            let r = records.iter().find(|r| r["index"] == *i).unwrap();
+            assert_eq!(r["params"][field], bw, "{bw}: run {i}");
+        }
+        // The table's equal-area row for the value: its runs, and their speed-up.
+        let row = table
+            .lines()
+            .find(|l| l.starts_with(&format!("| {bw} | bunny | run ")))
+            .unwrap_or_else(|| panic!("no row for {bw} in\n{table}"));
+        let runs: Vec<u64> = row
+            .split("run ")
+            .skip(1)
+            .map(|s| s.split(':').next().unwrap().parse().unwrap())
+            .collect();
+        let speedup = format!("{:.2}x", cycles(runs[1]) as f64 / cycles(runs[0]) as f64);
+        assert!(row.contains(&speedup), "{row} lacks {speedup}");
+        assert!(
+            table.contains(&format!("| {bw} | bunny | 30.0 dB: ")),
+            "{table}"
+        );
+    }
+    // Plotted against the bandwidth too, each path holding what the plot says.
+    let svg =
+        std::fs::read_to_string(dir.join("vs_framebuffer_bytes_per_cycle_bunny.svg")).unwrap();
+    assert!(svg.contains("against arch.framebuffer.bytes_per_cycle"));
+    // report.html shows the answer and the table.
+    let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    assert!(html.contains("Answer by value") && html.contains("How the answer moves with"));
+}
+
+/// A spec over two viewports runs each scene at each, with a reference of its own, and
+/// keeps them apart: each viewport its own plots and its own answer rows.
+#[test]
+fn a_sweep_over_two_viewports_keeps_them_apart() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = run_spec(
+        tmp.path(),
+        "sphere24.json",
+        r#""name": "vp", "viewport": [[48, 48], "64x32"], "area_budget_mm2": 100,
+           "grid": [{"path": ["lembo"], "k": [2, 1]}, {"path": ["triangle"], "tess": [1, 2]}]"#,
+    );
+    let run = masked(&dir);
+    assert_eq!(run.records.len(), 8);
+    for r in &run.records {
+        let scene = &r["report"]["scene"];
+        let shown = format!("{}x{}", scene["width"], scene["height"]);
+        assert_eq!(r["params"]["viewport"], shown.as_str());
+        assert!(r["report"]["accuracy"]["psnr_db"].as_f64().unwrap() > 10.0);
+    }
+    for stem in ["sphere24_48x48", "sphere24_64x32"] {
+        assert!(
+            dir.join(format!("tradeoff_{stem}.svg")).exists(),
+            "no tradeoff_{stem}.svg"
+        );
+    }
+    let answer = std::fs::read_to_string(dir.join("answer.md")).unwrap();
+    for scene in [
+        "| sphere24 48x48 | lembo |",
+        "| sphere24 64x32 | triangle |",
+    ] {
+        assert!(answer.contains(scene), "no `{scene}` in\n{answer}");
+    }
+    // Each run's command reproduces its viewport.
+    assert!(answer.contains("--viewport 64x32"), "{answer}");
+}
