@@ -51,6 +51,8 @@ pub(super) struct Ask<'a> {
     pub(super) targets: &'a Targets,
     /// The spec's sensitivity study.
     pub(super) sensitivity: Option<Sensitivity>,
+    /// The field whose values are series apart (`by`); None for none.
+    pub(super) by: Option<&'a str>,
 }
 
 /// The answer: its files and each scene's figures.
@@ -99,6 +101,7 @@ pub(super) fn answer_files(records: &[Value], ask: &Ask) -> Result<Option<Answer
         refine: ask.refine,
         budget: Some(ask.budget_mm2),
         triangle_ok: &triangle_ok,
+        by: ask.by,
     };
     let all_series = series(&runs, &limits);
     let (constant, shared) = shared_params(&runs);
@@ -115,6 +118,7 @@ pub(super) fn answer_files(records: &[Value], ask: &Ask) -> Result<Option<Answer
         constant: &constant,
         margin,
         cost_margin: ask.refine.map_or(DEFAULT_COST_MARGIN, |r| r.cost_margin),
+        by: ask.by,
     };
 
     let mut scenes: Vec<&str> = Vec::new();
@@ -364,10 +368,10 @@ fn preamble(ask: &Ask, margin: f64, shared: &str) -> String {
                 "Refined beyond the grid (k halved down to {}, n doubled up to {}{}) until the \
                  last two levels each gained under {} dB over the best coarser one; each finer level \
                  runs on the series' fastest and most frugal architectures at the level before. \
-                 On the coarse side, k doubled up to {} on the fastest and most frugal \
-                 architectures at the coarsest level, until a coarser level saved under {}% of \
-                 the fewest cycles and of the least energy of the level finer than it (n = 1 is \
-                 the coarsest n there is).",
+                 On the coarse side, k doubled up to {} and n halved down to 1 on the fastest \
+                 and most frugal architectures at the coarsest level, until a coarser level \
+                 saved under {}% of the fewest cycles and of the least energy of the level finer \
+                 than it.",
                 r.k_floor,
                 r.tess_cap,
                 r.cycle_cap
@@ -539,6 +543,7 @@ struct Names<'a> {
     constant: &'a [(String, Value)],
     margin: f64,
     cost_margin: f64,
+    by: Option<&'a str>,
 }
 
 impl Names<'_> {
@@ -652,7 +657,7 @@ impl Names<'_> {
     }
 
     fn series_of(&self, m: &Measured) -> Option<&Series> {
-        let key = m.series_key();
+        let key = m.series_key(self.by);
         self.series
             .iter()
             .find(|s| s.scene == m.scene && s.path == m.path && s.key == key)

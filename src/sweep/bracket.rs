@@ -289,12 +289,30 @@ impl Measured {
         self.params_without(|name| name == "path" || name == self.knob.param())
     }
 
-    /// The parameters that can change the image (not `arch.*`), without the knob: the
-    /// series.
-    pub fn series_key(&self) -> String {
-        self.params_without(|name| {
+    /// The parameters that can change the image (not `arch.*`), without the knob, and
+    /// the value of `by` (the spec's `by`: each value's runs are series of their own, so
+    /// that each is refined and bracketed apart): the series.
+    pub fn series_key(&self, by: Option<&str>) -> String {
+        let key = self.params_without(|name| {
             name == "path" || name == self.knob.param() || name.starts_with(super::names::ARCH)
-        })
+        });
+        match by.and_then(|b| Some((b, b.strip_prefix(super::names::ARCH)?))) {
+            Some((name, path)) => {
+                let value = self.params.get(name).cloned().unwrap_or_else(|| {
+                    path.split('.')
+                        .try_fold(&self.arch, |at, part| at.get(part))
+                        .cloned()
+                        .unwrap_or(Value::Null)
+                });
+                let by = format!("{name}={value}");
+                if key.is_empty() {
+                    by
+                } else {
+                    format!("{key}|{by}")
+                }
+            }
+            None => key,
+        }
     }
 
     fn params_without(&self, drop: impl Fn(&str) -> bool) -> String {
@@ -407,7 +425,7 @@ pub enum Coarse {
         /// the coarser level cost more).
         saving: f64,
     },
-    /// k reached the ceiling while still saving.
+    /// k reached the ceiling while still saving (n halves on down to 1, which is natural).
     Ceiling,
     /// The spec asks for no refinement and the grid starts here.
     GridEnd,
@@ -503,6 +521,8 @@ pub struct Limits<'a> {
     pub budget: Option<f64>,
     /// Whether a scene (by name) can take n triangles a lembo edge.
     pub triangle_ok: &'a dyn Fn(&str, u32) -> bool,
+    /// The field whose values are series apart (the spec's `by`); None for none.
+    pub by: Option<&'a str>,
 }
 
 /// The series of `runs` (measured runs, any order), each with its stop, in order of
@@ -515,7 +535,7 @@ pub fn series(runs: &[Measured], limits: &Limits) -> Vec<Series> {
         if !m.within(limits.budget) {
             continue;
         }
-        let key = (m.scene.clone(), m.path, m.series_key());
+        let key = (m.scene.clone(), m.path, m.series_key(limits.by));
         match keyed.iter_mut().find(|(k, _)| *k == key) {
             Some((_, v)) => v.push(i),
             None => keyed.push((key, vec![i])),
@@ -662,7 +682,9 @@ fn coarse_of(
         Knob::K(k) if k < refine.k_ceiling => {
             Coarse::Next(Knob::K((k * 2.0).min(refine.k_ceiling)))
         }
-        _ => Coarse::Ceiling,
+        // n halves down to 1, the coarsest n there is (checked above).
+        Knob::Tess(n) => Coarse::Next(Knob::Tess(n / 2)),
+        Knob::K(_) => Coarse::Ceiling,
     }
 }
 
@@ -772,6 +794,7 @@ mod tests {
             refine,
             budget,
             triangle_ok: &|_, n| n <= 64,
+            by: None,
         }
     }
 
@@ -902,6 +925,24 @@ mod tests {
         assert_eq!(next, [(4, Knob::Tess(4)), (3, Knob::Tess(4))]);
         // Images do not depend on the architecture: one series, whatever the counts.
         assert_eq!(series(&runs, &l).len(), 1);
+    }
+
+    /// A triangle series whose grid starts above n = 1 and whose coarsest level still
+    /// saves goes on to half its n, down to n = 1, where nothing coarser exists.
+    #[test]
+    fn the_coarse_side_halves_n_down_to_one() {
+        let l = limits(Some(Refine::default()), None);
+        let mut runs = vec![
+            run(0, Knob::Tess(4), 1, 500, 1.0, 40.0),
+            run(1, Knob::Tess(8), 1, 1000, 2.0, 44.0),
+        ];
+        assert_eq!(series(&runs, &l)[0].coarse, Coarse::Next(Knob::Tess(2)));
+        runs.push(run(2, Knob::Tess(2), 1, 300, 0.6, 35.0));
+        assert_eq!(series(&runs, &l)[0].coarse, Coarse::Next(Knob::Tess(1)));
+        runs.push(run(3, Knob::Tess(1), 1, 200, 0.5, 30.0));
+        let s = &series(&runs, &l)[0];
+        assert_eq!(s.coarse, Coarse::Natural);
+        assert!(s.coarse.bracketed());
     }
 
     #[test]

@@ -42,20 +42,7 @@ impl Spec {
                 .expect("the technology serialises"),
             points: Vec::new(),
             by_params: BTreeMap::new(),
-            viewports: match &viewports {
-                Viewports::Each(list) => list
-                    .iter()
-                    .enumerate()
-                    .map(|(i, &(w, h))| {
-                        (
-                            Setting::Viewport((w, h)),
-                            Value::from(format!("{w}x{h}")),
-                            format!("viewport[{i}]"),
-                        )
-                    })
-                    .collect(),
-                _ => Vec::new(),
-            },
+            viewports: viewports.axis(),
         };
         match (&f.grid, &f.points) {
             (None, None) => {
@@ -175,6 +162,26 @@ enum Viewports {
     One((u32, u32)),
     /// Every point at each of these.
     Each(Vec<(u32, u32)>),
+}
+
+impl Viewports {
+    /// The `viewport` parameter's values every point is crossed with, each with its
+    /// setting, canonical value and field; none unless the spec lists several.
+    fn axis(&self) -> Vec<(Setting, Value, String)> {
+        let Viewports::Each(list) = self else {
+            return Vec::new();
+        };
+        list.iter()
+            .enumerate()
+            .map(|(i, &(w, h))| {
+                (
+                    Setting::Viewport((w, h)),
+                    Value::from(format!("{w}x{h}")),
+                    format!("viewport[{i}]"),
+                )
+            })
+            .collect()
+    }
 }
 
 /// The spec's mode, with the fields only a timed sweep may have (`arch`,

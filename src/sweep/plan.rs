@@ -149,26 +149,7 @@ impl Plan {
             check_samples(job.samples, scene, file, &point.field("samples"))?;
             jobs.push(job);
         }
-        // A frame whose measured runs mix sample counts measures them all against one
-        // target, the area-averaged colours (DESIGN.md §6): its one-sample runs' reference
-        // is supersampled as the others' ([`SweepReference::area_averaged`]).
-        for f in 0..frames.len() {
-            let measured = || {
-                jobs.iter()
-                    .zip(&spec.runs)
-                    .filter(|(j, r)| frame_of[r.index] == f && j.reference)
-            };
-            if measured().any(|(j, _)| j.samples != Samples::ONE) {
-                let one: Vec<usize> = measured()
-                    .filter(|(j, _)| j.samples == Samples::ONE)
-                    .map(|(_, r)| r.index)
-                    .collect();
-                for i in one {
-                    jobs[i].supersample = AA_SUPERSAMPLE;
-                    jobs[i].given.supersample = true;
-                }
-            }
-        }
+        one_target_a_frame(&mut jobs, &spec.runs, &frame_of, frames.len());
         Ok(Plan {
             spec,
             scenes,
@@ -350,6 +331,26 @@ impl Plan {
             report: &out.report,
         };
         Ok(serde_json::to_string(&record).expect("a record serialises"))
+    }
+}
+
+/// A frame whose measured runs mix sample counts measures them all against one target, the
+/// area-averaged colours (DESIGN.md §6): its one-sample runs' reference is supersampled as
+/// the others' ([`SweepReference::area_averaged`]).
+fn one_target_a_frame(jobs: &mut [RenderJob], runs: &[Run], frame_of: &[usize], frames: usize) {
+    for f in 0..frames {
+        let measured: Vec<(usize, Samples)> = jobs
+            .iter()
+            .zip(runs)
+            .filter(|(j, r)| frame_of[r.index] == f && j.reference)
+            .map(|(j, r)| (r.index, j.samples))
+            .collect();
+        if measured.iter().any(|(_, n)| *n != Samples::ONE) {
+            for (i, _) in measured.iter().filter(|(_, n)| *n == Samples::ONE) {
+                jobs[*i].supersample = AA_SUPERSAMPLE;
+                jobs[*i].given.supersample = true;
+            }
+        }
     }
 }
 

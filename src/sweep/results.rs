@@ -285,6 +285,7 @@ pub(super) fn write_final(
             refine: super::bracket::Refine::of_spec_text(spec_text),
             targets: &targets,
             sensitivity: super::sensitivity::Sensitivity::of_spec_text(spec_text),
+            by,
         };
         match super::answer::answer_files(&records, &ask)? {
             Some(answer) => {
@@ -327,7 +328,7 @@ pub(super) fn write_final(
 fn summary_line(h: &super::answer::Headline) -> String {
     let area = match h.area {
         Some([l, t]) => format!(
-            "at equal area lembo run {} ({} cycles, {:.1} dB), triangle run {} ({} cycles, {:.1} dB): {:.2}x the cycles; {}",
+            "at equal area lembo run {} ({} cycles, {:.1} dB), triangle run {} ({} cycles, {:.1} dB), triangle/lembo cycles {:.2}; {}",
             l.0,
             l.1,
             l.2,

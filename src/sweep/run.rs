@@ -290,6 +290,7 @@ fn refinement_round(
             refine: Some(refine),
             budget: plan.spec.area_budget_mm2,
             triangle_ok: &triangle_ok,
+            by: plan.spec.by.as_deref(),
         },
     )
 }
