@@ -596,6 +596,17 @@ pub fn rows(r: &CompareReport) -> Table {
             .as_ref()
             .map_or_else(|| "-".into(), |c| format!("{:.1}", c.energy_pj * 1e-6))
     });
+    both("  of it on chip uJ", &|r| {
+        r.cost.as_ref().map_or_else(
+            || "-".into(),
+            |c| format!("{:.1}", c.on_chip_energy_pj() * 1e-6),
+        )
+    });
+    both("  of it DRAM uJ", &|r| {
+        r.cost
+            .as_ref()
+            .map_or_else(|| "-".into(), |c| format!("{:.1}", c.dram_energy_pj() * 1e-6))
+    });
     both("fragments", &|r| r.counts.fragments.to_string());
     rows.push([
         "quad efficiency".to_string(),

@@ -272,10 +272,38 @@ fn cost_section(c: &CostReport) -> (&'static str, String) {
         .as_ref()
         .map(|b| para(&super::text::blend_cost(b)))
         .unwrap_or_default();
+    let split = table(
+        &["energy", "µJ", "of what"],
+        &[
+            vec![
+                "on chip".to_string(),
+                format!("{:.3}", c.on_chip_energy_pj() * 1e-6),
+                "operations, FIFO accesses, SRAM and logic leakage".to_string(),
+            ],
+            vec![
+                "DRAM".to_string(),
+                format!("{:.3}", c.dram_energy_pj() * 1e-6),
+                format!(
+                    "{} bytes through the memory port (frame buffer {}, accumulation {}, geometry fetched {}) at {} pJ/B",
+                    c.framebuffer_bytes + c.accumulation_bytes + c.geometry_bytes,
+                    c.framebuffer_bytes,
+                    c.accumulation_bytes,
+                    c.geometry_bytes,
+                    c.tech.dram_pj_per_byte
+                ),
+            ],
+            vec![
+                "total".to_string(),
+                format!("{:.3}", c.energy_pj * 1e-6),
+                String::new(),
+            ],
+        ],
+    );
     (
         "Cost: area and energy (DESIGN.md §12)",
         para(&head)
             + &blend
+            + &split
             + &table(
                 &[
                     "unit",
