@@ -177,8 +177,12 @@ pub struct Ratios {
     pub triangle_cycles_per_covered_pixel: Option<f64>,
     /// Triangle frame cycles over lembo frame cycles.
     pub triangle_over_lembo_cycles: f64,
-    /// Triangle primitive bytes over lembo primitive bytes.
+    /// Triangle primitive bytes over lembo primitive bytes, as stored in memory
+    /// (`primitives.bytes`).
     pub triangle_over_lembo_bytes: f64,
+    /// Triangle primitive bytes over lembo primitive bytes, as the geometry fetch read them
+    /// (`fetch.bytes`: a mesh's vertices once per vertex-cache miss).
+    pub triangle_over_lembo_bytes_fetched: f64,
 }
 
 /// `compare.json`.
@@ -511,6 +515,7 @@ fn per_pixel(cycles: f64, r: &Report) -> Option<f64> {
 
 fn ratios(arch: Option<&ArchConfig>, lembo: &Report, triangle: &Report) -> Option<Ratios> {
     let (cl, ct) = (lembo.cycles.as_ref()?, triangle.cycles.as_ref()?);
+    let (fl, ft) = (lembo.fetch.as_ref()?, triangle.fetch.as_ref()?);
     let (nl, nt) = (lembo.primitives.count, triangle.primitives.count);
     let (cl_total, ct_total) = (cl.total.as_f64(), ct.total.as_f64());
     if nl == 0 || nt == 0 || cl_total == 0.0 || ct_total == 0.0 {
@@ -528,6 +533,7 @@ fn ratios(arch: Option<&ArchConfig>, lembo: &Report, triangle: &Report) -> Optio
         triangle_over_lembo_cycles: ct_total / cl_total,
         triangle_over_lembo_bytes: triangle.primitives.bytes as f64
             / lembo.primitives.bytes.max(1) as f64,
+        triangle_over_lembo_bytes_fetched: ft.bytes as f64 / fl.bytes.max(1) as f64,
     })
 }
 
@@ -574,7 +580,14 @@ pub fn rows(r: &CompareReport) -> Table {
     };
     both("primitives", &|r| r.primitives.count.to_string());
     both("vertices", &|r| r.primitives.vertices.to_string());
-    both("primitive bytes", &|r| r.primitives.bytes.to_string());
+    // What the geometry fetch read through the memory port (a mesh's vertices once per
+    // vertex-cache miss), and the primitive data as it lies in memory.
+    both("primitive bytes fetched", &|r| {
+        r.fetch
+            .as_ref()
+            .map_or_else(|| "-".into(), |f| f.bytes.to_string())
+    });
+    both("primitive bytes stored", &|r| r.primitives.bytes.to_string());
     both("cycles per frame", &|r| {
         r.cycles
             .as_ref()
@@ -635,8 +648,9 @@ pub fn rows(r: &CompareReport) -> Table {
             pixel(x.triangle_cycles_per_covered_pixel),
         ]);
         notes.push(format!(
-            "triangle/lembo: cycles per frame {:.2}, primitive bytes {:.2}; lembo/triangle cycles per primitive {:.2} ({})",
+            "triangle/lembo: cycles per frame {:.2}, primitive bytes fetched {:.2} (stored {:.2}); lembo/triangle cycles per primitive {:.2} ({})",
             x.triangle_over_lembo_cycles,
+            x.triangle_over_lembo_bytes_fetched,
             x.triangle_over_lembo_bytes,
             x.lembo_over_triangle_cycles_per_primitive,
             if r.tess.level == 1 {
