@@ -687,7 +687,8 @@ pub fn table(r: &CompareReport) -> String {
     t
 }
 
-/// The compare's `report.html`: the seven images, the table, and each path's report.
+/// The compare's `report.html`: the seven images and the montage, links to compare.json and
+/// compare.txt, the table, and each path's report.
 fn page(r: &CompareReport) -> String {
     let Table { title, rows, notes } = rows(r);
     let figures: String = [
@@ -713,10 +714,17 @@ fn page(r: &CompareReport) -> String {
             "triangle_flip.png",
             format!("triangle path's {}", html::flip_map_caption(&r.triangle)),
         ),
+        (
+            "montage.png",
+            "montage: the two paths' images, the reference and the two error maps side by \
+             side, labelled with cycles, PSNR, FLIP and the silhouette error"
+                .to_string(),
+        ),
     ]
     .iter()
     .map(|(file, caption)| html::figure(file, caption, false))
-    .collect();
+    .collect::<String>()
+        + &html::file_links(&["compare.json", "compare.txt"]);
     let rows: Vec<Vec<String>> = rows.into_iter().map(Vec::from).collect();
     let notes: String = notes.iter().map(|n| html::para(n)).collect();
     let body = html::section("Images", &figures)

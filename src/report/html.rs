@@ -134,6 +134,16 @@ pub fn figure(file: &str, caption: &str, plot: bool) -> String {
     )
 }
 
+/// A line of links to `files` beside the page that it does not show as images (the
+/// reports and tables), so that every file of the run is one click from its page.
+pub fn file_links(files: &[&str]) -> String {
+    let links: Vec<String> = files
+        .iter()
+        .map(|f| format!("<a href=\"{}\">{}</a>", href(f), escape(f)))
+        .collect();
+    format!("<p>Files: {}</p>\n", links.join(", "))
+}
+
 /// A paragraph of text.
 pub fn para(text: &str) -> String {
     format!("<p>{}</p>\n", escape(text))
@@ -411,13 +421,20 @@ fn host_section(h: &Host) -> (&'static str, String) {
     )
 }
 
-/// The page of one render: its images, then [`report_sections`]. `images` are the files
-/// beside the page with their captions; `trace` the link to the timeline, if written.
-pub fn render_page(r: &Report, images: &[(&str, String)], trace: Option<&str>) -> String {
+/// The page of one render: its images, links to its other files, then [`report_sections`].
+/// `images` are the files beside the page with their captions, `others` the rest of its
+/// files (report.json, report.txt); `trace` the link to the timeline, if written.
+pub fn render_page(
+    r: &Report,
+    images: &[(&str, String)],
+    others: &[&str],
+    trace: Option<&str>,
+) -> String {
     let figures: String = images
         .iter()
         .map(|(file, caption)| figure(file, caption, false))
-        .collect();
+        .collect::<String>()
+        + &file_links(others);
     let subtitle = format!(
         "render: {} path, {} mode, {}x{} px{}{}",
         r.settings.path,
