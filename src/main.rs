@@ -328,9 +328,9 @@ struct CompareArgs {
     matching: Option<MatchArg>,
     /// The path whose accuracy knob the match searches [default: triangle]: `triangle`, n
     /// with --tess auto, against the lembo run at --k; `lembo`, k against the triangle run
-    /// at --tess N (a level: auto is refused): the largest k, from --k halved down to
-    /// 0.0001 px until one matches and then bisected until it is within 5 % of the k above
-    /// it that did not.
+    /// at --tess N (a level: auto is refused): the largest k in [0.0001, 64] px, from --k
+    /// halved until one matches (or doubled while it does), then bisected until it is
+    /// within 5 % of the k above it that did not.
     #[arg(long, value_enum, value_name = "PATH")]
     match_path: Option<MatchPathArg>,
     /// Datapath precision of both paths.
