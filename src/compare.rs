@@ -3,18 +3,30 @@
 //!
 //! Both paths run on the timed pipeline of the same architecture (same ROPs, same
 //! frame-buffer port) and are measured against one reference of the lembo surfaces. The
-//! tessellation level is given, or `auto`: the smallest n whose silhouette error
-//! (`silhouette_max_px`) is no larger than the lembo path's at the given k, found by
-//! doubling n from 1 and then bisecting between the last level that missed and the first
-//! that met it (so it assumes the error falls with n between those two; every level tried
-//! is listed in compare.json). Levels beyond [`MAX_AUTO_TESS`] or the triangle budget are
-//! not tried; if none meets the target the largest tried is used and `reached` is false.
+//! tessellation level is given, or `auto`: the smallest n whose accuracy on the `--match`
+//! metric ([`MatchMetric`]: the silhouette error `silhouette_max_px` by default, or
+//! `psnr_db`, or `flip_mean`) is at least as good as the lembo path's at the given k,
+//! found by doubling n from 1 and then bisecting between the last level that missed and
+//! the first that met it ([`smallest_level`]), up to [`MAX_AUTO_TESS`] or the triangle
+//! budget. With `--match-path lembo` the triangle path keeps its given n and the lembo
+//! path's k is searched instead ([`largest_k`]). The search (`compare/matching.rs`) draws each
+//! level with the functional model and measures it against the reference; every level
+//! tried is listed in compare.json. A target the knob's cap cannot reach is refused (exit
+//! status 2) naming the closest run: the comparison would not be at equal accuracy.
 //!
 //! Outputs: `lembo.png`, `triangle.png`, `reference.png`, `lembo_error.png`,
 //! `triangle_error.png`, `lembo_flip.png`, `triangle_flip.png` (each path's FLIP map),
 //! `montage.png` (the three images and the two error maps, labelled),
 //! `compare.json` (both reports, the tessellation search and the cost ratios) and
 //! `compare.txt` (the table printed).
+
+mod matching;
+
+pub use matching::{
+    largest_k, smallest_level, AutoStep, Level, MatchMetric, MatchPath, MatchReport, MatchStep,
+    TessChoice, K_MATCH_WITHIN, MAX_AUTO_TESS,
+};
+use matching::{measured, search_k, search_tess};
 
 use crate::camera::{Samples, View};
 use crate::config::ArchConfig;
@@ -23,34 +35,38 @@ use crate::discoid::blend::BlendMode;
 use crate::error::{Error, Result, COMMAND_LINE};
 use crate::job::{
     self, check_tess_range, check_triangle_budget, load_arch, render_reference, run_path, Given,
-    Mode, Model, PathRun, PrimitivePath, RenderJob, MAX_TRIANGLES,
+    Mode, Model, PathRun, PrimitivePath, RenderJob,
 };
-use crate::lembo::tessellate::Tessellation;
 use crate::output::{check_out_dir, write_set};
-use crate::raster;
-use crate::reference::metrics::Accuracy;
 use crate::reference::montage::{montage, Panel};
 use crate::reference::oracle::ReferenceImage;
 use crate::reference::PixelsPerDegree;
 use crate::report::{html, png_bytes, Report};
-use crate::scene::Scene;
 use crate::tolerance::PerspectiveTol;
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-/// The largest level `--tess auto` tries.
-pub const MAX_AUTO_TESS: u32 = 64;
 /// Version of the `compare.json` layout.
-pub const COMPARE_SCHEMA_VERSION: u32 = 2;
-
+pub const COMPARE_SCHEMA_VERSION: u32 = 3;
 /// How the tessellation level is chosen.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Tess {
     /// This level n (n² triangles per lembo).
     Level(u32),
-    /// The smallest level matching the lembo path's silhouette error.
+    /// The smallest level matching the lembo path's accuracy on the `--match` metric.
     Auto,
+}
+
+/// What a compare searches, decided from its flags before any work.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Search {
+    /// Nothing: n is given and k is the given one.
+    None(u32),
+    /// n of the triangle path, against the lembo run (`--tess auto`).
+    Tess(MatchMetric),
+    /// k of the lembo path, against the triangle run at this n (`--match-path lembo`).
+    K(MatchMetric, u32),
 }
 
 /// A validated compare request.
@@ -88,15 +104,51 @@ pub struct CompareJob {
     pub flip_ppd: PixelsPerDegree,
     /// Host threads of the timed runs (`--host-threads`).
     pub host_threads: u32,
+    /// The metric the search matches (`--match`); None when not given: the silhouette.
+    pub matching: Option<MatchMetric>,
+    /// The path whose knob the search sets (`--match-path`); None when not given: the
+    /// triangle path's n.
+    pub match_path: Option<MatchPath>,
 }
 
 impl CompareJob {
-    /// The render job of one path (validated like `render`'s flags).
-    fn render_job(&self, path: PrimitivePath, tess: Option<u32>) -> RenderJob {
+    /// Which knob the run searches and on which metric; the match flags are refused where
+    /// they do not apply (DESIGN.md §8), each naming itself.
+    fn search(&self) -> Result<Search> {
+        let metric = self.matching.unwrap_or_default();
+        match (self.match_path.unwrap_or_default(), self.tess) {
+            (MatchPath::Triangle, Tess::Auto) => Ok(Search::Tess(metric)),
+            (MatchPath::Lembo, Tess::Level(n)) => Ok(Search::K(metric, n)),
+            (MatchPath::Lembo, Tess::Auto) => Err(Error::invalid(
+                COMMAND_LINE,
+                "--tess",
+                "auto",
+                "--match-path lembo holds the triangle run's level and searches the lembo path's k against it: give the level, --tess N",
+            )),
+            (MatchPath::Triangle, Tess::Level(n)) => match (self.matching, self.match_path) {
+                (Some(m), _) => Err(Error::invalid(
+                    COMMAND_LINE,
+                    "--match",
+                    m.name(),
+                    format!("matches the triangle path's n to the lembo run with --tess auto; with --tess {n} nothing is searched (add --match-path lembo to search the lembo path's k against the triangle run at n = {n})"),
+                )),
+                (None, Some(_)) => Err(Error::invalid(
+                    COMMAND_LINE,
+                    "--match-path",
+                    "triangle",
+                    format!("searches the triangle path's n with --tess auto; with --tess {n} nothing is searched"),
+                )),
+                (None, None) => Ok(Search::None(n)),
+            },
+        }
+    }
+
+    /// The render job of one path at tolerance `k` (validated like `render`'s flags).
+    fn render_job(&self, path: PrimitivePath, tess: Option<u32>, k: f64) -> RenderJob {
         RenderJob {
             scene: self.scene.clone(),
             out: None,
-            k: self.k,
+            k,
             perspective_tol: match path {
                 PrimitivePath::Lembo => self.perspective_tol,
                 PrimitivePath::Triangle => PerspectiveTol::FollowK,
@@ -129,34 +181,6 @@ impl CompareJob {
     }
 }
 
-/// One level tried by `--tess auto`.
-#[derive(Clone, Debug, Serialize)]
-pub struct AutoStep {
-    /// The level n tried.
-    pub tess: u32,
-    /// Triangles of the scene at that level.
-    pub triangles: u64,
-    /// Its largest silhouette error against the reference \[pixels\].
-    pub silhouette_max_px: f64,
-    /// Its mean silhouette error against the reference \[pixels\].
-    pub silhouette_mean_px: f64,
-}
-
-/// How the tessellation level was chosen.
-#[derive(Clone, Debug, Serialize)]
-pub struct TessChoice {
-    /// The level used.
-    pub level: u32,
-    /// Whether it was chosen by `--tess auto`.
-    pub auto: bool,
-    /// The lembo path's silhouette_max_px, the target of `auto` \[pixels\].
-    pub target_silhouette_px: Option<f64>,
-    /// Whether the level used meets the target (always true for a given level).
-    pub reached: bool,
-    /// Every level `auto` tried, in the order tried.
-    pub tried: Vec<AutoStep>,
-}
-
 /// Cost ratios of the two paths on this scene and architecture.
 #[derive(Clone, Debug, Serialize)]
 pub struct Ratios {
@@ -177,8 +201,12 @@ pub struct Ratios {
     pub triangle_cycles_per_covered_pixel: Option<f64>,
     /// Triangle frame cycles over lembo frame cycles.
     pub triangle_over_lembo_cycles: f64,
-    /// Triangle primitive bytes over lembo primitive bytes.
+    /// Triangle primitive bytes over lembo primitive bytes, as stored in memory
+    /// (`primitives.bytes`).
     pub triangle_over_lembo_bytes: f64,
+    /// Triangle primitive bytes over lembo primitive bytes, as the geometry fetch read them
+    /// (`fetch.bytes`: a mesh's vertices once per vertex-cache miss).
+    pub triangle_over_lembo_bytes_fetched: f64,
 }
 
 /// `compare.json`.
@@ -188,6 +216,10 @@ pub struct CompareReport {
     pub schema_version: u32,
     /// The triangle path's level and how it was chosen.
     pub tess: TessChoice,
+    /// The search that matched the two paths' accuracy: its metric, target, levels tried,
+    /// the level chosen and how close it came; null when both knobs were given.
+    #[serde(rename = "match")]
+    pub matched: Option<MatchReport>,
     /// Cycle and byte ratios of the two paths; null in functional mode or for an empty frame.
     pub ratios: Option<Ratios>,
     /// The lembo path's report, as `render --reference` writes it.
@@ -208,96 +240,13 @@ pub struct CompareOutput {
     pub files: Vec<String>,
 }
 
-/// The silhouette error of the triangle path at level `n` with `samples` per pixel against
-/// `reference`, from the functional model (what auto compares).
-fn triangle_accuracy(
-    scene: &Scene,
-    view: &View,
-    reference: &ReferenceImage,
-    n: u32,
-    datapath: Datapath,
-    samples: Samples,
-) -> Accuracy {
-    let t = Tessellation::new(scene, n);
-    let frame = raster::render_functional_triangles(scene, &view.grid(samples), &t, datapath, true)
-        .resolve(samples);
-    job::measure_frame_and_flip(
-        scene,
-        view,
-        &frame,
-        reference,
-        PrimitivePath::Triangle,
-        t.triangles_per_lembo(),
-        // Only the silhouette is compared here.
-        PixelsPerDegree::default(),
-        samples,
-    )
-    .0
-}
-
-/// `--tess auto`: doubling, then bisection (module doc).
-fn auto_level(
-    scene: &Scene,
-    view: &View,
-    reference: &ReferenceImage,
-    target: f64,
-    datapath: Datapath,
-    samples: Samples,
-) -> TessChoice {
-    let mut tried: Vec<AutoStep> = Vec::new();
-    let mut meets = |n: u32| -> bool {
-        let a = triangle_accuracy(scene, view, reference, n, datapath, samples);
-        tried.push(AutoStep {
-            tess: n,
-            triangles: scene.lembo_count() as u64 * (n as u64).pow(2),
-            silhouette_max_px: a.silhouette_max_px,
-            silhouette_mean_px: a.silhouette_mean_px,
-        });
-        a.silhouette_max_px <= target
-    };
-    let affordable = |n: u32| {
-        n <= MAX_AUTO_TESS && scene.lembo_count() as u64 * (n as u64).pow(2) <= MAX_TRIANGLES
-    };
-    let (mut lo, mut hi) = (0u32, None);
-    let mut n = 1;
-    while affordable(n) {
-        if meets(n) {
-            hi = Some(n);
-            break;
-        }
-        lo = n;
-        n *= 2;
-    }
-    let (level, reached) = match hi {
-        Some(mut hi) => {
-            while hi - lo > 1 {
-                let mid = lo + (hi - lo) / 2;
-                if meets(mid) {
-                    hi = mid;
-                } else {
-                    lo = mid;
-                }
-            }
-            (hi, true)
-        }
-        None => (lo.max(1), false),
-    };
-    TessChoice {
-        level,
-        auto: true,
-        target_silhouette_px: Some(target),
-        reached,
-        tried,
-    }
-}
-
 /// A path's image, error map and FLIP map kept until the end of a compare \[bytes per
 /// pixel\].
 const BYTES_PER_PIXEL_IMAGES: f64 = 9.0;
 
 /// Runs a compare to completion: nothing is written unless everything succeeded.
 pub fn run_compare(job: &CompareJob) -> Result<CompareOutput> {
-    let lembo_job = job.render_job(PrimitivePath::Lembo, None);
+    let lembo_job = job.render_job(PrimitivePath::Lembo, None, job.k);
     lembo_job.validate()?;
     if let Some(dir) = &job.out {
         check_out_dir("--out", dir)?;
@@ -305,6 +254,7 @@ pub fn run_compare(job: &CompareJob) -> Result<CompareOutput> {
     if let Tess::Level(n) = job.tess {
         check_tess_range(n)?;
     }
+    let search = job.search()?;
     let scene = job::load_scene(&lembo_job)?;
     if scene.discoid_count() > 0 {
         return Err(Error::invalid(
@@ -325,51 +275,60 @@ pub fn run_compare(job: &CompareJob) -> Result<CompareOutput> {
     if let Some(a) = &arch {
         check_host_threads(job, a)?;
     }
+    // Every run is measured against the one reference: both paths' accuracy, so every
+    // metric `--match` names, is always there.
     let (reference, reference_wall) = render_reference(
         &scene,
         &view,
         lembo_job.reference_supersample(),
         job.samples,
     );
-
-    let lembo = run_path(
-        &lembo_job,
-        &scene,
-        &view,
-        Model::new(arch.as_ref()),
-        Some((&reference, reference_wall)),
-    )?;
-    let lembo_accuracy = lembo.report.accuracy.clone().expect("measured");
-    let choice = match job.tess {
-        Tess::Level(n) => TessChoice {
-            level: n,
-            auto: false,
-            target_silhouette_px: None,
-            reached: true,
-            tried: Vec::new(),
-        },
-        Tess::Auto => auto_level(
+    let run = |path: PrimitivePath, tess: Option<u32>, k: f64| {
+        run_path(
+            &job.render_job(path, tess, k),
             &scene,
             &view,
-            &reference,
-            lembo_accuracy.silhouette_max_px,
-            job.datapath,
-            job.samples,
-        ),
+            Model::new(arch.as_ref()),
+            Some((&reference, reference_wall)),
+        )
     };
-    let triangle_job = job.render_job(PrimitivePath::Triangle, Some(choice.level));
-    let triangle = run_path(
-        &triangle_job,
-        &scene,
-        &view,
-        Model::new(arch.as_ref()),
-        Some((&reference, reference_wall)),
-    )?;
+
+    let (lembo, triangle, choice, found) = match search {
+        Search::K(metric, n) => {
+            // The triangle run at its given level sets the target; k is searched for it.
+            let triangle = run(PrimitivePath::Triangle, Some(n), job.k)?;
+            let target = measured(metric, &triangle);
+            let (k, found) = search_k(&lembo_job, &scene, &view, &reference, metric, target)?;
+            let lembo = run(PrimitivePath::Lembo, None, k)?;
+            (lembo, triangle, TessChoice::given(n), Some(found))
+        }
+        Search::Tess(metric) => {
+            let lembo = run(PrimitivePath::Lembo, None, job.k)?;
+            let target = measured(metric, &lembo);
+            let (choice, found) =
+                search_tess(&lembo_job, &scene, &view, &reference, metric, target)?;
+            let triangle = run(PrimitivePath::Triangle, Some(choice.level), job.k)?;
+            (lembo, triangle, choice, Some(found))
+        }
+        Search::None(n) => {
+            let lembo = run(PrimitivePath::Lembo, None, job.k)?;
+            let triangle = run(PrimitivePath::Triangle, Some(n), job.k)?;
+            (lembo, triangle, TessChoice::given(n), None)
+        }
+    };
+    let matched = found.map(|f| {
+        let chosen = match f.searched {
+            PrimitivePath::Lembo => &lembo.report,
+            PrimitivePath::Triangle => &triangle.report,
+        };
+        f.report(chosen)
+    });
 
     let ratios = ratios(arch.as_ref(), &lembo.report, &triangle.report);
     let report = CompareReport {
         schema_version: COMPARE_SCHEMA_VERSION,
         tess: choice,
+        matched,
         ratios,
         lembo: lembo.report.clone(),
         triangle: triangle.report.clone(),
@@ -458,7 +417,7 @@ fn images(
     let labels = [
         format!(
             "lembo k={} px{samples}\n{} lembos\n{}",
-            job.k,
+            report.lembo.settings.k_px.unwrap_or(job.k),
             report.lembo.primitives.count,
             cycles(&report.lembo)
         ),
@@ -511,6 +470,7 @@ fn per_pixel(cycles: f64, r: &Report) -> Option<f64> {
 
 fn ratios(arch: Option<&ArchConfig>, lembo: &Report, triangle: &Report) -> Option<Ratios> {
     let (cl, ct) = (lembo.cycles.as_ref()?, triangle.cycles.as_ref()?);
+    let (fl, ft) = (lembo.fetch.as_ref()?, triangle.fetch.as_ref()?);
     let (nl, nt) = (lembo.primitives.count, triangle.primitives.count);
     let (cl_total, ct_total) = (cl.total.as_f64(), ct.total.as_f64());
     if nl == 0 || nt == 0 || cl_total == 0.0 || ct_total == 0.0 {
@@ -528,6 +488,7 @@ fn ratios(arch: Option<&ArchConfig>, lembo: &Report, triangle: &Report) -> Optio
         triangle_over_lembo_cycles: ct_total / cl_total,
         triangle_over_lembo_bytes: triangle.primitives.bytes as f64
             / lembo.primitives.bytes.max(1) as f64,
+        triangle_over_lembo_bytes_fetched: ft.bytes as f64 / fl.bytes.max(1) as f64,
     })
 }
 
@@ -538,7 +499,8 @@ pub struct Table {
     pub title: String,
     /// One row per quantity: its name, the lembo path's value and the triangle path's.
     pub rows: Vec<[String; 3]>,
-    /// Lines under the rows: the ratios and, for `--tess auto`, the levels tried.
+    /// Lines under the rows: the ratios and, for a search, the levels tried and how close
+    /// the chosen one came.
     pub notes: Vec<String>,
 }
 
@@ -546,26 +508,36 @@ pub struct Table {
 /// accuracy metric, per path.
 pub fn rows(r: &CompareReport) -> Table {
     let (l, tr) = (&r.lembo, &r.triangle);
+    // How the searched knob was chosen, said beside it.
+    let how = |path: &str| {
+        r.matched
+            .as_ref()
+            .filter(|m| m.searched_path == path)
+            .map(|m| {
+                let target = format!(
+                    "{} {} {}, the {} run's",
+                    m.field,
+                    m.relation,
+                    m.metric.value(m.target),
+                    m.target_path
+                );
+                match m.start {
+                    Level::Tess(_) => format!(" (auto: smallest n with {target})"),
+                    Level::K(k) => format!(" (matched: largest k from {k} px with {target})"),
+                }
+            })
+            .unwrap_or_default()
+    };
     let title = format!(
-        "compare {} ({}x{} px), architecture {}, k = {} px, tessellation {}{}",
+        "compare {} ({}x{} px), architecture {}, k = {} px{}, tessellation {}{}",
         l.scene.name,
         l.scene.width,
         l.scene.height,
         l.arch.as_ref().map(|a| a.name.as_str()).unwrap_or("-"),
         l.settings.k_px.unwrap_or_default(),
+        how("lembo"),
         r.tess.level,
-        match (r.tess.auto, r.tess.reached) {
-            (false, _) => String::new(),
-            (true, true) => format!(
-                " (auto: smallest n with silhouette_max_px <= {:.3})",
-                r.tess.target_silhouette_px.unwrap_or_default()
-            ),
-            (true, false) => format!(
-                " (auto: no n up to {} reached silhouette_max_px <= {:.3}; largest tried)",
-                r.tess.tried.iter().map(|s| s.tess).max().unwrap_or(1),
-                r.tess.target_silhouette_px.unwrap_or_default()
-            ),
-        }
+        how("triangle"),
     );
     let mut rows: Vec<[String; 3]> = Vec::new();
     // A row with one value per report.
@@ -574,7 +546,16 @@ pub fn rows(r: &CompareReport) -> Table {
     };
     both("primitives", &|r| r.primitives.count.to_string());
     both("vertices", &|r| r.primitives.vertices.to_string());
-    both("primitive bytes", &|r| r.primitives.bytes.to_string());
+    // What the geometry fetch read through the memory port (a mesh's vertices once per
+    // vertex-cache miss), and the primitive data as it lies in memory.
+    both("primitive bytes fetched", &|r| {
+        r.fetch
+            .as_ref()
+            .map_or_else(|| "-".into(), |f| f.bytes.to_string())
+    });
+    both("primitive bytes stored", &|r| {
+        r.primitives.bytes.to_string()
+    });
     both("cycles per frame", &|r| {
         r.cycles
             .as_ref()
@@ -595,6 +576,18 @@ pub fn rows(r: &CompareReport) -> Table {
         r.cost
             .as_ref()
             .map_or_else(|| "-".into(), |c| format!("{:.1}", c.energy_pj * 1e-6))
+    });
+    both("  of it on chip uJ", &|r| {
+        r.cost.as_ref().map_or_else(
+            || "-".into(),
+            |c| format!("{:.1}", c.on_chip_energy_pj() * 1e-6),
+        )
+    });
+    both("  of it DRAM uJ", &|r| {
+        r.cost.as_ref().map_or_else(
+            || "-".into(),
+            |c| format!("{:.1}", c.dram_energy_pj() * 1e-6),
+        )
     });
     both("fragments", &|r| r.counts.fragments.to_string());
     rows.push([
@@ -624,8 +617,9 @@ pub fn rows(r: &CompareReport) -> Table {
             pixel(x.triangle_cycles_per_covered_pixel),
         ]);
         notes.push(format!(
-            "triangle/lembo: cycles per frame {:.2}, primitive bytes {:.2}; lembo/triangle cycles per primitive {:.2} ({})",
+            "triangle/lembo: cycles per frame {:.2}, primitive bytes fetched {:.2} (stored {:.2}); lembo/triangle cycles per primitive {:.2} ({})",
             x.triangle_over_lembo_cycles,
+            x.triangle_over_lembo_bytes_fetched,
             x.triangle_over_lembo_bytes,
             x.lembo_over_triangle_cycles_per_primitive,
             if r.tess.level == 1 {
@@ -635,14 +629,27 @@ pub fn rows(r: &CompareReport) -> Table {
             }
         ));
     }
-    if r.tess.auto {
-        let tried: Vec<String> = r
-            .tess
+    if let Some(m) = &r.matched {
+        let tried: Vec<String> = m
             .tried
             .iter()
-            .map(|s| format!("n={} {:.3} px", s.tess, s.silhouette_max_px))
+            .map(|s| format!("{} {}", s.level, m.metric.value(s.value)))
             .collect();
-        notes.push(format!("auto tried: {}", tried.join(", ")));
+        notes.push(format!(
+            "match ({}): the {} path's {} searched for {} {} the {} run's {}; tried (functional model) {}",
+            m.metric.name(),
+            m.searched_path,
+            match m.start {
+                Level::Tess(_) => "n",
+                Level::K(_) => "k",
+            },
+            m.field,
+            m.relation,
+            m.target_path,
+            m.metric.value(m.target),
+            tried.join(", ")
+        ));
+        notes.push(format!("matched: {}", m.summary));
     }
     Table { title, rows, notes }
 }
@@ -662,7 +669,8 @@ pub fn table(r: &CompareReport) -> String {
     t
 }
 
-/// The compare's `report.html`: the seven images, the table, and each path's report.
+/// The compare's `report.html`: the seven images and the montage, links to compare.json and
+/// compare.txt, the table, and each path's report.
 fn page(r: &CompareReport) -> String {
     let Table { title, rows, notes } = rows(r);
     let figures: String = [
@@ -688,10 +696,17 @@ fn page(r: &CompareReport) -> String {
             "triangle_flip.png",
             format!("triangle path's {}", html::flip_map_caption(&r.triangle)),
         ),
+        (
+            "montage.png",
+            "montage: the two paths' images, the reference and the two error maps side by \
+             side, labelled with cycles, PSNR, FLIP and the silhouette error"
+                .to_string(),
+        ),
     ]
     .iter()
     .map(|(file, caption)| html::figure(file, caption, false))
-    .collect();
+    .collect::<String>()
+        + &html::file_links(&["compare.json", "compare.txt"]);
     let rows: Vec<Vec<String>> = rows.into_iter().map(Vec::from).collect();
     let notes: String = notes.iter().map(|n| html::para(n)).collect();
     let body = html::section("Images", &figures)
@@ -709,4 +724,82 @@ fn page(r: &CompareReport) -> String {
         &title,
         &body,
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A compare request with these knobs, the rest as the command's defaults.
+    fn request(
+        tess: Tess,
+        matching: Option<MatchMetric>,
+        match_path: Option<MatchPath>,
+    ) -> CompareJob {
+        CompareJob {
+            scene: None,
+            out: None,
+            k: crate::tolerance::DEFAULT_K_PX,
+            perspective_tol: PerspectiveTol::default(),
+            tess,
+            datapath: Datapath::default(),
+            arch: None,
+            arch_set: Vec::new(),
+            tech: None,
+            no_memory_check: false,
+            viewport: None,
+            supersample: 1,
+            supersample_given: false,
+            samples: Samples::ONE,
+            flip_ppd: PixelsPerDegree::default(),
+            host_threads: 1,
+            matching,
+            match_path,
+        }
+    }
+
+    /// The field a request's refusal names.
+    fn refused(job: &CompareJob) -> String {
+        match job.search() {
+            Err(Error::Invalid { field, .. }) => field,
+            other => panic!("expected a refusal, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn the_match_flags_are_refused_where_nothing_is_searched() {
+        use MatchMetric::*;
+        let psnr = Some(Psnr);
+        assert_eq!(
+            request(Tess::Auto, None, None).search().unwrap(),
+            Search::Tess(Silhouette)
+        );
+        assert_eq!(
+            request(Tess::Auto, psnr, None).search().unwrap(),
+            Search::Tess(Psnr)
+        );
+        assert_eq!(
+            request(Tess::Level(3), None, None).search().unwrap(),
+            Search::None(3)
+        );
+        assert_eq!(
+            request(Tess::Level(3), Some(Flip), Some(MatchPath::Lembo))
+                .search()
+                .unwrap(),
+            Search::K(Flip, 3)
+        );
+        assert_eq!(refused(&request(Tess::Level(3), psnr, None)), "--match");
+        assert_eq!(
+            refused(&request(Tess::Level(3), psnr, Some(MatchPath::Triangle))),
+            "--match"
+        );
+        assert_eq!(
+            refused(&request(Tess::Level(3), None, Some(MatchPath::Triangle))),
+            "--match-path"
+        );
+        assert_eq!(
+            refused(&request(Tess::Auto, psnr, Some(MatchPath::Lembo))),
+            "--tess"
+        );
+    }
 }

@@ -2,7 +2,7 @@
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use lembo_sim::camera::Samples;
-use lembo_sim::compare::{run_compare, CompareJob, Tess};
+use lembo_sim::compare::{run_compare, CompareJob, MatchMetric, MatchPath, Tess};
 use lembo_sim::datapath::Datapath;
 use lembo_sim::discoid::blend::BlendMode;
 use lembo_sim::job::{self, run_render, Given, PrimitivePath, RenderJob};
@@ -41,9 +41,10 @@ enum Command {
     /// Render a scene as lembos and as tessellated triangles on the same architecture,
     /// measure both against the exact surface, and write lembo.png, triangle.png,
     /// reference.png, lembo_error.png, triangle_error.png, lembo_flip.png,
-    /// triangle_flip.png, montage.png, compare.json and
-    /// compare.txt; print the table (primitives, vertices, bytes, cycles, fragments,
-    /// accuracy per path).
+    /// triangle_flip.png, montage.png, compare.json, compare.txt and report.html; print the
+    /// table (primitives, vertices, bytes fetched and stored, cycles, area, energy on chip
+    /// and in DRAM, fragments, accuracy per path). By default the triangle path's n is
+    /// chosen to match the lembo path's accuracy (--tess auto, --match).
     Compare(CompareArgs),
     /// Run every point of a sweep spec (sim/sweeps/README.md) on every scene it names, in
     /// parallel, appending each run's record to DIR/results.jsonl as it finishes; then write
@@ -138,6 +139,24 @@ enum PathArg {
     Lembo,
     /// Each lembo tessellated into n² triangles (--tess), rasterized with edge functions.
     Triangle,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum MatchArg {
+    /// silhouette_max_px: the searched path's no larger than the other run's.
+    Silhouette,
+    /// psnr_db: the searched path's PSNR no smaller than the other run's.
+    Psnr,
+    /// flip_mean: the searched path's mean FLIP no larger than the other run's.
+    Flip,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum MatchPathArg {
+    /// Search the triangle path's n (--tess auto) against the lembo run at --k.
+    Triangle,
+    /// Search the lembo path's k against the triangle run at --tess N.
+    Lembo,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -302,10 +321,28 @@ struct CompareArgs {
         allow_hyphen_values = true
     )]
     perspective_tol: Option<PerspectiveTol>,
-    /// Tessellation level of the triangle path, or `auto`: the smallest N whose silhouette
-    /// error is no larger than the lembo path's at this k.
+    /// Tessellation level of the triangle path, or `auto`: the smallest N whose accuracy on
+    /// the --match metric (the silhouette error by default) is at least the lembo path's at
+    /// this k, N doubled from 1 and then bisected, up to 64 (less where the triangle budget
+    /// stops it).
     #[arg(long, value_name = "N|auto", default_value = "auto", value_parser = parse_tess)]
     tess: Tess,
+    /// The accuracy metric the search matches the two paths on [default: silhouette]: the
+    /// searched level is the first whose metric is at least as good as the other path's
+    /// run (silhouette_max_px and flip_mean no larger, psnr_db no smaller). compare.json's
+    /// `match` and the notes under the table list every level tried with its value, the
+    /// level chosen and how close it came. A target no level up to the knob's cap reaches
+    /// is refused (exit status 2) naming the closest run; --match with --tess N and no
+    /// --match-path lembo is refused (nothing is searched).
+    #[arg(long = "match", value_enum, value_name = "METRIC")]
+    matching: Option<MatchArg>,
+    /// The path whose accuracy knob the match searches [default: triangle]: `triangle`, n
+    /// with --tess auto, against the lembo run at --k; `lembo`, k against the triangle run
+    /// at --tess N (a level: auto is refused): the largest k in [0.0001, 64] px, from --k
+    /// halved until one matches (or doubled while it does), then bisected until it is
+    /// within 5 % of the k above it that did not.
+    #[arg(long, value_enum, value_name = "PATH")]
+    match_path: Option<MatchPathArg>,
     /// Datapath precision of both paths.
     #[arg(long, value_enum, default_value = "f32")]
     datapath: DatapathArg,
@@ -626,6 +663,15 @@ fn compare(args: CompareArgs) -> ExitCode {
         samples: args.quality.samples,
         flip_ppd: args.quality.flip_ppd.unwrap_or_default(),
         host_threads: args.host_threads,
+        matching: args.matching.map(|m| match m {
+            MatchArg::Silhouette => MatchMetric::Silhouette,
+            MatchArg::Psnr => MatchMetric::Psnr,
+            MatchArg::Flip => MatchMetric::Flip,
+        }),
+        match_path: args.match_path.map(|p| match p {
+            MatchPathArg::Triangle => MatchPath::Triangle,
+            MatchPathArg::Lembo => MatchPath::Lembo,
+        }),
     };
     match with_progress(|| run_compare(&job)) {
         Ok(out) => {

@@ -52,6 +52,38 @@ fn config_files_load_and_validate() {
     }
 }
 
+/// The dotted paths of every value in a JSON object (`setup.count`, `links.x.fifo_depth`).
+fn leaf_paths(v: &serde_json::Value, prefix: &str, out: &mut Vec<String>) {
+    match v.as_object() {
+        Some(map) => {
+            for (k, v) in map {
+                leaf_paths(v, &format!("{prefix}{k}."), out);
+            }
+        }
+        None => out.push(prefix.trim_end_matches('.').to_string()),
+    }
+}
+
+/// sim/arch/README.md says the shipped files list every field, so that they can be compared
+/// line by line: each has exactly the fields `ArchConfig` serialises, no more, no fewer.
+#[test]
+fn config_shipped_files_list_every_field() {
+    let mut every = Vec::new();
+    leaf_paths(
+        &serde_json::to_value(ArchConfig::default()).unwrap(),
+        "",
+        &mut every,
+    );
+    every.sort();
+    for name in ["baseline.json", "minimal.json", "wide.json", "gpu.json"] {
+        let text = std::fs::read_to_string(arch_dir().join(name)).unwrap();
+        let mut listed = Vec::new();
+        leaf_paths(&serde_json::from_str(&text).unwrap(), "", &mut listed);
+        listed.sort();
+        assert_eq!(listed, every, "{name}");
+    }
+}
+
 #[test]
 fn config_baseline_file_equals_defaults() {
     assert_eq!(load("baseline.json"), ArchConfig::default());

@@ -84,6 +84,23 @@ pub struct CostReport {
     pub per_busy_cycle: BTreeMap<String, f64>,
 }
 
+impl CostReport {
+    /// The part of [`Self::energy_pj`] spent in DRAM: every byte through the memory port
+    /// (`framebuffer_bytes`, `accumulation_bytes` and `geometry_bytes`) at the DRAM's
+    /// figure \[pJ\]. Computed from the report's own fields, so a reader of report.json
+    /// gets the same figure.
+    pub fn dram_energy_pj(&self) -> f64 {
+        (self.framebuffer_bytes + self.accumulation_bytes + self.geometry_bytes) as f64
+            * self.tech.dram_pj_per_byte
+    }
+
+    /// The part of [`Self::energy_pj`] spent on chip: the operations, the FIFOs' accesses and
+    /// the SRAM's and logic's leakage, everything but [`Self::dram_energy_pj`] \[pJ\].
+    pub fn on_chip_energy_pj(&self) -> f64 {
+        self.energy_pj - self.dram_energy_pj()
+    }
+}
+
 /// `cost.tech` in report.json: which technology file priced the frame.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct TechUsed {
@@ -581,6 +598,11 @@ mod tests {
         );
         assert_eq!(c.logic_leakage_pj, 0.0);
         assert_eq!(c.tech.dram_kind, DramKind::Ddr4);
+        // The split: the frame buffer's DRAM bytes, and the rest on chip.
+        assert_eq!(c.dram_energy_pj(), 1000.0 * 162.5);
+        let on_chip = c.energy_pj - 1000.0 * 162.5;
+        assert!((c.on_chip_energy_pj() - on_chip).abs() < 1e-9 * c.energy_pj);
+        assert!(c.on_chip_energy_pj() >= expected.access_pj + expected.leakage_pj);
         // 1 mW/mm² of logic: the ROP's two multipliers (400 over 200 busy cycles), 2 µs.
         tech.logic_leakage.mw_per_mm2 = 1.0;
         let leaky = cost_at(&tech, &arch, Datapath::F32, &work, &design);

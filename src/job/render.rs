@@ -48,7 +48,8 @@ pub fn load_arch(job: &RenderJob) -> Result<Option<ArchConfig>> {
     })
 }
 
-/// The render's `report.html`: its images with what they show, and the report.
+/// The render's `report.html`: its images with what they show, links to its other files
+/// (report.json, report.txt), and the report.
 fn render_page(
     report: &Report,
     files: &[(&str, Vec<u8>)],
@@ -73,8 +74,13 @@ fn render_page(
             (*name, caption)
         })
         .collect();
+    let others: Vec<&str> = files
+        .iter()
+        .map(|(name, _)| *name)
+        .filter(|name| !name.ends_with(".png"))
+        .collect();
     let trace = trace.map(|t| html::link_from(dir, t));
-    html::render_page(report, &images, trace.as_deref())
+    html::render_page(report, &images, &others, trace.as_deref())
 }
 
 /// Runs a render job to completion: nothing is written unless everything succeeded.

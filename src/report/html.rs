@@ -134,6 +134,16 @@ pub fn figure(file: &str, caption: &str, plot: bool) -> String {
     )
 }
 
+/// A line of links to `files` beside the page that it does not show as images (the
+/// reports and tables), so that every file of the run is one click from its page.
+pub fn file_links(files: &[&str]) -> String {
+    let links: Vec<String> = files
+        .iter()
+        .map(|f| format!("<a href=\"{}\">{}</a>", href(f), escape(f)))
+        .collect();
+    format!("<p>Files: {}</p>\n", links.join(", "))
+}
+
 /// A paragraph of text.
 pub fn para(text: &str) -> String {
     format!("<p>{}</p>\n", escape(text))
@@ -272,10 +282,38 @@ fn cost_section(c: &CostReport) -> (&'static str, String) {
         .as_ref()
         .map(|b| para(&super::text::blend_cost(b)))
         .unwrap_or_default();
+    let split = table(
+        &["energy", "µJ", "of what"],
+        &[
+            vec![
+                "on chip".to_string(),
+                format!("{:.3}", c.on_chip_energy_pj() * 1e-6),
+                "operations, FIFO accesses, SRAM and logic leakage".to_string(),
+            ],
+            vec![
+                "DRAM".to_string(),
+                format!("{:.3}", c.dram_energy_pj() * 1e-6),
+                format!(
+                    "{} bytes through the memory port (frame buffer {}, accumulation {}, geometry fetched {}) at {} pJ/B",
+                    c.framebuffer_bytes + c.accumulation_bytes + c.geometry_bytes,
+                    c.framebuffer_bytes,
+                    c.accumulation_bytes,
+                    c.geometry_bytes,
+                    c.tech.dram_pj_per_byte
+                ),
+            ],
+            vec![
+                "total".to_string(),
+                format!("{:.3}", c.energy_pj * 1e-6),
+                String::new(),
+            ],
+        ],
+    );
     (
         "Cost: area and energy (DESIGN.md §12)",
         para(&head)
             + &blend
+            + &split
             + &table(
                 &[
                     "unit",
@@ -383,13 +421,20 @@ fn host_section(h: &Host) -> (&'static str, String) {
     )
 }
 
-/// The page of one render: its images, then [`report_sections`]. `images` are the files
-/// beside the page with their captions; `trace` the link to the timeline, if written.
-pub fn render_page(r: &Report, images: &[(&str, String)], trace: Option<&str>) -> String {
+/// The page of one render: its images, links to its other files, then [`report_sections`].
+/// `images` are the files beside the page with their captions, `others` the rest of its
+/// files (report.json, report.txt); `trace` the link to the timeline, if written.
+pub fn render_page(
+    r: &Report,
+    images: &[(&str, String)],
+    others: &[&str],
+    trace: Option<&str>,
+) -> String {
     let figures: String = images
         .iter()
         .map(|(file, caption)| figure(file, caption, false))
-        .collect();
+        .collect::<String>()
+        + &file_links(others);
     let subtitle = format!(
         "render: {} path, {} mode, {}x{} px{}{}",
         r.settings.path,

@@ -451,16 +451,19 @@ impl Report {
     }
 }
 
-/// The cost section's first sentence: area, energy, power, the technology and the DRAM
-/// bytes it priced; `mm2`, `uj` and `charged` spelled for the page (text or HTML).
+/// The cost section's first sentence: area, energy, power, the energy on chip and in DRAM,
+/// the technology and the DRAM bytes it priced; `mm2`, `uj` and `charged` spelled for the
+/// page (text or HTML).
 pub fn cost_head(c: &CostReport, mm2: &str, uj: &str, charged: &str) -> String {
     format!(
-        "{:.3} {mm2}, {:.1} {uj} this frame{} (technology {}; {} frame-buffer bytes{}, {} geometry bytes fetched, {charged} {} DRAM at {} pJ/B; SRAM leakage {:.3} {uj}, logic leakage {:.3} {uj})",
+        "{:.3} {mm2}, {:.1} {uj} this frame{}: {:.1} {uj} on chip, {:.1} {uj} DRAM (technology {}; {} frame-buffer bytes{}, {} geometry bytes fetched, {charged} {} DRAM at {} pJ/B; SRAM leakage {:.3} {uj}, logic leakage {:.3} {uj})",
         c.area_mm2,
         c.energy_pj * 1e-6,
         c.power_mw
             .map(|p| format!(" = {p:.0} mW at the clock"))
             .unwrap_or_default(),
+        c.on_chip_energy_pj() * 1e-6,
+        c.dram_energy_pj() * 1e-6,
         c.tech.name,
         c.framebuffer_bytes,
         if c.blend.is_some() {

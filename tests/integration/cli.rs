@@ -766,7 +766,18 @@ fn help_explains_the_render_flags() {
     }
     let out = bin().args(["compare", "--help"]).output().unwrap();
     let text = String::from_utf8_lossy(&out.stdout);
-    for flag in ["--k", "--tess", "auto", "--out", "--arch", "--viewport"] {
+    for flag in [
+        "--k",
+        "--tess",
+        "auto",
+        "--match",
+        "psnr",
+        "flip",
+        "--match-path",
+        "--out",
+        "--arch",
+        "--viewport",
+    ] {
         assert!(text.contains(flag), "compare --help lacks {flag}");
     }
 }
@@ -832,14 +843,19 @@ fn compare_writes_every_file_and_both_reports() {
     for row in [
         "primitives",
         "vertices",
-        "primitive bytes",
+        "primitive bytes fetched",
+        "primitive bytes stored",
         "cycles",
+        "energy uJ/frame",
+        "of it on chip uJ",
+        "of it DRAM uJ",
         "fragments",
     ] {
         assert!(stdout.contains(row), "table row {row}: {stdout}");
     }
     let c: serde_json::Value =
         serde_json::from_slice(&std::fs::read(dir.path().join("c/compare.json")).unwrap()).unwrap();
+    assert_eq!(c["schema_version"], 3);
     for path in ["lembo", "triangle"] {
         let r = &c[path];
         assert_eq!(r["settings"]["path"], path);
@@ -874,6 +890,25 @@ fn compare_writes_every_file_and_both_reports() {
             <= target
     );
     assert!(c["triangle"]["accuracy"]["max_scanline_deviation_px"].is_null());
+    // The default match is the silhouette's, of the triangle path's n.
+    let m = &c["match"];
+    assert_eq!(m["metric"], "silhouette");
+    assert_eq!(m["searched_path"], "triangle");
+    assert_eq!(m["target"].as_f64().unwrap(), target);
+    assert_eq!(m["level"].as_u64().unwrap(), level);
+    assert_eq!(m["tried"].as_array().unwrap().len(), tried.len());
+    // Primitive bytes: the row gives what the fetch read, the ratio both.
+    for path in ["lembo", "triangle"] {
+        let fetched = c[path]["fetch"]["bytes"].as_u64().unwrap();
+        assert_eq!(fetched, c[path]["cost"]["geometry_bytes"].as_u64().unwrap());
+        assert!(stdout.contains(&fetched.to_string()), "{path}: {stdout}");
+    }
+    assert!(
+        c["ratios"]["triangle_over_lembo_bytes_fetched"]
+            .as_f64()
+            .unwrap()
+            > 0.0
+    );
     assert!(
         c["ratios"]["lembo_over_triangle_cycles_per_primitive"]
             .as_f64()
@@ -888,6 +923,171 @@ fn compare_writes_every_file_and_both_reports() {
     );
     let montage = image::open(dir.path().join("c/montage.png")).unwrap();
     assert!(montage.width() >= 5 * 160 && montage.height() > 160);
+}
+
+/// `compare --match psnr` (issue 49): the triangle path's n is the smallest whose PSNR is at
+/// least the lembo run's; the output says what was matched, every level tried and how
+/// close the chosen one came: within 1 dB, or the level below it missed.
+#[test]
+fn compare_match_psnr_picks_the_smallest_n_at_the_lembo_runs_psnr() {
+    let dir = tempfile::tempdir().unwrap();
+    let bunny = manifest().join("traces/bunny.json");
+    let out = run(
+        &[
+            "compare",
+            bunny.to_str().unwrap(),
+            "--viewport",
+            "256x192",
+            "--match",
+            "psnr",
+            "--out",
+            "c",
+        ],
+        dir.path(),
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let c: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("c/compare.json")).unwrap()).unwrap();
+    let psnr = |path: &str| c[path]["accuracy"]["psnr_db"].as_f64().unwrap();
+    let m = &c["match"];
+    assert_eq!(m["metric"], "psnr");
+    assert_eq!(m["field"], "psnr_db");
+    assert_eq!(m["searched_path"], "triangle");
+    assert_eq!(m["target"].as_f64().unwrap(), psnr("lembo"));
+    let n = c["tess"]["level"].as_u64().unwrap();
+    assert_eq!(m["level"].as_u64().unwrap(), n);
+    assert_eq!(c["triangle"]["settings"]["tess"].as_u64().unwrap(), n);
+    assert_eq!(m["value"].as_f64().unwrap(), psnr("triangle"));
+    assert!(psnr("triangle") >= psnr("lembo"), "{stdout}");
+    // Every level tried is listed with its PSNR, meeting the target exactly from n on.
+    let tried = m["tried"].as_array().unwrap();
+    for step in tried {
+        let (level, value) = (
+            step["level"].as_u64().unwrap(),
+            step["value"].as_f64().unwrap(),
+        );
+        assert_eq!(step["meets"].as_bool().unwrap(), value >= psnr("lembo"));
+        assert_eq!(
+            value >= psnr("lembo"),
+            level >= n,
+            "n = {level}: {value} dB"
+        );
+    }
+    assert_eq!(c["tess"]["tried"].as_array().unwrap().len(), tried.len());
+    // Within 1 dB, or the output says why not: n - 1 was tried and fell short.
+    let gap = psnr("triangle") - psnr("lembo");
+    if gap > 1.0 {
+        let miss = &m["nearest_miss"];
+        assert_eq!(miss["level"].as_u64().unwrap(), n - 1, "{m}");
+        assert!(miss["value"].as_f64().unwrap() < psnr("lembo"));
+        assert!(stdout.contains(&format!("n = {} (", n - 1)), "{stdout}");
+    }
+    for part in [
+        "smallest n with psnr_db >=",
+        "tried (functional model) n = 1 ",
+        &format!(
+            "matched: PSNR {:.2} dB at n = {n} against the lembo run's",
+            psnr("triangle")
+        ),
+        &format!("within {gap:.2} dB"),
+    ] {
+        assert!(stdout.contains(part), "{part}: {stdout}");
+    }
+    let page = std::fs::read_to_string(dir.path().join("c/report.html")).unwrap();
+    assert!(
+        page.contains("matched: PSNR"),
+        "report.html lacks the match"
+    );
+}
+
+/// `compare --match-path lembo`: the triangle run keeps its n and the lembo path's k is
+/// the largest that matches it, bisected to within 5 % of a k that did not.
+#[test]
+fn compare_match_path_lembo_searches_k_against_the_triangle_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let bunny = manifest().join("traces/bunny.json");
+    let out = run(
+        &[
+            "compare",
+            bunny.to_str().unwrap(),
+            "--viewport",
+            "256x192",
+            "--match-path",
+            "lembo",
+            "--tess",
+            "2",
+            "--out",
+            "c",
+        ],
+        dir.path(),
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let c: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("c/compare.json")).unwrap()).unwrap();
+    let m = &c["match"];
+    assert_eq!(m["metric"], "silhouette");
+    assert_eq!(m["searched_path"], "lembo");
+    assert_eq!(c["tess"]["level"], 2);
+    assert!(!c["tess"]["auto"].as_bool().unwrap());
+    let k = m["level"].as_f64().unwrap();
+    assert_eq!(c["lembo"]["settings"]["k_px"].as_f64().unwrap(), k);
+    let silhouette = |path: &str| c[path]["accuracy"]["silhouette_max_px"].as_f64().unwrap();
+    assert_eq!(m["target"].as_f64().unwrap(), silhouette("triangle"));
+    assert!(silhouette("lembo") <= silhouette("triangle"));
+    // The lembo run's 0.5 px misses the triangles' silhouette on the bunny: k is smaller,
+    // with a larger k that missed within 5 % of it.
+    assert!(k < 0.5, "{m}");
+    let miss = m["nearest_miss"]["level"].as_f64().unwrap();
+    assert!(miss > k && miss - k <= 0.05 * k, "{m}");
+    assert_eq!(m["start"].as_f64().unwrap(), 0.5);
+    assert_eq!(m["cap"].as_f64().unwrap(), 1e-4);
+}
+
+/// A match target the knob's cap cannot reach is refused rather than pretended (issue 49,
+/// DESIGN.md §8): at k = 0.001 px the lembos' PSNR on the bunny is above what n = 64 gives.
+/// Exit status 2, the error names `--match`, the target, the cap and the closest run, and
+/// nothing is written.
+#[test]
+fn compare_refuses_a_match_target_the_cap_cannot_reach() {
+    let bunny = manifest().join("traces/bunny.json");
+    let args = [
+        "compare",
+        bunny.to_str().unwrap(),
+        "--viewport",
+        "256x192",
+        "--k",
+        "0.001",
+        "--match",
+        "psnr",
+        "--out",
+        "o",
+    ];
+    let (out, dir) = run_in_empty_dir(&args, &[]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    for part in [
+        "`--match` = psnr",
+        "the lembo run's PSNR",
+        "n = 64 (the cap of --tess auto)",
+        "the closest run, n = 64, measured PSNR",
+    ] {
+        assert!(stderr.contains(part), "{part}: {stderr}");
+    }
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(
+        files_in(dir.path()).is_empty(),
+        "{:?}",
+        files_in(dir.path())
+    );
 }
 
 #[test]
@@ -949,6 +1149,28 @@ fn bad_tessellation_flags_are_refused() {
     );
     assert_refused(&["compare", "--tess", "many", "--out", "o"], "--tess");
     assert_refused(&["compare", "--tess", "0", "--out", "o"], "--tess");
+    // A match where nothing is searched, or searched without its fixed level.
+    assert_refused(
+        &["compare", "--match", "psnr", "--tess", "3", "--out", "o"],
+        "--match",
+    );
+    assert_refused(
+        &[
+            "compare",
+            "--match-path",
+            "triangle",
+            "--tess",
+            "3",
+            "--out",
+            "o",
+        ],
+        "--match-path",
+    );
+    assert_refused(
+        &["compare", "--match-path", "lembo", "--out", "o"],
+        "--tess",
+    );
+    assert_refused(&["compare", "--match", "ssim", "--out", "o"], "--match");
     let bunny = manifest().join("traces/bunny.json");
     // 3674 lembos x 1024² triangles: refused before any work.
     assert_refused(

@@ -220,6 +220,8 @@ fn render_compare_and_sweep_pages_load_whole_in_a_browser() {
             "reference.png",
             "error.png",
             "flip.png",
+            "report.json",
+            "report.txt",
             "../traces out/bunny trace.json",
         ],
     );
@@ -244,9 +246,13 @@ fn render_compare_and_sweep_pages_load_whole_in_a_browser() {
         "--out",
         "d",
     ]);
-    check_page(browser, &tmp.path().join("d"), &["image.png"]);
+    check_page(
+        browser,
+        &tmp.path().join("d"),
+        &["image.png", "report.json", "report.txt"],
+    );
 
-    // A compare: both paths, the reference and both error maps.
+    // A compare: both paths, the reference, both error maps, the montage and the data.
     ok(&[
         "compare",
         scene("sphere24.json").to_str().unwrap(),
@@ -268,6 +274,9 @@ fn render_compare_and_sweep_pages_load_whole_in_a_browser() {
             "triangle_error.png",
             "lembo_flip.png",
             "triangle_flip.png",
+            "montage.png",
+            "compare.json",
+            "compare.txt",
         ],
     );
 
