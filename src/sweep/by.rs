@@ -146,11 +146,13 @@ fn table(
         "# How the answer moves with {field}\n\n\
          One answer for each value of `{field}`, made from only the runs at that value \
          (within the area budget of {budget} mm², as answer.md): each is \
-         `by_{stem}/<value>/answer.md`, with its figures beside it. A speed-up is the \
+         `by_{stem}/<value>/answer.md`, with its figures beside it. A ratio is the \
          triangle path's cycles over the lembo path's (above 1: lembos faster).\n\n\
          ## At equal area\n\nEach path's most accurate run within the budget (PSNR; ties: \
-         the fastest).\n\n\
-         | {field} | scene | lembo | triangle | speed-up | verdict |\n|---|---|---|---|---|---|\n"
+         the fastest). The two runs' accuracy differs: where the verdict names no winner, \
+         their cycle ratio is not a speed-up (the equal-PSNR table below is).\n\n\
+         | {field} | scene | lembo | triangle | triangle/lembo cycles | verdict |\n\
+         |---|---|---|---|---|---|\n"
     );
     let run = |(index, cycles, psnr): (usize, u64, f64)| {
         format!("run {index}: {cycles} cycles, {psnr:.1} dB")
