@@ -557,3 +557,32 @@ fn scenes_get_their_own_plots_with_safe_file_names() {
         "my scene/1: image error"
     ));
 }
+
+/// The unit-count plot holds the other varying fields at their most common value; where
+/// two values are equally common it says which it held and which tied with it, instead of
+/// holding one silently (the bandwidth at 32 and 64 here).
+#[test]
+fn the_unit_count_plot_says_a_tied_held_value() {
+    let records: Vec<Value> = [(2, 32, 900), (4, 32, 500), (2, 64, 800), (4, 64, 400)]
+        .into_iter()
+        .enumerate()
+        .map(|(i, (rops, bw, cycles))| {
+            record(
+                i as u64,
+                json!({"path": "lembo", "k": 0.5, "arch.rop.count": rops,
+                       "arch.framebuffer.bytes_per_cycle": bw}),
+                Some(cycles),
+                Some(40.0),
+            )
+        })
+        .collect();
+    let points: Vec<Point> = records.iter().filter_map(Point::from_record).collect();
+    let series = held_series(&points, ArchAxis::Counts);
+    assert_eq!(series.len(), 1);
+    let note = series[0].0.note.as_deref().unwrap();
+    assert!(
+        note.contains("arch.framebuffer.bytes_per_cycle=32 (tied with 64)"),
+        "{note}"
+    );
+    assert_eq!(series[0].1, [(2.0, 900.0), (4.0, 500.0)]);
+}

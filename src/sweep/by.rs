@@ -32,7 +32,7 @@ pub(super) fn table_file(field: &str) -> String {
 
 /// Refuses a `by` field (`--by` or the spec's `by`, named `flag` in `file`) that no point
 /// of `spec` sets, that is a knob or the path, or where the spec has no area budget.
-pub(super) fn check_by(spec: &super::Spec, file: &str, flag: &str, by: &str) -> Result<()> {
+pub(super) fn check_by(spec: &super::spec::Spec, file: &str, flag: &str, by: &str) -> Result<()> {
     let why = if NOT_BY.contains(&by) {
         Some("each answer compares the paths across their knobs (path, k, tess); group by another field".to_string())
     } else if spec.area_budget_mm2.is_none() {

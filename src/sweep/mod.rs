@@ -39,7 +39,9 @@
 //!
 //! Layout, from the bottom up: [`spec`] (names and bounds, the file's shape, the expanded
 //! spec, shards), `grid` (expanding blocks and points), `parse` (`Spec::parse`), [`plan`]
-//! (`Plan::load`: everything validated before a run), [`results`] (the folder's files:
+//! (`Plan::load`: everything validated before a run), the answer's files (`bracket`,
+//! `curves`, `sensitivity`, `flips`, `reproduce`, `answer`, and `by`, the answer by value),
+//! [`results`] (the folder's files:
 //! reading `results.jsonl` back, `results.csv`, the final set), [`run`] (the request, the
 //! pool, appends, resumption), [`merge`] (`sweep-merge`), [`lock`]. Each imports only files
 //! before it (and `lock`); this file only declares them and re-exports their public items.

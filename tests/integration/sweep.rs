@@ -504,6 +504,7 @@ fn every_committed_spec_is_valid() {
         names,
         [
             "antialias",
+            "bandwidth",
             "equal_area",
             "fair",
             "fair_ci",
