@@ -30,8 +30,9 @@ pub(super) fn table_file(field: &str) -> String {
     format!("answer_by_{}.md", file_stem(field))
 }
 
-/// Refuses a `by` field (`--by` or the spec's `by`, named `flag` in `file`) that no point
-/// of `spec` sets, that is a knob or the path, or where the spec has no area budget.
+/// Refuses a `by` field (`--by` or the spec's `by`, named `flag` in `file`) that the spec
+/// does not sweep (one value over every point, a point that leaves it unset counting as one
+/// value), that is a knob or the path, or where the spec has no area budget.
 pub(super) fn check_by(spec: &super::spec::Spec, file: &str, flag: &str, by: &str) -> Result<()> {
     let why = if NOT_BY.contains(&by) {
         Some("each answer compares the paths across their knobs (path, k, tess); group by another field".to_string())
@@ -70,8 +71,8 @@ pub(super) fn check_by(spec: &super::spec::Spec, file: &str, flag: &str, by: &st
     }
 }
 
-/// The answer of each value of `field` over `records`, and how it moves; an error when no
-/// record carries the field.
+/// The answer of each value of `field` over `records`, and how it moves; an internal error
+/// when no record carries the field ([`check_by`] refuses such a field before any run).
 pub(super) fn by_files(records: &[Value], ask: &Ask, field: &str) -> Result<ByAnswer> {
     let mut groups: Vec<(Value, Vec<Value>)> = Vec::new();
     for r in records {
