@@ -508,37 +508,7 @@ pub struct Table {
 /// accuracy metric, per path.
 pub fn rows(r: &CompareReport) -> Table {
     let (l, tr) = (&r.lembo, &r.triangle);
-    // How the searched knob was chosen, said beside it.
-    let how = |path: &str| {
-        r.matched
-            .as_ref()
-            .filter(|m| m.searched_path == path)
-            .map(|m| {
-                let target = format!(
-                    "{} {} {}, the {} run's",
-                    m.field,
-                    m.relation,
-                    m.metric.value(m.target),
-                    m.target_path
-                );
-                match m.start {
-                    Level::Tess(_) => format!(" (auto: smallest n with {target})"),
-                    Level::K(k) => format!(" (matched: largest k from {k} px with {target})"),
-                }
-            })
-            .unwrap_or_default()
-    };
-    let title = format!(
-        "compare {} ({}x{} px), architecture {}, k = {} px{}, tessellation {}{}",
-        l.scene.name,
-        l.scene.width,
-        l.scene.height,
-        l.arch.as_ref().map(|a| a.name.as_str()).unwrap_or("-"),
-        l.settings.k_px.unwrap_or_default(),
-        how("lembo"),
-        r.tess.level,
-        how("triangle"),
-    );
+    let title = title(r);
     let mut rows: Vec<[String; 3]> = Vec::new();
     // A row with one value per report.
     let mut both = |name: &str, value: &dyn Fn(&Report) -> String| {
@@ -630,12 +600,57 @@ pub fn rows(r: &CompareReport) -> Table {
         ));
     }
     if let Some(m) = &r.matched {
-        let tried: Vec<String> = m
-            .tried
-            .iter()
-            .map(|s| format!("{} {}", s.level, m.metric.value(s.value)))
-            .collect();
-        notes.push(format!(
+        notes.extend(match_notes(m));
+    }
+    Table { title, rows, notes }
+}
+
+/// The table's title: the scene, its size, the architecture, k and n, and how the searched
+/// knob was chosen beside it.
+fn title(r: &CompareReport) -> String {
+    let l = &r.lembo;
+    // How the searched knob was chosen, said beside it.
+    let how = |path: &str| {
+        r.matched
+            .as_ref()
+            .filter(|m| m.searched_path == path)
+            .map(|m| {
+                let target = format!(
+                    "{} {} {}, the {} run's",
+                    m.field,
+                    m.relation,
+                    m.metric.value(m.target),
+                    m.target_path
+                );
+                match m.start {
+                    Level::Tess(_) => format!(" (auto: smallest n with {target})"),
+                    Level::K(k) => format!(" (matched: largest k from {k} px with {target})"),
+                }
+            })
+            .unwrap_or_default()
+    };
+    format!(
+        "compare {} ({}x{} px), architecture {}, k = {} px{}, tessellation {}{}",
+        l.scene.name,
+        l.scene.width,
+        l.scene.height,
+        l.arch.as_ref().map(|a| a.name.as_str()).unwrap_or("-"),
+        l.settings.k_px.unwrap_or_default(),
+        how("lembo"),
+        r.tess.level,
+        how("triangle"),
+    )
+}
+
+/// The notes of a match: what was searched for and the levels tried, and how close the
+/// chosen level came.
+fn match_notes(m: &MatchReport) -> [String; 2] {
+    let tried: Vec<String> = m
+        .tried
+        .iter()
+        .map(|s| format!("{} {}", s.level, m.metric.value(s.value)))
+        .collect();
+    let searched = format!(
             "match ({}): the {} path's {} searched for {} {} the {} run's {}; tried (functional model) {}",
             m.metric.name(),
             m.searched_path,
@@ -648,10 +663,8 @@ pub fn rows(r: &CompareReport) -> Table {
             m.target_path,
             m.metric.value(m.target),
             tried.join(", ")
-        ));
-        notes.push(format!("matched: {}", m.summary));
-    }
-    Table { title, rows, notes }
+        );
+    [searched, format!("matched: {}", m.summary)]
 }
 
 /// The table as compare.txt and the command print it.

@@ -119,9 +119,22 @@ pub fn run_merge(job: &MergeJob) -> Result<MergeOutput> {
     if let Some(by) = &job.by {
         super::by::check_by(&spec, COMMAND_LINE, "--by", by)?;
     }
-    let missing: Vec<usize> = (0..spec.runs.len())
-        .filter(|i| !lines.contains_key(i))
-        .collect();
+    check_every_run(&spec, |i| lines.contains_key(&i))?;
+    let lines: BTreeMap<usize, String> = lines.into_iter().map(|(i, (l, _, _))| (i, l)).collect();
+    let _lock = FolderLock::acquire(&job.out, "sweep-merge", "--out")?;
+    let written = write_final(&job.out, &spec_bytes, &lines, job.by.as_deref())?;
+    Ok(MergeOutput {
+        dir: job.out.clone(),
+        name: spec.name,
+        runs: spec.runs.len(),
+        files: written.files,
+        answer: written.answer,
+    })
+}
+
+/// Refuses a merge that misses a run of `spec`, naming the first missing ones.
+fn check_every_run(spec: &Spec, merged: impl Fn(usize) -> bool) -> Result<()> {
+    let missing: Vec<usize> = (0..spec.runs.len()).filter(|&i| !merged(i)).collect();
     if !missing.is_empty() {
         let shown: Vec<String> = missing.iter().take(8).map(|i| i.to_string()).collect();
         return Err(Error::invalid(
@@ -139,14 +152,5 @@ pub fn run_merge(job: &MergeJob) -> Result<MergeOutput> {
             ),
         ));
     }
-    let lines: BTreeMap<usize, String> = lines.into_iter().map(|(i, (l, _, _))| (i, l)).collect();
-    let _lock = FolderLock::acquire(&job.out, "sweep-merge", "--out")?;
-    let written = write_final(&job.out, &spec_bytes, &lines, job.by.as_deref())?;
-    Ok(MergeOutput {
-        dir: job.out.clone(),
-        name: spec.name,
-        runs: spec.runs.len(),
-        files: written.files,
-        answer: written.answer,
-    })
+    Ok(())
 }

@@ -162,21 +162,7 @@ pub fn run_sweep(job: &SweepJob) -> std::result::Result<SweepOutcome, SweepError
             .unwrap_or(1)
             .min(MAX_JOBS)
     });
-    if plan.spec.refine.is_some() && job.shard != Shard::ALL {
-        return Err(Error::invalid(
-            COMMAND_LINE,
-            "--shard",
-            format!("{}/{}", job.shard.index, job.shard.count),
-            format!(
-                "{} has `refine`: its refinement rounds follow the results of every earlier run, so it runs in one process",
-                plan.spec.file
-            ),
-        )
-        .into());
-    }
-    if let Some(by) = &job.by {
-        super::by::check_by(&plan.spec, COMMAND_LINE, "--by", by)?;
-    }
+    check_request(&plan, job)?;
     let runs = plan.shard_runs(job.shard);
     plan.check_memory(&runs, jobs, job.no_memory_check)?;
     let mut round: Vec<usize> = runs.iter().map(|r| r.index).collect();
@@ -264,6 +250,27 @@ pub fn run_sweep(job: &SweepJob) -> std::result::Result<SweepOutcome, SweepError
         answer: written.answer,
         wall_seconds: t0.elapsed().as_secs_f64(),
     }))
+}
+
+/// The flags checked against the spec: `--shard` of a spec with `refine`, a `--by` field
+/// it does not sweep.
+fn check_request(plan: &Plan, job: &SweepJob) -> Result<()> {
+    if plan.spec.refine.is_some() && job.shard != Shard::ALL {
+        return Err(Error::invalid(
+            COMMAND_LINE,
+            "--shard",
+            format!("{}/{}", job.shard.index, job.shard.count),
+            format!(
+                "{} has `refine`: its refinement rounds follow the results of every earlier run, so it runs in one process",
+                plan.spec.file
+            ),
+        )
+        );
+    }
+    if let Some(by) = &job.by {
+        super::by::check_by(&plan.spec, COMMAND_LINE, "--by", by)?;
+    }
+    Ok(())
 }
 
 /// The next refinement round's additions (DESIGN.md §7, "Bracketing") from the records
