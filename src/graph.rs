@@ -13,6 +13,7 @@
 //! pushes an item on is its dispatch rule (round-robin, or by screen tile into the ROPs).
 
 use serde::{Deserialize, Serialize};
+use std::sync::LazyLock;
 
 /// The kinds of unit, in dataflow order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize)]
@@ -165,39 +166,62 @@ impl TessSource {
 
 impl Path {
     /// The kinds this path instantiates when the triangle path's triangles come from
-    /// `source`, in dataflow order.
+    /// `source`, in dataflow order: derived from [`BOUNDARIES`] ([`derive_kinds`]), once.
     pub fn kinds(self, source: TessSource) -> &'static [UnitKind] {
-        use UnitKind::*;
-        match (self, source) {
-            (Path::Lembo, _) => &[
-                GeometryFetch,
-                Setup,
-                MinMax,
-                IntervalManager,
-                Segmenter,
-                Subsegmenter,
-                FragmentRasterizer,
-                Rop,
-                FrameBuffer,
-            ],
-            (Path::Triangle, TessSource::Memory) => &[
-                GeometryFetch,
-                TriangleSetup,
-                TriangleRasterizer,
-                Rop,
-                FrameBuffer,
-            ],
-            (Path::Triangle, TessSource::OnChip) => &[
-                GeometryFetch,
-                Tessellator,
-                DomainEval,
-                TriangleSetup,
-                TriangleRasterizer,
-                Rop,
-                FrameBuffer,
-            ],
-        }
+        static KINDS: LazyLock<[Vec<UnitKind>; 3]> = LazyLock::new(|| {
+            [
+                derive_kinds(Path::Lembo, TessSource::Memory),
+                derive_kinds(Path::Triangle, TessSource::Memory),
+                derive_kinds(Path::Triangle, TessSource::OnChip),
+            ]
+        });
+        let i = match (self, source) {
+            (Path::Lembo, _) => 0,
+            (Path::Triangle, TessSource::Memory) => 1,
+            (Path::Triangle, TessSource::OnChip) => 2,
+        };
+        &KINDS[i]
     }
+}
+
+/// Every kind a path's primitives pass through: from the geometry fetch, which reads every
+/// primitive, along each boundary the path and source take ([`Boundary::taken_by`]), in
+/// dataflow order (a kind after every kind that feeds it; among kinds ready together, the
+/// one whose boundary comes first in [`BOUNDARIES`]).
+pub fn derive_kinds(path: Path, source: TessSource) -> Vec<UnitKind> {
+    let taken: Vec<&Boundary> = BOUNDARIES
+        .iter()
+        .filter(|b| b.taken_by(path, source))
+        .collect();
+    // The kinds reachable from the fetch.
+    let mut reached = vec![UnitKind::GeometryFetch];
+    let mut i = 0;
+    while i < reached.len() {
+        let from = reached[i];
+        for b in taken.iter().filter(|b| b.from == from) {
+            if !reached.contains(&b.to) {
+                reached.push(b.to);
+            }
+        }
+        i += 1;
+    }
+    // Kahn's order over the boundaries among them.
+    let mut order = Vec::with_capacity(reached.len());
+    while order.len() < reached.len() {
+        let next = reached
+            .iter()
+            .copied()
+            .filter(|k| !order.contains(k))
+            .find(|k| {
+                taken
+                    .iter()
+                    .filter(|b| b.to == *k && reached.contains(&b.from))
+                    .all(|b| order.contains(&b.from))
+            })
+            .expect("the boundaries of a path form no cycle");
+        order.push(next);
+    }
+    order
 }
 
 /// One FIFO between two units: a bounded queue with a transit latency (DESIGN.md §3).
@@ -242,6 +266,10 @@ pub struct Boundary {
     pub to: UnitKind,
     /// The link each of its crossbar's links has unless the architecture says otherwise.
     pub default: LinkConfig,
+    /// The path whose primitives alone take it, for a boundary out of a kind both paths
+    /// have (the geometry fetch feeds the lembo path's setup engines or the triangle
+    /// path's); None: every path with both kinds.
+    pub path: Option<Path>,
     /// The triangle source whose graphs alone wire it, when its two kinds meet in graphs of
     /// both sources but it belongs to one (the fetch feeds the triangle setup engines
     /// directly only from a mesh in memory); None: every graph with both kinds.
@@ -249,6 +277,11 @@ pub struct Boundary {
 }
 
 impl Boundary {
+    /// Whether the primitives of `path`, triangles from `source`, take this boundary.
+    pub fn taken_by(&self, path: Path, source: TessSource) -> bool {
+        self.path.is_none_or(|p| p == path) && self.only.is_none_or(|only| only == source)
+    }
+
     /// Whether a graph of `kinds`, its triangles from `source`, wires this boundary.
     pub fn wired_in(&self, kinds: &[UnitKind], source: TessSource) -> bool {
         kinds.contains(&self.from)
@@ -277,6 +310,7 @@ pub const BOUNDARIES: [Boundary; 14] = {
             from,
             to,
             default: LinkConfig::new(depth, latency),
+            path: None,
             only: None,
         }
     }
@@ -329,10 +363,14 @@ pub const BOUNDARIES: [Boundary; 14] = {
         // the read was issued at 500 MHz (a DRAM access latency, row miss, of DDR4); four
         // batches in flight per engine keep it fed across that latency down to batches of
         // about 10 primitives at a cycle each.
-        b("fetch_to_setup", GeometryFetch, Setup, 4, 40),
+        Boundary {
+            path: Some(Path::Lembo),
+            ..b("fetch_to_setup", GeometryFetch, Setup, 4, 40)
+        },
         // As fetch_to_setup, a batch of triangles to its triangle setup engine, from a mesh
         // in memory (on-chip tessellation feeds the engines from its domain evaluators).
         Boundary {
+            path: Some(Path::Triangle),
             only: Some(TessSource::Memory),
             ..b(
                 "fetch_to_triangle_setup",
@@ -343,7 +381,11 @@ pub const BOUNDARIES: [Boundary; 14] = {
             )
         },
         // As fetch_to_setup, a batch of lembos to its tessellator.
-        b("fetch_to_tessellator", GeometryFetch, Tessellator, 4, 40),
+        Boundary {
+            path: Some(Path::Triangle),
+            only: Some(TessSource::OnChip),
+            ..b("fetch_to_tessellator", GeometryFetch, Tessellator, 4, 40)
+        },
         // Depth 8, latency 1: a lembo's tessellation (its lattice of domain points), a wide
         // entry like setup_to_minmax's.
         b("tessellator_to_domain_eval", Tessellator, DomainEval, 8, 1),
@@ -574,6 +616,64 @@ impl std::fmt::Display for GraphError {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Each path's kinds, derived from the boundaries, are the lists the code held by hand
+    /// before (in dataflow order), so every graph is the one it was.
+    #[test]
+    fn each_paths_kinds_follow_from_the_boundaries() {
+        use UnitKind::*;
+        assert_eq!(
+            Path::Lembo.kinds(TessSource::Memory),
+            [
+                GeometryFetch,
+                Setup,
+                MinMax,
+                IntervalManager,
+                Segmenter,
+                Subsegmenter,
+                FragmentRasterizer,
+                Rop,
+                FrameBuffer,
+            ]
+        );
+        assert_eq!(
+            Path::Lembo.kinds(TessSource::OnChip),
+            Path::Lembo.kinds(TessSource::Memory)
+        );
+        assert_eq!(
+            Path::Triangle.kinds(TessSource::Memory),
+            [
+                GeometryFetch,
+                TriangleSetup,
+                TriangleRasterizer,
+                Rop,
+                FrameBuffer
+            ]
+        );
+        assert_eq!(
+            Path::Triangle.kinds(TessSource::OnChip),
+            [
+                GeometryFetch,
+                Tessellator,
+                DomainEval,
+                TriangleSetup,
+                TriangleRasterizer,
+                Rop,
+                FrameBuffer,
+            ]
+        );
+        // A boundary no path takes would be a unit no graph has.
+        for b in BOUNDARIES {
+            let taken = [
+                (Path::Lembo, TessSource::Memory),
+                (Path::Triangle, TessSource::Memory),
+                (Path::Triangle, TessSource::OnChip),
+            ]
+            .into_iter()
+            .any(|(p, s)| b.taken_by(p, s) && p.kinds(s).contains(&b.from));
+            assert!(taken, "{} is taken by no path", b.key);
+        }
+    }
 
     /// Every kind a path instantiates is fed by a boundary from the kind before it (the
     /// graph is a chain of crossbars), and every boundary joins kinds of one path.

@@ -255,6 +255,7 @@ mod tests {
             from,
             to,
             default: LinkConfig::default(),
+            path: None,
             only: None,
         }
     }
@@ -364,10 +365,16 @@ mod tests {
         );
         // Both rasterizers into the ROPs: a ROP reads from both boundaries, its ports the
         // lembo rasterizers' then the triangle rasterizers'.
-        // Every kind with a body of its own: both paths' units.
+        // Every kind with a body of its own that a graph of triangles from memory has:
+        // both paths' units (the on-chip tessellation's are fed only from on-chip sources).
         let both: Vec<UnitKind> = crate::graph::KINDS
             .into_iter()
             .filter(|k| k.inside().is_none())
+            .filter(|k| {
+                [crate::graph::Path::Lembo, crate::graph::Path::Triangle]
+                    .iter()
+                    .any(|p| p.kinds(TessSource::Memory).contains(k))
+            })
             .collect();
         let ports = check(&both, &BOUNDARIES).unwrap();
         let rop = both.iter().position(|&k| k == Rop).unwrap();

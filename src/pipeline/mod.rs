@@ -513,10 +513,16 @@ mod tests {
         let view = View::new(&scene.camera, scene.viewport);
         let tol = Tolerance::from(0.5);
         let arch = ArchConfig::default();
-        // Every kind with a body of its own: both paths' units.
+        // Every kind with a body of its own that a graph of triangles from memory has:
+        // both paths' units (the on-chip tessellation's are fed only from on-chip sources).
         let both: Vec<UnitKind> = crate::graph::KINDS
             .into_iter()
             .filter(|k| k.inside().is_none())
+            .filter(|k| {
+                [crate::graph::Path::Lembo, crate::graph::Path::Triangle]
+                    .iter()
+                    .any(|p| p.kinds(TessSource::Memory).contains(k))
+            })
             .collect();
         let graph = Graph {
             kinds: &both,
