@@ -3,10 +3,9 @@ pub mod fragment_shader;
 pub mod framebuffer;
 pub mod lanes;
 pub mod plane;
-#[allow(clippy::module_inception)]
-pub mod rop;
 pub mod shade;
+pub mod sink;
 
 pub use framebuffer::{FrameBuffer, NO_PRIMITIVE};
-pub use rop::Rop;
 pub use shade::{Light, Shader};
+pub use sink::Rop;

@@ -31,7 +31,7 @@ use crate::pipeline::tiles::RopPixels;
 use crate::pipeline::unit::{DiscoidPass, Finished, Run, Unit};
 use crate::raster::Counts;
 use crate::rop::fragment_shader::FragmentShader;
-use crate::rop::rop::Batch;
+use crate::rop::sink::Batch;
 
 /// A ROP.
 pub struct Rop;
