@@ -1,6 +1,6 @@
 //! The shader every ROP shades a fragment with ([`FragmentShader`]: Piranda et al. 2006
 //! equation 6, [`super::shade`], for one view) and [`normalize`]. A file of its own so that
-//! the functional ROP ([`super::rop`]), its shading in lanes ([`super::lanes`]), the timed ROP
+//! the functional ROP ([`super::sink`]), its shading in lanes ([`super::lanes`]), the timed ROP
 //! units and the discoid passes import it without importing each other.
 
 use super::shade::{to_u8, Light, Shader};
