@@ -209,6 +209,18 @@ pub struct MatchStep {
     pub meets: bool,
 }
 
+impl MatchStep {
+    /// Level `level`, its accuracy `a` read on `metric` and checked against `target`.
+    fn measured(level: Level, metric: MatchMetric, a: &Accuracy, target: f64) -> MatchStep {
+        let value = metric.of(a);
+        MatchStep {
+            level,
+            value,
+            meets: metric.meets(value, target),
+        }
+    }
+}
+
 /// How a compare matched its two paths' accuracy (`compare.json`'s `match`).
 #[derive(Clone, Debug, Serialize)]
 pub struct MatchReport {
@@ -560,14 +572,9 @@ pub(super) fn search_tess(
             job.flip_ppd,
         );
         steps.push(AutoStep::new(scene, n, &a));
-        let value = metric.of(&a);
-        let meets = metric.meets(value, target);
-        tried.push(MatchStep {
-            level: Level::Tess(n),
-            value,
-            meets,
-        });
-        Ok(meets)
+        let step = MatchStep::measured(Level::Tess(n), metric, &a, target);
+        tried.push(step);
+        Ok(step.meets)
     })?;
     let (start, cap) = (Level::Tess(1), Level::Tess(cap));
     let Some(level) = found else {
@@ -616,14 +623,9 @@ pub(super) fn search_k(
     let mut tried = Vec::new();
     let found = largest_k(job.k, K_RANGE, |k| {
         let a = lembo_accuracy(scene, view, reference, &RenderJob { k, ..job.clone() })?;
-        let value = metric.of(&a);
-        let meets = metric.meets(value, target);
-        tried.push(MatchStep {
-            level: Level::K(k),
-            value,
-            meets,
-        });
-        Ok(meets)
+        let step = MatchStep::measured(Level::K(k), metric, &a, target);
+        tried.push(step);
+        Ok(step.meets)
     })?;
     let (start, cap) = (Level::K(job.k), Level::K(floor));
     let Some(k) = found else {
