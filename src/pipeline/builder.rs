@@ -1,10 +1,10 @@
 //! Elaboration, after DAM's `ProgramBuilder`: the graph description ([`crate::graph`]) drives
-//! it. [`Plan::new`] checks the description against the units' declarations
+//! it. [`Netlist::new`] checks the description against the units' declarations
 //! ([`super::units::bodies`]) before anything runs (every kind has a body, every boundary
 //! joins a writer and a reader of the same item type in dataflow order, every unit's ports
 //! are connected) and refuses a bad one with a [`GraphError`]; then it instantiates each
 //! kind as the architecture says and makes each boundary's typed links. Each host thread
-//! then takes its units' bodies from the plan ([`Plan::bodies`]).
+//! then takes its units' bodies from the plan ([`Netlist::bodies`]).
 //!
 //! A kind may read from several boundaries and write to several, all of its one item type
 //! (a memory port fed by the ROPs and by a geometry fetch, a geometry fetch feeding the
@@ -15,7 +15,7 @@
 
 use super::runtime::executor::UnitFuture;
 use super::runtime::{partition, LinkSpec, SimOptions};
-use super::unit::{Elaborate, Finished, Run};
+use super::unit::{Elaborate, Finished, RunInputs};
 use super::units::bodies;
 use super::wiring::HostWiring;
 use crate::config::ArchConfig;
@@ -114,7 +114,7 @@ fn check_with<R: Real>(
 
 /// A checked graph instantiated on an architecture, partitioned over host threads, with
 /// every boundary's links made: what each host thread elaborates its units from.
-pub struct Plan {
+pub struct Netlist {
     /// Every unit, in dataflow order (each kind's instances together).
     pub units: Vec<UnitInstance>,
     /// Each unit's latency \[cycles\].
@@ -131,13 +131,13 @@ pub struct Plan {
     crossbars: Vec<Option<(usize, Box<dyn Any + Send + Sync>)>>,
 }
 
-impl Plan {
+impl Netlist {
     /// Checks `graph` and instantiates it on `arch` over the host threads `options` asks for.
     pub fn new<R: Real>(
         graph: &Graph,
         arch: &ArchConfig,
         options: &SimOptions,
-    ) -> Result<Plan, GraphError> {
+    ) -> Result<Netlist, GraphError> {
         let bodies = bodies::<R>();
         let ports = check_with(graph, &bodies)?;
         let units = graph::instances(&ports.kinds, |k| arch.unit(k).0);
@@ -174,7 +174,7 @@ impl Plan {
                 crossbars[bi] = Some((p, xb));
             }
         }
-        Ok(Plan {
+        Ok(Netlist {
             units,
             latency,
             thread,
@@ -189,7 +189,7 @@ impl Plan {
     pub fn bodies<'a, R: Real>(
         &self,
         host: &mut HostWiring,
-        run: &'a Run<'a, R>,
+        run: &'a RunInputs<'a, R>,
         trace: Option<usize>,
     ) -> Vec<UnitFuture<'a, Finished>> {
         let bodies = bodies::<R>();
@@ -429,7 +429,7 @@ mod tests {
             boundaries: &renamed,
             source: TessSource::Memory,
         };
-        let e = Plan::new::<f32>(&graph, &ArchConfig::default(), &SimOptions::default())
+        let e = Netlist::new::<f32>(&graph, &ArchConfig::default(), &SimOptions::default())
             .err()
             .unwrap();
         assert_eq!(
@@ -460,7 +460,7 @@ mod tests {
         let mut arch = ArchConfig::default();
         arch.segmenter.count = 3;
         arch.rop.count = 2;
-        let plan = Plan::new::<f64>(
+        let plan = Netlist::new::<f64>(
             &Graph::of(Path::Lembo, TessSource::Memory),
             &arch,
             &SimOptions {

@@ -50,12 +50,12 @@ use crate::raster::Counts;
 use crate::rop::FrameBuffer;
 use crate::scene::Scene;
 use crate::tolerance::Tolerance;
-use builder::Plan;
-use runtime::executor::{Board, HostThread, Recoveries, Stop};
+use builder::Netlist;
+use runtime::executor::{Board, Halt, HostThread, Recoveries};
 use runtime::trace;
 use serde::Serialize;
 use tiles::{RopTiles, SharedFrame};
-use unit::{FetchPlan, Finished, NoTriangles, Run};
+use unit::{FetchPlan, Finished, NoTriangles, RunInputs};
 use wiring::HostWiring;
 
 /// The cycle accounting of one unit over the frame \[cycles\].
@@ -199,7 +199,7 @@ fn run_in<R: Real>(
         Some(_) => TessSource::Memory,
         None => arch.tessellation.source,
     };
-    let plan = Plan::new::<R>(graph.unwrap_or(&Graph::of(path, tess)), arch, options)?;
+    let plan = Netlist::new::<R>(graph.unwrap_or(&Graph::of(path, tess)), arch, options)?;
     let discoids = discoid.is_some();
     let trace_cap = options.trace_event_cap / plan.units.len();
     let trace = options.trace.then_some(trace_cap);
@@ -237,7 +237,7 @@ fn run_in<R: Real>(
         };
         // What a person watching sees advance: the primitives fetched.
         crate::progress::add_total(fetch.primitives);
-        let run = Run {
+        let run = RunInputs {
             scene,
             view,
             arch,
@@ -275,12 +275,12 @@ fn run_in<R: Real>(
     };
     let (mut results, recoveries) = match results {
         Ok(r) => r,
-        Err(Stop::Deadlock(waiting)) => {
+        Err(Halt::Deadlock(waiting)) => {
             return Err(Error::Deadlock {
                 waiting: waiting.into_iter().map(|(_, w)| w).collect(),
             })
         }
-        Err(Stop::Aborted) => return Err(Error::Internal("the timed run was aborted".into())),
+        Err(Halt::Aborted) => return Err(Error::Internal("the timed run was aborted".into())),
     };
     results.sort_by_key(|(u, _)| *u);
     let mut frame = finish(arch, fb, plan.units, results, options, trace_cap)?;
@@ -295,14 +295,14 @@ fn run_in<R: Real>(
 
 /// How the executor left a run: every unit's result (by global index) with the recoveries
 /// it needed, or why it stopped.
-type Outcome = std::result::Result<(Vec<(usize, Finished)>, Recoveries), Stop>;
+type Outcome = std::result::Result<(Vec<(usize, Finished)>, Recoveries), Halt>;
 
 /// The units' results of a run over several host threads, one scoped OS thread each; a
 /// panic or a failure on one aborts the others.
 fn run_threads<'a, R: Real>(
-    plan: &Plan,
+    plan: &Netlist,
     options: &SimOptions,
-    run: &'a Run<'a, R>,
+    run: &'a RunInputs<'a, R>,
     trace: Option<usize>,
 ) -> Result<Outcome> {
     let (units, thread, threads) = (&plan.units, &plan.thread, plan.threads);
@@ -353,8 +353,8 @@ fn run_threads<'a, R: Real>(
                     ))
                 }
                 Ok(Ok((done, _))) => all.extend(done),
-                Ok(Err(Stop::Deadlock(w))) => waiting.extend(w),
-                Ok(Err(Stop::Aborted)) => {}
+                Ok(Err(Halt::Deadlock(w))) => waiting.extend(w),
+                Ok(Err(Halt::Aborted)) => {}
             }
         }
         if let Some(e) = failure {
@@ -362,7 +362,7 @@ fn run_threads<'a, R: Real>(
         }
         if board.deadlocked() {
             waiting.sort();
-            return Ok(Err(Stop::Deadlock(waiting)));
+            return Ok(Err(Halt::Deadlock(waiting)));
         }
         if all.len() != units.len() {
             return Err(Error::Internal("a unit stopped without a result".into()));

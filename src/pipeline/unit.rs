@@ -1,6 +1,6 @@
 //! What a unit of the timed pipeline is to the builder (after DAM's contexts): a [`Unit`]
 //! declares its kind, the item it reads and the item it writes, the size of its output
-//! items in a FIFO, and how to start its body from a [`Run`]. The body itself sees only its
+//! items in a FIFO, and how to start its body from a [`RunInputs`]. The body itself sees only its
 //! own context: its links ([`Ctx`]), its configuration section, and what else it needs (its
 //! tolerance, the scene source), never the whole architecture.
 //!
@@ -161,7 +161,7 @@ pub struct DiscoidPass<'a, R> {
 
 /// What one run offers its units: each unit's [`Unit::spawn`] takes out its own context and
 /// hands its body only that.
-pub struct Run<'a, R> {
+pub struct RunInputs<'a, R> {
     /// The scene being drawn.
     pub scene: &'a Scene,
     /// Its camera and viewport.
@@ -200,7 +200,7 @@ pub trait Unit<R: Real>: 'static {
     /// taken from `run`.
     fn spawn<'a>(
         ctx: Ctx<Self::In, Self::Out>,
-        run: &'a Run<'a, R>,
+        run: &'a RunInputs<'a, R>,
         index: usize,
     ) -> UnitFuture<'a, Finished>;
 }
@@ -239,24 +239,24 @@ pub trait Elaborate<R: Real> {
         index: usize,
         inputs: Vec<&mut dyn Any>,
         outputs: Vec<&mut dyn Any>,
-        run: &'a Run<'a, R>,
+        run: &'a RunInputs<'a, R>,
         trace: Option<usize>,
     ) -> UnitFuture<'a, Finished>;
 }
 
 /// The erased form of unit `U`.
-pub struct Spec<U>(PhantomData<U>);
+pub struct ErasedUnit<U>(PhantomData<U>);
 
-impl<U> Spec<U> {
+impl<U> ErasedUnit<U> {
     /// Unit `U`'s entry in the builder's list.
     pub const fn new() -> Self {
-        Spec(PhantomData)
+        ErasedUnit(PhantomData)
     }
 }
 
-impl<U> Default for Spec<U> {
+impl<U> Default for ErasedUnit<U> {
     fn default() -> Self {
-        Spec::new()
+        ErasedUnit::new()
     }
 }
 
@@ -265,7 +265,7 @@ fn link_type<T: 'static>() -> Option<(TypeId, &'static str)> {
     (TypeId::of::<T>() != TypeId::of::<()>()).then(|| (TypeId::of::<T>(), type_name::<T>()))
 }
 
-impl<R: Real, U: Unit<R>> Elaborate<R> for Spec<U> {
+impl<R: Real, U: Unit<R>> Elaborate<R> for ErasedUnit<U> {
     fn kind(&self) -> UnitKind {
         U::KIND
     }
@@ -314,7 +314,7 @@ impl<R: Real, U: Unit<R>> Elaborate<R> for Spec<U> {
         index: usize,
         inputs: Vec<&mut dyn Any>,
         outputs: Vec<&mut dyn Any>,
-        run: &'a Run<'a, R>,
+        run: &'a RunInputs<'a, R>,
         trace: Option<usize>,
     ) -> UnitFuture<'a, Finished> {
         // The builder checked before elaboration that every consumer reads its producers'

@@ -198,7 +198,7 @@ pub fn rasterize<R: Real, S: FragmentSink<R>>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::raster::interval::{CurvePoint, INTERIOR};
+    use crate::raster::interval::{ConicPoint, INTERIOR};
     use crate::raster::setup::tests::{
         quad, scanline_fragments, screen_lembo, x_linear, y_bowl, y_error, y_plane, y_saddle,
         Collect, SIDE,
@@ -206,7 +206,7 @@ mod tests {
     use std::collections::BTreeMap;
 
     fn sub(x0: f64, x1: f64) -> Subsegment<f64> {
-        let p = |x: f64| CurvePoint {
+        let p = |x: f64| ConicPoint {
             uv: [0.2, 0.2],
             x,
             edge: INTERIOR,
@@ -242,7 +242,7 @@ mod tests {
         use crate::graph::UnitKind;
         type C = Counted<f64>;
         let l = screen_lembo::<C>(x_linear(), y_plane());
-        let p = |x: f64| CurvePoint {
+        let p = |x: f64| ConicPoint {
             uv: [C::of(0.2), C::of(0.3)],
             x: C::of(x),
             edge: INTERIOR,
@@ -342,12 +342,12 @@ mod tests {
     #[test]
     fn fragment_domain_point_is_interpolated_at_the_pixel_centre() {
         let l = screen_lembo::<f64>(x_linear(), y_plane());
-        let a = CurvePoint {
+        let a = ConicPoint {
             uv: [0.1, 0.3],
             x: 10.25,
             edge: INTERIOR,
         };
-        let b = CurvePoint {
+        let b = ConicPoint {
             uv: [0.5, 0.1],
             x: 30.25,
             edge: INTERIOR,
@@ -374,12 +374,12 @@ mod tests {
     fn on_a_sample_grid_fragments_are_at_the_rows_samples() {
         let l = screen_lembo::<f64>(x_linear(), y_plane());
         let (a, b) = (
-            CurvePoint {
+            ConicPoint {
                 uv: [0.1, 0.3],
                 x: 10.25,
                 edge: INTERIOR,
             },
-            CurvePoint {
+            ConicPoint {
                 uv: [0.5, 0.1],
                 x: 30.25,
                 edge: INTERIOR,

@@ -8,7 +8,7 @@ use super::probe::ProbeReport;
 use crate::camera::View;
 use crate::datapath::Real;
 use crate::error::Result;
-use crate::rop::{FrameBuffer, Rop};
+use crate::rop::{FrameBuffer, RopSink};
 use crate::scene::Scene;
 
 /// A rendered frame and what it took.
@@ -38,13 +38,13 @@ pub fn frame_with<R: Real>(
     scene: &Scene,
     view: &View,
     analyse: bool,
-    draw: impl FnOnce(&mut Rop<R>, &mut Counts) -> Result<Option<ProbeReport>>,
+    draw: impl FnOnce(&mut RopSink<R>, &mut Counts) -> Result<Option<ProbeReport>>,
 ) -> Result<Frame> {
     let vp = view.viewport;
     let bg = scene.background.map(crate::rop::shade::to_u8::<f64>);
     let mut fb = FrameBuffer::new(vp.width, vp.height, bg, analyse);
     let mut counts = Counts::default();
-    let mut rop = Rop::<R>::new(&mut fb, &scene.light, view);
+    let mut rop = RopSink::<R>::new(&mut fb, &scene.light, view);
     let probe = draw(&mut rop, &mut counts)?;
     (counts.fragments_passed_depth, counts.pixels_covered) = rop.finish();
     Ok(Frame {

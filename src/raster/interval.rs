@@ -33,7 +33,7 @@ use crate::datapath::Real;
 /// A point of the curve with its screen x \[pixels\] (from the edge curve on domain edges,
 /// so shared edges agree bit for bit).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CurvePoint<R> {
+pub struct ConicPoint<R> {
     /// The point in the lembo's domain.
     pub uv: V2<R>,
     /// Its screen x \[pixels\].
@@ -42,16 +42,16 @@ pub struct CurvePoint<R> {
     pub edge: u8,
 }
 
-/// [`CurvePoint::edge`] of a point not found on a domain edge.
+/// [`ConicPoint::edge`] of a point not found on a domain edge.
 pub const INTERIOR: u8 = 3;
 
 /// One piece of the curve Y = y_j inside the domain, from `start` to `end` in walking order.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Interval<R> {
     /// Where the walk starts.
-    pub start: CurvePoint<R>,
+    pub start: ConicPoint<R>,
     /// Where it ends.
-    pub end: CurvePoint<R>,
+    pub end: ConicPoint<R>,
     /// Walk key direction: `tau · p` increases strictly along the curve from start to end.
     pub tau: V2<R>,
     /// `tau · end`.
@@ -64,7 +64,7 @@ pub struct Interval<R> {
 #[derive(Clone, Copy, Debug)]
 pub struct Crossing<R> {
     /// Where the curve crosses.
-    pub p: CurvePoint<R>,
+    pub p: ConicPoint<R>,
     /// Whether the walk enters the domain (or its part) here, rather than leaves.
     pub entry: bool,
     /// Part of the domain (+1 or -1) the crossing belongs to.
@@ -186,7 +186,7 @@ fn scanline_partition<R: Real>(
                             let (gu, gv) = l.y.grad(uv[0], uv[1]);
                             // Walking from part -1 into part +1 when the walk climbs a·∇Y.
                             let up = dot(rot_cw([gu, gv]), [la * a[0], la * a[1]]) > R::zero();
-                            let p = CurvePoint {
+                            let p = ConicPoint {
                                 uv,
                                 x: l.x.eval(uv[0], uv[1]),
                                 edge: INTERIOR,
@@ -312,7 +312,7 @@ fn pair_crossings<R: Real>(
                     let tau = part_tau(a, part);
                     match saddle {
                         Some(centre) => {
-                            let mid = CurvePoint {
+                            let mid = ConicPoint {
                                 uv: centre,
                                 x: l.x.eval(centre[0], centre[1]),
                                 edge: INTERIOR,
@@ -380,7 +380,7 @@ pub fn edge_crossings<R: Real>(
     l: &ScreenLembo<R>,
     e: usize,
     yj: R,
-    mut push: impl FnMut(CurvePoint<R>, bool),
+    mut push: impl FnMut(ConicPoint<R>, bool),
 ) {
     let c = &l.edges[e];
     let f0 = c.y[0] - yj;
@@ -418,7 +418,7 @@ pub fn edge_crossings<R: Real>(
     // The crossing at edge parameter t (canonical order), with its parameter in lembo order.
     let point = |t: R| {
         let tl = if c.reversed { R::one() - t } else { t };
-        let p = CurvePoint {
+        let p = ConicPoint {
             uv: edge_uv(e, tl),
             x: c.x[0] + t * (bx + t * ax),
             edge: e as u8,
@@ -559,7 +559,7 @@ mod tests {
         let mut xs: Vec<Crossing<R>> = keys
             .iter()
             .map(|&(key, entry, part)| Crossing {
-                p: CurvePoint {
+                p: ConicPoint {
                     uv: [R::of(0.25), R::of(0.25)],
                     x: key,
                     edge: 0,
@@ -701,7 +701,7 @@ mod tests {
     #[test]
     fn only_an_entry_then_an_exit_of_one_part_takes_the_shortcut() {
         let c = |entry: bool, part: i8| Crossing {
-            p: CurvePoint {
+            p: ConicPoint {
                 uv: [0.25, 0.25],
                 x: 3.0,
                 edge: INTERIOR,
@@ -843,7 +843,7 @@ mod tests {
     }
 
     /// The roots of scanline `j` on each domain edge.
-    fn roots_per_edge<R: Real>(l: &ScreenLembo<R>, j: u32) -> [Vec<(CurvePoint<R>, bool)>; 3] {
+    fn roots_per_edge<R: Real>(l: &ScreenLembo<R>, j: u32) -> [Vec<(ConicPoint<R>, bool)>; 3] {
         let yj = R::of(j as f64 + 0.5);
         [0, 1, 2].map(|e| {
             let mut v = Vec::new();

@@ -184,7 +184,7 @@ fn render_in<R: Real>(scene: &Scene, view: &View, tol: Tolerance, analyse: bool)
 mod tests {
     use super::*;
     use crate::raster::driver::Stages;
-    use crate::rop::{FrameBuffer, Rop};
+    use crate::rop::{FrameBuffer, RopSink};
 
     /// The shipped scene at `path` (from the crate's root) on a 384x384 viewport, and its view.
     fn shipped(path: &str) -> (Scene, View) {
@@ -215,7 +215,7 @@ mod tests {
         let [dispatched, compiled] = [true, false].map(|dispatched| {
             let mut fb = FrameBuffer::new(384, 384, [0; 3], false);
             let mut counts = Counts::default();
-            let mut rop = Rop::<R>::new(&mut fb, &scene.light, &view);
+            let mut rop = RopSink::<R>::new(&mut fb, &scene.light, &view);
             let path = TrianglePath::new(source, &view);
             let all = 0..Stages::<R>::primitives(&path);
             let mut pieces = Vec::new();

@@ -38,7 +38,7 @@ use crate::camera::View;
 use crate::datapath::Real;
 use crate::error::{Error, Result};
 use crate::rop::framebuffer::FrameRows;
-use crate::rop::{FrameBuffer, Rop};
+use crate::rop::{FrameBuffer, RopSink};
 use crate::scene::Scene;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Mutex, OnceLock};
@@ -222,7 +222,7 @@ impl<'a, T> Pieces<'a, T> {
 }
 
 /// What one band drew: its counts, its passed depth tests and covered pixels
-/// ([`Rop::finish`]); or the first error it met with the (piece, scanline) it met it at.
+/// ([`RopSink::finish`]); or the first error it met with the (piece, scanline) it met it at.
 type Band = std::result::Result<(Counts, (u64, u64)), ((usize, u32), Error)>;
 
 /// A frame's setup tasks, which its threads take by number as they come free.
@@ -536,7 +536,7 @@ pub fn render_in_bands<R: Real, P>(
     threads: u32,
 ) -> Result<Frame>
 where
-    P: Stages<R> + for<'fb> Draw<R, Rop<'fb, R>>,
+    P: Stages<R> + for<'fb> Draw<R, RopSink<'fb, R>>,
     P::Piece: RowCost,
 {
     render_in_windows(scene, view, path, threads, WINDOW_PRIMITIVES)
@@ -556,7 +556,7 @@ fn render_in_windows<R: Real, P>(
     window: usize,
 ) -> Result<Frame>
 where
-    P: Stages<R> + for<'fb> Draw<R, Rop<'fb, R>>,
+    P: Stages<R> + for<'fb> Draw<R, RopSink<'fb, R>>,
     P::Piece: RowCost,
 {
     let per_task = per_task(path.primitives(), path.fetched_together(), threads);
@@ -574,7 +574,7 @@ where
             set_up
         },
         |pieces, lo, hi, rows, buffers: &mut P::Buffers| {
-            let mut rop = Rop::<R>::band(rows, &scene.light, view, lo);
+            let mut rop = RopSink::<R>::band(rows, &scene.light, view, lo);
             let mut c = Counts::default();
             driver::draw(
                 path,

@@ -18,7 +18,7 @@
 //!   only against those two.
 
 use super::fragment::FragmentSink;
-use super::interval::{CurvePoint, INTERIOR};
+use super::interval::{ConicPoint, INTERIOR};
 use super::screen::ScreenLembo;
 use super::subsegmenter::Subsegment;
 use crate::camera::Viewport;
@@ -208,7 +208,7 @@ impl<R: Real, S: FragmentSink<R>> FragmentSink<R> for Probe<'_, S> {
 /// the extremum of the canonical edge parabola y(t) it lies on (a scanline meets the edge
 /// at most once on each side). Two lembos sharing the edge have bit-identical canonical
 /// edges, so they agree on the index of every crossing.
-fn crossing_index<R: Real>(l: &ScreenLembo<R>, p: &CurvePoint<R>) -> u8 {
+fn crossing_index<R: Real>(l: &ScreenLembo<R>, p: &ConicPoint<R>) -> u8 {
     let c = &l.edges[p.edge as usize];
     // Lembo-order parameter along the edge (the inverse of `setup::edge_uv`), then canonical.
     let tl = match p.edge {
@@ -279,13 +279,13 @@ mod tests {
         // A point on edge AB of lembo n at canonical t (from P), or in the interior.
         let on_edge = |n: usize, t: f64, x: f64| {
             let u = if n == 0 { t } else { 1.0 - t };
-            CurvePoint {
+            ConicPoint {
                 uv: [u, 0.0],
                 x,
                 edge: 0,
             }
         };
-        let inner = |x: f64| CurvePoint {
+        let inner = |x: f64| ConicPoint {
             uv: [0.3, 0.3],
             x,
             edge: INTERIOR,
@@ -354,12 +354,12 @@ mod tests {
             // right, so both claim pixel 58.
             let t = (1.0 - (1.0f64 - 4.0 * 0.075).sqrt()) / 2.0;
             let x2 = 30.0 + 30.0 * (1.0 - t);
-            let on_edge = |u: f64, x: f64| CurvePoint {
+            let on_edge = |u: f64, x: f64| ConicPoint {
                 uv: [u, 0.0],
                 x,
                 edge: 0,
             };
-            let inner = |x: f64| CurvePoint {
+            let inner = |x: f64| ConicPoint {
                 uv: [0.3, 0.3],
                 x,
                 edge: INTERIOR,

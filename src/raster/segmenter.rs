@@ -22,7 +22,7 @@
 //! clamp to the end. More than `cap` segments in one interval is refused.
 
 use super::counts::Counts;
-use super::interval::{CurvePoint, Interval, INTERIOR};
+use super::interval::{ConicPoint, Interval, INTERIOR};
 use super::screen::ScreenLembo;
 use super::v2::{dot, norm, rot_cw, V2};
 use crate::datapath::Real;
@@ -31,9 +31,9 @@ use crate::datapath::Real;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Segment<R> {
     /// The chord's start.
-    pub p0: CurvePoint<R>,
+    pub p0: ConicPoint<R>,
     /// Its end.
-    pub p1: CurvePoint<R>,
+    pub p1: ConicPoint<R>,
 }
 
 /// The walk of one interval ran past the segment cap.
@@ -165,7 +165,7 @@ pub fn walk<R: Real>(
         };
         match stop {
             Some(q) => {
-                let p1 = CurvePoint {
+                let p1 = ConicPoint {
                     uv: q,
                     x: l.x.eval(q[0], q[1]),
                     edge: INTERIOR,
@@ -195,7 +195,7 @@ fn last_chords<R: Real>(
     yj: R,
     k: R,
     iv: &Interval<R>,
-    p: CurvePoint<R>,
+    p: ConicPoint<R>,
     first: usize,
     cap: usize,
     out: &mut Vec<Segment<R>>,
@@ -203,7 +203,7 @@ fn last_chords<R: Real>(
 ) -> Result<(), CapExceeded> {
     // Rounding of Y in the datapath, so f32 does not split chords that are exactly k.
     let slack = k * R::of(1e-3) + R::epsilon() * R::of(64.0) * (yj.abs() + R::one());
-    let too_far = |a: &CurvePoint<R>, b: &CurvePoint<R>| {
+    let too_far = |a: &ConicPoint<R>, b: &ConicPoint<R>| {
         let m = [
             (a.uv[0] + b.uv[0]) * R::of(0.5),
             (a.uv[1] + b.uv[1]) * R::of(0.5),
@@ -251,7 +251,7 @@ fn last_chords<R: Real>(
         };
         match split {
             Some(q) => {
-                let mid = CurvePoint {
+                let mid = ConicPoint {
                     uv: q,
                     x: l.x.eval(q[0], q[1]),
                     edge: INTERIOR,
@@ -508,7 +508,7 @@ mod tests {
         (out, counts)
     }
 
-    fn finite<R: Real>(p: &CurvePoint<R>) -> bool {
+    fn finite<R: Real>(p: &ConicPoint<R>) -> bool {
         p.uv[0].is_finite() && p.uv[1].is_finite() && p.x.is_finite()
     }
 
@@ -758,7 +758,7 @@ mod tests {
         let g = l.y.grad(on.uv[0], on.uv[1]);
         let gg = g.0 * g.0 + g.1 * g.1;
         let uv = [on.uv[0] + 5.0 * g.0 / gg, on.uv[1] + 5.0 * g.1 / gg];
-        let end = CurvePoint { uv, ..on };
+        let end = ConicPoint { uv, ..on };
         let off = Interval {
             end,
             end_key: dot(iv.tau, uv),
@@ -807,7 +807,7 @@ mod tests {
                     if inside(q) {
                         continue;
                     }
-                    let end = CurvePoint {
+                    let end = ConicPoint {
                         uv: q,
                         x: l.x.eval(q[0], q[1]),
                         edge: INTERIOR,

@@ -11,7 +11,7 @@
 //! subsegment's chord spans its exact x extent.
 
 use super::counts::Counts;
-use super::interval::{CurvePoint, INTERIOR};
+use super::interval::{ConicPoint, INTERIOR};
 use super::screen::ScreenLembo;
 use super::segmenter::Segment;
 use crate::datapath::Real;
@@ -21,9 +21,9 @@ use crate::datapath::Real;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Subsegment<R> {
     /// The subsegment's start, in walking order.
-    pub a: CurvePoint<R>,
+    pub a: ConicPoint<R>,
     /// Its end.
-    pub b: CurvePoint<R>,
+    pub b: ConicPoint<R>,
 }
 
 /// Most subsegments one segment may produce (a bound on work, far above any visible need:
@@ -84,7 +84,7 @@ pub fn subsegments<R: Real>(
         } else if t == one {
             p1
         } else {
-            CurvePoint {
+            ConicPoint {
                 uv: [p0.uv[0] + t * du, p0.uv[1] + t * dv],
                 x: p0.x + t * (bt + t * at),
                 edge: INTERIOR,
@@ -140,7 +140,7 @@ mod tests {
     fn segment<R: Real>(l: &ScreenLembo<R>, p0: [f64; 2], p1: [f64; 2]) -> Segment<R> {
         let point = |p: [f64; 2], edge| {
             let uv = p.map(R::of);
-            CurvePoint {
+            ConicPoint {
                 uv,
                 x: l.x.eval(uv[0], uv[1]),
                 edge,

@@ -8,4 +8,4 @@ pub mod sink;
 
 pub use framebuffer::{FrameBuffer, NO_PRIMITIVE};
 pub use shade::{Light, Shader};
-pub use sink::Rop;
+pub use sink::RopSink;

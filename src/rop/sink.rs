@@ -6,7 +6,7 @@
 //! are written at the test, their colour when the batch is shaded, in arrival order, so a
 //! pixel two fragments of one primitive reach ends with the later one's colour as before.
 //! A batch is shaded when it is full, when a fragment of another primitive (or another piece
-//! of a split lembo) arrives, before a fragment is shaded alone, and at [`Rop::finish`].
+//! of a split lembo) arrives, before a fragment is shaded alone, and at [`RopSink::finish`].
 
 use super::fragment_shader::FragmentShader;
 use super::framebuffer::{FrameBuffer, FrameRows};
@@ -53,7 +53,7 @@ enum Surface<R> {
 }
 
 /// Fragments of one primitive that passed the depth test and wait to be shaded: the
-/// functional [`Rop`]'s and each timed ROP unit's.
+/// functional [`RopSink`]'s and each timed ROP unit's.
 pub struct Batch<R> {
     of: Option<Surface<R>>,
     len: usize,
@@ -246,7 +246,7 @@ impl<R: Real> Batch<R> {
 
 /// The ROP of the functional model: depth test, Phong shading and the frame-buffer write,
 /// as a fragment sink for both paths.
-pub struct Rop<'a, R: Real> {
+pub struct RopSink<'a, R: Real> {
     fb: FrameRows<'a>,
     shader: FragmentShader<R>,
     /// Fragments that passed the depth test.
@@ -256,7 +256,7 @@ pub struct Rop<'a, R: Real> {
     batch: Box<Batch<R>>,
     /// Per column, the colour and normal a multisampled triangle (or piece) was last shaded
     /// with in that column, and at which pixel row: what a counting datapath's ROP shades
-    /// once per pixel and primitive ([`Rop::write_multisampled`]).
+    /// once per pixel and primitive ([`RopSink::write_multisampled`]).
     shaded: Vec<Option<Shaded>>,
 }
 
@@ -269,16 +269,16 @@ struct Shaded {
     normal: [f32; 3],
 }
 
-impl<'a, R: Real> Rop<'a, R> {
+impl<'a, R: Real> RopSink<'a, R> {
     /// A ROP writing into `fb`, shading with `light` for `view`.
     pub fn new(fb: &'a mut FrameBuffer, light: &Light, view: &View) -> Self {
-        Rop::band(fb.rows_mut(), light, view, 0)
+        RopSink::band(fb.rows_mut(), light, view, 0)
     }
 
     /// A ROP writing `rows`, whose first row is frame row `row0` (`raster::parallel`'s
     /// bands).
     pub fn band(rows: FrameRows<'a>, light: &Light, view: &View, row0: u32) -> Self {
-        Rop {
+        RopSink {
             fb: rows,
             shader: FragmentShader::new(light, view),
             passed: 0,
@@ -324,14 +324,14 @@ fn into_rows<'b, 'a: 'b, R: Real>(
     move |idx, rgb, unit| fb.write_color(idx, rgb, || unit.map(|c| c.f64() as f32))
 }
 
-impl<R: Real> Drop for Rop<'_, R> {
-    /// What is held back is shaded even if [`Rop::finish`] is not called.
+impl<R: Real> Drop for RopSink<'_, R> {
+    /// What is held back is shaded even if [`RopSink::finish`] is not called.
     fn drop(&mut self) {
         self.flush();
     }
 }
 
-impl<R: Real> Rop<'_, R> {
+impl<R: Real> RopSink<'_, R> {
     /// Depth test, shading and write of one fragment of primitive `id`, shaded alone (for
     /// a counting datapath, and fragments handed over one by one).
     #[inline(always)]
@@ -358,7 +358,7 @@ impl<R: Real> Rop<'_, R> {
     }
 }
 
-impl<R: Real> Rop<'_, R> {
+impl<R: Real> RopSink<'_, R> {
     /// [`Self::write`] of a sample of a multisampled triangle `t` at column i of sample row
     /// j, one by one (a counting datapath, a probe's fragments): the depth test per sample,
     /// and the shading once per pixel and triangle, at the pixel centre (the colour of its
@@ -395,7 +395,7 @@ impl<R: Real> Rop<'_, R> {
     }
 }
 
-impl<R: Real> TriangleSink<R> for Rop<'_, R> {
+impl<R: Real> TriangleSink<R> for RopSink<'_, R> {
     #[inline]
     fn fragment(&mut self, t: &ScreenTriangle<R>, i: u32, j: u32, f: &TriangleFragment<R>) {
         if t.samples != Samples::ONE {
@@ -457,7 +457,7 @@ impl<R: Real> TriangleSink<R> for Rop<'_, R> {
     }
 }
 
-impl<R: Real> FragmentSink<R> for Rop<'_, R> {
+impl<R: Real> FragmentSink<R> for RopSink<'_, R> {
     #[inline]
     fn fragment(
         &mut self,

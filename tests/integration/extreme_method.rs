@@ -15,7 +15,7 @@ use lembo_sim::datapath::{Datapath, Real};
 use lembo_sim::job::{measure_frame, PrimitivePath};
 use lembo_sim::lembo::construct::lembo_from_triangle;
 use lembo_sim::lembo::Lembo;
-use lembo_sim::raster::interval::{edge_crossings, CurvePoint};
+use lembo_sim::raster::interval::{edge_crossings, ConicPoint};
 use lembo_sim::raster::probe::shared_edges;
 use lembo_sim::raster::setup::{setup, ScreenLembo};
 use lembo_sim::raster::{
@@ -290,7 +290,7 @@ fn shared_crossings_agree<R: Real>(scene: &Scene) -> usize {
     for j in j0..=j1 {
         let yj = R::of(j as f64 + 0.5);
         let mut sides = [(0, e0), (1, e1)].map(|(n, e)| {
-            let mut roots: Vec<(CurvePoint<R>, bool)> = Vec::new();
+            let mut roots: Vec<(ConicPoint<R>, bool)> = Vec::new();
             edge_crossings(&ls[n], e as usize, yj, |p, entry| roots.push((p, entry)));
             roots.sort_by(|a, b| a.0.x.partial_cmp(&b.0.x).unwrap());
             roots

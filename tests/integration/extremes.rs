@@ -260,11 +260,11 @@ fn every_scene_has_an_expectation_and_every_expectation_a_scene() {
 #[test]
 fn segment_cap_is_refused_by_lembo_and_scanline() {
     use lembo_sim::raster::{render_lembos, Counts};
-    use lembo_sim::rop::{FrameBuffer, Rop};
+    use lembo_sim::rop::{FrameBuffer, RopSink};
     let scene = Scene::load(&dir().join("huge_curved.json")).unwrap();
     let view = View::new(&scene.camera, scene.viewport);
     let mut fb = FrameBuffer::new(view.viewport.width, view.viewport.height, [0; 3], false);
-    let mut rop = Rop::<f64>::new(&mut fb, &scene.light, &view);
+    let mut rop = RopSink::<f64>::new(&mut fb, &scene.light, &view);
     let err = render_lembos::<f64, _>(&scene, &view, 1e-4, 4, &mut rop, &mut Counts::default())
         .expect_err("more than 4 segments on some interval");
     let msg = err.to_string();

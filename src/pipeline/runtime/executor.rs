@@ -56,7 +56,7 @@ enum Resume {
     Continue,
     /// A horizon moved; the thread is still idle on the board.
     Horizon,
-    Stop,
+    Halt,
 }
 
 /// How often a run needed a recovery (host statistics; they do not change results).
@@ -197,7 +197,7 @@ impl Board {
                 let mut st = self.state.lock().expect("not poisoned");
                 if self.abort.load(SeqCst) {
                     st[me].idle = false;
-                    return Resume::Stop;
+                    return Resume::Halt;
                 }
                 if !st[me].go.is_empty() {
                     st[me].idle = false;
@@ -226,7 +226,7 @@ impl Board {
 
 /// Why a thread's units stopped before finishing.
 #[derive(Debug, PartialEq, Eq)]
-pub enum Stop {
+pub enum Halt {
     /// Every unit waits and none holds an item: what each waits for, by global index.
     Deadlock(Vec<(usize, String)>),
     /// Another host thread stopped the run.
@@ -251,7 +251,7 @@ impl<F> HostThread<'_, F> {
     pub fn run(
         mut self,
         sync: Option<(&Board, usize)>,
-    ) -> Result<(Vec<(usize, F)>, Recoveries), Stop> {
+    ) -> Result<(Vec<(usize, F)>, Recoveries), Halt> {
         let bodies = std::mem::take(&mut self.futures);
         let result = self.run_inner(bodies, sync);
         self.core.clear();
@@ -262,7 +262,7 @@ impl<F> HostThread<'_, F> {
         &self,
         bodies: Vec<UnitFuture<'_, F>>,
         sync: Option<(&Board, usize)>,
-    ) -> Result<(Vec<(usize, F)>, Recoveries), Stop> {
+    ) -> Result<(Vec<(usize, F)>, Recoveries), Halt> {
         let core = &self.core;
         let mut stats = Recoveries::default();
         let mut local = Vec::new();
@@ -318,7 +318,7 @@ impl<F> HostThread<'_, F> {
                     }
                     match resolve(&core.snapshot(&self.global), &mut stats) {
                         Some(go) => go_ahead(go),
-                        None => return Err(Stop::Deadlock(self.waiting())),
+                        None => return Err(Halt::Deadlock(self.waiting())),
                     }
                 }
                 Some((board, me)) => {
@@ -337,7 +337,7 @@ impl<F> HostThread<'_, F> {
                         match board.wait(me) {
                             Resume::Go(go) => go_ahead(go),
                             Resume::Continue => {}
-                            Resume::Stop => return Err(self.stopped(board)),
+                            Resume::Halt => return Err(self.stopped(board)),
                             Resume::Horizon => {
                                 core.next_step();
                                 if self.drain() {
@@ -385,11 +385,11 @@ impl<F> HostThread<'_, F> {
             .collect()
     }
 
-    fn stopped(&self, board: &Board) -> Stop {
+    fn stopped(&self, board: &Board) -> Halt {
         if board.deadlocked() {
-            Stop::Deadlock(self.waiting())
+            Halt::Deadlock(self.waiting())
         } else {
-            Stop::Aborted
+            Halt::Aborted
         }
     }
 }

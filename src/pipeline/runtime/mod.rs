@@ -76,7 +76,7 @@ pub fn partition(units: usize, threads: usize, seed: Option<u64>) -> Vec<usize> 
 mod tests {
     use super::*;
     use crate::pipeline::runtime::core::Core;
-    use crate::pipeline::runtime::executor::{HostThread, Stop, UnitFuture};
+    use crate::pipeline::runtime::executor::{Halt, HostThread, UnitFuture};
     use crate::pipeline::runtime::link::{local_link, Ends, Rx, Tx};
     use std::rc::Rc;
 
@@ -230,7 +230,7 @@ mod tests {
         let err = thread(core, futures).run(None).unwrap_err();
         assert_eq!(
             err,
-            Stop::Deadlock(vec![
+            Halt::Deadlock(vec![
                 (0, "Left waits for input from [Right]".to_string()),
                 (1, "Right waits for input from [Left]".to_string()),
             ])
@@ -324,7 +324,7 @@ mod tests {
         let mut waiting: Vec<(usize, String)> = results
             .into_iter()
             .flat_map(|r| match r {
-                Err(Stop::Deadlock(w)) => w,
+                Err(Halt::Deadlock(w)) => w,
                 other => panic!("{other:?}"),
             })
             .collect();

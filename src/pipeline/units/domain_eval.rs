@@ -23,7 +23,7 @@ use crate::graph::UnitKind;
 use crate::pipeline::items::{MemAccess, Patch};
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::Ctx;
-use crate::pipeline::unit::{Finished, Run, Unit};
+use crate::pipeline::unit::{Finished, RunInputs, Unit};
 use crate::raster::triangle::TriangleSource;
 use crate::raster::Counts;
 
@@ -40,7 +40,7 @@ impl<R: Real> Unit<R> for DomainEval {
 
     fn spawn<'a>(
         ctx: Ctx<Self::In, Self::Out>,
-        run: &'a Run<'a, R>,
+        run: &'a RunInputs<'a, R>,
         _: usize,
     ) -> UnitFuture<'a, Finished> {
         Box::pin(self::run(

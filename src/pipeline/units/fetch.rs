@@ -31,7 +31,7 @@ use crate::graph::UnitKind;
 use crate::pipeline::items::MemAccess;
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::{Ctx, Cycle};
-use crate::pipeline::unit::{FetchPlan, FetchReport, Finished, Run, Unit, VertexCacheCounts};
+use crate::pipeline::unit::{FetchPlan, FetchReport, Finished, RunInputs, Unit, VertexCacheCounts};
 use crate::pipeline::units::framebuffer::PortClock;
 use crate::raster::triangle::TriangleSource;
 use crate::raster::Counts;
@@ -49,7 +49,7 @@ impl<R: Real> Unit<R> for GeometryFetch {
 
     fn spawn<'a>(
         ctx: Ctx<(), MemAccess>,
-        run: &'a Run<'a, R>,
+        run: &'a RunInputs<'a, R>,
         _: usize,
     ) -> UnitFuture<'a, Finished> {
         Box::pin(self::run(

@@ -21,13 +21,13 @@ use crate::graph::UnitKind;
 use crate::pipeline::items::MemAccess;
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::{Ctx, Cycle};
-use crate::pipeline::unit::{Finished, Run, Unit};
+use crate::pipeline::unit::{Finished, RunInputs, Unit};
 use crate::raster::Counts;
 
 /// The frame-buffer memory port.
-pub struct FrameBuffer;
+pub struct FrameBufferPort;
 
-impl<R: Real> Unit<R> for FrameBuffer {
+impl<R: Real> Unit<R> for FrameBufferPort {
     const KIND: UnitKind = UnitKind::FrameBuffer;
     type In = MemAccess;
     type Out = ();
@@ -36,7 +36,7 @@ impl<R: Real> Unit<R> for FrameBuffer {
 
     fn spawn<'a>(
         ctx: Ctx<Self::In, Self::Out>,
-        run: &'a Run<'a, R>,
+        run: &'a RunInputs<'a, R>,
         _: usize,
     ) -> UnitFuture<'a, Finished> {
         let vp = run.view.viewport;

@@ -17,7 +17,7 @@ use crate::graph::UnitKind;
 use crate::pipeline::items::{ScanInterval, ScanlineRange};
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::Ctx;
-use crate::pipeline::unit::{Finished, Run, Unit};
+use crate::pipeline::unit::{Finished, RunInputs, Unit};
 use crate::raster::interval::{intervals, IntervalScratch};
 use crate::raster::Counts;
 
@@ -33,7 +33,7 @@ impl<R: Real> Unit<R> for IntervalManager {
 
     fn spawn<'a>(
         ctx: Ctx<Self::In, Self::Out>,
-        run: &'a Run<'a, R>,
+        run: &'a RunInputs<'a, R>,
         _: usize,
     ) -> UnitFuture<'a, Finished> {
         Box::pin(self::run(ctx, &run.arch.interval_manager, run.k))

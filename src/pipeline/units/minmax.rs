@@ -22,7 +22,7 @@ use crate::graph::UnitKind;
 use crate::pipeline::items::{LemboReady, ScanlineRange};
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::Ctx;
-use crate::pipeline::unit::{Finished, Run, Unit};
+use crate::pipeline::unit::{Finished, RunInputs, Unit};
 use crate::raster::{facing, minmax, Counts};
 
 /// The MinMax finder, Figure 5's second box.
@@ -37,7 +37,7 @@ impl<R: Real> Unit<R> for MinMax {
 
     fn spawn<'a>(
         ctx: Ctx<Self::In, Self::Out>,
-        run: &'a Run<'a, R>,
+        run: &'a RunInputs<'a, R>,
         _: usize,
     ) -> UnitFuture<'a, Finished> {
         Box::pin(self::run(ctx, &run.arch.minmax, run.view))

@@ -21,14 +21,14 @@ pub mod tessellator;
 pub mod triangle_rasterizer;
 pub mod triangle_setup;
 
-use super::unit::{Elaborate, Spec, Unit};
+use super::unit::{Elaborate, ErasedUnit, Unit};
 use crate::datapath::Real;
 
 /// Every unit with a body, as the builder elaborates them; a kind of the graph missing here
 /// is refused by the builder's check before a run starts.
 pub fn bodies<R: Real>() -> Vec<Box<dyn Elaborate<R>>> {
     fn entry<R: Real, U: Unit<R>>() -> Box<dyn Elaborate<R>> {
-        Box::new(Spec::<U>::new())
+        Box::new(ErasedUnit::<U>::new())
     }
     vec![
         entry::<R, fetch::GeometryFetch>(),
@@ -43,6 +43,6 @@ pub fn bodies<R: Real>() -> Vec<Box<dyn Elaborate<R>>> {
         entry::<R, triangle_setup::TriangleSetup>(),
         entry::<R, triangle_rasterizer::TriangleRasterizer>(),
         entry::<R, rop::Rop>(),
-        entry::<R, framebuffer::FrameBuffer>(),
+        entry::<R, framebuffer::FrameBufferPort>(),
     ]
 }

@@ -23,7 +23,7 @@ use crate::pipeline::items::{FragmentSpan, RopItem, ScanSubsegment};
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::{ceil_div, Ctx};
 use crate::pipeline::tiles::{RopTiles, SharedFrame};
-use crate::pipeline::unit::{Finished, Run, Unit};
+use crate::pipeline::unit::{Finished, RunInputs, Unit};
 use crate::raster::fragment::{span, Columns, Span};
 use crate::raster::Counts;
 
@@ -39,7 +39,7 @@ impl<R: Real> Unit<R> for FragmentRasterizer {
 
     fn spawn<'a>(
         ctx: Ctx<Self::In, Self::Out>,
-        run: &'a Run<'a, R>,
+        run: &'a RunInputs<'a, R>,
         _: usize,
     ) -> UnitFuture<'a, Finished> {
         Box::pin(self::run(

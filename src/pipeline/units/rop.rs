@@ -28,7 +28,7 @@ use crate::pipeline::items::{FragmentSpan, MemAccess, RopItem};
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::Ctx;
 use crate::pipeline::tiles::RopPixels;
-use crate::pipeline::unit::{DiscoidPass, Finished, Run, Unit};
+use crate::pipeline::unit::{DiscoidPass, Finished, RunInputs, Unit};
 use crate::raster::Counts;
 use crate::rop::fragment_shader::FragmentShader;
 use crate::rop::sink::Batch;
@@ -45,7 +45,7 @@ impl<R: Real> Unit<R> for Rop {
 
     fn spawn<'a>(
         ctx: Ctx<RopItem<R>, MemAccess>,
-        run: &'a Run<'a, R>,
+        run: &'a RunInputs<'a, R>,
         index: usize,
     ) -> UnitFuture<'a, Finished> {
         let arch = run.arch;

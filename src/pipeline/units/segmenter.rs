@@ -17,7 +17,7 @@ use crate::graph::UnitKind;
 use crate::pipeline::items::{ScanInterval, ScanSegment};
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::Ctx;
-use crate::pipeline::unit::{Finished, Run, Unit};
+use crate::pipeline::unit::{Finished, RunInputs, Unit};
 use crate::raster::segmenter::{least_reach, walk_dispatched};
 use crate::raster::{Counts, DEFAULT_SEGMENT_CAP};
 use std::sync::Arc;
@@ -34,7 +34,7 @@ impl<R: Real> Unit<R> for Segmenter {
 
     fn spawn<'a>(
         ctx: Ctx<Self::In, Self::Out>,
-        run: &'a Run<'a, R>,
+        run: &'a RunInputs<'a, R>,
         _: usize,
     ) -> UnitFuture<'a, Finished> {
         Box::pin(self::run(ctx, &run.arch.segmenter, run.k))

@@ -24,7 +24,7 @@ use crate::lembo::set::LastParent;
 use crate::pipeline::items::{LemboReady, MemAccess, Piece, PieceId};
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::Ctx;
-use crate::pipeline::unit::{Finished, Run, Unit};
+use crate::pipeline::unit::{Finished, RunInputs, Unit};
 use crate::raster::setup::setup_pieces;
 use crate::raster::Counts;
 use crate::scene::Scene;
@@ -43,7 +43,7 @@ impl<R: Real> Unit<R> for Setup {
 
     fn spawn<'a>(
         ctx: Ctx<MemAccess, LemboReady<R>>,
-        run: &'a Run<'a, R>,
+        run: &'a RunInputs<'a, R>,
         _: usize,
     ) -> UnitFuture<'a, Finished> {
         Box::pin(self::run(

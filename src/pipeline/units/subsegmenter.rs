@@ -13,7 +13,7 @@ use crate::graph::UnitKind;
 use crate::pipeline::items::{ScanSegment, ScanSubsegment};
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::Ctx;
-use crate::pipeline::unit::{Finished, Run, Unit};
+use crate::pipeline::unit::{Finished, RunInputs, Unit};
 use crate::raster::subsegmenter::subsegments_dispatched;
 use crate::raster::Counts;
 
@@ -29,7 +29,7 @@ impl<R: Real> Unit<R> for Subsegmenter {
 
     fn spawn<'a>(
         ctx: Ctx<Self::In, Self::Out>,
-        run: &'a Run<'a, R>,
+        run: &'a RunInputs<'a, R>,
         _: usize,
     ) -> UnitFuture<'a, Finished> {
         Box::pin(self::run(ctx, &run.arch.subsegmenter, run.k))

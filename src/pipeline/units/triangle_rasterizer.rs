@@ -20,7 +20,7 @@ use crate::pipeline::items::{RopItem, TrianglePiece};
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::{ceil_div, Ctx};
 use crate::pipeline::tiles::RopTiles;
-use crate::pipeline::unit::{Finished, Run, Unit};
+use crate::pipeline::unit::{Finished, RunInputs, Unit};
 use crate::raster::triangle::{quads_in, ScreenTriangle};
 use crate::raster::Counts;
 use std::sync::Arc;
@@ -37,7 +37,7 @@ impl<R: Real> Unit<R> for TriangleRasterizer {
 
     fn spawn<'a>(
         ctx: Ctx<Self::In, Self::Out>,
-        run: &'a Run<'a, R>,
+        run: &'a RunInputs<'a, R>,
         _: usize,
     ) -> UnitFuture<'a, Finished> {
         Box::pin(self::run(ctx, &run.arch.triangle_rasterizer, &run.tiles))
