@@ -281,3 +281,149 @@ fn documents_a_planted_bad_name_is_found() {
         assert!(found.iter().any(|f| f.contains(bad)), "{bad}: {found:#?}");
     }
 }
+
+/// The names a Rust file declares: items (`fn`, `struct`, `enum`, `trait`, `type`,
+/// `const`, `static`, `mod`, `macro_rules!`), enum variants and struct fields (an
+/// identifier that starts a line and is followed by `,`, `(`, `{` or `:`).
+fn declared(text: &str) -> impl Iterator<Item = String> + '_ {
+    const KEYWORDS: &[&str] = &[
+        "fn",
+        "struct",
+        "enum",
+        "trait",
+        "type",
+        "const",
+        "static",
+        "mod",
+        "macro_rules!",
+    ];
+    text.lines().flat_map(|line| {
+        let words: Vec<&str> = line.split_whitespace().collect();
+        let mut names: Vec<String> = words
+            .windows(2)
+            .filter(|w| KEYWORDS.contains(&w[0]))
+            .filter_map(|w| identifiers(w[1]).next())
+            .collect();
+        let mut bare = line.trim_start();
+        if let Some(rest) = bare.strip_prefix("pub(") {
+            bare = rest.split_once(')').map_or(rest, |(_, r)| r).trim_start();
+        }
+        let bare = bare.trim_start_matches("pub ");
+        if let Some(name) = identifiers(bare)
+            .next()
+            .filter(|n| bare.starts_with(n.as_str()))
+        {
+            let rest = bare[name.len()..].trim_start();
+            if rest.starts_with([',', '(', '{', ':']) {
+                names.push(name);
+            }
+        }
+        names
+    })
+}
+
+/// Items of other crates and tools that ARCHITECTURE.md names, each with where it lives.
+const FOREIGN_ITEMS: &[(&str, &str)] = &[
+    ("Arc", "std::sync"),
+    ("Option", "std::option"),
+    ("Pending", "std::task::Poll"),
+    (
+        "ProgramBuilder",
+        "DAM-RS, the simulator the builder follows",
+    ),
+    ("look_at_rh", "glam::Mat4"),
+    ("perspective_rh_gl", "glam::Mat4"),
+    ("orthographic_rh_gl", "glam::Mat4"),
+    ("deny_unknown_fields", "serde's container attribute"),
+];
+
+/// Every name the repository declares: the Rust code's items ([`declared`]), the names
+/// its string literals give (a boundary's name, a JSON field), the stems of its files (a
+/// shipped scene), and [`FOREIGN_ITEMS`].
+fn declarations(root: &Path, tree: &Tree) -> BTreeSet<String> {
+    let mut names: BTreeSet<String> = FOREIGN_ITEMS.iter().map(|(n, _)| n.to_string()).collect();
+    for p in &tree.paths {
+        let stem = p.rsplit('/').next().unwrap_or(p);
+        names.insert(stem.split('.').next().unwrap_or(stem).to_string());
+        if p.ends_with(".rs") {
+            let text = std::fs::read_to_string(root.join(p)).unwrap_or_default();
+            names.extend(declared(&text));
+            names.extend(text.split('"').skip(1).step_by(2).filter_map(|q| {
+                let q = q.trim_end_matches("\\");
+                identifiers(q).next().filter(|i| i == q)
+            }));
+        }
+    }
+    names
+}
+
+/// What ARCHITECTURE.md names as an item, bare in backticks (`Netlist`, `run_path`,
+/// `cost_of()`), that nothing declares: a code map names only what the code holds. A bare
+/// span is an item when it is an identifier with an upper-case first letter and a
+/// lower-case letter (a type, trait or variant), or a snake_case identifier with `_` or a
+/// call's `()` (a function, field, module or constant); other words (`auto`, `k`) are
+/// prose.
+fn undeclared(text: &str, declared: &BTreeSet<String>) -> Vec<String> {
+    let is_ident = |s: &str| {
+        s.starts_with(|c: char| c.is_ascii_alphabetic() || c == '_')
+            && s.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+    };
+    let mut out = Vec::new();
+    for span in text.split('`').skip(1).step_by(2) {
+        let called = span.ends_with("()");
+        let s = span.trim_end_matches("()");
+        if !is_ident(s) {
+            continue;
+        }
+        let typed = s.starts_with(|c: char| c.is_ascii_uppercase())
+            && s.contains(|c: char| c.is_ascii_lowercase());
+        let snake = s.contains('_') && s.chars().all(|c| !c.is_ascii_uppercase());
+        if (typed || snake || called) && !declared.contains(s) {
+            out.push(format!("ARCHITECTURE.md: `{span}` (nothing declares it)"));
+        }
+    }
+    out.sort();
+    out.dedup();
+    out
+}
+
+#[test]
+fn architecture_names_only_declared_items() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let tree = Tree::read(root);
+    let declared = declarations(root, &tree);
+    assert!(declared.len() >= 2000, "{} names declared", declared.len());
+    let text = std::fs::read_to_string(root.join("ARCHITECTURE.md")).unwrap();
+    let missing = undeclared(&text, &declared);
+    assert!(
+        missing.is_empty(),
+        "ARCHITECTURE.md names items the code does not declare:\n{}",
+        missing.join("\n")
+    );
+}
+
+/// The control: a planted renamed type, function and call are found; declared items,
+/// variants, fields and prose words are not.
+#[test]
+fn architecture_a_planted_undeclared_item_is_found() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let declared = declarations(root, &Tree::read(root));
+    // The planted names are built here, so that this file does not declare them.
+    let (ty, func, call) = (
+        format!("Gone{}", "Netlist"),
+        format!("gone_{}", "run_path"),
+        format!("gone{}()", "Finish"),
+    );
+    let text = format!(
+        "`Netlist`, `run_path`, `UnitKind`, `GeometryFetch`, `bytes_per_cycle`, \
+         `auto`, `k`, `{ty}`, `{func}`, `{call}`, `--match`, `sweep::bracket::Refine`."
+    );
+    let found = undeclared(&text, &declared);
+    assert_eq!(found.len(), 3, "{found:#?}");
+    for bad in [&ty, &func, &call] {
+        assert!(
+            found.iter().any(|f| f.contains(bad.as_str())),
+            "{bad}: {found:#?}"
+        );
+    }
+}
