@@ -11,7 +11,6 @@
 use super::fragment_shader::FragmentShader;
 use super::framebuffer::{FrameBuffer, FrameRows};
 use super::lanes::{self, three, Lanes, LANES};
-use super::shade::Light;
 use crate::camera::{Samples, View};
 use crate::datapath::{Op, Real};
 use crate::lembo::{eval3, Quadratic3};
@@ -22,6 +21,7 @@ use crate::raster::triangle::{
     inv_w_at, perspective_lerp, row_by_pixels, ScreenTriangle, TriangleFragment, TriangleSink,
     WEIGHT_LANES,
 };
+use crate::scene::Light;
 
 /// Fragments a ROP holds back to shade together, at most.
 pub const BATCH: usize = 64;

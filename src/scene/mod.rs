@@ -47,8 +47,36 @@ use crate::discoid::DiscoidSet;
 use crate::lembo::construct::TriangleMesh;
 use crate::lembo::set::{LastParent, Lembos};
 use crate::lembo::Lembo;
-use crate::rop::shade::Light;
+use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
+
+/// One directional light with the Phong terms of Piranda et al. 2006 equation (6).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Light {
+    /// Direction from the surface towards the light (any length but zero).
+    pub direction_to_light: [f64; 3],
+    /// Ambient term Ka, >= 0.
+    pub ka: f64,
+    /// Lambertian diffuse term Kd, >= 0.
+    pub kd: f64,
+    /// Specular term Ks, >= 0.
+    pub ks: f64,
+    /// Shininess exponent N, >= 0.
+    pub shininess: f64,
+}
+
+impl Default for Light {
+    fn default() -> Self {
+        Light {
+            direction_to_light: [0.4, 0.6, 1.0],
+            ka: 0.1,
+            kd: 0.75,
+            ks: 0.35,
+            shininess: 24.0,
+        }
+    }
+}
 
 /// The viewport of a scene file without one \[pixels\].
 pub const DEFAULT_VIEWPORT: Viewport = Viewport {

@@ -88,6 +88,20 @@ fn src_has_no_import_cycle() {
     );
 }
 
+/// Top-level modules import one another in no ring, test code included: a test that
+/// reaches a higher module lives in that module's tests or in `tests/integration/`.
+#[test]
+fn no_cycle_among_top_level_modules_test_code_included() {
+    let graph = Graph::of_src_with_tests();
+    let cycles = graph.module_cycles();
+    assert!(
+        cycles.is_empty(),
+        "{} cycles among src/'s top-level modules, test code included (each edge's first line):\n{}",
+        cycles.len(),
+        graph.describe_module_cycles(&cycles)
+    );
+}
+
 #[test]
 fn no_file_imports_a_higher_layer() {
     let graph = Graph::of_src();
@@ -304,19 +318,35 @@ struct Line {
 impl Graph {
     /// This crate's `src/`.
     fn of_src() -> Graph {
-        let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
-        let mut files = Vec::new();
-        read_tree(&src, &src, &mut files);
-        Graph::new(&env!("CARGO_PKG_NAME").replace('-', "_"), files)
+        Graph::new(&lib_name(), src_files())
     }
 
-    /// The graph of the files (path relative to `src/`, text); `lib_name` is how `main.rs`
-    /// names the library.
+    /// This crate's `src/`, test code included.
+    fn of_src_with_tests() -> Graph {
+        Graph::with_tests(&lib_name(), src_files())
+    }
+
+    /// The graph of the files (path relative to `src/`, text), test code left out;
+    /// `lib_name` is how `main.rs` names the library.
     fn new(lib_name: &str, files: impl IntoIterator<Item = (String, String)>) -> Graph {
+        Graph::build(lib_name, files, false)
+    }
+
+    /// The same graph with test code in: the items under `#[cfg(test)]` and the files
+    /// declared under it are read as any other.
+    fn with_tests(lib_name: &str, files: impl IntoIterator<Item = (String, String)>) -> Graph {
+        Graph::build(lib_name, files, true)
+    }
+
+    fn build(
+        lib_name: &str,
+        files: impl IntoIterator<Item = (String, String)>,
+        tests: bool,
+    ) -> Graph {
         let scans: BTreeMap<String, (String, Scan)> = files
             .into_iter()
             .map(|(path, text)| {
-                let scan = Scan::of(&text, &module_of(&path));
+                let scan = Scan::of(&text, &module_of(&path), tests);
                 (path, (text, scan))
             })
             .collect();
@@ -330,7 +360,7 @@ impl Graph {
                 test_roots.insert([module.clone(), vec![child.clone()]].concat());
             }
         }
-        let is_test = |m: &[String]| test_roots.iter().any(|r| m.starts_with(r));
+        let is_test = |m: &[String]| !tests && test_roots.iter().any(|r| m.starts_with(r));
         let modules: BTreeMap<Vec<String>, &str> = scans
             .keys()
             .filter(|p| *p != MAIN_FILE && !is_test(&module_of(p)))
@@ -370,7 +400,7 @@ impl Graph {
         let top_level = scans.get("lib.rs").map_or(Vec::new(), |(_, scan)| {
             scan.children
                 .iter()
-                .filter(|c| !scan.test_children.contains(c))
+                .filter(|c| tests || !scan.test_children.contains(c))
                 .cloned()
                 .collect()
         });
@@ -379,30 +409,7 @@ impl Graph {
 
     /// The strongly connected components of more than one file, each sorted, in order.
     fn cycles(&self) -> Vec<Vec<String>> {
-        let mut tarjan = Tarjan {
-            graph: self,
-            index: BTreeMap::new(),
-            low: BTreeMap::new(),
-            stack: Vec::new(),
-            components: Vec::new(),
-        };
-        for file in self.edges.keys() {
-            if !tarjan.index.contains_key(file.as_str()) {
-                tarjan.visit(file);
-            }
-        }
-        let mut cycles: Vec<Vec<String>> = tarjan
-            .components
-            .into_iter()
-            .filter(|c| c.len() > 1)
-            .map(|c| {
-                let mut c: Vec<String> = c.into_iter().map(str::to_string).collect();
-                c.sort();
-                c
-            })
-            .collect();
-        cycles.sort();
-        cycles
+        cycles_of(&self.edges)
     }
 
     /// Each cycle's files, then its edges with the line that makes each.
@@ -419,6 +426,57 @@ impl Graph {
                             line.number, line.text
                         )
                         .unwrap();
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// The graph of the top-level modules (`main` for the binary): A -> B when a file of A
+    /// imports a file of B, with the first such file and line.
+    fn modules(&self) -> BTreeMap<String, BTreeMap<String, String>> {
+        let mut modules: BTreeMap<String, BTreeMap<String, String>> = BTreeMap::new();
+        for (from, targets) in &self.edges {
+            let Some(a) = top_level_of(from) else {
+                continue;
+            };
+            let out = modules.entry(a.clone()).or_default();
+            for (to, line) in targets {
+                match top_level_of(to) {
+                    Some(b) if b != a => {
+                        out.entry(b).or_insert_with(|| {
+                            format!("src/{from}:{}: {}", line.number, line.text)
+                        });
+                    }
+                    _ => {}
+                }
+            }
+        }
+        modules
+    }
+
+    /// The cycles among the top-level modules, each sorted, in order.
+    fn module_cycles(&self) -> Vec<Vec<String>> {
+        cycles_of(&self.modules())
+    }
+
+    /// Each module cycle, then its edges with the first line that makes each.
+    fn describe_module_cycles(&self, cycles: &[Vec<String>]) -> String {
+        let modules = self.modules();
+        let mut out = String::new();
+        for cycle in cycles {
+            writeln!(
+                out,
+                "cycle of {} modules: {}",
+                cycle.len(),
+                cycle.join(", ")
+            )
+            .unwrap();
+            for from in cycle {
+                for (to, line) in &modules[from] {
+                    if cycle.contains(to) {
+                        writeln!(out, "    {from} -> {to}   ({line})").unwrap();
                     }
                 }
             }
@@ -478,9 +536,42 @@ impl Graph {
     }
 }
 
-/// Tarjan's strongly connected components over [`Graph::edges`].
+/// The strongly connected components of more than one node of a graph whose every node is
+/// a key, each sorted, in order.
+fn cycles_of<V>(edges: &BTreeMap<String, BTreeMap<String, V>>) -> Vec<Vec<String>> {
+    let adjacent: BTreeMap<&str, Vec<&str>> = edges
+        .iter()
+        .map(|(v, ws)| (v.as_str(), ws.keys().map(String::as_str).collect()))
+        .collect();
+    let mut tarjan = Tarjan {
+        adjacent: &adjacent,
+        index: BTreeMap::new(),
+        low: BTreeMap::new(),
+        stack: Vec::new(),
+        components: Vec::new(),
+    };
+    for &v in adjacent.keys() {
+        if !tarjan.index.contains_key(v) {
+            tarjan.visit(v);
+        }
+    }
+    let mut cycles: Vec<Vec<String>> = tarjan
+        .components
+        .into_iter()
+        .filter(|c| c.len() > 1)
+        .map(|c| {
+            let mut c: Vec<String> = c.into_iter().map(str::to_string).collect();
+            c.sort();
+            c
+        })
+        .collect();
+    cycles.sort();
+    cycles
+}
+
+/// Tarjan's strongly connected components.
 struct Tarjan<'g> {
-    graph: &'g Graph,
+    adjacent: &'g BTreeMap<&'g str, Vec<&'g str>>,
     index: BTreeMap<&'g str, usize>,
     low: BTreeMap<&'g str, usize>,
     stack: Vec<&'g str>,
@@ -489,13 +580,12 @@ struct Tarjan<'g> {
 
 impl<'g> Tarjan<'g> {
     fn visit(&mut self, v: &'g str) {
-        let graph = self.graph;
+        let adjacent = self.adjacent;
         let n = self.index.len();
         self.index.insert(v, n);
         self.low.insert(v, n);
         self.stack.push(v);
-        for w in graph.edges[v].keys() {
-            let w = w.as_str();
+        for &w in adjacent.get(v).into_iter().flatten() {
             if !self.index.contains_key(w) {
                 self.visit(w);
                 let low = self.low[v].min(self.low[w]);
@@ -514,6 +604,19 @@ impl<'g> Tarjan<'g> {
             self.components.push(self.stack.split_off(at));
         }
     }
+}
+
+/// How `main.rs` names the library.
+fn lib_name() -> String {
+    env!("CARGO_PKG_NAME").replace('-', "_")
+}
+
+/// Every `.rs` file of this crate's `src/`.
+fn src_files() -> Vec<(String, String)> {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    read_tree(&src, &src, &mut files);
+    files
 }
 
 /// Every `.rs` file under `dir`, as (path relative to `root` with `/`, text).
@@ -605,7 +708,9 @@ struct Ref {
 }
 
 impl Scan {
-    fn of(text: &str, module: &[String]) -> Scan {
+    /// The scan of one file; with `tests`, test code is read as any other (its `mod`
+    /// declarations are still listed as test children).
+    fn of(text: &str, module: &[String], tests: bool) -> Scan {
         let tokens = tokenize(text);
         let t = |i: usize| tokens.get(i).map_or("", |t: &Token| t.text.as_str());
         let mut scan = Scan {
@@ -620,20 +725,24 @@ impl Scan {
         let mut i = 0;
         while i < tokens.len() {
             if let Some((after, inner)) = cfg_test_at(&tokens, i) {
+                if tests {
+                    scan.test_only |= inner;
+                    if let Some(child) = declared_mod(&tokens, after) {
+                        scan.test_children.push(child.to_string());
+                    }
+                    i = after;
+                    continue;
+                }
                 if inner {
                     scan.test_only = true;
                     scan.refs.clear();
                     return scan;
                 }
-                let end = skip_item(&tokens, after);
-                let item: Vec<&str> = tokens[after..end].iter().map(|t| t.text.as_str()).collect();
-                if item.last() == Some(&";") {
-                    if let Some(m) = item.iter().position(|&w| w == "mod") {
-                        scan.test_children.push(item[m + 1].to_string());
-                        scan.children.push(item[m + 1].to_string());
-                    }
+                if let Some(child) = declared_mod(&tokens, after) {
+                    scan.test_children.push(child.to_string());
+                    scan.children.push(child.to_string());
                 }
-                i = end;
+                i = skip_item(&tokens, after);
                 continue;
             }
             let scope = scopes.last().expect("the file's scope").0.clone();
@@ -706,6 +815,18 @@ fn cfg_test_at(tokens: &[Token], i: usize) -> Option<(usize, bool)> {
         .map(|t| t.text.as_str())
         .collect();
     (words == ["[", "cfg", "(", "test", ")", "]"]).then_some((start + 6, inner))
+}
+
+/// The module an item starting at `i` declares from its own file (`mod x;`, after any
+/// attributes and visibility), if it does.
+fn declared_mod(tokens: &[Token], i: usize) -> Option<&str> {
+    let end = skip_item(tokens, i);
+    let item: Vec<&str> = tokens[i..end].iter().map(|t| t.text.as_str()).collect();
+    if item.last() != Some(&";") {
+        return None;
+    }
+    let m = item.iter().position(|&w| w == "mod")?;
+    item.get(m + 1).copied()
 }
 
 /// The index after the item starting at `i`: after its `;` or its closing brace, or at a
