@@ -61,6 +61,7 @@ pub mod datapath;
 pub mod datapath_study;
 pub mod discoid;
 pub mod error;
+pub mod frame;
 pub mod graph;
 pub mod isa;
 pub mod job;

@@ -275,7 +275,7 @@ impl<'a, R: Real> RopSink<'a, R> {
         RopSink::band(fb.rows_mut(), light, view, 0)
     }
 
-    /// A ROP writing `rows`, whose first row is frame row `row0` (`raster::parallel`'s
+    /// A ROP writing `rows`, whose first row is frame row `row0` (`frame::bands`'s
     /// bands).
     pub fn band(rows: FrameRows<'a>, light: &Light, view: &View, row0: u32) -> Self {
         RopSink {

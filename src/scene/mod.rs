@@ -28,7 +28,8 @@
 //! default into a `Scene`), [`format`](mod@format) (the file's shape), [`validate`] (the
 //! scene-wide checks and the walk over the objects), [`objects`] (builtin, inline and mesh
 //! objects), [`discoids`] (an object's discoids), [`mesh`] (transforms and OBJ files),
-//! [`pointcloud`] (PLY surfels).
+//! [`pointcloud`] (PLY surfels), [`surface`] (the surface a discoid scene stands for, as
+//! lembos, for the reference).
 //!
 //! Not modelled here: triangles as scene objects, point clouds in formats other than PLY,
 //! and non-uniform scaling (which would need the inverse transpose for normals).
@@ -40,6 +41,7 @@ pub mod load;
 pub mod mesh;
 pub mod objects;
 pub mod pointcloud;
+pub mod surface;
 pub mod validate;
 
 use crate::camera::{Camera, Viewport};
@@ -173,6 +175,12 @@ impl Scene {
         self.objects
             .iter()
             .flat_map(|o| o.lembos.iter().map(move |l| (l, o.color)))
+    }
+
+    /// Each object's lembos with its colour, in scene order (what a
+    /// [`Tessellation`](crate::lembo::tessellate::Tessellation) is made of).
+    pub fn lembo_sets(&self) -> impl Iterator<Item = (&Lembos, [f64; 3])> + '_ {
+        self.objects.iter().map(|o| (&o.lembos, o.color))
     }
 
     /// Where each object's lembos start in scene order, for [`Scene::lembo`].

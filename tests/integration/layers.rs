@@ -47,10 +47,11 @@ const LAYERS: &[(&str, &[&str])] = &[
         &[
             "camera",
             "lembo",
+            "discoid",
             "scene",
             "raster",
             "rop",
-            "discoid",
+            "frame",
             "reference",
         ],
     ),
