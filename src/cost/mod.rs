@@ -17,6 +17,9 @@ pub mod model;
 pub mod onchip;
 pub mod tech;
 
+#[cfg(test)]
+mod tests;
+
 use crate::camera::View;
 use crate::datapath::{Datapath, Real};
 use crate::discoid::blend::BlendMode;
