@@ -12,13 +12,13 @@ use lembo_sim::config::ArchConfig;
 use lembo_sim::datapath::Datapath;
 use lembo_sim::discoid::blend::BlendMode;
 use lembo_sim::discoid::blend::{Accum, BlendInput};
-use lembo_sim::discoid::render::render_discoids_functional;
+use lembo_sim::frame::{self, discoid::render_discoids_functional};
 use lembo_sim::job::render_reference;
 use lembo_sim::lembo::tessellate::Tessellation;
 use lembo_sim::pipeline::discoid::run_discoid_timed;
 use lembo_sim::pipeline::{run_timed, SimOptions, Source};
 use lembo_sim::raster::{
-    self, fragment, interval, minmax, segmenter, setup, subsegmenter, triangle, Counts,
+    fragment, interval, minmax, segmenter, setup, subsegmenter, triangle, Counts,
 };
 use lembo_sim::tolerance::PerspectiveTol;
 
@@ -32,7 +32,7 @@ fn scenes(c: &mut Criterion) {
         for side in [512u32, 1024] {
             let s = scenes::trace(name, Some(side));
             let view = View::new(&s.camera, s.viewport);
-            let frags = raster::render_functional(&s, &view, 0.5, Datapath::F32, false)
+            let frags = frame::render_functional(&s, &view, 0.5, Datapath::F32, false)
                 .unwrap()
                 .counts
                 .fragments;
@@ -42,7 +42,7 @@ fn scenes(c: &mut Criterion) {
                 &side,
                 |b, _| {
                     b.iter(|| {
-                        raster::render_functional(&s, &view, 0.5, Datapath::F32, false).unwrap()
+                        frame::render_functional(&s, &view, 0.5, Datapath::F32, false).unwrap()
                     })
                 },
             );
@@ -189,7 +189,7 @@ fn more_stages(c: &mut Criterion) {
     g.sample_size(10);
     let s = scenes::trace("sphere24.json", None);
     let view = View::new(&s.camera, s.viewport);
-    let t = Tessellation::new(&s, 4);
+    let t = Tessellation::new(s.lembo_sets(), 4);
     let mut tris = Vec::new();
     let (mut buf, mut pieces) = (Vec::new(), Vec::new());
     for c in 0..triangle::TriangleSource::chunks(&t) {
@@ -248,7 +248,7 @@ fn timed_vs_functional(c: &mut Criterion) {
         let s = scenes::trace(&format!("{name}.json"), Some(1024));
         let view = View::new(&s.camera, s.viewport);
         g.bench_function(format!("functional/{name}/1024"), |b| {
-            b.iter(|| raster::render_functional(&s, &view, 0.5, Datapath::F32, false).unwrap())
+            b.iter(|| frame::render_functional(&s, &view, 0.5, Datapath::F32, false).unwrap())
         });
         for threads in [1, 2] {
             let options = SimOptions {
@@ -282,13 +282,13 @@ fn triangle_path(c: &mut Criterion) {
     let s = scenes::trace("bunny.json", Some(1024));
     let view = View::new(&s.camera, s.viewport);
     for n in [1u32, 4] {
-        let t = Tessellation::new(&s, n);
+        let t = Tessellation::new(s.lembo_sets(), n);
         g.throughput(Throughput::Elements(t.len()));
         g.bench_with_input(BenchmarkId::new("functional/bunny/1024", n), &n, |b, _| {
-            b.iter(|| raster::render_functional_triangles(&s, &view, &t, Datapath::F32, false))
+            b.iter(|| frame::render_functional_triangles(&s, &view, &t, Datapath::F32, false))
         });
     }
-    let t = Tessellation::new(&s, 1);
+    let t = Tessellation::new(s.lembo_sets(), 1);
     let (arch, options) = (ArchConfig::baseline(), SimOptions::default());
     g.throughput(Throughput::Elements(t.len()));
     g.bench_function("timed_baseline/bunny/1024/1", |b| {
@@ -351,7 +351,7 @@ fn scope_and_extremes(c: &mut Criterion) {
         let s = scenes::with_offscreen_copies(copies, 512);
         let view = View::new(&s.camera, s.viewport);
         g.bench_function(format!("functional/sphere24+{copies}_offscreen/512"), |b| {
-            b.iter(|| raster::render_functional(&s, &view, 0.5, Datapath::F32, false).unwrap())
+            b.iter(|| frame::render_functional(&s, &view, 0.5, Datapath::F32, false).unwrap())
         });
         g.bench_function(
             format!("timed_baseline/sphere24+{copies}_offscreen/512"),
@@ -375,13 +375,13 @@ fn scope_and_extremes(c: &mut Criterion) {
     let view = View::new(&s.camera, s.viewport);
     for dp in [Datapath::F32, Datapath::F64] {
         g.bench_function(format!("functional/huge_curved/k1e-4/{}", dp.name()), |b| {
-            b.iter(|| raster::render_functional(&s, &view, 1e-4, dp, false).unwrap())
+            b.iter(|| frame::render_functional(&s, &view, 1e-4, dp, false).unwrap())
         });
     }
     g.finish();
 }
 
-/// One functional frame on 1, 2 and 4 host threads (`--threads`, `raster::parallel`): the
+/// One functional frame on 1, 2 and 4 host threads (`--threads`, `frame::bands`): the
 /// bunny at 1024x1024 on both paths; the frames are identical.
 fn frame_threads(c: &mut Criterion) {
     let mut g = c.benchmark_group("frame_threads");
@@ -389,7 +389,7 @@ fn frame_threads(c: &mut Criterion) {
     let s = scenes::trace("bunny.json", Some(1024));
     let view = View::new(&s.camera, s.viewport);
     let tol = PerspectiveTol::FollowK.with_k(0.5);
-    let t = Tessellation::new(&s, 1);
+    let t = Tessellation::new(s.lembo_sets(), 1);
     for threads in [1u32, 2, 4] {
         for (path, source) in [
             ("lembo", None),
@@ -400,16 +400,8 @@ fn frame_threads(c: &mut Criterion) {
                 &threads,
                 |b, &n| {
                     b.iter(|| {
-                        raster::render_functional_on(
-                            &s,
-                            &view,
-                            tol,
-                            source,
-                            Datapath::F32,
-                            false,
-                            n,
-                        )
-                        .unwrap()
+                        frame::render_functional_on(&s, &view, tol, source, Datapath::F32, false, n)
+                            .unwrap()
                     })
                 },
             );

@@ -31,9 +31,9 @@
 
 use crate::camera::View;
 use crate::datapath::Datapath;
+use crate::frame::render_functional;
 use crate::job::{measure_frame, render_reference, PrimitivePath};
 use crate::lembo::Lembo;
-use crate::raster::render_functional;
 use crate::reference::PixelsPerDegree;
 use crate::rop::FrameBuffer;
 use crate::scene::Scene;

@@ -22,8 +22,10 @@
 //!   over the datapath ([`datapath::Real`]: `f32` or `f64`); the triangle path's setup and
 //!   rasterizer.
 //! - [`discoid`]: the atlas of discoids (Piranda et al. 2006): beta textures, the blend
-//!   units' arithmetic per precision mode, the three passes in the functional model.
+//!   units' arithmetic per precision mode, the EWA kernel, the blend report.
 //! - [`rop`]: depth test, per-fragment Phong (Piranda et al. 2006 equation 6), frame buffer.
+//! - [`frame`]: a functional frame drawn: the rasterizer into the ROP over a fresh frame
+//!   buffer, on one thread or in bands on several, and the three discoid passes.
 //! - [`pipeline`]: the timed model (Figure 5 as one resumable unit per instance on bounded
 //!   links with cycle accounting, run by a deterministic discrete-event executor), its unit
 //!   graph, and the triangle path's and discoid passes' timed units; [`config`] its
@@ -61,6 +63,7 @@ pub mod datapath;
 pub mod datapath_study;
 pub mod discoid;
 pub mod error;
+pub mod frame;
 pub mod graph;
 pub mod isa;
 pub mod job;

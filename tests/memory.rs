@@ -9,8 +9,8 @@
 use lembo_sim::camera::View;
 use lembo_sim::config::ArchConfig;
 use lembo_sim::datapath::Datapath;
+use lembo_sim::frame::render_functional_on;
 use lembo_sim::pipeline::{run_timed, SimOptions, Source};
-use lembo_sim::raster::render_functional_on;
 use lembo_sim::scene::Scene;
 use lembo_sim::tolerance::Tolerance;
 use std::alloc::{GlobalAlloc, Layout, System};

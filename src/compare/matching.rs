@@ -13,9 +13,9 @@
 use crate::camera::{Samples, View};
 use crate::datapath::Datapath;
 use crate::error::{Error, Result, COMMAND_LINE};
+use crate::frame;
 use crate::job::{self, PathRun, PrimitivePath, RenderJob, MAX_TRIANGLES};
 use crate::lembo::tessellate::Tessellation;
-use crate::raster;
 use crate::reference::metrics::Accuracy;
 use crate::reference::oracle::ReferenceImage;
 use crate::reference::PixelsPerDegree;
@@ -268,8 +268,8 @@ fn triangle_accuracy(
     samples: Samples,
     ppd: PixelsPerDegree,
 ) -> Accuracy {
-    let t = Tessellation::new(scene, n);
-    let frame = raster::render_functional_triangles(scene, &view.grid(samples), &t, datapath, true)
+    let t = Tessellation::new(scene.lembo_sets(), n);
+    let frame = frame::render_functional_triangles(scene, &view.grid(samples), &t, datapath, true)
         .resolve(samples);
     job::measure_frame_and_flip(
         scene,
@@ -293,7 +293,7 @@ fn lembo_accuracy(
     reference: &ReferenceImage,
     job: &RenderJob,
 ) -> Result<Accuracy> {
-    let frame = raster::render_functional(
+    let frame = frame::render_functional(
         scene,
         &view.grid(job.samples),
         job.grid_tolerance(),

@@ -441,16 +441,9 @@ fn config_serializes_back_to_itself() {
 /// the field.
 #[test]
 fn config_sensitivity_knobs_default_halve_double_and_refuse() {
+    // That the fetch's defaults are the formats' sizes is the lembo module's test
+    // (`lembo::tessellate::tests`): the configuration sits below it.
     let d = ArchConfig::default();
-    assert_eq!(d.fetch.bytes_per_lembo, crate::lembo::LEMBO_BYTES);
-    assert_eq!(
-        d.fetch.bytes_per_vertex,
-        crate::lembo::tessellate::VERTEX_BYTES
-    );
-    assert_eq!(
-        d.fetch.index_bytes_per_triangle,
-        crate::lembo::tessellate::INDEX_BYTES_PER_TRIANGLE
-    );
     assert_eq!(d.framebuffer.access_cycles, Ratio::whole(1));
     assert_eq!(d.rop.fragments_per_cycle, Ratio::whole(1));
     assert_eq!(d.tessellator.cycles_per_triangle, Ratio::whole(1));

@@ -17,15 +17,18 @@ pub mod model;
 pub mod onchip;
 pub mod tech;
 
+#[cfg(test)]
+mod tests;
+
 use crate::camera::View;
 use crate::datapath::{Datapath, Real};
 use crate::discoid::blend::BlendMode;
-use crate::discoid::render::{render_discoids_in, DiscoidFrame};
 use crate::error::Result;
+use crate::frame::discoid::{render_discoids_in, DiscoidFrame};
+use crate::frame::{frame_with, Frame};
 use crate::graph::UnitKind;
 use crate::raster::driver::draw_in_order;
 use crate::raster::fragment::FragmentSink;
-use crate::raster::frame::{frame_with, Frame};
 use crate::raster::lembo_path::LemboPath;
 use crate::raster::screen::ScreenLembo;
 use crate::raster::subsegmenter::Subsegment;
@@ -72,7 +75,7 @@ impl<R: Real, S: TriangleSink<R>> TriangleSink<R> for ChargedToRop<'_, S> {
 }
 
 /// The lembo path's frame drawn by the functional model in a counting datapath, with the
-/// operations of each kind: the same pixels as [`crate::raster::render_functional`] (the
+/// operations of each kind: the same pixels as [`crate::frame::render_functional`] (the
 /// counting words do the same IEEE operations; `tests/integration/cost.rs`).
 pub fn lembo_ops(
     scene: &Scene,
@@ -139,7 +142,7 @@ fn triangle_ops_in<R: Real>(
 /// operations of each kind: both passes through the path's units (the ROP's discoid work
 /// charged to the ROP), the blend in the blend ALU's counting `f32` charged to the blend
 /// units, the resolve to the ROPs. The same image as
-/// [`crate::discoid::render::render_discoids`] (the counting words do the same IEEE
+/// [`crate::frame::discoid::render_discoids`] (the counting words do the same IEEE
 /// operations; `tests/integration/cost.rs`).
 pub fn discoid_ops(
     scene: &Scene,

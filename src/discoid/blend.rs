@@ -350,10 +350,10 @@ fn blend_rgba8<W: Real>(rgba: &mut [u8; 4], b: u8, input: [f32; 3]) -> Blended {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn frag(beta: f64, diffuse: f64, specular: f64) -> BlendInput {
+    pub(crate) fn frag(beta: f64, diffuse: f64, specular: f64) -> BlendInput {
         BlendInput {
             beta,
             diffuse,
@@ -372,7 +372,7 @@ mod tests {
     }
 
     /// SplitMix64: a seeded stream of uniform numbers in [0, 1), for reproducible tests.
-    struct Rng(u64);
+    pub(crate) struct Rng(pub(crate) u64);
 
     impl Rng {
         fn next_u64(&mut self) -> u64 {
@@ -388,7 +388,7 @@ mod tests {
         }
 
         /// 1..=16 fragments with beta in (0, 1] and interest values in [0, 1].
-        fn stream(&mut self) -> Vec<BlendInput> {
+        pub(crate) fn stream(&mut self) -> Vec<BlendInput> {
             let n = 1 + (self.next_u64() % 16) as usize;
             (0..n)
                 .map(|_| frag(1.0 - self.unit(), self.unit(), self.unit()))
@@ -430,72 +430,6 @@ mod tests {
             assert_eq!(mode.bytes_per_fragment(), 2 * mode.bytes_per_pixel());
         }
         assert_eq!(BlendMode::ALL.map(BlendMode::bytes_per_pixel), [4, 8, 16]);
-    }
-
-    /// Counted per fragment, as the module doc says: a float mode's zero test of β, its
-    /// S_old + β and two averages of two multiplies, an add and a divide each; rgba8 the
-    /// same averages (its S_new is the nibble adds') and five integer operations: the
-    /// code's zero test, two saturating nibble adds, two Σβ recombinations. A β that
-    /// changes nothing costs its zero test. The resolve's Σβ test is a compare, or in
-    /// rgba8 a recombination and an integer test.
-    #[test]
-    fn the_blend_alu_counts_equation_5_per_mode() {
-        use crate::cost::counted::{counting, Counted};
-        use crate::graph::UnitKind::BlendUnit;
-        type C = Counted<f32>;
-        let f = frag(0.5, 0.25, 0.75);
-        for (mode, blend, resolve) in [
-            (
-                BlendMode::F32,
-                [3, 4, 2, 0, 1, 0, 0, 0, 0],
-                [0, 0, 0, 0, 1, 0, 0, 0, 0],
-            ),
-            (
-                BlendMode::F16,
-                [3, 4, 2, 0, 1, 0, 0, 0, 0],
-                [0, 0, 0, 0, 1, 0, 0, 0, 0],
-            ),
-            (
-                BlendMode::Rgba8,
-                [2, 4, 2, 0, 0, 0, 0, 5, 0],
-                [0, 0, 0, 0, 0, 0, 0, 2, 0],
-            ),
-        ] {
-            let mut px = Accum::default();
-            let (_, ops) = counting(BlendUnit, || mode.blend_in::<C>(&mut px, f));
-            assert_eq!(ops.of(BlendUnit), blend, "{mode:?} blend");
-            let (r, ops) = counting(BlendUnit, || mode.resolve_in::<C>(&px));
-            assert!(r.is_some());
-            assert_eq!(ops.of(BlendUnit), resolve, "{mode:?} resolve");
-            let (_, ops) = counting(BlendUnit, || {
-                mode.blend_in::<C>(&mut px, frag(0.0, 1.0, 1.0))
-            });
-            let zero_test = if mode == BlendMode::Rgba8 { 7 } else { 4 };
-            assert_eq!(ops.of(BlendUnit).iter().sum::<u64>(), 1, "{mode:?}");
-            assert_eq!(ops.of(BlendUnit)[zero_test], 1, "{mode:?}");
-        }
-    }
-
-    /// The counting word blends and resolves every mode to the same bits.
-    #[test]
-    fn counting_the_blend_changes_no_bit() {
-        use crate::cost::counted::Counted;
-        let mut rng = Rng(0x5eed_0003);
-        for _ in 0..5_000 {
-            let frags = rng.stream();
-            for mode in BlendMode::ALL {
-                let (plain, counted) = (&mut Accum::default(), &mut Accum::default());
-                for &f in &frags {
-                    let a = mode.blend(plain, f);
-                    let b = mode.blend_in::<Counted<f32>>(counted, f);
-                    assert_eq!((a, *plain), (b, *counted), "{mode:?}");
-                }
-                assert_eq!(
-                    mode.resolve(plain),
-                    mode.resolve_in::<Counted<f32>>(counted)
-                );
-            }
-        }
     }
 
     #[test]

@@ -7,8 +7,9 @@
 //! through the lembo path). Surfels (Pfister et al. 2000) are planar discoids tangent to a point
 //! cloud. beta = 0 is outside the discoid.
 //!
-//! These types are what the scene hands the renderers; the textures, the blend modes and the
-//! three passes live in the submodules.
+//! These types are what the scene hands the renderers; the textures, the blend modes, the
+//! EWA kernel and the blend report live in the submodules. The three passes, which draw a
+//! scene, are `frame::discoid`, above the scene, the rasterizer and the ROP.
 
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
@@ -21,9 +22,9 @@ pub const PLANAR_DISCOID_BYTES: u64 = 7 * 4;
 pub const CURVED_DISCOID_BYTES: u64 = crate::lembo::LEMBO_BYTES + 6 * 2 * 4;
 
 pub mod blend;
-pub mod render;
+pub mod ewa;
+pub mod report;
 pub mod shapes;
-pub mod surface;
 pub mod texture;
 
 /// The gray-level texture a discoid carries (Piranda et al. 2006 Figure 5, and a gaussian).

@@ -11,8 +11,8 @@ use super::validate::RenderJob;
 use crate::camera::View;
 use crate::config::ArchConfig;
 use crate::cost::{self, model::CostReport};
-use crate::discoid;
 use crate::error::{Error, Result};
+use crate::frame;
 use crate::pipeline;
 use crate::reference::flip::flip_frame;
 use crate::reference::oracle::ReferenceImage;
@@ -68,7 +68,7 @@ pub(super) fn run_discoids(
             )
         }
         Model::Functional => {
-            let f = discoid::render::render_discoids_functional(
+            let f = frame::discoid::render_discoids_functional(
                 scene,
                 view,
                 job.tolerance(),
@@ -216,7 +216,7 @@ fn measure_discoids(
     (reference, wall): (&ReferenceImage, f64),
 ) -> Result<Measured> {
     let t1 = Instant::now();
-    let with_normals = discoid::render::render_discoids(
+    let with_normals = frame::discoid::render_discoids(
         scene,
         view,
         job.tolerance(),

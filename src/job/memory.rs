@@ -21,7 +21,7 @@ const BYTES_PER_PIXEL_REFERENCE: f64 = 175.0 + 55.0;
 const BYTES_PER_PIXEL_DISCOIDS: f64 = 160.0;
 
 /// What a run holds whatever its size: the binary, the thread stacks, the functional
-/// frame's window of set-up pieces (`raster::parallel::WINDOW_PRIMITIVES`).
+/// frame's window of set-up pieces (`frame::bands::WINDOW_PRIMITIVES`).
 const BYTES_FIXED: f64 = 96.0 * 1024.0 * 1024.0;
 
 /// Bytes a run holds per lembo besides what the scene holds ([`Scene::lembo_bytes`]): the

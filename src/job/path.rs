@@ -12,6 +12,7 @@ use crate::camera::View;
 use crate::config::{ArchConfig, FetchConfig};
 use crate::cost::{self, model::CostReport};
 use crate::error::{Error, Result};
+use crate::frame;
 use crate::graph::TessSource;
 use crate::pipeline::{self, CycleReport, FetchReport, Source};
 use crate::raster;
@@ -223,17 +224,17 @@ fn cost_of(
 #[allow(clippy::large_enum_variant)]
 enum Drawn {
     /// The functional model alone (with its probe when the run is measured).
-    Functional(raster::Frame),
+    Functional(frame::Frame),
     /// The timed pipeline; for a measured run also the functional model's probed frame.
     Timed {
         timed: pipeline::TimedFrame,
-        probed: Option<raster::Frame>,
+        probed: Option<frame::Frame>,
     },
 }
 
 impl Drawn {
     /// The functional frame carrying the fragment probe, when the run is measured.
-    fn probed(&self) -> Option<&raster::Frame> {
+    fn probed(&self) -> Option<&frame::Frame> {
         match self {
             Drawn::Functional(f) => Some(f),
             Drawn::Timed { probed, .. } => probed.as_ref(),
@@ -262,12 +263,12 @@ fn draw(
 ) -> Result<(Drawn, f64)> {
     // Multisampled, both models draw the sample grid and the frames are resolved at the end.
     let grid = view.grid(job.samples);
-    let functional = |analyse: bool| -> Result<raster::Frame> {
+    let functional = |analyse: bool| -> Result<frame::Frame> {
         let triangles = match route {
             Route::Triangles(t) => Some(t as &dyn raster::triangle::TriangleSource),
             _ => None,
         };
-        raster::render_functional_on(
+        frame::render_functional_on(
             scene,
             &grid,
             job.grid_tolerance(),

@@ -3,11 +3,10 @@
 
 use super::validate::{PrimitivePath, RenderJob};
 use crate::camera::{Samples, View};
-use crate::discoid;
 use crate::error::{Error, Result, COMMAND_LINE};
+use crate::frame;
 use crate::lembo::tessellate::Tessellation;
 use crate::lembo::Lembo;
-use crate::raster;
 use crate::reference::flip::{flip_frame, FlipMap, PixelsPerDegree};
 use crate::reference::oracle::ReferenceImage;
 use crate::reference::{heatmap, metrics, oracle, see_through, Accuracy};
@@ -16,13 +15,13 @@ use crate::scene::Scene;
 use std::time::Instant;
 
 /// The scene whose lembos the exact reference of `scene` renders: the scene itself, or for
-/// a discoid scene the surface its discoids stand for (`discoid::surface`); a discoid
+/// a discoid scene the surface its discoids stand for (`scene::surface`); a discoid
 /// scene that does not say what surface that is has `--reference` refused naming why.
 pub fn reference_scene(scene: &Scene) -> Result<std::borrow::Cow<'_, Scene>> {
     if scene.discoid_count() == 0 {
         return Ok(std::borrow::Cow::Borrowed(scene));
     }
-    discoid::surface::surface_scene(scene)
+    crate::scene::surface::surface_scene(scene)
         .map(std::borrow::Cow::Owned)
         .map_err(no_surface)
 }
@@ -30,7 +29,7 @@ pub fn reference_scene(scene: &Scene) -> Result<std::borrow::Cow<'_, Scene>> {
 /// Refuses, before any work, `--reference` on a discoid scene that does not say what
 /// surface it stands for ([`reference_scene`] without building the surface).
 pub fn check_reference_scene(scene: &Scene) -> Result<()> {
-    discoid::surface::check_surfaces(scene).map_err(no_surface)
+    crate::scene::surface::check_surfaces(scene).map_err(no_surface)
 }
 
 /// The `--reference` error of a discoid scene without a surface.
@@ -115,7 +114,7 @@ pub(super) fn measure(
     scene: &Scene,
     view: &View,
     ids_per_lembo: u64,
-    frame: &raster::Frame,
+    frame: &frame::Frame,
     (reference, wall): (&ReferenceImage, f64),
 ) -> Measured {
     crate::progress::stage("accuracy metrics");
@@ -151,7 +150,7 @@ pub(super) fn measure(
 pub fn measure_frame(
     scene: &Scene,
     view: &View,
-    frame: &raster::Frame,
+    frame: &frame::Frame,
     reference: &ReferenceImage,
     path: PrimitivePath,
     ids_per_lembo: u64,
@@ -177,7 +176,7 @@ pub fn measure_frame(
 pub fn measure_frame_and_flip(
     scene: &Scene,
     view: &View,
-    frame: &raster::Frame,
+    frame: &frame::Frame,
     reference: &ReferenceImage,
     path: PrimitivePath,
     ids_per_lembo: u64,
@@ -227,6 +226,6 @@ pub fn see_through_px(
     let lembos: Vec<(&Lembo, bool)> = held.iter().map(|(l, m)| (l, *m)).collect();
     // On the triangle path (n² ids a lembo), the tessellation whose triangles were drawn.
     let level = ids_per_lembo.isqrt() as u32;
-    let triangles = (ids_per_lembo > 1).then(|| Tessellation::new(scene, level));
+    let triangles = (ids_per_lembo > 1).then(|| Tessellation::new(scene.lembo_sets(), level));
     Some(see_through::see_through(&lembos, view, render, ids_per_lembo, triangles.as_ref()).total())
 }

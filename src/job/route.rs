@@ -82,7 +82,7 @@ impl<'s> Route<'s> {
             PrimitivePath::Triangle => {
                 let level = job.tess.unwrap_or(1);
                 check_triangle_budget(scene, level)?;
-                Route::Triangles(Tessellation::new(scene, level))
+                Route::Triangles(Tessellation::new(scene.lembo_sets(), level))
             }
         })
     }

@@ -117,7 +117,7 @@ pub struct RenderJob {
     /// no simulated result depends on it).
     pub host_threads: u32,
     /// Host threads a functional frame is drawn on (`--threads`, >= 1); None for the
-    /// machine's cores. No pixel or count depends on it (`raster::parallel`).
+    /// machine's cores. No pixel or count depends on it (`frame::bands`).
     pub threads: Option<u32>,
     /// Which settings with a default the user gave, so that one that does not apply to the
     /// scene is refused instead of ignored.

@@ -25,10 +25,11 @@ use crate::camera::{View, Viewport};
 use crate::config::ArchConfig;
 use crate::datapath::{Datapath, Real};
 use crate::discoid::blend::BlendMode;
-use crate::discoid::render::{
-    check_scene, resolve, BlendReport, DiscoidTable, DiscoidTarget, KeptFragment, Pass,
-};
+use crate::discoid::report::BlendReport;
 use crate::error::{Error, Result};
+use crate::frame::discoid::{
+    check_scene, resolve, DiscoidTable, DiscoidTarget, KeptFragment, Pass,
+};
 use crate::raster::Counts;
 use crate::rop::fragment_shader::FragmentShader;
 use crate::rop::shade::to_u8;

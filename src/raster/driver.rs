@@ -1,7 +1,7 @@
 //! The functional stage driver: the order in which a path's stages run, written once for
 //! every functional run: the single-threaded frame (`render_functional`, `render_lembos`,
 //! `render_triangles`), the frame drawn in bands on several host threads
-//! ([`super::parallel`]) and the cost model's counting run (the `cost` module).
+//! (`frame::bands`) and the cost model's counting run (the `cost` module).
 //!
 //! ```text
 //! per primitive, in drawing order:   Setup ─► pieces               (set_up)

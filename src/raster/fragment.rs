@@ -229,37 +229,6 @@ mod tests {
         hits
     }
 
-    /// The operation counts of a hand-worked subsegment of n fragments: the span's setup
-    /// (order the ends: a compare; dx: an add and a compare; each end's pixel: an add, a
-    /// ceil and a clamp compare; the empty test: a compare; du/dx and dv/dx: an add and a
-    /// divide each; the first centre's offset: 2 adds; u and v there: a multiply and an add
-    /// each), then per fragment the depth quadratic in Horner form (5 multiplies, 5 adds)
-    /// and the two increments (2 adds).
-    #[test]
-    fn fragment_counts_what_a_hand_worked_subsegment_costs() {
-        use crate::cost::counted::{counting, Counted};
-        use crate::datapath::Op;
-        use crate::graph::UnitKind;
-        type C = Counted<f64>;
-        let l = screen_lembo::<C>(x_linear(), y_plane());
-        let p = |x: f64| ConicPoint {
-            uv: [C::of(0.2), C::of(0.3)],
-            x: C::of(x),
-            edge: INTERIOR,
-        };
-        for (x0, x1, n) in [(10.5, 12.5, 2u64), (3.2, 9.9, 7)] {
-            let s = Subsegment { a: p(x1), b: p(x0) };
-            let (mut sink, mut counts) = (Collect::default(), Counts::default());
-            let ((), ops) = counting(UnitKind::FragmentRasterizer, || {
-                rasterize(&l, 7, &s, Columns::plain(SIDE), &mut sink, &mut counts)
-            });
-            assert_eq!(counts.fragments, n);
-            let got = [Op::Add, Op::Mul, Op::Div, Op::Cmp, Op::Round, Op::Sqrt]
-                .map(|op| ops.get(UnitKind::FragmentRasterizer, op));
-            assert_eq!(got, [9 + 7 * n, 2 + 5 * n, 2, 5, 2, 0], "{n} fragments");
-        }
-    }
-
     /// A run split anywhere, each piece walked after [`Span::advance`] past the pixels
     /// before it (as the timed rasterizer splits runs at ROP tiles), gives the whole run's
     /// pixels and domain points bit for bit.

@@ -93,43 +93,6 @@ mod tests {
         }
     }
 
-    /// The operation counts of a hand-worked lembo, the bowl: its three edge extrema and the
-    /// diagonal's are inside the domain, so each candidate costs its own arithmetic, the
-    /// domain test (3 compares and an add), an evaluation in Horner form (5 multiplies, 5
-    /// adds) and the running min and max (2 compares); the vertices' min and max cost 4
-    /// compares. Candidates: -d / 2a (a multiply, a divide), -e / 2b (the same), the
-    /// diagonal's uc (2 multiplies, 5 adds, a divide) with 1 - uc (an add), and the interior
-    /// centre of a central partition (given by Setup).
-    #[test]
-    fn minmax_counts_what_a_hand_worked_lembo_costs() {
-        use crate::cost::counted::{counting, Counted};
-        use crate::datapath::{Op, OPS};
-        use crate::graph::UnitKind;
-        let l = screen_lembo::<Counted<f64>>(x_linear(), y_bowl());
-        let (_, ops) = counting(UnitKind::MinMax, || y_range(&l));
-        let central = matches!(l.partition, Partition::Central { .. }) as u64;
-        let candidate = |mul: u64, add: u64, div: u64| [mul + 5, add + 6, div, 5];
-        let sum = [
-            candidate(1, 0, 1),
-            candidate(1, 0, 1),
-            candidate(2, 6, 1),
-            candidate(0, 0, 0).map(|x| x * central),
-        ]
-        .iter()
-        .fold([0, 0, 0, 4], |a, c| {
-            [a[0] + c[0], a[1] + c[1], a[2] + c[2], a[3] + c[3]]
-        });
-        let got = [Op::Mul, Op::Add, Op::Div, Op::Cmp].map(|op| ops.get(UnitKind::MinMax, op));
-        assert_eq!(got, sum, "central partition: {central}");
-        let others: u64 = OPS
-            .iter()
-            .filter(|op| ![Op::Mul, Op::Add, Op::Div, Op::Cmp].contains(op))
-            .map(|&op| ops.get(UnitKind::MinMax, op))
-            .sum();
-        assert_eq!(others, 0);
-        assert_eq!(ops.of(UnitKind::Setup), [0; OPS.len()]);
-    }
-
     #[test]
     fn minmax_clips_to_the_viewport() {
         // y from -30 to 170.

@@ -611,7 +611,7 @@ mod tests {
         use crate::camera::{Camera, Projection, View, Viewport};
         use crate::lembo::construct::lembo_from_triangle;
         use crate::reference::oracle::{render_reference, ReferenceInput, Tracer};
-        use crate::rop::shade::Light;
+        use crate::scene::Light;
         // Orthographic, world (X, Y) on screen (X + 32, 32 - Y): the square of two flat
         // lembos covers screen x in [10.2, 50.2], y in [10.25, 50.25].
         let camera = Camera {

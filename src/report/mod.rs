@@ -5,7 +5,7 @@
 use crate::camera::Winding;
 use crate::config::ArchConfig;
 use crate::cost::model::CostReport;
-use crate::discoid::render::BlendReport;
+use crate::discoid::report::BlendReport;
 use crate::pipeline::discoid::PassCycles;
 use crate::pipeline::{Cycle, CycleReport, FetchReport, UnitInstance};
 use crate::raster::Counts;

@@ -3,11 +3,12 @@
 //! the functional ROP ([`super::sink`]), its shading in lanes ([`super::lanes`]), the timed ROP
 //! units and the discoid passes import it without importing each other.
 
-use super::shade::{to_u8, Light, Shader};
+use super::shade::{to_u8, Shader};
 use crate::camera::View;
 use crate::datapath::Real;
 use crate::lembo::eval3;
 use crate::raster::setup::ScreenLembo;
+use crate::scene::Light;
 
 /// Per-fragment shading (Piranda et al. 2006 equation 6) from the lembo's normal and position
 /// functions; shared by the functional ROP and the timed ROP units so both give the same

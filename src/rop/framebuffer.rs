@@ -123,7 +123,7 @@ impl FrameBuffer {
     }
 
     /// The rows of each band `lo..hi`, for bands that follow one another from row 0 to the
-    /// last (`raster::parallel`), to write on separate threads.
+    /// last (`frame::bands`), to write on separate threads.
     pub fn bands_mut(&mut self, bands: &[(u32, u32)]) -> Vec<FrameRows<'_>> {
         let width = self.width;
         let (mut color, mut depth, mut primitive) = (

@@ -164,7 +164,7 @@ impl<R: Real> FragmentShader<R> {
 mod tests {
     use super::*;
     use crate::camera::{Camera, Projection, View, Viewport};
-    use crate::rop::shade::Light;
+    use crate::scene::Light;
     use proptest::prelude::RngExt;
     use proptest::test_runner::{RngAlgorithm, TestRng};
 

@@ -7,5 +7,5 @@ pub mod shade;
 pub mod sink;
 
 pub use framebuffer::{FrameBuffer, NO_PRIMITIVE};
-pub use shade::{Light, Shader};
+pub use shade::Shader;
 pub use sink::RopSink;

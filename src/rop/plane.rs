@@ -10,7 +10,7 @@
 //! is ordinary pages and only slower. Smaller planes, and other systems, use a `Vec`.
 //!
 //! A mapped plane starts as the kernel's zero pages, so [`Plane::zeroed`] touches nothing:
-//! `raster::parallel` clears each band's rows on the thread that draws them.
+//! `frame::bands` clears each band's rows on the thread that draws them.
 
 use std::ops::{Deref, DerefMut};
 

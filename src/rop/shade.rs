@@ -8,35 +8,7 @@
 //! behind are lit like their front.
 
 use crate::datapath::Real;
-use serde::{Deserialize, Serialize};
-
-/// One directional light with the Phong terms of Piranda et al. 2006 equation (6).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Light {
-    /// Direction from the surface towards the light (any length but zero).
-    pub direction_to_light: [f64; 3],
-    /// Ambient term Ka, >= 0.
-    pub ka: f64,
-    /// Lambertian diffuse term Kd, >= 0.
-    pub kd: f64,
-    /// Specular term Ks, >= 0.
-    pub ks: f64,
-    /// Shininess exponent N, >= 0.
-    pub shininess: f64,
-}
-
-impl Default for Light {
-    fn default() -> Self {
-        Light {
-            direction_to_light: [0.4, 0.6, 1.0],
-            ka: 0.1,
-            kd: 0.75,
-            ks: 0.35,
-            shininess: 24.0,
-        }
-    }
-}
+use crate::scene::Light;
 
 /// The light and material terms in a datapath's precision, ready for the fragment loop.
 #[derive(Clone, Copy, Debug)]

@@ -11,7 +11,6 @@
 use super::fragment_shader::FragmentShader;
 use super::framebuffer::{FrameBuffer, FrameRows};
 use super::lanes::{self, three, Lanes, LANES};
-use super::shade::Light;
 use crate::camera::{Samples, View};
 use crate::datapath::{Op, Real};
 use crate::lembo::{eval3, Quadratic3};
@@ -22,6 +21,7 @@ use crate::raster::triangle::{
     inv_w_at, perspective_lerp, row_by_pixels, ScreenTriangle, TriangleFragment, TriangleSink,
     WEIGHT_LANES,
 };
+use crate::scene::Light;
 
 /// Fragments a ROP holds back to shade together, at most.
 pub const BATCH: usize = 64;
@@ -275,7 +275,7 @@ impl<'a, R: Real> RopSink<'a, R> {
         RopSink::band(fb.rows_mut(), light, view, 0)
     }
 
-    /// A ROP writing `rows`, whose first row is frame row `row0` (`raster::parallel`'s
+    /// A ROP writing `rows`, whose first row is frame row `row0` (`frame::bands`'s
     /// bands).
     pub fn band(rows: FrameRows<'a>, light: &Light, view: &View, row0: u32) -> Self {
         RopSink {

@@ -1,9 +1,9 @@
 //! The scene file's shape: private `*Spec` structs that serde reads with
 //! `deny_unknown_fields`, before any value is checked.
 
+use super::Light;
 use crate::camera::Viewport;
 use crate::discoid::BetaShape;
-use crate::rop::shade::Light;
 use serde::Deserialize;
 
 #[derive(Deserialize)]

@@ -28,7 +28,8 @@
 //! default into a `Scene`), [`format`](mod@format) (the file's shape), [`validate`] (the
 //! scene-wide checks and the walk over the objects), [`objects`] (builtin, inline and mesh
 //! objects), [`discoids`] (an object's discoids), [`mesh`] (transforms and OBJ files),
-//! [`pointcloud`] (PLY surfels).
+//! [`pointcloud`] (PLY surfels), [`surface`] (the surface a discoid scene stands for, as
+//! lembos, for the reference).
 //!
 //! Not modelled here: triangles as scene objects, point clouds in formats other than PLY,
 //! and non-uniform scaling (which would need the inverse transpose for normals).
@@ -40,6 +41,7 @@ pub mod load;
 pub mod mesh;
 pub mod objects;
 pub mod pointcloud;
+pub mod surface;
 pub mod validate;
 
 use crate::camera::{Camera, Viewport};
@@ -47,8 +49,36 @@ use crate::discoid::DiscoidSet;
 use crate::lembo::construct::TriangleMesh;
 use crate::lembo::set::{LastParent, Lembos};
 use crate::lembo::Lembo;
-use crate::rop::shade::Light;
+use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
+
+/// One directional light with the Phong terms of Piranda et al. 2006 equation (6).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Light {
+    /// Direction from the surface towards the light (any length but zero).
+    pub direction_to_light: [f64; 3],
+    /// Ambient term Ka, >= 0.
+    pub ka: f64,
+    /// Lambertian diffuse term Kd, >= 0.
+    pub kd: f64,
+    /// Specular term Ks, >= 0.
+    pub ks: f64,
+    /// Shininess exponent N, >= 0.
+    pub shininess: f64,
+}
+
+impl Default for Light {
+    fn default() -> Self {
+        Light {
+            direction_to_light: [0.4, 0.6, 1.0],
+            ka: 0.1,
+            kd: 0.75,
+            ks: 0.35,
+            shininess: 24.0,
+        }
+    }
+}
 
 /// The viewport of a scene file without one \[pixels\].
 pub const DEFAULT_VIEWPORT: Viewport = Viewport {
@@ -145,6 +175,12 @@ impl Scene {
         self.objects
             .iter()
             .flat_map(|o| o.lembos.iter().map(move |l| (l, o.color)))
+    }
+
+    /// Each object's lembos with its colour, in scene order (what a
+    /// [`Tessellation`](crate::lembo::tessellate::Tessellation) is made of).
+    pub fn lembo_sets(&self) -> impl Iterator<Item = (&Lembos, [f64; 3])> + '_ {
+        self.objects.iter().map(|o| (&o.lembos, o.color))
     }
 
     /// Where each object's lembos start in scene order, for [`Scene::lembo`].

@@ -675,3 +675,4 @@ fn bunny_mesh() -> TriangleMesh {
 }
 
 mod discoids;
+mod tessellation;

@@ -2,6 +2,7 @@
 //! error; this file holds the scene-wide checks (viewport, name, camera, projection, light,
 //! transforms, inline lembos) and `SceneSpec::validate`, which walks the objects.
 
+use super::Light;
 use super::{
     format::{
         CameraSpec, LemboSpec, LightSpec, ProjectionKind, ProjectionSpec, SceneSpec, TransformSpec,
@@ -15,7 +16,6 @@ use crate::discoid::Discoid;
 use crate::error::{Error, Result};
 use crate::lembo::shapes::{builtin_lembo_count, MAX_BUILTIN_LEMBOS, MAX_TERRAIN_CELLS};
 use crate::lembo::Lembo;
-use crate::rop::shade::Light;
 use glam::{DMat3, DVec3};
 use std::fmt;
 use std::path::Path;

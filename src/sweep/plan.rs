@@ -11,8 +11,8 @@ use crate::config::ArchConfig;
 use crate::cost::tech::Tech;
 use crate::datapath::Datapath;
 use crate::discoid::blend::BlendMode;
-use crate::discoid::render::check_scene;
 use crate::error::{parent_dir, read_text_file, Error, Result};
+use crate::frame::discoid::check_scene;
 use crate::job::{
     check_available, check_samples, check_triangle_budget, memory_estimate, run_path, Given, Mode,
     PrimitivePath, RenderJob, TechSource, AA_SUPERSAMPLE,

@@ -12,12 +12,12 @@ use lembo_sim::cost::{discoid_ops, lembo_ops, triangle_ops};
 use lembo_sim::datapath::Datapath;
 use lembo_sim::datapath::{Op, EVENTS, OPS};
 use lembo_sim::discoid::blend::BlendMode;
-use lembo_sim::discoid::render::render_discoids_functional;
+use lembo_sim::frame::discoid::render_discoids_functional;
+use lembo_sim::frame::{render_functional, render_functional_triangles};
 use lembo_sim::graph::{UnitKind, KINDS};
 use lembo_sim::lembo::tessellate::Tessellation;
 use lembo_sim::pipeline::discoid::run_discoid_timed;
 use lembo_sim::pipeline::SimOptions;
-use lembo_sim::raster::{render_functional, render_functional_triangles};
 use lembo_sim::scene::Scene;
 
 fn scenes() -> Vec<Scene> {
@@ -49,7 +49,7 @@ fn counting_changes_no_pixel() {
             assert_eq!(plain.counts, counted.counts);
             assert!(ops.get(UnitKind::Segmenter, Op::Mul) > 0);
             assert_eq!(ops.get(UnitKind::Setup, Op::Other), 0);
-            let tess = Tessellation::new(&scene, 2);
+            let tess = Tessellation::new(scene.lembo_sets(), 2);
             let plain = render_functional_triangles(&scene, &view, &tess, dp, false);
             let (counted, ops) = triangle_ops(&scene, &view, &tess, dp);
             assert!(plain.framebuffer.color == counted.framebuffer.color);
@@ -437,7 +437,7 @@ fn shipped_scenes_keep_their_operation_counts() {
             };
             got.insert(format!("{name} lembo {dp:?}"), ops);
         }
-        let tess = Tessellation::new(&scene, 2);
+        let tess = Tessellation::new(scene.lembo_sets(), 2);
         let (_, ops) = triangle_ops(&scene, &view, &tess, Datapath::F32);
         got.insert(format!("{name} triangle F32"), digest(&ops));
     }

@@ -83,7 +83,7 @@ fn run_with(scene: &Scene, a: &ArchConfig, triangles: bool, options: &SimOptions
             Err(e) => format!("error: {e}"),
         };
     }
-    let tess = triangles.then(|| Tessellation::new(scene, 2));
+    let tess = triangles.then(|| Tessellation::new(scene.lembo_sets(), 2));
     let source = tess
         .as_ref()
         .map_or(Source::Lembos, |t| Source::Triangles(t));

@@ -16,7 +16,7 @@
 use lembo_sim::camera::View;
 use lembo_sim::datapath::Datapath;
 use lembo_sim::datapath_study::{run, summarise, CaseResult, Family, StudySettings, FAMILIES};
-use lembo_sim::raster::render_functional;
+use lembo_sim::frame::render_functional;
 use lembo_sim::scene::Scene;
 use lembo_sim::tolerance::Tolerance;
 use std::path::Path;

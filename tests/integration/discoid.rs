@@ -7,7 +7,7 @@ use lembo_sim::camera::View;
 use lembo_sim::config::ArchConfig;
 use lembo_sim::datapath::Datapath;
 use lembo_sim::discoid::blend::BlendMode;
-use lembo_sim::discoid::render::{render_discoids_functional, DiscoidFrame};
+use lembo_sim::frame::discoid::{render_discoids_functional, DiscoidFrame};
 use lembo_sim::pipeline::discoid::{run_discoid_timed, DiscoidTimed};
 use lembo_sim::pipeline::SimOptions;
 use lembo_sim::pipeline::UnitKind;

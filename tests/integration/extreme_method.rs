@@ -12,15 +12,14 @@
 use glam::DVec3;
 use lembo_sim::camera::View;
 use lembo_sim::datapath::{Datapath, Real};
+use lembo_sim::frame::{render_functional, Frame};
 use lembo_sim::job::{measure_frame, PrimitivePath};
 use lembo_sim::lembo::construct::lembo_from_triangle;
 use lembo_sim::lembo::Lembo;
 use lembo_sim::raster::interval::{edge_crossings, ConicPoint};
 use lembo_sim::raster::probe::shared_edges;
 use lembo_sim::raster::setup::{setup, ScreenLembo};
-use lembo_sim::raster::{
-    minmax, render_functional, render_lembos, Counts, Frame, DEFAULT_SEGMENT_CAP,
-};
+use lembo_sim::raster::{minmax, render_lembos, Counts, DEFAULT_SEGMENT_CAP};
 use lembo_sim::reference::metrics::Accuracy;
 use lembo_sim::reference::oracle::{render_reference, ReferenceImage, ReferenceInput};
 use lembo_sim::rop::framebuffer::NO_PRIMITIVE;

@@ -53,8 +53,8 @@ use lembo_sim::camera::View;
 use lembo_sim::config::ArchConfig;
 use lembo_sim::datapath::Datapath;
 use lembo_sim::error::Error;
+use lembo_sim::frame::{render_functional, render_functional_triangles, Frame};
 use lembo_sim::lembo::tessellate::Tessellation;
-use lembo_sim::raster::{render_functional, render_functional_triangles, Frame};
 use lembo_sim::scene::Scene;
 use proptest::prelude::*;
 use proptest::test_runner::{RngAlgorithm, TestCaseError, TestRng, TestRunner};
@@ -1366,7 +1366,7 @@ fn functional_pipeline_on_arbitrary_lembos() {
 
         let frame = within_deadline("render_functional_triangles", move || {
             let view = View::new(&scene.camera, scene.viewport);
-            let tessellation = Tessellation::new(&scene, tess);
+            let tessellation = Tessellation::new(scene.lembo_sets(), tess);
             render_functional_triangles(&scene, &view, &tessellation, datapath, analyse)
         })
         .map_err(with_case)?;

@@ -103,7 +103,7 @@ fn knob_rop_rate_halved_and_doubled() {
 #[test]
 fn knob_onchip_rates_halved_and_doubled() {
     let s = sphere();
-    let tess = Tessellation::new(&s, 3);
+    let tess = Tessellation::new(s.lembo_sets(), 3);
     let lembos = tess.lembos() as u64;
     let mut a = ArchConfig::default();
     a.tessellation.source = TessSource::OnChip;
@@ -165,7 +165,7 @@ fn knob_lembo_bytes_halved_and_doubled() {
 #[test]
 fn knob_mesh_bytes_and_vertex_cache_halved_and_doubled() {
     let s = sphere();
-    let tess = Tessellation::new(&s, 4);
+    let tess = Tessellation::new(s.lembo_sets(), 4);
     let tris = tess.len();
     let base = triangles(&s, &tess, &ArchConfig::default());
     let misses = base.fetch.unwrap().vertex_cache.unwrap().misses;

@@ -10,6 +10,7 @@
 use glam::DVec3;
 use lembo_sim::camera::View;
 use lembo_sim::datapath::{Datapath, Real};
+use lembo_sim::frame::{render_functional_triangles, Frame};
 use lembo_sim::job::{measure_frame, render_reference, PrimitivePath};
 use lembo_sim::lembo::tessellate::{Tessellation, Triangle};
 use lembo_sim::lembo::Lembo;
@@ -18,7 +19,7 @@ use lembo_sim::pipeline::{run_timed, Source, UnitKind};
 use lembo_sim::raster::triangle::{
     render_triangles, ScreenTriangle, TriangleFragment, TriangleSink, TriangleSource,
 };
-use lembo_sim::raster::{render_functional_triangles, Counts, Frame};
+use lembo_sim::raster::Counts;
 use lembo_sim::reference::flip::flip_frame;
 use lembo_sim::reference::metrics::{measure, Accuracy};
 use lembo_sim::reference::oracle::{self, ReferenceInput};
@@ -29,7 +30,13 @@ use scenes::trace as scene;
 
 fn functional(s: &Scene, n: u32, datapath: Datapath) -> Frame {
     let view = View::new(&s.camera, s.viewport);
-    render_functional_triangles(s, &view, &Tessellation::new(s, n), datapath, true)
+    render_functional_triangles(
+        s,
+        &view,
+        &Tessellation::new(s.lembo_sets(), n),
+        datapath,
+        true,
+    )
 }
 
 /// The triangle path at level `n` against the exact reference of the scene's lembos.
@@ -70,7 +77,7 @@ fn against_reference(s: &Scene, n: u32, datapath: Datapath) -> (Accuracy, Counts
 /// its normal function is the triangle's linear blend).
 fn against_facets(s: &Scene, n: u32, datapath: Datapath) -> Accuracy {
     let view = View::new(&s.camera, s.viewport);
-    let t = Tessellation::new(s, n);
+    let t = Tessellation::new(s.lembo_sets(), n);
     let mut facets: Vec<(Lembo, [f64; 3])> = Vec::new();
     let mut tris: Vec<Triangle> = Vec::new();
     for c in 0..t.chunks() {
@@ -138,7 +145,12 @@ fn fragment_depths(s: &Scene, n: u32) -> [f64; 2] {
     let view = View::new(&s.camera, s.viewport);
     let mut sink = Depths([f64::INFINITY, f64::NEG_INFINITY]);
     let mut counts = Counts::default();
-    render_triangles::<f32, _>(&Tessellation::new(s, n), &view, &mut sink, &mut counts);
+    render_triangles::<f32, _>(
+        &Tessellation::new(s.lembo_sets(), n),
+        &view,
+        &mut sink,
+        &mut counts,
+    );
     assert!(counts.fragments > 0);
     sink.0
 }
@@ -268,7 +280,7 @@ fn timed_near_clipping_draws_the_functional_image_and_charges_its_pieces() {
     ] {
         let s = scene(name, Some(128));
         let view = View::new(&s.camera, s.viewport);
-        let t = Tessellation::new(&s, 1);
+        let t = Tessellation::new(s.lembo_sets(), 1);
         let f = functional(&s, 1, Datapath::F32);
         assert!(
             f.counts.triangles_clipped_depth >= 1,

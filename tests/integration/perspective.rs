@@ -99,8 +99,8 @@ fn orthographic_views_are_not_split() {
         far: 100.0,
     };
     let view = View::new(&s.camera, s.viewport);
-    let on = lembo_sim::raster::render_functional(&s, &view, 0.05, Datapath::F32, false).unwrap();
-    let off = lembo_sim::raster::render_functional(
+    let on = lembo_sim::frame::render_functional(&s, &view, 0.05, Datapath::F32, false).unwrap();
+    let off = lembo_sim::frame::render_functional(
         &s,
         &view,
         Tolerance::paper(0.05),

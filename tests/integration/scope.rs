@@ -19,7 +19,7 @@ use crate::support::scenes;
 /// tessellation `tess`.
 fn timed(s: &Scene, tess: Option<u32>) -> TimedFrame {
     let view = View::new(&s.camera, s.viewport);
-    let t = tess.map(|n| Tessellation::new(s, n));
+    let t = tess.map(|n| Tessellation::new(s.lembo_sets(), n));
     let a = ArchConfig::default();
     let source = t.as_ref().map_or(Source::Lembos, |t| Source::Triangles(t));
     run_timed(

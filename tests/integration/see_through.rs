@@ -6,11 +6,11 @@
 use glam::DVec3;
 use lembo_sim::camera::View;
 use lembo_sim::datapath::Datapath;
+use lembo_sim::frame::{render_functional, render_functional_triangles, Frame};
 use lembo_sim::job::{run_render, see_through_px, RenderJob};
 use lembo_sim::lembo::construct::{lembo_from_triangle, TriangleMesh};
 use lembo_sim::lembo::set::Lembos;
 use lembo_sim::lembo::tessellate::Tessellation;
-use lembo_sim::raster::{render_functional, render_functional_triangles, Frame};
 use lembo_sim::rop::framebuffer::NO_PRIMITIVE;
 use lembo_sim::scene::Scene;
 use std::path::Path;
@@ -113,7 +113,7 @@ fn lembo_frame(scene: &Scene) -> Frame {
 
 fn triangle_frame(scene: &Scene, n: u32) -> Frame {
     let view = View::new(&scene.camera, scene.viewport);
-    let t = Tessellation::new(scene, n);
+    let t = Tessellation::new(scene.lembo_sets(), n);
     render_functional_triangles(scene, &view, &t, Datapath::F32, true)
 }
 

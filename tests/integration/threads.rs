@@ -1,4 +1,4 @@
-//! `--threads N` (raster::parallel): a functional frame drawn on N host threads is the
+//! `--threads N` (frame::bands): a functional frame drawn on N host threads is the
 //! single-threaded frame bit for bit (colour, depth, winner ids) with the same counts, on
 //! every surface scene shipped and the extremes, both paths and both datapaths. And the
 //! ROP's shading in batches of lanes (`rop::lanes`) gives the frame that shading one
@@ -7,8 +7,8 @@
 
 use lembo_sim::camera::View;
 use lembo_sim::datapath::Datapath;
+use lembo_sim::frame::{render_functional_on, Frame};
 use lembo_sim::lembo::tessellate::Tessellation;
-use lembo_sim::raster::{render_functional_on, Frame};
 use lembo_sim::scene::Scene;
 use lembo_sim::tolerance::PerspectiveTol;
 
@@ -54,7 +54,7 @@ fn every_thread_count_draws_the_single_threaded_frame() {
     for scene in &scenes {
         let view = View::new(&scene.camera, scene.viewport);
         let tol = PerspectiveTol::FollowK.with_k(0.5);
-        let tess = Tessellation::new(scene, 2);
+        let tess = Tessellation::new(scene.lembo_sets(), 2);
         for datapath in [Datapath::F32, Datapath::F64] {
             for triangles in [false, true] {
                 let source = triangles.then_some(&tess as _);
@@ -83,7 +83,7 @@ fn shading_in_batches_draws_what_shading_one_fragment_at_a_time_draws() {
         let tol = PerspectiveTol::FollowK.with_k(0.5);
         // Level 1: large triangles, which the near plane clips into pieces that cover
         // pixels (inside_mesh.json).
-        let tess = [1, 2].map(|n| Tessellation::new(scene, n));
+        let tess = [1, 2].map(|n| Tessellation::new(scene.lembo_sets(), n));
         for datapath in [Datapath::F32, Datapath::F64] {
             for source in [None, Some(&tess[0] as _), Some(&tess[1] as _)] {
                 let triangles = source.is_some();

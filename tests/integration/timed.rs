@@ -5,9 +5,9 @@
 use lembo_sim::camera::View;
 use lembo_sim::config::ArchConfig;
 use lembo_sim::datapath::Datapath;
+use lembo_sim::frame::render_functional;
 use lembo_sim::pipeline::SimOptions;
 use lembo_sim::pipeline::{run_timed, Source, TimedFrame, UnitKind};
-use lembo_sim::raster::render_functional;
 use lembo_sim::scene::Scene;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
@@ -311,8 +311,8 @@ fn order_free(counts: &lembo_sim::raster::Counts) -> lembo_sim::raster::Counts {
 /// path at n = 4) more engines take fewer cycles.
 #[test]
 fn replicated_setup_engines_deal_batches_and_draw_the_same_pixels() {
+    use lembo_sim::frame::render_functional_triangles;
     use lembo_sim::lembo::tessellate::Tessellation;
-    use lembo_sim::raster::render_functional_triangles;
     let s = scene("bunny.json", Some(256));
     let view = View::new(&s.camera, s.viewport);
     let options = SimOptions::default();
@@ -351,7 +351,7 @@ fn replicated_setup_engines_deal_batches_and_draw_the_same_pixels() {
         }
     }
     // The triangle path: setup is the bottleneck at n = 4 with one engine.
-    let tess = Tessellation::new(&s, 4);
+    let tess = Tessellation::new(s.lembo_sets(), 4);
     let functional = render_functional_triangles(&s, &view, &tess, Datapath::F32, false);
     let run = |a: &ArchConfig| {
         run_timed(
@@ -443,7 +443,7 @@ fn both_triangle_sources_draw_the_same_pixels_and_account_their_work() {
     let s = scene("bunny.json", Some(128));
     let view = View::new(&s.camera, s.viewport);
     let n = 3u64;
-    let tess = Tessellation::new(&s, n as u32);
+    let tess = Tessellation::new(s.lembo_sets(), n as u32);
     let lembos = tess.lembos() as u64;
     let triangles = tess.len();
     let run = |a: &ArchConfig| {
@@ -533,7 +533,7 @@ fn on_chip_tessellation_frees_the_triangle_front_end() {
     use lembo_sim::lembo::tessellate::Tessellation;
     let s = scene("bunny.json", Some(512));
     let view = View::new(&s.camera, s.viewport);
-    let tess = Tessellation::new(&s, 16);
+    let tess = Tessellation::new(s.lembo_sets(), 16);
     let gpu = arch("gpu.json");
     let t = run_timed(
         &s,

@@ -6,11 +6,11 @@
 use lembo_sim::camera::View;
 use lembo_sim::config::ArchConfig;
 use lembo_sim::datapath::Datapath;
+use lembo_sim::frame::{render_functional_triangles, Frame};
 use lembo_sim::job::{measure_frame, render_reference, PrimitivePath};
 use lembo_sim::lembo::tessellate::Tessellation;
 use lembo_sim::pipeline::SimOptions;
 use lembo_sim::pipeline::{run_timed, Source, TimedFrame, UnitKind};
-use lembo_sim::raster::{render_functional_triangles, Frame};
 use lembo_sim::scene::Scene;
 
 use crate::support::{arch, fans, scenes};
@@ -18,7 +18,7 @@ use scenes::trace as scene;
 
 fn timed(scene: &Scene, n: u32, arch: &ArchConfig, datapath: Datapath) -> TimedFrame {
     let view = View::new(&scene.camera, scene.viewport);
-    let t = Tessellation::new(scene, n);
+    let t = Tessellation::new(scene.lembo_sets(), n);
     run_timed(
         scene,
         &view,
@@ -33,7 +33,7 @@ fn timed(scene: &Scene, n: u32, arch: &ArchConfig, datapath: Datapath) -> TimedF
 
 fn functional(scene: &Scene, n: u32, datapath: Datapath, analyse: bool) -> Frame {
     let view = View::new(&scene.camera, scene.viewport);
-    let t = Tessellation::new(scene, n);
+    let t = Tessellation::new(scene.lembo_sets(), n);
     render_functional_triangles(scene, &view, &t, datapath, analyse)
 }
 
@@ -199,7 +199,7 @@ fn silhouette_error_falls_roughly_as_one_over_n_squared() {
 #[test]
 fn a_mesh_at_level_one_is_drawn_as_its_own_triangles() {
     let s = scene("bunny.json", Some(256));
-    let t = Tessellation::new(&s, 1);
+    let t = Tessellation::new(s.lembo_sets(), 1);
     let mesh = s.objects[0].mesh().unwrap();
     assert_eq!(t.len(), mesh.triangles.len() as u64);
     assert_eq!(t.vertex_count(), mesh.positions.len() as u64);

@@ -20,8 +20,9 @@ use crate::camera::{Samples, View};
 use crate::config::{BlendConfig, FrameBufferConfig, RopConfig};
 use crate::datapath::Real;
 use crate::discoid::blend::BlendMode;
-use crate::discoid::render::{
-    accumulation_keeps, depth_pass_wins, evaluate, BlendReport, DiscoidFragment, KeptFragment, Pass,
+use crate::discoid::report::BlendReport;
+use crate::frame::discoid::{
+    accumulation_keeps, depth_pass_wins, evaluate, DiscoidFragment, KeptFragment, Pass,
 };
 use crate::graph::UnitKind;
 use crate::pipeline::items::{FragmentSpan, MemAccess, RopItem};

@@ -778,3 +778,27 @@ fn back_faces_are_culled_by_their_signed_area() {
     let o = setup::<f32>(0, &[a, far, b], &[z; 3], [1.0; 3], &view, &mut out);
     assert!(o.fan >= 1 && o.cull.is_none() && !out.is_empty(), "{o:?}");
 }
+
+/// A tessellation's bytes are its indexed mesh's at the architecture's default sizes: every
+/// distinct vertex once, and a triangle's indices (moved from the Tessellator's tests, which
+/// may not name the triangle source: it sits above them).
+#[test]
+fn a_tessellations_bytes_are_its_indexed_meshs() {
+    use crate::lembo::tessellate::{Tessellation, INDEX_BYTES_PER_TRIANGLE, VERTEX_BYTES};
+    let sizes = crate::config::FetchConfig::default();
+    for (name, levels) in [("sphere24", 1..=4), ("bunny", 1..=2), ("bunny", 5..=5)] {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("traces")
+            .join(format!("{name}.json"));
+        let scene = crate::scene::Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+        for n in levels {
+            let tess = Tessellation::new(scene.lembo_sets(), n);
+            let count = tess.vertex_count();
+            assert_eq!(
+                TriangleSource::bytes(&tess, &sizes),
+                count * VERTEX_BYTES + tess.len() * INDEX_BYTES_PER_TRIANGLE,
+                "{name} at n = {n}"
+            );
+        }
+    }
+}

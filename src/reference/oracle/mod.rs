@@ -46,7 +46,8 @@
 
 use crate::camera::View;
 use crate::lembo::{bezier_controls, Lembo, Quadratic, Quadratic3};
-use crate::rop::shade::{to_u8, Light, Shader};
+use crate::rop::shade::{to_u8, Shader};
+use crate::scene::Light;
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 

@@ -94,7 +94,7 @@ impl<R: Real> FragmentSink<R> for Hits {
 
 /// Triangles in the fans of the scene's clipped triangles at tessellation level `n`.
 pub fn fans<R: Real>(s: &Scene, n: u32, view: &View) -> u64 {
-    let t = Tessellation::new(s, n);
+    let t = Tessellation::new(s.lembo_sets(), n);
     let (mut tris, mut pieces, mut fan) = (Vec::new(), Vec::new(), 0);
     for c in 0..t.chunks() {
         t.chunk(c, &mut tris);

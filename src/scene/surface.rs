@@ -13,10 +13,10 @@
 //!   largest viewport (16 384 px); the normals are the sphere's exactly at the reference
 //!   points.
 
-use super::shapes::{sphere_lembos, SPHERE_REFERENCE_LEVELS};
-use super::DiscoidSurface;
+use super::{Scene, SceneObject};
+use crate::discoid::shapes::{sphere_lembos, SPHERE_REFERENCE_LEVELS};
+use crate::discoid::DiscoidSurface;
 use crate::lembo::Lembo;
-use crate::scene::{Scene, SceneObject};
 
 /// The lembos of `surface`, in world space.
 pub fn surface_lembos(surface: &DiscoidSurface) -> Vec<Lembo> {

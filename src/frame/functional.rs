@@ -1,13 +1,13 @@
 //! A functional frame ([`Frame`]): the image the ROP wrote into a fresh frame buffer, what
 //! the stages counted and, when analysed, the probe's measurements. The driver
-//! ([`super::driver`]) draws into the ROP [`frame_with`] makes, or into the ROPs of the bands
-//! [`super::parallel`] makes.
+//! (`raster::driver`) draws into the ROP [`frame_with`] makes, or into the ROPs of the bands
+//! [`super::bands`] makes.
 
-use super::counts::Counts;
-use super::probe::ProbeReport;
 use crate::camera::View;
 use crate::datapath::Real;
 use crate::error::Result;
+use crate::raster::counts::Counts;
+use crate::raster::probe::ProbeReport;
 use crate::rop::{FrameBuffer, RopSink};
 use crate::scene::Scene;
 

@@ -29,14 +29,14 @@
 //! The analysed frame (`--reference`, with the fragment probe) and the counting runs of the
 //! cost model stay single-threaded.
 
-use super::counts::Counts;
-use super::driver::{self, Draw, Placed, Stages};
-use super::frame::Frame;
-use super::screen::ScreenLembo;
-use super::triangle::ScreenTriangle;
+use super::functional::Frame;
 use crate::camera::View;
 use crate::datapath::Real;
 use crate::error::{Error, Result};
+use crate::raster::counts::Counts;
+use crate::raster::driver::{self, Draw, Placed, Stages};
+use crate::raster::screen::ScreenLembo;
+use crate::raster::triangle::ScreenTriangle;
 use crate::rop::framebuffer::FrameRows;
 use crate::rop::{FrameBuffer, RopSink};
 use crate::scene::Scene;
@@ -597,7 +597,7 @@ mod tests {
 
     /// A shipped scene on a small viewport, and its view.
     fn shipped(path: &str) -> (Scene, View) {
-        crate::raster::tests::shipped_at(path, 96, 64)
+        crate::frame::tests::shipped_at(path, 96, 64)
     }
 
     /// A setup task that sets up nothing but says which task it was.
@@ -640,9 +640,9 @@ mod tests {
     fn windows_of_any_size_draw_the_single_threaded_frame() {
         // The bunny's lembos, and its triangles at level 2, in windows of a primitive to the
         // whole scene, on 1 to 3 threads: the frame and counts of one thread, bit for bit.
-        let (scene, view) = crate::raster::tests::shipped_at("traces/bunny.json", 160, 128);
+        let (scene, view) = crate::frame::tests::shipped_at("traces/bunny.json", 160, 128);
         let tol = crate::tolerance::Tolerance::new(0.5);
-        let tessellation = crate::lembo::tessellate::Tessellation::new(&scene, 2);
+        let tessellation = crate::lembo::tessellate::Tessellation::new(scene.lembo_sets(), 2);
         let bits = |f: &Frame| {
             let fb = &f.framebuffer;
             let depth: Vec<u32> = fb.depth.iter().map(|d| d.to_bits()).collect();
@@ -651,7 +651,7 @@ mod tests {
         let lembos = LemboPath::<f32>::new(&scene, &view, tol.k, tol.perspective, 1 << 16);
         let triangles = TrianglePath::new(&tessellation, &view);
         let one = |t: Option<&dyn TriangleSource>| {
-            let frame = crate::raster::render_functional_on(
+            let frame = crate::frame::render_functional_on(
                 &scene,
                 &view,
                 tol,
