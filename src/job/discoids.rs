@@ -13,7 +13,8 @@ use crate::config::ArchConfig;
 use crate::cost::{self, model::CostReport};
 use crate::error::{Error, Result};
 use crate::frame;
-use crate::pipeline;
+use crate::pipeline::{self, CycleReport, UnitInstance};
+use crate::raster::Counts;
 use crate::reference::flip::flip_frame;
 use crate::reference::oracle::ReferenceImage;
 use crate::reference::{heatmap, metrics, oracle};
@@ -36,56 +37,7 @@ pub(super) fn run_discoids(
     let threshold = job.threshold.unwrap_or(scene.discoid_threshold);
     crate::progress::stage("discoid passes");
     let t0 = Instant::now();
-    let (framebuffer, counts, blend, units, cycles, cost) = match model {
-        Model::Timed(arch) => {
-            let t = pipeline::discoid::run_discoid_timed(
-                scene,
-                view,
-                job.tolerance(),
-                job.datapath,
-                arch,
-                job.blend,
-                threshold,
-                &sim_options(
-                    job,
-                    arch,
-                    if scene.lembo_count() > 0 {
-                        pipeline::Path::Lembo
-                    } else {
-                        pipeline::Path::Triangle
-                    },
-                )?,
-            )?;
-            let cost = discoid_cost(job, scene, view, arch, threshold, &t)?;
-            let blend = BlendSection::new(t.blend, Some(t.passes));
-            (
-                t.framebuffer,
-                t.counts,
-                blend,
-                t.units,
-                Some(t.cycles),
-                Some(cost),
-            )
-        }
-        Model::Functional => {
-            let f = frame::discoid::render_discoids_functional(
-                scene,
-                view,
-                job.tolerance(),
-                job.datapath,
-                job.blend,
-                threshold,
-            )?;
-            (
-                f.framebuffer,
-                f.counts,
-                BlendSection::new(f.blend, None),
-                Vec::new(),
-                None,
-                None,
-            )
-        }
-    };
+    let passes = run_passes(job, scene, view, model, threshold)?;
     let wall = t0.elapsed().as_secs_f64();
     let measured = match reference {
         Some(reference) => Some(measure_discoids(
@@ -93,21 +45,20 @@ pub(super) fn run_discoids(
             scene,
             view,
             threshold,
-            &framebuffer,
+            &passes.framebuffer,
             reference,
         )?),
         None => None,
     };
-    let (planar, curved) = scene
-        .objects
-        .iter()
-        .filter_map(|o| o.discoids.as_ref())
-        .fold((0u64, 0u64), |(p, c), d| {
-            (
-                p + d.planar.len() as u64,
-                c + d.lembo_texcoords.len() as u64,
-            )
-        });
+    let Passes {
+        framebuffer,
+        counts,
+        blend,
+        units,
+        cycles,
+        cost,
+    } = passes;
+    let (planar, curved) = discoid_counts(scene);
     let primitive_bytes = PLANAR_DISCOID_BYTES * planar + CURVED_DISCOID_BYTES * curved;
     let memory = Memory::new(
         FrameBuffer::stored_bytes(scene.viewport.width, scene.viewport.height),
@@ -162,6 +113,92 @@ pub(super) fn run_discoids(
         error_maps: measured.map(|m| m.maps),
         trace: None,
     })
+}
+
+/// What a discoid scene's passes yield, timed or functional: the blended image, its
+/// counts and blend section, and when timed the units, cycles and cost.
+struct Passes {
+    framebuffer: FrameBuffer,
+    counts: Counts,
+    blend: BlendSection,
+    units: Vec<UnitInstance>,
+    cycles: Option<CycleReport>,
+    cost: Option<CostReport>,
+}
+
+/// The three passes on `model`: timed on its architecture (then priced by
+/// [`discoid_cost`]), or functional.
+fn run_passes(
+    job: &RenderJob,
+    scene: &Scene,
+    view: &View,
+    model: Model,
+    threshold: f64,
+) -> Result<Passes> {
+    Ok(match model {
+        Model::Timed(arch) => {
+            let t = pipeline::discoid::run_discoid_timed(
+                scene,
+                view,
+                job.tolerance(),
+                job.datapath,
+                arch,
+                job.blend,
+                threshold,
+                &sim_options(
+                    job,
+                    arch,
+                    if scene.lembo_count() > 0 {
+                        pipeline::Path::Lembo
+                    } else {
+                        pipeline::Path::Triangle
+                    },
+                )?,
+            )?;
+            let cost = discoid_cost(job, scene, view, arch, threshold, &t)?;
+            let blend = BlendSection::new(t.blend, Some(t.passes));
+            Passes {
+                framebuffer: t.framebuffer,
+                counts: t.counts,
+                blend,
+                units: t.units,
+                cycles: Some(t.cycles),
+                cost: Some(cost),
+            }
+        }
+        Model::Functional => {
+            let f = frame::discoid::render_discoids_functional(
+                scene,
+                view,
+                job.tolerance(),
+                job.datapath,
+                job.blend,
+                threshold,
+            )?;
+            Passes {
+                framebuffer: f.framebuffer,
+                counts: f.counts,
+                blend: BlendSection::new(f.blend, None),
+                units: Vec::new(),
+                cycles: None,
+                cost: None,
+            }
+        }
+    })
+}
+
+/// How many planar and curved (lembo-textured) discoids the scene's objects hold.
+fn discoid_counts(scene: &Scene) -> (u64, u64) {
+    scene
+        .objects
+        .iter()
+        .filter_map(|o| o.discoids.as_ref())
+        .fold((0u64, 0u64), |(p, c), d| {
+            (
+                p + d.planar.len() as u64,
+                c + d.lembo_texcoords.len() as u64,
+            )
+        })
 }
 
 /// The cost of a timed discoid frame (DESIGN.md §12): the functional passes again in

@@ -4,7 +4,7 @@
 
 use super::culling;
 use super::discoids::run_discoids;
-use super::reference::measure;
+use super::reference::{measure, Measured};
 use super::route::{sim_options, Model, PathRun, Route};
 use super::sections::{host, scene_info, settings};
 use super::validate::{PrimitivePath, RenderJob};
@@ -18,7 +18,7 @@ use crate::pipeline::{self, CycleReport, FetchReport, Source};
 use crate::raster;
 use crate::raster::triangle::TriangleSource;
 use crate::reference::oracle::ReferenceImage;
-use crate::report::{Memory, Primitives, Report, SCHEMA_VERSION};
+use crate::report::{Host, Memory, Primitives, Report, SCHEMA_VERSION};
 use crate::rop::FrameBuffer;
 use crate::scene::Scene;
 use std::time::Instant;
@@ -43,16 +43,7 @@ pub fn run_path(
     let (cull, culling) = culling::resolve(scene, view, model, &route);
     let view = &view.with_culling(cull);
     let (drawn, wall) = draw(job, scene, view, model, &route, reference.is_some())?;
-    let measured = match (reference, drawn.probed()) {
-        (Some(reference), Some(frame)) => {
-            let ids_per_lembo = match &route {
-                Route::Triangles(t) => t.triangles_per_lembo(),
-                _ => 1,
-            };
-            Some(measure(job, scene, view, ids_per_lembo, frame, reference))
-        }
-        _ => None,
-    };
+    let measured = measure_drawn(job, scene, view, &route, &drawn, reference);
     let counts = drawn.counts();
     // The primitives' sizes: the architecture's, or its defaults for a functional frame.
     let sizes = model.arch().map(|a| a.fetch.clone()).unwrap_or_default();
@@ -106,20 +97,7 @@ pub fn run_path(
         primitives,
         units,
         counts,
-        host: {
-            let mut h = host(
-                wall,
-                counts.fragments,
-                cycles.as_ref().map(|c| (c.total, job.host_threads)),
-                measured.as_ref().map(|m| m.reference_wall),
-                measured.as_ref().map(|m| m.metrics_wall),
-            );
-            if cycles.is_none() {
-                // The functional frame's threads: the analysed frame is drawn on one.
-                h.host_threads = Some(if measured.is_some() { 1 } else { job.threads() });
-            }
-            h
-        },
+        host: route_host(job, wall, &counts, cycles.as_ref(), measured.as_ref()),
         cycles,
         fetch,
         cost,
@@ -134,6 +112,51 @@ pub fn run_path(
         error_maps: measured.map(|m| m.maps),
         trace,
     })
+}
+
+/// The drawn frame measured against `reference` (with the wall time it took), when the run
+/// is measured and has a probed functional frame; a triangle's ids count per lembo.
+fn measure_drawn(
+    job: &RenderJob,
+    scene: &Scene,
+    view: &View,
+    route: &Route,
+    drawn: &Drawn,
+    reference: Option<(&ReferenceImage, f64)>,
+) -> Option<Measured> {
+    match (reference, drawn.probed()) {
+        (Some(reference), Some(frame)) => {
+            let ids_per_lembo = match route {
+                Route::Triangles(t) => t.triangles_per_lembo(),
+                _ => 1,
+            };
+            Some(measure(job, scene, view, ids_per_lembo, frame, reference))
+        }
+        _ => None,
+    }
+}
+
+/// The host section of a lembo or triangle route's report: a functional frame also
+/// names its threads (one when it was analysed).
+fn route_host(
+    job: &RenderJob,
+    wall: f64,
+    counts: &raster::Counts,
+    cycles: Option<&CycleReport>,
+    measured: Option<&Measured>,
+) -> Host {
+    let mut h = host(
+        wall,
+        counts.fragments,
+        cycles.map(|c| (c.total, job.host_threads)),
+        measured.map(|m| m.reference_wall),
+        measured.map(|m| m.metrics_wall),
+    );
+    if cycles.is_none() {
+        // The functional frame's threads: the analysed frame is drawn on one.
+        h.host_threads = Some(if measured.is_some() { 1 } else { job.threads() });
+    }
+    h
 }
 
 /// The primitives section of a lembo or triangle route's report, their bytes at `sizes`.

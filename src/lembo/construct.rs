@@ -176,6 +176,25 @@ pub struct Weld {
     pub tolerance: f64,
 }
 
+/// The root of vertex `i`'s set in the weld's union-find `rep`, halving the path on the
+/// way up.
+fn find(rep: &mut [u32], mut i: u32) -> u32 {
+    while rep[i as usize] != i {
+        let up = rep[rep[i as usize] as usize];
+        rep[i as usize] = up;
+        i = up;
+    }
+    i
+}
+
+/// Joins the sets of vertices `a` and `b` in `rep`.
+fn union(rep: &mut [u32], a: u32, b: u32) {
+    let (ra, rb) = (find(rep, a), find(rep, b));
+    // The lower index becomes the root, so every set's root is its lowest vertex.
+    let (lo, hi) = (ra.min(rb), ra.max(rb));
+    rep[hi as usize] = lo;
+}
+
 impl TriangleMesh {
     /// Fills missing normals with area-weighted face-normal averages.
     pub fn with_computed_normals(mut self) -> Self {
@@ -203,95 +222,11 @@ impl TriangleMesh {
                 tolerance: 0.0,
             };
         }
-        let (lo, hi) = self.positions.iter().fold(
-            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-            |(lo, hi), &p| (lo.min(p), hi.max(p)),
-        );
-        let extent = hi - lo;
-        let m = extent.abs().max_element();
-        let diagonal = if m > 0.0 && m.is_finite() {
-            m * (extent / m).length()
-        } else {
-            0.0
-        };
-        let tolerance = WELD_RELATIVE * diagonal;
-        fn find(rep: &mut [u32], mut i: u32) -> u32 {
-            while rep[i as usize] != i {
-                let up = rep[rep[i as usize] as usize];
-                rep[i as usize] = up;
-                i = up;
-            }
-            i
-        }
-        let union = |rep: &mut Vec<u32>, a: u32, b: u32| {
-            let (ra, rb) = (find(rep, a), find(rep, b));
-            // The lower index becomes the root, so every set's root is its lowest vertex.
-            let (lo, hi) = (ra.min(rb), ra.max(rb));
-            rep[hi as usize] = lo;
-        };
+        let (lo, tolerance) = self.weld_tolerance();
         if tolerance > 0.0 && tolerance.is_finite() {
-            // Cells WELD_CELLS tolerances wide, the vertices sorted by cell: two positions
-            // within the tolerance are in the same cell, or in cells either side of a face
-            // that one of them is within two tolerances of (twice, whatever the rounding of
-            // the cell coordinates). Most vertices are near no face and look in their own
-            // cell only; which pairs are compared changes nothing but the time, as the sets
-            // are those of every pair within the tolerance.
-            let cell = WELD_CELLS * tolerance;
-            let near = 2.0 / WELD_CELLS;
-            let at = |p: DVec3| (p - lo) / cell;
-            let mut sorted: Vec<([i64; 3], u32)> = (self.positions.iter().enumerate())
-                .map(|(i, &p)| (at(p).floor().as_i64vec3().to_array(), i as u32))
-                .collect();
-            sorted.sort_unstable();
-            let run_of = |k: [i64; 3]| {
-                let start = sorted.partition_point(|e| e.0 < k);
-                let end = start + sorted[start..].partition_point(|e| e.0 == k);
-                start..end
-            };
-            // In cell order, so that a cell's vertices are next to one another in memory.
-            let mut run_start = 0;
-            for (e, &(k, i)) in sorted.iter().enumerate() {
-                if sorted[run_start].0 != k {
-                    run_start = e;
-                }
-                let p = self.positions[i as usize];
-                let close = |j: u32| (self.positions[j as usize] - p).length() <= tolerance;
-                for &(_, j) in &sorted[run_start..e] {
-                    if close(j) {
-                        union(&mut rep, i, j);
-                    }
-                }
-                let c = at(p);
-                let f = c - c.floor();
-                // Per axis, a neighbour across a face it is near.
-                let span = |d: usize| {
-                    let lo = if f[d] < near { -1 } else { 0 };
-                    let hi = if f[d] > 1.0 - near { 1 } else { 0 };
-                    lo..=hi
-                };
-                for dx in span(0) {
-                    for dy in span(1) {
-                        for dz in span(2) {
-                            if (dx, dy, dz) == (0, 0, 0) {
-                                continue;
-                            }
-                            for &(_, j) in &sorted[run_of([k[0] + dx, k[1] + dy, k[2] + dz])] {
-                                if close(j) {
-                                    union(&mut rep, i, j);
-                                }
-                            }
-                        }
-                    }
-                }
-            }
+            self.union_within(&mut rep, lo, tolerance);
         } else {
-            let mut seen: std::collections::HashMap<[u64; 3], u32> =
-                std::collections::HashMap::new();
-            for (i, p) in self.positions.iter().enumerate() {
-                let bits = p.to_array().map(f64::to_bits);
-                let first = *seen.entry(bits).or_insert(i as u32);
-                union(&mut rep, i as u32, first);
-            }
+            self.union_identical(&mut rep);
         }
         for i in 0..n as u32 {
             let r = find(&mut rep, i);
@@ -304,6 +239,95 @@ impl TriangleMesh {
             } else {
                 0.0
             },
+        }
+    }
+
+    /// The low corner of the positions' bounding box and the weld tolerance,
+    /// [`WELD_RELATIVE`] of its diagonal (0 for a box of no extent or an infinite one; the
+    /// diagonal scaled by the largest extent so that it does not overflow). At least one
+    /// position.
+    fn weld_tolerance(&self) -> (DVec3, f64) {
+        let (lo, hi) = self.positions.iter().fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), &p| (lo.min(p), hi.max(p)),
+        );
+        let extent = hi - lo;
+        let m = extent.abs().max_element();
+        let diagonal = if m > 0.0 && m.is_finite() {
+            m * (extent / m).length()
+        } else {
+            0.0
+        };
+        (lo, WELD_RELATIVE * diagonal)
+    }
+
+    /// Joins in `rep` every pair of positions within `tolerance` (finite, > 0) of each
+    /// other, found through a grid of cells from the box's low corner `lo`.
+    fn union_within(&self, rep: &mut [u32], lo: DVec3, tolerance: f64) {
+        // Cells WELD_CELLS tolerances wide, the vertices sorted by cell: two positions
+        // within the tolerance are in the same cell, or in cells either side of a face
+        // that one of them is within two tolerances of (twice, whatever the rounding of
+        // the cell coordinates). Most vertices are near no face and look in their own
+        // cell only; which pairs are compared changes nothing but the time, as the sets
+        // are those of every pair within the tolerance.
+        let cell = WELD_CELLS * tolerance;
+        let near = 2.0 / WELD_CELLS;
+        let at = |p: DVec3| (p - lo) / cell;
+        let mut sorted: Vec<([i64; 3], u32)> = (self.positions.iter().enumerate())
+            .map(|(i, &p)| (at(p).floor().as_i64vec3().to_array(), i as u32))
+            .collect();
+        sorted.sort_unstable();
+        let run_of = |k: [i64; 3]| {
+            let start = sorted.partition_point(|e| e.0 < k);
+            let end = start + sorted[start..].partition_point(|e| e.0 == k);
+            start..end
+        };
+        // In cell order, so that a cell's vertices are next to one another in memory.
+        let mut run_start = 0;
+        for (e, &(k, i)) in sorted.iter().enumerate() {
+            if sorted[run_start].0 != k {
+                run_start = e;
+            }
+            let p = self.positions[i as usize];
+            let close = |j: u32| (self.positions[j as usize] - p).length() <= tolerance;
+            for &(_, j) in &sorted[run_start..e] {
+                if close(j) {
+                    union(rep, i, j);
+                }
+            }
+            let c = at(p);
+            let f = c - c.floor();
+            // Per axis, a neighbour across a face it is near.
+            let span = |d: usize| {
+                let lo = if f[d] < near { -1 } else { 0 };
+                let hi = if f[d] > 1.0 - near { 1 } else { 0 };
+                lo..=hi
+            };
+            for dx in span(0) {
+                for dy in span(1) {
+                    for dz in span(2) {
+                        if (dx, dy, dz) == (0, 0, 0) {
+                            continue;
+                        }
+                        for &(_, j) in &sorted[run_of([k[0] + dx, k[1] + dy, k[2] + dz])] {
+                            if close(j) {
+                                union(rep, i, j);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// Joins in `rep` the positions that are bit for bit the same (where there is no
+    /// tolerance to weld within).
+    fn union_identical(&self, rep: &mut [u32]) {
+        let mut seen: std::collections::HashMap<[u64; 3], u32> = std::collections::HashMap::new();
+        for (i, p) in self.positions.iter().enumerate() {
+            let bits = p.to_array().map(f64::to_bits);
+            let first = *seen.entry(bits).or_insert(i as u32);
+            union(rep, i as u32, first);
         }
     }
 

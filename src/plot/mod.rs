@@ -39,7 +39,8 @@ pub mod speedup;
 use crate::error::{Error, Result};
 use chart::{
     draw_legend, draw_lines, draw_mark, fmt_int, fmt_num, fmt_value, framed, log_axis, log_range,
-    mesh, min_max, plot_size, svg, Entry, Plot, CHART_HEIGHT, FONT, LEMBO, MARKS, PALETTE, WIDTH,
+    mesh, min_max, plot_size, svg, Area, DrawResult, Entry, Mark, Plot, CHART_HEIGHT, FONT, LEMBO,
+    MARKS, PALETTE, WIDTH,
 };
 use error::{error_against, Against, ErrorAxis};
 use plotters::prelude::*;
@@ -133,89 +134,9 @@ const BLOCKED: RGBColor = RGBColor(214, 39, 40);
 /// parameters that vary. A combination run at a single k says nothing about k: its points
 /// are counted in the legend, not drawn.
 fn cycles_vs_k(scene: &str, points: &[Point]) -> Plot {
-    let pts: Vec<&Point> = points
-        .iter()
-        .filter(|p| p.path == "lembo" && p.cycles.is_some() && p.k_px.is_some_and(|k| k > 0.0))
-        .collect();
-    let others: Vec<String> = varying(&pts)
-        .into_iter()
-        .filter(|key| key != "k" && key != "path")
-        .collect();
-    let mut groups: BTreeMap<String, Vec<&Point>> = BTreeMap::new();
-    for p in &pts {
-        groups.entry(assignment(p, &others)).or_default().push(p);
-    }
-    let (drawn, single): (Vec<Vec<&Point>>, Vec<Vec<&Point>>) =
-        groups.into_values().partition(|group| {
-            let ks: BTreeSet<u64> = group
-                .iter()
-                .filter_map(|p| p.k_px)
-                .map(f64::to_bits)
-                .collect();
-            ks.len() > 1
-        });
-    if drawn.is_empty() {
-        return None;
-    }
-    // Named by what tells the drawn series apart; a lone series by all it holds fixed.
-    let all_drawn: Vec<&Point> = drawn.iter().flatten().copied().collect();
-    let mut names: Vec<String> = varying(&all_drawn)
-        .into_iter()
-        .filter(|key| others.contains(key))
-        .collect();
-    if names.is_empty() {
-        names = others.clone();
-    }
-    let series: Vec<(String, Vec<(f64, f64)>)> = drawn
-        .iter()
-        .map(|group| {
-            let mut line: Vec<(f64, f64)> = group
-                .iter()
-                .filter_map(|p| Some((p.k_px?, p.cycles? as f64)))
-                .collect();
-            line.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
-            let name = if names.is_empty() {
-                "all points".to_string()
-            } else {
-                assignment(group[0], &names)
-            };
-            (name, line)
-        })
-        .collect();
-    let style = |s: usize| {
-        let color = if series.len() == 1 {
-            LEMBO
-        } else {
-            PALETTE[s % PALETTE.len()]
-        };
-        (color, MARKS[s % MARKS.len()])
-    };
-    let mut entries: Vec<Entry> = series
-        .iter()
-        .enumerate()
-        .map(|(s, (name, _))| {
-            let (color, mark) = style(s);
-            Entry {
-                mark: Some(mark),
-                line: true,
-                color,
-                label: name.clone(),
-                note: None,
-            }
-        })
-        .collect();
-    let left_out: usize = single.iter().map(Vec::len).sum();
-    if left_out > 0 {
-        entries.push(Entry {
-            mark: None,
-            line: false,
-            color: BLACK,
-            label: format!(
-                "not drawn: {left_out} point(s) whose other parameters were run at a single k"
-            ),
-            note: None,
-        });
-    }
+    let (series, left_out) = k_series(points)?;
+    let style = |s: usize| k_style(s, series.len());
+    let entries = k_entries(&series, left_out);
     let drawn = || series.iter().flat_map(|(_, line)| line.iter());
     let y_max = drawn().map(|p| p.1).fold(1.0, f64::max);
     let title = format!("{scene}: cycles against k (lembo path)");
@@ -241,6 +162,108 @@ fn cycles_vs_k(scene: &str, points: &[Point]) -> Plot {
         }
         draw_legend(&legend, &entries)
     })
+}
+
+/// A series of plot 2: its name and its points (k, cycles) in ascending k.
+type KSeries = (String, Vec<(f64, f64)>);
+
+/// Plot 2's series: the lembo points grouped by the other varying parameters, each
+/// group run at more than one k a series, named by what tells the series apart (a lone
+/// series by all it holds fixed); with the count of points left out, whose group was run
+/// at a single k. None when no group was.
+fn k_series(points: &[Point]) -> Option<(Vec<KSeries>, usize)> {
+    let pts: Vec<&Point> = points
+        .iter()
+        .filter(|p| p.path == "lembo" && p.cycles.is_some() && p.k_px.is_some_and(|k| k > 0.0))
+        .collect();
+    let others: Vec<String> = varying(&pts)
+        .into_iter()
+        .filter(|key| key != "k" && key != "path")
+        .collect();
+    let mut groups: BTreeMap<String, Vec<&Point>> = BTreeMap::new();
+    for p in &pts {
+        groups.entry(assignment(p, &others)).or_default().push(p);
+    }
+    let (drawn, single): (Vec<Vec<&Point>>, Vec<Vec<&Point>>) =
+        groups.into_values().partition(|group| {
+            let ks: BTreeSet<u64> = group
+                .iter()
+                .filter_map(|p| p.k_px)
+                .map(f64::to_bits)
+                .collect();
+            ks.len() > 1
+        });
+    if drawn.is_empty() {
+        return None;
+    }
+    let left_out: usize = single.iter().map(Vec::len).sum();
+    // Named by what tells the drawn series apart; a lone series by all it holds fixed.
+    let all_drawn: Vec<&Point> = drawn.iter().flatten().copied().collect();
+    let mut names: Vec<String> = varying(&all_drawn)
+        .into_iter()
+        .filter(|key| others.contains(key))
+        .collect();
+    if names.is_empty() {
+        names = others.clone();
+    }
+    let series: Vec<KSeries> = drawn
+        .iter()
+        .map(|group| {
+            let mut line: Vec<(f64, f64)> = group
+                .iter()
+                .filter_map(|p| Some((p.k_px?, p.cycles? as f64)))
+                .collect();
+            line.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+            let name = if names.is_empty() {
+                "all points".to_string()
+            } else {
+                assignment(group[0], &names)
+            };
+            (name, line)
+        })
+        .collect();
+    Some((series, left_out))
+}
+
+/// The colour and marker of plot 2's series `s` of `n`: a lone series in the lembo
+/// path's colour.
+fn k_style(s: usize, n: usize) -> (RGBColor, Mark) {
+    let color = if n == 1 {
+        LEMBO
+    } else {
+        PALETTE[s % PALETTE.len()]
+    };
+    (color, MARKS[s % MARKS.len()])
+}
+
+/// Plot 2's legend: one entry per series, and a line counting the points not drawn.
+fn k_entries(series: &[KSeries], left_out: usize) -> Vec<Entry> {
+    let mut entries: Vec<Entry> = series
+        .iter()
+        .enumerate()
+        .map(|(s, (name, _))| {
+            let (color, mark) = k_style(s, series.len());
+            Entry {
+                mark: Some(mark),
+                line: true,
+                color,
+                label: name.clone(),
+                note: None,
+            }
+        })
+        .collect();
+    if left_out > 0 {
+        entries.push(Entry {
+            mark: None,
+            line: false,
+            color: BLACK,
+            label: format!(
+                "not drawn: {left_out} point(s) whose other parameters were run at a single k"
+            ),
+            note: None,
+        });
+    }
+    entries
 }
 
 /// An architecture field a plot puts on its x axis: unit counts or FIFO depths.
@@ -385,85 +408,105 @@ fn utilisation(scene: &str, points: &[Point]) -> Plot {
     svg((WIDTH, 90 + heights.iter().sum::<u32>()), |root| {
         let root = root.titled(&title, (FONT, 22))?;
         let (legend, mut rest) = root.split_vertically(40);
-        for (i, (name, color)) in [
-            ("busy", BUSY),
-            ("starved (waiting for input)", STARVED),
-            ("blocked (a full FIFO downstream)", BLOCKED),
-        ]
-        .into_iter()
-        .enumerate()
-        {
-            let x = [180, 290, 530][i];
-            legend.draw(&Rectangle::new([(x, 12), (x + 16, 28)], color.filled()))?;
-            legend.draw(&Text::new(
-                name,
-                (x + 22, 20),
-                (FONT, 14)
-                    .into_font()
-                    .color(&BLACK)
-                    .pos(Pos::new(HPos::Left, VPos::Center)),
-            ))?;
-        }
+        utilisation_legend(&legend)?;
         for ((group, p), height) in groups.iter().zip(&heights) {
             let (area, below) = rest.split_vertically(*height);
             rest = below;
-            let total = p.cycles.unwrap_or(1).max(1) as f64;
-            let n = p.units.len() as i32;
-            let caption = fit(
-                format!(
-                    "{group}: {} ({} cycles)",
-                    describe_apart(p, &pts, &varying),
-                    fmt_int(p.cycles.unwrap_or(0))
-                ),
-                CAPTION_CHARS,
-            );
-            let mut chart = ChartBuilder::on(&area)
-                .caption(caption, (FONT, 16))
-                .margin(10)
-                .margin_right(30)
-                .x_label_area_size(45)
-                .y_label_area_size(170)
-                .build_cartesian_2d(0.0..100.0, (0..n).into_segmented())?;
-            // Unit 0 at the top.
-            let row = |i: usize| n - 1 - i as i32;
-            chart
-                .configure_mesh()
-                .disable_y_mesh()
-                .y_labels(p.units.len())
-                .y_label_formatter(&|v| match v {
-                    SegmentValue::CenterOf(r) => p
-                        .units
-                        .get((n - 1 - r) as usize)
-                        .map(|u| u.name.clone())
-                        .unwrap_or_default(),
-                    _ => String::new(),
-                })
-                .x_label_formatter(&|v| fmt_num(*v))
-                .x_desc("share of the frame time [%]")
-                .y_desc("unit")
-                .label_style((FONT, 13))
-                .axis_desc_style((FONT, 15))
-                .draw()?;
-            chart.draw_series(p.units.iter().enumerate().flat_map(|(i, u)| {
-                let shares = [(u.busy, BUSY), (u.starved, STARVED), (u.blocked, BLOCKED)];
-                let mut x0 = 0.0;
-                shares.map(|(cycles, color)| {
-                    let x1 = x0 + 100.0 * cycles as f64 / total;
-                    let mut bar = Rectangle::new(
-                        [
-                            (x0, SegmentValue::Exact(row(i))),
-                            (x1, SegmentValue::Exact(row(i) + 1)),
-                        ],
-                        color.filled(),
-                    );
-                    bar.set_margin(3, 3, 0, 0);
-                    x0 = x1;
-                    bar
-                })
-            }))?;
+            draw_unit_shares(&area, group, p, &pts, &varying)?;
         }
         Ok(())
     })
+}
+
+/// Plot 4's legend: the colours of the busy, starved and blocked shares.
+fn utilisation_legend(legend: &Area) -> DrawResult {
+    for (i, (name, color)) in [
+        ("busy", BUSY),
+        ("starved (waiting for input)", STARVED),
+        ("blocked (a full FIFO downstream)", BLOCKED),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let x = [180, 290, 530][i];
+        legend.draw(&Rectangle::new([(x, 12), (x + 16, 28)], color.filled()))?;
+        legend.draw(&Text::new(
+            name,
+            (x + 22, 20),
+            (FONT, 14)
+                .into_font()
+                .color(&BLACK)
+                .pos(Pos::new(HPos::Left, VPos::Center)),
+        ))?;
+    }
+    Ok(())
+}
+
+/// One point's chart in plot 4: a bar per unit (unit 0 at the top) split into its busy,
+/// starved and blocked shares of the frame, captioned by `group` and what sets the point
+/// apart from the others.
+fn draw_unit_shares(
+    area: &Area,
+    group: &str,
+    p: &Point,
+    pts: &[&Point],
+    varying: &[String],
+) -> DrawResult {
+    let total = p.cycles.unwrap_or(1).max(1) as f64;
+    let n = p.units.len() as i32;
+    let caption = fit(
+        format!(
+            "{group}: {} ({} cycles)",
+            describe_apart(p, pts, varying),
+            fmt_int(p.cycles.unwrap_or(0))
+        ),
+        CAPTION_CHARS,
+    );
+    let mut chart = ChartBuilder::on(area)
+        .caption(caption, (FONT, 16))
+        .margin(10)
+        .margin_right(30)
+        .x_label_area_size(45)
+        .y_label_area_size(170)
+        .build_cartesian_2d(0.0..100.0, (0..n).into_segmented())?;
+    // Unit 0 at the top.
+    let row = |i: usize| n - 1 - i as i32;
+    chart
+        .configure_mesh()
+        .disable_y_mesh()
+        .y_labels(p.units.len())
+        .y_label_formatter(&|v| match v {
+            SegmentValue::CenterOf(r) => p
+                .units
+                .get((n - 1 - r) as usize)
+                .map(|u| u.name.clone())
+                .unwrap_or_default(),
+            _ => String::new(),
+        })
+        .x_label_formatter(&|v| fmt_num(*v))
+        .x_desc("share of the frame time [%]")
+        .y_desc("unit")
+        .label_style((FONT, 13))
+        .axis_desc_style((FONT, 15))
+        .draw()?;
+    chart.draw_series(p.units.iter().enumerate().flat_map(|(i, u)| {
+        let shares = [(u.busy, BUSY), (u.starved, STARVED), (u.blocked, BLOCKED)];
+        let mut x0 = 0.0;
+        shares.map(|(cycles, color)| {
+            let x1 = x0 + 100.0 * cycles as f64 / total;
+            let mut bar = Rectangle::new(
+                [
+                    (x0, SegmentValue::Exact(row(i))),
+                    (x1, SegmentValue::Exact(row(i) + 1)),
+                ],
+                color.filled(),
+            );
+            bar.set_margin(3, 3, 0, 0);
+            x0 = x1;
+            bar
+        })
+    }))?;
+    Ok(())
 }
 
 /// The most characters a 16-point caption holds across a plot.

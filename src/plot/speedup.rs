@@ -4,7 +4,7 @@
 
 use super::chart::{
     draw_legend, draw_mark, fmt_num, framed, log_axis, log_range, min_max, plot_size, svg, Entry,
-    Mark, CHART_HEIGHT, FONT, LEMBO, PALETTE, TRIANGLE, WIDTH,
+    Mark, Plot, CHART_HEIGHT, FONT, LEMBO, PALETTE, TRIANGLE, WIDTH,
 };
 use crate::error::{Error, Result};
 use plotters::prelude::*;
@@ -30,32 +30,7 @@ pub struct SpeedupFigure<'a> {
 /// axis is linear in dB for PSNR and logarithmic for the others; which side is stricter is
 /// said on it.
 pub fn speedup_svg(f: &SpeedupFigure) -> Result<String> {
-    let entries = vec![
-        Entry {
-            mark: Some(Mark::Dot),
-            line: true,
-            color: LEMBO,
-            label: "cycles: the triangle path's fewest over the lembo path's".into(),
-            note: None,
-        },
-        Entry {
-            mark: Some(Mark::Ring),
-            line: true,
-            color: PALETTE[0],
-            label: "energy: the triangle path's least over the lembo path's".into(),
-            note: None,
-        },
-        Entry {
-            mark: None,
-            line: true,
-            color: RGBColor(150, 150, 150),
-            label: "1: a tie; above it the lembo unit is ahead".into(),
-            note: Some(
-                "each path's cost at a target is its cheapest run reaching it within the area budget"
-                    .into(),
-            ),
-        },
-    ];
+    let entries = speedup_entries();
     let all = || f.cycles.iter().chain(f.energy);
     let ys = log_range(all().map(|p| p.1).chain([1.0]));
     let title = format!("{}: lembo speed-up against target {}", f.scene, f.metric);
@@ -100,16 +75,7 @@ pub fn speedup_svg(f: &SpeedupFigure) -> Result<String> {
                         .copied()
                         .filter(|p| !log_x || p.0 > 0.0)
                         .collect();
-                    // A path's cost is constant between two measured levels and changes at
-                    // the stricter one: a step at each point.
-                    let mut steps: Vec<(f64, f64)> = Vec::with_capacity(2 * pts.len());
-                    for (i, p) in pts.iter().enumerate() {
-                        if i > 0 {
-                            steps.push((pts[i - 1].0, p.1));
-                        }
-                        steps.push(*p);
-                    }
-                    chart.draw_series(LineSeries::new(steps, color.stroke_width(2)))?;
+                    chart.draw_series(LineSeries::new(step_points(&pts), color.stroke_width(2)))?;
                     for p in &pts {
                         draw_mark(root, chart.backend_coord(p), mark, color)?;
                     }
@@ -126,11 +92,7 @@ pub fn speedup_svg(f: &SpeedupFigure) -> Result<String> {
         }
         draw_legend(&legend, &entries)
     });
-    match drawn {
-        Some(Ok(s)) => Ok(s),
-        Some(Err(e)) => Err(Error::Internal(format!("drawing {title}: {e}"))),
-        None => Err(Error::Internal(format!("drawing {title}: nothing drawn"))),
-    }
+    drawn_or_error(drawn, &title)
 }
 
 /// One bar of a tornado chart: a parameter, its low and high values and the speed-up at
@@ -153,36 +115,8 @@ pub struct TornadoBar {
 /// 1 (a tie) marked.
 /// `measure` names the x axis's ratio (`triangle cycles / lembo cycles`).
 pub fn tornado_svg(title: &str, measure: &str, base: f64, bars: &[TornadoBar]) -> Result<String> {
-    let mut order: Vec<&TornadoBar> = bars.iter().collect();
-    let width = |b: &TornadoBar| {
-        let lo = b.at_low.unwrap_or(base).ln();
-        let hi = b.at_high.unwrap_or(base).ln();
-        (lo - base.ln()).abs().max((hi - base.ln()).abs())
-    };
-    order.sort_by(|a, b| width(b).total_cmp(&width(a)));
-    let entries = vec![
-        Entry {
-            mark: Some(Mark::Square),
-            line: false,
-            color: PALETTE[1],
-            label: "the parameter at its low value".into(),
-            note: None,
-        },
-        Entry {
-            mark: Some(Mark::Square),
-            line: false,
-            color: TRIANGLE,
-            label: "the parameter at its high value".into(),
-            note: None,
-        },
-        Entry {
-            mark: None,
-            line: true,
-            color: BLACK,
-            label: format!("the base: {}x", fmt_num(base)),
-            note: Some("grey line: 1, a tie; right of it the lembo unit is ahead".into()),
-        },
-    ];
+    let order = widest_first(bars, base);
+    let entries = tornado_entries(base);
     let xs = log_range(
         bars.iter()
             .flat_map(|b| [b.at_low, b.at_high])
@@ -243,19 +177,9 @@ pub fn tornado_svg(title: &str, measure: &str, base: f64, bars: &[TornadoBar]) -
                     Pos::new(hpos, VPos::Center),
                 ))?;
             }
-            let missing: Vec<&str> = [(b.at_low, "low"), (b.at_high, "high")]
-                .iter()
-                .filter(|(v, _)| v.is_none())
-                .map(|(_, s)| *s)
-                .collect();
-            let name = if missing.is_empty() {
-                b.param.clone()
-            } else {
-                format!("{} (not reached at {})", b.param, missing.join(", "))
-            };
             let at = chart.backend_coord(&(xs.start, y));
             root.draw(&text(
-                &name,
+                &bar_name(b),
                 (at.0 - 8, at.1),
                 Pos::new(HPos::Right, VPos::Center),
             ))?;
@@ -270,6 +194,108 @@ pub fn tornado_svg(title: &str, measure: &str, base: f64, bars: &[TornadoBar]) -
         ))?;
         draw_legend(&legend, &entries)
     });
+    drawn_or_error(drawn, &title)
+}
+
+/// The legend of a speed-up figure: its two series and the line at 1.
+fn speedup_entries() -> Vec<Entry> {
+    vec![
+        Entry {
+            mark: Some(Mark::Dot),
+            line: true,
+            color: LEMBO,
+            label: "cycles: the triangle path's fewest over the lembo path's".into(),
+            note: None,
+        },
+        Entry {
+            mark: Some(Mark::Ring),
+            line: true,
+            color: PALETTE[0],
+            label: "energy: the triangle path's least over the lembo path's".into(),
+            note: None,
+        },
+        Entry {
+            mark: None,
+            line: true,
+            color: RGBColor(150, 150, 150),
+            label: "1: a tie; above it the lembo unit is ahead".into(),
+            note: Some(
+                "each path's cost at a target is its cheapest run reaching it within the area budget"
+                    .into(),
+            ),
+        },
+    ]
+}
+
+/// A series drawn as steps: a path's cost is constant between two measured levels and
+/// changes at the stricter one, so a step at each point.
+fn step_points(pts: &[(f64, f64)]) -> Vec<(f64, f64)> {
+    let mut steps: Vec<(f64, f64)> = Vec::with_capacity(2 * pts.len());
+    for (i, p) in pts.iter().enumerate() {
+        if i > 0 {
+            steps.push((pts[i - 1].0, p.1));
+        }
+        steps.push(*p);
+    }
+    steps
+}
+
+/// The bars in the order a tornado draws them: the widest swing (in log speed-up, from
+/// the base) first; a value not reached counts as the base.
+fn widest_first(bars: &[TornadoBar], base: f64) -> Vec<&TornadoBar> {
+    let mut order: Vec<&TornadoBar> = bars.iter().collect();
+    let width = |b: &TornadoBar| {
+        let lo = b.at_low.unwrap_or(base).ln();
+        let hi = b.at_high.unwrap_or(base).ln();
+        (lo - base.ln()).abs().max((hi - base.ln()).abs())
+    };
+    order.sort_by(|a, b| width(b).total_cmp(&width(a)));
+    order
+}
+
+/// The legend of a tornado chart: the low and high values' bars and the base.
+fn tornado_entries(base: f64) -> Vec<Entry> {
+    vec![
+        Entry {
+            mark: Some(Mark::Square),
+            line: false,
+            color: PALETTE[1],
+            label: "the parameter at its low value".into(),
+            note: None,
+        },
+        Entry {
+            mark: Some(Mark::Square),
+            line: false,
+            color: TRIANGLE,
+            label: "the parameter at its high value".into(),
+            note: None,
+        },
+        Entry {
+            mark: None,
+            line: true,
+            color: BLACK,
+            label: format!("the base: {}x", fmt_num(base)),
+            note: Some("grey line: 1, a tie; right of it the lembo unit is ahead".into()),
+        },
+    ]
+}
+
+/// A bar's label: its parameter, and the ends at which the path did not reach the target.
+fn bar_name(b: &TornadoBar) -> String {
+    let missing: Vec<&str> = [(b.at_low, "low"), (b.at_high, "high")]
+        .iter()
+        .filter(|(v, _)| v.is_none())
+        .map(|(_, s)| *s)
+        .collect();
+    if missing.is_empty() {
+        b.param.clone()
+    } else {
+        format!("{} (not reached at {})", b.param, missing.join(", "))
+    }
+}
+
+/// A figure's SVG text, or an internal error naming the figure `title`.
+fn drawn_or_error(drawn: Plot, title: &str) -> Result<String> {
     match drawn {
         Some(Ok(s)) => Ok(s),
         Some(Err(e)) => Err(Error::Internal(format!("drawing {title}: {e}"))),

@@ -309,21 +309,7 @@ pub fn setup_refined<R: Real>(
         edges: [EdgeSource::Own; 3],
     };
     let root_net = s.net(&world);
-    if s.projectable(&root_net) {
-        let points = ScreenPoints::of(&root.screen);
-        if outside(view, points.hull()) {
-            return Err(Cull::Outside);
-        }
-        if zero_area(points.xs(), points.ys()) {
-            return Err(Cull::Degenerate);
-        }
-    } else {
-        match beyond(&root_net) {
-            Some(Beyond::Near) => return Err(Cull::BehindEye),
-            Some(Beyond::Other) => return Err(Cull::Outside),
-            None => {}
-        }
-    }
+    cull_whole(&s, view, &root, &root_net)?;
     let mut split = Split::default();
     let mut pending = vec![root];
     let first = out.len();
@@ -339,23 +325,8 @@ pub fn setup_refined<R: Real>(
         };
         let projectable = s.projectable(&net);
         let points = ScreenPoints::of(&node.screen);
-        if node.depth > 0 {
-            let culled = if projectable {
-                outside(view, points.hull()).then_some(Beyond::Other)
-            } else {
-                beyond(&net)
-            };
-            match culled {
-                Some(Beyond::Near) => {
-                    split.culled_near += 1;
-                    continue;
-                }
-                Some(Beyond::Other) => {
-                    split.culled += 1;
-                    continue;
-                }
-                None => {}
-            }
+        if node.depth > 0 && culled_piece(view, &net, projectable, &points, &mut split) {
+            continue;
         }
         // Why this piece would split (decided before the caps, to count what they cut).
         let own_refined: [bool; 3] = std::array::from_fn(|e| {
@@ -391,6 +362,55 @@ pub fn setup_refined<R: Real>(
         }
     }
     Ok(split)
+}
+
+/// Why the whole lembo (the root node, with its Bézier net `net`) is not drawn, if it is
+/// not: outside the view or of zero screen area when projectable, else wholly behind the
+/// eye or beyond another clip plane.
+fn cull_whole(s: &Surface, view: &View, root: &Node, net: &[DVec4; 6]) -> Result<(), Cull> {
+    if s.projectable(net) {
+        let points = ScreenPoints::of(&root.screen);
+        if outside(view, points.hull()) {
+            return Err(Cull::Outside);
+        }
+        if zero_area(points.xs(), points.ys()) {
+            return Err(Cull::Degenerate);
+        }
+    } else {
+        match beyond(net) {
+            Some(Beyond::Near) => return Err(Cull::BehindEye),
+            Some(Beyond::Other) => return Err(Cull::Outside),
+            None => {}
+        }
+    }
+    Ok(())
+}
+
+/// Whether a piece below the root is culled (outside the view when projectable, else
+/// beyond a clip plane by its net), counted in `split` as culled near or culled.
+fn culled_piece(
+    view: &View,
+    net: &[DVec4; 6],
+    projectable: bool,
+    points: &ScreenPoints,
+    split: &mut Split,
+) -> bool {
+    let culled = if projectable {
+        outside(view, points.hull()).then_some(Beyond::Other)
+    } else {
+        beyond(net)
+    };
+    match culled {
+        Some(Beyond::Near) => {
+            split.culled_near += 1;
+            true
+        }
+        Some(Beyond::Other) => {
+            split.culled += 1;
+            true
+        }
+        None => false,
+    }
 }
 
 /// Edge `e` of a node as (uv, world, screen) at its start, middle and end.

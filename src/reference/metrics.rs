@@ -10,10 +10,12 @@
 //! reference is asked about the points in between. Crack pixels (holes inside the
 //! reference coverage) are counted apart and left out of the silhouette error.
 
+use super::distance::Bounds;
 use super::flip::FlipMap;
 use super::oracle::ReferenceImage;
 use super::outline::{outline_distances, Misplaced, ReferenceCoverage, SILHOUETTE_RESOLUTION_PX};
 use crate::rop::framebuffer::{FrameBuffer, NO_PRIMITIVE};
+use crate::rop::plane::Plane;
 use serde::Serialize;
 
 /// The PSNR reported for identical images \[dB\] (the true value is infinite, which JSON
@@ -178,7 +180,73 @@ pub fn measure(
     let cracks = crack_mask(&ours, &theirs, w, h);
     let mut bounds = Bounds::new(&theirs, w, h);
     let diagonal = ((w * w + h * h) as f64).sqrt();
+    let t = tally(render, reference, normals, &ours, &cracks, &mut bounds);
+    let distances = outline_distances(&theirs, w, h, &t.misplaced, outline);
+    let (sil_max, silhouette_mean_px) = silhouette(&distances, t.unbounded, diagonal);
+    let psnr_db = psnr_db(t.squared_error, w, h);
+    Accuracy {
+        coverage_false_positive: t.fp,
+        coverage_false_negative: t.fn_,
+        silhouette_max_px: sil_max,
+        silhouette_mean_px,
+        silhouette_resolution_px: SILHOUETTE_RESOLUTION_PX,
+        depth_max_abs: t.depth_max,
+        normal_max_deg: t.normal_max,
+        normal_mean_deg: if t.compared > 0 {
+            t.normal_sum / t.compared as f64
+        } else {
+            0.0
+        },
+        psnr_db,
+        max_abs_error: t.max_abs,
+        flip_mean: flip.mean,
+        flip_pixels_per_degree: flip.ppd.get(),
+        crack_pixels: t.n_crack,
+        double_hit_pixels,
+        see_through_px,
+        max_scanline_deviation_px,
+        supersample: reference.supersample as u64,
+        pixels_compared: t.compared,
+    }
+}
 
+/// What one pass over the pixels finds: colour errors, the coverage disagreements and
+/// cracks, the misplaced pixels to measure to the outline, and the depth and normal
+/// errors where both cover.
+struct Tally {
+    /// Pixels the render covers and the reference does not.
+    fp: u64,
+    /// Pixels the reference covers and the render does not.
+    fn_: u64,
+    /// Misplaced pixels that are cracks (left out of the silhouette error).
+    n_crack: u64,
+    /// Misplaced pixels with a bound on their distance to the outline, to search.
+    misplaced: Vec<Misplaced>,
+    /// Misplaced pixels without one (no pixel of the other state): the diagonal each.
+    unbounded: u64,
+    depth_max: f64,
+    /// Largest and summed normal angle \[degrees\] over the `compared` pixels.
+    normal_max: f64,
+    normal_sum: f64,
+    /// Pixels both cover.
+    compared: u64,
+    /// Sum of the squared channel differences, and the largest difference.
+    squared_error: u64,
+    max_abs: u64,
+}
+
+/// The pass over every pixel, in index order: the colour error, and by coverage either
+/// the depth and normal errors (both cover) or a misplaced pixel (one covers), a crack or
+/// bounded by the nearest reference pixel of the other state.
+fn tally(
+    render: &FrameBuffer,
+    reference: &ReferenceImage,
+    normals: &Plane<[f32; 3]>,
+    ours: &[bool],
+    cracks: &[bool],
+    bounds: &mut Bounds,
+) -> Tally {
+    let (w, h) = (render.width as usize, render.height as usize);
     let (mut fp, mut fn_, mut n_crack) = (0u64, 0u64, 0u64);
     // Misplaced pixels with a bound, to search; those without one are the diagonal.
     let (mut misplaced, mut unbounded) = (Vec::new(), 0u64);
@@ -218,7 +286,24 @@ pub fn measure(
             }
         }
     }
-    let distances = outline_distances(&theirs, w, h, &misplaced, outline);
+    Tally {
+        fp,
+        fn_,
+        n_crack,
+        misplaced,
+        unbounded,
+        depth_max,
+        normal_max,
+        normal_sum,
+        compared,
+        squared_error,
+        max_abs,
+    }
+}
+
+/// The silhouette error's maximum and mean \[pixels\] over the measured misplaced
+/// pixels' `distances` and the `unbounded` ones, which count as the image's `diagonal`.
+fn silhouette(distances: &[f64], unbounded: u64, diagonal: f64) -> (f64, f64) {
     let sil_n = distances.len() as u64 + unbounded;
     let sil_max = if unbounded > 0 {
         diagonal
@@ -226,39 +311,22 @@ pub fn measure(
         distances.iter().copied().fold(0.0, f64::max)
     };
     let sil_sum = distances.iter().sum::<f64>() + unbounded as f64 * diagonal;
+    let sil_mean = if sil_n > 0 {
+        sil_sum / sil_n as f64
+    } else {
+        0.0
+    };
+    (sil_max, sil_mean)
+}
+
+/// The PSNR \[dB\] of `squared_error` summed over the three channels of `w` x `h`
+/// pixels, capped at [`PSNR_CAP_DB`] (identical images).
+fn psnr_db(squared_error: u64, w: usize, h: usize) -> f64 {
     let mse = squared_error as f64 / (3 * w * h).max(1) as f64;
-    let psnr_db = if mse == 0.0 {
+    if mse == 0.0 {
         PSNR_CAP_DB
     } else {
         (10.0 * (255.0 * 255.0 / mse).log10()).min(PSNR_CAP_DB)
-    };
-    Accuracy {
-        coverage_false_positive: fp,
-        coverage_false_negative: fn_,
-        silhouette_max_px: sil_max,
-        silhouette_mean_px: if sil_n > 0 {
-            sil_sum / sil_n as f64
-        } else {
-            0.0
-        },
-        silhouette_resolution_px: SILHOUETTE_RESOLUTION_PX,
-        depth_max_abs: depth_max,
-        normal_max_deg: normal_max,
-        normal_mean_deg: if compared > 0 {
-            normal_sum / compared as f64
-        } else {
-            0.0
-        },
-        psnr_db,
-        max_abs_error: max_abs,
-        flip_mean: flip.mean,
-        flip_pixels_per_degree: flip.ppd.get(),
-        crack_pixels: n_crack,
-        double_hit_pixels,
-        see_through_px,
-        max_scanline_deviation_px,
-        supersample: reference.supersample as u64,
-        pixels_compared: compared,
     }
 }
 
@@ -285,151 +353,6 @@ fn crack_mask(ours: &[bool], theirs: &[bool], w: usize, h: usize) -> Vec<bool> {
         }
     }
     out
-}
-
-/// Rings searched around a pixel for the nearest centre of a mask value before the whole
-/// image's distance transform is computed instead.
-const RING_SEARCH_LIMIT: usize = 16;
-
-/// The distance from a pixel to the nearest pixel of a mask value: by searching rings
-/// around it (misplaced pixels are mostly near the outline), or, past
-/// [`RING_SEARCH_LIMIT`], from the exact distance transform of the whole mask, computed
-/// once per value when first needed. Both give the same exact distance.
-struct Bounds<'a> {
-    mask: &'a [bool],
-    w: usize,
-    h: usize,
-    /// The transforms to `false` and `true` pixels, when computed.
-    transforms: [Option<Vec<Option<f64>>>; 2],
-}
-
-impl<'a> Bounds<'a> {
-    fn new(mask: &'a [bool], w: usize, h: usize) -> Self {
-        Bounds {
-            mask,
-            w,
-            h,
-            transforms: [None, None],
-        }
-    }
-
-    /// The Euclidean distance \[pixels\] from pixel `k` to the nearest pixel whose mask
-    /// value is `value`; None when there is none.
-    fn nearest(&mut self, k: usize, value: bool) -> Option<f64> {
-        let (w, h) = (self.w as i64, self.h as i64);
-        let (x, y) = ((k % self.w) as i64, (k / self.w) as i64);
-        if self.mask[k] == value {
-            return Some(0.0);
-        }
-        let mut best = i64::MAX;
-        for r in 1..=RING_SEARCH_LIMIT as i64 {
-            // Every pixel of ring r (Chebyshev distance r) is at least r away.
-            if r * r >= best {
-                return Some((best as f64).sqrt());
-            }
-            for j in (y - r).max(0)..=(y + r).min(h - 1) {
-                let dy = j - y;
-                // The ring's pixels in row j: both ends, or the whole row at the top and bottom.
-                let step = if dy.abs() == r { 1 } else { 2 * r };
-                let mut i = x - r;
-                while i <= x + r {
-                    if i >= 0 && i < w && self.mask[(j * w + i) as usize] == value {
-                        best = best.min((i - x) * (i - x) + dy * dy);
-                    }
-                    i += step;
-                }
-            }
-        }
-        if best <= (RING_SEARCH_LIMIT as i64 + 1).pow(2) {
-            return Some((best as f64).sqrt());
-        }
-        let (mask, w, h) = (self.mask, self.w, self.h);
-        self.transforms[value as usize].get_or_insert_with(|| distance_to(mask, w, h, value))[k]
-    }
-}
-
-/// Per pixel, the Euclidean distance \[pixels\] to the nearest pixel whose mask value is
-/// `value`; `None` everywhere when there is no such pixel.
-fn distance_to(mask: &[bool], w: usize, h: usize, value: bool) -> Vec<Option<f64>> {
-    if !mask.contains(&value) {
-        return vec![None; w * h];
-    }
-    // Squared distances: 0 at the features, "infinity" elsewhere. A finite stand-in keeps
-    // the parabola intersections free of inf - inf.
-    const FAR: f64 = 1e20;
-    let mut grid: Vec<f64> = mask
-        .iter()
-        .map(|&m| if m == value { 0.0 } else { FAR })
-        .collect();
-    let mut buf = Transform1d::new(w.max(h));
-    let mut column = vec![0.0; h];
-    for i in 0..w {
-        for j in 0..h {
-            column[j] = grid[j * w + i];
-        }
-        buf.run(&mut column);
-        for j in 0..h {
-            grid[j * w + i] = column[j];
-        }
-    }
-    for row in grid.chunks_mut(w) {
-        buf.run(row);
-    }
-    grid.into_iter().map(|d2| Some(d2.sqrt())).collect()
-}
-
-/// Buffers of the 1D squared distance transform (the lower envelope of parabolas).
-struct Transform1d {
-    f: Vec<f64>,
-    v: Vec<usize>,
-    z: Vec<f64>,
-}
-
-impl Transform1d {
-    fn new(n: usize) -> Self {
-        Transform1d {
-            f: vec![0.0; n],
-            v: vec![0; n],
-            z: vec![0.0; n + 1],
-        }
-    }
-
-    /// Replaces `d[q]` by `min_p (q - p)² + d[p]`.
-    fn run(&mut self, d: &mut [f64]) {
-        let n = d.len();
-        if n == 0 {
-            return;
-        }
-        let (f, v, z) = (&mut self.f, &mut self.v, &mut self.z);
-        f[..n].copy_from_slice(d);
-        let cross = |f: &[f64], q: usize, p: usize| {
-            let (qf, pf) = (q as f64, p as f64);
-            ((f[q] + qf * qf) - (f[p] + pf * pf)) / (2.0 * (qf - pf))
-        };
-        let mut k = 0;
-        v[0] = 0;
-        z[0] = f64::NEG_INFINITY;
-        z[1] = f64::INFINITY;
-        for q in 1..n {
-            let mut s = cross(f, q, v[k]);
-            while s <= z[k] {
-                k -= 1;
-                s = cross(f, q, v[k]);
-            }
-            k += 1;
-            v[k] = q;
-            z[k] = s;
-            z[k + 1] = f64::INFINITY;
-        }
-        k = 0;
-        for (q, out) in d.iter_mut().enumerate() {
-            while z[k + 1] < q as f64 {
-                k += 1;
-            }
-            let dq = q as f64 - v[k] as f64;
-            *out = dq * dq + f[v[k]];
-        }
-    }
 }
 
 #[cfg(test)]
@@ -729,44 +652,6 @@ mod tests {
     }
 
     #[test]
-    fn distance_transform_matches_brute_force() {
-        let (w, h) = (13, 9);
-        let mask: Vec<bool> = (0..w * h).map(|k| (k * 7919) % 11 == 0).collect();
-        let fast = distance_to(&mask, w, h, true);
-        for (k, d) in fast.iter().enumerate() {
-            let (x, y) = ((k % w) as f64, (k / w) as f64);
-            let brute = (0..w * h)
-                .filter(|&p| mask[p])
-                .map(|p| ((x - (p % w) as f64).powi(2) + (y - (p / w) as f64).powi(2)).sqrt())
-                .fold(f64::INFINITY, f64::min);
-            assert!(
-                (d.unwrap() - brute).abs() < 1e-12,
-                "pixel {k}: {d:?} vs {brute}"
-            );
-        }
-        assert!(distance_to(&mask, w, h, true).iter().all(|d| d.is_some()));
-        assert!(distance_to(&[false; 4], 2, 2, true)
-            .iter()
-            .all(|d| d.is_none()));
-    }
-
-    #[test]
-    fn ring_search_matches_the_distance_transform() {
-        // Sparse features: some pixels find one within the rings, others need the transform.
-        let (w, h) = (61, 47);
-        let mask: Vec<bool> = (0..w * h).map(|k| (k * 7919) % 401 == 0).collect();
-        let mut bounds = Bounds::new(&mask, w, h);
-        for value in [true, false] {
-            let exact = distance_to(&mask, w, h, value);
-            for (k, want) in exact.iter().enumerate() {
-                assert_eq!(bounds.nearest(k, value), *want, "pixel {k}, {value}");
-            }
-        }
-        let none = [false; 6];
-        assert_eq!(Bounds::new(&none, 3, 2).nearest(4, true), None);
-    }
-
-    #[test]
     fn measure_normal_mean_is_the_mean_angle_over_the_pixels_both_cover() {
         // Four pixels of the disc off +z: by 10 and 40 degrees, by 20 degrees on the far side
         // (the same up to sign) and with no normal at all (90 degrees); the rest exact.
@@ -907,28 +792,6 @@ mod tests {
             }
         }
         assert!(cracks > 100, "{cracks}");
-    }
-
-    #[test]
-    fn ring_search_matches_brute_force_on_dense_masks() {
-        // Dense masks: the nearest pixel of either value is found within the rings.
-        let (w, h) = (23, 17);
-        let mut random = crate::datapath_study::SplitMix64::new(11);
-        for density in [0.5, 0.1, 0.02] {
-            let mask: Vec<bool> = (0..w * h).map(|_| random.unit() < density).collect();
-            let mut bounds = Bounds::new(&mask, w, h);
-            for value in [true, false] {
-                for k in 0..w * h {
-                    let (x, y) = ((k % w) as i64, (k / w) as i64);
-                    let brute = (0..w * h)
-                        .filter(|&p| mask[p] == value)
-                        .map(|p| ((p % w) as i64 - x).pow(2) + ((p / w) as i64 - y).pow(2))
-                        .min()
-                        .map(|d2| (d2 as f64).sqrt());
-                    assert_eq!(bounds.nearest(k, value), brute, "pixel {k}, {value}");
-                }
-            }
-        }
     }
 
     #[test]

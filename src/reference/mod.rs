@@ -14,6 +14,7 @@
 //! or the datapath precision. It depends only on the lembo model, the camera, the shading
 //! equation and the frame buffer's layout, so it can judge any renderer.
 
+mod distance;
 pub mod flip;
 pub mod heatmap;
 pub mod metrics;

@@ -2,8 +2,8 @@
 //! world-space lembos and mesh, in range, with its crease angle.
 
 use super::{
-    format::ObjectSpec,
-    mesh::{load_obj, transform_mesh},
+    format::{LemboSpec, ObjectSpec},
+    mesh::{load_obj, transform_mesh, Transform},
     validate::{given, lembo_in_range, Check},
     SceneObject, DEFAULT_COLOR, MAX_WORLD_COORDINATE,
 };
@@ -44,68 +44,21 @@ impl Check<'_> {
             None => None,
         };
         let (label, lembos, discoids) = match (&o.builtin, &o.lembos, &o.mesh, &o.discoids) {
-            (Some(name), None, None, None) => {
-                let Some(mesh) = builtin_mesh(name) else {
-                    return Err(self.invalid(
-                        format!("{field}.builtin"),
-                        format!("{name:?}"),
-                        format!(
-                            "unknown builtin shape; known: {}, terrainN (N from 1 to {MAX_TERRAIN_CELLS})",
-                            BUILTIN_NAMES.join(", ")
-                        ),
-                    ));
-                };
-                let mesh = transform_mesh(mesh, transform.as_ref());
-                self.mesh_in_range(&field, transform.is_some(), &mesh)?;
-                let mesh = mesh.welded();
-                // Only a transform can collapse a builtin's triangle (a scale so small that
-                // positions round together).
-                let lembos = mesh.into_lembos().map_err(|c| {
-                    self.invalid(
-                        format!("{field}.transform"),
-                        "(world-space geometry)",
-                        format!("builtin {name}: {c}"),
-                    )
-                })?;
-                (format!("builtin {name}"), Lembos::Mesh(lembos), None)
-            }
-            (None, Some(specs), None, None) => {
-                if specs.is_empty() {
-                    return Err(self.invalid(
-                        format!("{field}.lembos"),
-                        "[]",
-                        "must hold at least one lembo",
-                    ));
-                }
-                let lembos = specs
-                    .iter()
-                    .enumerate()
-                    .map(|(j, l)| {
-                        self.inline_lembo(&format!("{field}.lembos[{j}]"), l, transform.as_ref())
-                    })
-                    .collect::<Result<Vec<_>>>()?;
-                ("inline lembos".to_string(), Lembos::Held(lembos), None)
-            }
-            (None, None, Some(path), None) => {
-                let mesh_field = format!("{field}.mesh");
-                let full = base_dir.join(path);
-                let mesh = load_obj(self.file, &mesh_field, &full)?;
-                let mesh = transform_mesh(mesh, transform.as_ref());
-                self.mesh_in_range(&field, transform.is_some(), &mesh)?;
-                let mesh = mesh.welded();
-                let collapsed = |c: CollapsedTriangle| Error::Mesh {
-                    file: self.file.to_string(),
-                    field: mesh_field.clone(),
-                    path: full.clone(),
-                    message: c.to_string(),
-                };
-                let mesh = match crease {
-                    Some(angle) => mesh.with_crease_angle(angle).map_err(collapsed)?,
-                    None => mesh,
-                };
-                let lembos = mesh.into_lembos().map_err(collapsed)?;
-                (format!("mesh {path}"), Lembos::Mesh(lembos), None)
-            }
+            (Some(name), None, None, None) => (
+                format!("builtin {name}"),
+                self.builtin_object(&field, name, transform.as_ref())?,
+                None,
+            ),
+            (None, Some(specs), None, None) => (
+                "inline lembos".to_string(),
+                self.inline_object(&field, specs, transform.as_ref())?,
+                None,
+            ),
+            (None, None, Some(path), None) => (
+                format!("mesh {path}"),
+                self.mesh_object(&field, path, base_dir, transform.as_ref(), crease)?,
+                None,
+            ),
             (None, None, None, Some(spec)) => {
                 let (label, lembos, set) =
                     self.discoids(&field, spec, transform.as_ref(), base_dir, radii)?;
@@ -142,6 +95,92 @@ impl Check<'_> {
             lembos,
             discoids,
         })
+    }
+
+    /// The lembos of the builtin shape `name` (`field.builtin`), transformed, in range and
+    /// welded.
+    fn builtin_object(
+        &self,
+        field: &str,
+        name: &str,
+        transform: Option<&Transform>,
+    ) -> Result<Lembos> {
+        let Some(mesh) = builtin_mesh(name) else {
+            return Err(self.invalid(
+                format!("{field}.builtin"),
+                format!("{name:?}"),
+                format!(
+                    "unknown builtin shape; known: {}, terrainN (N from 1 to {MAX_TERRAIN_CELLS})",
+                    BUILTIN_NAMES.join(", ")
+                ),
+            ));
+        };
+        let mesh = transform_mesh(mesh, transform);
+        self.mesh_in_range(field, transform.is_some(), &mesh)?;
+        let mesh = mesh.welded();
+        // Only a transform can collapse a builtin's triangle (a scale so small that
+        // positions round together).
+        let lembos = mesh.into_lembos().map_err(|c| {
+            self.invalid(
+                format!("{field}.transform"),
+                "(world-space geometry)",
+                format!("builtin {name}: {c}"),
+            )
+        })?;
+        Ok(Lembos::Mesh(lembos))
+    }
+
+    /// The inline lembos `specs` (`field.lembos`, at least one), each transformed.
+    fn inline_object(
+        &self,
+        field: &str,
+        specs: &[LemboSpec],
+        transform: Option<&Transform>,
+    ) -> Result<Lembos> {
+        if specs.is_empty() {
+            return Err(self.invalid(
+                format!("{field}.lembos"),
+                "[]",
+                "must hold at least one lembo",
+            ));
+        }
+        let lembos = specs
+            .iter()
+            .enumerate()
+            .map(|(j, l)| self.inline_lembo(&format!("{field}.lembos[{j}]"), l, transform))
+            .collect::<Result<Vec<_>>>()?;
+        Ok(Lembos::Held(lembos))
+    }
+
+    /// The lembos of the OBJ mesh at `path` (`field.mesh`, relative to `base_dir`),
+    /// transformed, in range, welded and with normals split at the `crease` angle if given;
+    /// a triangle the weld collapses is refused naming the file.
+    fn mesh_object(
+        &self,
+        field: &str,
+        path: &str,
+        base_dir: &Path,
+        transform: Option<&Transform>,
+        crease: Option<f64>,
+    ) -> Result<Lembos> {
+        let mesh_field = format!("{field}.mesh");
+        let full = base_dir.join(path);
+        let mesh = load_obj(self.file, &mesh_field, &full)?;
+        let mesh = transform_mesh(mesh, transform);
+        self.mesh_in_range(field, transform.is_some(), &mesh)?;
+        let mesh = mesh.welded();
+        let collapsed = |c: CollapsedTriangle| Error::Mesh {
+            file: self.file.to_string(),
+            field: mesh_field.clone(),
+            path: full.clone(),
+            message: c.to_string(),
+        };
+        let mesh = match crease {
+            Some(angle) => mesh.with_crease_angle(angle).map_err(collapsed)?,
+            None => mesh,
+        };
+        let lembos = mesh.into_lembos().map_err(collapsed)?;
+        Ok(Lembos::Mesh(lembos))
     }
 
     /// `lembos` subdivided `s` times (`field.subdivide`): each into 4^s over the same

@@ -496,22 +496,7 @@ impl Expander<'_> {
                 )));
             }
         };
-        let canonical = match &setting {
-            Setting::Path(p) => Value::from(p.name()),
-            Setting::K(x) | Setting::Threshold(x) => Value::from(*x),
-            Setting::PerspectiveTol(t) => match t {
-                PerspectiveTol::Px(px) => Value::from(*px),
-                _ => Value::from("off"),
-            },
-            Setting::Tess(n) => Value::from(*n),
-            Setting::Samples(n) => Value::from(n.get()),
-            Setting::Viewport((w, h)) => Value::from(format!("{w}x{h}")),
-            Setting::Datapath(d) => Value::from(d.name()),
-            Setting::Blend(m) => Value::from(m.name()),
-            Setting::Arch(..) | Setting::Tech(..) | Setting::Scale(..) => {
-                unreachable!("returned above")
-            }
-        };
+        let canonical = canonical_value(&setting);
         Ok((setting, canonical))
     }
 
@@ -549,6 +534,28 @@ impl Expander<'_> {
             .map_err(|e| parse(e.into_inner().to_string()))?;
         let back = serde_json::to_value(tech).expect("the technology serialises");
         Ok(arch_field(&back, path).cloned().unwrap_or(Value::Null))
+    }
+}
+
+/// The canonical JSON of a setting [`Expander::setting`] parsed from a named parameter, as
+/// the results record it. An architecture or technology field's is worked out where it is
+/// parsed, and a scale is not parsed from a value.
+fn canonical_value(setting: &Setting) -> Value {
+    match setting {
+        Setting::Path(p) => Value::from(p.name()),
+        Setting::K(x) | Setting::Threshold(x) => Value::from(*x),
+        Setting::PerspectiveTol(t) => match t {
+            PerspectiveTol::Px(px) => Value::from(*px),
+            _ => Value::from("off"),
+        },
+        Setting::Tess(n) => Value::from(*n),
+        Setting::Samples(n) => Value::from(n.get()),
+        Setting::Viewport((w, h)) => Value::from(format!("{w}x{h}")),
+        Setting::Datapath(d) => Value::from(d.name()),
+        Setting::Blend(m) => Value::from(m.name()),
+        Setting::Arch(..) | Setting::Tech(..) | Setting::Scale(..) => {
+            unreachable!("Expander::setting returns these with their canonical value")
+        }
     }
 }
 

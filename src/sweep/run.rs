@@ -7,8 +7,8 @@ use super::{
     lock::FolderLock,
     plan::{Plan, SweepReference},
     results::{
-        check_all_placed, check_same_spec, joined, place, read_partial, write_final, RESULTS_JSONL,
-        SPEC_JSON,
+        check_all_placed, check_same_spec, joined, place, read_partial, write_final, Unplaced,
+        RESULTS_JSONL, SPEC_JSON,
     },
     spec::{Run, Shard},
 };
@@ -156,32 +156,15 @@ pub fn run_sweep(job: &SweepJob) -> std::result::Result<SweepOutcome, SweepError
         .out
         .clone()
         .unwrap_or_else(|| Path::new("out").join("sweeps").join(&plan.spec.name));
-    let jobs = job.jobs.unwrap_or_else(|| {
-        std::thread::available_parallelism()
-            .map(|n| n.get())
-            .unwrap_or(1)
-            .min(MAX_JOBS)
-    });
+    let jobs = job.jobs.unwrap_or_else(default_jobs);
     check_request(&plan, job)?;
     let runs = plan.shard_runs(job.shard);
     plan.check_memory(&runs, jobs, job.no_memory_check)?;
     let mut round: Vec<usize> = runs.iter().map(|r| r.index).collect();
 
-    // One writer per folder: a second sweep on it is refused before it reads anything.
-    let _lock = FolderLock::acquire(&dir, "sweep", "--out")?;
-    let results_path = dir.join(RESULTS_JSONL);
-    check_same_spec(&dir, &plan.spec)?;
-    let (mut lines, dropped, mut unplaced) = read_partial(&results_path, &plan.spec, job.shard)?;
-    write_files(&dir, &[(SPEC_JSON, plan.spec.text.clone().into_bytes())])?;
-    if dropped || !results_path.exists() {
-        write_files(&dir, &[(RESULTS_JSONL, joined(&lines))])?;
-    }
+    let (_lock, results_path, mut lines, mut unplaced) = open_folder(&dir, &plan, job.shard)?;
 
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(jobs)
-        .thread_name(|i| format!("sweep-{i}"))
-        .build()
-        .map_err(|e| Error::Internal(format!("cannot start the sweep's threads: {e}")))?;
+    let pool = thread_pool(jobs)?;
     let bar = progress_bar(job.progress, 0);
     let mut references: Vec<SweepReference> = Vec::new();
     let (mut total, mut skipped, mut appended) = (0, 0, 0);
@@ -250,6 +233,45 @@ pub fn run_sweep(job: &SweepJob) -> std::result::Result<SweepOutcome, SweepError
         answer: written.answer,
         wall_seconds: t0.elapsed().as_secs_f64(),
     }))
+}
+
+/// The runs at once when `--jobs` is not given: the host's parallelism, at most
+/// [`MAX_JOBS`].
+fn default_jobs() -> usize {
+    std::thread::available_parallelism()
+        .map(|n| n.get())
+        .unwrap_or(1)
+        .min(MAX_JOBS)
+}
+
+/// Takes the output folder `dir` for this sweep and reads what it holds: the folder's lock
+/// (one writer per folder: a second sweep on it is refused before it reads anything),
+/// the path of `results.jsonl`, its records by run index and those refinement rounds have
+/// not placed yet. The spec is written beside them, and `results.jsonl` rewritten when a
+/// torn last line was dropped or it did not exist.
+fn open_folder(
+    dir: &Path,
+    plan: &Plan,
+    shard: Shard,
+) -> Result<(FolderLock, PathBuf, BTreeMap<usize, String>, Unplaced)> {
+    let lock = FolderLock::acquire(dir, "sweep", "--out")?;
+    let results_path = dir.join(RESULTS_JSONL);
+    check_same_spec(dir, &plan.spec)?;
+    let (lines, dropped, unplaced) = read_partial(&results_path, &plan.spec, shard)?;
+    write_files(dir, &[(SPEC_JSON, plan.spec.text.clone().into_bytes())])?;
+    if dropped || !results_path.exists() {
+        write_files(dir, &[(RESULTS_JSONL, joined(&lines))])?;
+    }
+    Ok((lock, results_path, lines, unplaced))
+}
+
+/// The pool of `jobs` threads the sweep's runs share (`sweep-0`, `sweep-1`, ...).
+fn thread_pool(jobs: usize) -> Result<rayon::ThreadPool> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(jobs)
+        .thread_name(|i| format!("sweep-{i}"))
+        .build()
+        .map_err(|e| Error::Internal(format!("cannot start the sweep's threads: {e}")))
 }
 
 /// The flags checked against the spec: `--shard` of a spec with `refine`, a `--by` field

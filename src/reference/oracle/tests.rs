@@ -6,6 +6,7 @@ use super::*;
 use crate::camera::{Camera, Projection, Viewport};
 use crate::lembo::shapes::builtin_lembos;
 use crate::lembo::REFERENCE_UV;
+use glam::DVec2;
 
 /// The lembo of an exactly quadratic map (points and normals sampled from it).
 fn lembo_of(f: impl Fn(f64, f64) -> DVec3, n: impl Fn(f64, f64) -> DVec3) -> Lembo {
