@@ -39,7 +39,7 @@ pub enum BetaShape {
     Gaussian,
     /// Planar discoids and surfels only: the gaussian as EWA splatting resamples it
     /// (Zwicker et al. 2001): the tangent-plane gaussian mapped to the screen and
-    /// convolved with a one-pixel low-pass filter ([`render::EwaKernel`]).
+    /// convolved with a one-pixel low-pass filter ([`ewa::EwaKernel`]).
     Ewa,
 }
 
