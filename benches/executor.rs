@@ -68,7 +68,7 @@ fn chain(items: u64) -> u64 {
     );
     futures.push(Box::pin(async move {
         for n in 0..items {
-            src.emit(1, 0, n).await;
+            src.emit(1, n).await;
         }
         src.finish();
         0
@@ -83,7 +83,7 @@ fn chain(items: u64) -> u64 {
         );
         futures.push(Box::pin(async move {
             while let Some(x) = c.next_input().await {
-                c.emit(1, 0, x).await;
+                c.emit(1, x).await;
             }
             c.finish();
             0
@@ -132,7 +132,7 @@ fn merge(items: u64) -> u64 {
         futures.push(Box::pin(async move {
             for n in 0..items / 4 {
                 // Sources of different speeds, so the merge interleaves them.
-                c.emit(1 + (n + s as u64) % 3, 0, n).await;
+                c.emit(1 + (n + s as u64) % 3, n).await;
             }
             c.finish();
             0

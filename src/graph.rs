@@ -10,7 +10,8 @@
 //!
 //! Every boundary is a crossbar: one link (FIFO depth and latency from the architecture's
 //! `links`) from every producer instance to every consumer instance; which link a producer
-//! pushes an item on is its dispatch rule (round-robin, or by screen tile into the ROPs).
+//! pushes an item on is the boundary's [`Dispatch`] rule, applied by the runtime, so no
+//! unit body chooses a destination.
 
 use serde::{Deserialize, Serialize};
 use std::sync::LazyLock;
@@ -79,6 +80,18 @@ struct KindInfo {
     /// The kind this one sits inside, if any: listed and priced, its cycles its host's, and
     /// not elaborated as a unit of its own.
     inside: Option<UnitKind>,
+    /// The DRAM traffic whose bytes are priced on this kind, if any.
+    dram: Option<Traffic>,
+}
+
+/// Traffic through the memory port, as the frame's cost prices it: each kind of traffic's
+/// bytes are priced as DRAM on the one kind that declares it ([`UnitKind::dram`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Traffic {
+    /// The ROPs' frame-buffer reads and writes, and a discoid frame's accumulation targets.
+    Frame,
+    /// The primitives the geometry fetch reads.
+    Geometry,
 }
 
 impl UnitKind {
@@ -101,10 +114,16 @@ impl UnitKind {
             BlendUnit => ("BlendUnit", true, Some(Rop)),
             FrameBuffer => ("FrameBuffer", false, None),
         };
+        let dram = match self {
+            GeometryFetch => Some(Traffic::Geometry),
+            FrameBuffer => Some(Traffic::Frame),
+            _ => None,
+        };
         KindInfo {
             name,
             replicated,
             inside,
+            dram,
         }
     }
 
@@ -125,9 +144,53 @@ impl UnitKind {
     pub fn inside(self) -> Option<UnitKind> {
         self.info().inside
     }
+
+    /// The DRAM traffic whose bytes are priced on this kind (the frame's on the memory
+    /// port, the primitives' on the geometry fetch that reads them); None for most.
+    pub fn dram(self) -> Option<Traffic> {
+        self.info().dram
+    }
 }
 
-/// The kinds a scene with discoids adds to either path, each inside a kind of the path.
+/// A unit several kinds share (DESIGN.md §3, "One memory port"): its clients by link are
+/// the kinds with a boundary into it; its `direct` clients reach it without a link, each
+/// timing its own accesses on the port's clock (`pipeline::units::framebuffer::PortClock`),
+/// so their busy cycles are the port's too: the port's reported busy cycles include them
+/// and the frame lasts at least the port's busy cycles.
+#[derive(Clone, Copy, Debug)]
+pub struct SharedPort {
+    /// The unit that serves the clients.
+    pub port: UnitKind,
+    /// The clients that reach it without a link.
+    pub direct: &'static [UnitKind],
+}
+
+impl SharedPort {
+    /// Every client of the port among `kinds`: the producers of the boundaries into it,
+    /// then its direct clients, in dataflow order.
+    pub fn clients(&self, kinds: &[UnitKind]) -> Vec<UnitKind> {
+        let mut clients: Vec<UnitKind> = BOUNDARIES
+            .iter()
+            .filter(|b| b.to == self.port)
+            .map(|b| b.from)
+            .chain(self.direct.iter().copied())
+            .filter(|k| kinds.contains(k))
+            .collect();
+        clients.sort();
+        clients.dedup();
+        clients
+    }
+}
+
+/// Every shared unit: the one memory port, which the ROPs reach by their link and the
+/// geometry fetch reads through directly.
+pub const SHARED: &[SharedPort] = &[SharedPort {
+    port: UnitKind::FrameBuffer,
+    direct: &[UnitKind::GeometryFetch],
+}];
+
+/// The kinds a scene with discoids adds to either path, each inside a kind of the path;
+/// their operations are in the blend mode's number format, not the datapath's.
 pub const DISCOID_KINDS: [UnitKind; 1] = [UnitKind::BlendUnit];
 
 /// Which primitives the timed pipeline draws.
@@ -165,6 +228,23 @@ impl TessSource {
 }
 
 impl Path {
+    /// The path whose units `kinds` are: the triangle path if any of them is a kind only
+    /// it has, else the lembo path.
+    pub fn of_kinds(kinds: impl IntoIterator<Item = UnitKind>) -> Path {
+        let lembo = Path::Lembo.kinds(TessSource::Memory);
+        let triangle_only = |k: &UnitKind| {
+            !lembo.contains(k)
+                && [TessSource::Memory, TessSource::OnChip]
+                    .iter()
+                    .any(|&s| Path::Triangle.kinds(s).contains(k))
+        };
+        if kinds.into_iter().any(|k| triangle_only(&k)) {
+            Path::Triangle
+        } else {
+            Path::Lembo
+        }
+    }
+
     /// The kinds this path instantiates when the triangle path's triangles come from
     /// `source`, in dataflow order: derived from [`BOUNDARIES`] ([`derive_kinds`]), once.
     pub fn kinds(self, source: TessSource) -> &'static [UnitKind] {
@@ -254,6 +334,35 @@ impl Default for LinkConfig {
     }
 }
 
+/// Which consumer of a boundary each item a producer sends goes to: declared on the
+/// boundary, applied by the runtime as the item leaves (`pipeline::runtime::Dispatcher`), so
+/// that no unit body computes a destination port. Every consumer merges its inputs by
+/// (arrival, port) (DESIGN.md §3).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Dispatch {
+    /// Round-robin by item: the n-th item a producer sends goes to consumer n mod N (each
+    /// producer counts its own items, from consumer 0).
+    RoundRobin,
+    /// Batches in submission order: the producer cuts its primitives into batches of its
+    /// consumers' `batch` and the n-th batch goes to consumer n mod N (ARCHITECTURE.md,
+    /// "Front ends"), so each engine draws its primitives in scene order.
+    Batches,
+    /// By screen tile: each item to the consumer (a ROP) that owns the screen tile of its
+    /// first pixel (`pipeline::tiles::RopTiles`).
+    ScreenTile,
+}
+
+impl Dispatch {
+    /// Its name in the graph's diagram.
+    pub fn name(self) -> &'static str {
+        match self {
+            Dispatch::RoundRobin => "round-robin",
+            Dispatch::Batches => "batches",
+            Dispatch::ScreenTile => "screen tile",
+        }
+    }
+}
+
 /// One boundary of the graph: the crossbar of links from every instance of `from` to every
 /// instance of `to`.
 #[derive(Clone, Copy, Debug)]
@@ -266,6 +375,8 @@ pub struct Boundary {
     pub to: UnitKind,
     /// The link each of its crossbar's links has unless the architecture says otherwise.
     pub default: LinkConfig,
+    /// Which consumer each item goes to.
+    pub dispatch: Dispatch,
     /// The path whose primitives alone take it, for a boundary out of a kind both paths
     /// have (the geometry fetch feeds the lembo path's setup engines or the triangle
     /// path's); None: every path with both kinds.
@@ -292,10 +403,9 @@ impl Boundary {
 
 /// Every boundary of both paths (the lembo path's in dataflow order, then the triangle
 /// path's, then the geometry fetch's, then the on-chip tessellation's): the one place a
-/// link is named and given its defaults. Dispatch: every producer
-/// sends round-robin over its links, except into the ROPs, which are chosen by the screen
-/// tile of the item (`units::rop::RopTiles`); every consumer merges its inputs by
-/// (arrival, port) (DESIGN.md §3).
+/// link is named and given its defaults and its [`Dispatch`]: round-robin by item unless
+/// the boundary says otherwise (batches out of the geometry fetch and the domain
+/// evaluators, by screen tile into the ROPs).
 pub const BOUNDARIES: [Boundary; 14] = {
     use UnitKind::*;
     const fn b(
@@ -310,8 +420,21 @@ pub const BOUNDARIES: [Boundary; 14] = {
             from,
             to,
             default: LinkConfig::new(depth, latency),
+            dispatch: Dispatch::RoundRobin,
             path: None,
             only: None,
+        }
+    }
+    const fn tiled(b: Boundary) -> Boundary {
+        Boundary {
+            dispatch: Dispatch::ScreenTile,
+            ..b
+        }
+    }
+    const fn batches(b: Boundary) -> Boundary {
+        Boundary {
+            dispatch: Dispatch::Batches,
+            ..b
         }
     }
     [
@@ -343,7 +466,7 @@ pub const BOUNDARIES: [Boundary; 14] = {
         // Depth 64, latency 2: a full crossbar from every rasterizer to every ROP costs one
         // cycle of arbitration on top of the register stage; an item is a span of at most
         // one tile row, and GPU ROP input queues hold tens of such quads or spans.
-        b("rasterizer_to_rop", FragmentRasterizer, Rop, 64, 2),
+        tiled(b("rasterizer_to_rop", FragmentRasterizer, Rop, 64, 2)),
         // Depth 32, latency 4: the request queue of the memory controller, and the wires
         // and arbitration to reach it from the ROPs. DRAM access latency itself is not
         // modelled.
@@ -358,33 +481,39 @@ pub const BOUNDARIES: [Boundary; 14] = {
             1,
         ),
         // Depth 64, latency 2: as rasterizer_to_rop; an item is a quad-row piece.
-        b("triangle_rasterizer_to_rop", TriangleRasterizer, Rop, 64, 2),
+        tiled(b(
+            "triangle_rasterizer_to_rop",
+            TriangleRasterizer,
+            Rop,
+            64,
+            2,
+        )),
         // Depth 4, latency 40: a batch read from DRAM reaches its setup engine 80 ns after
         // the read was issued at 500 MHz (a DRAM access latency, row miss, of DDR4); four
         // batches in flight per engine keep it fed across that latency down to batches of
         // about 10 primitives at a cycle each.
         Boundary {
             path: Some(Path::Lembo),
-            ..b("fetch_to_setup", GeometryFetch, Setup, 4, 40)
+            ..batches(b("fetch_to_setup", GeometryFetch, Setup, 4, 40))
         },
         // As fetch_to_setup, a batch of triangles to its triangle setup engine, from a mesh
         // in memory (on-chip tessellation feeds the engines from its domain evaluators).
         Boundary {
             path: Some(Path::Triangle),
             only: Some(TessSource::Memory),
-            ..b(
+            ..batches(b(
                 "fetch_to_triangle_setup",
                 GeometryFetch,
                 TriangleSetup,
                 4,
                 40,
-            )
+            ))
         },
         // As fetch_to_setup, a batch of lembos to its tessellator.
         Boundary {
             path: Some(Path::Triangle),
             only: Some(TessSource::OnChip),
-            ..b("fetch_to_tessellator", GeometryFetch, Tessellator, 4, 40)
+            ..batches(b("fetch_to_tessellator", GeometryFetch, Tessellator, 4, 40))
         },
         // Depth 8, latency 1: a lembo's tessellation (its lattice of domain points), a wide
         // entry like setup_to_minmax's.
@@ -392,13 +521,13 @@ pub const BOUNDARIES: [Boundary; 14] = {
         // Depth 32, latency 1: batches of a lembo's evaluated triangles to the setup
         // engines, narrow entries (the vertices sit in the domain evaluator's output
         // buffer, as a DX11 domain shader's do).
-        b(
+        batches(b(
             "domain_eval_to_triangle_setup",
             DomainEval,
             TriangleSetup,
             32,
             1,
-        ),
+        )),
     ]
 };
 
@@ -475,6 +604,9 @@ pub fn instance_count(path: Path, source: TessSource, count: impl Fn(UnitKind) -
 /// (`pipeline::builder::check`), so a broken one is refused with a [`GraphError`].
 #[derive(Clone, Copy, Debug)]
 pub struct Graph<'g> {
+    /// The path whose primitives it draws: a producer feeding several kinds sends along the
+    /// boundary this path takes ([`Boundary::taken_by`]); the others carry nothing.
+    pub path: Path,
     /// The kinds, in dataflow order.
     pub kinds: &'g [UnitKind],
     /// The boundaries.
@@ -488,6 +620,7 @@ impl Graph<'static> {
     /// [`BOUNDARIES`].
     pub fn of(path: Path, source: TessSource) -> Self {
         Graph {
+            path,
             kinds: path.kinds(source),
             boundaries: &BOUNDARIES,
             source,
@@ -502,6 +635,134 @@ impl Graph<'_> {
         self.boundaries
             .iter()
             .filter(|b| b.wired_in(self.kinds, self.source))
+    }
+
+    /// [`Self::wired`] in dataflow order: by producer, then consumer.
+    pub fn in_dataflow_order(&self) -> Vec<&Boundary> {
+        let at = |k: UnitKind| self.kinds.iter().position(|&x| x == k);
+        let mut wired: Vec<&Boundary> = self.wired().collect();
+        wired.sort_by_key(|b| (at(b.from), at(b.to)));
+        wired
+    }
+}
+
+/// What `lembo-sim graph` prints: the graph of `path` (its triangles from `source`) as
+/// text: its kinds in dataflow order, its boundaries with their dispatch rules and default
+/// links, and its shared units with their clients. Generated from [`BOUNDARIES`],
+/// [`SHARED`] and the kinds' entries, so it cannot go stale.
+pub fn diagram(path: Path, source: TessSource) -> String {
+    use std::fmt::Write as _;
+    let graph = Graph::of(path, source);
+    let mut out = String::new();
+    let _ = writeln!(out, "{}", title(path, source));
+    let _ = writeln!(out, "\nkinds, in dataflow order ([N]: always replicated):");
+    for &k in graph.kinds {
+        let _ = writeln!(out, "  {}", kind_label(k));
+    }
+    for k in DISCOID_KINDS {
+        if let Some(host) = k.inside().filter(|h| graph.kinds.contains(h)) {
+            let _ = writeln!(
+                out,
+                "  {} (inside each {}, with discoids)",
+                kind_label(k),
+                host.name()
+            );
+        }
+    }
+    let _ = writeln!(
+        out,
+        "\nboundaries (a crossbar of links each; default FIFO depth, latency):"
+    );
+    let rows: Vec<[String; 4]> = graph
+        .in_dataflow_order()
+        .into_iter()
+        .map(|b| {
+            [
+                b.key.to_string(),
+                format!("{} -> {}", b.from.name(), b.to.name()),
+                b.dispatch.name().to_string(),
+                format!(
+                    "depth {}, latency {}",
+                    b.default.fifo_depth, b.default.latency_cycles
+                ),
+            ]
+        })
+        .collect();
+    let width = |c: usize| rows.iter().map(|r| r[c].len()).max().unwrap_or(0);
+    let (w0, w1, w2) = (width(0), width(1), width(2));
+    for [key, ends, rule, link] in &rows {
+        let _ = writeln!(out, "  {key:w0$}  {ends:w1$}  {rule:w2$}  {link}");
+    }
+    let _ = writeln!(out, "\nshared units:");
+    for shared in SHARED.iter().filter(|s| graph.kinds.contains(&s.port)) {
+        let clients: Vec<String> = shared
+            .clients(graph.kinds)
+            .iter()
+            .map(|c| {
+                let how = if shared.direct.contains(c) {
+                    "direct"
+                } else {
+                    "by link"
+                };
+                format!("{} ({how})", c.name())
+            })
+            .collect();
+        let _ = writeln!(out, "  {}: {}", shared.port.name(), clients.join(", "));
+    }
+    out
+}
+
+/// [`diagram`] as a Graphviz `dot` graph: a box per kind, an edge per boundary labelled
+/// with its name and dispatch rule, a dashed edge from each direct client of a shared unit.
+pub fn dot(path: Path, source: TessSource) -> String {
+    use std::fmt::Write as _;
+    let graph = Graph::of(path, source);
+    let mut out = String::new();
+    let _ = writeln!(out, "digraph lembo_sim {{");
+    let _ = writeln!(out, "  label=\"{}\";", title(path, source));
+    let _ = writeln!(out, "  rankdir=LR;");
+    let _ = writeln!(out, "  node [shape=box];");
+    for &k in graph.kinds {
+        let _ = writeln!(out, "  {} [label=\"{}\"];", k.name(), kind_label(k));
+    }
+    for b in graph.in_dataflow_order() {
+        let _ = writeln!(
+            out,
+            "  {} -> {} [label=\"{}\\n{}\"];",
+            b.from.name(),
+            b.to.name(),
+            b.key,
+            b.dispatch.name()
+        );
+    }
+    for shared in SHARED.iter().filter(|s| graph.kinds.contains(&s.port)) {
+        for c in shared.direct.iter().filter(|c| graph.kinds.contains(c)) {
+            let _ = writeln!(
+                out,
+                "  {} -> {} [style=dashed, label=\"shares\"];",
+                c.name(),
+                shared.port.name()
+            );
+        }
+    }
+    let _ = writeln!(out, "}}");
+    out
+}
+
+/// The diagram's title: the path, and for the triangle path where its triangles come from.
+fn title(path: Path, source: TessSource) -> String {
+    match path {
+        Path::Lembo => "lembo path".to_string(),
+        Path::Triangle => format!("triangle path, triangles from {}", source.name()),
+    }
+}
+
+/// A kind's name in the diagram: `Kind[N]` when the architecture replicates it.
+fn kind_label(k: UnitKind) -> String {
+    if k.replicated() {
+        format!("{}[N]", k.name())
+    } else {
+        k.name().to_string()
     }
 }
 
@@ -562,6 +823,12 @@ pub enum GraphError {
         /// The boundary's name.
         boundary: &'static str,
     },
+    /// A boundary dispatched by screen tile carries items that do not say where on screen
+    /// they lie.
+    NotOnScreen {
+        /// The boundary's name.
+        boundary: &'static str,
+    },
     /// A boundary of the graph has no link configuration in the architecture.
     NoLink {
         /// The boundary's name.
@@ -605,6 +872,10 @@ impl std::fmt::Display for GraphError {
             GraphError::BackEdge { boundary } => write!(
                 f,
                 "boundary {boundary} runs against the dataflow order (the graph must be acyclic)"
+            ),
+            GraphError::NotOnScreen { boundary } => write!(
+                f,
+                "boundary {boundary} is dispatched by screen tile but its items have no pixel"
             ),
             GraphError::NoLink { boundary } => {
                 write!(f, "boundary {boundary} has no link configuration")

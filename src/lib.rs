@@ -4,16 +4,10 @@
 //! (quadratic triangular patches with a separate quadratic normal function, WSCG 2006), built
 //! so that an architect can measure what such a unit costs and what it buys.
 //!
-//! ```text
-//!  scene ─► Setup ─► MinMax ─► IntervalManager ─► Segmenter ─► Subsegmenter ─► FragmentRasterizer ─► ROP ─► FrameBuffer
-//!           project   y range,  per scanline y_j:   walk Y(u,v)=y_j  split so x(t) is   pixel centres, u,v by    depth test,
-//!           6 points  cull,     domain-edge roots   with midpoint    linear within k    increments, z and n      Phong shading
-//!           + normals clip to   -> intervals        error exactly k                     from the quadratics
-//!                     viewport
-//! ```
-//!
-//! Triangle path (the baseline): `Tessellator ─► TriangleSetup ─► TriangleRasterizer ─►` the
-//! same ROPs and frame buffer.
+//! The timed pipeline's unit graph (each path's units, the boundaries between them with
+//! their dispatch rules, the shared memory port) is generated from [`graph`]: run
+//! `lembo-sim graph [--path lembo|triangle] [--source memory|onchip] [--dot]`, or read
+//! ARCHITECTURE.md, "The unit graph", which a test keeps equal to it.
 //!
 //! Modules, from the model outwards:
 //! - [`lembo`]: the model (Martinelli 2006 section 2): six-point construction, evaluation,

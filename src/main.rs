@@ -57,6 +57,34 @@ enum Command {
     /// Union the results of the shards of one sweep (each run with --shard I/N) into what
     /// an unsharded sweep writes: results.jsonl, results.csv and spec.json.
     SweepMerge(MergeArgs),
+    /// Print the timed pipeline's unit graph, generated from the simulator's own
+    /// description (src/graph.rs): the unit kinds in dataflow order, the boundaries between
+    /// them (each a crossbar of FIFO links) with their dispatch rule (round-robin, batches,
+    /// screen tile) and default FIFO depth and latency, and the units several kinds share
+    /// (the memory port). --dot prints it as a Graphviz graph (`| dot -Tsvg`).
+    Graph(GraphArgs),
+}
+
+#[derive(Args)]
+struct GraphArgs {
+    /// Which path's graph.
+    #[arg(long, value_enum, default_value = "lembo")]
+    path: PathArg,
+    /// Where the triangle path's triangles come from (the architecture's
+    /// tessellation.source); the lembo path has one graph.
+    #[arg(long, value_enum, default_value = "memory")]
+    source: SourceArg,
+    /// Print Graphviz dot instead of text.
+    #[arg(long)]
+    dot: bool,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum SourceArg {
+    /// A mesh tessellated ahead of the frame, read from memory.
+    Memory,
+    /// The lembos, tessellated on chip.
+    Onchip,
 }
 
 #[derive(Args)]
@@ -465,7 +493,27 @@ fn main() -> ExitCode {
         Command::Compare(args) => compare(args),
         Command::Sweep(args) => sweep(args),
         Command::SweepMerge(args) => sweep_merge(args),
+        Command::Graph(args) => graph(args),
     }
+}
+
+fn graph(args: GraphArgs) -> ExitCode {
+    use lembo_sim::graph::{self, Path, TessSource};
+    let path = match args.path {
+        PathArg::Lembo => Path::Lembo,
+        PathArg::Triangle => Path::Triangle,
+    };
+    let source = match args.source {
+        SourceArg::Memory => TessSource::Memory,
+        SourceArg::Onchip => TessSource::OnChip,
+    };
+    let text = if args.dot {
+        graph::dot(path, source)
+    } else {
+        graph::diagram(path, source)
+    };
+    let _ = write!(std::io::stdout().lock(), "{text}");
+    ExitCode::SUCCESS
 }
 
 fn sweep(args: SweepArgs) -> ExitCode {

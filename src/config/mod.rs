@@ -3,11 +3,7 @@
 //! latency of the FIFOs between them. Files live in `sim/arch/*.json`; `sim/arch/README.md`
 //! states each unit's cost model in words.
 //!
-//! ```text
-//!  Setup ─► MinMax ─► IntervalManager ─► Segmenter ×n ─► Subsegmenter ×n
-//!        ─► FragmentRasterizer ×n ─► ROP ×n ─► FrameBuffer port        (─► = one link)
-//!  TriangleSetup ─► TriangleRasterizer ×n ─► (the same) ROP ×n       (the triangle path)
-//! ```
+//! The units and the links between them: `lembo-sim graph` (generated from [`crate::graph`]).
 //!
 //! Every unit has a `latency_cycles` (an output is ready that long after the operation that
 //! produces it issues) and one or more `cycles_per_*` initiation intervals (how long the

@@ -37,7 +37,7 @@ use super::tech::{DramKind, Sram, Tech};
 use crate::config::ArchConfig;
 use crate::datapath::{Datapath, Op, OPS};
 use crate::discoid::blend::BlendMode;
-use crate::graph::{UnitKind, KINDS};
+use crate::graph::{Traffic, UnitKind, DISCOID_KINDS, KINDS};
 use crate::pipeline::{self, CycleReport, UnitCycles};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -305,22 +305,12 @@ pub fn cost_at(
     work: &Work,
     design: &DesignPointFile,
 ) -> CostReport {
-    let triangles = work
-        .cycles
-        .units
-        .iter()
-        .any(|u| u.kind == UnitKind::TriangleSetup);
     let sizing = Sizing {
         datapath,
         blend: work.blend.as_ref().map(|b| b.mode),
         reciprocal: arch.triangle_rasterizer.reciprocal,
-        path: if triangles {
-            pipeline::Path::Triangle
-        } else {
-            pipeline::Path::Lembo
-        },
+        path: pipeline::Path::of_kinds(work.cycles.units.iter().map(|u| u.kind)),
     };
-    let mut per_busy_cycle = BTreeMap::new();
     // The units built differently from the model priced as built (DESIGN.md §12).
     let ops = super::built::as_built(
         work.ops,
@@ -331,63 +321,37 @@ pub fn cost_at(
     let mut units: Vec<&UnitCycles> = work.cycles.units.iter().collect();
     units.extend(work.blend.iter().flat_map(|b| b.units));
     units.sort_by_key(|u| KINDS.iter().position(|&k| k == u.kind));
-    let price = |kind: UnitKind, op: Op| match &work.blend {
-        Some(b) if kind == UnitKind::BlendUnit => blend_figures(tech, b.mode, op).1,
-        _ => tech.op(datapath, op),
+    let frame = Frame {
+        tech,
+        arch,
+        datapath,
+        work,
+        design,
+        sizing,
+        ops: &ops,
+        units: &units,
+        kinds: units.iter().map(|u| u.kind).collect(),
+        frame_us: work.cycles.total.0 as f64 / work.cycles.clock_mhz,
     };
-    let word_bits = match datapath {
-        Datapath::F32 => 32.0,
-        Datapath::F64 => 64.0,
-    };
-    let frame_us = work.cycles.total.0 as f64 / work.cycles.clock_mhz;
-    let kinds: Vec<UnitKind> = units.iter().map(|u| u.kind).collect();
-    let mut out = Vec::with_capacity(units.len());
+    let mut per_busy_cycle = BTreeMap::new();
     let mut logic_leakage_pj = 0.0;
-    for &u in &units {
-        let kind_ops = ops.of(u.kind);
-        let (busy, share) = busy_and_share(&units, u);
-        let fus = sizing.functional_units(design, arch, u.kind);
-        let (mut area_um2, mut energy_pj) = (0.0, 0.0);
-        for (k, &op) in OPS.iter().enumerate() {
-            let (pj, um2) = price(u.kind, op);
-            area_um2 += fus[k] as f64 * um2;
-            if kind_ops[k] == 0 {
-                continue;
-            }
-            energy_pj += kind_ops[k] as f64 * share * pj;
-            if busy > 0 {
-                per_busy_cycle.insert(sizing.key(u.kind, op), kind_ops[k] as f64 / busy as f64);
-            }
-        }
-        // mW/mm² × mm² × µs = nJ.
-        let logic_leak_pj = tech.logic_leakage.mw_per_mm2 * area_um2 * 1e-6 * frame_us * 1e3;
-        logic_leakage_pj += logic_leak_pj;
-        let fifo = input_fifos(tech, arch, u, &kinds, word_bits, frame_us);
-        if u.kind == UnitKind::FrameBuffer {
-            let bytes = work.framebuffer_bytes + work.accumulation_bytes;
-            energy_pj += bytes as f64 * tech.dram.pj_per_byte;
-        }
-        if u.kind == UnitKind::GeometryFetch {
-            energy_pj += work.geometry_bytes as f64 * tech.dram.pj_per_byte;
-        }
-        out.push(UnitCost {
-            name: u.name.clone(),
-            area_mm2: (area_um2 + fifo.area_um2) * 1e-6,
-            energy_pj: energy_pj + logic_leak_pj + fifo.access_pj + fifo.leakage_pj,
-            fifo_area_mm2: fifo.area_um2 * 1e-6,
-            fifo_energy_pj: fifo.access_pj,
-            fifo_leakage_pj: fifo.leakage_pj,
-            functional_units: OpCounts::from_array(fus),
-        });
-    }
+    let out: Vec<UnitCost> = units
+        .iter()
+        .map(|u| {
+            let (cost, leak) = frame.unit(u, &mut per_busy_cycle);
+            logic_leakage_pj += leak;
+            cost
+        })
+        .collect();
     let area_mm2: f64 = out.iter().map(|u| u.area_mm2).sum();
     let energy_pj: f64 = out.iter().map(|u| u.energy_pj).sum();
-    let mut kinds: Vec<UnitKind> = units.iter().map(|u| u.kind).collect();
+    let mut kinds = frame.kinds.clone();
     kinds.dedup();
     let blend = work
         .blend
         .as_ref()
         .map(|b| blend_cost(tech, b.mode, &units, &out, work.accumulation_bytes));
+    let frame_us = frame.frame_us;
     CostReport {
         tech: TechUsed::of(tech),
         area_mm2,
@@ -409,6 +373,84 @@ pub fn cost_at(
             })
             .collect(),
         per_busy_cycle,
+    }
+}
+
+/// What pricing one frame's units needs, worked out once for all of them.
+struct Frame<'f> {
+    tech: &'f Tech,
+    arch: &'f ArchConfig,
+    datapath: Datapath,
+    work: &'f Work<'f>,
+    design: &'f DesignPointFile,
+    sizing: Sizing,
+    /// The operations as built.
+    ops: &'f OpTable,
+    /// The units priced, in dataflow order, and their kinds.
+    units: &'f [&'f UnitCycles],
+    kinds: Vec<UnitKind>,
+    /// The frame's length \[µs\].
+    frame_us: f64,
+}
+
+impl Frame<'_> {
+    /// One operation of class `op` in a unit of `kind`: its energy \[pJ\] and area
+    /// \[µm²\]; a discoid kind's in the blend mode's number format ([`DISCOID_KINDS`]).
+    fn price(&self, kind: UnitKind, op: Op) -> (f64, f64) {
+        match &self.work.blend {
+            Some(b) if DISCOID_KINDS.contains(&kind) => blend_figures(self.tech, b.mode, op).1,
+            _ => self.tech.op(self.datapath, op),
+        }
+    }
+
+    /// The DRAM bytes priced on `kind` ([`UnitKind::dram`]).
+    fn dram_bytes(&self, kind: UnitKind) -> u64 {
+        let w = self.work;
+        match kind.dram() {
+            Some(Traffic::Frame) => w.framebuffer_bytes + w.accumulation_bytes,
+            Some(Traffic::Geometry) => w.geometry_bytes,
+            None => 0,
+        }
+    }
+
+    /// Unit `u`'s cost and its datapath's leakage \[pJ\], its kind's operations per busy
+    /// cycle recorded in `per_busy_cycle`.
+    fn unit(&self, u: &UnitCycles, per_busy_cycle: &mut BTreeMap<String, f64>) -> (UnitCost, f64) {
+        let kind_ops = self.ops.of(u.kind);
+        let (busy, share) = busy_and_share(self.units, u);
+        let fus = self.sizing.functional_units(self.design, self.arch, u.kind);
+        let (mut area_um2, mut energy_pj) = (0.0, 0.0);
+        for (k, &op) in OPS.iter().enumerate() {
+            let (pj, um2) = self.price(u.kind, op);
+            area_um2 += fus[k] as f64 * um2;
+            if kind_ops[k] == 0 {
+                continue;
+            }
+            energy_pj += kind_ops[k] as f64 * share * pj;
+            if busy > 0 {
+                let key = self.sizing.key(u.kind, op);
+                per_busy_cycle.insert(key, kind_ops[k] as f64 / busy as f64);
+            }
+        }
+        // mW/mm² × mm² × µs = nJ.
+        let tech = self.tech;
+        let logic_leak_pj = tech.logic_leakage.mw_per_mm2 * area_um2 * 1e-6 * self.frame_us * 1e3;
+        let word_bits = match self.datapath {
+            Datapath::F32 => 32.0,
+            Datapath::F64 => 64.0,
+        };
+        let fifo = input_fifos(tech, self.arch, u, &self.kinds, word_bits, self.frame_us);
+        energy_pj += self.dram_bytes(u.kind) as f64 * tech.dram.pj_per_byte;
+        let cost = UnitCost {
+            name: u.name.clone(),
+            area_mm2: (area_um2 + fifo.area_um2) * 1e-6,
+            energy_pj: energy_pj + logic_leak_pj + fifo.access_pj + fifo.leakage_pj,
+            fifo_area_mm2: fifo.area_um2 * 1e-6,
+            fifo_energy_pj: fifo.access_pj,
+            fifo_leakage_pj: fifo.leakage_pj,
+            functional_units: OpCounts::from_array(fus),
+        };
+        (cost, logic_leak_pj)
     }
 }
 
@@ -488,7 +530,7 @@ fn blend_cost(
     let priced = units
         .iter()
         .zip(out)
-        .filter(|(u, _)| u.kind == UnitKind::BlendUnit);
+        .filter(|(u, _)| DISCOID_KINDS.contains(&u.kind));
     let (area_mm2, energy_pj) = priced.clone().fold((0.0, 0.0), |(a, e), (_, c)| {
         (a + c.area_mm2, e + c.energy_pj)
     });

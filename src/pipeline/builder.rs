@@ -11,16 +11,18 @@
 //! setup engines and the memory port): its input ports are every feeding boundary's
 //! links, boundary by boundary in the graph's order, each boundary's producers in order,
 //! all merged by (arrival, port) as one crossbar's are; its output ports likewise, each
-//! boundary's a contiguous group ([`super::runtime::Ctx::group`]).
+//! boundary's a contiguous group. Its items go along the first boundary it feeds that the
+//! graph's path takes, dispatched by that boundary's rule ([`crate::graph::Dispatch`]);
+//! the others carry nothing.
 
 use super::runtime::executor::UnitFuture;
 use super::runtime::{partition, LinkSpec, SimOptions};
-use super::unit::{Elaborate, Finished, RunInputs};
+use super::unit::{Elaborate, Finished, OutputBoundary, RunInputs};
 use super::units::bodies;
 use super::wiring::HostWiring;
 use crate::config::ArchConfig;
 use crate::datapath::Real;
-use crate::graph::{self, Graph, GraphError, UnitInstance, UnitKind};
+use crate::graph::{self, Dispatch, Graph, GraphError, UnitInstance, UnitKind};
 use std::any::Any;
 
 /// How a checked graph is wired: per kind (in the graph's order), the index of its body in
@@ -85,6 +87,9 @@ fn check_with<R: Real>(
                 read: read.1,
             });
         }
+        if b.dispatch == Dispatch::ScreenTile && !bodies[body[p]].on_screen() {
+            return Err(GraphError::NotOnScreen { boundary: b.key });
+        }
         if let Some(&first) = output[p].iter().find(|&&o| graph.boundaries[o].to == b.to) {
             return Err(GraphError::Fanned {
                 kind: b.from,
@@ -129,6 +134,8 @@ pub struct Netlist {
     /// Each boundary's crossbar (a `Crossbar<T>` of its item type) and the index of its
     /// producer's kind, for the boundaries with links.
     crossbars: Vec<Option<(usize, Box<dyn Any + Send + Sync>)>>,
+    /// Each boundary's dispatch rule, and whether the graph's path takes it.
+    rules: Vec<(Dispatch, bool)>,
 }
 
 impl Netlist {
@@ -174,6 +181,11 @@ impl Netlist {
                 crossbars[bi] = Some((p, xb));
             }
         }
+        let rules = graph
+            .boundaries
+            .iter()
+            .map(|b| (b.dispatch, b.taken_by(graph.path, graph.source)))
+            .collect();
         Ok(Netlist {
             units,
             latency,
@@ -182,6 +194,7 @@ impl Netlist {
             ports,
             first,
             crossbars,
+            rules,
         })
     }
 
@@ -217,15 +230,23 @@ impl Netlist {
             };
             let mut rx = take(&mut wired, &self.ports.input[k]);
             let mut tx = take(&mut wired, &self.ports.output[k]);
-            futures.push(bodies[self.ports.body[k]].spawn(
-                host,
-                g,
-                g - self.first[k],
-                rx.iter_mut().map(|(_, w)| w.as_mut()).collect(),
-                tx.iter_mut().map(|(_, w)| w.as_mut()).collect(),
-                run,
-                trace,
-            ));
+            futures.push(
+                bodies[self.ports.body[k]].spawn(
+                    host,
+                    g,
+                    g - self.first[k],
+                    rx.iter_mut().map(|(_, w)| w.as_mut()).collect(),
+                    tx.iter_mut()
+                        .map(|(b, w)| OutputBoundary {
+                            wired: w.as_mut(),
+                            dispatch: self.rules[*b].0,
+                            taken: self.rules[*b].1,
+                        })
+                        .collect(),
+                    run,
+                    trace,
+                ),
+            );
             for (b, w) in rx.into_iter().chain(tx) {
                 wired[b] = Some(w);
             }
@@ -255,6 +276,7 @@ mod tests {
             from,
             to,
             default: LinkConfig::default(),
+            dispatch: Dispatch::RoundRobin,
             path: None,
             only: None,
         }
@@ -307,6 +329,7 @@ mod tests {
         let lembo = Path::Lembo.kinds(TessSource::Memory);
         let check = |kinds: &[UnitKind], boundaries: &[Boundary]| {
             check::<f32>(&Graph {
+                path: Path::Lembo,
                 kinds,
                 boundaries,
                 source: TessSource::Memory,
@@ -425,6 +448,7 @@ mod tests {
             })
             .collect();
         let graph = Graph {
+            path: Path::Lembo,
             kinds: Path::Lembo.kinds(TessSource::Memory),
             boundaries: &renamed,
             source: TessSource::Memory,

@@ -320,18 +320,25 @@ fn merged_units(
     port_busy: u64,
     resolve_total: u64,
 ) -> Vec<UnitCycles> {
+    // The resolve runs in the blend units' hosts (the ROPs) and the shared port they
+    // write through, as the graph says.
+    let host = UnitKind::BlendUnit.inside();
+    let port = crate::graph::SHARED
+        .iter()
+        .find(|s| host.is_some_and(|h| crate::graph::boundary(h, s.port).is_some()))
+        .map(|s| s.port);
     let mut rop_index = 0;
     c1.units
         .iter()
         .zip(&c2.units)
         .map(|(a, b)| {
-            let busy = match a.kind {
-                UnitKind::Rop => {
-                    rop_index += 1;
-                    rop_busy[rop_index - 1]
-                }
-                UnitKind::FrameBuffer => port_busy,
-                _ => 0,
+            let busy = if Some(a.kind) == host {
+                rop_index += 1;
+                rop_busy[rop_index - 1]
+            } else if Some(a.kind) == port {
+                port_busy
+            } else {
+                0
             };
             UnitCycles {
                 name: a.name.clone(),

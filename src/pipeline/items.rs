@@ -11,7 +11,11 @@
 //! the set-up lembos in flight, not every lembo of the scene. What the hardware FIFO holds,
 //! for its area and energy (DESIGN.md §12), is each producing unit's
 //! [`super::unit::Unit::OUT_WORDS`].
+//!
+//! Every item type is an [`Item`]: what the runtime needs to know of it to dispatch it (an
+//! item dispatched by screen tile says where on screen it lies).
 
+use crate::datapath::Real;
 use crate::raster::fragment::Span;
 use crate::raster::interval::Interval;
 use crate::raster::screen::ScreenLembo;
@@ -167,5 +171,44 @@ impl MemAccess {
             first: 0,
             count: 0,
         }
+    }
+}
+
+/// What a link carries, as the runtime dispatches it ([`crate::graph::Dispatch`]).
+pub trait Item: Send + 'static {
+    /// Whether items of this type say where on screen they lie ([`Item::pixel`]): a
+    /// boundary dispatched by screen tile must carry such items (the builder checks it).
+    const ON_SCREEN: bool = false;
+
+    /// The item's first pixel (column, row), for an item on screen.
+    fn pixel(&self) -> Option<(u32, u32)> {
+        None
+    }
+}
+
+impl Item for () {}
+impl Item for MemAccess {}
+impl Item for Patch {}
+impl<R: Real> Item for LemboReady<R> {}
+impl<R: Real> Item for ScanlineRange<R> {}
+impl<R: Real> Item for ScanInterval<R> {}
+impl<R: Real> Item for ScanSegment<R> {}
+impl<R: Real> Item for ScanSubsegment<R> {}
+impl<R: Real> Item for Arc<ScreenTriangle<R>> {}
+
+impl<R: Real> Item for RopItem<R> {
+    const ON_SCREEN: bool = true;
+
+    /// A span's first pixel; a triangle piece's first pixel in its first row with any (a
+    /// piece lies inside one tile, so any of its pixels names the tile's ROP).
+    #[inline]
+    fn pixel(&self) -> Option<(u32, u32)> {
+        Some(match self {
+            RopItem::Lembo(f) => (f.span.i0, f.j),
+            RopItem::Triangle(t) => match t.rows {
+                [(a, b), _] if a < b => (a, t.j),
+                [_, (a, _)] => (a, t.j + 1),
+            },
+        })
     }
 }

@@ -3,14 +3,8 @@
 //! functional code of [`crate::raster`] and adds only time; the image is bit-identical to
 //! the functional model's for every architecture configuration and every host partition.
 //!
-//! ```text
-//!  Setup ─► MinMax ─► IntervalManager ─┬► Segmenter[0..Ns] ─┬► Subsegmenter[0..Nb] ─┬► FragmentRasterizer[0..Nr] ─┬► Rop[0..Np] ─► FrameBuffer
-//!                                      round-robin          round-robin             round-robin                   by screen tile   (memory port)
-//! ```
-//!
-//! The triangle path instantiates instead
-//! `TriangleSetup ─► TriangleRasterizer[0..Nt] ─► Rop[0..Np] ─► FrameBuffer`, the same ROPs
-//! and port.
+//! Which units each path instantiates, the boundaries between them and their dispatch
+//! rules, and the units they share are [`crate::graph`]'s; `lembo-sim graph` prints them.
 //!
 //! - [`runtime`]: the framework: clocks, links, the executor, the timeline. It knows no
 //!   unit.
@@ -388,66 +382,23 @@ fn finish(
             units[*u].name
         )));
     }
-    // A recorded functional error: the first in scene order.
-    let mut first_error: Option<Error> = None;
-    for (_, f) in &mut results {
-        if let Some(e) = f.error.take() {
-            let key = |e: &Error| match e {
-                Error::SegmentCap {
-                    lembo, scanline, ..
-                } => (*lembo, *scanline),
-                _ => (usize::MAX, u32::MAX),
-            };
-            if first_error.as_ref().is_none_or(|f| key(&e) < key(f)) {
-                first_error = Some(e);
-            }
-        }
-    }
-    if let Some(e) = first_error {
+    if let Some(e) = first_error(&mut results) {
         return Err(e);
     }
-
-    let mut total = results
+    let last = results
         .iter()
         .map(|(_, f)| f.stats.end)
         .max()
         .unwrap_or(Cycle::ZERO);
-    // One memory port (DESIGN.md §3): the frame-buffer port's busy cycles are the ROPs'
-    // traffic and the geometry fetch's reads, and the frame lasts at least as long.
-    let of_kind = |kind: UnitKind| {
-        results
-            .iter()
-            .filter(|(u, _)| units[*u].kind == kind)
-            .map(|(_, f)| f.stats.busy)
-            .sum::<u64>()
-    };
-    let reads = of_kind(UnitKind::GeometryFetch);
-    total = total.max(Cycle(of_kind(UnitKind::FrameBuffer) + reads));
+    let (total, direct) = shared_ports(&units, &results, last);
     let mut counts = Counts::default();
     let mut fetch = None;
-    let mut unit_cycles = Vec::with_capacity(units.len());
-    for (u, f) in &results {
+    for (_, f) in &results {
         counts += f.counts;
         fetch = fetch.or(f.fetch);
-        let st = &f.stats;
-        // The port's reads for the fetch, taken from its idle cycles.
-        let reads = if units[*u].kind == UnitKind::FrameBuffer {
-            reads
-        } else {
-            0
-        };
-        unit_cycles.push(UnitCycles {
-            name: units[*u].name.clone(),
-            kind: units[*u].kind,
-            busy: Cycle(st.busy + reads),
-            starved: Cycle((st.starved + (total - st.end)).saturating_sub(reads)),
-            blocked: Cycle(st.blocked),
-            items_in: st.items_in,
-            items_out: st.items_out,
-            max_fifo_occupancy: st.max_fifo_occupancy,
-        });
     }
     counts.pixels_covered = fb.covered() as u64;
+    let unit_cycles = unit_cycles(&units, &results, &direct, total);
     let trace = options.trace.then(|| {
         let tracks: Vec<trace::Track> = results
             .iter()
@@ -461,22 +412,117 @@ fn finish(
             .collect();
         trace::chrome_json(&tracks, arch.clock_mhz, total.0, trace_cap)
     });
-    let bottleneck = unit_cycles
+    let cycles = CycleReport {
+        total,
+        clock_mhz: arch.clock_mhz,
+        fps: (total > Cycle::ZERO).then(|| arch.clock_mhz * 1e6 / total.as_f64()),
+        bottleneck: bottleneck(&unit_cycles),
+        units: unit_cycles,
+    };
+    Ok(TimedFrame {
+        framebuffer: fb,
+        counts,
+        units,
+        cycles,
+        trace,
+        discoid: kept_fragments(&mut results),
+        fetch,
+        recoveries: Recoveries::default(),
+    })
+}
+
+/// The first functional error the units recorded, in scene order (taken out of them).
+fn first_error(results: &mut [(usize, Finished)]) -> Option<Error> {
+    let key = |e: &Error| match e {
+        Error::SegmentCap {
+            lembo, scanline, ..
+        } => (*lembo, *scanline),
+        _ => (usize::MAX, u32::MAX),
+    };
+    let mut first: Option<Error> = None;
+    for (_, f) in results {
+        if let Some(e) = f.error.take() {
+            if first.as_ref().is_none_or(|f| key(&e) < key(f)) {
+                first = Some(e);
+            }
+        }
+    }
+    first
+}
+
+/// The shared units of the graph ([`graph::SHARED`]): the frame's total, at least `last`
+/// and at least each shared port's busy cycles with its direct clients' (whose busy cycles
+/// are its accesses too), and the direct clients' busy cycles each port unit is charged.
+fn shared_ports(
+    units: &[UnitInstance],
+    results: &[(usize, Finished)],
+    last: Cycle,
+) -> (Cycle, Vec<(UnitKind, u64)>) {
+    let of_kind = |kind: UnitKind| {
+        results
+            .iter()
+            .filter(|(u, _)| units[*u].kind == kind)
+            .map(|(_, f)| f.stats.busy)
+            .sum::<u64>()
+    };
+    let mut total = last;
+    let mut direct = Vec::new();
+    for shared in graph::SHARED {
+        let reads: u64 = shared.direct.iter().map(|&k| of_kind(k)).sum();
+        total = total.max(Cycle(of_kind(shared.port) + reads));
+        direct.push((shared.port, reads));
+    }
+    (total, direct)
+}
+
+/// Every unit's accounting over a frame of `total` cycles, a shared port's unit charged
+/// its direct clients' accesses (`direct`) out of its idle cycles.
+fn unit_cycles(
+    units: &[UnitInstance],
+    results: &[(usize, Finished)],
+    direct: &[(UnitKind, u64)],
+    total: Cycle,
+) -> Vec<UnitCycles> {
+    results
+        .iter()
+        .map(|(u, f)| {
+            let st = &f.stats;
+            let kind = units[*u].kind;
+            let reads: u64 = direct
+                .iter()
+                .filter(|(port, _)| *port == kind)
+                .map(|(_, r)| r)
+                .sum();
+            UnitCycles {
+                name: units[*u].name.clone(),
+                kind,
+                busy: Cycle(st.busy + reads),
+                starved: Cycle((st.starved + (total - st.end)).saturating_sub(reads)),
+                blocked: Cycle(st.blocked),
+                items_in: st.items_in,
+                items_out: st.items_out,
+                max_fifo_occupancy: st.max_fifo_occupancy,
+            }
+        })
+        .collect()
+}
+
+/// The unit with the most busy cycles, the first in dataflow order on a tie.
+fn bottleneck(units: &[UnitCycles]) -> Option<String> {
+    units
         .iter()
         .fold(None::<&UnitCycles>, |best, u| match best {
             Some(b) if b.busy >= u.busy => Some(b),
             _ => Some(u),
         })
-        .map(|u| u.name.clone());
-    let cycles = CycleReport {
-        total,
-        clock_mhz: arch.clock_mhz,
-        fps: (total > Cycle::ZERO).then(|| arch.clock_mhz * 1e6 / total.as_f64()),
-        bottleneck,
-        units: unit_cycles,
-    };
+        .map(|u| u.name.clone())
+}
+
+/// An accumulation pass's kept fragments and counters over every ROP (taken out of them);
+/// None when no unit kept any.
+fn kept_fragments(results: &mut [(usize, Finished)]) -> Option<(Vec<KeptFragment>, BlendReport)> {
     let mut discoid: Option<(Vec<KeptFragment>, BlendReport)> = None;
-    for (_, f) in &mut results {
+    for (_, f) in results {
         if let Some((pending, report)) = f.discoid.take() {
             let (all, sum) = discoid.get_or_insert_with(Default::default);
             all.extend(pending);
@@ -485,16 +531,7 @@ fn finish(
             sum.discarded_threshold += report.discarded_threshold;
         }
     }
-    Ok(TimedFrame {
-        framebuffer: fb,
-        counts,
-        units,
-        cycles,
-        trace,
-        discoid,
-        fetch,
-        recoveries: Recoveries::default(),
-    })
+    discoid
 }
 
 #[cfg(test)]
@@ -526,6 +563,7 @@ mod tests {
             })
             .collect();
         let graph = Graph {
+            path: Path::Lembo,
             kinds: &both,
             boundaries: &BOUNDARIES,
             source: TessSource::Memory,

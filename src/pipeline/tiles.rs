@@ -49,6 +49,17 @@ impl RopTiles {
         };
         (rop as usize, (tx + 1) * self.tile_px)
     }
+
+    /// The first pixel column past the tile holding column `i`: where a rasterizer cuts a
+    /// run so that each piece lies in one ROP's tile.
+    #[inline]
+    pub fn tile_end(&self, i: u32) -> u32 {
+        let tx = match self.shift {
+            Some(s) => i >> s,
+            None => i / self.tile_px,
+        };
+        (tx + 1) * self.tile_px
+    }
 }
 
 /// The frame buffer the ROPs write in place, each only the pixels of its own tiles.

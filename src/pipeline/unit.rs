@@ -8,9 +8,10 @@
 //! take the units of a path from a list, make each boundary's links from its producer's
 //! output type, and refuse a graph whose consumer reads another type before anything runs.
 
+use super::items::Item;
 use super::runtime::executor::UnitFuture;
 use super::runtime::trace::Recorder;
-use super::runtime::{Ctx, LinkSpec, UnitStats};
+use super::runtime::{Ctx, Dispatcher, LinkSpec, UnitStats};
 use super::tiles::{RopTiles, SharedFrame};
 use super::wiring::{Crossbar, HostWiring, Wired};
 use crate::camera::View;
@@ -20,7 +21,7 @@ use crate::discoid::blend::BlendMode;
 use crate::discoid::report::BlendReport;
 use crate::error::Error;
 use crate::frame::discoid::{DiscoidTable, KeptFragment, Pass};
-use crate::graph::{UnitInstance, UnitKind};
+use crate::graph::{Dispatch, UnitInstance, UnitKind};
 use crate::raster::triangle::TriangleSource;
 use crate::raster::Counts;
 use crate::scene::Scene;
@@ -192,7 +193,7 @@ pub trait Unit<R: Real>: 'static {
     /// The item it reads from its input links; `()` for a unit without inputs (a source).
     type In: Send + 'static;
     /// The item it writes to its output links; `()` for a unit without outputs (a sink).
-    type Out: Send + 'static;
+    type Out: Item;
     /// Datapath words one of its output items takes in a FIFO (32 bits each in f32, 64 in
     /// f64), counted from what the hardware would send, for the FIFOs' area and energy
     /// (DESIGN.md §12); 0 for a sink.
@@ -216,6 +217,8 @@ pub trait Elaborate<R: Real> {
     fn output(&self) -> Option<(TypeId, &'static str)>;
     /// [`Unit::OUT_WORDS`].
     fn out_words(&self) -> u32;
+    /// Whether its output items say where on screen they lie ([`Item::ON_SCREEN`]).
+    fn on_screen(&self) -> bool;
     /// The crossbar of its output links to every instance of `to` (a `Crossbar<Out>`),
     /// its links each producer's output ports from `port_base` on.
     fn crossbar(
@@ -230,8 +233,8 @@ pub trait Elaborate<R: Real> {
     fn wire(&self, host: &mut HostWiring, xb: &(dyn Any + Send + Sync)) -> Box<dyn Any>;
     /// The body of unit `g`, instance `index` of its kind, with its inputs taken from
     /// `inputs` (a `Wired<In>` per feeding boundary, in the graph's order: its ports, one
-    /// boundary's after another's) and its outputs from `outputs` (a `Wired<Out>` per
-    /// boundary it feeds, likewise).
+    /// boundary's after another's) and its outputs from `outputs` (per boundary it feeds,
+    /// likewise), its items dispatched by the rule of the one its path takes.
     #[allow(clippy::too_many_arguments)]
     fn spawn<'a>(
         &self,
@@ -239,10 +242,42 @@ pub trait Elaborate<R: Real> {
         g: usize,
         index: usize,
         inputs: Vec<&mut dyn Any>,
-        outputs: Vec<&mut dyn Any>,
+        outputs: Vec<OutputBoundary<'_>>,
         run: &'a RunInputs<'a, R>,
         trace: Option<usize>,
     ) -> UnitFuture<'a, Finished>;
+}
+
+/// One boundary a unit feeds, as its body is spawned.
+pub struct OutputBoundary<'w> {
+    /// Its links (a `Wired<Out>`).
+    pub wired: &'w mut dyn Any,
+    /// Its dispatch rule.
+    pub dispatch: Dispatch,
+    /// Whether the run's path takes it: a unit sends along the first boundary it feeds
+    /// that the path takes; the others carry nothing (a graph wiring both paths' engines).
+    pub taken: bool,
+}
+
+/// The runtime's dispatcher of `rule` over the output ports `ports` (a ROP per port for a
+/// rule by screen tile, the tile interleave `tiles`).
+fn dispatcher<O: Item>(
+    rule: Dispatch,
+    ports: std::ops::Range<usize>,
+    tiles: &RopTiles,
+) -> Dispatcher<O> {
+    match rule {
+        Dispatch::RoundRobin | Dispatch::Batches => Dispatcher::round_robin(ports),
+        Dispatch::ScreenTile => {
+            let tiles = tiles.clone();
+            Dispatcher::keyed(ports, move |item: &O| {
+                let (i, j) = item
+                    .pixel()
+                    .expect("the graph check found the items on screen");
+                tiles.owner(i, j).0
+            })
+        }
+    }
 }
 
 /// The erased form of unit `U`.
@@ -283,6 +318,10 @@ impl<R: Real, U: Unit<R>> Elaborate<R> for ErasedUnit<U> {
         U::OUT_WORDS
     }
 
+    fn on_screen(&self) -> bool {
+        <U::Out as Item>::ON_SCREEN
+    }
+
     fn crossbar(
         &self,
         units: &[UnitInstance],
@@ -314,7 +353,7 @@ impl<R: Real, U: Unit<R>> Elaborate<R> for ErasedUnit<U> {
         g: usize,
         index: usize,
         inputs: Vec<&mut dyn Any>,
-        outputs: Vec<&mut dyn Any>,
+        outputs: Vec<OutputBoundary<'_>>,
         run: &'a RunInputs<'a, R>,
         trace: Option<usize>,
     ) -> UnitFuture<'a, Finished> {
@@ -328,16 +367,22 @@ impl<R: Real, U: Unit<R>> Elaborate<R> for ErasedUnit<U> {
                     .take_rx(index)
             })
             .collect();
-        let mut groups = Vec::with_capacity(outputs.len());
         let mut tx = Vec::new();
-        for w in outputs {
-            let links = w
+        let mut dispatch = None;
+        for out in outputs {
+            let links = out
+                .wired
                 .downcast_mut::<Wired<U::Out>>()
                 .expect("the graph check matched the output type")
                 .take_tx(index);
-            groups.push(tx.len()..tx.len() + links.len());
+            let ports = tx.len()..tx.len() + links.len();
             tx.extend(links);
+            if out.taken && dispatch.is_none() {
+                dispatch = Some(dispatcher(out.dispatch, ports, &run.tiles));
+            }
         }
-        U::spawn(host.ctx(g, rx, tx, groups, trace), run, index)
+        // A unit its path takes no boundary out of is fed nothing, and sends nothing.
+        let dispatch = dispatch.unwrap_or_else(|| Dispatcher::round_robin(0..0));
+        U::spawn(host.ctx(g, rx, tx, dispatch, trace), run, index)
     }
 }

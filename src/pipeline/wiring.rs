@@ -6,7 +6,7 @@
 use super::runtime::core::Core;
 use super::runtime::link::{local_link, Ends, RemoteEnd, RemoteParts, Rx, Tx};
 use super::runtime::signal::Signal;
-use super::runtime::{Ctx, LinkName, LinkSpec};
+use super::runtime::{Ctx, Dispatcher, LinkName, LinkSpec};
 use crate::graph::{UnitInstance, UnitKind};
 use std::ops::Range;
 use std::rc::Rc;
@@ -182,17 +182,17 @@ impl<'p> HostWiring<'p> {
         Wired { tx, rx }
     }
 
-    /// The context of unit `g` (of this thread) with these links, its output ports in
-    /// `groups` (one per boundary it feeds).
+    /// The context of unit `g` (of this thread) with these links, its items sent by
+    /// `dispatch`.
     pub fn ctx<I, O>(
         &self,
         g: usize,
         inputs: Vec<Rx<I>>,
         outputs: Vec<Tx<O>>,
-        groups: Vec<Range<usize>>,
+        dispatch: Dispatcher<O>,
         trace: Option<usize>,
     ) -> Ctx<I, O> {
         let u = self.local[g].expect("a unit of this thread");
-        Ctx::new(self.core.clone(), u, inputs, outputs, trace).with_groups(groups)
+        Ctx::new(self.core.clone(), u, inputs, outputs, trace).with_dispatch(dispatch)
     }
 }

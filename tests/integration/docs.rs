@@ -427,3 +427,26 @@ fn architecture_a_planted_undeclared_item_is_found() {
         );
     }
 }
+
+/// ARCHITECTURE.md's "The unit graph" is what `lembo-sim graph` prints for each graph, so
+/// the diagram cannot go stale.
+#[test]
+fn architecture_unit_graph_is_generated() {
+    use lembo_sim::graph::{diagram, Path as UnitPath, TessSource};
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let text = std::fs::read_to_string(root.join("ARCHITECTURE.md")).unwrap();
+    let graphs = [
+        (UnitPath::Lembo, TessSource::Memory),
+        (UnitPath::Triangle, TessSource::Memory),
+        (UnitPath::Triangle, TessSource::OnChip),
+    ];
+    let want: Vec<String> = graphs.iter().map(|&(p, s)| diagram(p, s)).collect();
+    let block = format!("```text\n{}```\n", want.join("\n"));
+    assert!(
+        text.contains(&block),
+        "ARCHITECTURE.md's section \"The unit graph\" is stale: replace its text block with \
+         the output of\n  for a in lembo triangle 'triangle --source onchip'; do \
+         cargo run -q --release -- graph --path $a; echo; done\n(without the last empty \
+         line), which reads:\n{block}"
+    );
+}

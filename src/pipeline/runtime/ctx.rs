@@ -2,7 +2,8 @@
 //!
 //! A unit is an `async fn` whose life is a sequence of ops. [`Ctx::next_input`] takes the
 //! next input by merge order; [`Ctx::work`] spends busy cycles with no output;
-//! [`Ctx::emit`] spends busy cycles and pushes one output item. The awaits are where the
+//! [`Ctx::emit`] spends busy cycles and pushes one output item, on the port its boundary's
+//! dispatch rule picks ([`super::dispatch`]). The awaits are where the
 //! unit waits: the executor ([`super::executor`]) then runs another unit. Every cycle from
 //! 0 to the unit's last op is exactly one of busy, starved (waiting for an input to
 //! arrive) or blocked (a full FIFO downstream):
@@ -21,6 +22,7 @@
 
 use super::core::{Core, Wait};
 use super::cycle::Cycle;
+use super::dispatch::Dispatcher;
 use super::link::{Rx, Tx};
 use super::trace::{Recorder, State};
 use std::future::Future;
@@ -76,9 +78,8 @@ pub struct Ctx<I, O> {
     unit: u32,
     inputs: Vec<Rx<I>>,
     outputs: Vec<Tx<O>>,
-    /// The output ports by the boundary they lead to, in the graph's order (one group, all
-    /// ports, unless the unit feeds several kinds).
-    groups: Vec<std::ops::Range<usize>>,
+    /// Which output port each item leaves by.
+    dispatch: Dispatcher<O>,
     /// Cycles from an op's last cycle to its output being ready.
     latency: u64,
     /// Its clock, shown in its slot when it yields ([`Self::publish`]).
@@ -96,7 +97,8 @@ pub struct Ctx<I, O> {
 
 impl<I, O> Ctx<I, O> {
     /// The context of unit `unit` of `core`, with a timeline of up to `trace_cap` events
-    /// when given.
+    /// when given, sending round-robin over all its outputs until told otherwise
+    /// ([`Self::with_dispatch`]).
     pub fn new(
         core: Rc<Core>,
         unit: u32,
@@ -110,7 +112,7 @@ impl<I, O> Ctx<I, O> {
             core,
             unit,
             inputs,
-            groups: std::iter::once(0..outputs.len()).collect(),
+            dispatch: Dispatcher::round_robin(0..outputs.len()),
             outputs,
             latency,
             now: Cycle::ZERO,
@@ -122,37 +124,22 @@ impl<I, O> Ctx<I, O> {
         }
     }
 
-    /// These output ports grouped by the boundary they lead to, in the graph's order.
-    pub fn with_groups(mut self, groups: Vec<std::ops::Range<usize>>) -> Self {
-        debug_assert_eq!(
-            groups.iter().map(|g| g.len()).sum::<usize>(),
-            self.outputs.len()
-        );
-        if !groups.is_empty() {
-            self.groups = groups;
-        }
+    /// Items leave by the ports `dispatch` picks (the boundary's rule, over the ports of
+    /// the boundary the run's path takes).
+    pub fn with_dispatch(mut self, dispatch: Dispatcher<O>) -> Self {
+        self.dispatch = dispatch;
         self
     }
 
-    /// Number of output ports.
-    pub fn outputs(&self) -> usize {
-        self.outputs.len()
+    /// The consumers its items are dispatched over.
+    pub fn consumers(&self) -> usize {
+        self.dispatch.consumers()
     }
 
-    /// The output ports to the `i`-th kind this unit feeds (in the graph's order of its
-    /// boundaries): a unit feeding several kinds addresses each through its group.
-    pub fn group(&self, i: usize) -> std::ops::Range<usize> {
-        self.groups[i].clone()
-    }
-
-    /// The port after `port`, round-robin (without a division per item).
-    #[inline]
-    pub fn next_port(&self, port: usize) -> usize {
-        if port + 1 >= self.outputs.len() {
-            0
-        } else {
-            port + 1
-        }
+    /// Which of them (by position) the next item goes to, when the rule does not depend on
+    /// the item ([`Dispatcher::next_consumer`]): for what a producer models per consumer.
+    pub fn next_consumer(&self) -> Option<usize> {
+        self.dispatch.next_consumer()
     }
 
     /// Shows the unit's clock to the executor and the other units' bounds. Done whenever
@@ -182,13 +169,14 @@ impl<I, O> Ctx<I, O> {
         }
     }
 
-    /// Spends `cycles` (>= 1) busy cycles producing `item` for output `port`, then pushes
-    /// it when the FIFO has room (see the module doc for the freeze). The op is issued and,
-    /// when the credit is known, the item pushed before this returns; the future then only
-    /// waits for a credit not yet given.
+    /// Spends `cycles` (>= 1) busy cycles producing `item`, then pushes it on the port the
+    /// dispatch rule picks when that FIFO has room (see the module doc for the freeze). The
+    /// op is issued and, when the credit is known, the item pushed before this returns; the
+    /// future then only waits for a credit not yet given.
     #[inline(always)]
-    pub fn emit(&mut self, cycles: u64, port: usize, item: O) -> Emit<'_, I, O> {
+    pub fn emit(&mut self, cycles: u64, item: O) -> Emit<'_, I, O> {
         debug_assert!(cycles >= 1);
+        let port = self.dispatch.port(&item);
         let cycles = cycles.max(1);
         let issue = self.now;
         self.work(cycles);

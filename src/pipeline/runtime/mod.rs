@@ -4,7 +4,8 @@
 //! - [`cycle`]: [`Cycle`] and [`Timed`].
 //! - [`link`]: FIFOs with depth, latency and credits, inside a host thread or across.
 //! - [`ctx`]: a unit's clock and its ops (`next_input`, `work`, `emit`) and the busy,
-//!   starved and blocked accounting.
+//!   starved and blocked accounting; [`dispatch`]: which port an emitted item leaves by
+//!   (the boundary's rule).
 //! - [`core`]: one host thread's units, their ready queue and the bounds merges read.
 //! - [`executor`]: runs the units deterministically, smallest local clock first, on one
 //!   host thread or partitioned over several; recovery and deadlock reports.
@@ -13,6 +14,7 @@
 pub mod core;
 pub mod ctx;
 pub mod cycle;
+pub mod dispatch;
 pub mod executor;
 pub mod link;
 pub mod signal;
@@ -20,6 +22,7 @@ pub mod trace;
 
 pub use ctx::{ceil_div, Ctx, UnitStats};
 pub use cycle::{Cycle, Timed};
+pub use dispatch::Dispatcher;
 pub use link::{LinkName, LinkSpec};
 
 /// Host-side options of a timed run; none of them changes a simulated result.
@@ -130,7 +133,7 @@ mod tests {
         let futures: Vec<UnitFuture<'_, (UnitStats, Vec<u32>)>> = vec![
             Box::pin(async move {
                 for n in 0..3 {
-                    src.emit(2, 0, n).await;
+                    src.emit(2, n).await;
                 }
                 (src.finish().0, Vec::new())
             }),
@@ -177,15 +180,15 @@ mod tests {
                 Box::pin(async move {
                     for n in 0..3 {
                         a.work(if n == 0 { 1 } else { 2 });
-                        a.emit(1, 0, ('A', n)).await;
+                        a.emit(1, ('A', n)).await;
                     }
                     a.finish();
                     Vec::new()
                 }),
                 Box::pin(async move {
                     b.work(1);
-                    b.emit(1, 0, ('B', 0)).await;
-                    b.emit(1, 0, ('B', 1)).await;
+                    b.emit(1, ('B', 0)).await;
+                    b.emit(1, ('B', 1)).await;
                     b.finish();
                     Vec::new()
                 }),
@@ -221,7 +224,7 @@ mod tests {
             let mut c = Ctx::<u32, u32>::new(core.clone(), unit, vec![rx], vec![tx], None);
             Box::pin(async move {
                 while let Some(n) = c.next_input().await {
-                    c.emit(1, 0, n).await;
+                    c.emit(1, n).await;
                 }
                 c.finish();
             })
@@ -302,7 +305,7 @@ mod tests {
                         );
                         let body: UnitFuture<'static, ()> = Box::pin(async move {
                             while let Some(n) = c.next_input().await {
-                                c.emit(1, 0, n).await;
+                                c.emit(1, n).await;
                             }
                             c.finish();
                         });

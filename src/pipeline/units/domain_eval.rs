@@ -64,7 +64,6 @@ pub async fn run(
     let vertices = source.vertices_per_chunk();
     // The points evaluated once the first `t` triangles of a patch are out: their share.
     let points = |t: u64| (vertices as u128 * t as u128 / triangles.max(1) as u128) as u64;
-    let mut next = 0;
     while let Some(Patch { lembo }) = ctx.next_input().await {
         let base = u64::from(lembo) * triangles;
         let mut done = 0;
@@ -77,8 +76,7 @@ pub async fn run(
                 first: (base + done) as u32,
                 count: (end - done) as u32,
             };
-            ctx.emit(cycles.max(1), next, access).await;
-            next = ctx.next_port(next);
+            ctx.emit(cycles.max(1), access).await;
             done = end;
         }
     }

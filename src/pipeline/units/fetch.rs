@@ -73,12 +73,9 @@ pub async fn run(
     port: &FrameBufferConfig,
 ) -> Finished {
     let mut port = PortClock::new(port);
-    // Its first boundary leads to the engines (a graph with both paths' setup engines
-    // feeds the second kind nothing).
-    let engines = ctx.group(0);
+    // One vertex cache per engine the batches are dealt to.
     let mut caches = plan.vertex_cache.map(|entries| {
-        engines
-            .clone()
+        (0..ctx.consumers())
             .map(|_| VertexCache::new(entries as usize))
             .collect::<Vec<_>>()
     });
@@ -88,7 +85,6 @@ pub async fn run(
         primitives: plan.primitives,
         ..FetchReport::default()
     };
-    let mut engine = engines.start;
     // The fetch's clock when its last access ended.
     let mut issued = Cycle::ZERO;
     let mut first = 0;
@@ -96,7 +92,9 @@ pub async fn run(
         let end = (first + plan.batch as u64).min(plan.primitives);
         let bytes = match caches.as_mut() {
             Some(caches) => {
-                let cache = &mut caches[engine - engines.start];
+                // The cache of the engine the runtime deals this batch to.
+                let engine = ctx.next_consumer().expect("batches are dealt in turn");
+                let cache = &mut caches[engine];
                 let misses = indices.misses(first..end, cache);
                 sizes.mesh_bytes(end - first, misses)
             }
@@ -119,13 +117,8 @@ pub async fn run(
             port.hold_until(Cycle(now.0 + 1));
         }
         issued = Cycle(now.0 + cycles);
-        ctx.emit(cycles, engine, access).await;
+        ctx.emit(cycles, access).await;
         crate::progress::advance(end - first);
-        engine = if engine + 1 >= engines.end {
-            engines.start
-        } else {
-            engine + 1
-        };
         first = end;
     }
     report.vertex_cache = caches.map(|caches| VertexCacheCounts {

@@ -50,7 +50,6 @@ pub async fn run<R: Real>(
     let mut counts = Counts::default();
     let mut scratch = IntervalScratch::default();
     let mut ivs = Vec::new();
-    let mut next_port = 0;
     while let Some(ScanlineRange { piece, j0, j1 }) = ctx.next_input().await {
         let l = &*piece.screen;
         for j in j0..=j1 {
@@ -61,7 +60,6 @@ pub async fn run<R: Real>(
             for &interval in &ivs {
                 ctx.emit(
                     cfg.cycles_per_interval,
-                    next_port,
                     ScanInterval {
                         piece: piece.clone(),
                         j,
@@ -69,7 +67,6 @@ pub async fn run<R: Real>(
                     },
                 )
                 .await;
-                next_port = ctx.next_port(next_port);
             }
         }
     }

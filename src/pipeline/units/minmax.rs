@@ -55,8 +55,6 @@ pub async fn run<R: Real>(
     let cost = cfg.cycles_per_lembo + if culls { cfg.cull_cycles_per_lembo } else { 0 };
     let height = view.viewport.height;
     let mut counts = Counts::default();
-    // Whole lembos (pieces) to the interval managers, round-robin.
-    let mut next_port = 0;
     while let Some(LemboReady { piece }) = ctx.next_input().await {
         if facing::faces_away(&piece.screen, view) {
             counts.lembos_culled_backface += 1;
@@ -65,9 +63,7 @@ pub async fn run<R: Real>(
         }
         match minmax::scanlines(&piece.screen, height) {
             Some((j0, j1)) => {
-                ctx.emit(cost, next_port, ScanlineRange { piece, j0, j1 })
-                    .await;
-                next_port = ctx.next_port(next_port);
+                ctx.emit(cost, ScanlineRange { piece, j0, j1 }).await;
             }
             None => {
                 counts.lembos_culled_outside += 1;

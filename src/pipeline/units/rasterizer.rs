@@ -74,7 +74,7 @@ pub async fn run<R: Real>(
         };
         counts.fragments += run.len() as u64;
         while !run.is_empty() {
-            let (rop, tile_end) = tiles.owner(run.i0, j);
+            let tile_end = tiles.tile_end(run.i0);
             let n = run.i1.min(tile_end) - run.i0;
             let span = Span {
                 i1: run.i0 + n,
@@ -83,7 +83,7 @@ pub async fn run<R: Real>(
             let cycles = ceil_div(n as u64, cfg.fragments_per_cycle);
             frame.prefetch(j as usize * cols.width as usize + run.i0 as usize);
             let piece = piece.clone();
-            ctx.emit(cycles, rop, RopItem::Lembo(FragmentSpan { piece, j, span }))
+            ctx.emit(cycles, RopItem::Lembo(FragmentSpan { piece, j, span }))
                 .await;
             if run.i1 <= tile_end {
                 // The last span: no (u, v) to step on to.

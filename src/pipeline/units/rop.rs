@@ -242,7 +242,6 @@ pub async fn run<R: Real>(mut ctx: Ctx<RopItem<R>, MemAccess>, rop: RopContext<'
         };
         ctx.emit(
             cfg.fragments_per_cycle.ceil_div(n) + extra,
-            0,
             MemAccess::frame(bytes),
         )
         .await;

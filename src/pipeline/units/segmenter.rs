@@ -50,7 +50,6 @@ pub async fn run<R: Real>(
     let cost = cfg.cycles_per_segment;
     let mut counts = Counts::default();
     let mut segs = Vec::new();
-    let mut next_port = 0;
     // The first (lembo, piece, scanline) over the cap, as the functional model meets them.
     let mut cap_error: Option<(u32, u32, u32)> = None;
     // The last piece's bound on a step's reach (`least_reach`), worked out once for its
@@ -76,9 +75,7 @@ pub async fn run<R: Real>(
         }
         for &segment in &segs {
             let piece = piece.clone();
-            ctx.emit(cost, next_port, ScanSegment { piece, j, segment })
-                .await;
-            next_port = ctx.next_port(next_port);
+            ctx.emit(cost, ScanSegment { piece, j, segment }).await;
         }
     }
     let mut done = Finished::new(ctx, counts);

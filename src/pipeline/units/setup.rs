@@ -68,8 +68,6 @@ pub async fn run<R: Real>(
     let cost = cfg.cycles_per_lembo;
     let mut counts = Counts::default();
     let mut pieces = Vec::new();
-    // Pieces to the MinMax units, round-robin.
-    let mut next_port = 0;
     // Each lembo of the batches dealt to this engine, made as it is taken (the others'
     // lembos are not made here).
     let (starts, mut last) = (scene.lembo_index(), LastParent::default());
@@ -94,8 +92,7 @@ pub async fn run<R: Real>(
                             id,
                             screen: Arc::new(screen),
                         };
-                        ctx.emit(owed.max(1), next_port, LemboReady { piece }).await;
-                        next_port = ctx.next_port(next_port);
+                        ctx.emit(owed.max(1), LemboReady { piece }).await;
                         owed = 0;
                     }
                     if n == 0 {

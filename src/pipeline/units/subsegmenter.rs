@@ -45,7 +45,6 @@ pub async fn run<R: Real>(
     let cost = cfg.cycles_per_subsegment;
     let mut counts = Counts::default();
     let mut subs = Vec::new();
-    let mut next_port = 0;
     while let Some(ScanSegment { piece, j, segment }) = ctx.next_input().await {
         let l = &*piece.screen;
         subs.clear();
@@ -54,7 +53,6 @@ pub async fn run<R: Real>(
             let piece = piece.clone();
             ctx.emit(
                 cost,
-                next_port,
                 ScanSubsegment {
                     piece,
                     j,
@@ -62,7 +60,6 @@ pub async fn run<R: Real>(
                 },
             )
             .await;
-            next_port = ctx.next_port(next_port);
         }
     }
     Finished::new(ctx, counts)

@@ -53,12 +53,10 @@ pub async fn run(
     cfg: &TessellatorConfig,
     triangles: u64,
 ) -> Finished {
-    let mut next = 0;
     while let Some(MemAccess { first, count, .. }) = ctx.next_input().await {
         for lembo in first..first + count {
             let cycles = cfg.cycles_per_triangle.ceil_mul(triangles).max(1);
-            ctx.emit(cycles, next, Patch { lembo }).await;
-            next = ctx.next_port(next);
+            ctx.emit(cycles, Patch { lembo }).await;
         }
     }
     Finished::new(ctx, Counts::default())

@@ -98,14 +98,8 @@ pub async fn run<R: Real>(
                     if piece.is_empty() {
                         continue;
                     }
-                    let row = if piece.rows[0].0 < piece.rows[0].1 {
-                        qj
-                    } else {
-                        qj + 1
-                    };
-                    let (rop, _) = tiles.owner(i, row);
                     let cycles = ceil_div(4 * quads_in(&piece.rows), ppc).max(1);
-                    ctx.emit(cycles, rop, RopItem::Triangle(piece)).await;
+                    ctx.emit(cycles, RopItem::Triangle(piece)).await;
                     emitted = true;
                 }
                 i = end;

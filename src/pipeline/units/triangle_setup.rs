@@ -70,7 +70,6 @@ pub async fn run<R: Real>(
     let mut culled = 0;
     let mut counts = Counts::default();
     let (mut triangles, mut pieces) = (Vec::new(), Vec::new());
-    let mut next = 0;
     let per_chunk = source.per_chunk().max(1);
     // The chunk in `triangles`, if any.
     let mut held = None;
@@ -101,8 +100,7 @@ pub async fn run<R: Real>(
                 if outcome.fan > 0 {
                     cost += per_piece;
                 }
-                ctx.emit(cost, next, Arc::new(st)).await;
-                next = ctx.next_port(next);
+                ctx.emit(cost, Arc::new(st)).await;
                 cost = 0;
             }
         }
