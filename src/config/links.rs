@@ -2,8 +2,18 @@
 //! read, written and defaulted from [`BOUNDARIES`] (a link given in part keeps its own
 //! boundary's defaults for the rest).
 
+use super::declare::{Row, Section};
+use super::rules::{Check, Describe, Whole, CYCLES, MAX_FIFO_DEPTH};
+use crate::error::Result;
 use crate::graph::{self, LinkConfig, UnitKind, BOUNDARIES, LINK_KEYS};
 use serde::{Deserialize, Serialize};
+
+/// What a link's `fifo_depth` accepts.
+const FIFO_DEPTH: Whole = Whole {
+    min: 1,
+    max: MAX_FIFO_DEPTH as u64,
+    unit: "items (a FIFO must hold at least one item)",
+};
 
 /// The file's shape of one [`LinkConfig`]: a field left out keeps its boundary's default;
 /// `null` is refused like any other value of the wrong type.
@@ -83,6 +93,57 @@ impl LinksConfig {
     pub fn all(&self) -> [(&'static str, &LinkConfig); BOUNDARIES.len()] {
         let links = self.0.each_ref();
         std::array::from_fn(|i| (LINK_KEYS[i], links[i]))
+    }
+}
+
+impl Section for LinksConfig {
+    fn validate(&self, check: &Check) -> Result<()> {
+        for (name, link) in self.all() {
+            let check = check.at(name);
+            check.field("fifo_depth", &link.fifo_depth, &FIFO_DEPTH)?;
+            check.field("latency_cycles", &link.latency_cycles, &CYCLES)?;
+        }
+        Ok(())
+    }
+
+    /// Two rows a boundary, its defaults from [`BOUNDARIES`].
+    fn rows(key: &str) -> Vec<Row> {
+        let row = |b: &graph::Boundary, field: &str, default: String, rule: &dyn Describe| Row {
+            field: format!("{key}.{}.{field}", b.key),
+            default,
+            accepted: rule.accepted(),
+            what: match field {
+                "fifo_depth" => format!(
+                    "Capacity of each link from {} to {} [items].",
+                    b.from.name(),
+                    b.to.name()
+                ),
+                _ => format!(
+                    "Transit time of each link from {} to {} [cycles].",
+                    b.from.name(),
+                    b.to.name()
+                ),
+            },
+        };
+        BOUNDARIES
+            .iter()
+            .flat_map(|b| {
+                [
+                    row(
+                        b,
+                        "fifo_depth",
+                        b.default.fifo_depth.to_string(),
+                        &FIFO_DEPTH,
+                    ),
+                    row(
+                        b,
+                        "latency_cycles",
+                        b.default.latency_cycles.to_string(),
+                        &CYCLES,
+                    ),
+                ]
+            })
+            .collect()
     }
 }
 

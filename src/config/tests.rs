@@ -2,7 +2,7 @@
 //! naming their fields, the graph's instances.
 
 use super::*;
-use crate::graph::{LinkConfig, BOUNDARIES, LINK_KEYS};
+use crate::graph::{LinkConfig, TessSource, BOUNDARIES, KINDS, LINK_KEYS};
 use std::path::PathBuf;
 
 fn arch_dir() -> PathBuf {
@@ -43,11 +43,23 @@ fn assert_invalid(text: &str, expected_field: &str, expected_value: &str) {
     }
 }
 
+/// Every file of `sim/arch/`, by name.
+fn shipped_files() -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(arch_dir())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".json"))
+        .collect();
+    names.sort();
+    assert!(names.len() >= 4, "{names:?}");
+    names
+}
+
 #[test]
 fn config_files_load_and_validate() {
-    for name in ["baseline.json", "minimal.json", "wide.json"] {
-        let config = load(name);
-        config.validate(name).unwrap();
+    for name in shipped_files() {
+        let config = load(&name);
+        config.validate(&name).unwrap();
         assert_eq!(format!("{}.json", config.name), name);
     }
 }
@@ -75,8 +87,8 @@ fn config_shipped_files_list_every_field() {
         &mut every,
     );
     every.sort();
-    for name in ["baseline.json", "minimal.json", "wide.json", "gpu.json"] {
-        let text = std::fs::read_to_string(arch_dir().join(name)).unwrap();
+    for name in shipped_files() {
+        let text = std::fs::read_to_string(arch_dir().join(&name)).unwrap();
         let mut listed = Vec::new();
         leaf_paths(&serde_json::from_str(&text).unwrap(), "", &mut listed);
         listed.sort();
@@ -84,58 +96,90 @@ fn config_shipped_files_list_every_field() {
     }
 }
 
+/// The lembo path's unit instances on `config`, counted from the graph's kinds and the
+/// file's count fields ([`ArchConfig::count_field`]) rather than from [`ArchConfig::unit`]:
+/// a kind without a count field has one instance, a kind inside another none of its own.
+fn lembo_units(config: &ArchConfig) -> u32 {
+    let value = serde_json::to_value(config).unwrap();
+    UnitPath::Lembo
+        .kinds(config.tessellation.source)
+        .iter()
+        .filter(|k| k.inside().is_none())
+        .map(|&k| match ArchConfig::count_field(k) {
+            Some(field) => value
+                .pointer(&format!("/{}", field.replace('.', "/")))
+                .unwrap()
+                .as_u64()
+                .unwrap() as u32,
+            None => 1,
+        })
+        .sum()
+}
+
+/// The baseline named `name` with each count field of the graph's kinds set to `count`
+/// when `count` is Some, then the fields `sets` (dotted path, value), and the links `links`.
+fn baseline_with(
+    name: &str,
+    count: Option<u32>,
+    sets: &[(&str, u32)],
+    links: LinksConfig,
+) -> ArchConfig {
+    let mut fields: Vec<(String, serde_json::Value)> = Vec::new();
+    if let Some(count) = count {
+        fields.extend(
+            KINDS
+                .iter()
+                .filter_map(|&k| ArchConfig::count_field(k))
+                .map(|f| (f.to_string(), count.into())),
+        );
+    }
+    fields.extend(sets.iter().map(|(f, v)| (f.to_string(), (*v).into())));
+    let mut c = ArchConfig::default().with_fields(&fields, "test").unwrap();
+    c.name = name.to_string();
+    c.links = links;
+    c
+}
+
 #[test]
 fn config_baseline_file_equals_defaults() {
     assert_eq!(load("baseline.json"), ArchConfig::default());
     assert_eq!(ArchConfig::baseline(), ArchConfig::default());
     ArchConfig::default().validate("default").unwrap();
-    assert_eq!(ArchConfig::default().units(), 1 + 3 + 2 + 2 + 4 + 4 + 1);
+    let d = ArchConfig::default();
+    assert_eq!(d.units(), lembo_units(&d));
 }
 
 #[test]
 fn config_minimal_has_one_of_each_unit_and_depth_one_fifos() {
     let config = load("minimal.json");
     let defaults = ArchConfig::default();
-    assert_eq!(config.segmenter.count, 1);
-    assert_eq!(config.subsegmenter.count, 1);
-    assert_eq!(config.rasterizer.count, 1);
-    assert_eq!(config.rop.count, 1);
-    assert_eq!(config.units(), 9);
+    let lembo_kinds = UnitPath::Lembo.kinds(TessSource::Memory);
+    let own = lembo_kinds.iter().filter(|k| k.inside().is_none()).count();
+    assert_eq!(config.units() as usize, own);
+    for kind in KINDS {
+        assert_eq!(config.unit(kind).0, 1, "{kind:?}");
+    }
     for ((name, link), (_, default)) in config.links.all().into_iter().zip(defaults.links.all()) {
         assert_eq!(link.fifo_depth, 1, "{name}");
         assert_eq!(link.latency_cycles, default.latency_cycles, "{name}");
     }
     // Everything else is the baseline.
-    let expected = baseline_with("minimal", [1, 1, 1, 1], config.links.clone());
+    let expected = baseline_with("minimal", Some(1), &[], config.links.clone());
     assert_eq!(config, expected);
-}
-
-/// The baseline named `name` with the segmenter, subsegmenter, rasterizer and ROP counts
-/// `counts` and the links `links`.
-fn baseline_with(name: &str, counts: [u32; 4], links: LinksConfig) -> ArchConfig {
-    let mut c = ArchConfig {
-        name: name.to_string(),
-        links,
-        ..ArchConfig::default()
-    };
-    [
-        c.segmenter.count,
-        c.subsegmenter.count,
-        c.rasterizer.count,
-        c.rop.count,
-    ] = counts;
-    c
 }
 
 #[test]
 fn config_wide_has_its_counts_and_depths() {
     let config = load("wide.json");
     let defaults = ArchConfig::default();
-    assert_eq!(config.segmenter.count, 4);
-    assert_eq!(config.subsegmenter.count, 4);
-    assert_eq!(config.rasterizer.count, 8);
-    assert_eq!(config.rop.count, 4);
-    assert_eq!(config.units(), 1 + 3 + 4 + 4 + 8 + 4 + 1);
+    let counts = [
+        ("segmenter.count", 4),
+        ("subsegmenter.count", 4),
+        ("rasterizer.count", 8),
+        ("triangle_rasterizer.count", 2),
+    ];
+    assert_eq!(config.units(), lembo_units(&config));
+    assert!(config.units() > defaults.units());
     for ((name, link), (_, default)) in config.links.all().into_iter().zip(defaults.links.all()) {
         let depth = match name {
             "rop_to_framebuffer" => 32,
@@ -144,8 +188,7 @@ fn config_wide_has_its_counts_and_depths() {
         assert_eq!(link.fifo_depth, depth, "{name}");
         assert_eq!(link.latency_cycles, default.latency_cycles, "{name}");
     }
-    let mut expected = baseline_with("wide", [4, 4, 8, 4], config.links.clone());
-    expected.triangle_rasterizer.count = 2;
+    let expected = baseline_with("wide", None, &counts, config.links.clone());
     assert_eq!(config, expected);
 }
 
@@ -530,5 +573,156 @@ fn config_sensitivity_knobs_default_halve_double_and_refuse() {
     assert_parse_err(
         r#"{"rop": {"fragments_per_cycle": "1"}}"#,
         "rop.fragments_per_cycle",
+    );
+}
+
+/// Every kind of the unit graph has exactly one section declaring it (a kind inside another
+/// has its host's): `unit` finds its count and latency, and `count_field` names a field
+/// that sets the count, or none for a kind of one instance.
+#[test]
+fn config_every_kind_of_the_graph_has_one_section() {
+    let declared = ArchConfig::declared_units();
+    let mut wide = load("wide.json");
+    for (i, link) in wide.links.all_mut().into_iter().enumerate() {
+        link.latency_cycles = i as u64 + 1;
+    }
+    for kind in KINDS {
+        let host = kind.inside().unwrap_or(kind);
+        let sections: Vec<_> = declared.iter().filter(|(_, k)| *k == host).collect();
+        assert_eq!(sections.len(), 1, "{kind:?}: {sections:?}");
+        let (count, latency) = wide.unit(kind);
+        match ArchConfig::count_field(kind) {
+            Some(field) => {
+                assert_eq!(field, format!("{}.count", sections[0].0));
+                let set = [(field.to_string(), serde_json::json!(count + 1))];
+                assert_eq!(
+                    wide.with_fields(&set, "test").unwrap().unit(kind).0,
+                    count + 1
+                );
+                let latency_field = field.replace(".count", ".latency_cycles");
+                let set = [(latency_field, serde_json::json!(latency + 1))];
+                assert_eq!(
+                    wide.with_fields(&set, "test").unwrap().unit(kind).1,
+                    latency + 1
+                );
+            }
+            None => assert_eq!((count, latency), (1, 1), "{kind:?}"),
+        }
+    }
+}
+
+/// The names each enum field's rule lists (the README's table shows them) are exactly the
+/// names serde reads and writes: each reads back as itself, and an unknown name is refused
+/// with a message that lists them all.
+#[test]
+fn config_enum_rules_list_the_names_serde_accepts() {
+    fn names_of<T: serde::de::DeserializeOwned + Serialize>(rule: &rules::OneOf) {
+        for name in rule.0 {
+            let value: T = serde_json::from_value(serde_json::json!(name)).unwrap();
+            assert_eq!(
+                serde_json::to_value(&value).unwrap(),
+                serde_json::json!(name)
+            );
+        }
+        let message = serde_json::from_str::<T>("\"no_such_name\"")
+            .err()
+            .unwrap()
+            .to_string();
+        let listed: Vec<String> = message
+            .split('`')
+            .skip(3)
+            .step_by(2)
+            .map(str::to_string)
+            .collect();
+        assert_eq!(listed, rule.0, "{message}");
+    }
+    names_of::<CullBackfaces>(&sections::CULL_BACKFACES);
+    names_of::<Reciprocal>(&sections::RECIPROCALS);
+    names_of::<TessSource>(&sections::TESS_SOURCES);
+}
+
+/// A section's checks follow its declaration: for every field with a lower bound above 0,
+/// the value 0 is refused naming the field's path; every default is accepted.
+#[test]
+fn config_every_declared_bound_is_checked() {
+    ArchConfig::default().validate("default").unwrap();
+    let mut refused = 0;
+    for row in ArchConfig::rows() {
+        let zero_refused = row.accepted.starts_with("1 ") || row.accepted.starts_with("1/");
+        if !zero_refused || row.field == "name" {
+            continue;
+        }
+        let set = [(row.field.clone(), serde_json::json!(0))];
+        match ArchConfig::default().with_fields(&set, "--set") {
+            Err(Error::Invalid { field, value, .. }) => {
+                assert_eq!((field.as_str(), value.as_str()), (row.field.as_str(), "0"));
+                refused += 1;
+            }
+            other => panic!("{}: {other:?}", row.field),
+        }
+    }
+    assert!(refused > 50, "{refused}");
+}
+
+/// `sim/arch/README.md` holds the field table as the declarations generate it.
+#[test]
+fn config_readme_field_table_is_generated() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("sim/arch/README.md");
+    let readme = std::fs::read_to_string(&path).unwrap();
+    let fresh = table::with_table(&readme, &fields_table()).unwrap_or_else(|| {
+        panic!(
+            "sim/arch/README.md has no generated field table: add the lines\n{}\n{}",
+            table::BEGIN,
+            table::END
+        )
+    });
+    if fresh == readme {
+        return;
+    }
+    if std::env::var_os(REFRESH).is_some_and(|v| v == "1") {
+        std::fs::write(&path, &fresh).unwrap();
+        return;
+    }
+    panic!(
+        "sim/arch/README.md's field table differs from the declarations in src/config; \
+         refresh it with\n  {REFRESH}=1 cargo test --lib config::tests::config_readme_field_table_is_generated"
+    );
+}
+
+/// The variable that makes [`config_readme_field_table_is_generated`] rewrite the README.
+const REFRESH: &str = "LEMBO_REFRESH_DOCS";
+
+/// The table's generation: one row per field of a file, and the README's copy replaced
+/// between its markers only.
+#[test]
+fn config_field_table_lists_every_field() {
+    let mut every = Vec::new();
+    leaf_paths(
+        &serde_json::to_value(ArchConfig::default()).unwrap(),
+        "",
+        &mut every,
+    );
+    every.sort();
+    let mut rows: Vec<String> = ArchConfig::rows().into_iter().map(|r| r.field).collect();
+    rows.sort();
+    assert_eq!(rows, every);
+    let readme = format!("intro\n{}\nold\n{}\ncost model\n", table::BEGIN, table::END);
+    let fresh = table::with_table(&readme, "| new |\n").unwrap();
+    assert_eq!(
+        fresh,
+        format!(
+            "intro\n{}\n\n| new |\n\n{}\ncost model\n",
+            table::BEGIN,
+            table::END
+        )
+    );
+    assert_eq!(table::with_table("no markers", "x"), None);
+    let row = ArchConfig::rows()
+        .into_iter()
+        .find(|r| r.field == "rop.tile_px")
+        .unwrap();
+    assert_eq!(
+        (row.default.as_str(), row.accepted.as_str()),
+        ("8", "1 to 256")
     );
 }
