@@ -50,9 +50,9 @@ enum Command {
     /// parallel, appending each run's record to DIR/results.jsonl as it finishes; then write
     /// results.jsonl in run order, results.csv and spec.json. Started again on the same
     /// DIR, it skips the runs already recorded.
-    ///
-    /// Test hook: with the environment variable LEMBO_SWEEP_STOP_AFTER=K the sweep stops
-    /// once K records were appended and exits with status 3, as if interrupted.
+    // Test hook, in builds with the `testkit` feature only (`stop_after_hook`): with the
+    // environment variable LEMBO_SWEEP_STOP_AFTER=K the sweep stops once K records were
+    // appended and exits with status 3, as if interrupted.
     Sweep(SweepArgs),
     /// Union the results of the shards of one sweep (each run with --shard I/N) into what
     /// an unsharded sweep writes: results.jsonl, results.csv and spec.json.
@@ -105,10 +105,31 @@ struct MergeArgs {
     by: Option<String>,
 }
 
-/// The test hook's environment variable: stop after this many records (exit status 3).
+/// The test hook's environment variable: stop after this many records (exit status 3), read
+/// in builds with the `testkit` feature only.
 const STOP_AFTER_ENV: &str = "LEMBO_SWEEP_STOP_AFTER";
 /// Exit status of a sweep stopped by the test hook.
 const EXIT_STOPPED: u8 = 3;
+
+/// The test hook: the records after which a sweep stops, from [`STOP_AFTER_ENV`] when set.
+/// Only builds with the `testkit` feature read it (the tests' builds: Cargo.toml).
+#[cfg(feature = "testkit")]
+fn stop_after_hook() -> Result<Option<usize>, String> {
+    match std::env::var(STOP_AFTER_ENV) {
+        Err(_) => Ok(None),
+        Ok(v) => v
+            .trim()
+            .parse::<usize>()
+            .map(Some)
+            .map_err(|e| format!("environment variable {STOP_AFTER_ENV} = {v:?}: {e}")),
+    }
+}
+
+/// The shipped binary has no test hook: a sweep runs to its end.
+#[cfg(not(feature = "testkit"))]
+fn stop_after_hook() -> Result<Option<usize>, String> {
+    Ok(None)
+}
 
 fn parse_shard(s: &str) -> Result<(u32, u32), String> {
     let (i, n) = s
@@ -480,17 +501,9 @@ fn sweep(args: SweepArgs) -> ExitCode {
             Err(e) => return fail(e.to_string(), e.exit_code()),
         },
     };
-    let stop_after = match std::env::var(STOP_AFTER_ENV) {
-        Err(_) => None,
-        Ok(v) => match v.trim().parse::<usize>() {
-            Ok(k) => Some(k),
-            Err(e) => {
-                return fail(
-                    format!("environment variable {STOP_AFTER_ENV} = {v:?}: {e}"),
-                    2,
-                )
-            }
-        },
+    let stop_after = match stop_after_hook() {
+        Ok(k) => k,
+        Err(message) => return fail(message, 2),
     };
     let job = SweepJob {
         spec: args.spec,

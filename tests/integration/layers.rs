@@ -39,6 +39,7 @@ const LAYERS: &[(&str, &[&str])] = &[
             "json",
             "tolerance",
             "progress",
+            "testkit",
         ],
     ),
     ("the architecture file", &["config"]),
@@ -58,15 +59,7 @@ const LAYERS: &[(&str, &[&str])] = &[
     ("cost", &["cost"]),
     (
         "jobs and reports",
-        &[
-            "report",
-            "output",
-            "job",
-            "compare",
-            "sweep",
-            "plot",
-            "datapath_study",
-        ],
+        &["report", "output", "job", "compare", "sweep", "plot"],
     ),
     ("the command", &["main"]),
 ];
