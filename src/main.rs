@@ -1,11 +1,12 @@
 //! The `lembo-sim` command: parse, validate, run, print. Everything else is in the library.
 
+use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use lembo_sim::camera::Samples;
 use lembo_sim::compare::{run_compare, CompareJob, MatchMetric, MatchPath, Tess};
 use lembo_sim::datapath::Datapath;
 use lembo_sim::discoid::blend::BlendMode;
-use lembo_sim::job::{self, run_render, Given, PrimitivePath, RenderJob};
+use lembo_sim::job::{self, run_render, Given, Mode, PrimitivePath, RenderJob};
 use lembo_sim::reference::PixelsPerDegree;
 use lembo_sim::sweep::{run_merge, run_sweep, MergeJob, Shard, SweepJob, SweepOutcome};
 use lembo_sim::tolerance::{PerspectiveTol, DEFAULT_K_PX};
@@ -154,12 +155,51 @@ enum BlendArg {
     F32,
 }
 
-#[derive(Clone, Copy, ValueEnum)]
-enum PathArg {
-    /// Lembos by the extreme method (Martinelli's unit).
-    Lembo,
-    /// Each lembo tessellated into n² triangles (--tess), rasterized with edge functions.
-    Triangle,
+/// A flag's values: the command line's word and help for each value of one of the library's
+/// own types, which the flag parses into directly (converted here, at the edge, with no
+/// second enum for the same concept).
+type Choices<T> = [(T, &'static str); 2];
+
+/// `--path`: the library's [`PrimitivePath`], in its own names.
+const PATHS: Choices<PrimitivePath> = [
+    (
+        PrimitivePath::Lembo,
+        "Lembos by the extreme method (Martinelli's unit)",
+    ),
+    (
+        PrimitivePath::Triangle,
+        "Each lembo tessellated into n² triangles (--tess), rasterized with edge functions",
+    ),
+];
+
+/// `--mode`: the library's [`Mode`], in its own names.
+const MODES: Choices<Mode> = [
+    (
+        Mode::Timed,
+        "The Figure 5 pipeline with cycle accounting, run by a deterministic executor",
+    ),
+    (
+        Mode::Functional,
+        "The untimed functional model (what is drawn; the same image, no cycles)",
+    ),
+];
+
+/// The parser of a flag whose values are `choices`, each named by `name`: clap lists them
+/// with their help, and refuses any other word naming the flag and the values it takes.
+fn choices<T: Copy + Send + Sync + 'static>(
+    choices: &'static Choices<T>,
+    name: fn(T) -> &'static str,
+) -> impl TypedValueParser<Value = T> {
+    let values = choices
+        .iter()
+        .map(move |&(v, help)| PossibleValue::new(name(v)).help(help));
+    PossibleValuesParser::new(values).map(move |word| {
+        choices
+            .iter()
+            .map(|&(v, _)| v)
+            .find(|&v| name(v) == word)
+            .expect("clap passes only the possible values")
+    })
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -178,14 +218,6 @@ enum MatchPathArg {
     Triangle,
     /// Search the lembo path's k against the triangle run at --tess N.
     Lembo,
-}
-
-#[derive(Clone, Copy, ValueEnum)]
-enum Mode {
-    /// The Figure 5 pipeline with cycle accounting, run by a deterministic executor.
-    Timed,
-    /// The untimed functional model (what is drawn; the same image, no cycles).
-    Functional,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -257,7 +289,7 @@ struct RenderArgs {
     #[command(flatten)]
     quality: QualityArgs,
     /// Simulation mode.
-    #[arg(long, value_enum, default_value = "timed")]
+    #[arg(long, default_value = "timed", value_parser = choices(&MODES, Mode::name))]
     mode: Mode,
     /// Architecture configuration (JSON, see sim/arch/README.md): unit counts, costs,
     /// FIFO depths and latencies, clock [default: the embedded sim/arch/baseline.json].
@@ -283,8 +315,8 @@ struct RenderArgs {
     viewport: Option<(u32, u32)>,
     /// Which primitives draw the scene's surfaces; refused on a discoid scene [default:
     /// lembo].
-    #[arg(long, value_enum)]
-    path: Option<PathArg>,
+    #[arg(long, value_parser = choices(&PATHS, PrimitivePath::name))]
+    path: Option<PrimitivePath>,
     /// Precision of the discoid blend units in the ROP (scenes with discoids): rgba8 is the
     /// paper's Table 1 packing in one 8-bit target; f16 and f32 are float targets. Refused
     /// on a scene without discoids [default: rgba8].
@@ -716,18 +748,12 @@ fn render(args: RenderArgs) -> ExitCode {
         samples: args.quality.samples,
         flip_ppd: args.quality.flip_ppd.unwrap_or_default(),
         viewport: args.viewport,
-        mode: match args.mode {
-            Mode::Timed => job::Mode::Timed,
-            Mode::Functional => job::Mode::Functional,
-        },
+        mode: args.mode,
         arch: args.arch,
         arch_set: args.set,
         trace_out: args.trace_out,
         tech: args.tech.map(job::TechSource::File),
-        path: match args.path.unwrap_or(PathArg::Lembo) {
-            PathArg::Lembo => PrimitivePath::Lembo,
-            PathArg::Triangle => PrimitivePath::Triangle,
-        },
+        path: args.path.unwrap_or_default(),
         tess: args.tess,
         blend: match args.blend.unwrap_or(BlendArg::Rgba8) {
             BlendArg::Rgba8 => BlendMode::Rgba8,

@@ -341,7 +341,7 @@ fn config_tessellation_fields_are_checked_naming_them() {
     assert_eq!(ok.tessellation.source, TessSource::OnChip);
     assert_eq!(ok.unit(UnitKind::Tessellator).0, 3);
     let kinds: Vec<_> = ok
-        .instances(UnitPath::Triangle)
+        .instances(PrimitivePath::Triangle)
         .into_iter()
         .map(|(u, _)| u.kind)
         .collect();

@@ -315,9 +315,9 @@ pub fn cost_at(
         blend: work.blend.as_ref().map(|b| b.mode),
         reciprocal: arch.triangle_rasterizer.reciprocal,
         path: if triangles {
-            pipeline::Path::Triangle
+            pipeline::PrimitivePath::Triangle
         } else {
-            pipeline::Path::Lembo
+            pipeline::PrimitivePath::Lembo
         },
     };
     let mut per_busy_cycle = BTreeMap::new();

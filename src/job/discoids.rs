@@ -7,7 +7,7 @@ use super::reference::reference_scene;
 use super::reference::{ErrorMaps, Measured};
 use super::route::{sim_options, Model, PathRun};
 use super::sections::{host, scene_info, settings};
-use super::validate::RenderJob;
+use super::validate::{PrimitivePath, RenderJob};
 use crate::camera::View;
 use crate::config::ArchConfig;
 use crate::cost::{self, model::CostReport};
@@ -50,9 +50,9 @@ pub(super) fn run_discoids(
                     job,
                     arch,
                     if scene.lembo_count() > 0 {
-                        pipeline::Path::Lembo
+                        PrimitivePath::Lembo
                     } else {
-                        pipeline::Path::Triangle
+                        PrimitivePath::Triangle
                     },
                 )?,
             )?;
