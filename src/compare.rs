@@ -386,14 +386,11 @@ fn run_paths(
 /// `--host-threads` is refused before any work when it exceeds the units of the smaller
 /// path's pipeline: each host thread runs at least one unit.
 fn check_host_threads(job: &CompareJob, arch: &ArchConfig) -> Result<()> {
-    let units = [
-        crate::pipeline::Path::Lembo,
-        crate::pipeline::Path::Triangle,
-    ]
-    .map(|p| arch.instances(p).len())
-    .into_iter()
-    .min()
-    .unwrap_or(1);
+    let units = [PrimitivePath::Lembo, PrimitivePath::Triangle]
+        .map(|p| arch.instances(p).len())
+        .into_iter()
+        .min()
+        .unwrap_or(1);
     if job.host_threads as usize > units {
         return Err(Error::invalid(
             COMMAND_LINE,

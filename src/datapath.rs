@@ -190,13 +190,8 @@ mod tests {
     fn f32_length_is_the_library_hypot_bit_for_bit() {
         // Random bit patterns (every exponent, subnormals, both signs) and values of the
         // sizes the extreme method meets, against `f32::hypot` (the C library's `hypotf`).
-        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            seed
-        };
+        let mut rng = crate::testkit::SplitMix64::new(0x9e37_79b9_7f4a_7c15);
+        let mut next = || rng.next_u64();
         for n in 0..2_000_000u32 {
             let r = next();
             let (x, y) = if n % 2 == 0 {

@@ -193,10 +193,13 @@ pub const SHARED: &[SharedPort] = &[SharedPort {
 /// their operations are in the blend mode's number format, not the datapath's.
 pub const DISCOID_KINDS: [UnitKind; 1] = [UnitKind::BlendUnit];
 
-/// Which primitives the timed pipeline draws.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Path {
-    /// Lembos by the extreme method (Figure 5).
+/// Which primitives a scene's surfaces are drawn as, by the functional model and the timed
+/// pipeline alike: the crate's one path type (`--path`, a sweep's `path`, report.json's
+/// `settings.path`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PrimitivePath {
+    /// Lembos by the extreme method (Figure 5; the default).
+    #[default]
     Lembo,
     /// The tessellated scene as triangles.
     Triangle,
@@ -227,21 +230,29 @@ impl TessSource {
     }
 }
 
-impl Path {
+impl PrimitivePath {
+    /// The path's name in reports and on the command line (`lembo`, `triangle`).
+    pub const fn name(self) -> &'static str {
+        match self {
+            PrimitivePath::Lembo => "lembo",
+            PrimitivePath::Triangle => "triangle",
+        }
+    }
+
     /// The path whose units `kinds` are: the triangle path if any of them is a kind only
     /// it has, else the lembo path.
-    pub fn of_kinds(kinds: impl IntoIterator<Item = UnitKind>) -> Path {
-        let lembo = Path::Lembo.kinds(TessSource::Memory);
+    pub fn of_kinds(kinds: impl IntoIterator<Item = UnitKind>) -> PrimitivePath {
+        let lembo = PrimitivePath::Lembo.kinds(TessSource::Memory);
         let triangle_only = |k: &UnitKind| {
             !lembo.contains(k)
                 && [TessSource::Memory, TessSource::OnChip]
                     .iter()
-                    .any(|&s| Path::Triangle.kinds(s).contains(k))
+                    .any(|&s| PrimitivePath::Triangle.kinds(s).contains(k))
         };
         if kinds.into_iter().any(|k| triangle_only(&k)) {
-            Path::Triangle
+            PrimitivePath::Triangle
         } else {
-            Path::Lembo
+            PrimitivePath::Lembo
         }
     }
 
@@ -250,15 +261,15 @@ impl Path {
     pub fn kinds(self, source: TessSource) -> &'static [UnitKind] {
         static KINDS: LazyLock<[Vec<UnitKind>; 3]> = LazyLock::new(|| {
             [
-                derive_kinds(Path::Lembo, TessSource::Memory),
-                derive_kinds(Path::Triangle, TessSource::Memory),
-                derive_kinds(Path::Triangle, TessSource::OnChip),
+                derive_kinds(PrimitivePath::Lembo, TessSource::Memory),
+                derive_kinds(PrimitivePath::Triangle, TessSource::Memory),
+                derive_kinds(PrimitivePath::Triangle, TessSource::OnChip),
             ]
         });
         let i = match (self, source) {
-            (Path::Lembo, _) => 0,
-            (Path::Triangle, TessSource::Memory) => 1,
-            (Path::Triangle, TessSource::OnChip) => 2,
+            (PrimitivePath::Lembo, _) => 0,
+            (PrimitivePath::Triangle, TessSource::Memory) => 1,
+            (PrimitivePath::Triangle, TessSource::OnChip) => 2,
         };
         &KINDS[i]
     }
@@ -268,7 +279,7 @@ impl Path {
 /// primitive, along each boundary the path and source take ([`Boundary::taken_by`]), in
 /// dataflow order (a kind after every kind that feeds it; among kinds ready together, the
 /// one whose boundary comes first in [`BOUNDARIES`]).
-pub fn derive_kinds(path: Path, source: TessSource) -> Vec<UnitKind> {
+pub fn derive_kinds(path: PrimitivePath, source: TessSource) -> Vec<UnitKind> {
     let taken: Vec<&Boundary> = BOUNDARIES
         .iter()
         .filter(|b| b.taken_by(path, source))
@@ -380,7 +391,7 @@ pub struct Boundary {
     /// The path whose primitives alone take it, for a boundary out of a kind both paths
     /// have (the geometry fetch feeds the lembo path's setup engines or the triangle
     /// path's); None: every path with both kinds.
-    pub path: Option<Path>,
+    pub path: Option<PrimitivePath>,
     /// The triangle source whose graphs alone wire it, when its two kinds meet in graphs of
     /// both sources but it belongs to one (the fetch feeds the triangle setup engines
     /// directly only from a mesh in memory); None: every graph with both kinds.
@@ -389,7 +400,7 @@ pub struct Boundary {
 
 impl Boundary {
     /// Whether the primitives of `path`, triangles from `source`, take this boundary.
-    pub fn taken_by(&self, path: Path, source: TessSource) -> bool {
+    pub fn taken_by(&self, path: PrimitivePath, source: TessSource) -> bool {
         self.path.is_none_or(|p| p == path) && self.only.is_none_or(|only| only == source)
     }
 
@@ -493,13 +504,13 @@ pub const BOUNDARIES: [Boundary; 14] = {
         // batches in flight per engine keep it fed across that latency down to batches of
         // about 10 primitives at a cycle each.
         Boundary {
-            path: Some(Path::Lembo),
+            path: Some(PrimitivePath::Lembo),
             ..batches(b("fetch_to_setup", GeometryFetch, Setup, 4, 40))
         },
         // As fetch_to_setup, a batch of triangles to its triangle setup engine, from a mesh
         // in memory (on-chip tessellation feeds the engines from its domain evaluators).
         Boundary {
-            path: Some(Path::Triangle),
+            path: Some(PrimitivePath::Triangle),
             only: Some(TessSource::Memory),
             ..batches(b(
                 "fetch_to_triangle_setup",
@@ -511,7 +522,7 @@ pub const BOUNDARIES: [Boundary; 14] = {
         },
         // As fetch_to_setup, a batch of lembos to its tessellator.
         Boundary {
-            path: Some(Path::Triangle),
+            path: Some(PrimitivePath::Triangle),
             only: Some(TessSource::OnChip),
             ..batches(b("fetch_to_tessellator", GeometryFetch, Tessellator, 4, 40))
         },
@@ -558,7 +569,7 @@ pub struct UnitInstance {
 
 /// The kinds `path` instantiates (its triangles from `source`), in dataflow order, with the
 /// [`DISCOID_KINDS`] whose host is on the path when the scene has discoids.
-pub fn kinds(path: Path, source: TessSource, discoids: bool) -> Vec<UnitKind> {
+pub fn kinds(path: PrimitivePath, source: TessSource, discoids: bool) -> Vec<UnitKind> {
     let mut kinds = path.kinds(source).to_vec();
     if discoids {
         let hosted = DISCOID_KINDS
@@ -591,7 +602,11 @@ pub fn instances(kinds: &[UnitKind], count: impl Fn(UnitKind) -> u32) -> Vec<Uni
 
 /// How many units `path` instantiates (its triangles from `source`) when kind `k` has
 /// `count(k)` instances, saturating (so that an unvalidated count cannot overflow).
-pub fn instance_count(path: Path, source: TessSource, count: impl Fn(UnitKind) -> u32) -> u32 {
+pub fn instance_count(
+    path: PrimitivePath,
+    source: TessSource,
+    count: impl Fn(UnitKind) -> u32,
+) -> u32 {
     path.kinds(source)
         .iter()
         .map(|&k| count(k))
@@ -606,7 +621,7 @@ pub fn instance_count(path: Path, source: TessSource, count: impl Fn(UnitKind) -
 pub struct Graph<'g> {
     /// The path whose primitives it draws: a producer feeding several kinds sends along the
     /// boundary this path takes ([`Boundary::taken_by`]); the others carry nothing.
-    pub path: Path,
+    pub path: PrimitivePath,
     /// The kinds, in dataflow order.
     pub kinds: &'g [UnitKind],
     /// The boundaries.
@@ -618,7 +633,7 @@ pub struct Graph<'g> {
 impl Graph<'static> {
     /// The graph of `path` with the triangle path's triangles from `source`: its kinds and
     /// [`BOUNDARIES`].
-    pub fn of(path: Path, source: TessSource) -> Self {
+    pub fn of(path: PrimitivePath, source: TessSource) -> Self {
         Graph {
             path,
             kinds: path.kinds(source),
@@ -650,7 +665,7 @@ impl Graph<'_> {
 /// text: its kinds in dataflow order, its boundaries with their dispatch rules and default
 /// links, and its shared units with their clients. Generated from [`BOUNDARIES`],
 /// [`SHARED`] and the kinds' entries, so it cannot go stale.
-pub fn diagram(path: Path, source: TessSource) -> String {
+pub fn diagram(path: PrimitivePath, source: TessSource) -> String {
     use std::fmt::Write as _;
     let graph = Graph::of(path, source);
     let mut out = String::new();
@@ -714,7 +729,7 @@ pub fn diagram(path: Path, source: TessSource) -> String {
 
 /// [`diagram`] as a Graphviz `dot` graph: a box per kind, an edge per boundary labelled
 /// with its name and dispatch rule, a dashed edge from each direct client of a shared unit.
-pub fn dot(path: Path, source: TessSource) -> String {
+pub fn dot(path: PrimitivePath, source: TessSource) -> String {
     use std::fmt::Write as _;
     let graph = Graph::of(path, source);
     let mut out = String::new();
@@ -750,10 +765,10 @@ pub fn dot(path: Path, source: TessSource) -> String {
 }
 
 /// The diagram's title: the path, and for the triangle path where its triangles come from.
-fn title(path: Path, source: TessSource) -> String {
+fn title(path: PrimitivePath, source: TessSource) -> String {
     match path {
-        Path::Lembo => "lembo path".to_string(),
-        Path::Triangle => format!("triangle path, triangles from {}", source.name()),
+        PrimitivePath::Lembo => "lembo path".to_string(),
+        PrimitivePath::Triangle => format!("triangle path, triangles from {}", source.name()),
     }
 }
 
@@ -894,7 +909,7 @@ mod tests {
     fn each_paths_kinds_follow_from_the_boundaries() {
         use UnitKind::*;
         assert_eq!(
-            Path::Lembo.kinds(TessSource::Memory),
+            PrimitivePath::Lembo.kinds(TessSource::Memory),
             [
                 GeometryFetch,
                 Setup,
@@ -908,11 +923,11 @@ mod tests {
             ]
         );
         assert_eq!(
-            Path::Lembo.kinds(TessSource::OnChip),
-            Path::Lembo.kinds(TessSource::Memory)
+            PrimitivePath::Lembo.kinds(TessSource::OnChip),
+            PrimitivePath::Lembo.kinds(TessSource::Memory)
         );
         assert_eq!(
-            Path::Triangle.kinds(TessSource::Memory),
+            PrimitivePath::Triangle.kinds(TessSource::Memory),
             [
                 GeometryFetch,
                 TriangleSetup,
@@ -922,7 +937,7 @@ mod tests {
             ]
         );
         assert_eq!(
-            Path::Triangle.kinds(TessSource::OnChip),
+            PrimitivePath::Triangle.kinds(TessSource::OnChip),
             [
                 GeometryFetch,
                 Tessellator,
@@ -936,9 +951,9 @@ mod tests {
         // A boundary no path takes would be a unit no graph has.
         for b in BOUNDARIES {
             let taken = [
-                (Path::Lembo, TessSource::Memory),
-                (Path::Triangle, TessSource::Memory),
-                (Path::Triangle, TessSource::OnChip),
+                (PrimitivePath::Lembo, TessSource::Memory),
+                (PrimitivePath::Triangle, TessSource::Memory),
+                (PrimitivePath::Triangle, TessSource::OnChip),
             ]
             .into_iter()
             .any(|(p, s)| b.taken_by(p, s) && p.kinds(s).contains(&b.from));
@@ -951,9 +966,9 @@ mod tests {
     #[test]
     fn graph_boundaries_chain_each_path() {
         let graphs = [
-            Path::Lembo.kinds(TessSource::Memory),
-            Path::Triangle.kinds(TessSource::Memory),
-            Path::Triangle.kinds(TessSource::OnChip),
+            PrimitivePath::Lembo.kinds(TessSource::Memory),
+            PrimitivePath::Triangle.kinds(TessSource::Memory),
+            PrimitivePath::Triangle.kinds(TessSource::OnChip),
         ];
         for kinds in graphs {
             for pair in kinds.windows(2) {

@@ -37,8 +37,9 @@
 //!   parsing of every input file, errors naming the field path.
 //! - [`tolerance`]: the lembo path's tolerances, k and Setup's perspective tolerance, each
 //!   with its default, range and check.
-//! - [`datapath`]: the `f32`/`f64` datapath; [`datapath_study`]: f32 against f64 over
-//!   seeded random lembos, for `examples/datapath_study.rs` and `tests/integration/datapath.rs`.
+//! - [`datapath`]: the `f32`/`f64` datapath.
+//! - `testkit` (tests, examples and benchmarks only: the `testkit` feature): the seeded
+//!   random number generator they share.
 //!
 //! DESIGN.md (beside the crate) holds the design the code relies on: what a cycle means,
 //! the report contract, the bad-input policy and the accuracy metrics' definitions;
@@ -54,7 +55,6 @@ pub mod compare;
 pub mod config;
 pub mod cost;
 pub mod datapath;
-pub mod datapath_study;
 pub mod discoid;
 pub mod error;
 pub mod frame;
@@ -73,4 +73,6 @@ pub mod report;
 pub mod rop;
 pub mod scene;
 pub mod sweep;
+#[cfg(any(test, feature = "testkit"))]
+pub mod testkit;
 pub mod tolerance;

@@ -1,11 +1,13 @@
 //! The `lembo-sim` command: parse, validate, run, print. Everything else is in the library.
 
+use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use lembo_sim::camera::Samples;
 use lembo_sim::compare::{run_compare, CompareJob, MatchMetric, MatchPath, Tess};
 use lembo_sim::datapath::Datapath;
 use lembo_sim::discoid::blend::BlendMode;
-use lembo_sim::job::{self, run_render, Given, PrimitivePath, RenderJob};
+use lembo_sim::graph::TessSource;
+use lembo_sim::job::{self, run_render, Given, Mode, PrimitivePath, RenderJob};
 use lembo_sim::reference::PixelsPerDegree;
 use lembo_sim::sweep::{run_merge, run_sweep, MergeJob, Shard, SweepJob, SweepOutcome};
 use lembo_sim::tolerance::{PerspectiveTol, DEFAULT_K_PX};
@@ -50,9 +52,9 @@ enum Command {
     /// parallel, appending each run's record to DIR/results.jsonl as it finishes; then write
     /// results.jsonl in run order, results.csv and spec.json. Started again on the same
     /// DIR, it skips the runs already recorded.
-    ///
-    /// Test hook: with the environment variable LEMBO_SWEEP_STOP_AFTER=K the sweep stops
-    /// once K records were appended and exits with status 3, as if interrupted.
+    // Test hook, in builds with the `testkit` feature only (`stop_after_hook`): with the
+    // environment variable LEMBO_SWEEP_STOP_AFTER=K the sweep stops once K records were
+    // appended and exits with status 3, as if interrupted.
     Sweep(SweepArgs),
     /// Union the results of the shards of one sweep (each run with --shard I/N) into what
     /// an unsharded sweep writes: results.jsonl, results.csv and spec.json.
@@ -68,23 +70,15 @@ enum Command {
 #[derive(Args)]
 struct GraphArgs {
     /// Which path's graph.
-    #[arg(long, value_enum, default_value = "lembo")]
-    path: PathArg,
+    #[arg(long, default_value = "lembo", value_parser = choices(&PATHS, PrimitivePath::name))]
+    path: PrimitivePath,
     /// Where the triangle path's triangles come from (the architecture's
     /// tessellation.source); the lembo path has one graph.
-    #[arg(long, value_enum, default_value = "memory")]
-    source: SourceArg,
+    #[arg(long, default_value = "memory", value_parser = choices(&SOURCES, TessSource::name))]
+    source: TessSource,
     /// Print Graphviz dot instead of text.
     #[arg(long)]
     dot: bool,
-}
-
-#[derive(Clone, Copy, ValueEnum)]
-enum SourceArg {
-    /// A mesh tessellated ahead of the frame, read from memory.
-    Memory,
-    /// The lembos, tessellated on chip.
-    Onchip,
 }
 
 #[derive(Args)]
@@ -133,10 +127,31 @@ struct MergeArgs {
     by: Option<String>,
 }
 
-/// The test hook's environment variable: stop after this many records (exit status 3).
+/// The test hook's environment variable: stop after this many records (exit status 3), read
+/// in builds with the `testkit` feature only.
 const STOP_AFTER_ENV: &str = "LEMBO_SWEEP_STOP_AFTER";
 /// Exit status of a sweep stopped by the test hook.
 const EXIT_STOPPED: u8 = 3;
+
+/// The test hook: the records after which a sweep stops, from [`STOP_AFTER_ENV`] when set.
+/// Only builds with the `testkit` feature read it (the tests' builds: Cargo.toml).
+#[cfg(feature = "testkit")]
+fn stop_after_hook() -> Result<Option<usize>, String> {
+    match std::env::var(STOP_AFTER_ENV) {
+        Err(_) => Ok(None),
+        Ok(v) => v
+            .trim()
+            .parse::<usize>()
+            .map(Some)
+            .map_err(|e| format!("environment variable {STOP_AFTER_ENV} = {v:?}: {e}")),
+    }
+}
+
+/// The shipped binary has no test hook: a sweep runs to its end.
+#[cfg(not(feature = "testkit"))]
+fn stop_after_hook() -> Result<Option<usize>, String> {
+    Ok(None)
+}
 
 fn parse_shard(s: &str) -> Result<(u32, u32), String> {
     let (i, n) = s
@@ -161,12 +176,60 @@ enum BlendArg {
     F32,
 }
 
-#[derive(Clone, Copy, ValueEnum)]
-enum PathArg {
-    /// Lembos by the extreme method (Martinelli's unit).
-    Lembo,
-    /// Each lembo tessellated into n² triangles (--tess), rasterized with edge functions.
-    Triangle,
+/// A flag's values: the command line's word and help for each value of one of the library's
+/// own types, which the flag parses into directly (converted here, at the edge, with no
+/// second enum for the same concept).
+type Choices<T> = [(T, &'static str); 2];
+
+/// `--path`: the library's [`PrimitivePath`], in its own names.
+/// The triangle sources `graph --source` takes.
+const SOURCES: Choices<TessSource> = [
+    (
+        TessSource::Memory,
+        "A mesh tessellated ahead of the frame, read from memory",
+    ),
+    (TessSource::OnChip, "The lembos, tessellated on chip"),
+];
+
+const PATHS: Choices<PrimitivePath> = [
+    (
+        PrimitivePath::Lembo,
+        "Lembos by the extreme method (Martinelli's unit)",
+    ),
+    (
+        PrimitivePath::Triangle,
+        "Each lembo tessellated into n² triangles (--tess), rasterized with edge functions",
+    ),
+];
+
+/// `--mode`: the library's [`Mode`], in its own names.
+const MODES: Choices<Mode> = [
+    (
+        Mode::Timed,
+        "The Figure 5 pipeline with cycle accounting, run by a deterministic executor",
+    ),
+    (
+        Mode::Functional,
+        "The untimed functional model (what is drawn; the same image, no cycles)",
+    ),
+];
+
+/// The parser of a flag whose values are `choices`, each named by `name`: clap lists them
+/// with their help, and refuses any other word naming the flag and the values it takes.
+fn choices<T: Copy + Send + Sync + 'static>(
+    choices: &'static Choices<T>,
+    name: fn(T) -> &'static str,
+) -> impl TypedValueParser<Value = T> {
+    let values = choices
+        .iter()
+        .map(move |&(v, help)| PossibleValue::new(name(v)).help(help));
+    PossibleValuesParser::new(values).map(move |word| {
+        choices
+            .iter()
+            .map(|&(v, _)| v)
+            .find(|&v| name(v) == word)
+            .expect("clap passes only the possible values")
+    })
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -185,14 +248,6 @@ enum MatchPathArg {
     Triangle,
     /// Search the lembo path's k against the triangle run at --tess N.
     Lembo,
-}
-
-#[derive(Clone, Copy, ValueEnum)]
-enum Mode {
-    /// The Figure 5 pipeline with cycle accounting, run by a deterministic executor.
-    Timed,
-    /// The untimed functional model (what is drawn; the same image, no cycles).
-    Functional,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -264,7 +319,7 @@ struct RenderArgs {
     #[command(flatten)]
     quality: QualityArgs,
     /// Simulation mode.
-    #[arg(long, value_enum, default_value = "timed")]
+    #[arg(long, default_value = "timed", value_parser = choices(&MODES, Mode::name))]
     mode: Mode,
     /// Architecture configuration (JSON, see sim/arch/README.md): unit counts, costs,
     /// FIFO depths and latencies, clock [default: the embedded sim/arch/baseline.json].
@@ -290,8 +345,8 @@ struct RenderArgs {
     viewport: Option<(u32, u32)>,
     /// Which primitives draw the scene's surfaces; refused on a discoid scene [default:
     /// lembo].
-    #[arg(long, value_enum)]
-    path: Option<PathArg>,
+    #[arg(long, value_parser = choices(&PATHS, PrimitivePath::name))]
+    path: Option<PrimitivePath>,
     /// Precision of the discoid blend units in the ROP (scenes with discoids): rgba8 is the
     /// paper's Table 1 packing in one 8-bit target; f16 and f32 are float targets. Refused
     /// on a scene without discoids [default: rgba8].
@@ -498,19 +553,11 @@ fn main() -> ExitCode {
 }
 
 fn graph(args: GraphArgs) -> ExitCode {
-    use lembo_sim::graph::{self, Path, TessSource};
-    let path = match args.path {
-        PathArg::Lembo => Path::Lembo,
-        PathArg::Triangle => Path::Triangle,
-    };
-    let source = match args.source {
-        SourceArg::Memory => TessSource::Memory,
-        SourceArg::Onchip => TessSource::OnChip,
-    };
+    let (path, source) = (args.path, args.source);
     let text = if args.dot {
-        graph::dot(path, source)
+        lembo_sim::graph::dot(path, source)
     } else {
-        graph::diagram(path, source)
+        lembo_sim::graph::diagram(path, source)
     };
     let _ = write!(std::io::stdout().lock(), "{text}");
     ExitCode::SUCCESS
@@ -528,17 +575,9 @@ fn sweep(args: SweepArgs) -> ExitCode {
             Err(e) => return fail(e.to_string(), e.exit_code()),
         },
     };
-    let stop_after = match std::env::var(STOP_AFTER_ENV) {
-        Err(_) => None,
-        Ok(v) => match v.trim().parse::<usize>() {
-            Ok(k) => Some(k),
-            Err(e) => {
-                return fail(
-                    format!("environment variable {STOP_AFTER_ENV} = {v:?}: {e}"),
-                    2,
-                )
-            }
-        },
+    let stop_after = match stop_after_hook() {
+        Ok(k) => k,
+        Err(message) => return fail(message, 2),
     };
     let job = SweepJob {
         spec: args.spec,
@@ -751,18 +790,12 @@ fn render(args: RenderArgs) -> ExitCode {
         samples: args.quality.samples,
         flip_ppd: args.quality.flip_ppd.unwrap_or_default(),
         viewport: args.viewport,
-        mode: match args.mode {
-            Mode::Timed => job::Mode::Timed,
-            Mode::Functional => job::Mode::Functional,
-        },
+        mode: args.mode,
         arch: args.arch,
         arch_set: args.set,
         trace_out: args.trace_out,
         tech: args.tech.map(job::TechSource::File),
-        path: match args.path.unwrap_or(PathArg::Lembo) {
-            PathArg::Lembo => PrimitivePath::Lembo,
-            PathArg::Triangle => PrimitivePath::Triangle,
-        },
+        path: args.path.unwrap_or_default(),
         tess: args.tess,
         blend: match args.blend.unwrap_or(BlendArg::Rgba8) {
             BlendArg::Rgba8 => BlendMode::Rgba8,

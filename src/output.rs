@@ -34,18 +34,19 @@
 //! Nothing is fsynced: a killed process loses nothing the kernel already has, and
 //! durability across a power loss is not attempted.
 //!
-//! Test hook: with the environment variable `LEMBO_HOLD_BEFORE_RENAME_SECS=S` every write
-//! waits S seconds between steps 2 and 3, so a test can interrupt a run whose temporaries
-//! are all written (`tests/integration/atomic.rs`).
+//! Test hook, in builds with the `testkit` feature only (the tests' builds, not the shipped
+//! binary: Cargo.toml): with the environment variable `LEMBO_HOLD_BEFORE_RENAME_SECS=S`
+//! every write waits S seconds between steps 2 and 3, so a test can interrupt a run whose
+//! temporaries are all written (`tests/integration/atomic.rs`).
 
 use crate::error::{parent_dir, Error, Result, COMMAND_LINE};
 use std::fs::File;
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, MutexGuard};
-use std::time::Duration;
 
 /// The test hook's environment variable: seconds to wait before the renames.
+#[cfg(feature = "testkit")]
 pub const HOLD_ENV: &str = "LEMBO_HOLD_BEFORE_RENAME_SECS";
 
 /// What this process's writes in progress have put on disk: what a signal must remove.
@@ -284,18 +285,20 @@ pub fn write_paths(files: &[(PathBuf, &[u8])]) -> Result<()> {
     for ((dir, name, _), (_, bytes)) in targets.iter().zip(files) {
         staged.write_temp(&dir.join(temp_name(name)), bytes)?;
     }
+    #[cfg(feature = "testkit")]
     hold_for_tests();
     staged.commit(&dirs, targets.iter().map(|(_, _, path)| path))
 }
 
 /// The test hook: waits [`HOLD_ENV`] seconds (at most an hour) when it is set.
+#[cfg(feature = "testkit")]
 fn hold_for_tests() {
     let secs = std::env::var(HOLD_ENV)
         .ok()
         .and_then(|v| v.trim().parse::<f64>().ok())
         .filter(|s| s.is_finite() && *s > 0.0);
     if let Some(secs) = secs {
-        std::thread::sleep(Duration::from_secs_f64(secs.min(3600.0)));
+        std::thread::sleep(std::time::Duration::from_secs_f64(secs.min(3600.0)));
     }
 }
 

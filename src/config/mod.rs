@@ -25,7 +25,7 @@
 //! crossbar, and DRAM timing beyond a bandwidth-limited port.
 
 use crate::error::{read_text_file, Error, Result};
-use crate::graph::{self, Path as UnitPath, UnitInstance, UnitKind};
+use crate::graph::{self, PrimitivePath, UnitInstance, UnitKind};
 
 mod declare;
 mod links;
@@ -177,13 +177,13 @@ impl ArchConfig {
 
     /// The units `path` instantiates on this architecture, in dataflow order, with their
     /// latencies \[cycles\].
-    pub fn instances(&self, path: UnitPath) -> Vec<(UnitInstance, u64)> {
+    pub fn instances(&self, path: PrimitivePath) -> Vec<(UnitInstance, u64)> {
         self.instances_with(path, false)
     }
 
     /// [`ArchConfig::instances`], with the units a scene with discoids adds when `discoids`
     /// ([`graph::DISCOID_KINDS`]).
-    pub fn instances_with(&self, path: UnitPath, discoids: bool) -> Vec<(UnitInstance, u64)> {
+    pub fn instances_with(&self, path: PrimitivePath, discoids: bool) -> Vec<(UnitInstance, u64)> {
         graph::instances(
             &graph::kinds(path, self.tessellation.source, discoids),
             |k| self.unit(k).0,
@@ -199,7 +199,7 @@ impl ArchConfig {
     /// Unit instances of the lembo path (saturating, so that an unvalidated configuration
     /// cannot overflow).
     pub fn units(&self) -> u32 {
-        graph::instance_count(UnitPath::Lembo, self.tessellation.source, |k| {
+        graph::instance_count(PrimitivePath::Lembo, self.tessellation.source, |k| {
             self.unit(k).0
         })
     }

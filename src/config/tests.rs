@@ -101,7 +101,7 @@ fn config_shipped_files_list_every_field() {
 /// a kind without a count field has one instance, a kind inside another none of its own.
 fn lembo_units(config: &ArchConfig) -> u32 {
     let value = serde_json::to_value(config).unwrap();
-    UnitPath::Lembo
+    PrimitivePath::Lembo
         .kinds(config.tessellation.source)
         .iter()
         .filter(|k| k.inside().is_none())
@@ -153,7 +153,7 @@ fn config_baseline_file_equals_defaults() {
 fn config_minimal_has_one_of_each_unit_and_depth_one_fifos() {
     let config = load("minimal.json");
     let defaults = ArchConfig::default();
-    let lembo_kinds = UnitPath::Lembo.kinds(TessSource::Memory);
+    let lembo_kinds = PrimitivePath::Lembo.kinds(TessSource::Memory);
     let own = lembo_kinds.iter().filter(|k| k.inside().is_none()).count();
     assert_eq!(config.units() as usize, own);
     for kind in KINDS {
@@ -384,7 +384,7 @@ fn config_tessellation_fields_are_checked_naming_them() {
     assert_eq!(ok.tessellation.source, TessSource::OnChip);
     assert_eq!(ok.unit(UnitKind::Tessellator).0, 3);
     let kinds: Vec<_> = ok
-        .instances(UnitPath::Triangle)
+        .instances(PrimitivePath::Triangle)
         .into_iter()
         .map(|(u, _)| u.kind)
         .collect();

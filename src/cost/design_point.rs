@@ -36,7 +36,7 @@
 use crate::config::{ArchConfig, Reciprocal};
 use crate::datapath::{Datapath, Op, OPS};
 use crate::discoid::blend::BlendMode;
-use crate::graph::{Path, UnitKind};
+use crate::graph::{PrimitivePath, UnitKind};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::sync::OnceLock;
@@ -87,7 +87,7 @@ pub struct Sizing {
     /// The triangle rasterizer's reciprocal.
     pub reciprocal: Reciprocal,
     /// The path the frame's ROPs serve.
-    pub path: Path,
+    pub path: PrimitivePath,
 }
 
 impl Sizing {
@@ -119,14 +119,7 @@ impl Sizing {
                 }
             ),
             (UnitKind::BlendUnit, Some(mode)) => format!("{}/{}", kind.name(), mode.name()),
-            (UnitKind::Rop, _) => format!(
-                "{}/{}",
-                kind.name(),
-                match self.path {
-                    Path::Lembo => "lembo",
-                    Path::Triangle => "triangle",
-                }
-            ),
+            (UnitKind::Rop, _) => format!("{}/{}", kind.name(), self.path.name()),
             _ => kind.name().to_string(),
         }
     }
@@ -307,10 +300,10 @@ mod tests {
         let d = embedded();
         assert!(d.regenerate.contains("LEMBO_BLESS=1"), "{}", d.regenerate);
         for (dp, path) in [
-            (Datapath::F32, Path::Lembo),
-            (Datapath::F64, Path::Lembo),
-            (Datapath::F32, Path::Triangle),
-            (Datapath::F64, Path::Triangle),
+            (Datapath::F32, PrimitivePath::Lembo),
+            (Datapath::F64, PrimitivePath::Lembo),
+            (Datapath::F32, PrimitivePath::Triangle),
+            (Datapath::F64, PrimitivePath::Triangle),
         ] {
             let sizing = |datapath| Sizing {
                 datapath,

@@ -309,7 +309,7 @@ pub fn cost_at(
         datapath,
         blend: work.blend.as_ref().map(|b| b.mode),
         reciprocal: arch.triangle_rasterizer.reciprocal,
-        path: pipeline::Path::of_kinds(work.cycles.units.iter().map(|u| u.kind)),
+        path: pipeline::PrimitivePath::of_kinds(work.cycles.units.iter().map(|u| u.kind)),
     };
     // The units built differently from the model priced as built (DESIGN.md §12).
     let ops = super::built::as_built(

@@ -5,7 +5,7 @@
 
 use super::counted::{counting, Counted};
 use crate::datapath::{Op, Real, OPS};
-use crate::discoid::blend::tests::{frag, Rng};
+use crate::discoid::blend::tests::{frag, stream};
 use crate::discoid::blend::{Accum, BlendMode};
 use crate::graph::UnitKind;
 use crate::raster::fragment::{rasterize, Columns};
@@ -15,6 +15,7 @@ use crate::raster::screen::Partition;
 use crate::raster::setup::tests::{screen_lembo, x_linear, y_bowl, y_plane, Collect, SIDE};
 use crate::raster::subsegmenter::Subsegment;
 use crate::raster::Counts;
+use crate::testkit::SplitMix64;
 
 /// The operation counts of a hand-worked subsegment of n fragments: the span's setup
 /// (order the ends: a compare; dx: an add and a compare; each end's pixel: an add, a
@@ -124,9 +125,9 @@ fn the_blend_alu_counts_equation_5_per_mode() {
 /// The counting word blends and resolves every mode to the same bits.
 #[test]
 fn counting_the_blend_changes_no_bit() {
-    let mut rng = Rng(0x5eed_0003);
+    let mut rng = SplitMix64::new(0x5eed_0003);
     for _ in 0..5_000 {
-        let frags = rng.stream();
+        let frags = stream(&mut rng);
         for mode in BlendMode::ALL {
             let (plain, counted) = (&mut Accum::default(), &mut Accum::default());
             for &f in &frags {

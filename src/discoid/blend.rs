@@ -352,6 +352,7 @@ fn blend_rgba8<W: Real>(rgba: &mut [u8; 4], b: u8, input: [f32; 3]) -> Blended {
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+    use crate::testkit::SplitMix64;
 
     pub(crate) fn frag(beta: f64, diffuse: f64, specular: f64) -> BlendInput {
         BlendInput {
@@ -371,29 +372,12 @@ pub(crate) mod tests {
         (px, saturated)
     }
 
-    /// SplitMix64: a seeded stream of uniform numbers in [0, 1), for reproducible tests.
-    pub(crate) struct Rng(pub(crate) u64);
-
-    impl Rng {
-        fn next_u64(&mut self) -> u64 {
-            self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            z ^ (z >> 31)
-        }
-
-        fn unit(&mut self) -> f64 {
-            (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-        }
-
-        /// 1..=16 fragments with beta in (0, 1] and interest values in [0, 1].
-        pub(crate) fn stream(&mut self) -> Vec<BlendInput> {
-            let n = 1 + (self.next_u64() % 16) as usize;
-            (0..n)
-                .map(|_| frag(1.0 - self.unit(), self.unit(), self.unit()))
-                .collect()
-        }
+    /// 1..=16 fragments with beta in (0, 1] and interest values in [0, 1], drawn from `rng`.
+    pub(crate) fn stream(rng: &mut SplitMix64) -> Vec<BlendInput> {
+        let n = 1 + (rng.next_u64() % 16) as usize;
+        (0..n)
+            .map(|_| frag(1.0 - rng.unit(), rng.unit(), rng.unit()))
+            .collect()
     }
 
     #[test]
@@ -638,10 +622,10 @@ pub(crate) mod tests {
 
     #[test]
     fn f32_incremental_form_agrees_with_the_direct_average() {
-        let mut rng = Rng(0x5eed_0001);
+        let mut rng = SplitMix64::new(0x5eed_0001);
         let mut worst = 0.0f64;
         for _ in 0..20_000 {
-            let frags = rng.stream();
+            let frags = stream(&mut rng);
             let mut exact = ExactAccum::default();
             frags.iter().for_each(|&f| exact.add(f));
             let (px, _) = accumulate(BlendMode::F32, &frags);
@@ -655,12 +639,12 @@ pub(crate) mod tests {
 
     #[test]
     fn blend_error_is_ordered_f32_f16_rgba8() {
-        let mut rng = Rng(0x5eed_0002);
+        let mut rng = SplitMix64::new(0x5eed_0002);
         let mut error = [0.0f64; 3];
         let mut n_resolved = [0u32; 3];
         let mut n_all_codes_zero = 0;
         for _ in 0..20_000 {
-            let frags = rng.stream();
+            let frags = stream(&mut rng);
             let mut exact = ExactAccum::default();
             frags.iter().for_each(|&f| exact.add(f));
             let (ed, es) = exact.resolve().unwrap();

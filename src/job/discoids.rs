@@ -7,7 +7,7 @@ use super::reference::reference_scene;
 use super::reference::{ErrorMaps, Measured};
 use super::route::{sim_options, Model, PathRun};
 use super::sections::{host, scene_info, settings};
-use super::validate::RenderJob;
+use super::validate::{PrimitivePath, RenderJob};
 use crate::camera::View;
 use crate::config::ArchConfig;
 use crate::cost::{self, model::CostReport};
@@ -149,9 +149,9 @@ fn run_passes(
                     job,
                     arch,
                     if scene.lembo_count() > 0 {
-                        pipeline::Path::Lembo
+                        PrimitivePath::Lembo
                     } else {
-                        pipeline::Path::Triangle
+                        PrimitivePath::Triangle
                     },
                 )?,
             )?;

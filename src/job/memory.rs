@@ -85,8 +85,10 @@ fn estimate(job: &RenderJob, scene: &Scene, extra_per_pixel: f64) -> (f64, f64) 
 }
 
 /// The environment variable that, when set, replaces the memory the system reports as
-/// available \[bytes\]: a machine of any size can then be asked how a smaller one refuses
-/// (the tests use it, so the refusal is tested on every machine).
+/// available \[bytes\]: a user setting, not a test hook (DESIGN.md §8), for a run whose
+/// allowance is not what /proc/meminfo says (a cgroup's memory limit, a shared host); a
+/// machine of any size can also be asked how a smaller one refuses, which is how the tests
+/// check the refusal on every machine.
 pub const MEMORY_AVAILABLE_ENV: &str = "LEMBO_MEMORY_AVAILABLE";
 
 /// The memory a run may count on \[bytes\]: [`MEMORY_AVAILABLE_ENV`] when set (a positive

@@ -311,8 +311,8 @@ fn draw(
         Model::Timed(arch) => arch,
     };
     let (path, source) = match route {
-        Route::Triangles(t) => (pipeline::Path::Triangle, Source::Triangles(t)),
-        _ => (pipeline::Path::Lembo, Source::Lembos),
+        Route::Triangles(t) => (PrimitivePath::Triangle, Source::Triangles(t)),
+        _ => (PrimitivePath::Lembo, Source::Lembos),
     };
     let options = sim_options(job, arch, path)?;
     crate::progress::stage("timed pipeline");

@@ -9,7 +9,7 @@ use crate::camera::{Samples, MAX_VIEWPORT_SIDE};
 use crate::config::ArchConfig;
 use crate::error::{Error, Result, COMMAND_LINE};
 use crate::lembo::tessellate::Tessellation;
-use crate::pipeline::{self, SimOptions};
+use crate::pipeline::SimOptions;
 use crate::report::Report;
 use crate::rop::FrameBuffer;
 use crate::scene::Scene;
@@ -225,7 +225,7 @@ pub struct PathRun {
 pub(super) fn sim_options(
     job: &RenderJob,
     arch: &ArchConfig,
-    path: pipeline::Path,
+    path: PrimitivePath,
 ) -> Result<SimOptions> {
     let units = arch.instances(path).len();
     if job.host_threads as usize > units {

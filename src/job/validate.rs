@@ -10,6 +10,7 @@ use crate::error::{Error, Result, COMMAND_LINE};
 use crate::output::{check_out_dir, check_out_file};
 use crate::reference::PixelsPerDegree;
 use crate::tolerance::{check_k, PerspectiveTol, Tolerance};
+use serde::Deserialize;
 use std::path::PathBuf;
 
 /// Checks a count given on the command line: `value` of `flag` must be in 1..=`max`
@@ -38,34 +39,30 @@ pub const MAX_SUPERSAMPLE: u32 = 8;
 /// The largest accepted tessellation level (triangles per lembo edge).
 pub const MAX_TESS: u32 = 1024;
 
-/// Which primitives the scene's surfaces are drawn as.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum PrimitivePath {
-    /// Lembos, by the extreme method (the default).
-    #[default]
-    Lembo,
-    /// Each lembo tessellated into n² triangles, rasterized as a GPU does.
-    Triangle,
-}
+/// Which primitives the scene's surfaces are drawn as: the graph's path type, which the
+/// timed pipeline instantiates too.
+pub use crate::graph::PrimitivePath;
 
-impl PrimitivePath {
-    /// The path's name in reports and on the command line (`lembo`, `triangle`).
-    pub fn name(self) -> &'static str {
-        match self {
-            PrimitivePath::Lembo => "lembo",
-            PrimitivePath::Triangle => "triangle",
-        }
-    }
-}
-
-/// How a render is simulated.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+/// How a render is simulated: the crate's one mode type (`--mode`, a sweep spec's `mode`,
+/// which is why it deserializes: `timed`, `functional`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum Mode {
     /// The Figure 5 pipeline with cycle accounting (the default).
     #[default]
     Timed,
     /// The functional model alone: the same image, no cycles.
     Functional,
+}
+
+impl Mode {
+    /// The mode's name in reports, specs and on the command line (`timed`, `functional`).
+    pub const fn name(self) -> &'static str {
+        match self {
+            Mode::Timed => "timed",
+            Mode::Functional => "functional",
+        }
+    }
 }
 
 /// A validated render request.

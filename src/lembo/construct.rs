@@ -732,13 +732,8 @@ mod tests {
     /// cell faces, edges and corners.
     #[test]
     fn the_weld_finds_the_sets_every_pair_finds() {
-        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
-        let mut random = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rng = crate::testkit::SplitMix64::new(0x9e37_79b9_7f4a_7c15);
+        let mut random = move || rng.unit();
         let far = DVec3::splat(1e6);
         let tol = WELD_RELATIVE * far.length();
         let cell = WELD_CELLS * tol;

@@ -267,7 +267,7 @@ pub fn out_words(kind: UnitKind) -> u32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::graph::{Boundary, LinkConfig, Path, TessSource, BOUNDARIES};
+    use crate::graph::{Boundary, LinkConfig, PrimitivePath, TessSource, BOUNDARIES};
     use UnitKind::*;
 
     fn boundary(key: &'static str, from: UnitKind, to: UnitKind) -> Boundary {
@@ -289,9 +289,9 @@ mod tests {
     #[test]
     fn builder_accepts_both_paths() {
         let graphs = [
-            (Path::Lembo, TessSource::Memory),
-            (Path::Triangle, TessSource::Memory),
-            (Path::Triangle, TessSource::OnChip),
+            (PrimitivePath::Lembo, TessSource::Memory),
+            (PrimitivePath::Triangle, TessSource::Memory),
+            (PrimitivePath::Triangle, TessSource::OnChip),
         ];
         for (path, source) in graphs {
             let ports = check::<f32>(&Graph::of(path, source)).unwrap();
@@ -326,10 +326,10 @@ mod tests {
     /// error that names it.
     #[test]
     fn builder_refuses_a_miswired_graph_with_a_named_error() {
-        let lembo = Path::Lembo.kinds(TessSource::Memory);
+        let lembo = PrimitivePath::Lembo.kinds(TessSource::Memory);
         let check = |kinds: &[UnitKind], boundaries: &[Boundary]| {
             check::<f32>(&Graph {
-                path: Path::Lembo,
+                path: PrimitivePath::Lembo,
                 kinds,
                 boundaries,
                 source: TessSource::Memory,
@@ -394,9 +394,12 @@ mod tests {
             .into_iter()
             .filter(|k| k.inside().is_none())
             .filter(|k| {
-                [crate::graph::Path::Lembo, crate::graph::Path::Triangle]
-                    .iter()
-                    .any(|p| p.kinds(TessSource::Memory).contains(k))
+                [
+                    crate::graph::PrimitivePath::Lembo,
+                    crate::graph::PrimitivePath::Triangle,
+                ]
+                .iter()
+                .any(|p| p.kinds(TessSource::Memory).contains(k))
             })
             .collect();
         let ports = check(&both, &BOUNDARIES).unwrap();
@@ -448,8 +451,8 @@ mod tests {
             })
             .collect();
         let graph = Graph {
-            path: Path::Lembo,
-            kinds: Path::Lembo.kinds(TessSource::Memory),
+            path: PrimitivePath::Lembo,
+            kinds: PrimitivePath::Lembo.kinds(TessSource::Memory),
             boundaries: &renamed,
             source: TessSource::Memory,
         };
@@ -485,7 +488,7 @@ mod tests {
         arch.segmenter.count = 3;
         arch.rop.count = 2;
         let plan = Netlist::new::<f64>(
-            &Graph::of(Path::Lembo, TessSource::Memory),
+            &Graph::of(PrimitivePath::Lembo, TessSource::Memory),
             &arch,
             &SimOptions {
                 host_threads: 2,

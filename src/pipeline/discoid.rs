@@ -176,14 +176,14 @@ fn passes<R: Real>(
 
     let (rop_busy, port_busy) = resolve_cost(arch, vp, mode);
     let fbc = &arch.framebuffer;
-    let resolve_bytes = resolve_bytes(vp, mode);
+    let resolve_pass = blend_resolve_bytes(vp, mode);
     let port_bytes = PortBytes {
         framebuffer: first.counts.fragments * fbc.bytes_per_fragment_tested
             + first.counts.fragments_passed_depth * fbc.bytes_per_fragment_tested
             + second.counts.fragments * fbc.bytes_per_fragment_tested
-            + resolve_bytes.framebuffer,
+            + resolve_pass.framebuffer,
         accumulation: target.report.fragments_accumulated * mode.bytes_per_fragment()
-            + resolve_bytes.accumulation,
+            + resolve_pass.accumulation,
         geometry: 2 * match source {
             Source::Triangles(t) => t.bytes(&arch.fetch),
             Source::Lembos => scene.lembo_count() as u64 * crate::discoid::CURVED_DISCOID_BYTES,
@@ -289,7 +289,7 @@ fn resolve_cost(arch: &ArchConfig, vp: Viewport, mode: BlendMode) -> (Vec<u64>, 
         .iter()
         .map(|&p| arch.rop.fragments_per_cycle.ceil_div(p))
         .collect();
-    let bytes = resolve_bytes(vp, mode);
+    let bytes = blend_resolve_bytes(vp, mode);
     let port_busy = arch
         .framebuffer
         .transfer_cycles(bytes.framebuffer + bytes.accumulation);
@@ -299,9 +299,10 @@ fn resolve_cost(arch: &ArchConfig, vp: Viewport, mode: BlendMode) -> (Vec<u64>, 
 /// The colour bytes the resolve writes per pixel (RGBA8) \[bytes\].
 const RESOLVE_COLOR_BYTES: u64 = 4;
 
-/// The resolve pass's bytes through the frame-buffer port: every pixel's accumulation
+/// The blend resolve pass's bytes through the frame-buffer port (not a multisample
+/// resolve's, [`FrameBuffer::resolve_bytes`]): every pixel's accumulation
 /// target read and its colour written.
-fn resolve_bytes(vp: Viewport, mode: BlendMode) -> PortBytes {
+fn blend_resolve_bytes(vp: Viewport, mode: BlendMode) -> PortBytes {
     let pixels = vp.pixels() as u64;
     PortBytes {
         framebuffer: pixels * RESOLVE_COLOR_BYTES,

@@ -29,7 +29,7 @@ pub mod unit;
 pub mod units;
 pub mod wiring;
 
-pub use crate::graph::{Path, UnitInstance, UnitKind};
+pub use crate::graph::{PrimitivePath, UnitInstance, UnitKind};
 pub use builder::out_words;
 pub use runtime::{Cycle, SimOptions};
 pub use unit::{DiscoidPass, FetchReport, Source, VertexCacheCounts};
@@ -168,8 +168,8 @@ fn run_in<R: Real>(
     let path = match source {
         Source::Triangles(t) if t.chunks() == 0 => None,
         Source::Lembos if n_lembos == 0 => None,
-        Source::Lembos => Some(Path::Lembo),
-        Source::Triangles(_) => Some(Path::Triangle),
+        Source::Lembos => Some(PrimitivePath::Lembo),
+        Source::Triangles(_) => Some(PrimitivePath::Triangle),
     };
     let Some(path) = path else {
         return Ok(TimedFrame {
@@ -200,7 +200,7 @@ fn run_in<R: Real>(
     let trace = options.trace.then_some(trace_cap);
     let results: Outcome = {
         let fetch = match (path, source, tess) {
-            (Path::Triangle, Source::Triangles(t), TessSource::Memory) => FetchPlan {
+            (PrimitivePath::Triangle, Source::Triangles(t), TessSource::Memory) => FetchPlan {
                 source: TessSource::Memory.name(),
                 primitives: t.chunks() as u64 * t.per_chunk(),
                 bytes: t.bytes(&arch.fetch),
@@ -211,7 +211,7 @@ fn run_in<R: Real>(
                     .then_some(arch.tessellation.vertex_cache_entries),
             },
             // The lembos themselves, read for the on-chip tessellators.
-            (Path::Triangle, Source::Triangles(t), TessSource::OnChip) => FetchPlan {
+            (PrimitivePath::Triangle, Source::Triangles(t), TessSource::OnChip) => FetchPlan {
                 source: TessSource::OnChip.name(),
                 primitives: t.chunks() as u64,
                 bytes: t.chunks() as u64 * arch.fetch.bytes_per_lembo,
@@ -557,13 +557,16 @@ mod tests {
             .into_iter()
             .filter(|k| k.inside().is_none())
             .filter(|k| {
-                [crate::graph::Path::Lembo, crate::graph::Path::Triangle]
-                    .iter()
-                    .any(|p| p.kinds(TessSource::Memory).contains(k))
+                [
+                    crate::graph::PrimitivePath::Lembo,
+                    crate::graph::PrimitivePath::Triangle,
+                ]
+                .iter()
+                .any(|p| p.kinds(TessSource::Memory).contains(k))
             })
             .collect();
         let graph = Graph {
-            path: Path::Lembo,
+            path: PrimitivePath::Lembo,
             kinds: &both,
             boundaries: &BOUNDARIES,
             source: TessSource::Memory,

@@ -228,7 +228,7 @@ pub(super) fn fmt_value(v: &Value) -> String {
 }
 
 /// Three significant digits with k, M or G for thousands: `52.5k`, `0.00255`.
-pub(super) fn fmt_num(v: f64) -> String {
+pub fn fmt_num(v: f64) -> String {
     let a = v.abs();
     if a == 0.0 || !v.is_finite() {
         return format!("{v}");

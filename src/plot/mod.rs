@@ -32,15 +32,16 @@
 mod chart;
 mod error;
 mod field;
+pub mod loglog;
 mod point;
-pub mod scaling;
 pub mod speedup;
 
 use crate::error::{Error, Result};
+pub use chart::fmt_num;
 use chart::{
-    draw_legend, draw_lines, draw_mark, fmt_int, fmt_num, fmt_value, framed, log_axis, log_range,
-    mesh, min_max, plot_size, svg, Area, DrawResult, Entry, Mark, Plot, CHART_HEIGHT, FONT, LEMBO,
-    MARKS, PALETTE, WIDTH,
+    draw_legend, draw_lines, draw_mark, fmt_int, fmt_value, framed, log_axis, log_range, mesh,
+    min_max, plot_size, svg, Area, DrawResult, Entry, Mark, Plot, CHART_HEIGHT, FONT, LEMBO, MARKS,
+    PALETTE, WIDTH,
 };
 use error::{error_against, Against, ErrorAxis};
 use plotters::prelude::*;

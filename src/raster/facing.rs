@@ -165,8 +165,6 @@ mod tests {
     use crate::camera::{Camera, Projection, Viewport};
     use crate::lembo::Lembo;
     use glam::DVec3;
-    use proptest::prelude::RngExt;
-    use proptest::test_runner::{RngAlgorithm, TestRng};
 
     /// The facing function (P - eye) · (P_u x P_v), or forward · (P_u x P_v) for an
     /// orthographic view, of `l` at (u, v), in f64, with the size of its two factors.
@@ -187,16 +185,12 @@ mod tests {
 
     /// A random lembo: a triangle in the unit box, its edge points off the chords by up to
     /// `bulge` of the edge's length.
-    fn random_lembo(rng: &mut TestRng, bulge: f64) -> Lembo {
+    fn random_lembo(rng: &mut crate::testkit::SplitMix64, bulge: f64) -> Lembo {
         let mut r3 = |s: f64| {
             if s == 0.0 {
                 return DVec3::ZERO;
             }
-            DVec3::new(
-                rng.random_range(-s..s),
-                rng.random_range(-s..s),
-                rng.random_range(-s..s),
-            )
+            DVec3::new(rng.range(-s, s), rng.range(-s, s), rng.range(-s, s))
         };
         let (a, b, c) = (r3(1.0), r3(1.0), r3(1.0));
         let mut mid = |p: DVec3, q: DVec3| 0.5 * (p + q) + (p - q).length() * r3(bulge);
@@ -247,7 +241,7 @@ mod tests {
     /// a share of curved ones.
     #[test]
     fn back_face_test_is_conservative_and_culls_what_clearly_faces_away() {
-        let mut rng = TestRng::from_seed(RngAlgorithm::ChaCha, &[48; 32]);
+        let mut rng = crate::testkit::SplitMix64::new(48);
         let n = 40;
         let lattice: Vec<(f64, f64)> = (0..=n)
             .flat_map(|i| (0..=n - i).map(move |j| (i as f64 / n as f64, j as f64 / n as f64)))
@@ -260,18 +254,18 @@ mod tests {
             let centre = DVec3::from_array(l.position.map(|q| q.eval(1.0 / 3.0, 1.0 / 3.0)));
             let normal = (l.points[1] - l.points[0]).cross(l.points[2] - l.points[0]);
             let mut dir = DVec3::new(
-                rng.random_range(-1.0..1.0),
-                rng.random_range(-1.0..1.0),
-                rng.random_range(-1.0..1.0),
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
             )
             .normalize_or(DVec3::X);
             if case % 5 == 0 {
                 // Grazing: nearly in the patch's plane.
                 dir = (dir - dir.dot(normal) / normal.length_squared() * normal
-                    + rng.random_range(-0.02..0.02) * normal.normalize_or_zero())
+                    + rng.range(-0.02, 0.02) * normal.normalize_or_zero())
                 .normalize_or(DVec3::X);
             }
-            let distance = 10f64.powf(rng.random_range(-1.5..1.7));
+            let distance = 10f64.powf(rng.range(-1.5, 1.7));
             let orthographic = case % 7 == 0;
             let view = view_from(centre + distance * dir, centre, orthographic);
             let samples: Vec<(f64, f64)> = lattice

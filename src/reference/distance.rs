@@ -196,7 +196,7 @@ mod tests {
     fn ring_search_matches_brute_force_on_dense_masks() {
         // Dense masks: the nearest pixel of either value is found within the rings.
         let (w, h) = (23, 17);
-        let mut random = crate::datapath_study::SplitMix64::new(11);
+        let mut random = crate::testkit::SplitMix64::new(11);
         for density in [0.5, 0.1, 0.02] {
             let mask: Vec<bool> = (0..w * h).map(|_| random.unit() < density).collect();
             let mut bounds = Bounds::new(&mask, w, h);

@@ -767,7 +767,7 @@ mod tests {
         // image), the render misses it and covers both its left and right neighbours or
         // both those above and below.
         let (w, h) = (9, 7);
-        let mut random = crate::datapath_study::SplitMix64::new(7);
+        let mut random = crate::testkit::SplitMix64::new(7);
         let mut cracks = 0;
         for _ in 0..300 {
             let mut draw = |p: f64| (0..w * h).map(|_| random.unit() < p).collect::<Vec<_>>();

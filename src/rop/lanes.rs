@@ -165,11 +165,9 @@ mod tests {
     use super::*;
     use crate::camera::{Camera, Projection, View, Viewport};
     use crate::scene::Light;
-    use proptest::prelude::RngExt;
-    use proptest::test_runner::{RngAlgorithm, TestRng};
 
-    fn rng(seed: u8) -> TestRng {
-        TestRng::from_seed(RngAlgorithm::ChaCha, &[seed; 32])
+    fn rng(seed: u8) -> crate::testkit::SplitMix64 {
+        crate::testkit::SplitMix64::new(seed as u64)
     }
 
     fn view(projection: Projection) -> View {
@@ -190,13 +188,13 @@ mod tests {
 
     /// A value that reaches the corners the shader's branches turn on: zero (both signs),
     /// tiny, huge and ordinary values of either sign.
-    fn value(rng: &mut impl RngExt) -> f64 {
-        match rng.random_range(0..10) {
+    fn value(rng: &mut crate::testkit::SplitMix64) -> f64 {
+        match rng.below(10) {
             0 => 0.0,
             1 => -0.0,
-            2 => rng.random_range(-1e-30..1e-30),
-            3 => rng.random_range(-1e30..1e30),
-            _ => rng.random_range(-2.0..2.0),
+            2 => rng.range(-1e-30, 1e-30),
+            3 => rng.range(-1e30, 1e30),
+            _ => rng.range(-2.0, 2.0),
         }
     }
 
@@ -217,14 +215,14 @@ mod tests {
         (three(|c| normal[c][k]), three(|c| position[c][k]))
     }
 
-    fn check<R: Real>(light: &Light, view: &View, rng: &mut impl RngExt) {
+    fn check<R: Real>(light: &Light, view: &View, rng: &mut crate::testkit::SplitMix64) {
         #[cfg(target_arch = "x86_64")]
         let avx2 = crate::isa::avx2_comparable("the AVX2 shading lanes");
         let shader = FragmentShader::<R>::new(light, view);
         let color = [0.9, 0.45, 0.1].map(R::of);
         for _ in 0..4000 {
             let normal: Lanes3<R> = [0; 3].map(|_| lanes(|_| R::of(value(rng))));
-            let position: Lanes3<R> = [0; 3].map(|_| lanes(|_| R::of(rng.random_range(-3.0..3.0))));
+            let position: Lanes3<R> = [0; 3].map(|_| lanes(|_| R::of(rng.range(-3.0, 3.0))));
             let (rgb, n) = shader.shade_lanes(|k| lane(&normal, &position, k), color);
             #[cfg(target_arch = "x86_64")]
             if avx2 {
@@ -296,8 +294,8 @@ mod tests {
     fn powi_in_lanes_is_the_runtime_powi_bit_for_bit() {
         let mut rng = rng(24);
         for n in (-40..=40).chain([127, 255, 1000, 1024, -1024]) {
-            let x: Lanes<f32> = lanes(|_| rng.random_range(0.0f32..1.5));
-            let y: Lanes<f64> = lanes(|_| rng.random_range(0.0f64..1.5));
+            let x: Lanes<f32> = lanes(|_| rng.range(0.0, 1.5) as f32);
+            let y: Lanes<f64> = lanes(|_| rng.range(0.0, 1.5));
             let (px, py) = (powi(&x, n), powi(&y, n));
             for k in 0..LANES {
                 assert_eq!(px[k].to_bits(), x[k].powi(n).to_bits(), "{}^{n}", x[k]);

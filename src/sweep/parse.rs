@@ -6,7 +6,7 @@ use super::curves::Targets;
 use super::grid::{viewport as viewport_of, Expander};
 use super::sensitivity::Sensitivity;
 use super::spec::{
-    check_name, empty_list, key, too_many, ModeSpec, Point, Run, Setting, Spec, SpecFile, MAX_RUNS,
+    check_name, empty_list, key, too_many, Point, Run, Setting, Spec, SpecFile, MAX_RUNS,
 };
 use crate::camera::MAX_VIEWPORT_SIDE;
 use crate::config::ArchConfig;
@@ -187,10 +187,7 @@ impl Viewports {
 /// The spec's mode, with the fields only a timed sweep may have (`arch`,
 /// `area_budget_mm2`) checked against it.
 fn check_mode(file: &str, f: &SpecFile) -> Result<Mode> {
-    let mode = match f.mode {
-        ModeSpec::Timed => Mode::Timed,
-        ModeSpec::Functional => Mode::Functional,
-    };
+    let mode = f.mode;
     if mode == Mode::Functional && f.arch.is_some() {
         return Err(Error::invalid(
             file,

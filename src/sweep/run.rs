@@ -334,9 +334,9 @@ fn clamp_host_threads(plan: &mut Plan, host_threads: u32) {
             let path = if rj.path == PrimitivePath::Triangle
                 || (scene.discoid_count() > 0 && scene.lembo_count() == 0)
             {
-                crate::pipeline::Path::Triangle
+                PrimitivePath::Triangle
             } else {
-                crate::pipeline::Path::Lembo
+                PrimitivePath::Lembo
             };
             let units = arch.instances(path).len().max(1);
             rj.host_threads = host_threads.min(units as u32);

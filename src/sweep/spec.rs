@@ -50,7 +50,7 @@ pub(super) struct SpecFile {
     /// runs at.
     pub(super) viewport: Option<Value>,
     #[serde(default)]
-    pub(super) mode: ModeSpec,
+    pub(super) mode: Mode,
     pub(super) reference: Option<bool>,
     pub(super) arch: Option<String>,
     pub(super) area_budget_mm2: Option<f64>,
@@ -60,14 +60,6 @@ pub(super) struct SpecFile {
     pub(super) sensitivity: Option<super::sensitivity::SensitivityFile>,
     pub(super) grid: Option<Vec<Params>>,
     pub(super) points: Option<Vec<Params>>,
-}
-
-#[derive(Deserialize, Default, Clone, Copy, PartialEq, Eq)]
-#[serde(rename_all = "lowercase")]
-pub(super) enum ModeSpec {
-    #[default]
-    Timed,
-    Functional,
 }
 
 /// A JSON object of parameters in the file's order (the order of a grid's product), with

@@ -1,6 +1,6 @@
 //! The datapath study in small (issue 7, item 2): the first cases of the study's default
 //! seed, every family, both datapaths, k = 0.25 and 1 px, against the exact reference
-//! (`lembo_sim::datapath_study`, which `examples/datapath_study.rs` runs in full). It
+//! (`examples/datapath_study/study/`, which `examples/datapath_study/` runs in full). It
 //! asserts what a user of the f32 datapath relies on, with the bounds measured by the full
 //! study (RESULTS.md, "f32 against f64 over random lembos") and some headroom:
 //! - no family fails (no error, no panic);
@@ -15,11 +15,17 @@
 
 use lembo_sim::camera::View;
 use lembo_sim::datapath::Datapath;
-use lembo_sim::datapath_study::{run, summarise, CaseResult, Family, StudySettings, FAMILIES};
 use lembo_sim::frame::render_functional;
 use lembo_sim::scene::Scene;
 use lembo_sim::tolerance::Tolerance;
 use std::path::Path;
+use study::{run, summarise, CaseResult, Family, StudySettings, FAMILIES};
+
+/// The study, compiled here as the example compiles it; its own unit tests run here too. What
+/// only the example's output uses is dead code to this test.
+#[path = "../../examples/datapath_study/study/mod.rs"]
+#[allow(dead_code)]
+mod study;
 
 /// The study's default seed: these cases are the first of its default run.
 const SEED: u64 = 1;

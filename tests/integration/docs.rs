@@ -432,13 +432,13 @@ fn architecture_a_planted_undeclared_item_is_found() {
 /// the diagram cannot go stale.
 #[test]
 fn architecture_unit_graph_is_generated() {
-    use lembo_sim::graph::{diagram, Path as UnitPath, TessSource};
+    use lembo_sim::graph::{diagram, PrimitivePath, TessSource};
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let text = std::fs::read_to_string(root.join("ARCHITECTURE.md")).unwrap();
     let graphs = [
-        (UnitPath::Lembo, TessSource::Memory),
-        (UnitPath::Triangle, TessSource::Memory),
-        (UnitPath::Triangle, TessSource::OnChip),
+        (PrimitivePath::Lembo, TessSource::Memory),
+        (PrimitivePath::Triangle, TessSource::Memory),
+        (PrimitivePath::Triangle, TessSource::OnChip),
     ];
     let want: Vec<String> = graphs.iter().map(|&(p, s)| diagram(p, s)).collect();
     let block = format!("```text\n{}```\n", want.join("\n"));

@@ -45,6 +45,7 @@ const LAYERS: &[(&str, &[&str])] = &[
             "json",
             "tolerance",
             "progress",
+            "testkit",
         ],
     ),
     ("the architecture file", &["config"]),
@@ -65,15 +66,7 @@ const LAYERS: &[(&str, &[&str])] = &[
     ("cost", &["cost"]),
     (
         "jobs and reports",
-        &[
-            "report",
-            "output",
-            "job",
-            "compare",
-            "sweep",
-            "plot",
-            "datapath_study",
-        ],
+        &["report", "output", "job", "compare", "sweep", "plot"],
     ),
     ("the command", &["main"]),
 ];

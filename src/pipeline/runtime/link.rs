@@ -908,13 +908,8 @@ mod tests {
     /// item popped after p_n, for seeded random push and pop times obeying the link's rules.
     #[test]
     fn link_occupancy_matches_its_definition() {
-        let mut x = 0x9E37_79B9_7F4A_7C15u64;
-        let mut rnd = |m: u64| {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            x % m
-        };
+        let mut rng = crate::testkit::SplitMix64::new(0x9E37_79B9_7F4A_7C15);
+        let mut rnd = |m: u64| rng.below(m);
         // Small steps make pops and pushes fall on the same cycle (popped first: out).
         for (depth, push_step, pop_step) in [1u32, 2, 3, 5, 8, 16]
             .into_iter()

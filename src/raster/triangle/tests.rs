@@ -88,16 +88,14 @@ fn setup_one<R: Real>(
 /// triangles reaching past the viewport.
 #[test]
 fn row_span_in_closed_form_is_the_pixel_walk() {
-    use proptest::prelude::RngExt;
-    use proptest::test_runner::{RngAlgorithm, TestRng};
-    let mut rng = TestRng::from_seed(RngAlgorithm::ChaCha, &[3; 32]);
+    let mut rng = crate::testkit::SplitMix64::new(3);
     let mut tested = 0;
     for n in 0..4000 {
         let reach = [300, 4_000, 40_000][n % 3];
         let p = [0; 3].map(|_| {
             (
-                rng.random_range(-reach..VP.width as i64 * SUBPIXEL + reach),
-                rng.random_range(-reach..VP.height as i64 * SUBPIXEL + reach),
+                rng.range_i64(-reach, VP.width as i64 * SUBPIXEL + reach),
+                rng.range_i64(-reach, VP.height as i64 * SUBPIXEL + reach),
             )
         });
         let Some(t) = tri(n as u32, p).or_else(|| tri(n as u32, [p[0], p[2], p[1]])) else {
@@ -127,16 +125,14 @@ fn row_span_in_closed_form_is_the_pixel_walk() {
 /// that are wholly outside one edge).
 #[test]
 fn the_hardware_walk_finds_the_models_quads_and_fragments() {
-    use proptest::prelude::RngExt;
-    use proptest::test_runner::{RngAlgorithm, TestRng};
-    let mut rng = TestRng::from_seed(RngAlgorithm::ChaCha, &[5; 32]);
+    let mut rng = crate::testkit::SplitMix64::new(5);
     let (mut tested, mut rejected_some) = (0, false);
     for n in 0..3000 {
         let reach = [300, 4_000, 40_000][n % 3];
         let p = [0; 3].map(|_| {
             (
-                rng.random_range(-reach..VP.width as i64 * SUBPIXEL + reach),
-                rng.random_range(-reach..VP.height as i64 * SUBPIXEL + reach),
+                rng.range_i64(-reach, VP.width as i64 * SUBPIXEL + reach),
+                rng.range_i64(-reach, VP.height as i64 * SUBPIXEL + reach),
             )
         });
         let Some(t) = tri(n as u32, p).or_else(|| tri(n as u32, [p[0], p[2], p[1]])) else {
@@ -170,9 +166,7 @@ fn the_hardware_walk_finds_the_models_quads_and_fragments() {
 /// walk find the same samples.
 #[test]
 fn on_a_sample_grid_a_triangle_covers_the_samples_at_direct3ds_positions() {
-    use proptest::prelude::RngExt;
-    use proptest::test_runner::{RngAlgorithm, TestRng};
-    let mut rng = TestRng::from_seed(RngAlgorithm::ChaCha, &[9; 32]);
+    let mut rng = crate::testkit::SplitMix64::new(9);
     let mut tested = 0;
     for n in 0..600 {
         let samples = Samples::new([2, 4, 8][n % 3]).unwrap();
@@ -184,8 +178,8 @@ fn on_a_sample_grid_a_triangle_covers_the_samples_at_direct3ds_positions() {
         let reach = [200, 2_000][n % 2];
         let p: [(i64, i64); 3] = [0; 3].map(|_| {
             (
-                rng.random_range(-reach..grid.width as i64 * SUBPIXEL + reach),
-                rng.random_range(-reach..grid.height as i64 * SUBPIXEL + reach),
+                rng.range_i64(-reach, grid.width as i64 * SUBPIXEL + reach),
+                rng.range_i64(-reach, grid.height as i64 * SUBPIXEL + reach),
             )
         });
         let assemble = |p: [(i64, i64); 3]| {
@@ -340,13 +334,8 @@ fn top_left_rule_on_pixel_centres() {
 fn triangles_sharing_an_edge_cover_each_pixel_exactly_once() {
     // Shared edges of many slopes through many pixel centres, both windings: the union
     // of the two triangles (a convex quadrilateral) is covered exactly once.
-    let mut seed = 12345u64;
-    let mut rnd = |lo: i64, hi: i64| {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        lo + (seed % (hi - lo) as u64) as i64
-    };
+    let mut rng = crate::testkit::SplitMix64::new(12345);
+    let mut rnd = |lo: i64, hi: i64| rng.range_i64(lo, hi);
     for case in 0..400 {
         // The shared edge from p to q; on-centre end points half the time.
         let (p, q) = if case % 2 == 0 {

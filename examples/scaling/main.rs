@@ -5,7 +5,13 @@
 //!
 //! ```text
 //! cargo build --release && cargo run --release --example scaling [-- OUT_DIR] [--quick]
+//! cargo run --release --example scaling -- --replot [OUT_DIR]
 //! ```
+//!
+//! The first measures and writes `sim/scaling/` (committed; RESULTS.md, "How cost grows"): its
+//! times and memory are measurements of the machine it runs on, so a run reproduces their
+//! slopes, not their bytes. `--replot` measures nothing: it draws the four plots again from
+//! `OUT_DIR/scaling.csv`, byte for byte the committed ones from the committed CSV.
 //!
 //! Writes `OUT_DIR` (default `sim/scaling/`): `scaling.csv` (one row a run: the sweep, x,
 //! mode, lembos, pixels, the render's wall seconds as report.json gives them, the process's
@@ -14,7 +20,10 @@
 //! `memory_vs_pixels.svg`. `--quick` stops at 500 000 lembos and 2048x2048 (a check that it
 //! runs, not a measurement). It takes a few minutes on 2 cores; run it on an idle machine.
 
-use lembo_sim::plot::scaling::{loglog_svg, Series};
+mod slope;
+
+use lembo_sim::plot::loglog::loglog_svg;
+use slope::slope_label;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
@@ -47,6 +56,11 @@ fn main() {
         .find(|a| !a.starts_with("--"))
         .map(PathBuf::from)
         .unwrap_or_else(|| PathBuf::from("sim/scaling"));
+    if args.iter().any(|a| a == "--replot") {
+        let csv = std::fs::read_to_string(out.join("scaling.csv")).expect("OUT_DIR/scaling.csv");
+        plot(&out, &read_csv(&csv));
+        return;
+    }
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let bin = root.join("target/release/lembo-sim");
     if !bin.is_file() {
@@ -172,6 +186,41 @@ fn write(out: &Path, runs: &[Run]) {
         );
     }
     std::fs::write(out.join("scaling.csv"), csv).expect("scaling.csv");
+    plot(out, runs);
+}
+
+/// The runs of a `scaling.csv` this program wrote.
+fn read_csv(csv: &str) -> Vec<Run> {
+    let label = |v: &str, of: &[&'static str]| -> &'static str {
+        of.iter()
+            .find(|x| **x == v)
+            .unwrap_or_else(|| panic!("scaling.csv: unknown {v:?}"))
+    };
+    csv.lines()
+        .skip(1)
+        .map(|line| {
+            let f: Vec<&str> = line.split(',').collect();
+            assert_eq!(f.len(), 8, "scaling.csv: {line:?}");
+            let num = |i: usize| -> f64 {
+                f[i].parse()
+                    .unwrap_or_else(|e| panic!("scaling.csv: {line:?}: {e}"))
+            };
+            Run {
+                sweep: label(f[0], &["lembos", "pixels"]),
+                x: num(1),
+                mode: label(f[2], &MODES),
+                lembos: num(3) as u64,
+                pixels: num(4) as u64,
+                render_s: num(5),
+                process_s: num(6),
+                peak_rss: num(7),
+            }
+        })
+        .collect()
+}
+
+/// The four plots into `out`.
+fn plot(out: &Path, runs: &[Run]) {
     // The slope from 160 k lembos or 1024² pixels on: where the fixed costs (the binary,
     // the bunny's setup, the frame buffer of 1024²) no longer hide the growth.
     for (sweep, x_desc, tail) in [("lembos", "lembos", 1.6e5), ("pixels", "pixels", 1.0e6)] {
@@ -180,18 +229,18 @@ fn write(out: &Path, runs: &[Run]) {
             ("memory", "peak resident memory [bytes]", |r| r.peak_rss),
         ];
         for (name, y_desc, y) in figures {
-            let series: Vec<Series> = MODES
+            let lines: Vec<(String, Vec<(f64, f64)>)> = MODES
                 .iter()
-                .map(|&mode| Series {
-                    label: mode.to_string(),
-                    points: runs
+                .map(|&mode| {
+                    let points: Vec<(f64, f64)> = runs
                         .iter()
                         .filter(|r| r.sweep == sweep && r.mode == mode)
                         .map(|r| (r.x, y(r)))
-                        .collect(),
+                        .collect();
+                    (slope_label(mode, &points, tail), points)
                 })
                 .collect();
-            let svg = loglog_svg(x_desc, y_desc, &series, tail).expect("a plot");
+            let svg = loglog_svg(x_desc, y_desc, &lines).expect("a plot");
             let file = out.join(format!("{name}_vs_{sweep}.svg"));
             std::fs::write(&file, svg).expect("a plot file");
             eprintln!("wrote {}", file.display());

@@ -4,20 +4,26 @@
 //! cargo run --release --example datapath_study -- [--lembos N] [--seed S] [--out DIR]
 //! ```
 //!
+//! Its committed output is the two tables of RESULTS.md, "f32 against f64 over random
+//! lembos": with no flag (200 cases per family, seed 1, k = 0.25 and 1 px) it prints them,
+//! every figure but the host times (the last column) as committed.
+//!
 //! Prints a markdown table (one row per family and k) and writes into `--out`:
 //! `datapath_study.json` (settings, wall time, the per-family summaries, the anomalies),
 //! `datapath_study.csv` (one row per case, datapath and k) and, for every anomalous case (a
 //! failure, an f64 slack above 1e-6 px (`F64_DEFECT_PX`), unpaired roots), its scene file in `cases/`, which
 //! `lembo-sim render FILE --reference` reproduces. The cases and the measurements are
-//! deterministic; the wall times are not. The generator and the measurement are
-//! `lembo_sim::datapath_study`.
+//! deterministic; the wall times are not. The generator and the measurement are the
+//! module `study` beside this file, which `tests/integration/datapath.rs` runs in small.
+
+mod study;
 
 use clap::Parser;
-use lembo_sim::datapath_study::{self, Family, StudySettings, FAMILIES};
 use serde::Serialize;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
+use study::{Family, StudySettings, FAMILIES};
 
 #[derive(Parser)]
 #[command(
@@ -55,9 +61,9 @@ struct Output<'a> {
     threads: usize,
     /// Sum of the references' wall times [seconds].
     reference_seconds: f64,
-    summaries: Vec<datapath_study::Summary>,
-    by_extent: Vec<datapath_study::ExtentSummary>,
-    anomalies: Vec<&'a datapath_study::Measurement>,
+    summaries: Vec<study::Summary>,
+    by_extent: Vec<study::ExtentSummary>,
+    anomalies: Vec<&'a study::Measurement>,
 }
 
 fn main() -> ExitCode {
@@ -70,10 +76,7 @@ fn main() -> ExitCode {
             eprintln!("error: --scene: expected FAMILY:INDEX, e.g. large:3, got {which:?}");
             return ExitCode::from(2);
         };
-        println!(
-            "{}",
-            datapath_study::case(family, args.seed, index).scene_json
-        );
+        println!("{}", study::case(family, args.seed, index).scene_json);
         return ExitCode::SUCCESS;
     }
     let mut families = Vec::new();
@@ -110,11 +113,11 @@ fn main() -> ExitCode {
 
 fn run(settings: &StudySettings, args: &Args) -> Result<(), Box<dyn std::error::Error>> {
     let t = Instant::now();
-    let results = datapath_study::run(settings);
+    let results = study::run(settings);
     let wall_seconds = t.elapsed().as_secs_f64();
-    let summaries = datapath_study::summarise(settings, &results);
-    let anomalies = datapath_study::anomalies(&results);
-    let by_extent = datapath_study::by_extent(settings, &results);
+    let summaries = study::summarise(settings, &results);
+    let anomalies = study::anomalies(&results);
+    let by_extent = study::by_extent(settings, &results);
 
     std::fs::create_dir_all(&args.out)?;
     let mut csv = csv::Writer::from_path(args.out.join("datapath_study.csv"))?;
@@ -126,7 +129,7 @@ fn run(settings: &StudySettings, args: &Args) -> Result<(), Box<dyn std::error::
         let dir = args.out.join("cases");
         std::fs::create_dir_all(&dir)?;
         for m in &anomalies {
-            let case = datapath_study::case(m.family, m.seed, m.index);
+            let case = study::case(m.family, m.seed, m.index);
             let file = dir.join(format!("{}_{}.json", m.family.name(), m.index));
             std::fs::write(file, case.scene_json)?;
         }
@@ -150,9 +153,9 @@ fn run(settings: &StudySettings, args: &Args) -> Result<(), Box<dyn std::error::
         serde_json::to_string_pretty(&output)? + "\n",
     )?;
 
-    print!("{}", datapath_study::markdown(&summaries));
+    print!("{}", study::markdown(&summaries));
     println!();
-    print!("{}", datapath_study::extent_markdown(&by_extent));
+    print!("{}", study::extent_markdown(&by_extent));
     println!();
     println!(
         "{} cases per family, seed {}, {} families, {:.1} s wall on {} threads; {} anomalies{}",
