@@ -1,7 +1,8 @@
 //! The side-by-side table of a compare, once for `compare.txt` and `report.html`: its
 //! title, rows and notes ([`rows`]), the printed text ([`table`]) and the page.
 
-use super::{CompareReport, Level, MatchReport};
+use super::matching::{Level, MatchReport};
+use super::report::CompareReport;
 use crate::report::{html, Report};
 use std::fmt::Write as _;
 

@@ -194,7 +194,7 @@ pub fn tornado_svg(title: &str, measure: &str, base: f64, bars: &[TornadoBar]) -
         ))?;
         draw_legend(&legend, &entries)
     });
-    drawn_or_error(drawn, &title)
+    drawn_or_error(drawn, title)
 }
 
 /// The legend of a speed-up figure: its two series and the line at 1.

@@ -55,30 +55,9 @@ use roots::{Patch, Scratch};
 mod roots;
 mod tracer;
 
-pub use tracer::{TraceScratch, Tracer};
-
-/// Roots this far outside the domain [uv units] still count, clamped onto it.
-pub const DOMAIN_TOLERANCE: f64 = 1e-9;
-/// Roots closer than this in uv (L1 distance) are the same root.
-pub const SAME_ROOT_UV: f64 = 1e-7;
-/// Side of the square screen tiles that lembos are binned into \[pixels\].
-const TILE: u32 = 16;
-
-/// The winning surface at a sample.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ReferenceHit {
-    /// Depth in [0, 1] of the hit point, as [`View::depth_of`] gives it.
-    pub depth: f64,
-    /// Unit normal of the normal function at (u, v), as shaded before the two-sided flip
-    /// (zero where the normal function vanishes).
-    pub normal: DVec3,
-    /// Index of the lembo in [`ReferenceInput::lembos`].
-    pub lembo: u32,
-    /// Domain coordinates of the hit.
-    pub u: f64,
-    /// Domain v of the hit.
-    pub v: f64,
-}
+pub use roots::{DOMAIN_TOLERANCE, SAME_ROOT_UV};
+use tracer::TILE;
+pub use tracer::{ReferenceHit, TraceScratch, Tracer};
 
 /// The reference image, row 0 at the top.
 #[derive(Clone, Debug, PartialEq)]

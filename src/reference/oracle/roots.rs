@@ -3,10 +3,13 @@
 //! for a yes-or-no answer, convex-hull) tests, Newton's method and the Jacobian test that
 //! proves a sub-triangle holds no other root.
 
-use super::{DOMAIN_TOLERANCE, SAME_ROOT_UV};
 use crate::lembo::{bezier_controls, Lembo, Quadratic, Quadratic3};
 use glam::{DVec2, DVec3};
 
+/// Roots this far outside the domain [uv units] still count, clamped onto it.
+pub const DOMAIN_TOLERANCE: f64 = 1e-9;
+/// Roots closer than this in uv (L1 distance) are the same root.
+pub const SAME_ROOT_UV: f64 = 1e-7;
 /// Deepest subdivision: sub-triangles with legs of 2^-MAX_DEPTH in uv.
 const MAX_DEPTH: u32 = 20;
 /// Sub-triangles examined per ray and lembo before every remaining one becomes a leaf; only

@@ -3,9 +3,28 @@
 //! at or behind the eye) and the lembos binned per screen tile, nearest first.
 
 use super::roots::{Patch, Root, Scratch};
-use super::{ReferenceHit, TILE};
 use crate::camera::View;
 use crate::lembo::Lembo;
+use glam::DVec3;
+
+/// Side of the square screen tiles that lembos are binned into \[pixels\].
+pub(super) const TILE: u32 = 16;
+
+/// The winning surface at a sample.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ReferenceHit {
+    /// Depth in [0, 1] of the hit point, as [`View::depth_of`] gives it.
+    pub depth: f64,
+    /// Unit normal of the normal function at (u, v), as shaded before the two-sided flip
+    /// (zero where the normal function vanishes).
+    pub normal: DVec3,
+    /// Index of the lembo in [`super::ReferenceInput::lembos`].
+    pub lembo: u32,
+    /// Domain coordinates of the hit.
+    pub u: f64,
+    /// Domain v of the hit.
+    pub v: f64,
+}
 
 /// Where a lembo can appear on screen.
 #[derive(Clone, Copy, Debug)]

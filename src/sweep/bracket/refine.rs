@@ -24,7 +24,7 @@ pub const DEFAULT_COST_MARGIN: f64 = 0.02;
 /// `refine` as the spec file writes it.
 #[derive(Deserialize, Default)]
 #[serde(deny_unknown_fields)]
-pub(in crate::sweep) struct RefineFile {
+pub(crate) struct RefineFile {
     margin_db: Option<f64>,
     k_floor: Option<f64>,
     tess_cap: Option<u32>,
@@ -67,7 +67,7 @@ impl Default for Refine {
 
 impl Refine {
     /// Checks the file's values; errors name `refine.<field>` of `file`.
-    pub(in crate::sweep) fn from_file(file: &str, f: &RefineFile) -> Result<Refine> {
+    pub(crate) fn from_file(file: &str, f: &RefineFile) -> Result<Refine> {
         let d = Refine::default();
         let margin_db = f.margin_db.unwrap_or(d.margin_db);
         if !(margin_db.is_finite() && (0.0..=MAX_MARGIN_DB).contains(&margin_db)) {
@@ -123,7 +123,7 @@ impl Refine {
 
     /// The spec's `refine` read back from its text (checked when the spec was parsed);
     /// None when it has none.
-    pub(in crate::sweep) fn of_spec_text(spec_text: &[u8]) -> Option<Refine> {
+    pub(crate) fn of_spec_text(spec_text: &[u8]) -> Option<Refine> {
         let v: Value = serde_json::from_slice(spec_text).ok()?;
         let f: RefineFile = serde_json::from_value(v.get("refine")?.clone()).ok()?;
         Refine::from_file("spec", &f).ok()
