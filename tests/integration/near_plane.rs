@@ -1,4 +1,4 @@
-//! Near- and far-plane clipping of the triangle path (ARCHITECTURE.md, "How the triangle
+//! Near- and far-plane clipping of the triangle path (DESIGN.md §13, "How the triangle
 //! path is made fair") on the scenes that need it: a ground plane running behind the camera
 //! (`traces/walkthrough_ground.json`), a camera 0.05 in front of a sphere with the near
 //! plane 0.2 away (`traces/near_camera.json`) and a camera inside a closed sphere

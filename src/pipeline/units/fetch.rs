@@ -1,6 +1,6 @@
 //! GeometryFetch (DESIGN.md §3, "Geometry fetch"): reads the scene's primitives from memory,
 //! in submission order, and deals them in batches (batch b to engine b mod count:
-//! ARCHITECTURE.md, "Front ends") to the engines it feeds: the lembo Setups; the triangle
+//! DESIGN.md §13, "Front ends") to the engines it feeds: the lembo Setups; the triangle
 //! setup engines, from a mesh tessellated in memory; or the Tessellators, whose lembos are
 //! tessellated on chip (`tessellation.source`).
 //!
