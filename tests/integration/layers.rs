@@ -88,24 +88,9 @@ fn src_has_no_import_cycle() {
     );
 }
 
-/// Top-level modules on their way out of `src/` (issue 50, item 6: `datapath_study` goes
-/// to `examples/`): their files and every edge into them are left out of the checks that
-/// count test code (a test of `reference` still borrows the study's random numbers). A
-/// name here that `src/lib.rs` no longer declares fails the checks: remove it.
-const LEAVING_SRC: &[&str] = &["datapath_study"];
-
-/// This crate's `src/`, test code included, without the modules of [`LEAVING_SRC`].
+/// This crate's `src/`, test code included.
 fn src_with_tests() -> Graph {
-    let graph = Graph::of_src_with_tests();
-    let gone: Vec<&&str> = LEAVING_SRC
-        .iter()
-        .filter(|m| !graph.top_level.iter().any(|t| t == **m))
-        .collect();
-    assert!(
-        gone.is_empty(),
-        "LEAVING_SRC names {gone:?}, which src/lib.rs no longer declares: remove it"
-    );
-    graph.without(LEAVING_SRC)
+    Graph::of_src_with_tests()
 }
 
 /// Top-level modules import one another in no ring, test code included: a test that
