@@ -22,7 +22,7 @@
 
 use super::{run_in, Cycle, CycleReport, DiscoidPass, Source, UnitCycles, UnitInstance, UnitKind};
 use crate::camera::{View, Viewport};
-use crate::config::ArchConfig;
+use crate::config::{ArchConfig, BlendConfig};
 use crate::datapath::{Datapath, Real};
 use crate::discoid::blend::BlendMode;
 use crate::discoid::report::BlendReport;
@@ -38,7 +38,6 @@ use crate::scene::Scene;
 use crate::tolerance::Tolerance;
 
 use super::tiles::RopTiles;
-use super::units::rop::blend_cycles;
 use super::SimOptions;
 
 /// What the timed discoid passes produced.
@@ -145,6 +144,7 @@ fn passes<R: Real>(
                 pass,
                 table: &table,
                 mode,
+                blend_cycles: blend_cycles(&arch.blend, mode),
                 threshold,
                 depth,
                 winner,
@@ -352,4 +352,13 @@ fn merged_units(
             }
         })
         .collect()
+}
+
+/// Blend-unit cycles per kept fragment in `mode`.
+pub fn blend_cycles(cfg: &BlendConfig, mode: BlendMode) -> u64 {
+    match mode {
+        BlendMode::Rgba8 => cfg.cycles_per_fragment_rgba8,
+        BlendMode::F16 => cfg.cycles_per_fragment_f16,
+        BlendMode::F32 => cfg.cycles_per_fragment_f32,
+    }
 }

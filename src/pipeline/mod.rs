@@ -204,7 +204,6 @@ fn run_in<R: Real>(
                 source: TessSource::Memory.name(),
                 primitives: t.chunks() as u64 * t.per_chunk(),
                 bytes: t.bytes(&arch.fetch),
-                batch: arch.triangle_setup.batch,
                 // A vertex cache for a source that is an indexed mesh.
                 vertex_cache: t
                     .indexed()
@@ -215,7 +214,6 @@ fn run_in<R: Real>(
                 source: TessSource::OnChip.name(),
                 primitives: t.chunks() as u64,
                 bytes: t.chunks() as u64 * arch.fetch.bytes_per_lembo,
-                batch: arch.tessellator.batch,
                 vertex_cache: None,
             },
             _ => FetchPlan {
@@ -226,7 +224,6 @@ fn run_in<R: Real>(
                         Some(_) => crate::discoid::CURVED_DISCOID_BYTES,
                         None => arch.fetch.bytes_per_lembo,
                     },
-                batch: arch.setup.batch,
                 vertex_cache: None,
             },
         };
@@ -236,6 +233,7 @@ fn run_in<R: Real>(
             scene,
             view,
             arch,
+            port: &arch.framebuffer,
             k: R::of(tol.k),
             perspective_tol: tol.perspective,
             fetch,

@@ -9,6 +9,8 @@ pub struct Dispatcher<O> {
     /// The output ports of that boundary: one per consumer, in the consumers' order.
     ports: Range<usize>,
     rule: Rule<O>,
+    /// The primitives per batch its consumers take, under a rule of batches.
+    batch: Option<u32>,
 }
 
 /// A dispatcher's rule.
@@ -26,6 +28,7 @@ impl<O> Dispatcher<O> {
         Dispatcher {
             rule: Rule::RoundRobin { next: ports.start },
             ports,
+            batch: None,
         }
     }
 
@@ -34,7 +37,20 @@ impl<O> Dispatcher<O> {
         Dispatcher {
             ports,
             rule: Rule::Keyed(Box::new(key)),
+            batch: None,
         }
+    }
+
+    /// The same rule, dealing batches of `batch` primitives (the consumers' batch: the
+    /// producer cuts its primitives into batches of it).
+    pub fn with_batch(mut self, batch: Option<u32>) -> Self {
+        self.batch = batch;
+        self
+    }
+
+    /// The consumers' batch under a rule of batches; None otherwise.
+    pub fn batch(&self) -> Option<u32> {
+        self.batch
     }
 
     /// The consumers it spreads items over.

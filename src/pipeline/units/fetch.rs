@@ -57,13 +57,13 @@ impl<R: Real> Unit<R> for GeometryFetch {
             run.fetch,
             run.triangles,
             &run.arch.fetch,
-            &run.arch.framebuffer,
+            run.port,
         ))
     }
 }
 
-/// The fetch's body: the primitives of `plan`, a batch at a time, to the engines in turn,
-/// read through the memory port `port`; with a vertex cache, the triangles' vertex indices
+/// The fetch's body: the primitives of `plan`, a batch (its consumers', which its boundary
+/// hands it) at a time, to the engines in turn, read through the memory port `port`; with a vertex cache, the triangles' vertex indices
 /// come from `source`, and each triangle's and vertex's bytes are `sizes`'.
 pub async fn run(
     mut ctx: Ctx<(), MemAccess>,
@@ -72,6 +72,7 @@ pub async fn run(
     sizes: &FetchConfig,
     port: &FrameBufferConfig,
 ) -> Finished {
+    let batch = u64::from(ctx.batch().expect("the fetch's boundary deals batches"));
     let mut port = PortClock::new(port);
     // One vertex cache per engine the batches are dealt to.
     let mut caches = plan.vertex_cache.map(|entries| {
@@ -89,7 +90,7 @@ pub async fn run(
     let mut issued = Cycle::ZERO;
     let mut first = 0;
     while first < plan.primitives {
-        let end = (first + plan.batch as u64).min(plan.primitives);
+        let end = (first + batch).min(plan.primitives);
         let bytes = match caches.as_mut() {
             Some(caches) => {
                 // The cache of the engine the runtime deals this batch to.

@@ -17,9 +17,8 @@
 //! memory model.
 
 use crate::camera::{Samples, View};
-use crate::config::{BlendConfig, FrameBufferConfig, RopConfig};
+use crate::config::{FrameBufferConfig, RopConfig};
 use crate::datapath::Real;
-use crate::discoid::blend::BlendMode;
 use crate::discoid::report::BlendReport;
 use crate::frame::discoid::{
     accumulation_keeps, depth_pass_wins, evaluate, DiscoidFragment, KeptFragment, Pass,
@@ -49,13 +48,11 @@ impl<R: Real> Unit<R> for Rop {
         run: &'a RunInputs<'a, R>,
         index: usize,
     ) -> UnitFuture<'a, Finished> {
-        let arch = run.arch;
         Box::pin(self::run(
             ctx,
             RopContext {
-                cfg: &arch.rop,
-                memory: &arch.framebuffer,
-                blend: &arch.blend,
+                cfg: &run.arch.rop,
+                memory: run.port,
                 pixels: RopPixels::new(&run.frame, &run.tiles, index, run.view.viewport.width),
                 shader: FragmentShader::<R>::new(&run.scene.light, run.view),
                 view: run.view,
@@ -65,15 +62,13 @@ impl<R: Real> Unit<R> for Rop {
     }
 }
 
-/// What a ROP works with: its configuration and the frame buffer's, its own pixels, the
+/// What a ROP works with: its configuration and the memory port's, its own pixels, the
 /// shader, and the discoid pass when there is one.
 pub struct RopContext<'a, R> {
     /// Its rate.
     pub cfg: &'a RopConfig,
     /// The bytes a fragment moves through the frame-buffer port.
     pub memory: &'a FrameBufferConfig,
-    /// The blend units' rates, in a discoid pass.
-    pub blend: &'a BlendConfig,
     /// The pixels of its tiles.
     pub pixels: RopPixels<'a, 'a>,
     /// The fragment shader (the scene's light seen from the camera).
@@ -136,7 +131,6 @@ pub async fn run<R: Real>(mut ctx: Ctx<RopItem<R>, MemAccess>, rop: RopContext<'
     let RopContext {
         cfg,
         memory: fbc,
-        blend,
         mut pixels,
         shader,
         view,
@@ -237,7 +231,7 @@ pub async fn run<R: Real>(mut ctx: Ctx<RopItem<R>, MemAccess>, rop: RopContext<'
             }) => (tested + passed * fbc.bytes_per_fragment_tested, 0),
             Some(dp) => (
                 tested + passed * dp.mode.bytes_per_fragment(),
-                passed * blend_cycles(blend, dp.mode),
+                passed * dp.blend_cycles,
             ),
         };
         ctx.emit(
@@ -258,13 +252,4 @@ pub async fn run<R: Real>(mut ctx: Ctx<RopItem<R>, MemAccess>, rop: RopContext<'
         finished.discoid = Some(kept);
     }
     finished
-}
-
-/// Blend-unit cycles per kept fragment in `mode`.
-pub fn blend_cycles(cfg: &BlendConfig, mode: BlendMode) -> u64 {
-    match mode {
-        BlendMode::Rgba8 => cfg.cycles_per_fragment_rgba8,
-        BlendMode::F16 => cfg.cycles_per_fragment_f16,
-        BlendMode::F32 => cfg.cycles_per_fragment_f32,
-    }
 }
