@@ -227,7 +227,8 @@ fn run_in<R: Real>(
                 vertex_cache: None,
             },
         };
-        // What a person watching sees advance: the primitives fetched.
+        // What a person watching sees advance: the primitives fetched, counted by the
+        // runtime as they leave the source (`Dispatcher::with_progress`).
         crate::progress::add_total(fetch.primitives);
         let run = RunInputs {
             scene,

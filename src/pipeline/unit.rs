@@ -401,7 +401,11 @@ impl<R: Real, U: Unit<R>> Elaborate<R> for ErasedUnit<U> {
             }
         }
         // A unit its path takes no boundary out of is fed nothing, and sends nothing.
-        let dispatch = dispatch.unwrap_or_else(|| Dispatcher::round_robin(0..0));
+        let mut dispatch = dispatch.unwrap_or_else(|| Dispatcher::round_robin(0..0));
+        // The source's items are the primitives fetched: the run's progress.
+        if link_type::<U::In>().is_none() {
+            dispatch = dispatch.with_progress(<U::Out as Item>::primitives);
+        }
         U::spawn(host.ctx(g, rx, tx, dispatch, trace), run, index)
     }
 }

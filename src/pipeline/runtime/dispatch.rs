@@ -11,6 +11,9 @@ pub struct Dispatcher<O> {
     rule: Rule<O>,
     /// The primitives per batch its consumers take, under a rule of batches.
     batch: Option<u32>,
+    /// For the pipeline's source: the primitives an item carries, counted into the
+    /// process-wide progress record ([`crate::progress`]) as the item leaves.
+    progress: Option<fn(&O) -> u64>,
 }
 
 /// A dispatcher's rule.
@@ -29,6 +32,7 @@ impl<O> Dispatcher<O> {
             rule: Rule::RoundRobin { next: ports.start },
             ports,
             batch: None,
+            progress: None,
         }
     }
 
@@ -38,6 +42,7 @@ impl<O> Dispatcher<O> {
             ports,
             rule: Rule::Keyed(Box::new(key)),
             batch: None,
+            progress: None,
         }
     }
 
@@ -45,6 +50,13 @@ impl<O> Dispatcher<O> {
     /// producer cuts its primitives into batches of it).
     pub fn with_batch(mut self, batch: Option<u32>) -> Self {
         self.batch = batch;
+        self
+    }
+
+    /// The same rule, counting the primitives each item carries (`primitives`) into the
+    /// progress record as it leaves: what a person watching sees advance.
+    pub fn with_progress(mut self, primitives: fn(&O) -> u64) -> Self {
+        self.progress = Some(primitives);
         self
     }
 
@@ -71,6 +83,9 @@ impl<O> Dispatcher<O> {
     /// The output port `item` leaves by, advancing the rule.
     #[inline(always)]
     pub fn port(&mut self, item: &O) -> usize {
+        if let Some(primitives) = self.progress {
+            crate::progress::advance(primitives(item));
+        }
         match &mut self.rule {
             Rule::RoundRobin { next } => {
                 let port = *next;

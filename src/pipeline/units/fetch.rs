@@ -119,7 +119,6 @@ pub async fn run(
         }
         issued = Cycle(now.0 + cycles);
         ctx.emit(cycles, access).await;
-        crate::progress::advance(end - first);
         first = end;
     }
     report.vertex_cache = caches.map(|caches| VertexCacheCounts {
