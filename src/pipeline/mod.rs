@@ -50,7 +50,7 @@ use runtime::executor::{Board, Halt, HostThread, Recoveries};
 use runtime::trace;
 use serde::Serialize;
 use tiles::{RopTiles, SharedFrame};
-use unit::{FetchPlan, Finished, NoTriangles, RunInputs};
+use unit::{FetchPlan, Finished, NoTriangles, RunInputs, UnitReport};
 use wiring::HostWiring;
 
 /// The cycle accounting of one unit over the frame \[cycles\].
@@ -394,7 +394,9 @@ fn finish(
     let mut fetch = None;
     for (_, f) in &results {
         counts += f.counts;
-        fetch = fetch.or(f.fetch);
+        if let Some(UnitReport::Fetch(report)) = f.own {
+            fetch = fetch.or(Some(report));
+        }
     }
     counts.pixels_covered = fb.covered() as u64;
     let unit_cycles = unit_cycles(&units, &results, &direct, total);
@@ -522,7 +524,10 @@ fn bottleneck(units: &[UnitCycles]) -> Option<String> {
 fn kept_fragments(results: &mut [(usize, Finished)]) -> Option<(Vec<KeptFragment>, BlendReport)> {
     let mut discoid: Option<(Vec<KeptFragment>, BlendReport)> = None;
     for (_, f) in results {
-        if let Some((pending, report)) = f.discoid.take() {
+        if !matches!(f.own, Some(UnitReport::Kept(..))) {
+            continue;
+        }
+        if let Some(UnitReport::Kept(pending, report)) = f.own.take() {
             let (all, sum) = discoid.get_or_insert_with(Default::default);
             all.extend(pending);
             sum.culled_backface += report.culled_backface;

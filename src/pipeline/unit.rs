@@ -28,7 +28,7 @@ use crate::scene::Scene;
 use std::any::{type_name, Any, TypeId};
 use std::marker::PhantomData;
 
-/// What a unit hands back when it ends.
+/// What a unit hands back when it ends: what every unit reports, and its own figures.
 pub struct Finished {
     /// Its busy, starved and blocked cycles and item counts.
     pub stats: UnitStats,
@@ -38,11 +38,17 @@ pub struct Finished {
     pub counts: Counts,
     /// A functional error the unit recorded (the run still ends normally).
     pub error: Option<Error>,
+    /// The figures only this unit keeps, if it has any.
+    pub own: Option<UnitReport>,
+}
+
+/// A unit's own figures, each kind's its own record, read by the run's report.
+pub enum UnitReport {
+    /// The geometry fetch's account of what it read.
+    Fetch(FetchReport),
     /// A ROP's accumulation-pass output in a discoid pass: the fragments it kept and its
     /// counters.
-    pub discoid: Option<(Vec<KeptFragment>, BlendReport)>,
-    /// The geometry fetch's account of what it read.
-    pub fetch: Option<FetchReport>,
+    Kept(Vec<KeptFragment>, BlendReport),
 }
 
 impl Finished {
@@ -54,9 +60,14 @@ impl Finished {
             trace,
             counts,
             error: None,
-            discoid: None,
-            fetch: None,
+            own: None,
         }
+    }
+
+    /// The same, with the unit's own figures `own`.
+    pub fn with(mut self, own: UnitReport) -> Self {
+        self.own = Some(own);
+        self
     }
 }
 

@@ -31,7 +31,9 @@ use crate::graph::UnitKind;
 use crate::pipeline::items::MemAccess;
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::{Ctx, Cycle};
-use crate::pipeline::unit::{FetchPlan, FetchReport, Finished, RunInputs, Unit, VertexCacheCounts};
+use crate::pipeline::unit::{
+    FetchPlan, FetchReport, Finished, RunInputs, Unit, UnitReport, VertexCacheCounts,
+};
 use crate::pipeline::units::framebuffer::PortClock;
 use crate::raster::triangle::TriangleSource;
 use crate::raster::Counts;
@@ -126,9 +128,7 @@ pub async fn run(
         hits: caches.iter().map(|c| c.hits).sum(),
         misses: caches.iter().map(|c| c.misses).sum(),
     });
-    let mut finished = Finished::new(ctx, Counts::default());
-    finished.fetch = Some(report);
-    finished
+    Finished::new(ctx, Counts::default()).with(UnitReport::Fetch(report))
 }
 
 /// The index buffer of an indexed triangle source, read a chunk at a time.

@@ -28,7 +28,7 @@ use crate::pipeline::items::{FragmentSpan, MemAccess, RopItem};
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::Ctx;
 use crate::pipeline::tiles::RopPixels;
-use crate::pipeline::unit::{DiscoidPass, Finished, RunInputs, Unit};
+use crate::pipeline::unit::{DiscoidPass, Finished, RunInputs, Unit, UnitReport};
 use crate::raster::Counts;
 use crate::rop::fragment_shader::FragmentShader;
 use crate::rop::sink::Batch;
@@ -241,15 +241,12 @@ pub async fn run<R: Real>(mut ctx: Ctx<RopItem<R>, MemAccess>, rop: RopContext<'
         .await;
     }
     batch.flush(&shader, into(&mut pixels));
-    let mut finished = Finished::new(ctx, counts);
-    if matches!(
-        discoid,
+    let finished = Finished::new(ctx, counts);
+    match discoid {
         Some(DiscoidPass {
             pass: Pass::Accumulate,
             ..
-        })
-    ) {
-        finished.discoid = Some(kept);
+        }) => finished.with(UnitReport::Kept(kept.0, kept.1)),
+        _ => finished,
     }
-    finished
 }
