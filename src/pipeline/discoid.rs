@@ -20,6 +20,7 @@
 //! share (busy for its ROP's kept fragments at that rate), which the cost model sizes the
 //! blend units by.
 
+use super::unit::FetchPlan;
 use super::{run_in, Cycle, CycleReport, DiscoidPass, Source, UnitCycles, UnitInstance, UnitKind};
 use crate::camera::{View, Viewport};
 use crate::config::{ArchConfig, BlendConfig};
@@ -30,6 +31,7 @@ use crate::error::{Error, Result};
 use crate::frame::discoid::{
     check_scene, resolve, DiscoidTable, DiscoidTarget, KeptFragment, Pass,
 };
+use crate::graph::TessSource;
 use crate::raster::Counts;
 use crate::rop::fragment_shader::FragmentShader;
 use crate::rop::shade::to_u8;
@@ -150,7 +152,6 @@ fn passes<R: Real>(
                 winner,
             }),
             options,
-            None,
         )
     };
     let first = pass(Pass::Depth, &[], &[])?;
@@ -184,10 +185,8 @@ fn passes<R: Real>(
             + resolve_bytes.framebuffer,
         accumulation: target.report.fragments_accumulated * mode.bytes_per_fragment()
             + resolve_bytes.accumulation,
-        geometry: 2 * match source {
-            Source::Triangles(t) => t.bytes(&arch.fetch),
-            Source::Lembos => scene.lembo_count() as u64 * crate::discoid::CURVED_DISCOID_BYTES,
-        },
+        geometry: 2 * FetchPlan::new(arch, source, TessSource::Memory, scene.lembo_count(), true)
+            .bytes,
     };
     let resolve_total = rop_busy.iter().copied().max().unwrap_or(0).max(port_busy);
     let (c1, c2) = (first.cycles, second.cycles);

@@ -21,7 +21,7 @@ use crate::discoid::blend::BlendMode;
 use crate::discoid::report::BlendReport;
 use crate::error::Error;
 use crate::frame::discoid::{DiscoidTable, KeptFragment, Pass};
-use crate::graph::{Dispatch, UnitInstance, UnitKind};
+use crate::graph::{Dispatch, TessSource, UnitInstance, UnitKind};
 use crate::raster::triangle::TriangleSource;
 use crate::raster::Counts;
 use crate::scene::Scene;
@@ -146,6 +146,46 @@ pub struct VertexCacheCounts {
 }
 
 impl FetchPlan {
+    /// What the geometry fetch reads of `source`, its primitives `tess` (a mesh in memory,
+    /// or the lembos themselves for on-chip tessellation) or the scene's `lembos` (curved
+    /// discoids when `discoids`), its bytes `arch.fetch`'s.
+    pub fn new(
+        arch: &ArchConfig,
+        source: Source,
+        tess: TessSource,
+        lembos: usize,
+        discoids: bool,
+    ) -> Self {
+        match (source, tess) {
+            (Source::Triangles(t), TessSource::Memory) => FetchPlan {
+                source: TessSource::Memory.name(),
+                primitives: t.chunks() as u64 * t.per_chunk(),
+                bytes: t.bytes(&arch.fetch),
+                // A vertex cache for a source that is an indexed mesh.
+                vertex_cache: t
+                    .indexed()
+                    .then_some(arch.tessellation.vertex_cache_entries),
+            },
+            // The lembos themselves, read for the on-chip tessellators.
+            (Source::Triangles(t), TessSource::OnChip) => FetchPlan {
+                source: TessSource::OnChip.name(),
+                primitives: t.chunks() as u64,
+                bytes: t.chunks() as u64 * arch.fetch.bytes_per_lembo,
+                vertex_cache: None,
+            },
+            (Source::Lembos, _) => FetchPlan {
+                source: "lembos",
+                primitives: lembos as u64,
+                bytes: lembos as u64
+                    * match discoids {
+                        true => crate::discoid::CURVED_DISCOID_BYTES,
+                        false => arch.fetch.bytes_per_lembo,
+                    },
+                vertex_cache: None,
+            },
+        }
+    }
+
     /// The bytes of primitives `first..end`: their share of the whole, so that batches add
     /// up to the bytes stored (an indexed mesh's shared vertices are read once).
     pub fn bytes_of(&self, first: u64, end: u64) -> u64 {

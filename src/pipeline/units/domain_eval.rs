@@ -43,11 +43,7 @@ impl<R: Real> Unit<R> for DomainEval {
         run: &'a RunInputs<'a, R>,
         _: usize,
     ) -> UnitFuture<'a, Finished> {
-        Box::pin(self::run(
-            ctx,
-            &run.arch.domain_eval,
-            run.triangles,
-        ))
+        Box::pin(self::run(ctx, &run.arch.domain_eval, run.triangles))
     }
 }
 
