@@ -243,7 +243,6 @@ fn run_on<R: Real>(
         frame: SharedFrame::new(&mut fb),
     };
     let (mut results, recoveries) = execute(&plan, options, &run, trace)?;
-    drop(run);
     results.sort_by_key(|(u, _)| *u);
     let mut frame = finish(arch, fb, plan.units, results, options, trace_cap)?;
     frame.recoveries = recoveries;
