@@ -134,8 +134,9 @@ pub struct Netlist {
     /// Each boundary's crossbar (a `Crossbar<T>` of its item type) and the index of its
     /// producer's kind, for the boundaries with links.
     crossbars: Vec<Option<(usize, Box<dyn Any + Send + Sync>)>>,
-    /// Each boundary's dispatch rule, and whether the graph's path takes it.
-    rules: Vec<(Dispatch, bool)>,
+    /// Each boundary's dispatch rule, whether the graph's path takes it, and the batch its
+    /// consumers take under a rule of batches.
+    rules: Vec<(Dispatch, bool, Option<u32>)>,
 }
 
 impl Netlist {
@@ -181,10 +182,18 @@ impl Netlist {
                 crossbars[bi] = Some((p, xb));
             }
         }
+        // A boundary dealt in batches deals its consumers' batch (their own section's).
+        let at = |kind: UnitKind| ports.kinds.iter().position(|&k| k == kind);
         let rules = graph
             .boundaries
             .iter()
-            .map(|b| (b.dispatch, b.taken_by(graph.path, graph.source)))
+            .map(|b| {
+                let batch = match b.dispatch {
+                    Dispatch::Batches => at(b.to).and_then(|k| bodies[ports.body[k]].batch(arch)),
+                    _ => None,
+                };
+                (b.dispatch, b.taken_by(graph.path, graph.source), batch)
+            })
             .collect();
         Ok(Netlist {
             units,
@@ -241,6 +250,7 @@ impl Netlist {
                             wired: w.as_mut(),
                             dispatch: self.rules[*b].0,
                             taken: self.rules[*b].1,
+                            batch: self.rules[*b].2,
                         })
                         .collect(),
                     run,

@@ -20,9 +20,10 @@
 //! share (busy for its ROP's kept fragments at that rate), which the cost model sizes the
 //! blend units by.
 
+use super::unit::FetchPlan;
 use super::{run_in, Cycle, CycleReport, DiscoidPass, Source, UnitCycles, UnitInstance, UnitKind};
 use crate::camera::{View, Viewport};
-use crate::config::ArchConfig;
+use crate::config::{ArchConfig, BlendConfig};
 use crate::datapath::{Datapath, Real};
 use crate::discoid::blend::BlendMode;
 use crate::discoid::report::BlendReport;
@@ -30,6 +31,7 @@ use crate::error::{Error, Result};
 use crate::frame::discoid::{
     check_scene, resolve, DiscoidTable, DiscoidTarget, KeptFragment, Pass,
 };
+use crate::graph::TessSource;
 use crate::raster::Counts;
 use crate::rop::fragment_shader::FragmentShader;
 use crate::rop::shade::to_u8;
@@ -38,7 +40,6 @@ use crate::scene::Scene;
 use crate::tolerance::Tolerance;
 
 use super::tiles::RopTiles;
-use super::units::rop::blend_cycles;
 use super::SimOptions;
 
 /// What the timed discoid passes produced.
@@ -145,12 +146,12 @@ fn passes<R: Real>(
                 pass,
                 table: &table,
                 mode,
+                blend_cycles: blend_cycles(&arch.blend, mode),
                 threshold,
                 depth,
                 winner,
             }),
             options,
-            None,
         )
     };
     let first = pass(Pass::Depth, &[], &[])?;
@@ -184,10 +185,8 @@ fn passes<R: Real>(
             + resolve_pass.framebuffer,
         accumulation: target.report.fragments_accumulated * mode.bytes_per_fragment()
             + resolve_pass.accumulation,
-        geometry: 2 * match source {
-            Source::Triangles(t) => t.bytes(&arch.fetch),
-            Source::Lembos => scene.lembo_count() as u64 * crate::discoid::CURVED_DISCOID_BYTES,
-        },
+        geometry: 2 * FetchPlan::new(arch, source, TessSource::Memory, scene.lembo_count(), true)
+            .bytes,
     };
     let resolve_total = rop_busy.iter().copied().max().unwrap_or(0).max(port_busy);
     let (c1, c2) = (first.cycles, second.cycles);
@@ -353,4 +352,13 @@ fn merged_units(
             }
         })
         .collect()
+}
+
+/// Blend-unit cycles per kept fragment in `mode`.
+pub fn blend_cycles(cfg: &BlendConfig, mode: BlendMode) -> u64 {
+    match mode {
+        BlendMode::Rgba8 => cfg.cycles_per_fragment_rgba8,
+        BlendMode::F16 => cfg.cycles_per_fragment_f16,
+        BlendMode::F32 => cfg.cycles_per_fragment_f32,
+    }
 }

@@ -184,10 +184,22 @@ pub trait Item: Send + 'static {
     fn pixel(&self) -> Option<(u32, u32)> {
         None
     }
+
+    /// The primitives the item carries, as a source's items count them for the person
+    /// watching the run ([`crate::progress`]); 0 for an item that carries none.
+    fn primitives(&self) -> u64 {
+        0
+    }
 }
 
 impl Item for () {}
-impl Item for MemAccess {}
+
+impl Item for MemAccess {
+    fn primitives(&self) -> u64 {
+        u64::from(self.count)
+    }
+}
+
 impl Item for Patch {}
 impl<R: Real> Item for LemboReady<R> {}
 impl<R: Real> Item for ScanlineRange<R> {}

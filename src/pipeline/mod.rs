@@ -50,7 +50,7 @@ use runtime::executor::{Board, Halt, HostThread, Recoveries};
 use runtime::trace;
 use serde::Serialize;
 use tiles::{RopTiles, SharedFrame};
-use unit::{FetchPlan, Finished, NoTriangles, RunInputs};
+use unit::{FetchPlan, Finished, NoTriangles, RunInputs, UnitReport};
 use wiring::HostWiring;
 
 /// The cycle accounting of one unit over the frame \[cycles\].
@@ -131,8 +131,8 @@ pub fn run_timed(
 ) -> Result<TimedFrame> {
     let tol = tol.into();
     match datapath {
-        Datapath::F32 => run_in::<f32>(scene, view, tol, arch, source, None, options, None),
-        Datapath::F64 => run_in::<f64>(scene, view, tol, arch, source, None, options, None),
+        Datapath::F32 => run_in::<f32>(scene, view, tol, arch, source, None, options),
+        Datapath::F64 => run_in::<f64>(scene, view, tol, arch, source, None, options),
     }
 }
 
@@ -147,9 +147,8 @@ impl Drop for AbortOnPanic<'_> {
     }
 }
 
-/// [`run_timed`] in datapath `R`, for a discoid pass when `discoid`, on `graph` (a test's)
-/// instead of the path's own when given.
-#[allow(clippy::too_many_arguments)]
+/// [`run_timed`] in datapath `R`, for a discoid pass when `discoid`: on the graph of the
+/// source's path, or no units for a scene without primitives.
 fn run_in<R: Real>(
     scene: &Scene,
     view: &View,
@@ -158,134 +157,139 @@ fn run_in<R: Real>(
     source: Source,
     discoid: Option<DiscoidPass<R>>,
     options: &SimOptions,
-    graph: Option<&Graph>,
 ) -> Result<TimedFrame> {
-    let vp = view.viewport;
-    let background = scene.background.map(crate::rop::shade::to_u8::<f64>);
-    let n_lembos = scene.lembo_count();
-    let mut fb = FrameBuffer::new(vp.width, vp.height, background, false);
     // Model only what the scene requires: no primitives, no units.
     let path = match source {
         Source::Triangles(t) if t.chunks() == 0 => None,
-        Source::Lembos if n_lembos == 0 => None,
+        Source::Lembos if scene.lembo_count() == 0 => None,
         Source::Lembos => Some(PrimitivePath::Lembo),
         Source::Triangles(_) => Some(PrimitivePath::Triangle),
     };
     let Some(path) = path else {
-        return Ok(TimedFrame {
-            framebuffer: fb,
-            counts: Counts::default(),
-            units: Vec::new(),
-            cycles: CycleReport {
-                total: Cycle::ZERO,
-                clock_mhz: arch.clock_mhz,
-                fps: None,
-                bottleneck: None,
-                units: Vec::new(),
-            },
-            trace: None,
-            discoid: None,
-            fetch: None,
-            recoveries: Recoveries::default(),
-        });
+        return Ok(empty_frame(scene, view, arch));
     };
     // A discoid pass's triangles are planar discoids in memory, whatever the tessellation.
     let tess = match discoid {
         Some(_) => TessSource::Memory,
         None => arch.tessellation.source,
     };
-    let plan = Netlist::new::<R>(graph.unwrap_or(&Graph::of(path, tess)), arch, options)?;
+    let graph = Graph::of(path, tess);
+    run_on::<R>(&graph, scene, view, tol, arch, source, discoid, options)
+}
+
+/// The frame buffer `scene` starts from: its background, nothing drawn.
+fn blank(scene: &Scene, view: &View) -> FrameBuffer {
+    let vp = view.viewport;
+    let background = scene.background.map(crate::rop::shade::to_u8::<f64>);
+    FrameBuffer::new(vp.width, vp.height, background, false)
+}
+
+/// The frame of a scene without primitives: its background, no units, no cycles.
+fn empty_frame(scene: &Scene, view: &View, arch: &ArchConfig) -> TimedFrame {
+    TimedFrame {
+        framebuffer: blank(scene, view),
+        counts: Counts::default(),
+        units: Vec::new(),
+        cycles: CycleReport {
+            total: Cycle::ZERO,
+            clock_mhz: arch.clock_mhz,
+            fps: None,
+            bottleneck: None,
+            units: Vec::new(),
+        },
+        trace: None,
+        discoid: None,
+        fetch: None,
+        recoveries: Recoveries::default(),
+    }
+}
+
+/// [`run_in`] on `graph` (its path's, or a test's).
+#[allow(clippy::too_many_arguments)]
+fn run_on<R: Real>(
+    graph: &Graph,
+    scene: &Scene,
+    view: &View,
+    tol: Tolerance,
+    arch: &ArchConfig,
+    source: Source,
+    discoid: Option<DiscoidPass<R>>,
+    options: &SimOptions,
+) -> Result<TimedFrame> {
+    let vp = view.viewport;
+    let mut fb = blank(scene, view);
+    let plan = Netlist::new::<R>(graph, arch, options)?;
     let discoids = discoid.is_some();
     let trace_cap = options.trace_event_cap / plan.units.len();
     let trace = options.trace.then_some(trace_cap);
-    let results: Outcome = {
-        let fetch = match (path, source, tess) {
-            (PrimitivePath::Triangle, Source::Triangles(t), TessSource::Memory) => FetchPlan {
-                source: TessSource::Memory.name(),
-                primitives: t.chunks() as u64 * t.per_chunk(),
-                bytes: t.bytes(&arch.fetch),
-                batch: arch.triangle_setup.batch,
-                // A vertex cache for a source that is an indexed mesh.
-                vertex_cache: t
-                    .indexed()
-                    .then_some(arch.tessellation.vertex_cache_entries),
-            },
-            // The lembos themselves, read for the on-chip tessellators.
-            (PrimitivePath::Triangle, Source::Triangles(t), TessSource::OnChip) => FetchPlan {
-                source: TessSource::OnChip.name(),
-                primitives: t.chunks() as u64,
-                bytes: t.chunks() as u64 * arch.fetch.bytes_per_lembo,
-                batch: arch.tessellator.batch,
-                vertex_cache: None,
-            },
-            _ => FetchPlan {
-                source: "lembos",
-                primitives: n_lembos as u64,
-                bytes: n_lembos as u64
-                    * match discoid {
-                        Some(_) => crate::discoid::CURVED_DISCOID_BYTES,
-                        None => arch.fetch.bytes_per_lembo,
-                    },
-                batch: arch.setup.batch,
-                vertex_cache: None,
-            },
-        };
-        // What a person watching sees advance: the primitives fetched.
-        crate::progress::add_total(fetch.primitives);
-        let run = RunInputs {
-            scene,
-            view,
-            arch,
-            k: R::of(tol.k),
-            perspective_tol: tol.perspective,
-            fetch,
-            triangles: match source {
-                Source::Triangles(t) => t,
-                Source::Lembos => &NoTriangles,
-            },
-            tiles: RopTiles::new(vp.width, vp.height, arch.rop.tile_px, arch.rop.count),
-            discoid,
-            frame: SharedFrame::new(&mut fb),
-        };
-        if plan.threads == 1 {
-            let mut host = HostWiring::new(
-                &plan.units,
-                &plan.latency,
-                &plan.thread,
-                0,
-                options.perturb,
-                &[],
-            );
-            let futures = plan.bodies(&mut host, &run, trace);
-            HostThread {
-                core: host.core.clone(),
-                futures,
-                global: (0..plan.units.len()).collect(),
-                remotes: host.remotes,
-            }
-            .run(None)
-        } else {
-            run_threads(&plan, options, &run, trace)?
-        }
+    let fetch = FetchPlan::new(arch, source, graph.source, scene.lembo_count(), discoids);
+    // What a person watching sees advance: the primitives fetched, counted by the runtime
+    // as they leave the source (`Dispatcher::with_progress`).
+    crate::progress::add_total(fetch.primitives);
+    let run = RunInputs {
+        scene,
+        view,
+        arch,
+        port: &arch.framebuffer,
+        k: R::of(tol.k),
+        perspective_tol: tol.perspective,
+        fetch,
+        triangles: match source {
+            Source::Triangles(t) => t,
+            Source::Lembos => &NoTriangles,
+        },
+        tiles: RopTiles::new(vp.width, vp.height, arch.rop.tile_px, arch.rop.count),
+        discoid,
+        frame: SharedFrame::new(&mut fb),
     };
-    let (mut results, recoveries) = match results {
-        Ok(r) => r,
-        Err(Halt::Deadlock(waiting)) => {
-            return Err(Error::Deadlock {
-                waiting: waiting.into_iter().map(|(_, w)| w).collect(),
-            })
-        }
-        Err(Halt::Aborted) => return Err(Error::Internal("the timed run was aborted".into())),
-    };
+    let (mut results, recoveries) = execute(&plan, options, &run, trace)?;
     results.sort_by_key(|(u, _)| *u);
     let mut frame = finish(arch, fb, plan.units, results, options, trace_cap)?;
     frame.recoveries = recoveries;
     if discoids {
         // The blend units sit in the ROPs: listed (and priced) with the units, their cycles
         // the ROPs'.
-        frame.units = graph::instances(&graph::kinds(path, tess, true), |k| arch.unit(k).0);
+        let kinds = graph::kinds(graph.path, graph.source, true);
+        frame.units = graph::instances(&kinds, |k| arch.unit(k).0);
     }
     Ok(frame)
+}
+
+/// Runs the units of `plan` on one host thread or several: every unit's result with the
+/// recoveries the executor needed, or why the run stopped.
+fn execute<'a, R: Real>(
+    plan: &Netlist,
+    options: &SimOptions,
+    run: &'a RunInputs<'a, R>,
+    trace: Option<usize>,
+) -> Result<(Vec<(usize, Finished)>, Recoveries)> {
+    let outcome = if plan.threads == 1 {
+        let mut host = HostWiring::new(
+            &plan.units,
+            &plan.latency,
+            &plan.thread,
+            0,
+            options.perturb,
+            &[],
+        );
+        let futures = plan.bodies(&mut host, run, trace);
+        HostThread {
+            core: host.core.clone(),
+            futures,
+            global: (0..plan.units.len()).collect(),
+            remotes: host.remotes,
+        }
+        .run(None)
+    } else {
+        run_threads(plan, options, run, trace)?
+    };
+    match outcome {
+        Ok(r) => Ok(r),
+        Err(Halt::Deadlock(waiting)) => Err(Error::Deadlock {
+            waiting: waiting.into_iter().map(|(_, w)| w).collect(),
+        }),
+        Err(Halt::Aborted) => Err(Error::Internal("the timed run was aborted".into())),
+    }
 }
 
 /// How the executor left a run: every unit's result (by global index) with the recoveries
@@ -395,7 +399,9 @@ fn finish(
     let mut fetch = None;
     for (_, f) in &results {
         counts += f.counts;
-        fetch = fetch.or(f.fetch);
+        if let Some(UnitReport::Fetch(report)) = f.own {
+            fetch = fetch.or(Some(report));
+        }
     }
     counts.pixels_covered = fb.covered() as u64;
     let unit_cycles = unit_cycles(&units, &results, &direct, total);
@@ -523,7 +529,10 @@ fn bottleneck(units: &[UnitCycles]) -> Option<String> {
 fn kept_fragments(results: &mut [(usize, Finished)]) -> Option<(Vec<KeptFragment>, BlendReport)> {
     let mut discoid: Option<(Vec<KeptFragment>, BlendReport)> = None;
     for (_, f) in results {
-        if let Some((pending, report)) = f.discoid.take() {
+        if !matches!(f.own, Some(UnitReport::Kept(..))) {
+            continue;
+        }
+        if let Some(UnitReport::Kept(pending, report)) = f.own.take() {
             let (all, sum) = discoid.get_or_insert_with(Default::default);
             all.extend(pending);
             sum.culled_backface += report.culled_backface;
@@ -576,20 +585,18 @@ mod tests {
                 host_threads: threads,
                 ..SimOptions::default()
             };
-            let run = |graph: Option<&Graph>| {
-                run_in::<f32>(
-                    &scene,
-                    &view,
-                    tol,
-                    &arch,
-                    Source::Lembos,
-                    None,
-                    &options,
-                    graph,
-                )
-                .unwrap()
-            };
-            let (plain, fanned) = (run(None), run(Some(&graph)));
+            let plain = run_in::<f32>(&scene, &view, tol, &arch, Source::Lembos, None, &options);
+            let fanned = run_on::<f32>(
+                &graph,
+                &scene,
+                &view,
+                tol,
+                &arch,
+                Source::Lembos,
+                None,
+                &options,
+            );
+            let (plain, fanned) = (plain.unwrap(), fanned.unwrap());
             assert!(plain.framebuffer.color == fanned.framebuffer.color);
             assert_eq!(plain.counts, fanned.counts);
             assert_eq!(plain.cycles.total, fanned.cycles.total);

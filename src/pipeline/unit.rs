@@ -15,20 +15,20 @@ use super::runtime::{Ctx, Dispatcher, LinkSpec, UnitStats};
 use super::tiles::{RopTiles, SharedFrame};
 use super::wiring::{Crossbar, HostWiring, Wired};
 use crate::camera::View;
-use crate::config::ArchConfig;
+use crate::config::{ArchConfig, FrameBufferConfig};
 use crate::datapath::Real;
 use crate::discoid::blend::BlendMode;
 use crate::discoid::report::BlendReport;
 use crate::error::Error;
 use crate::frame::discoid::{DiscoidTable, KeptFragment, Pass};
-use crate::graph::{Dispatch, UnitInstance, UnitKind};
+use crate::graph::{Dispatch, TessSource, UnitInstance, UnitKind};
 use crate::raster::triangle::TriangleSource;
 use crate::raster::Counts;
 use crate::scene::Scene;
 use std::any::{type_name, Any, TypeId};
 use std::marker::PhantomData;
 
-/// What a unit hands back when it ends.
+/// What a unit hands back when it ends: what every unit reports, and its own figures.
 pub struct Finished {
     /// Its busy, starved and blocked cycles and item counts.
     pub stats: UnitStats,
@@ -38,11 +38,17 @@ pub struct Finished {
     pub counts: Counts,
     /// A functional error the unit recorded (the run still ends normally).
     pub error: Option<Error>,
+    /// The figures only this unit keeps, if it has any.
+    pub own: Option<UnitReport>,
+}
+
+/// A unit's own figures, each kind's its own record, read by the run's report.
+pub enum UnitReport {
+    /// The geometry fetch's account of what it read.
+    Fetch(FetchReport),
     /// A ROP's accumulation-pass output in a discoid pass: the fragments it kept and its
     /// counters.
-    pub discoid: Option<(Vec<KeptFragment>, BlendReport)>,
-    /// The geometry fetch's account of what it read.
-    pub fetch: Option<FetchReport>,
+    Kept(Vec<KeptFragment>, BlendReport),
 }
 
 impl Finished {
@@ -54,9 +60,14 @@ impl Finished {
             trace,
             counts,
             error: None,
-            discoid: None,
-            fetch: None,
+            own: None,
         }
+    }
+
+    /// The same, with the unit's own figures `own`.
+    pub fn with(mut self, own: UnitReport) -> Self {
+        self.own = Some(own);
+        self
     }
 }
 
@@ -91,8 +102,8 @@ impl TriangleSource for NoTriangles {
     }
 }
 
-/// What the geometry fetch reads: `primitives` in submission order, `bytes` in all, in
-/// batches of `batch` (the `batch` of the engines it deals them to).
+/// What the geometry fetch reads: `primitives` in submission order, `bytes` in all (in
+/// batches of its consumers' `batch`, which its boundary hands it).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct FetchPlan {
     /// What it reads, as report.json `fetch.source` names it.
@@ -102,8 +113,6 @@ pub struct FetchPlan {
     /// Their bytes in memory \[bytes\]; with a vertex cache, the whole indexed mesh (what
     /// a perfect cache would read).
     pub bytes: u64,
-    /// Primitives per batch dealt to one engine.
-    pub batch: u32,
     /// Entries of each setup engine's post-transform vertex cache, when the primitives are
     /// the triangles of an indexed mesh: the fetch then reads a triangle's indices and the
     /// vertices its engine's cache misses, instead of a share of `bytes`.
@@ -137,6 +146,46 @@ pub struct VertexCacheCounts {
 }
 
 impl FetchPlan {
+    /// What the geometry fetch reads of `source`, its primitives `tess` (a mesh in memory,
+    /// or the lembos themselves for on-chip tessellation) or the scene's `lembos` (curved
+    /// discoids when `discoids`), its bytes `arch.fetch`'s.
+    pub fn new(
+        arch: &ArchConfig,
+        source: Source,
+        tess: TessSource,
+        lembos: usize,
+        discoids: bool,
+    ) -> Self {
+        match (source, tess) {
+            (Source::Triangles(t), TessSource::Memory) => FetchPlan {
+                source: TessSource::Memory.name(),
+                primitives: t.chunks() as u64 * t.per_chunk(),
+                bytes: t.bytes(&arch.fetch),
+                // A vertex cache for a source that is an indexed mesh.
+                vertex_cache: t
+                    .indexed()
+                    .then_some(arch.tessellation.vertex_cache_entries),
+            },
+            // The lembos themselves, read for the on-chip tessellators.
+            (Source::Triangles(t), TessSource::OnChip) => FetchPlan {
+                source: TessSource::OnChip.name(),
+                primitives: t.chunks() as u64,
+                bytes: t.chunks() as u64 * arch.fetch.bytes_per_lembo,
+                vertex_cache: None,
+            },
+            (Source::Lembos, _) => FetchPlan {
+                source: "lembos",
+                primitives: lembos as u64,
+                bytes: lembos as u64
+                    * match discoids {
+                        true => crate::discoid::CURVED_DISCOID_BYTES,
+                        false => arch.fetch.bytes_per_lembo,
+                    },
+                vertex_cache: None,
+            },
+        }
+    }
+
     /// The bytes of primitives `first..end`: their share of the whole, so that batches add
     /// up to the bytes stored (an indexed mesh's shared vertices are read once).
     pub fn bytes_of(&self, first: u64, end: u64) -> u64 {
@@ -153,6 +202,8 @@ pub struct DiscoidPass<'a, R> {
     pub table: &'a DiscoidTable<R>,
     /// Precision of the blend units.
     pub mode: BlendMode,
+    /// The ROP's blend unit's cycles per kept fragment in `mode` (the blend section's).
+    pub blend_cycles: u64,
     /// The accumulation threshold t \[world units\].
     pub threshold: f64,
     /// The depth pass's result, whole frame: depth and winner per pixel (accumulation pass).
@@ -170,6 +221,9 @@ pub struct RunInputs<'a, R> {
     pub view: &'a View,
     /// The architecture: each unit takes its own section.
     pub arch: &'a ArchConfig,
+    /// The shared memory port's section ([`crate::graph::SHARED`]): its clients, the ROPs
+    /// by their link and the geometry fetch directly, move their bytes on its terms.
+    pub port: &'a FrameBufferConfig,
     /// Tolerance k in the datapath's precision \[pixels\].
     pub k: R,
     /// Setup's perspective tolerance \[pixels\]; None: the paper's Setup.
@@ -198,6 +252,12 @@ pub trait Unit<R: Real>: 'static {
     /// f64), counted from what the hardware would send, for the FIFOs' area and energy
     /// (DESIGN.md §12); 0 for a sink.
     const OUT_WORDS: u32;
+    /// The primitives per batch it takes from a boundary dealt in batches (its own
+    /// section's `batch`), which the runtime hands the producer of that boundary; None for
+    /// a unit fed otherwise.
+    fn batch(_arch: &ArchConfig) -> Option<u32> {
+        None
+    }
     /// The body of instance `index` of this kind, on its links `ctx`, with its context
     /// taken from `run`.
     fn spawn<'a>(
@@ -219,6 +279,8 @@ pub trait Elaborate<R: Real> {
     fn out_words(&self) -> u32;
     /// Whether its output items say where on screen they lie ([`Item::ON_SCREEN`]).
     fn on_screen(&self) -> bool;
+    /// [`Unit::batch`].
+    fn batch(&self, arch: &ArchConfig) -> Option<u32>;
     /// The crossbar of its output links to every instance of `to` (a `Crossbar<Out>`),
     /// its links each producer's output ports from `port_base` on.
     fn crossbar(
@@ -257,17 +319,21 @@ pub struct OutputBoundary<'w> {
     /// Whether the run's path takes it: a unit sends along the first boundary it feeds
     /// that the path takes; the others carry nothing (a graph wiring both paths' engines).
     pub taken: bool,
+    /// Its consumers' batch, under a rule of batches ([`Unit::batch`]).
+    pub batch: Option<u32>,
 }
 
-/// The runtime's dispatcher of `rule` over the output ports `ports` (a ROP per port for a
-/// rule by screen tile, the tile interleave `tiles`).
+/// The runtime's dispatcher of `out`'s rule over the output ports `ports` (a ROP per port
+/// for a rule by screen tile, the tile interleave `tiles`; the consumers' batch for a rule
+/// of batches).
 fn dispatcher<O: Item>(
-    rule: Dispatch,
+    out: &OutputBoundary,
     ports: std::ops::Range<usize>,
     tiles: &RopTiles,
 ) -> Dispatcher<O> {
-    match rule {
-        Dispatch::RoundRobin | Dispatch::Batches => Dispatcher::round_robin(ports),
+    match out.dispatch {
+        Dispatch::RoundRobin => Dispatcher::round_robin(ports),
+        Dispatch::Batches => Dispatcher::round_robin(ports).with_batch(out.batch),
         Dispatch::ScreenTile => {
             let tiles = tiles.clone();
             Dispatcher::keyed(ports, move |item: &O| {
@@ -320,6 +386,10 @@ impl<R: Real, U: Unit<R>> Elaborate<R> for ErasedUnit<U> {
 
     fn on_screen(&self) -> bool {
         <U::Out as Item>::ON_SCREEN
+    }
+
+    fn batch(&self, arch: &ArchConfig) -> Option<u32> {
+        U::batch(arch)
     }
 
     fn crossbar(
@@ -378,11 +448,15 @@ impl<R: Real, U: Unit<R>> Elaborate<R> for ErasedUnit<U> {
             let ports = tx.len()..tx.len() + links.len();
             tx.extend(links);
             if out.taken && dispatch.is_none() {
-                dispatch = Some(dispatcher(out.dispatch, ports, &run.tiles));
+                dispatch = Some(dispatcher(&out, ports, &run.tiles));
             }
         }
         // A unit its path takes no boundary out of is fed nothing, and sends nothing.
-        let dispatch = dispatch.unwrap_or_else(|| Dispatcher::round_robin(0..0));
+        let mut dispatch = dispatch.unwrap_or_else(|| Dispatcher::round_robin(0..0));
+        // The source's items are the primitives fetched: the run's progress.
+        if link_type::<U::In>().is_none() {
+            dispatch = dispatch.with_progress(<U::Out as Item>::primitives);
+        }
         U::spawn(host.ctx(g, rx, tx, dispatch, trace), run, index)
     }
 }

@@ -131,6 +131,12 @@ impl<I, O> Ctx<I, O> {
         self
     }
 
+    /// The primitives per batch its consumers take when its boundary deals batches
+    /// ([`crate::graph::Dispatch::Batches`]); None otherwise.
+    pub fn batch(&self) -> Option<u32> {
+        self.dispatch.batch()
+    }
+
     /// The consumers its items are dispatched over.
     pub fn consumers(&self) -> usize {
         self.dispatch.consumers()

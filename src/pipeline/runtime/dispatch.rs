@@ -9,6 +9,11 @@ pub struct Dispatcher<O> {
     /// The output ports of that boundary: one per consumer, in the consumers' order.
     ports: Range<usize>,
     rule: Rule<O>,
+    /// The primitives per batch its consumers take, under a rule of batches.
+    batch: Option<u32>,
+    /// For the pipeline's source: the primitives an item carries, counted into the
+    /// process-wide progress record ([`crate::progress`]) as the item leaves.
+    progress: Option<fn(&O) -> u64>,
 }
 
 /// A dispatcher's rule.
@@ -26,6 +31,8 @@ impl<O> Dispatcher<O> {
         Dispatcher {
             rule: Rule::RoundRobin { next: ports.start },
             ports,
+            batch: None,
+            progress: None,
         }
     }
 
@@ -34,7 +41,28 @@ impl<O> Dispatcher<O> {
         Dispatcher {
             ports,
             rule: Rule::Keyed(Box::new(key)),
+            batch: None,
+            progress: None,
         }
+    }
+
+    /// The same rule, dealing batches of `batch` primitives (the consumers' batch: the
+    /// producer cuts its primitives into batches of it).
+    pub fn with_batch(mut self, batch: Option<u32>) -> Self {
+        self.batch = batch;
+        self
+    }
+
+    /// The same rule, counting the primitives each item carries (`primitives`) into the
+    /// progress record as it leaves: what a person watching sees advance.
+    pub fn with_progress(mut self, primitives: fn(&O) -> u64) -> Self {
+        self.progress = Some(primitives);
+        self
+    }
+
+    /// The consumers' batch under a rule of batches; None otherwise.
+    pub fn batch(&self) -> Option<u32> {
+        self.batch
     }
 
     /// The consumers it spreads items over.
@@ -55,6 +83,9 @@ impl<O> Dispatcher<O> {
     /// The output port `item` leaves by, advancing the rule.
     #[inline(always)]
     pub fn port(&mut self, item: &O) -> usize {
+        if let Some(primitives) = self.progress {
+            crate::progress::advance(primitives(item));
+        }
         match &mut self.rule {
             Rule::RoundRobin { next } => {
                 let port = *next;

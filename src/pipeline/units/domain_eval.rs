@@ -1,7 +1,7 @@
 //! DomainEval (the `onchip` triangle source, DESIGN.md §5): evaluates each domain point of
 //! a lembo's tessellation, its position and unit normal, from the lembo's quadratic
 //! functions (a DX11 domain shader's work), and passes the lembo's triangles on in batches
-//! of `triangle_setup.batch`, batch after batch to the triangle setup engines in turn. The
+//! of the setup engines' `batch` (which its boundary hands it), batch after batch to the triangle setup engines in turn. The
 //! vertices are the functional model's ([`crate::lembo::tessellate`]), evaluated where
 //! TriangleSetup reads them; this unit adds only time.
 //!
@@ -43,23 +43,18 @@ impl<R: Real> Unit<R> for DomainEval {
         run: &'a RunInputs<'a, R>,
         _: usize,
     ) -> UnitFuture<'a, Finished> {
-        Box::pin(self::run(
-            ctx,
-            &run.arch.domain_eval,
-            run.triangles,
-            run.arch.triangle_setup.batch,
-        ))
+        Box::pin(self::run(ctx, &run.arch.domain_eval, run.triangles))
     }
 }
 
 /// DomainEval's body: each patch's points evaluated and its triangles passed on in batches
-/// of `batch`, to the setup engines in turn.
+/// of the setup engines' batch (its boundary's), to the engines in turn.
 pub async fn run(
     mut ctx: Ctx<Patch, MemAccess>,
     cfg: &DomainEvalConfig,
     source: &dyn TriangleSource,
-    batch: u32,
 ) -> Finished {
+    let batch = ctx.batch().expect("DomainEval's boundary deals batches");
     let triangles = source.per_chunk();
     let vertices = source.vertices_per_chunk();
     // The points evaluated once the first `t` triangles of a patch are out: their share.

@@ -31,7 +31,9 @@ use crate::graph::UnitKind;
 use crate::pipeline::items::MemAccess;
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::{Ctx, Cycle};
-use crate::pipeline::unit::{FetchPlan, FetchReport, Finished, RunInputs, Unit, VertexCacheCounts};
+use crate::pipeline::unit::{
+    FetchPlan, FetchReport, Finished, RunInputs, Unit, UnitReport, VertexCacheCounts,
+};
 use crate::pipeline::units::framebuffer::PortClock;
 use crate::raster::triangle::TriangleSource;
 use crate::raster::Counts;
@@ -57,13 +59,13 @@ impl<R: Real> Unit<R> for GeometryFetch {
             run.fetch,
             run.triangles,
             &run.arch.fetch,
-            &run.arch.framebuffer,
+            run.port,
         ))
     }
 }
 
-/// The fetch's body: the primitives of `plan`, a batch at a time, to the engines in turn,
-/// read through the memory port `port`; with a vertex cache, the triangles' vertex indices
+/// The fetch's body: the primitives of `plan`, a batch (its consumers', which its boundary
+/// hands it) at a time, to the engines in turn, read through the memory port `port`; with a vertex cache, the triangles' vertex indices
 /// come from `source`, and each triangle's and vertex's bytes are `sizes`'.
 pub async fn run(
     mut ctx: Ctx<(), MemAccess>,
@@ -72,6 +74,7 @@ pub async fn run(
     sizes: &FetchConfig,
     port: &FrameBufferConfig,
 ) -> Finished {
+    let batch = u64::from(ctx.batch().expect("the fetch's boundary deals batches"));
     let mut port = PortClock::new(port);
     // One vertex cache per engine the batches are dealt to.
     let mut caches = plan.vertex_cache.map(|entries| {
@@ -89,7 +92,7 @@ pub async fn run(
     let mut issued = Cycle::ZERO;
     let mut first = 0;
     while first < plan.primitives {
-        let end = (first + plan.batch as u64).min(plan.primitives);
+        let end = (first + batch).min(plan.primitives);
         let bytes = match caches.as_mut() {
             Some(caches) => {
                 // The cache of the engine the runtime deals this batch to.
@@ -118,7 +121,6 @@ pub async fn run(
         }
         issued = Cycle(now.0 + cycles);
         ctx.emit(cycles, access).await;
-        crate::progress::advance(end - first);
         first = end;
     }
     report.vertex_cache = caches.map(|caches| VertexCacheCounts {
@@ -126,9 +128,7 @@ pub async fn run(
         hits: caches.iter().map(|c| c.hits).sum(),
         misses: caches.iter().map(|c| c.misses).sum(),
     });
-    let mut finished = Finished::new(ctx, Counts::default());
-    finished.fetch = Some(report);
-    finished
+    Finished::new(ctx, Counts::default()).with(UnitReport::Fetch(report))
 }
 
 /// The index buffer of an indexed triangle source, read a chunk at a time.

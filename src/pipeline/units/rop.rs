@@ -17,19 +17,18 @@
 //! memory model.
 
 use crate::camera::{Samples, View};
-use crate::config::{BlendConfig, FrameBufferConfig, RopConfig};
+use crate::config::{FrameBufferConfig, RopConfig};
 use crate::datapath::Real;
-use crate::discoid::blend::BlendMode;
 use crate::discoid::report::BlendReport;
 use crate::frame::discoid::{
     accumulation_keeps, depth_pass_wins, evaluate, DiscoidFragment, KeptFragment, Pass,
 };
 use crate::graph::UnitKind;
-use crate::pipeline::items::{FragmentSpan, MemAccess, RopItem};
+use crate::pipeline::items::{FragmentSpan, MemAccess, RopItem, TrianglePiece};
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::Ctx;
 use crate::pipeline::tiles::RopPixels;
-use crate::pipeline::unit::{DiscoidPass, Finished, RunInputs, Unit};
+use crate::pipeline::unit::{DiscoidPass, Finished, RunInputs, Unit, UnitReport};
 use crate::raster::Counts;
 use crate::rop::fragment_shader::FragmentShader;
 use crate::rop::sink::Batch;
@@ -49,13 +48,11 @@ impl<R: Real> Unit<R> for Rop {
         run: &'a RunInputs<'a, R>,
         index: usize,
     ) -> UnitFuture<'a, Finished> {
-        let arch = run.arch;
         Box::pin(self::run(
             ctx,
             RopContext {
-                cfg: &arch.rop,
-                memory: &arch.framebuffer,
-                blend: &arch.blend,
+                cfg: &run.arch.rop,
+                memory: run.port,
                 pixels: RopPixels::new(&run.frame, &run.tiles, index, run.view.viewport.width),
                 shader: FragmentShader::<R>::new(&run.scene.light, run.view),
                 view: run.view,
@@ -65,15 +62,13 @@ impl<R: Real> Unit<R> for Rop {
     }
 }
 
-/// What a ROP works with: its configuration and the frame buffer's, its own pixels, the
+/// What a ROP works with: its configuration and the memory port's, its own pixels, the
 /// shader, and the discoid pass when there is one.
 pub struct RopContext<'a, R> {
     /// Its rate.
     pub cfg: &'a RopConfig,
     /// The bytes a fragment moves through the frame-buffer port.
     pub memory: &'a FrameBufferConfig,
-    /// The blend units' rates, in a discoid pass.
-    pub blend: &'a BlendConfig,
     /// The pixels of its tiles.
     pub pixels: RopPixels<'a, 'a>,
     /// The fragment shader (the scene's light seen from the camera).
@@ -136,7 +131,6 @@ pub async fn run<R: Real>(mut ctx: Ctx<RopItem<R>, MemAccess>, rop: RopContext<'
     let RopContext {
         cfg,
         memory: fbc,
-        blend,
         mut pixels,
         shader,
         view,
@@ -150,96 +144,30 @@ pub async fn run<R: Real>(mut ctx: Ctx<RopItem<R>, MemAccess>, rop: RopContext<'
     let mut batch = Batch::<R>::new();
     while let Some(item) = ctx.next_input().await {
         let mut passed = 0u64;
-        let n = match (item, discoid) {
-            (RopItem::Lembo(FragmentSpan { piece, j, span }), None) => {
-                let l = &*piece.screen;
-                let row = pixels.row(span.i0, span.i1, j);
-                pixels.prefetch(row + pixels.width() + span.i0 as usize);
-                batch.begin_lembo(l, &shader, into(&mut pixels));
-                span.walk(|i, u, v| {
-                    let idx = row + i as usize;
-                    let z = l.z.eval(u, v);
-                    if pixels.test_depth(idx, z.f64() as f32, l.id) {
-                        passed += 1;
-                        if batch.push(idx, [u, v]) {
-                            batch.flush(&shader, into(&mut pixels));
-                        }
-                    }
-                });
-                span.len() as u64
-            }
-            (RopItem::Lembo(FragmentSpan { piece, j, span }), Some(dp)) => {
-                let l = &*piece.screen;
-                let row = pixels.row(span.i0, span.i1, j);
-                span.walk(|i, u, v| {
-                    let idx = row + i as usize;
-                    let z = l.z.eval(u, v);
-                    let wins = dp.table.lembo_fragment(l, u, v, z).is_some_and(|f| {
-                        discoid_fragment(dp, view, &shader, &mut pixels, &mut kept, idx, &f)
-                    });
-                    passed += wins as u64;
-                });
-                span.len() as u64
-            }
-            (RopItem::Triangle(piece), discoid) => {
-                let t = &*piece.tri;
-                if discoid.is_none() {
-                    batch.begin_triangle(t, &shader, into(&mut pixels));
-                }
-                for (r, &(a, b)) in piece.rows.iter().enumerate() {
-                    let j = piece.j + r as u32;
-                    if a >= b {
-                        continue;
-                    }
-                    let row = pixels.row(a, b, j);
-                    for i in a..b {
-                        let idx = row + i as usize;
-                        let wins = match discoid {
-                            None => {
-                                let (l, z) = t.weights(i, j);
-                                // Multisampled, each sample is shaded at its pixel's centre.
-                                let l = match t.samples == Samples::ONE {
-                                    true => l,
-                                    false => t.shading_weights(i, j),
-                                };
-                                let pass = pixels.test_depth(idx, z.f64() as f32, t.id);
-                                if pass && batch.push(idx, l) {
-                                    batch.flush(&shader, into(&mut pixels));
-                                }
-                                pass
-                            }
-                            Some(dp) => {
-                                let df = dp.table.planar_fragment(t, &t.fragment(i, j));
-                                discoid_fragment(
-                                    dp,
-                                    view,
-                                    &shader,
-                                    &mut pixels,
-                                    &mut kept,
-                                    idx,
-                                    &df,
-                                )
-                            }
-                        };
-                        passed += wins as u64;
-                    }
-                }
-                piece.len()
-            }
-        };
-        counts.fragments_passed_depth += passed;
-        let tested = n * fbc.bytes_per_fragment_tested;
-        let (bytes, extra) = match discoid {
-            None => (tested + passed * fbc.bytes_per_fragment_written, 0),
-            // The depth pass writes depth only.
-            Some(DiscoidPass {
-                pass: Pass::Depth, ..
-            }) => (tested + passed * fbc.bytes_per_fragment_tested, 0),
-            Some(dp) => (
-                tested + passed * dp.mode.bytes_per_fragment(),
-                passed * blend_cycles(blend, dp.mode),
+        let n = match item {
+            RopItem::Triangle(piece) => triangle_fragments(
+                &piece,
+                discoid,
+                view,
+                &shader,
+                &mut pixels,
+                &mut batch,
+                &mut kept,
+                &mut passed,
+            ),
+            RopItem::Lembo(span) => lembo_fragments(
+                span,
+                discoid,
+                view,
+                &shader,
+                &mut pixels,
+                &mut batch,
+                &mut kept,
+                &mut passed,
             ),
         };
+        counts.fragments_passed_depth += passed;
+        let (bytes, extra) = traffic(fbc, discoid, n, passed);
         ctx.emit(
             cfg.fragments_per_cycle.ceil_div(n) + extra,
             MemAccess::frame(bytes),
@@ -247,24 +175,131 @@ pub async fn run<R: Real>(mut ctx: Ctx<RopItem<R>, MemAccess>, rop: RopContext<'
         .await;
     }
     batch.flush(&shader, into(&mut pixels));
-    let mut finished = Finished::new(ctx, counts);
-    if matches!(
-        discoid,
+    let finished = Finished::new(ctx, counts);
+    match discoid {
         Some(DiscoidPass {
             pass: Pass::Accumulate,
             ..
-        })
-    ) {
-        finished.discoid = Some(kept);
+        }) => finished.with(UnitReport::Kept(kept.0, kept.1)),
+        _ => finished,
     }
-    finished
 }
 
-/// Blend-unit cycles per kept fragment in `mode`.
-pub fn blend_cycles(cfg: &BlendConfig, mode: BlendMode) -> u64 {
-    match mode {
-        BlendMode::Rgba8 => cfg.cycles_per_fragment_rgba8,
-        BlendMode::F16 => cfg.cycles_per_fragment_f16,
-        BlendMode::F32 => cfg.cycles_per_fragment_f32,
+/// A span of lembo fragments: depth-tested, shaded into `batch` and written (or a discoid
+/// pass's work on each); its fragments, the ones that passed added to `passed`.
+#[allow(clippy::too_many_arguments)]
+fn lembo_fragments<R: Real>(
+    item: FragmentSpan<R>,
+    discoid: Option<&DiscoidPass<R>>,
+    view: &View,
+    shader: &FragmentShader<R>,
+    pixels: &mut RopPixels,
+    batch: &mut Batch<R>,
+    kept: &mut (Vec<KeptFragment>, BlendReport),
+    passed: &mut u64,
+) -> u64 {
+    match (item, discoid) {
+        (FragmentSpan { piece, j, span }, None) => {
+            let l = &*piece.screen;
+            let row = pixels.row(span.i0, span.i1, j);
+            pixels.prefetch(row + pixels.width() + span.i0 as usize);
+            batch.begin_lembo(l, shader, into(pixels));
+            span.walk(|i, u, v| {
+                let idx = row + i as usize;
+                let z = l.z.eval(u, v);
+                if pixels.test_depth(idx, z.f64() as f32, l.id) {
+                    *passed += 1;
+                    if batch.push(idx, [u, v]) {
+                        batch.flush(shader, into(pixels));
+                    }
+                }
+            });
+            span.len() as u64
+        }
+        (FragmentSpan { piece, j, span }, Some(dp)) => {
+            let l = &*piece.screen;
+            let row = pixels.row(span.i0, span.i1, j);
+            span.walk(|i, u, v| {
+                let idx = row + i as usize;
+                let z = l.z.eval(u, v);
+                let wins = dp
+                    .table
+                    .lembo_fragment(l, u, v, z)
+                    .is_some_and(|f| discoid_fragment(dp, view, shader, pixels, kept, idx, &f));
+                *passed += wins as u64;
+            });
+            span.len() as u64
+        }
+    }
+}
+
+/// A piece of a triangle: as [`lembo_fragments`], row by row.
+#[allow(clippy::too_many_arguments)]
+fn triangle_fragments<R: Real>(
+    piece: &TrianglePiece<R>,
+    discoid: Option<&DiscoidPass<R>>,
+    view: &View,
+    shader: &FragmentShader<R>,
+    pixels: &mut RopPixels,
+    batch: &mut Batch<R>,
+    kept: &mut (Vec<KeptFragment>, BlendReport),
+    passed: &mut u64,
+) -> u64 {
+    let t = &*piece.tri;
+    if discoid.is_none() {
+        batch.begin_triangle(t, shader, into(pixels));
+    }
+    for (r, &(a, b)) in piece.rows.iter().enumerate() {
+        let j = piece.j + r as u32;
+        if a >= b {
+            continue;
+        }
+        let row = pixels.row(a, b, j);
+        for i in a..b {
+            let idx = row + i as usize;
+            let wins = match discoid {
+                None => {
+                    let (l, z) = t.weights(i, j);
+                    // Multisampled, each sample is shaded at its pixel's centre.
+                    let l = match t.samples == Samples::ONE {
+                        true => l,
+                        false => t.shading_weights(i, j),
+                    };
+                    let pass = pixels.test_depth(idx, z.f64() as f32, t.id);
+                    if pass && batch.push(idx, l) {
+                        batch.flush(shader, into(pixels));
+                    }
+                    pass
+                }
+                Some(dp) => {
+                    let df = dp.table.planar_fragment(t, &t.fragment(i, j));
+                    discoid_fragment(dp, view, shader, pixels, kept, idx, &df)
+                }
+            };
+            *passed += wins as u64;
+        }
+    }
+    piece.len()
+}
+
+/// The bytes `n` fragments tested, `passed` of them passing, move through the memory port
+/// `fbc`, and the blend cycles a discoid pass adds.
+fn traffic<R>(
+    fbc: &FrameBufferConfig,
+    discoid: Option<&DiscoidPass<R>>,
+    n: u64,
+    passed: u64,
+) -> (u64, u64) {
+    let tested = n * fbc.bytes_per_fragment_tested;
+    match discoid {
+        None => (tested + passed * fbc.bytes_per_fragment_written, 0),
+        // The depth pass writes depth only.
+        Some(DiscoidPass {
+            pass: Pass::Depth, ..
+        }) => (tested + passed * fbc.bytes_per_fragment_tested, 0),
+        Some(dp) => (
+            tested + passed * dp.mode.bytes_per_fragment(),
+            passed * dp.blend_cycles,
+        ),
     }
 }

@@ -41,6 +41,10 @@ impl<R: Real> Unit<R> for Setup {
     // its colour (3) and id (1).
     const OUT_WORDS: u32 = 40;
 
+    fn batch(arch: &crate::config::ArchConfig) -> Option<u32> {
+        Some(arch.setup.batch)
+    }
+
     fn spawn<'a>(
         ctx: Ctx<MemAccess, LemboReady<R>>,
         run: &'a RunInputs<'a, R>,

@@ -33,6 +33,10 @@ impl<R: Real> Unit<R> for Tessellator {
     // patch constants) and its id.
     const OUT_WORDS: u32 = 37;
 
+    fn batch(arch: &crate::config::ArchConfig) -> Option<u32> {
+        Some(arch.tessellator.batch)
+    }
+
     fn spawn<'a>(
         ctx: Ctx<Self::In, Self::Out>,
         run: &'a RunInputs<'a, R>,

@@ -42,6 +42,10 @@ impl<R: Real> Unit<R> for TriangleSetup {
     // over w (18), bounding box (4), area and id.
     const OUT_WORDS: u32 = 42;
 
+    fn batch(arch: &crate::config::ArchConfig) -> Option<u32> {
+        Some(arch.triangle_setup.batch)
+    }
+
     fn spawn<'a>(
         ctx: Ctx<Self::In, Self::Out>,
         run: &'a RunInputs<'a, R>,
