@@ -82,6 +82,21 @@ struct KindInfo {
     inside: Option<UnitKind>,
     /// The DRAM traffic whose bytes are priced on this kind, if any.
     dram: Option<Traffic>,
+    /// The architecture fields that set how fast it works.
+    rates: &'static [Rate],
+}
+
+/// One of a kind's rates: an architecture field, by its dotted path, whose value sets how
+/// fast the kind works (how the cost model scales the kind's datapath from the baseline's,
+/// DESIGN.md §12). `{mode}` in a path stands for the blend mode's name (`f32` when none).
+/// A kind without a rate (the fetch, the memory port: they compute nothing) runs at the
+/// baseline's speed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Rate {
+    /// Cycles an item: the kind is faster when it is smaller.
+    CyclesPerItem(&'static str),
+    /// Items a cycle: the kind is faster when it is larger.
+    ItemsPerCycle(&'static str),
 }
 
 /// Traffic through the memory port, as the frame's cost prices it: each kind of traffic's
@@ -119,12 +134,48 @@ impl UnitKind {
             FrameBuffer => Some(Traffic::Frame),
             _ => None,
         };
+        use Rate::{CyclesPerItem as Cycles, ItemsPerCycle as Items};
+        let rates: &'static [Rate] = match self {
+            GeometryFetch | FrameBuffer => &[],
+            Setup => &[Cycles("setup.cycles_per_lembo")],
+            // Not `cull_cycles_per_lembo`: the back-face test's cycles, which the design
+            // point leaves out (a lower bound, DESIGN.md §12).
+            MinMax => &[Cycles("minmax.cycles_per_lembo")],
+            IntervalManager => &[
+                Cycles("interval_manager.cycles_per_scanline"),
+                Cycles("interval_manager.cycles_per_interval"),
+            ],
+            Segmenter => &[Cycles("segmenter.cycles_per_segment")],
+            Subsegmenter => &[Cycles("subsegmenter.cycles_per_subsegment")],
+            FragmentRasterizer => &[
+                Cycles("rasterizer.cycles_per_subsegment"),
+                Items("rasterizer.fragments_per_cycle"),
+            ],
+            Tessellator => &[Cycles("tessellator.cycles_per_triangle")],
+            DomainEval => &[Cycles("domain_eval.cycles_per_vertex")],
+            // Not `culled_per_cycle`: a culled triangle does only the area test (2
+            // multiplies, 5 adds) before it leaves, so culling faster widens that test
+            // alone, which the design point leaves out (a lower bound, DESIGN.md §12).
+            TriangleSetup => &[
+                Cycles("triangle_setup.cycles_per_triangle"),
+                Cycles("triangle_setup.cycles_per_clipped_piece"),
+            ],
+            TriangleRasterizer => &[Items("triangle_rasterizer.pixels_per_cycle")],
+            Rop => &[Items("rop.fragments_per_cycle")],
+            BlendUnit => &[Cycles("blend.cycles_per_fragment_{mode}")],
+        };
         KindInfo {
             name,
             replicated,
             inside,
             dram,
+            rates,
         }
+    }
+
+    /// The architecture fields that set how fast this kind works ([`Rate`]).
+    pub fn rates(self) -> &'static [Rate] {
+        self.info().rates
     }
 
     /// The kind's name, as in reports.

@@ -36,7 +36,7 @@
 use crate::config::{ArchConfig, Reciprocal};
 use crate::datapath::{Datapath, Op, OPS};
 use crate::discoid::blend::BlendMode;
-use crate::graph::{PrimitivePath, UnitKind};
+use crate::graph::{PrimitivePath, Rate, UnitKind};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::sync::OnceLock;
@@ -143,150 +143,46 @@ impl Sizing {
     }
 }
 
-/// A rate field's value as a number, whether it is whole or a fraction of a cycle.
-struct RateValue(f64);
-
-impl From<u64> for RateValue {
-    fn from(v: u64) -> RateValue {
-        RateValue(v as f64)
-    }
-}
-
-impl From<crate::config::Ratio> for RateValue {
-    fn from(v: crate::config::Ratio) -> RateValue {
-        RateValue(v.get())
-    }
-}
-
-/// A rate field's value on the baseline and on the architecture.
-type Rate = (f64, f64);
-
 /// How much faster `kind` runs on `arch` than on the embedded baseline: the largest ratio
-/// among its rate fields (baseline over `arch` for a `cycles_per_*` field, `arch` over
-/// baseline for a `*_per_cycle` one). A field set to 0 cycles (an item that costs no
-/// cycle) is left out; a kind without a rate field (the geometry fetch and the frame
-/// buffer, which compute nothing) runs at 1. The blend units' rate is their mode's
-/// `cycles_per_fragment_<mode>`.
+/// among its rate fields ([`UnitKind::rates`]: baseline over `arch` for cycles an item,
+/// `arch` over baseline for items a cycle). A field set to 0 cycles (an item that costs
+/// no cycle) is left out; a kind without a rate runs at 1. The blend units' rate is their
+/// mode's `cycles_per_fragment_<mode>`.
 pub fn speedup(arch: &ArchConfig, kind: UnitKind, blend: Option<BlendMode>) -> f64 {
-    static BASE: OnceLock<ArchConfig> = OnceLock::new();
-    let base = BASE.get_or_init(ArchConfig::baseline);
-    // (baseline, arch) per field: cycles per item, then items per cycle.
-    fn f(v: impl Into<RateValue>) -> f64 {
-        v.into().0
-    }
-    let (cycles, per_cycle): (Vec<Rate>, Vec<Rate>) = match kind {
-        UnitKind::Setup => (
-            vec![(
-                f(base.setup.cycles_per_lembo),
-                f(arch.setup.cycles_per_lembo),
-            )],
-            vec![],
-        ),
-        UnitKind::MinMax => (
-            vec![(
-                f(base.minmax.cycles_per_lembo),
-                f(arch.minmax.cycles_per_lembo),
-            )],
-            vec![],
-        ),
-        UnitKind::IntervalManager => {
-            let (b, a) = (&base.interval_manager, &arch.interval_manager);
-            (
-                vec![
-                    (f(b.cycles_per_scanline), f(a.cycles_per_scanline)),
-                    (f(b.cycles_per_interval), f(a.cycles_per_interval)),
-                ],
-                vec![],
-            )
-        }
-        UnitKind::Segmenter => (
-            vec![(
-                f(base.segmenter.cycles_per_segment),
-                f(arch.segmenter.cycles_per_segment),
-            )],
-            vec![],
-        ),
-        UnitKind::Subsegmenter => (
-            vec![(
-                f(base.subsegmenter.cycles_per_subsegment),
-                f(arch.subsegmenter.cycles_per_subsegment),
-            )],
-            vec![],
-        ),
-        UnitKind::FragmentRasterizer => (
-            vec![(
-                f(base.rasterizer.cycles_per_subsegment),
-                f(arch.rasterizer.cycles_per_subsegment),
-            )],
-            vec![(
-                f(base.rasterizer.fragments_per_cycle),
-                f(arch.rasterizer.fragments_per_cycle),
-            )],
-        ),
-        UnitKind::Tessellator => (
-            vec![(
-                f(base.tessellator.cycles_per_triangle),
-                f(arch.tessellator.cycles_per_triangle),
-            )],
-            vec![],
-        ),
-        UnitKind::DomainEval => (
-            vec![(
-                f(base.domain_eval.cycles_per_vertex),
-                f(arch.domain_eval.cycles_per_vertex),
-            )],
-            vec![],
-        ),
-        UnitKind::TriangleSetup => {
-            let (b, a) = (&base.triangle_setup, &arch.triangle_setup);
-            (
-                vec![
-                    (f(b.cycles_per_triangle), f(a.cycles_per_triangle)),
-                    (f(b.cycles_per_clipped_piece), f(a.cycles_per_clipped_piece)),
-                ],
-                // Not `culled_per_cycle`: a culled triangle does only the area test (2
-                // multiplies, 5 adds) before it leaves, so culling faster widens that test
-                // alone, which the design point leaves out (a lower bound, DESIGN.md §12).
-                vec![],
-            )
-        }
-        UnitKind::TriangleRasterizer => (
-            vec![],
-            vec![(
-                f(base.triangle_rasterizer.pixels_per_cycle),
-                f(arch.triangle_rasterizer.pixels_per_cycle),
-            )],
-        ),
-        UnitKind::Rop => (
-            vec![],
-            vec![(
-                f(base.rop.fragments_per_cycle),
-                f(arch.rop.fragments_per_cycle),
-            )],
-        ),
-        UnitKind::BlendUnit => {
-            let of = |c: &ArchConfig| match blend {
-                Some(BlendMode::Rgba8) => c.blend.cycles_per_fragment_rgba8,
-                Some(BlendMode::F16) => c.blend.cycles_per_fragment_f16,
-                Some(BlendMode::F32) | None => c.blend.cycles_per_fragment_f32,
-            };
-            (vec![(f(of(base)), f(of(arch)))], vec![])
-        }
-        UnitKind::GeometryFetch | UnitKind::FrameBuffer => (vec![], vec![]),
-    };
-    let ratios = cycles
+    static BASE: OnceLock<serde_json::Value> = OnceLock::new();
+    let base = BASE.get_or_init(|| rate_fields(&ArchConfig::baseline()));
+    let now = rate_fields(arch);
+    let mode = blend.unwrap_or(BlendMode::F32).name();
+    kind.rates()
         .iter()
-        .filter(|(b, a)| *a > 0.0 && *b > 0.0)
-        .map(|&(b, a)| b / a)
-        .chain(
-            per_cycle
-                .iter()
-                .filter(|(b, a)| *a > 0.0 && *b > 0.0)
-                .map(|&(b, a)| a / b),
-        );
-    ratios
+        .filter_map(|rate| {
+            let (path, per_item) = match *rate {
+                Rate::CyclesPerItem(p) => (p, true),
+                Rate::ItemsPerCycle(p) => (p, false),
+            };
+            let path = path.replace("{mode}", mode);
+            let (b, a) = (rate_value(base, &path), rate_value(&now, &path));
+            (a > 0.0 && b > 0.0).then_some(if per_item { b / a } else { a / b })
+        })
         .fold(None, |m: Option<f64>, r| Some(m.map_or(r, |m| m.max(r))))
         .unwrap_or(1.0)
+}
+
+/// An architecture as its file holds it, where [`UnitKind::rates`] name their fields.
+fn rate_fields(arch: &ArchConfig) -> serde_json::Value {
+    serde_json::to_value(arch).expect("an architecture serialises")
+}
+
+/// The number at `path` (`section.field`) of an architecture's fields.
+///
+/// # Panics
+/// When the path names no number: a rate the graph declares that the architecture lacks
+/// (a unit test reads every kind's rates on the baseline).
+fn rate_value(fields: &serde_json::Value, path: &str) -> f64 {
+    path.split('.')
+        .fold(fields, |v, key| &v[key])
+        .as_f64()
+        .unwrap_or_else(|| panic!("the graph's rate field {path} is no number of the architecture"))
 }
 
 #[cfg(test)]
@@ -340,6 +236,25 @@ mod tests {
 
     /// The baseline runs every kind at 1; halving a cycles-per-item rate or doubling an
     /// items-per-cycle one doubles it; a unit with several rates takes the fastest.
+    /// Every rate the graph declares names a positive number of the baseline's fields, in
+    /// every blend mode: a renamed field fails here, not in a user's run.
+    #[test]
+    fn every_rate_the_graph_declares_is_a_field_of_the_architecture() {
+        let fields = rate_fields(&ArchConfig::baseline());
+        let mut named = 0;
+        for kind in crate::graph::KINDS {
+            for rate in kind.rates() {
+                let (Rate::CyclesPerItem(path) | Rate::ItemsPerCycle(path)) = *rate;
+                for mode in BlendMode::ALL {
+                    let path = path.replace("{mode}", mode.name());
+                    assert!(rate_value(&fields, &path) > 0.0, "{kind:?}: {path}");
+                    named += 1;
+                }
+            }
+        }
+        assert!(named >= 15 * 3, "{named} rates read");
+    }
+
     #[test]
     fn a_units_speedup_is_its_fastest_rate_over_the_baselines() {
         let base = ArchConfig::baseline();

@@ -91,6 +91,59 @@ pub struct PassCycles {
     pub resolve: Cycle,
 }
 
+/// What a discoid scene's timed passes take their primitives from: its curved discoids as
+/// lembos, or its planar ones as triangles; a scene with both is refused, naming it.
+fn source_of<'t, R: Real>(scene: &Scene, table: &'t DiscoidTable<R>) -> Result<Source<'t>> {
+    let (curved, planar) = (scene.lembo_count() > 0, !table.planar.items.is_empty());
+    if curved && planar {
+        return Err(Error::invalid(
+            scene.source_name(),
+            "objects",
+            "curved and planar discoids",
+            "the timed passes draw either curved or planar discoids in one scene (use --mode functional for both)",
+        ));
+    }
+    Ok(if planar {
+        Source::Triangles(&table.planar)
+    } else {
+        Source::Lembos
+    })
+}
+
+/// The bytes through the memory port over the three passes: each pass's tested fragments
+/// and the depth pass's writes, the accumulation target's fragments, the resolve, and the
+/// primitives `geometry` read.
+fn port_bytes(
+    arch: &ArchConfig,
+    vp: Viewport,
+    mode: BlendMode,
+    [first, second]: [&Counts; 2],
+    accumulated: u64,
+    geometry: u64,
+) -> PortBytes {
+    let fbc = &arch.framebuffer;
+    let resolve_pass = blend_resolve_bytes(vp, mode);
+    PortBytes {
+        framebuffer: first.fragments * fbc.bytes_per_fragment_tested
+            + first.fragments_passed_depth * fbc.bytes_per_fragment_tested
+            + second.fragments * fbc.bytes_per_fragment_tested
+            + resolve_pass.framebuffer,
+        accumulation: accumulated * mode.bytes_per_fragment() + resolve_pass.accumulation,
+        geometry,
+    }
+}
+
+/// The unit with the most busy cycles (the first of a tie), by name.
+fn busiest(units: &[UnitCycles]) -> Option<String> {
+    units
+        .iter()
+        .fold(None::<&UnitCycles>, |best, u| match best {
+            Some(b) if b.busy >= u.busy => Some(b),
+            _ => Some(u),
+        })
+        .map(|u| u.name.clone())
+}
+
 /// Runs a discoid scene's three passes on the timed pipeline of `arch`.
 #[allow(clippy::too_many_arguments)]
 pub fn run_discoid_timed(
@@ -121,20 +174,7 @@ fn passes<R: Real>(
 ) -> Result<DiscoidTimed> {
     check_scene(scene)?;
     let table = DiscoidTable::<R>::new(scene, view);
-    let (curved, planar) = (scene.lembo_count() > 0, !table.planar.items.is_empty());
-    if curved && planar {
-        return Err(Error::invalid(
-            scene.source_name(),
-            "objects",
-            "curved and planar discoids",
-            "the timed passes draw either curved or planar discoids in one scene (use --mode functional for both)",
-        ));
-    }
-    let source = if planar {
-        Source::Triangles(&table.planar)
-    } else {
-        Source::Lembos
-    };
+    let source = source_of(scene, &table)?;
     let pass = |pass: Pass, depth: &[f32], winner: &[u32]| {
         run_in::<R>(
             scene,
@@ -176,30 +216,20 @@ fn passes<R: Real>(
     let framebuffer = resolve::<R, f32>(&mut target, &table, &shader, background, vp.height);
 
     let (rop_busy, port_busy) = resolve_cost(arch, vp, mode);
-    let fbc = &arch.framebuffer;
-    let resolve_pass = blend_resolve_bytes(vp, mode);
-    let port_bytes = PortBytes {
-        framebuffer: first.counts.fragments * fbc.bytes_per_fragment_tested
-            + first.counts.fragments_passed_depth * fbc.bytes_per_fragment_tested
-            + second.counts.fragments * fbc.bytes_per_fragment_tested
-            + resolve_pass.framebuffer,
-        accumulation: target.report.fragments_accumulated * mode.bytes_per_fragment()
-            + resolve_pass.accumulation,
-        geometry: 2 * FetchPlan::new(arch, source, TessSource::Memory, scene.lembo_count(), true)
-            .bytes,
-    };
+    let port_bytes = port_bytes(
+        arch,
+        vp,
+        mode,
+        [&first.counts, &second.counts],
+        target.report.fragments_accumulated,
+        2 * FetchPlan::new(arch, source, TessSource::Memory, scene.lembo_count(), true).bytes,
+    );
     let resolve_total = rop_busy.iter().copied().max().unwrap_or(0).max(port_busy);
     let (c1, c2) = (first.cycles, second.cycles);
     let units = merged_units(&c1, &c2, &rop_busy, port_busy, resolve_total);
     let total = c1.total + c2.total + resolve_total;
     let blend_units = blend_unit_cycles(arch, mode, &blended, total);
-    let bottleneck = units
-        .iter()
-        .fold(None::<&UnitCycles>, |best, u| match best {
-            Some(b) if b.busy >= u.busy => Some(b),
-            _ => Some(u),
-        })
-        .map(|u| u.name.clone());
+    let bottleneck = busiest(&units);
     let blend = target.report;
     let passes = PassCycles {
         depth: c1.total,

@@ -423,6 +423,12 @@ pub fn recover(snaps: &[UnitSnap]) -> Vec<(usize, Cycle)> {
             break;
         }
     }
+    safe_to_go(snaps, &|input: &InputSnap| bound(input, &x))
+}
+
+/// The held items that may go ahead, given each input's bound: an item every other input's
+/// bound is past (ties by port), as (unit, arrival).
+fn safe_to_go(snaps: &[UnitSnap], bound: &dyn Fn(&InputSnap) -> Cycle) -> Vec<(usize, Cycle)> {
     let mut go = Vec::new();
     for s in snaps {
         let Wait::Input { held: Some(a) } = s.wait else {
@@ -440,7 +446,7 @@ pub fn recover(snaps: &[UnitSnap]) -> Vec<(usize, Cycle)> {
         };
         let safe = s.inputs.iter().enumerate().all(|(j, inp)| {
             inp.head.is_some() || {
-                let b = bound(inp, &x);
+                let b = bound(inp);
                 b > a || (b == a && j > port)
             }
         });

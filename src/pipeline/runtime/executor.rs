@@ -265,13 +265,7 @@ impl<F> HostThread<'_, F> {
     ) -> Result<(Vec<(usize, F)>, Recoveries), Halt> {
         let core = &self.core;
         let mut stats = Recoveries::default();
-        let mut local = Vec::new();
-        for (u, &g) in self.global.iter().enumerate() {
-            if local.len() <= g {
-                local.resize(g + 1, u32::MAX);
-            }
-            local[g] = u as u32;
-        }
+        let local = self.local_index();
         let go_ahead = |go: Vec<(usize, Cycle)>| {
             for (g, a) in go {
                 core.go_ahead(local[g], a);
@@ -359,6 +353,19 @@ impl<F> HostThread<'_, F> {
             .map(|(u, out)| (self.global[u], out.expect("every unit finished")))
             .collect();
         Ok((outputs, stats))
+    }
+
+    /// Each unit's index on this thread, by its global index (`u32::MAX`: another
+    /// thread's).
+    fn local_index(&self) -> Vec<u32> {
+        let mut local = Vec::new();
+        for (u, &g) in self.global.iter().enumerate() {
+            if local.len() <= g {
+                local.resize(g + 1, u32::MAX);
+            }
+            local[g] = u as u32;
+        }
+        local
     }
 
     /// Sends what this thread holds for others (items, credits, horizons).
