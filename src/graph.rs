@@ -84,6 +84,22 @@ struct KindInfo {
     dram: Option<Traffic>,
     /// The architecture fields that set how fast it works.
     rates: &'static [Rate],
+    /// What else its design-point key names, if anything ([`Variant`]).
+    variant: Option<Variant>,
+}
+
+/// What changes what a kind computes besides its kind, so that the design point (the
+/// operations a kind does per busy cycle, DESIGN.md §12) keeps a key for each: the
+/// triangle rasterizer's reciprocal (per quad or per pixel), the blend unit's mode, the
+/// ROP's path.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Variant {
+    /// The triangle rasterizer's `reciprocal` setting.
+    Reciprocal,
+    /// The blend mode of a discoid frame.
+    BlendMode,
+    /// The primitive path.
+    Path,
 }
 
 /// One of a kind's rates: an architecture field, by its dotted path, whose value sets how
@@ -164,13 +180,25 @@ impl UnitKind {
             Rop => &[Items("rop.fragments_per_cycle")],
             BlendUnit => &[Cycles("blend.cycles_per_fragment_{mode}")],
         };
+        let variant = match self {
+            TriangleRasterizer => Some(Variant::Reciprocal),
+            BlendUnit => Some(Variant::BlendMode),
+            Rop => Some(Variant::Path),
+            _ => None,
+        };
         KindInfo {
             name,
             replicated,
             inside,
             dram,
             rates,
+            variant,
         }
+    }
+
+    /// What else the design point keys this kind by ([`Variant`]).
+    pub fn variant(self) -> Option<Variant> {
+        self.info().variant
     }
 
     /// The architecture fields that set how fast this kind works ([`Rate`]).

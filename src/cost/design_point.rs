@@ -36,7 +36,7 @@
 use crate::config::{ArchConfig, Reciprocal};
 use crate::datapath::{Datapath, Op, OPS};
 use crate::discoid::blend::BlendMode;
-use crate::graph::{PrimitivePath, Rate, UnitKind};
+use crate::graph::{PrimitivePath, Rate, UnitKind, Variant};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::sync::OnceLock;
@@ -109,18 +109,18 @@ impl Sizing {
     /// The unit's name in keys: its kind's, with the variant that changes what it
     /// computes.
     fn unit(&self, kind: UnitKind) -> String {
-        match (kind, self.blend) {
-            (UnitKind::TriangleRasterizer, _) => format!(
-                "{}/{}",
-                kind.name(),
-                match self.reciprocal {
-                    Reciprocal::Quad => "quad",
-                    Reciprocal::Pixel => "pixel",
-                }
-            ),
-            (UnitKind::BlendUnit, Some(mode)) => format!("{}/{}", kind.name(), mode.name()),
-            (UnitKind::Rop, _) => format!("{}/{}", kind.name(), self.path.name()),
-            _ => kind.name().to_string(),
+        let variant = match kind.variant() {
+            Some(Variant::Reciprocal) => Some(match self.reciprocal {
+                Reciprocal::Quad => "quad",
+                Reciprocal::Pixel => "pixel",
+            }),
+            Some(Variant::BlendMode) => self.blend.map(BlendMode::name),
+            Some(Variant::Path) => Some(self.path.name()),
+            None => None,
+        };
+        match variant {
+            Some(v) => format!("{}/{v}", kind.name()),
+            None => kind.name().to_string(),
         }
     }
 

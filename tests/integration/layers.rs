@@ -264,6 +264,72 @@ fn test_lines(text: &str) -> Vec<(usize, usize)> {
     out
 }
 
+/// No product code outside `graph.rs` and the units' own files tests a unit kind by name:
+/// what a kind is (shared, priced as DRAM, its rates, its design-point variant, a discoid
+/// kind) is declared in the graph and read from there.
+#[test]
+fn no_product_code_tests_a_unit_kind_by_name_outside_the_graph() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    read_tree(&src, &src, &mut files);
+    let mut found = Vec::new();
+    for (path, text) in &files {
+        let own = path == "graph.rs" || path.starts_with("pipeline/units/");
+        if own || path.ends_with("tests.rs") || path.contains("/tests/") {
+            continue;
+        }
+        let tests = test_lines(text);
+        for (n, line) in text.lines().enumerate() {
+            let in_test = tests.iter().any(|&(a, b)| (a..=b).contains(&(n + 1)));
+            if !in_test && tests_a_kind(line) {
+                found.push(format!("src/{path}:{}: {}", n + 1, line.trim()));
+            }
+        }
+    }
+    assert!(
+        found.is_empty(),
+        "unit kinds tested by name outside graph.rs (declare the fact in the graph):\n{}",
+        found.join("\n")
+    );
+}
+
+/// Whether a line compares or matches a `UnitKind` variant by name.
+fn tests_a_kind(line: &str) -> bool {
+    let code = line.split("//").next().unwrap_or_default();
+    code.match_indices("UnitKind::").any(|(i, _)| {
+        let before = code[..i].trim_end();
+        let after = &code[i + "UnitKind::".len()..];
+        let variant: String = after.chars().take_while(|c| c.is_alphanumeric()).collect();
+        let rest = after[variant.len()..].trim_start();
+        variant.starts_with(char::is_uppercase)
+            && (before.ends_with("==")
+                || before.ends_with("!=")
+                || rest.starts_with("=>")
+                || rest.starts_with('|')
+                || (before.ends_with('(') && rest.starts_with(',') && code.contains("=>")))
+    })
+}
+
+#[test]
+fn tests_a_kind_finds_comparisons_and_match_arms_only() {
+    for yes in [
+        "if u.kind == UnitKind::Rop {",
+        "UnitKind::Rop => 1,",
+        "UnitKind::GeometryFetch | UnitKind::FrameBuffer => (vec![], vec![]),",
+        "(UnitKind::Rop, _) => x,",
+    ] {
+        assert!(tests_a_kind(yes), "{yes}");
+    }
+    for no in [
+        "const KIND: UnitKind = UnitKind::Rop;",
+        "ops.add(UnitKind::Rop, Op::Mul, 1);",
+        "// u.kind == UnitKind::Rop",
+        "kinds: vec![UnitKind::Setup],",
+    ] {
+        assert!(!tests_a_kind(no), "{no}");
+    }
+}
+
 /// The measure itself, on functions of known length: a body's lines counted from `fn` to
 /// its closing brace, braces in strings and comments ignored, declarations without a body
 /// and `fn` pointer types skipped.

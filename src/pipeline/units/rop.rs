@@ -2,7 +2,7 @@
 //! the frame-buffer write, Np units screen-interleaved by tiles.
 //!
 //! Input: [`RopItem`]s from every rasterizer, merged by (arrival, port): lembo
-//! [`FragmentSpan`]s, or [`TrianglePiece`](crate::pipeline::items::TrianglePiece)s in the triangle path. For each fragment: its
+//! [`FragmentSpan`]s, or [`TrianglePiece`]s in the triangle path. For each fragment: its
 //! depth (from the lembo's depth quadratic, or the triangle's plane), the depth test on
 //! (z, id) (the winner does not depend on arrival order), and for a fragment that passes,
 //! Phong shading (Piranda et al. 2006 equation 6) and the write. Output: one [`MemAccess`] per
