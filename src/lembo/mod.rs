@@ -29,8 +29,8 @@ use glam::DVec3;
 
 /// Bytes of one lembo as it is stored in memory and fetched for Setup: six points and six
 /// normals in f32; the default of the architecture's `fetch.bytes_per_lembo`, which the
-/// counts use (a curved discoid's record, [`crate::discoid::CURVED_DISCOID_BYTES`], is this
-/// and its extra fields whatever the architecture says).
+/// counts use (a curved discoid's record is this and its extra fields, whatever the
+/// architecture says).
 pub const LEMBO_BYTES: u64 = 6 * 2 * 3 * 4;
 
 /// The six reference points of the domain, in the paper's order A, B, C, D, E, F.

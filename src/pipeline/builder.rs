@@ -334,17 +334,20 @@ mod tests {
 
     /// Each way of mis-wiring the lembo path is refused, before anything runs, with the
     /// error that names it.
+    /// The builder's check of a lembo-path graph of `kinds` and `boundaries`.
+    fn check_lembo(kinds: &[UnitKind], boundaries: &[Boundary]) -> Result<Ports, GraphError> {
+        check::<f32>(&Graph {
+            path: PrimitivePath::Lembo,
+            kinds,
+            boundaries,
+            source: TessSource::Memory,
+        })
+    }
+
     #[test]
     fn builder_refuses_a_miswired_graph_with_a_named_error() {
         let lembo = PrimitivePath::Lembo.kinds(TessSource::Memory);
-        let check = |kinds: &[UnitKind], boundaries: &[Boundary]| {
-            check::<f32>(&Graph {
-                path: PrimitivePath::Lembo,
-                kinds,
-                boundaries,
-                source: TessSource::Memory,
-            })
-        };
+        let check = check_lembo;
         // A boundary left out: the segmenters' output goes nowhere.
         let without: Vec<Boundary> = BOUNDARIES
             .iter()
@@ -396,29 +399,6 @@ mod tests {
             check(&[Setup, Setup], &BOUNDARIES),
             Err(GraphError::Repeated { kind: Setup })
         );
-        // Both rasterizers into the ROPs: a ROP reads from both boundaries, its ports the
-        // lembo rasterizers' then the triangle rasterizers'.
-        // Every kind with a body of its own that a graph of triangles from memory has:
-        // both paths' units (the on-chip tessellation's are fed only from on-chip sources).
-        let both: Vec<UnitKind> = crate::graph::KINDS
-            .into_iter()
-            .filter(|k| k.inside().is_none())
-            .filter(|k| {
-                [
-                    crate::graph::PrimitivePath::Lembo,
-                    crate::graph::PrimitivePath::Triangle,
-                ]
-                .iter()
-                .any(|p| p.kinds(TessSource::Memory).contains(k))
-            })
-            .collect();
-        let ports = check(&both, &BOUNDARIES).unwrap();
-        let rop = both.iter().position(|&k| k == Rop).unwrap();
-        let keys: Vec<&str> = ports.input[rop]
-            .iter()
-            .map(|&b| BOUNDARIES[b].key)
-            .collect();
-        assert_eq!(keys, ["rasterizer_to_rop", "triangle_rasterizer_to_rop"]);
         // Two boundaries between the same two kinds would make two crossbars of one pair.
         let mut twice = BOUNDARIES.to_vec();
         twice.insert(1, boundary("setup_to_minmax_again", Setup, MinMax));
@@ -447,6 +427,33 @@ mod tests {
             check(&[MinMax, IntervalManager], &BOUNDARIES),
             Err(GraphError::Unfed { kind: MinMax })
         );
+    }
+
+    /// Both rasterizers into the ROPs: a ROP reads from both boundaries, its ports the
+    /// lembo rasterizers' then the triangle rasterizers'.
+    #[test]
+    fn a_rop_reads_both_rasterizers_boundaries_in_dataflow_order() {
+        // Every kind with a body of its own that a graph of triangles from memory has:
+        // both paths' units (the on-chip tessellation's are fed only from on-chip sources).
+        let both: Vec<UnitKind> = crate::graph::KINDS
+            .into_iter()
+            .filter(|k| k.inside().is_none())
+            .filter(|k| {
+                [
+                    crate::graph::PrimitivePath::Lembo,
+                    crate::graph::PrimitivePath::Triangle,
+                ]
+                .iter()
+                .any(|p| p.kinds(TessSource::Memory).contains(k))
+            })
+            .collect();
+        let ports = check_lembo(&both, &BOUNDARIES).unwrap();
+        let rop = both.iter().position(|&k| k == Rop).unwrap();
+        let keys: Vec<&str> = ports.input[rop]
+            .iter()
+            .map(|&b| BOUNDARIES[b].key)
+            .collect();
+        assert_eq!(keys, ["rasterizer_to_rop", "triangle_rasterizer_to_rop"]);
     }
 
     /// A boundary the architecture has no link for is refused by the plan, and the error
