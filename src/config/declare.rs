@@ -275,7 +275,7 @@ macro_rules! architecture {
             /// The section declaring each kind, by the kinds' [`Section::UNIT`] (for the
             /// test that every kind of the graph has one).
             #[cfg(test)]
-            fn declared_units() -> Vec<(&'static str, $crate::graph::UnitKind)> {
+            pub(super) fn declared_units() -> Vec<(&'static str, $crate::graph::UnitKind)> {
                 let mut out = Vec::new();
                 $(if let Some(kind) = <$sty as $crate::config::declare::Section>::UNIT {
                     out.push((stringify!($section), kind));

@@ -34,83 +34,23 @@ mod rules;
 mod sections;
 mod table;
 use crate::json::parse_strict;
-use declare::architecture;
 pub use declare::Row;
 pub use links::LinksConfig;
 pub use ratio::Ratio;
-use rules::{Chars, Positive};
 pub use rules::{
     MAX_ACCESS_CYCLES, MAX_BATCH, MAX_BYTES, MAX_CLOCK_MHZ, MAX_CYCLES, MAX_FIFO_DEPTH,
     MAX_FRAGMENTS_PER_CYCLE, MAX_NAME_CHARS, MAX_TILE_PX, MAX_UNIT_COUNT, MAX_VERTEX_CACHE,
 };
 pub use sections::{
-    BlendConfig, CullBackfaces, DomainEvalConfig, FetchConfig, FrameBufferConfig,
+    ArchConfig, BlendConfig, CullBackfaces, DomainEvalConfig, FetchConfig, FrameBufferConfig,
     IntervalManagerConfig, MinMaxConfig, RasterizerConfig, Reciprocal, RopConfig, SegmenterConfig,
     SetupConfig, SubsegmenterConfig, TessellationConfig, TessellatorConfig,
     TriangleRasterizerConfig, TriangleSetupConfig,
 };
-use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 /// The embedded `sim/arch/baseline.json`.
 const BASELINE_JSON: &str = include_str!("../../sim/arch/baseline.json");
-
-architecture! {
-    /// The whole architecture: units in dataflow order, then the links between them.
-    pub struct ArchConfig {
-        /// Name of the configuration, shown in reports. Default `"baseline"`; a file that
-        /// leaves it out is named by its file name ([`ArchConfig::load`]).
-        pub name: String = "baseline".to_string() => Chars {
-            min: 1,
-            max: MAX_NAME_CHARS,
-        },
-        /// Clock of every unit \[MHz\], used only to turn cycles into frames per second. Default
-        /// 500: the class of a mid-2000s GPU core (the GeForce 6800 GT of the papers' figures
-        /// runs at about 400 MHz), rounded so that one cycle is 2 ns.
-        pub clock_mhz: f64 = 500.0 => Positive {
-            max: MAX_CLOCK_MHZ,
-            what: "clock",
-            unit: "MHz",
-        },
-        sections:
-        /// The projection unit (one instance); defaults in [`SetupConfig`].
-        pub setup: SetupConfig,
-        /// The y-range, cull and clip unit (one instance); defaults in [`MinMaxConfig`].
-        pub minmax: MinMaxConfig,
-        /// The scanline root finder (one instance); defaults in [`IntervalManagerConfig`].
-        pub interval_manager: IntervalManagerConfig,
-        /// The curve walkers (replicated); defaults in [`SegmenterConfig`].
-        pub segmenter: SegmenterConfig,
-        /// The linearity splitters (replicated); defaults in [`SubsegmenterConfig`].
-        pub subsegmenter: SubsegmenterConfig,
-        /// The fragment generators (replicated); defaults in [`RasterizerConfig`].
-        pub rasterizer: RasterizerConfig,
-        /// Where the triangle path's triangles come from, and the vertex cache of a mesh in
-        /// memory; defaults in [`TessellationConfig`].
-        pub tessellation: TessellationConfig,
-        /// What the geometry fetch reads per primitive; defaults in [`FetchConfig`].
-        pub fetch: FetchConfig,
-        /// The on-chip tessellators (the `onchip` source); defaults in [`TessellatorConfig`].
-        pub tessellator: TessellatorConfig,
-        /// The on-chip domain evaluators (the `onchip` source); defaults in
-        /// [`DomainEvalConfig`].
-        pub domain_eval: DomainEvalConfig,
-        /// The triangle path's setup unit (one instance); defaults in [`TriangleSetupConfig`].
-        pub triangle_setup: TriangleSetupConfig,
-        /// The triangle path's edge-function rasterizers (replicated); defaults in
-        /// [`TriangleRasterizerConfig`].
-        pub triangle_rasterizer: TriangleRasterizerConfig,
-        /// The depth-test and shading units (replicated, screen-interleaved); defaults in
-        /// [`RopConfig`].
-        pub rop: RopConfig,
-        /// The discoid blend units in the ROPs; defaults in [`BlendConfig`].
-        pub blend: BlendConfig,
-        /// The frame-buffer memory port (one instance); defaults in [`FrameBufferConfig`].
-        pub framebuffer: FrameBufferConfig,
-        /// The FIFOs between stages, one setting per boundary; defaults in [`LinksConfig`].
-        pub links: LinksConfig,
-    }
-}
 
 impl ArchConfig {
     /// Reads, parses and validates an architecture file. A file without a `"name"` is named

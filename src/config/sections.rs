@@ -1,11 +1,15 @@
-//! The sections of the architecture file, one [`section!`] each: every field's doc,
-//! type, default and rule in one place, in the order a file is echoed in.
+//! The architecture file, declared once: each section's [`section!`], then the whole
+//! [`ArchConfig`] ([`architecture!`]): every field's doc, type, default and rule in one
+//! place, in the order a file is echoed in. Adding a unit adds its section here and its
+//! line in `ArchConfig`.
 
-use super::declare::section;
+use super::declare::{architecture, section};
+use super::links::LinksConfig;
 use super::ratio::Ratio;
 use super::rules::{
-    Checked, OneOf, Steps, Whole, BATCH, BYTES, COUNT, CYCLES, CYCLES_OR_NONE, MAX_ACCESS_CYCLES,
-    MAX_CYCLES, MAX_FRAGMENTS_PER_CYCLE, MAX_TILE_PX, MAX_VERTEX_CACHE,
+    Chars, Checked, OneOf, Positive, Steps, Whole, BATCH, BYTES, COUNT, CYCLES, CYCLES_OR_NONE,
+    MAX_ACCESS_CYCLES, MAX_CLOCK_MHZ, MAX_CYCLES, MAX_FRAGMENTS_PER_CYCLE, MAX_NAME_CHARS,
+    MAX_TILE_PX, MAX_VERTEX_CACHE,
 };
 use crate::graph::TessSource;
 use serde::{Deserialize, Serialize};
@@ -473,3 +477,60 @@ macro_rules! choices {
     )*};
 }
 choices!(CullBackfaces, Reciprocal, TessSource);
+
+architecture! {
+    /// The whole architecture: units in dataflow order, then the links between them.
+    pub struct ArchConfig {
+        /// Name of the configuration, shown in reports. Default `"baseline"`; a file that
+        /// leaves it out is named by its file name ([`ArchConfig::load`]).
+        pub name: String = "baseline".to_string() => Chars {
+            min: 1,
+            max: MAX_NAME_CHARS,
+        },
+        /// Clock of every unit \[MHz\], used only to turn cycles into frames per second. Default
+        /// 500: the class of a mid-2000s GPU core (the GeForce 6800 GT of the papers' figures
+        /// runs at about 400 MHz), rounded so that one cycle is 2 ns.
+        pub clock_mhz: f64 = 500.0 => Positive {
+            max: MAX_CLOCK_MHZ,
+            what: "clock",
+            unit: "MHz",
+        },
+        sections:
+        /// The projection unit (one instance); defaults in [`SetupConfig`].
+        pub setup: SetupConfig,
+        /// The y-range, cull and clip unit (one instance); defaults in [`MinMaxConfig`].
+        pub minmax: MinMaxConfig,
+        /// The scanline root finder (one instance); defaults in [`IntervalManagerConfig`].
+        pub interval_manager: IntervalManagerConfig,
+        /// The curve walkers (replicated); defaults in [`SegmenterConfig`].
+        pub segmenter: SegmenterConfig,
+        /// The linearity splitters (replicated); defaults in [`SubsegmenterConfig`].
+        pub subsegmenter: SubsegmenterConfig,
+        /// The fragment generators (replicated); defaults in [`RasterizerConfig`].
+        pub rasterizer: RasterizerConfig,
+        /// Where the triangle path's triangles come from, and the vertex cache of a mesh in
+        /// memory; defaults in [`TessellationConfig`].
+        pub tessellation: TessellationConfig,
+        /// What the geometry fetch reads per primitive; defaults in [`FetchConfig`].
+        pub fetch: FetchConfig,
+        /// The on-chip tessellators (the `onchip` source); defaults in [`TessellatorConfig`].
+        pub tessellator: TessellatorConfig,
+        /// The on-chip domain evaluators (the `onchip` source); defaults in
+        /// [`DomainEvalConfig`].
+        pub domain_eval: DomainEvalConfig,
+        /// The triangle path's setup unit (one instance); defaults in [`TriangleSetupConfig`].
+        pub triangle_setup: TriangleSetupConfig,
+        /// The triangle path's edge-function rasterizers (replicated); defaults in
+        /// [`TriangleRasterizerConfig`].
+        pub triangle_rasterizer: TriangleRasterizerConfig,
+        /// The depth-test and shading units (replicated, screen-interleaved); defaults in
+        /// [`RopConfig`].
+        pub rop: RopConfig,
+        /// The discoid blend units in the ROPs; defaults in [`BlendConfig`].
+        pub blend: BlendConfig,
+        /// The frame-buffer memory port (one instance); defaults in [`FrameBufferConfig`].
+        pub framebuffer: FrameBufferConfig,
+        /// The FIFOs between stages, one setting per boundary; defaults in [`LinksConfig`].
+        pub links: LinksConfig,
+    }
+}

@@ -616,7 +616,7 @@ fn config_every_kind_of_the_graph_has_one_section() {
 /// with a message that lists them all.
 #[test]
 fn config_enum_rules_list_the_names_serde_accepts() {
-    fn names_of<T: serde::de::DeserializeOwned + Serialize>(rule: &rules::OneOf) {
+    fn names_of<T: serde::de::DeserializeOwned + serde::Serialize>(rule: &rules::OneOf) {
         for name in rule.0 {
             let value: T = serde_json::from_value(serde_json::json!(name)).unwrap();
             assert_eq!(
