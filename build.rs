@@ -1,9 +1,9 @@
 //! Writes the list of the timed pipeline's units from the files of `src/pipeline/units/`, so
 //! that adding a unit adds its file and no line to a list (ARCHITECTURE.md, "How to add a
-//! unit"). Each file but `mod.rs` is one unit: it becomes a public module of
-//! `pipeline::units`, and the one type it declares `impl<R: Real> Unit<R> for` becomes its
-//! entry in `pipeline::units::bodies`. A file that declares no such type, or two, stops the
-//! build naming the file.
+//! unit"). Each file but `mod.rs` is one unit; the script writes a macro that lists each as
+//! `module: Type`, the one type the file declares `impl<R: Real> Unit<R> for`, and
+//! `pipeline/units/mod.rs` declares each a module and its type an entry of `bodies`. A file
+//! that declares no such type, or two, stops the build naming the file.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -23,11 +23,11 @@ fn main() {
         .unwrap_or_else(|e| panic!("cannot write {}: {e}", out.display()));
 }
 
-/// Each unit file of `dir` as (module name, path, unit type), by module name.
-fn unit_files(dir: &Path) -> Vec<(String, PathBuf, String)> {
+/// Each unit file of `dir` as (module name, unit type), by module name.
+fn unit_files(dir: &Path) -> Vec<(String, String)> {
     let entries =
         std::fs::read_dir(dir).unwrap_or_else(|e| panic!("cannot list {}: {e}", dir.display()));
-    let mut units: Vec<(String, PathBuf, String)> = entries
+    let mut units: Vec<(String, String)> = entries
         .map(|entry| entry.expect("a readable directory entry").path())
         .filter(|path| path.extension().is_some_and(|e| e == "rs"))
         .filter(|path| path.file_name().is_some_and(|n| n != "mod.rs"))
@@ -37,8 +37,7 @@ fn unit_files(dir: &Path) -> Vec<(String, PathBuf, String)> {
                 .expect("a file name")
                 .to_string_lossy()
                 .into_owned();
-            let unit = unit_type(&path);
-            (module, path, unit)
+            (module, unit_type(&path))
         })
         .collect();
     units.sort();
@@ -69,18 +68,15 @@ fn unit_type(path: &Path) -> String {
     }
 }
 
-/// The modules and the `entries` function `pipeline/units/mod.rs` includes.
-fn generated(units: &[(String, PathBuf, String)]) -> String {
+/// The macro `pipeline/units/mod.rs` includes and calls with its own `declare!`: each unit
+/// as `module: Type`. Names only, no paths: the modules resolve beside `mod.rs` in the
+/// checkout being built.
+fn generated(units: &[(String, String)]) -> String {
     let mut text = String::from("// Written by build.rs from the files of src/pipeline/units/.\n");
-    for (module, path, _) in units {
-        let path = path.display().to_string().replace('\\', "/");
-        writeln!(text, "#[path = {path:?}]\npub mod {module};").expect("writes to a String");
+    text.push_str("macro_rules! each_unit {\n    ($declare:ident) => {\n        $declare! {\n");
+    for (module, unit) in units {
+        writeln!(text, "            {module}: {unit},").expect("writes to a String");
     }
-    text.push_str("\n/// One entry per unit file, by file name.\n");
-    text.push_str("fn entries<R: Real>() -> Vec<Box<dyn Elaborate<R>>> {\n    vec![\n");
-    for (module, _, unit) in units {
-        writeln!(text, "        entry::<R, {module}::{unit}>(),").expect("writes to a String");
-    }
-    text.push_str("    ]\n}\n");
+    text.push_str("        }\n    };\n}\n");
     text
 }

@@ -223,14 +223,13 @@ fn config_partial_link_keeps_its_boundary_defaults() {
         *links.get_mut(UnitKind::Rop, UnitKind::FrameBuffer) = LinkConfig::new(32, 9);
         links
     });
-    assert_parse_err(
-        r#"{"links": {"setup_to_minmax": {"fifo_depth": null}}}"#,
-        "links.setup_to_minmax.fifo_depth",
-    );
-    assert_parse_err(
-        r#"{"links": {"setup_to_minmax": {"fifo_depth": -1}}}"#,
-        "links.setup_to_minmax.fifo_depth",
-    );
+    let first = LINK_KEYS[0];
+    for depth in ["null", "-1"] {
+        assert_parse_err(
+            &format!(r#"{{"links": {{"{first}": {{"fifo_depth": {depth}}}}}}}"#),
+            &format!("links.{first}.fifo_depth"),
+        );
+    }
 }
 
 /// `links` is keyed by the graph's boundary names: an unknown or repeated name is
@@ -239,7 +238,10 @@ fn config_partial_link_keeps_its_boundary_defaults() {
 fn config_links_follow_the_unit_graph() {
     let message = assert_parse_err(r#"{"links": {"setup_to_rop": {}}}"#, "links.setup_to_rop");
     assert!(
-        message.contains("unknown field `setup_to_rop`, expected one of `setup_to_minmax`"),
+        message.contains(&format!(
+            "unknown field `setup_to_rop`, expected one of `{}`",
+            LINK_KEYS[0]
+        )),
         "{message}"
     );
     let message = assert_parse_err(
@@ -305,9 +307,10 @@ fn config_zero_fifo_depth_is_refused_naming_the_link() {
         "links.rop_to_framebuffer.fifo_depth",
         "4097",
     );
+    let first = LINK_KEYS[0];
     assert_invalid(
-        r#"{"links": {"setup_to_minmax": {"latency_cycles": 0}}}"#,
-        "links.setup_to_minmax.latency_cycles",
+        &format!(r#"{{"links": {{"{first}": {{"latency_cycles": 0}}}}}}"#),
+        &format!("links.{first}.latency_cycles"),
         "0",
     );
 }

@@ -14,6 +14,20 @@ use crate::datapath::Real;
 
 include!(concat!(env!("OUT_DIR"), "/units.rs"));
 
+/// Each unit file (`module: Type`, from `each_unit!`) declared a module, and its unit's body
+/// listed by `entries`, in file-name order.
+macro_rules! declare {
+    ($($module:ident: $unit:ident,)*) => {
+        $(pub mod $module;)*
+
+        fn entries<R: Real>() -> Vec<Box<dyn Elaborate<R>>> {
+            vec![$(entry::<R, $module::$unit>()),*]
+        }
+    };
+}
+
+each_unit!(declare);
+
 /// Every unit with a body, as the builder elaborates them (in file-name order: the builder
 /// finds each by its kind); a kind of the graph missing here is refused by the builder's
 /// check before a run starts.
