@@ -18,8 +18,8 @@
 //! (`<scene>`, `NAME`), criterion benchmark ids (`stages_more/...`: no top-level entry).
 //!
 //! ARCHITECTURE.md, the map, is held closer: every item it names is declared, every file
-//! its code map names lies under the module whose entry names it, and its "The unit graph"
-//! is what `lembo-sim graph` prints.
+//! its code map names lies under the module whose entry names it, its "The unit graph" is
+//! what `lembo-sim graph` prints, and it stays within a ten-minute read.
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
@@ -452,6 +452,26 @@ fn architecture_unit_graph_is_generated() {
          the output of\n  for a in lembo triangle 'triangle --source onchip'; do \
          cargo run -q --release -- graph --path $a; echo; done\n(without the last empty \
          line), which reads:\n{block}"
+    );
+}
+
+/// The most words ARCHITECTURE.md may hold, as `wc -w` counts them: about ten minutes'
+/// reading of technical prose (some 250 words a minute), the generated unit graph
+/// included.
+const ARCHITECTURE_WORD_BUDGET: usize = 2600;
+
+/// ARCHITECTURE.md stays a map a newcomer reads in ten minutes: explanation (why, history,
+/// numbers) goes to DESIGN.md §13, and the map keeps a sentence and a pointer.
+#[test]
+fn architecture_stays_a_ten_minute_read() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let text = std::fs::read_to_string(root.join("ARCHITECTURE.md")).unwrap();
+    let words = text.split_whitespace().count();
+    assert!(
+        words <= ARCHITECTURE_WORD_BUDGET,
+        "ARCHITECTURE.md holds {words} words, over its budget of {ARCHITECTURE_WORD_BUDGET} \
+         (a ten-minute read): state each part in a sentence or two and move the explanation \
+         (why, history, numbers) to DESIGN.md §13, leaving a pointer"
     );
 }
 
