@@ -434,7 +434,7 @@ pub enum Dispatch {
     /// producer counts its own items, from consumer 0).
     RoundRobin,
     /// Batches in submission order: the producer cuts its primitives into batches of its
-    /// consumers' `batch` and the n-th batch goes to consumer n mod N (ARCHITECTURE.md,
+    /// consumers' `batch` and the n-th batch goes to consumer n mod N (DESIGN.md §13,
     /// "Front ends"), so each engine draws its primitives in scene order.
     Batches,
     /// By screen tile: each item to the consumer (a ROP) that owns the screen tile of its

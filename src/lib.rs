@@ -42,8 +42,8 @@
 //!   random number generator they share.
 //!
 //! DESIGN.md (beside the crate) holds the design the code relies on: what a cycle means,
-//! the report contract, the bad-input policy and the accuracy metrics' definitions;
-//! ARCHITECTURE.md how the code meets it.
+//! the report contract, the bad-input policy and the accuracy metrics' definitions, and
+//! (its §13) how the code meets it; ARCHITECTURE.md maps the code.
 //!
 //! The functional model knows nothing of cycles; the timed pipeline calls the same stage
 //! functions and adds only time.

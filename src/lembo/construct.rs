@@ -2,7 +2,7 @@
 //!
 //! The edge midpoint comes from the near-least-squares quadratic edge of Barrera, Hast and
 //! Bengtsson ("Surface construction with near least square acceleration", SIGRAD 2002) as
-//! Martinelli prints it, with two repairs documented in ARCHITECTURE.md:
+//! Martinelli prints it, with two repairs (DESIGN.md §13, "How the extreme method is completed"):
 //! - the printed `T2 = -N1 - N2 (N1·N2)` is not tangent at P2; we use the tangent
 //!   `T2 = -N1 + N2 (N1·N2)` (the mirror image of `T1`), which makes the construction
 //!   symmetric and reproduces circular arcs' tangents on a sphere;

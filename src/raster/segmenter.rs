@@ -11,7 +11,7 @@
 //! the stable formula, taking the forward (positive) root; the other root is the step back.
 //! The sign of k is chosen once per interval from the curvature τᵀHτ, which keeps its sign
 //! along a level curve of a quadratic. One deviation from the paper, documented in
-//! ARCHITECTURE.md: the residual Y(P) of the previous step's rounding is folded into the
+//! DESIGN.md §13: the residual Y(P) of the previous step's rounding is folded into the
 //! system (`∇Y·s = ±4k - 3Y(P)`, `sᵀHs = ∓8k + 4Y(P)`), which makes Y(P + s) = 0 and the
 //! midpoint error exactly ±k from the true curve, so rounding does not accumulate along the
 //! walk; with Y(P) = 0 it is the paper's system.

@@ -16,6 +16,10 @@
 //!
 //! Not names: spans with spaces or shell syntax, URLs, command lines, placeholders
 //! (`<scene>`, `NAME`), criterion benchmark ids (`stages_more/...`: no top-level entry).
+//!
+//! ARCHITECTURE.md, the map, is held closer: every item it names is declared, every file
+//! its code map names lies under the module whose entry names it, its "The unit graph" is
+//! what `lembo-sim graph` prints, and it stays within a ten-minute read.
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
@@ -449,4 +453,153 @@ fn architecture_unit_graph_is_generated() {
          cargo run -q --release -- graph --path $a; echo; done\n(without the last empty \
          line), which reads:\n{block}"
     );
+}
+
+/// The most words ARCHITECTURE.md may hold, as `wc -w` counts them: about ten minutes'
+/// reading of technical prose (some 250 words a minute), the generated unit graph
+/// included.
+const ARCHITECTURE_WORD_BUDGET: usize = 2600;
+
+/// ARCHITECTURE.md stays a map a newcomer reads in ten minutes: explanation (why, history,
+/// numbers) goes to DESIGN.md §13, and the map keeps a sentence and a pointer.
+#[test]
+fn architecture_stays_a_ten_minute_read() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let text = std::fs::read_to_string(root.join("ARCHITECTURE.md")).unwrap();
+    let words = text.split_whitespace().count();
+    assert!(
+        words <= ARCHITECTURE_WORD_BUDGET,
+        "ARCHITECTURE.md holds {words} words, over its budget of {ARCHITECTURE_WORD_BUDGET} \
+         (a ten-minute read): state each part in a sentence or two and move the explanation \
+         (why, history, numbers) to DESIGN.md §13, leaving a pointer"
+    );
+}
+
+/// What ARCHITECTURE.md names as a file or folder that is not where it says. A name with
+/// a `/` resolves from the root or from `src/` (`pipeline/items.rs`). In the code map,
+/// each entry's names resolve under the folders the entry names (`src/pipeline/`: its
+/// `ctx.rs`, `runtime/`, `units/`), or under its files' folder when it names none; a
+/// bare file name elsewhere is left to [`missing`]. Files a run writes ([`OUTPUTS`]) are
+/// not sources.
+fn misplaced_files(text: &str, tree: &Tree) -> Vec<String> {
+    let map_start = text.find("\n## Code map").map_or(text.len(), |i| i + 1);
+    let map_end = text[map_start..]
+        .find("\n## ")
+        .map_or(text.len(), |i| map_start + i + 1);
+    let mut chunks: Vec<&str> = vec![&text[..map_start], &text[map_end..]];
+    let mut entry_start = map_start;
+    for (i, _) in text[map_start..map_end].match_indices("\n- ") {
+        chunks.push(&text[entry_start..map_start + i + 1]);
+        entry_start = map_start + i + 1;
+    }
+    chunks.push(&text[entry_start..map_end]);
+    let mut out: Vec<String> = chunks
+        .iter()
+        .flat_map(|chunk| misplaced_in(chunk, tree))
+        .collect();
+    out.sort();
+    out.dedup();
+    out
+}
+
+/// [`misplaced_files`] for one chunk: a code map entry or prose.
+fn misplaced_in(chunk: &str, tree: &Tree) -> Vec<String> {
+    let names: Vec<&str> = chunk
+        .split('`')
+        .skip(1)
+        .step_by(2)
+        .map(|s| s.trim().trim_end_matches(['.', ',', ';', ':']))
+        .filter(|s| file_like_name(s) && !OUTPUTS.contains(s))
+        .collect();
+    let rooted = |s: &&str| tree.exists("", s);
+    let mut folders: Vec<String> = names
+        .iter()
+        .filter(|s| s.ends_with('/') && rooted(s))
+        .map(|s| s.to_string())
+        .collect();
+    if folders.is_empty() {
+        folders = names
+            .iter()
+            .filter(|s| s.contains('/') && rooted(s))
+            .filter_map(|s| s.rsplit_once('/').map(|(dir, _)| format!("{dir}/")))
+            .collect();
+    }
+    let mut out = Vec::new();
+    for name in names.iter().filter(|s| !rooted(s)) {
+        let bare = name.trim_end_matches('/');
+        let found = if folders.is_empty() {
+            !bare.contains('/') || tree.exists("src", bare)
+        } else {
+            tree.paths.iter().any(|p| {
+                folders
+                    .iter()
+                    .any(|f| p.starts_with(f.as_str()) && (p.ends_with(&format!("/{bare}"))))
+            })
+        };
+        if !found {
+            let place = if folders.is_empty() {
+                "the root or src/".to_string()
+            } else {
+                folders.join(", ")
+            };
+            out.push(format!("ARCHITECTURE.md: `{name}` (not under {place})"));
+        }
+    }
+    out
+}
+
+/// Whether a backticked span names a file or folder: a path with a `/`, or a file name
+/// with an extension of the repository's files; not a command, pattern, URL, placeholder
+/// or Rust path.
+fn file_like_name(s: &str) -> bool {
+    let plain = !s.is_empty()
+        && !s.contains(char::is_whitespace)
+        && !s.contains("::")
+        && !s.contains("...")
+        && !s.contains(|c| "<>*{}[]()|=?'\"#$~".contains(c))
+        && !["http", "-", "/"].iter().any(|p| s.starts_with(p));
+    let extension = s.rsplit_once('.').map(|(_, e)| e);
+    let file = ["rs", "json", "md", "svg", "png", "csv", "toml", "txt"]
+        .iter()
+        .any(|e| extension == Some(e));
+    plain && (s.contains('/') || file)
+}
+
+#[test]
+fn architecture_names_only_files_where_they_are() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let tree = Tree::read(root);
+    let text = std::fs::read_to_string(root.join("ARCHITECTURE.md")).unwrap();
+    let misplaced = misplaced_files(&text, &tree);
+    assert!(
+        misplaced.is_empty(),
+        "ARCHITECTURE.md names files that are not where it says:\n{}",
+        misplaced.join("\n")
+    );
+}
+
+/// The control: a file named under the wrong module, a missing folder and a missing path
+/// from `src/` are found; files where their entry says, paths from the root or `src/`,
+/// outputs, commands and placeholders are not.
+#[test]
+fn architecture_a_planted_misplaced_file_is_found() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let tree = Tree::read(root);
+    let text = "# Map\n\nSee `raster/driver.rs`, `pipeline/no_such.rs`, `src/graph.rs`, \
+                `driver.rs`, `lembo-sim graph`, `src/pipeline/units/<unit>.rs`.\n\n\
+                ## Code map\n\n\
+                - `src/job/`: `validate.rs`, `ctx.rs`, `answer.md`.\n\
+                - `src/pipeline/`: `runtime/` (`ctx.rs`), `units/`, `gone/`, `items.rs`.\n\
+                - `src/main.rs`: `report.rs`.\n\
+                - Outside: `tests/integration/` (`support/`), `traces/README.md`.\n\n\
+                ## Layers\n\n`frame/bands.rs`.\n";
+    let found = misplaced_files(text, &tree);
+    assert_eq!(found.len(), 3, "{found:#?}");
+    for bad in [
+        "`pipeline/no_such.rs`",
+        "`ctx.rs` (not under src/job/)",
+        "`gone/`",
+    ] {
+        assert!(found.iter().any(|f| f.contains(bad)), "{bad}: {found:#?}");
+    }
 }
