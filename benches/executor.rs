@@ -49,7 +49,6 @@ fn chain(items: u64) -> u64 {
     let names = ["Source", "A", "B", "C", "Sink"];
     let core = Rc::new(Core::new(
         names.iter().map(|n| (n.to_string(), 1)).collect(),
-        None,
     ));
     let links: Vec<(Tx<u64>, Rx<u64>)> = (0..4).map(|i| link(&core, i, 0, i + 1)).collect();
     let mut txs: Vec<Option<Tx<u64>>> = Vec::new();
@@ -121,7 +120,6 @@ fn merge(items: u64) -> u64 {
                 )
             })
             .collect(),
-        None,
     ));
     let mut rxs = Vec::new();
     let mut futures: Vec<UnitFuture<'_, u64>> = Vec::new();

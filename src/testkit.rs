@@ -2,9 +2,10 @@
 //! the crate's unit tests and with the `testkit` feature, which every build of tests,
 //! examples or benchmarks turns on (Cargo.toml) and `cargo build --release` does not.
 //!
-//! [`SplitMix64`] is the one seeded random number generator of the crate's tests and of the
-//! datapath study (`examples/datapath_study/`): the study's committed results are its
-//! sequence, so it stays this generator, bit for bit.
+//! [`SplitMix64`] is the one seeded random number generator of the crate's tests, of the
+//! timed runtime's test hooks (`SimOptions::perturb` and `partition_seed`, compiled with
+//! this feature only) and of the datapath study (`examples/datapath_study/`): the study's
+//! committed results are its sequence, so it stays this generator, bit for bit.
 
 use glam::{DVec2, DVec3};
 

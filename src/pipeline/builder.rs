@@ -16,7 +16,7 @@
 //! the others carry nothing.
 
 use super::runtime::executor::UnitFuture;
-use super::runtime::{partition, LinkSpec, SimOptions};
+use super::runtime::{LinkSpec, SimOptions};
 use super::unit::{Elaborate, Finished, OutputBoundary, RunInputs};
 use super::units::bodies;
 use super::wiring::HostWiring;
@@ -161,7 +161,7 @@ impl Netlist {
             })
             .collect();
         let threads = options.host_threads.clamp(1, units.len().max(1));
-        let thread = partition(units.len(), threads, options.partition_seed);
+        let thread = options.partition(units.len());
         let mut crossbars: Vec<Option<(usize, Box<dyn Any + Send + Sync>)>> =
             graph.boundaries.iter().map(|_| None).collect();
         for (p, out) in ports.output.iter().enumerate() {

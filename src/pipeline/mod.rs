@@ -264,14 +264,7 @@ fn execute<'a, R: Real>(
     trace: Option<usize>,
 ) -> Result<(Vec<(usize, Finished)>, Recoveries)> {
     let outcome = if plan.threads == 1 {
-        let mut host = HostWiring::new(
-            &plan.units,
-            &plan.latency,
-            &plan.thread,
-            0,
-            options.perturb,
-            &[],
-        );
+        let mut host = HostWiring::new(&plan.units, &plan.latency, &plan.thread, 0, options, &[]);
         let futures = plan.bodies(&mut host, run, trace);
         HostThread {
             core: host.core.clone(),
@@ -319,7 +312,7 @@ fn run_threads<'a, R: Real>(
                             &plan.latency,
                             &plan.thread,
                             me,
-                            options.perturb,
+                            options,
                             &board.signals,
                         );
                         let futures = plan.bodies(&mut host, run, trace);

@@ -6,7 +6,7 @@
 use super::runtime::core::Core;
 use super::runtime::link::{local_link, Ends, RemoteEnd, RemoteParts, Rx, Tx};
 use super::runtime::signal::Signal;
-use super::runtime::{Ctx, Dispatcher, LinkName, LinkSpec};
+use super::runtime::{Ctx, Dispatcher, LinkName, LinkSpec, SimOptions};
 use crate::graph::{UnitInstance, UnitKind};
 use std::ops::Range;
 use std::rc::Rc;
@@ -96,13 +96,14 @@ pub struct HostWiring<'p> {
 
 impl<'p> HostWiring<'p> {
     /// Host thread `me`'s share of `units` (with their latencies \[cycles\]), unit `g` being
-    /// on thread `thread[g]`.
+    /// on thread `thread[g]`; `options` gives the `perturb` test hook's seed.
     pub fn new(
         units: &'p [UnitInstance],
         latency: &[u64],
         thread: &'p [usize],
         me: usize,
-        perturb: Option<u64>,
+        // Read only by the test hooks.
+        #[cfg_attr(not(feature = "testkit"), allow(unused_variables))] options: &SimOptions,
         signals: &'p [Arc<Signal>],
     ) -> Self {
         let mut local = vec![None; units.len()];
@@ -113,11 +114,15 @@ impl<'p> HostWiring<'p> {
                 mine.push((u.name.clone(), latency[g]));
             }
         }
+        let core = Core::new(mine);
+        // Each host thread's own random order.
+        #[cfg(feature = "testkit")]
+        let core = core.perturbed(options.perturb.map(|p| p ^ me as u64));
         HostWiring {
             units,
             thread,
             me,
-            core: Rc::new(Core::new(mine, perturb.map(|p| p ^ me as u64))),
+            core: Rc::new(core),
             local,
             remotes: Vec::new(),
             signals,

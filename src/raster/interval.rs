@@ -472,6 +472,7 @@ mod tests {
     use crate::raster::setup::tests::{
         quad, scanline_fragments, screen_lembo, x_linear, y_bowl, y_error, y_plane, y_saddle,
     };
+    use crate::testkit::SplitMix64;
 
     /// The intervals of scanline `j` and the counts.
     fn run<R: Real>(l: &ScreenLembo<R>, j: u32, k: f64) -> (Vec<Interval<R>>, Counts) {
@@ -492,11 +493,11 @@ mod tests {
     /// loop, gives the intervals and counts that the loop gives; and both ways are taken
     /// often (the loop on scanlines with other crossings).
     fn shortcut_pairs_as_the_loop<R: Real>() {
-        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut rng = SplitMix64::new(0x2545_f491_4f6c_dd1d);
         let (mut shortcut, mut looped) = (0, 0);
         for n in 0..300 {
             let bend = [2.0, 10.0, 40.0, 200.0][n % 4];
-            let Some(l) = crate::raster::setup::tests::random_lembo::<R>(&mut seed, bend) else {
+            let Some(l) = crate::raster::setup::tests::random_lembo::<R>(&mut rng, bend) else {
                 continue;
             };
             for k in [0.05, 2.0] {
@@ -658,10 +659,10 @@ mod tests {
     /// Every edge root of random lembos (curved in x as in y) lies on its edge with the
     /// screen x of the lembo there and y on the scanline.
     fn roots_lie_where_they_say<R: Real>() {
-        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut rng = SplitMix64::new(0x9e37_79b9_7f4a_7c15);
         let mut roots = 0;
         for n in 0..60 {
-            let Some(l) = crate::raster::setup::tests::random_lembo::<R>(&mut seed, 40.0) else {
+            let Some(l) = crate::raster::setup::tests::random_lembo::<R>(&mut rng, 40.0) else {
                 continue;
             };
             for j in (0..crate::raster::setup::tests::SIDE).step_by(3) {
@@ -797,12 +798,12 @@ mod tests {
     /// interval is one piece of the curve in its part, and a split one meets its twin at
     /// the saddle.
     fn intervals_are_pieces<R: Real>() {
-        let mut seed = 0x6a09_e667_f3bc_c908u64;
+        let mut rng = SplitMix64::new(0x6a09_e667_f3bc_c908);
         // Walked intervals on lembos with an interior extremum, a saddle, or neither.
         let mut walked = [0u32; 3];
         for n in 0..200 {
             let bend = [2.0, 10.0, 40.0, 200.0][n % 4];
-            let Some(l) = crate::raster::setup::tests::random_lembo::<R>(&mut seed, bend) else {
+            let Some(l) = crate::raster::setup::tests::random_lembo::<R>(&mut rng, bend) else {
                 continue;
             };
             let kind = match l.partition {

@@ -471,6 +471,7 @@ mod tests {
         quad, screen_lembo, x_linear, y_bowl, y_error, y_plane, y_saddle,
     };
     use crate::raster::DEFAULT_SEGMENT_CAP;
+    use crate::testkit::SplitMix64;
 
     /// Each interval of a scanline with its segments.
     type Walks<R> = Vec<(Interval<R>, Vec<Segment<R>>)>;
@@ -532,11 +533,11 @@ mod tests {
     /// (which are larger than a tessellated mesh's; 60 % of the bunny's are skipped), so
     /// that the claim is tested.
     fn skipped_steps_are_refused<R: Real>() {
-        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut rng = SplitMix64::new(0x9e37_79b9_7f4a_7c15);
         let (mut intervals_seen, mut skipped) = (0u64, 0u64);
         for n in 0..400 {
             let bend = [2.0, 10.0, 40.0, 200.0][n % 4];
-            let Some(l) = crate::raster::setup::tests::random_lembo::<R>(&mut seed, bend) else {
+            let Some(l) = crate::raster::setup::tests::random_lembo::<R>(&mut rng, bend) else {
                 continue;
             };
             for k in [0.05, 0.5, 2.0] {
@@ -839,15 +840,26 @@ mod tests {
     /// `curve_at_key` (up to a crossing beyond the sampled stretch). Nearly flat lembos (Y
     /// almost linear along the line) need the stable form of the root on both signs of its
     /// linear term: the textbook form loses the root to cancellation there.
+    ///
+    /// Both outcomes must be met often enough to be tested. Across the line, at distance d
+    /// from the drawn point, Y - y_j = A d² + B d + C, and the line misses the curve exactly
+    /// where B² < 4 A C: where the curvature across the line (A, up to 2 `bend`) beats its
+    /// slope (B, mostly the linear part of up to 90 pixels) against the offset C (up to 10
+    /// pixels). So the nearly flat class never misses, and the others rarely: drawn from
+    /// this distribution (4·10⁵ draws per class) the miss rates are 2.3 % (bend 2), 9.7 %
+    /// (40), 8.9 % (200) and 0 (10⁻⁹), and a crossing within the sampled stretch is found
+    /// at 50, 72, 85 and 49 %. Of 400 lembos only 20.9 miss on average (sd 4.4), so a
+    /// floor of 20 held for half of all seeds; of 2 000, 104 miss (sd 9.8) and 1 280 are
+    /// found (sd 20), and the floors below sit 5 sd under those means.
     #[test]
     fn the_curve_point_at_a_key_is_the_upward_crossing_of_the_line() {
-        let mut seed = 0x2545_f491_4f6c_dd1du64;
-        let mut next = move || crate::raster::setup::tests::uniform(&mut seed);
-        let mut lembo_seed = 0x1234_5678_9abc_def1u64;
+        let mut line_rng = SplitMix64::new(0x2545_f491_4f6c_dd1d);
+        let mut next = move || line_rng.unit();
+        let mut lembo_rng = SplitMix64::new(0x1234_5678_9abc_def1);
         let (mut found, mut none) = (0, 0);
-        for n in 0..400 {
+        for n in 0..2000 {
             let bend = [2.0, 40.0, 200.0, 1e-9][n % 4];
-            let Some(l) = crate::raster::setup::tests::random_lembo::<f64>(&mut lembo_seed, bend)
+            let Some(l) = crate::raster::setup::tests::random_lembo::<f64>(&mut lembo_rng, bend)
             else {
                 continue;
             };
@@ -908,7 +920,7 @@ mod tests {
             }
         }
         assert!(
-            found > 100 && none > 20,
+            found > 1170 && none > 55,
             "{found} found, {none} without a crossing"
         );
     }
@@ -1092,13 +1104,13 @@ mod tests {
     /// (the forms bounded through sin θ, the root bound, βm taken whole off the advance)
     /// shrink with θ; the floors are measured, with margin.
     fn reach_bounds_every_step<R: Real>() {
-        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut rng = SplitMix64::new(0x2545_f491_4f6c_dd1d);
         // Per (lembo, k) with a bound: d / s and the bound over the least advance found.
         let mut ratios = Vec::new();
         let mut monotone = 0;
         for n in 0..400 {
             let bend = [2.0, 10.0, 40.0, 200.0][n % 4];
-            let Some(l) = crate::raster::setup::tests::random_lembo::<R>(&mut seed, bend) else {
+            let Some(l) = crate::raster::setup::tests::random_lembo::<R>(&mut rng, bend) else {
                 continue;
             };
             let super::super::screen::Partition::Monotone { a, grad_bounds } = l.partition else {

@@ -188,6 +188,7 @@ pub(crate) mod tests {
     use crate::lembo::REFERENCE_UV;
     use crate::raster::counts::Counts;
     use crate::raster::screen::{Partition, SPLIT_GUARD_VIEWPORTS};
+    use crate::testkit::SplitMix64;
     use glam::DVec3;
 
     pub(crate) fn quad(a: f64, b: f64, c: f64, d: f64, e: f64, f: f64) -> Quadratic<f64> {
@@ -196,19 +197,10 @@ pub(crate) mod tests {
 
     /// A lembo of the test view with random screen quadratics: linear parts of up to 90
     /// pixels and curved parts of up to `bend` pixels; `None` when setup drops it.
-    /// The next of a xorshift sequence from `seed`, uniform in [0, 1).
-    pub(crate) fn uniform(seed: &mut u64) -> f64 {
-        *seed ^= *seed << 13;
-        *seed ^= *seed >> 7;
-        *seed ^= *seed << 17;
-        (*seed >> 11) as f64 / (1u64 << 53) as f64
-    }
-
-    pub(crate) fn random_lembo<R: Real>(seed: &mut u64, bend: f64) -> Option<ScreenLembo<R>> {
-        let mut next = || uniform(seed);
+    pub(crate) fn random_lembo<R: Real>(rng: &mut SplitMix64, bend: f64) -> Option<ScreenLembo<R>> {
         let mut q = |f: f64| {
-            let curve = [0; 3].map(|_| (2.0 * next() - 1.0) * bend);
-            let linear = [0; 2].map(|_| (2.0 * next() - 1.0) * 90.0);
+            let curve = [0; 3].map(|_| rng.range(-bend, bend));
+            let linear = [0; 2].map(|_| rng.range(-90.0, 90.0));
             quad(curve[0], curve[1], curve[2], linear[0], linear[1], f)
         };
         let (x, y) = (q(64.0), q(64.0));

@@ -844,7 +844,7 @@ mod tests {
     }
 
     fn local(d: u32, l: u64) -> (Rc<Core>, Tx<u32>, Rx<u32>) {
-        let core = Rc::new(Core::new(vec![("p".into(), 1), ("c".into(), 1)], None));
+        let core = Rc::new(Core::new(vec![("p".into(), 1), ("c".into(), 1)]));
         let link = Rc::new(LocalLink::new(
             core.clone(),
             spec(d, l),
@@ -956,8 +956,8 @@ mod tests {
     }
 
     fn remote(d: u32, l: u64) -> Remote {
-        let cp = Rc::new(Core::new(vec![("p".into(), 1)], None));
-        let cc = Rc::new(Core::new(vec![("c".into(), 1)], None));
+        let cp = Rc::new(Core::new(vec![("p".into(), 1)]));
+        let cc = Rc::new(Core::new(vec![("c".into(), 1)]));
         let name = LinkName {
             producer: "p".into(),
             consumer: "c".into(),

@@ -30,11 +30,14 @@ pub use link::{LinkName, LinkSpec};
 pub struct SimOptions {
     /// Host threads the units are partitioned over (>= 1; `--host-threads`).
     pub host_threads: usize,
-    /// Test switch: partition the units over the host threads at random (seeded) instead
-    /// of in contiguous runs of the dataflow order.
+    /// Test hook (the `testkit` feature only): partition the units over the host threads
+    /// at random (seeded) instead of in contiguous runs of the dataflow order.
+    #[cfg(feature = "testkit")]
     pub partition_seed: Option<u64>,
-    /// Test switch: run units in a random order (seeded) instead of smallest clock first,
-    /// to show that results do not depend on the schedule.
+    /// Test hook (the `testkit` feature only): run units in a random order (seeded)
+    /// instead of smallest clock first, to show that results do not depend on the
+    /// schedule.
+    #[cfg(feature = "testkit")]
     pub perturb: Option<u64>,
     /// Record a timeline of unit activity (for `--trace-out`).
     pub trace: bool,
@@ -46,7 +49,9 @@ impl Default for SimOptions {
     fn default() -> Self {
         SimOptions {
             host_threads: 1,
+            #[cfg(feature = "testkit")]
             partition_seed: None,
+            #[cfg(feature = "testkit")]
             perturb: None,
             trace: false,
             trace_event_cap: 200_000,
@@ -54,25 +59,34 @@ impl Default for SimOptions {
     }
 }
 
-/// Which host thread runs each of `units` units: contiguous runs of the dataflow order,
-/// as even as the count allows, or a seeded random assignment. Threads beyond the unit
-/// count get none.
-pub fn partition(units: usize, threads: usize, seed: Option<u64>) -> Vec<usize> {
-    let threads = threads.clamp(1, units.max(1));
-    match seed {
-        None => (0..units).map(|u| u * threads / units.max(1)).collect(),
-        Some(seed) => {
-            let mut x = seed | 1;
-            (0..units)
-                .map(|_| {
-                    x ^= x << 13;
-                    x ^= x >> 7;
-                    x ^= x << 17;
-                    (x % threads as u64) as usize
-                })
-                .collect()
+impl SimOptions {
+    /// Which host thread runs each of `units` units: [`partition`], or with the
+    /// `partition_seed` test hook a seeded random assignment.
+    pub fn partition(&self, units: usize) -> Vec<usize> {
+        #[cfg(feature = "testkit")]
+        if let Some(seed) = self.partition_seed {
+            return partition_at_random(units, self.host_threads, seed);
         }
+        partition(units, self.host_threads)
     }
+}
+
+/// Which host thread runs each of `units` units: contiguous runs of the dataflow order, as
+/// even as the count allows. Threads beyond the unit count get none.
+pub fn partition(units: usize, threads: usize) -> Vec<usize> {
+    let threads = threads.clamp(1, units.max(1));
+    (0..units).map(|u| u * threads / units.max(1)).collect()
+}
+
+/// The `partition_seed` test hook: each unit on a host thread drawn at random from `seed`
+/// (some threads may get none).
+#[cfg(feature = "testkit")]
+fn partition_at_random(units: usize, threads: usize, seed: u64) -> Vec<usize> {
+    let threads = threads.clamp(1, units.max(1));
+    let mut rng = crate::testkit::SplitMix64::new(seed);
+    (0..units)
+        .map(|_| rng.below(threads as u64) as usize)
+        .collect()
 }
 
 #[cfg(test)]
@@ -123,10 +137,7 @@ mod tests {
     /// Source: busy 6, blocked 2, ends at 8. Sink: busy 15, starved 5, ends at 20.
     #[test]
     fn executor_cycles_of_a_tiny_pipeline_are_exact() {
-        let core = Rc::new(Core::new(
-            vec![("Source".into(), 3), ("Sink".into(), 1)],
-            None,
-        ));
+        let core = Rc::new(Core::new(vec![("Source".into(), 3), ("Sink".into(), 1)]));
         let (tx, rx) = local::<u32>(&core, 0, 0, 1, 1);
         let mut src = Ctx::<(), u32>::new(core.clone(), 0, Vec::new(), vec![tx], None);
         let mut snk = Ctx::<u32, ()>::new(core.clone(), 1, vec![rx], Vec::new(), None);
@@ -166,10 +177,10 @@ mod tests {
     #[test]
     fn executor_merge_takes_items_by_arrival_then_port() {
         for perturb in [None, Some(1), Some(7), Some(99)] {
-            let core = Rc::new(Core::new(
-                vec![("A".into(), 1), ("B".into(), 1), ("Sink".into(), 1)],
-                perturb,
-            ));
+            let core = Rc::new(
+                Core::new(vec![("A".into(), 1), ("B".into(), 1), ("Sink".into(), 1)])
+                    .perturbed(perturb),
+            );
             let (ta, ra) = local::<(char, u32)>(&core, 0, 0, 2, 8);
             let (tb, rb) = local::<(char, u32)>(&core, 1, 0, 2, 8);
             let mut a = Ctx::<(), (char, u32)>::new(core.clone(), 0, Vec::new(), vec![ta], None);
@@ -214,10 +225,7 @@ mod tests {
     /// at once with a deadlock naming both and what they wait for.
     #[test]
     fn executor_miswired_loop_is_reported_as_a_deadlock() {
-        let core = Rc::new(Core::new(
-            vec![("Left".into(), 1), ("Right".into(), 1)],
-            None,
-        ));
+        let core = Rc::new(Core::new(vec![("Left".into(), 1), ("Right".into(), 1)]));
         let (t1, r1) = local::<u32>(&core, 0, 0, 1, 2);
         let (t2, r2) = local::<u32>(&core, 1, 0, 0, 2);
         let mk = |unit: u32, rx, tx| -> UnitFuture<'static, ()> {
@@ -259,7 +267,7 @@ mod tests {
                     let (board, parts) = (&board, &parts);
                     s.spawn(move || {
                         let other = 1 - me;
-                        let core = Rc::new(Core::new(vec![(names[me].into(), 1)], None));
+                        let core = Rc::new(Core::new(vec![(names[me].into(), 1)]));
                         let name = |p: usize, c: usize| LinkName {
                             producer: names[p].into(),
                             consumer: names[c].into(),
@@ -343,11 +351,22 @@ mod tests {
 
     #[test]
     fn partitions_cover_every_unit_with_valid_threads() {
-        assert_eq!(partition(5, 2, None), [0, 0, 0, 1, 1]);
-        assert_eq!(partition(3, 8, None), [0, 1, 2]);
-        assert_eq!(partition(4, 1, None), [0, 0, 0, 0]);
-        let p = partition(20, 3, Some(5));
+        assert_eq!(partition(5, 2), [0, 0, 0, 1, 1]);
+        assert_eq!(partition(3, 8), [0, 1, 2]);
+        assert_eq!(partition(4, 1), [0, 0, 0, 0]);
+        let p = partition_at_random(20, 3, 5);
         assert!(p.iter().all(|&t| t < 3));
-        assert_eq!(p, partition(20, 3, Some(5)));
+        assert_eq!(p, partition_at_random(20, 3, 5));
+        // Random: not the contiguous runs, and another seed gives another assignment.
+        assert_ne!(p, partition(20, 3));
+        assert_ne!(p, partition_at_random(20, 3, 6));
+        // Through the options, with and without the hook.
+        let options = |partition_seed| SimOptions {
+            host_threads: 3,
+            partition_seed,
+            ..SimOptions::default()
+        };
+        assert_eq!(options(None).partition(20), partition(20, 3));
+        assert_eq!(options(Some(5)).partition(20), p);
     }
 }

@@ -3,6 +3,7 @@
 
 use super::*;
 use crate::camera::{Culling, Samples};
+use crate::testkit::SplitMix64;
 
 /// Per pixel: whether an unbounded-precision rasterizer covers it for the triangle with
 /// world vertices `p` (projected, snapped to 1/256 pixel in f64 however far, edge
@@ -36,19 +37,24 @@ fn exact_coverage(p: &[DVec3; 3], view: &View) -> Vec<(bool, f64)> {
     cover
 }
 
-/// Clips triangle `p` (unit normals +z) and checks its pieces against
-/// [`exact_coverage`]: no pixel twice, and a pixel covered exactly when the exact
-/// rasterizer covers it, except a centre within 1/128 pixel of an edge (a clipped
-/// vertex, snapped on its clip line, is up to 1/512 pixel off the exact edge; an f32
-/// datapath adds up to 1/2048 before snapping). Returns the pieces and the mismatches.
+/// Sets up triangle `p` (unit normals +z) and checks its pieces against
+/// [`exact_coverage`]: clipped and fanned exactly when a vertex is beyond the guard band
+/// (|x| or |y| over [`GUARD_BAND_PX`]), no pixel twice, and a pixel covered exactly when
+/// the exact rasterizer covers it, except a centre within 1/128 pixel of an edge (a
+/// clipped vertex, snapped on its clip line, is up to 1/512 pixel off the exact edge; an
+/// f32 datapath adds up to 1/2048 before snapping). Returns the pieces and the mismatches.
 fn clip_against_exact<R: Real>(p: &[DVec3; 3], view: &View) -> (Vec<ScreenTriangle<R>>, u32) {
     let mut pieces = Vec::new();
     let o = setup::<R>(3, p, &[DVec3::Z; 3], [1.0; 3], view, &mut pieces);
     let exact = exact_coverage(p, view);
+    let beyond = p
+        .map(|q| view.project(q))
+        .iter()
+        .any(|s| s.x.abs() > GUARD_BAND_PX || s.y.abs() > GUARD_BAND_PX);
     if exact.iter().any(|e| e.0) {
-        assert!(o.fan >= 1 && o.cull.is_none(), "{p:?}: {o:?}");
+        assert!(o.cull.is_none() && (o.fan >= 1) == beyond, "{p:?}: {o:?}");
     }
-    assert!(o.fan <= 5 && pieces.len() <= o.fan, "{o:?}");
+    assert!(o.fan <= 5 && pieces.len() <= o.fan.max(1), "{o:?}");
     assert!(pieces.iter().all(|t| t.id == 3));
     let h = hits(&pieces);
     let mut mismatches = 0;
@@ -86,22 +92,20 @@ fn a_triangle_a_million_pixels_across_covers_the_viewport_once() {
 
 #[test]
 fn clipped_triangles_cover_the_exact_pixels_of_the_unclipped_ones() {
-    // Random triangles with one, two or three vertices 4·10^4 to 10^7 pixels away, edges
+    // Random triangles with one, two or three vertices 4·10^4 to 10^7 pixels away in the
+    // larger of x and y, so beyond the guard band's square (±32 767) at every angle, edges
     // through the viewport at every angle. Both datapaths.
     let view = ortho_view();
-    let mut seed = 987654321u64;
-    let mut rnd = || {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        (seed >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rng = SplitMix64::new(987654321);
+    let mut rnd = || rng.unit();
     let (mut drawn, mut mismatches, mut pixels) = (0, 0, 0);
     for case in 0..300 {
         let p: [DVec3; 3] = std::array::from_fn(|k| {
             if k < 1 + case % 3 {
                 let (a, r) = (rnd() * std::f64::consts::TAU, 10f64.powf(4.6 + 2.4 * rnd()));
-                DVec3::new(32.0 + r * a.cos(), 24.0 + r * a.sin(), 0.0)
+                let (c, s) = (a.cos(), a.sin());
+                let r = r / c.abs().max(s.abs());
+                DVec3::new(32.0 + r * c, 24.0 + r * s, 0.0)
             } else {
                 DVec3::new(-20.0 + 104.0 * rnd(), -20.0 + 88.0 * rnd(), 0.0)
             }
@@ -116,6 +120,34 @@ fn clipped_triangles_cover_the_exact_pixels_of_the_unclipped_ones() {
     assert!(drawn > 150, "{drawn}");
     // Only centres a rounding step from an edge can differ.
     assert!(mismatches * 10_000 < pixels, "{mismatches} of {pixels}");
+}
+
+#[test]
+fn a_vertex_far_away_on_a_diagonal_but_inside_the_guard_band_is_not_clipped() {
+    // 44 755 pixels from the viewport's centre, but |x| and |y| are under 32 767: inside
+    // the guard band's square (whose corners are 46 340 pixels out), so the triangle is
+    // set up whole, unclipped, and covers the exact pixels. Moved 2 % further out, x passes
+    // the guard band and the triangle is clipped, still to the exact pixels.
+    let view = ortho_view();
+    let far = DVec3::new(32441.26099477036, -30840.890562303503, 0.0);
+    let near = [
+        DVec3::new(72.67126469480847, 2.765186318569242, 0.0),
+        DVec3::new(28.598403838048384, 67.43338686335176, 0.0),
+    ];
+    for (far, clipped) in [(far, false), (far * 1.02, true)] {
+        let p = [far, near[0], near[1]];
+        let mut pieces = Vec::<ScreenTriangle<f64>>::new();
+        let o = setup(3, &p, &[DVec3::Z; 3], [1.0; 3], &view, &mut pieces);
+        assert_eq!((o.fan >= 1, o.guard_band, o.cull), (clipped, clipped, None));
+        assert_eq!(pieces.len(), if clipped { o.fan } else { 1 });
+        let (p64, m64) = clip_against_exact::<f64>(&p, &view);
+        let (p32, m32) = clip_against_exact::<f32>(&p, &view);
+        assert_eq!((m64, m32), (0, 0), "{p:?}");
+        // It reaches the view (a wedge about 16 pixels wide across it: 255 pixels unclipped).
+        let covered = hits(&p64).iter().sum::<u32>();
+        assert!(covered > 100, "{p:?}: {covered}");
+        assert_eq!(p64.len(), p32.len());
+    }
 }
 
 #[test]
@@ -269,13 +301,8 @@ fn triangles_sharing_an_edge_clip_it_at_the_same_points() {
     // exactly the two crossings, bit for bit, so their pieces meet without a crack.
     let view = perspective_view();
     let planes = guard_band_planes(&view);
-    let mut seed = 4242u64;
-    let mut rnd = || {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        (seed >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rng = SplitMix64::new(4242);
+    let mut rnd = || rng.unit();
     let clip_all = |t: [DVec3; 3]| {
         let mut polygon = Polygon::new(&t, &[DVec3::Z; 3]);
         for q in planes {
@@ -312,14 +339,6 @@ fn a_snapped_polygon_is_made_strictly_convex() {
     // Everything on one line: no area.
     let mut order: [usize; 3] = [0, 1, 2];
     assert_eq!(make_convex(&[0, 1, 2], &[0, 1, 2], &mut order, 3), 0);
-}
-
-/// A xorshift generator of numbers in [0, 1).
-fn uniform(seed: &mut u64) -> f64 {
-    *seed ^= *seed << 13;
-    *seed ^= *seed >> 7;
-    *seed ^= *seed << 17;
-    (*seed >> 11) as f64 / (1u64 << 53) as f64
 }
 
 /// Per pixel: fragments received, and the range of their depths.
@@ -464,8 +483,8 @@ fn a_triangle_straddling_the_near_plane_covers_its_visible_side_once() {
 
     // Random triangles around a point near the near plane, vertices 0.03 to 3 units from
     // it in any direction (behind the eye too), both datapaths.
-    let mut seed = 20240611u64;
-    let mut rnd = || uniform(&mut seed);
+    let mut rng = SplitMix64::new(20240611);
+    let mut rnd = || rng.unit();
     let (mut clipped, mut pixels, mut unclear) = (0, 0, 0);
     for _ in 0..300 {
         let m = DVec3::new(
@@ -545,8 +564,8 @@ fn triangles_sharing_an_edge_across_the_near_plane_have_no_crack_and_no_double_h
         }
         polygon
     };
-    let mut seed = 777u64;
-    let mut rnd = || uniform(&mut seed);
+    let mut rng = SplitMix64::new(777);
+    let mut rnd = || rng.unit();
     let mut pixels = 0;
     for case in 0..200 {
         let at = |x: f64, y: f64, z: f64| DVec3::new(x * z.abs(), y * z.abs(), z);
