@@ -229,7 +229,8 @@ macro_rules! architecture {
 
             /// Checks every value against what the simulator accepts, fields then sections
             /// in the file's order; the first refused value is returned as
-            /// [`Error::Invalid`] naming `file` and its dotted field path.
+            /// [`Error::Invalid`](crate::error::Error::Invalid) naming `file` and its dotted
+            /// field path.
             pub fn validate(&self, file: &str) -> $crate::error::Result<()> {
                 let check = $crate::config::rules::Check::new(file);
                 $($crate::config::declare::check_field(
