@@ -75,7 +75,8 @@ impl CacheConfig {
         if !self.sector_bytes.is_power_of_two() {
             return bad("sector_bytes", self.sector_bytes, "a power of two");
         }
-        if self.line_bytes < self.sector_bytes || self.line_bytes % self.sector_bytes != 0 {
+        if self.line_bytes < self.sector_bytes || !self.line_bytes.is_multiple_of(self.sector_bytes)
+        {
             return bad("line_bytes", self.line_bytes, "a multiple of sector_bytes");
         }
         if !self.line_bytes.is_power_of_two() {
@@ -93,7 +94,7 @@ impl CacheConfig {
         }
         let set_bytes = self.line_bytes as u64 * self.ways as u64;
         let sets = self.size_bytes as u64 / set_bytes;
-        if self.size_bytes as u64 % set_bytes != 0 || !sets.is_power_of_two() {
+        if !(self.size_bytes as u64).is_multiple_of(set_bytes) || !sets.is_power_of_two() {
             return bad(
                 "size_bytes",
                 self.size_bytes,

@@ -107,7 +107,10 @@ impl SurfaceLayout {
             return bad("bytes_per_pixel", bytes_per_pixel, "1 to 16 bytes");
         }
         let tile = 64 * bytes_per_pixel;
-        if sector_bytes == 0 || sector_bytes % bytes_per_pixel != 0 || tile % sector_bytes != 0 {
+        if sector_bytes == 0
+            || !sector_bytes.is_multiple_of(bytes_per_pixel)
+            || !tile.is_multiple_of(sector_bytes)
+        {
             return bad(
                 "sector_bytes",
                 sector_bytes,
