@@ -38,6 +38,8 @@
 //! - [`tolerance`]: the lembo path's tolerances, k and Setup's perspective tolerance, each
 //!   with its default, range and check.
 //! - [`datapath`]: the `f32`/`f64` datapath.
+//! - [`memory`]: the memory system's standalone models (issue 51): the DRAM controller and
+//!   its request traces.
 //! - `testkit` (tests, examples and benchmarks only: the `testkit` feature): the seeded
 //!   random number generator they share.
 //!
@@ -63,6 +65,7 @@ pub mod isa;
 pub mod job;
 pub mod json;
 pub mod lembo;
+pub mod memory;
 pub mod output;
 pub mod pipeline;
 pub mod plot;

@@ -46,6 +46,7 @@ const LAYERS: &[(&str, &[&str])] = &[
             "tolerance",
             "progress",
             "testkit",
+            "memory",
         ],
     ),
     ("the architecture file", &["config"]),
