@@ -6,4 +6,5 @@
 //! - [`dram`]: an event-driven DRAM controller (banks, rows, FR-FCFS, write drain) with
 //!   presets for DDR4-2400, GDDR6 and LPDDR5, and its energy per atom and activation.
 
+pub mod dram;
 pub mod trace;
