@@ -38,8 +38,9 @@
 //! - [`tolerance`]: the lembo path's tolerances, k and Setup's perspective tolerance, each
 //!   with its default, range and check.
 //! - [`datapath`]: the `f32`/`f64` datapath.
-//! - [`memory`]: the memory system behind the ROPs (issue 51): tiled surfaces, ROP caches,
-//!   tile compression and hierarchical Z, standalone models the pipeline does not use yet.
+//! - [`memory`]: the memory system's standalone models, not yet used by the pipeline: tiled
+//!   surfaces, ROP caches, tile compression, hierarchical Z, the DRAM controller and its
+//!   request traces.
 //! - `testkit` (tests, examples and benchmarks only: the `testkit` feature): the seeded
 //!   random number generator they share.
 //!
