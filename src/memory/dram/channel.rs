@@ -8,21 +8,22 @@
 //! - a conflict (another row open): PRE (after tRAS from its ACT, tRTP from its last read,
 //!   tWR from its last write data), ACT tRP later, the column command tRCD after that.
 //!
-//! ACTs respect tRRD (S or L by bank group) and tFAW per rank; column commands tCCD (S or L)
-//! after the previous one, tWTR (S or L) after the end of write data before a read, tRTW
+//! ACTs respect tRRD (S or L by bank group) and tFAW per rank; column commands tCCD (S or
+//! L) after the previous one, tWTR (S or L) after the end of write data before a read, tRTW
 //! after a read before a write; data (CL or CWL after the command, tBURST long) never
-//! overlaps on the bus, and bursts of two ranks are tRTRS apart. A read completes when its last data beat arrives, a write when its
-//! last beat is sent. The next decision is at the chosen request's first command (at least
-//! one cycle later), so ACTs to other banks overlap earlier requests' tRCD, and column
-//! commands issue in decision order.
+//! overlaps on the bus, and bursts of two ranks are tRTRS apart. A read completes when its
+//! last data beat arrives, a write when its last beat is sent. The next decision is at the
+//! chosen request's first command (at least one cycle later), so ACTs to other banks
+//! overlap earlier requests' tRCD, and column commands issue in decision order.
 //!
 //! **Not modelled**, each a simplification to state when comparing with DRAMsim3: refresh
 //! (tRFC every tREFI: 4.5 % of DDR4-2400's cycles), the one-command-per-cycle command bus,
 //! reads served from the write queue, and power-down. Column commands issue in decision
 //! order, so a miss chosen while no hit waits leaves the bus idle for its tRCD.
 
-use super::config::{DramConfig, DramTimings};
+use super::config::DramConfig;
 use super::mapping::Location;
+use super::timings::DramTimings;
 
 /// A request waiting in a queue.
 #[derive(Clone, Copy, Debug)]

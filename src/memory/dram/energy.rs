@@ -17,7 +17,7 @@
 //! these are the DRAM core's energy; a system figure such as GDDR6's 7.5 pJ/bit includes
 //! the interface and goes in through [`DramEnergy::per_bit`].
 
-use super::config::{DramTimings, FILE};
+use super::timings::{DramTimings, FILE};
 use crate::error::{Error, Result};
 
 /// Energy per event \[pJ\].

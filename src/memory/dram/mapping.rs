@@ -6,6 +6,7 @@
 //! sequential stream stays in one row of one bank until the row ends), then the bank
 //! group, bank, rank and channel, and the row highest.
 
+use super::timings::FILE;
 use crate::error::{Error, Result};
 use std::fmt;
 
@@ -57,7 +58,7 @@ impl AddressMapping {
     /// Parses DRAMsim3's twelve-letter form (`rochrababgco`); an unknown, missing or
     /// repeated field is [`Error::Invalid`] naming `address_mapping`.
     pub fn parse(text: &str) -> Result<AddressMapping> {
-        let bad = |reason: &str| Error::invalid("DRAM config", "address_mapping", text, reason);
+        let bad = |reason: &str| Error::invalid(FILE, "address_mapping", text, reason);
         if text.len() != 12 || !text.is_ascii() {
             return Err(bad("six two-letter fields (ch ra bg ba ro co), each once"));
         }

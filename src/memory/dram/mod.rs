@@ -4,7 +4,7 @@
 //! activation and per rank-cycle of standby. [`replay`] runs a trace ([`crate::memory::trace`])
 //! to [`DramStats`]; [`Dram`] takes requests one at a time and returns their completions.
 //!
-//! `config.rs` (what a memory is, validated), `mapping.rs` (address bits to channel, rank,
+//! `config.rs` (what a memory is, validated), `timings.rs`, `mapping.rs` (address bits to channel, rank,
 //! bank, row, column), `energy.rs` (pJ per event), `channel.rs` (one channel's queues,
 //! choice and timing), `controller.rs` (admission, events, completions), `stats.rs`,
 //! `presets.rs` (DDR4-2400, GDDR6, LPDDR5, cited).
@@ -18,10 +18,12 @@ mod presets;
 mod stats;
 #[cfg(test)]
 mod tests;
+mod timings;
 
-pub use config::{DramConfig, DramTimings};
+pub use config::DramConfig;
 pub use controller::{replay, Completion, Dram, Ticket};
 pub use energy::{DramEnergy, IddCurrents};
 pub use mapping::{AddressMapping, Location, MapField};
 pub use presets::{ddr4_2400_x8, gddr6_16g_x16, lpddr5_6400_x16};
 pub use stats::{DramEnergyStats, DramStats};
+pub use timings::DramTimings;

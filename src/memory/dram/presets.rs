@@ -2,7 +2,11 @@
 //! and LPDDR5-6400 (x16 channels), each figure cited. The queues follow DRAMsim3's
 //! `trans_queue_size = 32` and its write drain (a full write queue is drained until empty:
 //! `Controller::ScheduleTransaction`, `src/controller.cc`), so the same trace run through
-//! both differs by the models, not by the queue sizes.
+//! both differs by the models, not by the queue sizes. DDR4 keeps its file's mapping,
+//! `rochrababgco`; the x16 presets (several channels, which DRAMsim3's one-channel files
+//! never say how to interleave) take `rorabacobgch`: the channel lowest, so consecutive
+//! atoms go to consecutive channels as a GPU spreads an address range, then the bank
+//! group, so one channel's consecutive atoms alternate groups at tCCD_S, then the column.
 //!
 //! Measured (`cargo test --release --lib memory::dram::tests::measure -- --nocapture`,
 //! 200 000 requests of 64 bytes each, every request's atoms arriving at cycle 0 and admitted
@@ -24,9 +28,10 @@
 //! `rochrababgco`, so tCCD_L = 6 cycles a 4-cycle burst bounds it at 67 %; issue 51 quotes
 //! DRAMsim3 at 12.4 bytes a cycle on 200 000 64-byte reads on the same file.
 
-use super::config::{DramConfig, DramTimings};
+use super::config::DramConfig;
 use super::energy::{DramEnergy, IddCurrents};
 use super::mapping::{AddressMapping, MapField};
+use super::timings::DramTimings;
 
 /// DRAMsim3's queue depth (`trans_queue_size` in every configuration file named here).
 const QUEUE_DEPTH: u32 = 32;
@@ -124,10 +129,11 @@ pub fn ddr4_2400_x8() -> DramConfig {
 /// tRRD 9, tWTR 7, tFAW 32, tWR 16, tRTP 3, tRTRS 1, all at the file's tCK of 0.66 ns. This preset
 /// runs the command clock at 2 GHz (tCK 0.5 ns), where 16 Gb/s moves BL16 in 2 cycles
 /// (8 bits a pin a clock), and takes each of the file's times to that clock rounded up
-/// ([`reclock`]). tCCD is taken as tBURST = 2: back-to-back bursts keep a channel's pins
+/// (n x 0.66 / 0.5). tCCD is taken as tBURST = 2: back-to-back bursts keep a channel's pins
 /// busy at 16 Gb/s; the file's tCCD_L = 4 at 0.66 ns (2.64 ns a 32-byte burst) would cap a
 /// channel at 38 % of its pins, and its `burst_cycle = BL/16 = 1` is 24 Gb/s, so the file
-/// is not self-consistent there. Mapping: [`interleaved`]. tRTW = CL + tBURST + 2 - CWL. Energy from the file's
+/// is not self-consistent there. Mapping `rorabacobgch` (channel lowest: the module doc).
+/// tRTW = CL + tBURST + 2 - CWL. Energy from the file's
 /// `[power]` section (VDD 1.35 V, IDD0 71, IDD2N 60, IDD3N 61, IDD4R 248, IDD4W 231 mA,
 /// one x16 device a channel as the file counts them) by [`DramEnergy::from_idd`]: the DRAM
 /// core only, about 1 pJ/bit; a system figure with the interface (GDDR6 about 7.5 pJ/bit,
@@ -192,7 +198,8 @@ pub fn gddr6_16g_x16() -> DramConfig {
 /// tCCD 4 (same group), tRRD 4, tWTR_S/L 5/10, tFAW 16, nCS 2 (taken as tRTRS); organisation `LPDDR5_8Gb_x16`: 4
 /// bank groups of 4 banks, 32 768 rows, 1 024 columns of 16 bits (a 2 KB row: 64 atoms).
 /// The atom is 32 B (x16, BL16); at 6400 MT/s it takes 2.5 ns = tBURST 2 cycles (8 bits a
-/// pin a clock), which is also tCCD to another group. Mapping: [`interleaved`]. tRTW = CL + tBURST + 2 - CWL.
+/// pin a clock), which is also tCCD to another group. Mapping `rorabacobgch` (channel
+/// lowest: the module doc). tRTW = CL + tBURST + 2 - CWL.
 /// Energy: DRAMsim3's LPDDR4 currents (`configs/LPDDR4_8Gb_x16_2400.ini`: IDD0 80, IDD2N
 /// 34, IDD3N 47, IDD4R 243, IDD4W 228 mA, one x16 device a channel) at LPDDR5's VDD2H of
 /// 1.05 V (JESD209-5) by [`DramEnergy::from_idd`]: a stand-in until an LPDDR5 datasheet's
