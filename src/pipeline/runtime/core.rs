@@ -242,10 +242,11 @@ impl Core {
                     .map(|i| i.next_arrival(self))
                     .min()
                     .unwrap_or(Cycle::NEVER);
-                if a == Cycle::NEVER {
-                    Cycle::NEVER
-                } else {
-                    a.max(now) + s.latency
+                // Every input ended: the unit runs next and may still push (a ROP writes
+                // its caches back once its inputs end), so it is bounded as a runnable one.
+                match a {
+                    Cycle::NEVER => now + s.latency,
+                    a => a.max(now) + s.latency,
                 }
             }
         };
@@ -394,9 +395,11 @@ pub fn recover(snaps: &[UnitSnap]) -> Vec<(usize, Cycle)> {
             let (ei, xi) = match s.wait {
                 Wait::Done => continue,
                 Wait::Runnable => (s.now, s.now + s.latency),
+                // Every input ended: it runs next, and may still push (as `Core::bound`).
+                Wait::Input { .. } if never(a) => (s.now, s.now + s.latency),
                 Wait::Input { .. } => {
                     let ei = s.now.max(a);
-                    (ei, if never(ei) { ei } else { ei + s.latency })
+                    (ei, ei + s.latency)
                 }
                 Wait::Credit { .. } => {
                     let c = s

@@ -292,13 +292,30 @@ impl<I, O> Ctx<I, O> {
         self.inputs[port].pop(self.now)
     }
 
+    /// Waits (starved) until the end of its inputs reaches it: for a unit that still has
+    /// work once its inputs have ended ([`Self::next_input`] returned `None`), such as a
+    /// ROP writing back its caches at the end of the frame. Inputs not yet ended count
+    /// from the unit's clock.
+    pub fn wait_for_end_of_inputs(&mut self) {
+        let end = self
+            .inputs
+            .iter()
+            .filter_map(Rx::end_arrival)
+            .max()
+            .unwrap_or(self.now);
+        if end > self.now {
+            self.stats.starved += end - self.now;
+            self.now = end;
+        }
+    }
+
     /// Ends every output and returns the unit's counters and timeline. Consumes the
     /// context: a finished unit does nothing more.
     pub fn finish(mut self) -> (UnitStats, Option<Recorder>) {
         self.publish();
         self.core.slots[self.unit as usize].wait.set(Wait::Done);
         for tx in &self.outputs {
-            tx.end();
+            tx.end(self.now);
         }
         let mut stats = std::mem::take(&mut self.stats);
         stats.end = self.now;

@@ -192,6 +192,8 @@ struct Fifo<T> {
     pushed: u64,
     last_push: Cycle,
     ended: bool,
+    /// When the producer ended it.
+    end_at: Cycle,
 }
 
 impl<T> LocalLink<T> {
@@ -209,6 +211,7 @@ impl<T> LocalLink<T> {
                 pushed: 0,
                 last_push: Cycle::ZERO,
                 ended: false,
+                end_at: Cycle::ZERO,
             }),
             head: Cell::new(Cycle::NEVER),
             producer_waits: Cell::new(false),
@@ -374,14 +377,16 @@ pub struct RemoteRx<T> {
     /// No item will be pushed before this cycle (the last item's push or the horizon).
     bound: Cell<Cycle>,
     ended: Cell<bool>,
+    /// When the producer ended it.
+    end_at: Cell<Cycle>,
 }
 
 /// What a link between host threads carries producer → consumer.
 pub enum Msg<T> {
     /// Items in push order, times non-decreasing.
     Items(Vec<Timed<T>>),
-    /// The producer finished; no more items.
-    End,
+    /// The producer finished, at this cycle; no more items.
+    End(Cycle),
 }
 
 /// The channels of a link between host threads, made before the threads start and moved
@@ -453,6 +458,7 @@ impl<T> RemoteParts<T> {
             pending_credits: RefCell::new(Vec::new()),
             bound: Cell::new(Cycle::ZERO),
             ended: Cell::new(false),
+            end_at: Cell::new(Cycle::ZERO),
         }
     }
 }
@@ -612,7 +618,8 @@ impl<T> RemoteEnd for RemoteRx<T> {
                     }
                     changed = true;
                 }
-                Ok(Msg::End) => {
+                Ok(Msg::End(at)) => {
+                    self.end_at.set(at);
                     self.ended.set(true);
                     changed = true;
                     break;
@@ -749,11 +756,14 @@ impl<T> Tx<T> {
         }
     }
 
-    /// Ends the link: nothing more will be pushed.
-    pub fn end(&self) {
+    /// Ends the link at the producer's cycle `at`: nothing more will be pushed.
+    pub fn end(&self, at: Cycle) {
         match self {
             Tx::Local(l) => {
-                l.fifo.borrow_mut().ended = true;
+                let mut f = l.fifo.borrow_mut();
+                f.ended = true;
+                f.end_at = at;
+                drop(f);
                 l.core.wake_if_input(l.ends.consumer);
             }
             Tx::Remote(l) => {
@@ -761,7 +771,7 @@ impl<T> Tx<T> {
                     return;
                 }
                 l.send_batch();
-                let _ = l.data.send(Msg::End);
+                let _ = l.data.send(Msg::End(at));
                 l.peer.notify();
             }
         }
@@ -799,6 +809,21 @@ impl<T> Rx<T> {
         match self {
             Rx::Local(l) => l.next_arrival(core),
             Rx::Remote(l) => l.next_arrival(core),
+        }
+    }
+
+    /// When the end reaches the consumer (the producer's end plus the latency), once the
+    /// producer ended the link.
+    pub fn end_arrival(&self) -> Option<Cycle> {
+        match self {
+            Rx::Local(l) => {
+                let f = l.fifo.borrow();
+                f.ended.then_some(f.end_at + l.spec.latency_cycles)
+            }
+            Rx::Remote(l) => l
+                .ended
+                .get()
+                .then(|| l.end_at.get() + l.spec.latency_cycles),
         }
     }
 
@@ -1041,9 +1066,10 @@ mod tests {
         assert_eq!(r.rx.next_arrival(&r.cc), Cycle(32));
         assert_eq!(r.rx.pop(Cycle(32)), 7);
         assert_eq!(r.rx.next_arrival(&r.cc), Cycle(32));
-        r.tx.end();
+        r.tx.end(Cycle(40));
         assert!(r.rx_half.drain());
         assert!(r.rx.finished());
+        assert_eq!(r.rx.end_arrival(), Some(Cycle(42)));
         assert_eq!(r.rx.next_arrival(&r.cc), Cycle::NEVER);
         r.cp.clear();
         r.cc.clear();
