@@ -29,6 +29,7 @@ use crate::graph::{self, PrimitivePath, UnitInstance, UnitKind};
 
 mod declare;
 mod links;
+mod memory;
 mod ratio;
 mod rules;
 mod sections;
@@ -36,6 +37,7 @@ mod table;
 use crate::json::parse_strict;
 pub use declare::Row;
 pub use links::LinksConfig;
+pub use memory::{DramPreset, MemoryConfig, MemoryModel, BYTES_PER_PIXEL};
 pub use ratio::Ratio;
 pub use rules::{
     MAX_ACCESS_CYCLES, MAX_BATCH, MAX_BYTES, MAX_CLOCK_MHZ, MAX_CYCLES, MAX_FIFO_DEPTH,
@@ -70,6 +72,7 @@ impl ArchConfig {
     pub fn from_json(text: &str, file: &str) -> Result<ArchConfig> {
         let config: ArchConfig = parse_strict(text, file)?;
         config.validate(file)?;
+        config.check_memory(file)?;
         Ok(config)
     }
 
@@ -99,8 +102,27 @@ impl ArchConfig {
                 field: format!("{flag} {}", e.path()),
                 message: e.into_inner().to_string(),
             })?;
-        config.validate(&format!("{} ({flag})", crate::error::COMMAND_LINE))?;
+        let file = format!("{} ({flag})", crate::error::COMMAND_LINE);
+        config.validate(&file)?;
+        config.check_memory(&file)?;
         Ok(config)
+    }
+
+    /// The memory fields' checks across fields and sections ([`MemoryConfig::check`]); with
+    /// the DRAM model a ROP interleave tile must hold whole 8x8 memory tiles, so that no two
+    /// ROPs' caches share a sector.
+    pub fn check_memory(&self, file: &str) -> Result<()> {
+        self.memory.check(file)?;
+        let tile = crate::memory::tiles::TILE_PX;
+        if self.memory.model == MemoryModel::Dram && !self.rop.tile_px.is_multiple_of(tile) {
+            return Err(Error::invalid(
+                file,
+                "rop.tile_px",
+                self.rop.tile_px,
+                format!("must be a multiple of {tile} with memory.model \"dram\" (a ROP owns whole memory tiles)"),
+            ));
+        }
+        Ok(())
     }
 
     /// The embedded `sim/arch/baseline.json`, equal to [`ArchConfig::default`].

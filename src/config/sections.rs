@@ -5,6 +5,7 @@
 
 use super::declare::{architecture, section};
 use super::links::LinksConfig;
+use super::memory::MemoryConfig;
 use super::ratio::Ratio;
 use super::rules::{
     Chars, Checked, OneOf, Positive, Steps, Whole, BATCH, BYTES, COUNT, CYCLES, CYCLES_OR_NONE,
@@ -530,6 +531,9 @@ architecture! {
         pub blend: BlendConfig,
         /// The frame-buffer memory port (one instance); defaults in [`FrameBufferConfig`].
         pub framebuffer: FrameBufferConfig,
+        /// The memory system behind the ROPs (its model, caches, tile table and DRAM);
+        /// defaults in [`MemoryConfig`].
+        pub memory: MemoryConfig,
         /// The FIFOs between stages, one setting per boundary; defaults in [`LinksConfig`].
         pub links: LinksConfig,
     }

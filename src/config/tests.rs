@@ -729,3 +729,56 @@ fn config_field_table_lists_every_field() {
         ("8", "1 to 256")
     );
 }
+
+/// The memory fields refuse what the caches and the DRAM cannot be, naming the field, before
+/// any work: a cache smaller than a line, no ways, a line not a whole number of sectors, a
+/// line that is not one tile, no channels or a count the mapping cannot split, an unknown
+/// DRAM kind, and a ROP tile that splits a memory tile under the DRAM model.
+#[test]
+fn memory_fields_refuse_what_no_cache_or_dram_can_be() {
+    let m = |fields: &str| format!(r#"{{"memory": {{{fields}}}}}"#);
+    assert_invalid(
+        &m(r#""colour_cache_bytes": 128"#),
+        "memory.colour_cache_bytes",
+        "128",
+    );
+    assert_invalid(
+        &m(r#""depth_cache_bytes": 12288"#),
+        "memory.depth_cache_bytes",
+        "12288",
+    );
+    assert_invalid(&m(r#""cache_ways": 0"#), "memory.cache_ways", "0");
+    assert_invalid(&m(r#""sector_bytes": 48"#), "memory.sector_bytes", "48");
+    assert_invalid(
+        &m(r#""sector_bytes": 512"#),
+        "memory.cache_line_bytes",
+        "256",
+    );
+    assert_invalid(
+        &m(r#""cache_line_bytes": 512, "colour_cache_bytes": 32768, "depth_cache_bytes": 32768"#),
+        "memory.cache_line_bytes",
+        "512",
+    );
+    assert_invalid(&m(r#""channels": 0"#), "memory.channels", "0");
+    assert_invalid(&m(r#""channels": 3"#), "memory.channels", "3");
+    let message = assert_parse_err(&m(r#""dram": "hbm9""#), "memory.dram");
+    assert!(message.contains("gddr6"), "{message}");
+    // The port model leaves the ROP tile free; the DRAM model needs whole memory tiles.
+    let tile = r#"{"rop": {"tile_px": 4}, "memory": {"model": "dram"}}"#;
+    assert_invalid(tile, "rop.tile_px", "4");
+    assert!(ArchConfig::from_json(r#"{"rop": {"tile_px": 4}}"#, "t.json").is_ok());
+    assert!(ArchConfig::from_json(
+        r#"{"rop": {"tile_px": 16}, "memory": {"model": "dram"}}"#,
+        "t.json"
+    )
+    .is_ok());
+    // Through --set, as from a file.
+    let set = [("memory.channels".to_string(), serde_json::json!(0))];
+    let e = ArchConfig::default()
+        .with_fields(&set, "--set")
+        .unwrap_err();
+    assert!(
+        matches!(&e, Error::Invalid { field, .. } if field == "memory.channels"),
+        "{e}"
+    );
+}
