@@ -98,6 +98,7 @@ pub(super) fn run_discoids(
         arch: model.arch().cloned(),
         accuracy: measured.as_ref().map(|m| m.accuracy.clone()),
         blend: Some(blend),
+        memory_system: None,
         memory,
         host: host(
             wall,

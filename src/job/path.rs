@@ -48,14 +48,15 @@ pub fn run_path(
     // The primitives' sizes: the architecture's, or its defaults for a functional frame.
     let sizes = model.arch().map(|a| a.fetch.clone()).unwrap_or_default();
     let primitives = primitives(scene, &route, &counts, &sizes);
-    let (framebuffer, units, cycles, trace, fetch) = match drawn {
-        Drawn::Functional(f) => (f.framebuffer, Vec::new(), None, None, None),
+    let (framebuffer, units, cycles, trace, fetch, memory_system) = match drawn {
+        Drawn::Functional(f) => (f.framebuffer, Vec::new(), None, None, None, None),
         Drawn::Timed { timed, .. } => (
             timed.framebuffer,
             timed.units,
             Some(timed.cycles),
             timed.trace,
             timed.fetch,
+            timed.memory,
         ),
     };
     let cost = match (model, &cycles) {
@@ -104,6 +105,7 @@ pub fn run_path(
         arch: model.arch().cloned(),
         accuracy: measured.as_ref().map(|m| m.accuracy.clone()),
         blend: None,
+        memory_system,
         memory,
     };
     Ok(PathRun {

@@ -151,6 +151,16 @@ impl SurfaceLayout {
         self.tile_bytes() / self.sector_bytes
     }
 
+    /// Its width \[pixels\].
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Its height \[pixels, sample rows\].
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
     /// The tile holding pixel (x, y).
     pub fn tile_of(&self, x: u32, y: u32) -> u32 {
         x / TILE_PX + y / TILE_PX * self.tiles_x
@@ -407,6 +417,11 @@ impl TileTable {
     /// Its layout.
     pub fn layout(&self) -> &SurfaceLayout {
         &self.layout
+    }
+
+    /// Which surface it describes.
+    pub fn surface(&self) -> Surface {
+        self.surface
     }
 
     /// Its counts so far.

@@ -174,6 +174,66 @@ impl MemAccess {
     }
 }
 
+/// A ROP's frame-buffer traffic for one item: the bytes the port model moves
+/// (`memory.model = "port"`), and with the DRAM model the transfers between its caches and
+/// DRAM ([`crate::pipeline::rop_memory`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FrameTraffic {
+    /// Bytes moved through the port \[bytes\].
+    pub bytes: u64,
+    transfers: [LineTransfer; FrameTraffic::CAP],
+    len: u8,
+}
+
+impl FrameTraffic {
+    /// The transfers one item can carry: a fill and a write-back in each of two caches.
+    pub const CAP: usize = 4;
+
+    /// Traffic of `bytes` through the port, no transfer.
+    pub fn bytes(bytes: u64) -> Self {
+        FrameTraffic {
+            bytes,
+            ..FrameTraffic::default()
+        }
+    }
+
+    /// Adds a transfer.
+    ///
+    /// # Panics
+    /// When it holds [`Self::CAP`] already (a span makes at most that many).
+    pub fn push(&mut self, t: LineTransfer) {
+        self.transfers[self.len as usize] = t;
+        self.len += 1;
+    }
+
+    /// Its transfers.
+    pub fn transfers(&self) -> &[LineTransfer] {
+        &self.transfers[..self.len as usize]
+    }
+}
+
+/// A transfer between a ROP cache and DRAM: sectors (bit s) of the line at `addr`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LineTransfer {
+    /// The line's first byte in memory.
+    pub addr: u64,
+    /// The sectors moved.
+    pub sectors: u64,
+    /// A write-back (else a fill).
+    pub write: bool,
+}
+
+impl LineTransfer {
+    /// Transfer `t` of a surface starting at `base`.
+    pub fn at(base: u64, t: crate::memory::tiles::Transfer, write: bool) -> Self {
+        LineTransfer {
+            addr: base + t.addr,
+            sectors: t.sectors,
+            write,
+        }
+    }
+}
+
 /// What a link carries, as the runtime dispatches it ([`crate::graph::Dispatch`]).
 pub trait Item: Send + 'static {
     /// Whether items of this type say where on screen they lie ([`Item::pixel`]): a
@@ -200,6 +260,7 @@ impl Item for MemAccess {
     }
 }
 
+impl Item for FrameTraffic {}
 impl Item for Patch {}
 impl<R: Real> Item for LemboReady<R> {}
 impl<R: Real> Item for ScanlineRange<R> {}
@@ -207,6 +268,20 @@ impl<R: Real> Item for ScanInterval<R> {}
 impl<R: Real> Item for ScanSegment<R> {}
 impl<R: Real> Item for ScanSubsegment<R> {}
 impl<R: Real> Item for Arc<ScreenTriangle<R>> {}
+
+impl<R: Real> RopItem<R> {
+    /// The rows it covers, (row, first column, column past the last), an empty row where it
+    /// has none (a span has one row).
+    pub fn rows(&self) -> [(u32, u32, u32); 2] {
+        match self {
+            RopItem::Lembo(f) => [(f.j, f.span.i0, f.span.i1), (f.j, 0, 0)],
+            RopItem::Triangle(t) => {
+                let [(a0, b0), (a1, b1)] = t.rows;
+                [(t.j, a0, b0), (t.j + 1, a1, b1)]
+            }
+        }
+    }
+}
 
 impl<R: Real> Item for RopItem<R> {
     const ON_SCREEN: bool = true;

@@ -23,6 +23,7 @@
 pub mod builder;
 pub mod discoid;
 pub mod items;
+pub mod rop_memory;
 pub mod runtime;
 pub mod tiles;
 pub mod unit;
@@ -116,6 +117,8 @@ pub struct TimedFrame {
     pub fetch: Option<FetchReport>,
     /// How often the executor needed a recovery (host statistics).
     pub recoveries: Recoveries,
+    /// The caches, tile tables and DRAM, with the DRAM memory model; None with the port.
+    pub memory: Option<rop_memory::MemoryReport>,
 }
 
 /// Renders `scene` on the timed pipeline of `arch`: its lembos on the lembo path, or a
@@ -200,6 +203,7 @@ fn empty_frame(scene: &Scene, view: &View, arch: &ArchConfig) -> TimedFrame {
         trace: None,
         discoid: None,
         fetch: None,
+        memory: None,
         recoveries: Recoveries::default(),
     }
 }
@@ -390,12 +394,19 @@ fn finish(
     let (total, direct) = shared_ports(&units, &results, last);
     let mut counts = Counts::default();
     let mut fetch = None;
+    let (mut rops, mut dram) = (None::<rop_memory::RopMemoryStats>, None);
     for (_, f) in &results {
         counts += f.counts;
-        if let Some(UnitReport::Fetch(report)) = f.own {
-            fetch = fetch.or(Some(report));
+        match &f.own {
+            Some(UnitReport::Fetch(report)) => fetch = fetch.or(Some(*report)),
+            Some(UnitReport::RopMemory(m)) => rops.get_or_insert_with(Default::default).add(m),
+            Some(UnitReport::Dram(d)) => dram = Some(*d),
+            _ => {}
         }
     }
+    let memory = dram.map(|d| {
+        rop_memory::MemoryReport::new(&arch.memory.dram_config(), rops.unwrap_or_default(), &d)
+    });
     counts.pixels_covered = fb.covered() as u64;
     let unit_cycles = unit_cycles(&units, &results, &direct, total);
     let trace = options.trace.then(|| {
@@ -427,6 +438,7 @@ fn finish(
         discoid: kept_fragments(&mut results),
         fetch,
         recoveries: Recoveries::default(),
+        memory,
     })
 }
 

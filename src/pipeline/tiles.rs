@@ -195,6 +195,18 @@ impl<'a, 'f> RopPixels<'a, 'f> {
         pass
     }
 
+    /// Whether pixel (i, j) lies in one of this ROP's tiles.
+    pub fn owns(&self, i: u32, j: u32) -> bool {
+        self.tiles.owner(i, j).0 == self.rop
+    }
+
+    /// The colour at pixel index `idx`.
+    #[inline(always)]
+    pub fn color(&self, idx: usize) -> [u8; 3] {
+        // SAFETY: as for `depth`.
+        unsafe { *self.frame.color.add(idx) }
+    }
+
     /// Writes colour `rgb` at pixel index `idx`.
     #[inline(always)]
     pub fn set_color(&mut self, idx: usize, rgb: [u8; 3]) {

@@ -49,6 +49,10 @@ pub enum UnitReport {
     /// A ROP's accumulation-pass output in a discoid pass: the fragments it kept and its
     /// counters.
     Kept(Vec<KeptFragment>, BlendReport),
+    /// A ROP's caches and tile tables, with the DRAM memory model.
+    RopMemory(crate::pipeline::rop_memory::RopMemoryStats),
+    /// The memory controller's DRAM, with the DRAM memory model.
+    Dram(crate::memory::dram::DramStats),
 }
 
 impl Finished {

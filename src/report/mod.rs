@@ -7,6 +7,7 @@ use crate::config::ArchConfig;
 use crate::cost::model::CostReport;
 use crate::discoid::report::BlendReport;
 use crate::pipeline::discoid::PassCycles;
+use crate::pipeline::rop_memory::MemoryReport;
 use crate::pipeline::{Cycle, CycleReport, FetchReport, UnitInstance};
 use crate::raster::Counts;
 use crate::reference::metrics::Accuracy;
@@ -48,6 +49,11 @@ pub struct Report {
     pub accuracy: Option<Accuracy>,
     /// The discoid blend units' counters and error; null for scenes without discoids.
     pub blend: Option<BlendSection>,
+    /// With the DRAM memory model (`memory.model = "dram"`): the caches' hit rates, the
+    /// tile tables' compression and fast-cleared tiles, DRAM atoms, activations, row hits
+    /// and energy; left out with the port model.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub memory_system: Option<MemoryReport>,
     /// The storage the simulated unit instantiates for this run.
     pub memory: Memory,
     /// What the simulation cost the host (not deterministic).

@@ -138,6 +138,14 @@ impl Dram {
         self.counters.stats(&self.cfg, first_acts)
     }
 
+    /// Runs until every submitted request has entered its channel's queue; returns the
+    /// cycle the last one entered (the cycle reached when none was waiting). What a client
+    /// that must not run ahead of a full queue waits for.
+    pub fn admit_all(&mut self) -> u64 {
+        while !self.pending.is_empty() && self.step() {}
+        self.now
+    }
+
     /// Requests submitted and not yet admitted to a queue.
     pub fn waiting(&self) -> usize {
         self.pending.len()

@@ -14,14 +14,15 @@
 //! the geometry fetch's share of the port (`fetch.rs`, which prices its reads with its own
 //! [`PortClock`]).
 
-use crate::config::FrameBufferConfig;
-use crate::config::Ratio;
+use crate::config::{FrameBufferConfig, MemoryModel, Ratio};
+use crate::memory::dram::{Dram, DramConfig};
+use crate::memory::trace::Request;
 use crate::datapath::Real;
 use crate::graph::UnitKind;
-use crate::pipeline::items::MemAccess;
+use crate::pipeline::items::FrameTraffic;
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::{Ctx, Cycle};
-use crate::pipeline::unit::{Finished, RunInputs, Unit};
+use crate::pipeline::unit::{Finished, RunInputs, Unit, UnitReport};
 use crate::raster::Counts;
 
 /// The frame-buffer memory port.
@@ -29,7 +30,7 @@ pub struct FrameBufferPort;
 
 impl<R: Real> Unit<R> for FrameBufferPort {
     const KIND: UnitKind = UnitKind::FrameBuffer;
-    type In = MemAccess;
+    type In = FrameTraffic;
     type Out = ();
     // A sink: no output links.
     const OUT_WORDS: u32 = 0;
@@ -41,21 +42,100 @@ impl<R: Real> Unit<R> for FrameBufferPort {
     ) -> UnitFuture<'a, Finished> {
         let vp = run.view.viewport;
         let samples = run.view.samples;
+        if run.arch.memory.model == MemoryModel::Dram {
+            let clock = DramClock::new(run.arch.clock_mhz, &run.arch.memory.dram_config());
+            let sector = u64::from(run.arch.memory.sector_bytes);
+            return Box::pin(self::run_dram(ctx, run.arch.memory.dram_config(), clock, sector));
+        }
         let resolve =
             crate::rop::FrameBuffer::resolve_bytes(vp.width, vp.height / samples.get(), samples);
         Box::pin(self::run(ctx, &run.arch.framebuffer, resolve))
     }
 }
 
+/// The units' clock against the DRAM's command clock.
+#[derive(Clone, Copy, Debug)]
+pub struct DramClock {
+    /// A unit cycle \[ps\].
+    core_ps: f64,
+    /// A DRAM cycle \[ps\].
+    dram_ps: f64,
+}
+
+impl DramClock {
+    /// Units at `clock_mhz` against the DRAM of `cfg`.
+    pub fn new(clock_mhz: f64, cfg: &DramConfig) -> Self {
+        DramClock {
+            core_ps: 1e6 / clock_mhz,
+            dram_ps: f64::from(cfg.timings.tck_ps),
+        }
+    }
+
+    /// The first DRAM cycle at or after unit cycle `c`.
+    pub fn to_dram(&self, c: Cycle) -> u64 {
+        (c.0 as f64 * self.core_ps / self.dram_ps).ceil() as u64
+    }
+
+    /// The first unit cycle at or after DRAM cycle `d`.
+    pub fn to_core(&self, d: u64) -> u64 {
+        (d as f64 * self.dram_ps / self.core_ps).ceil() as u64
+    }
+}
+
+/// The memory controller's body with the DRAM model (`memory.model = "dram"`): each item's
+/// transfers become one request per DRAM atom they touch (a sector smaller than the atom
+/// pays the whole atom), submitted at the item's arrival; the unit takes its next item
+/// once they have entered the controller's queues, so a full queue holds the ROPs back.
+/// The frame ends when the last request has completed.
+pub async fn run_dram(
+    mut ctx: Ctx<FrameTraffic, ()>,
+    cfg: DramConfig,
+    clock: DramClock,
+    sector_bytes: u64,
+) -> Finished {
+    let mut dram = Dram::new(&cfg).expect("the memory fields were checked when the run was built");
+    let atom = u64::from(cfg.atom_bytes());
+    while let Some(t) = ctx.next_input().await {
+        let (now, _) = ctx.clock();
+        let at = clock.to_dram(now);
+        let mut submitted = false;
+        for tr in t.transfers() {
+            let mut last = u64::MAX;
+            for s in (0..64).filter(|s| tr.sectors >> s & 1 == 1) {
+                let a = (tr.addr + s * sector_bytes) / atom;
+                if a != last {
+                    dram.submit(Request {
+                        addr: a * atom,
+                        write: tr.write,
+                        arrival: at,
+                    });
+                    last = a;
+                    submitted = true;
+                }
+            }
+        }
+        if submitted {
+            let admitted = dram.admit_all();
+            ctx.work(clock.to_core(admitted).saturating_sub(now.0));
+            dram.complete();
+        }
+    }
+    let last = dram.finish();
+    let (now, _) = ctx.clock();
+    ctx.work(clock.to_core(last).saturating_sub(now.0));
+    Finished::new(ctx, Counts::default()).with(UnitReport::Dram(dram.stats()))
+}
+
 /// The memory port's body: every access through the port at its byte rate, then the
 /// multisample resolve's `resolve_bytes` (0 with one sample per pixel: no resolve).
 pub async fn run(
-    mut ctx: Ctx<MemAccess, ()>,
+    mut ctx: Ctx<FrameTraffic, ()>,
     cfg: &FrameBufferConfig,
     resolve_bytes: u64,
 ) -> Finished {
     let mut port = PortClock::new(cfg);
-    while let Some(MemAccess { bytes, .. }) = ctx.next_input().await {
+    while let Some(t) = ctx.next_input().await {
+        let bytes = t.bytes;
         let (now, arrival) = ctx.clock();
         ctx.work(port.access(now, arrival, bytes));
     }

@@ -17,14 +17,15 @@
 //! memory model.
 
 use crate::camera::{Samples, View};
-use crate::config::{FrameBufferConfig, RopConfig};
+use crate::config::{FrameBufferConfig, MemoryModel, RopConfig};
 use crate::datapath::Real;
 use crate::discoid::report::BlendReport;
 use crate::frame::discoid::{
     accumulation_keeps, depth_pass_wins, evaluate, DiscoidFragment, KeptFragment, Pass,
 };
 use crate::graph::UnitKind;
-use crate::pipeline::items::{FragmentSpan, MemAccess, RopItem, TrianglePiece};
+use crate::pipeline::items::{FragmentSpan, FrameTraffic, RopItem, TrianglePiece};
+use crate::pipeline::rop_memory::RopMemory;
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::Ctx;
 use crate::pipeline::tiles::RopPixels;
@@ -39,15 +40,21 @@ pub struct Rop;
 impl<R: Real> Unit<R> for Rop {
     const KIND: UnitKind = UnitKind::Rop;
     type In = RopItem<R>;
-    type Out = MemAccess;
+    type Out = FrameTraffic;
     // A write request: address and colour with depth.
     const OUT_WORDS: u32 = 3;
 
     fn spawn<'a>(
-        ctx: Ctx<RopItem<R>, MemAccess>,
+        ctx: Ctx<RopItem<R>, FrameTraffic>,
         run: &'a RunInputs<'a, R>,
         index: usize,
     ) -> UnitFuture<'a, Finished> {
+        let vp = run.view.viewport;
+        // The builder checked the memory fields (`memory::check` and the ROP tiles).
+        let caches = (run.arch.memory.model == MemoryModel::Dram).then(|| {
+            RopMemory::new(&run.arch.memory, vp.width, vp.height, run.view.samples.get())
+                .expect("the memory fields were checked when the run was built")
+        });
         Box::pin(self::run(
             ctx,
             RopContext {
@@ -57,6 +64,7 @@ impl<R: Real> Unit<R> for Rop {
                 shader: FragmentShader::<R>::new(&run.scene.light, run.view),
                 view: run.view,
                 discoid: run.discoid.as_ref(),
+                caches,
             },
         ))
     }
@@ -77,6 +85,8 @@ pub struct RopContext<'a, R> {
     pub view: &'a View,
     /// The discoid pass it runs; None for ordinary rendering.
     pub discoid: Option<&'a DiscoidPass<'a, R>>,
+    /// Its colour and depth caches, with the DRAM memory model.
+    pub caches: Option<RopMemory>,
 }
 
 /// Where a batch's colours go: this ROP's pixels.
@@ -127,7 +137,10 @@ fn discoid_fragment<R: Real>(
 }
 
 /// A ROP's body: depth-tests, shades and writes the fragments it is given into its pixels.
-pub async fn run<R: Real>(mut ctx: Ctx<RopItem<R>, MemAccess>, rop: RopContext<'_, R>) -> Finished {
+pub async fn run<R: Real>(
+    mut ctx: Ctx<RopItem<R>, FrameTraffic>,
+    rop: RopContext<'_, R>,
+) -> Finished {
     let RopContext {
         cfg,
         memory: fbc,
@@ -135,6 +148,7 @@ pub async fn run<R: Real>(mut ctx: Ctx<RopItem<R>, MemAccess>, rop: RopContext<'
         shader,
         view,
         discoid,
+        mut caches,
     } = rop;
     let mut counts = Counts::default();
     let mut kept = (Vec::new(), BlendReport::default());
@@ -144,6 +158,8 @@ pub async fn run<R: Real>(mut ctx: Ctx<RopItem<R>, MemAccess>, rop: RopContext<'
     let mut batch = Batch::<R>::new();
     while let Some(item) = ctx.next_input().await {
         let mut passed = 0u64;
+        let mut nearest = f32::INFINITY;
+        let rows = item.rows();
         let n = match item {
             RopItem::Triangle(piece) => triangle_fragments(
                 &piece,
@@ -154,6 +170,7 @@ pub async fn run<R: Real>(mut ctx: Ctx<RopItem<R>, MemAccess>, rop: RopContext<'
                 &mut batch,
                 &mut kept,
                 &mut passed,
+                &mut nearest,
             ),
             RopItem::Lembo(span) => lembo_fragments(
                 span,
@@ -164,18 +181,45 @@ pub async fn run<R: Real>(mut ctx: Ctx<RopItem<R>, MemAccess>, rop: RopContext<'
                 &mut batch,
                 &mut kept,
                 &mut passed,
+                &mut nearest,
             ),
         };
         counts.fragments_passed_depth += passed;
+        if discoid.is_some() {
+            // The discoid passes keep their own depths: nothing for hierarchical Z.
+            nearest = f32::NEG_INFINITY;
+        }
         let (bytes, extra) = traffic(fbc, discoid, n, passed);
-        ctx.emit(
-            cfg.fragments_per_cycle.ceil_div(n) + extra,
-            MemAccess::frame(bytes),
-        )
-        .await;
+        let mut out = FrameTraffic::bytes(bytes);
+        let mut cycles = cfg.fragments_per_cycle.ceil_div(n) + extra;
+        if let Some(c) = caches.as_mut() {
+            let rows = &rows[..];
+            let (ports, rejected) = c.access(rows, nearest, passed > 0, &pixels, &mut out);
+            // Hierarchical Z discards a rejected span in its one test.
+            cycles = if rejected { 1 } else { cycles.max(ports) };
+        }
+        ctx.emit(cycles, out).await;
     }
     batch.flush(&shader, into(&mut pixels));
+    let mut memory = None;
+    if let Some(c) = caches.as_mut() {
+        // The end of the frame reaches the ROP with the end of its inputs.
+        ctx.wait_for_end_of_inputs();
+        // The caches' write-backs and this ROP's share of the resolve, a burst of
+        // transfers an item, at the caches' port rate.
+        for chunk in c.finish(&pixels).chunks(FrameTraffic::CAP) {
+            let mut out = FrameTraffic::default();
+            chunk.iter().for_each(|&t| out.push(t));
+            let sectors: u64 = chunk.iter().map(|t| u64::from(t.sectors.count_ones())).sum();
+            ctx.emit(sectors.div_ceil(c.per_cycle()).max(1), out).await;
+        }
+        memory = Some(c.stats(&pixels));
+    }
     let finished = Finished::new(ctx, counts);
+    let finished = match memory {
+        Some(m) => finished.with(UnitReport::RopMemory(m)),
+        None => finished,
+    };
     match discoid {
         Some(DiscoidPass {
             pass: Pass::Accumulate,
@@ -197,6 +241,7 @@ fn lembo_fragments<R: Real>(
     batch: &mut Batch<R>,
     kept: &mut (Vec<KeptFragment>, BlendReport),
     passed: &mut u64,
+    nearest: &mut f32,
 ) -> u64 {
     match (item, discoid) {
         (FragmentSpan { piece, j, span }, None) => {
@@ -206,8 +251,9 @@ fn lembo_fragments<R: Real>(
             batch.begin_lembo(l, shader, into(pixels));
             span.walk(|i, u, v| {
                 let idx = row + i as usize;
-                let z = l.z.eval(u, v);
-                if pixels.test_depth(idx, z.f64() as f32, l.id) {
+                let z = l.z.eval(u, v).f64() as f32;
+                *nearest = nearest.min(z);
+                if pixels.test_depth(idx, z, l.id) {
                     *passed += 1;
                     if batch.push(idx, [u, v]) {
                         batch.flush(shader, into(pixels));
@@ -244,6 +290,7 @@ fn triangle_fragments<R: Real>(
     batch: &mut Batch<R>,
     kept: &mut (Vec<KeptFragment>, BlendReport),
     passed: &mut u64,
+    nearest: &mut f32,
 ) -> u64 {
     let t = &*piece.tri;
     if discoid.is_none() {
@@ -265,7 +312,9 @@ fn triangle_fragments<R: Real>(
                         true => l,
                         false => t.shading_weights(i, j),
                     };
-                    let pass = pixels.test_depth(idx, z.f64() as f32, t.id);
+                    let z = z.f64() as f32;
+                    *nearest = nearest.min(z);
+                    let pass = pixels.test_depth(idx, z, t.id);
                     if pass && batch.push(idx, l) {
                         batch.flush(shader, into(pixels));
                     }

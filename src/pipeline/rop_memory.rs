@@ -1,0 +1,382 @@
+//! A ROP's side of the DRAM memory model (`memory.model = "dram"`, DESIGN.md §3, "The
+//! memory system"): its colour and depth caches over the surfaces' tile tables. Each span
+//! or piece the ROP tests is charged by the sectors it touches; hits cost the caches' port
+//! rate, misses become fills and evictions become write-backs, which the ROP sends to the
+//! memory controller ([`FrameTraffic`]). The caches hold tags and sector states only: the
+//! pixels stay in the frame buffer, so nothing here changes a pixel.
+//!
+//! Surfaces: colour (RGBA8) at address 0, depth (D24S8) after it, and with multisampling
+//! the resolved colour after that, each `width` x `sample rows` pixels in 8x8 tiles. A ROP
+//! owns whole memory tiles (`rop.tile_px` is a multiple of 8, checked when the run is
+//! built), so no two ROPs' caches hold the same sector.
+
+use crate::config::{MemoryConfig, BYTES_PER_PIXEL};
+use crate::error::Result;
+use crate::memory::cache::{CacheStats, SectorCache};
+use crate::memory::compress::{depth24, TileValues};
+use crate::memory::tiles::{
+    Surface, SurfaceLayout, TableStats, TileTable, TileTouch, Transfer, TILE_PX,
+};
+use crate::pipeline::items::{FrameTraffic, LineTransfer};
+use crate::pipeline::tiles::RopPixels;
+use serde::Serialize;
+
+/// One surface: its tile table, this ROP's cache of it, and where it starts in memory.
+struct Cached {
+    table: TileTable,
+    cache: SectorCache,
+    base: u64,
+}
+
+/// What one ROP's caches and tables counted in a frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct RopMemoryStats {
+    /// The colour cache.
+    pub colour_cache: CacheStats,
+    /// The depth cache.
+    pub depth_cache: CacheStats,
+    /// The colour surface's tile table (this ROP's tiles).
+    pub colour: TableStats,
+    /// The depth surface's tile table (this ROP's tiles, and hierarchical Z).
+    pub depth: TableStats,
+    /// Tiles this ROP found cleared when the frame ended (fast clear's saving in the
+    /// resolve and in the next frame's reads).
+    pub cleared_tiles: u64,
+}
+
+impl RopMemoryStats {
+    /// The sum of two ROPs' counts.
+    pub fn add(&mut self, o: &RopMemoryStats) {
+        for (a, b) in [
+            (&mut self.colour_cache, &o.colour_cache),
+            (&mut self.depth_cache, &o.depth_cache),
+        ] {
+            a.hits += b.hits;
+            a.misses += b.misses;
+            a.fills += b.fills;
+            a.write_backs += b.write_backs;
+        }
+        for (a, b) in [(&mut self.colour, &o.colour), (&mut self.depth, &o.depth)] {
+            a.sectors_read += b.sectors_read;
+            a.sectors_written += b.sectors_written;
+            a.write_back_sectors += b.write_back_sectors;
+            a.write_back_sectors_raw += b.write_back_sectors_raw;
+            a.sectors_cleared_not_read += b.sectors_cleared_not_read;
+            a.compressed_write_backs += b.compressed_write_backs;
+            a.raw_write_backs += b.raw_write_backs;
+            a.hz_tests += b.hz_tests;
+            a.hz_rejects += b.hz_rejects;
+        }
+        self.cleared_tiles += o.cleared_tiles;
+    }
+}
+
+/// A ROP's caches and tile tables.
+pub struct RopMemory {
+    colour: Cached,
+    depth: Cached,
+    per_cycle: u64,
+    /// Where the resolved colour starts, with multisampling.
+    resolve_base: Option<u64>,
+    samples: u32,
+}
+
+impl RopMemory {
+    /// The caches of `cfg` over surfaces of `width` x `rows` sample rows (`samples` a
+    /// pixel), every tile cleared.
+    pub fn new(cfg: &MemoryConfig, width: u32, rows: u32, samples: u32) -> Result<Self> {
+        let layout = SurfaceLayout::new(
+            width,
+            rows,
+            BYTES_PER_PIXEL,
+            cfg.sector_bytes,
+            cfg.pixel_order,
+        )?;
+        let size = layout.tiles() as u64 * layout.tile_bytes() as u64;
+        let surface = |kind, cache: crate::memory::cache::CacheConfig, base| -> Result<Cached> {
+            Ok(Cached {
+                table: TileTable::new(layout, kind, cfg.features(), &cache, "memory")?,
+                cache: SectorCache::new(cache, "architecture", "memory")?,
+                base,
+            })
+        };
+        Ok(RopMemory {
+            colour: surface(Surface::Colour, cfg.colour_cache(), 0)?,
+            depth: surface(Surface::Depth, cfg.depth_cache(), size)?,
+            per_cycle: u64::from(cfg.cache_sectors_per_cycle),
+            resolve_base: (samples > 1).then_some(2 * size),
+            samples,
+        })
+    }
+
+    /// Sectors each cache moves a cycle.
+    pub fn per_cycle(&self) -> u64 {
+        self.per_cycle
+    }
+
+    /// The pixels `rows` (row, x0, x1: one tile's) of one span or piece touch.
+    fn touch(&self, rows: &[(u32, u32, u32)]) -> Option<TileTouch> {
+        let layout = self.depth.table.layout();
+        let &(y, x, _) = rows.iter().find(|r| r.1 < r.2)?;
+        let tile = layout.tile_of(x, y);
+        let (bx, by) = (x / TILE_PX * TILE_PX, y / TILE_PX * TILE_PX);
+        let mut pixels = 0u64;
+        for &(y, x0, x1) in rows.iter().filter(|r| r.1 < r.2) {
+            debug_assert_eq!(layout.tile_of(x0, y), tile, "a span lies in one tile");
+            let row = ((1u64 << (x1 - x0)) - 1) << (x0 - bx);
+            pixels |= row << (8 * (y - by));
+        }
+        Some(layout.touch(tile, pixels))
+    }
+
+    /// One span or piece: rows `rows` tested, `nearest` its nearest fragment depth,
+    /// `passed` whether any fragment passed (then depth and colour are written). Its
+    /// transfers go to `out`; returns the cache ports' cycles and whether hierarchical Z
+    /// rejected it (no depth read, no write).
+    pub fn access(
+        &mut self,
+        rows: &[(u32, u32, u32)],
+        nearest: f32,
+        passed: bool,
+        pixels: &RopPixels,
+        out: &mut FrameTraffic,
+    ) -> (u64, bool) {
+        let Some(touch) = self.touch(rows) else {
+            return (0, false);
+        };
+        if self.depth.table.hz_rejects(touch.tile, nearest) {
+            debug_assert!(!passed, "hierarchical Z rejected a span that passed");
+            return (0, true);
+        }
+        let depth = access(&mut self.depth, &touch, true, passed, pixels, out);
+        let colour = match passed {
+            true => access(&mut self.colour, &touch, false, true, pixels, out),
+            false => 0,
+        };
+        (depth.max(colour).div_ceil(self.per_cycle), false)
+    }
+
+    /// The end of the frame: every dirty line written back, then with multisampling this
+    /// ROP's share of the resolve (its colour tiles read as stored, the resolved pixels
+    /// written whole). Returns the transfers, in order.
+    pub fn finish(&mut self, pixels: &RopPixels) -> Vec<LineTransfer> {
+        let mut out = Vec::new();
+        for s in [&mut self.colour, &mut self.depth] {
+            let (base, surface, layout) = (s.base, s.table.surface(), *s.table.layout());
+            let mut values = |tile| tile_values(&layout, surface, tile, pixels);
+            for t in s.table.flush(&mut s.cache, &mut values) {
+                out.push(LineTransfer::at(base, t, true));
+            }
+        }
+        if let Some(resolve) = self.resolve_base {
+            let layout = *self.colour.table.layout();
+            let all = low_bits(layout.sectors_per_tile());
+            for tile in self.owned_tiles(pixels) {
+                let read = match self.colour.table.state(tile) {
+                    crate::memory::tiles::TileState::Cleared => 0,
+                    crate::memory::tiles::TileState::Compressed { sectors } => low_bits(sectors),
+                    crate::memory::tiles::TileState::Uncompressed => all,
+                };
+                let addr = layout.tile_address(tile);
+                if read != 0 {
+                    out.push(LineTransfer::at(
+                        0,
+                        Transfer {
+                            addr,
+                            sectors: read,
+                        },
+                        false,
+                    ));
+                }
+                // A tile of n sample rows resolves to 1/n of a tile, written whole.
+                let sectors = low_bits(layout.sectors_per_tile() / self.samples);
+                let addr = addr / u64::from(self.samples);
+                out.push(LineTransfer::at(resolve, Transfer { addr, sectors }, true));
+            }
+        }
+        out
+    }
+
+    /// The tiles of the surface this ROP owns.
+    fn owned_tiles<'p>(&self, pixels: &'p RopPixels) -> impl Iterator<Item = u32> + 'p {
+        let layout = *self.colour.table.layout();
+        (0..layout.tiles()).filter(move |&t| {
+            let (x, y, _, _) = bounds(&layout, t);
+            pixels.owns(x, y)
+        })
+    }
+
+    /// Its counts.
+    pub fn stats(&self, pixels: &RopPixels) -> RopMemoryStats {
+        let cleared = self
+            .owned_tiles(pixels)
+            .filter(|&t| self.colour.table.state(t) == crate::memory::tiles::TileState::Cleared)
+            .count() as u64;
+        RopMemoryStats {
+            colour_cache: *self.colour.cache.stats(),
+            depth_cache: *self.depth.cache.stats(),
+            colour: *self.colour.table.stats(),
+            depth: *self.depth.table.stats(),
+            cleared_tiles: cleared,
+        }
+    }
+}
+
+/// One access of `touch` to surface `s`: its fill and write-back into `out`; the sectors
+/// the cache's port moves.
+fn access(
+    s: &mut Cached,
+    touch: &TileTouch,
+    read: bool,
+    write: bool,
+    pixels: &RopPixels,
+    out: &mut FrameTraffic,
+) -> u64 {
+    let surface = s.table.surface();
+    let layout = *s.table.layout();
+    let mut values = |tile| tile_values(&layout, surface, tile, pixels);
+    let t = s
+        .table
+        .access(&mut s.cache, touch, read, write, &mut values);
+    if let Some(f) = t.fill {
+        out.push(LineTransfer::at(s.base, f, false));
+    }
+    if let Some(w) = t.write_back {
+        // The victim's farthest depth, exact as it leaves the cache (a passing depth
+        // test only ever lowers a depth, so it stays an upper bound until the next clear).
+        if surface == Surface::Depth {
+            let tile = (w.addr / u64::from(layout.tile_bytes())) as u32;
+            s.table.set_farthest(tile, farthest(&layout, tile, pixels));
+        }
+        out.push(LineTransfer::at(s.base, w, true));
+    }
+    u64::from(t.hits + t.misses)
+}
+
+/// The farthest depth stored in tile `tile` (1, the clear depth, past the surface's edge).
+fn farthest(layout: &SurfaceLayout, tile: u32, pixels: &RopPixels) -> f32 {
+    let (bx, by, x1, y1) = bounds(layout, tile);
+    let mut far: f32 = if x1 - bx < TILE_PX || y1 - by < TILE_PX {
+        1.0
+    } else {
+        0.0
+    };
+    for y in by..y1 {
+        let row = pixels.row(bx, x1, y);
+        for x in bx..x1 {
+            far = far.max(pixels.depth(row + x as usize));
+        }
+    }
+    far
+}
+
+/// Tile `tile`'s first column and row and the column and row past it, within the surface.
+fn bounds(layout: &SurfaceLayout, tile: u32) -> (u32, u32, u32, u32) {
+    let tiles_x = layout.width().div_ceil(TILE_PX);
+    let (bx, by) = (tile % tiles_x * TILE_PX, tile / tiles_x * TILE_PX);
+    let x1 = (bx + TILE_PX).min(layout.width());
+    (bx, by, x1, (by + TILE_PX).min(layout.height()))
+}
+
+/// The values of tile `tile` of a surface as stored (depth as D24, colour as RGBA8), in
+/// the order the codes read them (x + 8 y); pixels past the surface's edge hold the clear
+/// value.
+fn tile_values(
+    layout: &SurfaceLayout,
+    surface: Surface,
+    tile: u32,
+    pixels: &RopPixels,
+) -> TileValues {
+    let (bx, by, x1, y1) = bounds(layout, tile);
+    let mut v = [match surface {
+        Surface::Depth => depth24(1.0),
+        Surface::Colour => 0,
+    }; 64];
+    for y in by..y1 {
+        let row = pixels.row(bx, x1, y);
+        for x in bx..x1 {
+            let idx = row + x as usize;
+            v[((x - bx) + 8 * (y - by)) as usize] = match surface {
+                Surface::Depth => depth24(pixels.depth(idx)),
+                Surface::Colour => {
+                    let [r, g, b] = pixels.color(idx);
+                    u32::from_le_bytes([r, g, b, 255])
+                }
+            };
+        }
+    }
+    v
+}
+
+/// The mask of the first `n` sectors.
+fn low_bits(n: u32) -> u64 {
+    if n >= 64 {
+        u64::MAX
+    } else {
+        (1 << n) - 1
+    }
+}
+
+/// What the DRAM memory model measured over a frame: `memory_system` in report.json.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct MemoryReport {
+    /// The DRAM preset (`GDDR6 16 Gb/s x16`).
+    pub dram: String,
+    /// Its channels.
+    pub channels: u32,
+    /// Bytes one DRAM atom moves \[bytes\].
+    pub atom_bytes: u32,
+    /// Atoms read (cache fills, the resolve's reads).
+    pub atoms_read: u64,
+    /// Atoms written (write-backs, the resolve's writes).
+    pub atoms_written: u64,
+    /// Row activations.
+    pub activations: u64,
+    /// Requests that found their row open, over all requests.
+    pub row_hit_rate: f64,
+    /// Mean read latency from arrival \[DRAM cycles\].
+    pub read_latency_mean: f64,
+    /// The cycle the last request completed \[DRAM cycles\].
+    pub dram_cycles: u64,
+    /// The DRAM's energy by the preset's current figures \[pJ\]: reads, writes,
+    /// activations, background.
+    pub energy_pj: [f64; 4],
+    /// The colour caches' hit rate (sectors), over every ROP.
+    pub colour_cache_hit_rate: f64,
+    /// The depth caches' hit rate (sectors), over every ROP.
+    pub depth_cache_hit_rate: f64,
+    /// The colour write-backs' compression: raw sectors over sectors written.
+    pub colour_compression_ratio: f64,
+    /// The depth write-backs' compression.
+    pub depth_compression_ratio: f64,
+    /// Every ROP's counts, summed.
+    pub rops: RopMemoryStats,
+}
+
+impl MemoryReport {
+    /// The report of a frame whose ROPs counted `rops` (summed) over `dram`.
+    pub fn new(
+        cfg: &crate::memory::dram::DramConfig,
+        rops: RopMemoryStats,
+        dram: &crate::memory::dram::DramStats,
+    ) -> Self {
+        let e = &dram.energy;
+        MemoryReport {
+            dram: cfg.name.clone(),
+            channels: cfg.channels,
+            atom_bytes: cfg.atom_bytes(),
+            atoms_read: dram.atoms_read,
+            atoms_written: dram.atoms_written,
+            activations: dram.activations,
+            row_hit_rate: dram.row_hit_rate(),
+            read_latency_mean: dram.read_latency_mean,
+            dram_cycles: dram.last_done,
+            energy_pj: [e.read_pj, e.write_pj, e.activation_pj, e.background_pj],
+            colour_cache_hit_rate: rops.colour_cache.hit_rate(),
+            depth_cache_hit_rate: rops.depth_cache.hit_rate(),
+            colour_compression_ratio: rops.colour.compression_ratio(),
+            depth_compression_ratio: rops.depth.compression_ratio(),
+            rops,
+        }
+    }
+}
