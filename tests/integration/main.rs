@@ -23,6 +23,7 @@ mod fuzz;
 mod html;
 mod knobs;
 mod layers;
+mod memory_model;
 mod multisample;
 mod near_plane;
 mod perspective;

@@ -1,0 +1,173 @@
+//! The DRAM memory model (`memory.model = "dram"`, DESIGN.md §3, "The memory system"):
+//! ROP caches over tile tables, their traffic through a DRAM controller. Timing never
+//! changes pixels; results do not depend on the host schedule; the report says where the
+//! bytes went; the depth cache absorbs repeated tests.
+
+use lembo_sim::camera::{Samples, View};
+use lembo_sim::config::{ArchConfig, MemoryModel};
+use lembo_sim::datapath::Datapath;
+use lembo_sim::job::{run_path, Mode, Model, PathRun, PrimitivePath, RenderJob};
+use lembo_sim::pipeline::rop_memory::MemoryReport;
+use lembo_sim::pipeline::{run_timed, SimOptions, Source, TimedFrame};
+use lembo_sim::scene::Scene;
+
+use crate::support::{arch, render_job, scenes};
+
+/// `a` with the DRAM memory model.
+fn dram(mut a: ArchConfig) -> ArchConfig {
+    a.memory.model = MemoryModel::Dram;
+    a
+}
+
+/// A timed render of `scene` on `path` (the triangle path at n = 4) with `samples` a pixel.
+fn render(scene: &Scene, path: PrimitivePath, samples: u32, a: &ArchConfig) -> PathRun {
+    let job = RenderJob {
+        path,
+        tess: (path == PrimitivePath::Triangle).then_some(4),
+        samples: Samples::new(samples).unwrap(),
+        mode: Mode::Timed,
+        ..render_job(0.5, Datapath::F32)
+    };
+    let view = View::new(&scene.camera, scene.viewport);
+    run_path(&job, scene, &view, Model::new(Some(a)), None).expect("timed run")
+}
+
+fn memory(run: &PathRun) -> &MemoryReport {
+    run.report
+        .memory_system
+        .as_ref()
+        .expect("the DRAM model reports its memory system")
+}
+
+/// The caches hold tags only and the controller moves no pixel: every image, depth and
+/// winner is the port model's, on both paths, with one sample and with four (whose resolve
+/// goes through the caches' surfaces too).
+#[test]
+fn the_dram_model_draws_what_the_port_model_draws() {
+    for (name, side, samples) in [("bunny.json", 256, 1), ("sphere24.json", 128, 4)] {
+        let s = scenes::trace(name, Some(side));
+        for path in [PrimitivePath::Lembo, PrimitivePath::Triangle] {
+            let port = render(&s, path, samples, &ArchConfig::default());
+            let with_dram = render(&s, path, samples, &dram(ArchConfig::default()));
+            let what = format!("{name} {path:?} {samples} samples");
+            assert!(port.report.memory_system.is_none(), "{what}");
+            assert!(
+                with_dram.framebuffer.color == port.framebuffer.color,
+                "{what}"
+            );
+            assert!(
+                with_dram.framebuffer.depth == port.framebuffer.depth,
+                "{what}"
+            );
+            assert!(
+                with_dram.framebuffer.primitive == port.framebuffer.primitive,
+                "{what}"
+            );
+            let m = memory(&with_dram);
+            assert!(m.atoms_written > 0, "{what}: {m:?}");
+            if samples > 1 {
+                // The resolve writes every pixel's resolved colour: at least the frame's
+                // pixels in atoms.
+                let pixels = u64::from(side * side);
+                assert!(
+                    m.atoms_written * u64::from(m.atom_bytes) >= 4 * pixels,
+                    "{what}"
+                );
+            }
+        }
+    }
+}
+
+fn timed(scene: &Scene, a: &ArchConfig, options: &SimOptions) -> TimedFrame {
+    let view = View::new(&scene.camera, scene.viewport);
+    run_timed(scene, &view, 0.5, Datapath::F32, a, Source::Lembos, options).expect("timed run")
+}
+
+/// The controller is one unit fed through the ROPs' merge: seeded random orders and 2 to
+/// 4 host threads give the same cycles and the same memory report.
+#[test]
+fn the_dram_model_does_not_depend_on_the_host_schedule() {
+    let s = scenes::trace("sphere24.json", Some(256));
+    let a = dram(arch("wide.json"));
+    let first = timed(&s, &a, &SimOptions::default());
+    assert!(first.memory.is_some());
+    let runs = (1..=3)
+        .map(|seed| SimOptions {
+            perturb: Some(seed),
+            ..SimOptions::default()
+        })
+        .chain((2..=4).map(|threads| SimOptions {
+            host_threads: threads,
+            partition_seed: Some(threads as u64),
+            ..SimOptions::default()
+        }));
+    for options in runs {
+        let t = timed(&s, &a, &options);
+        assert_eq!(t.cycles, first.cycles, "{options:?}");
+        assert_eq!(t.memory, first.memory, "{options:?}");
+        assert!(t.framebuffer.color == first.framebuffer.color);
+        assert_eq!(t.recoveries.unproven, 0);
+    }
+}
+
+/// On the bunny at 512x512, report.json says where the bytes went on both paths: cache
+/// hit rates, compression ratios, fast-cleared tiles, DRAM atoms, activations and row hits.
+#[test]
+fn the_bunny_reports_its_memory_system_on_both_paths() {
+    let s = scenes::trace("bunny.json", None);
+    assert_eq!((s.viewport.width, s.viewport.height), (512, 512));
+    for path in [PrimitivePath::Lembo, PrimitivePath::Triangle] {
+        let run = render(&s, path, 1, &dram(ArchConfig::default()));
+        let m = memory(&run);
+        for rate in [
+            m.colour_cache_hit_rate,
+            m.depth_cache_hit_rate,
+            m.row_hit_rate,
+        ] {
+            assert!(rate > 0.0 && rate < 1.0, "{path:?}: {m:?}");
+        }
+        assert!(m.depth_compression_ratio > 1.0, "{path:?}: {m:?}");
+        assert!(m.colour_compression_ratio >= 1.0, "{path:?}: {m:?}");
+        assert!(m.atoms_read > 0 && m.atoms_written > 0 && m.activations > 0);
+        // The bunny covers a fraction of the screen: the rest stays cleared.
+        assert!(
+            m.rops.cleared_tiles > 0 && m.rops.cleared_tiles < 4096,
+            "{m:?}"
+        );
+        let json = serde_json::to_value(&run.report).unwrap();
+        for key in [
+            "atoms_read",
+            "activations",
+            "row_hit_rate",
+            "depth_cache_hit_rate",
+        ] {
+            assert!(json["memory_system"][key].is_number(), "{path:?}: {key}");
+        }
+        assert!(json["memory_system"]["depth_compression_ratio"].is_number());
+    }
+}
+
+/// traces/overdraw8.json: eight full-screen layers drawn cell by cell, so every pixel is
+/// tested eight times in a row. The depth cache takes nearly every test: the depth surface's
+/// DRAM traffic is a small fraction of what the port model moves for the tests.
+#[test]
+fn the_depth_cache_absorbs_an_overdraw_scenes_repeated_tests() {
+    let s = scenes::trace("overdraw8.json", None);
+    for path in [PrimitivePath::Lembo, PrimitivePath::Triangle] {
+        let run = render(&s, path, 1, &dram(ArchConfig::default()));
+        let m = memory(&run);
+        let tests = run.report.counts.fragments;
+        let pixels = u64::from(s.viewport.width * s.viewport.height);
+        assert_eq!(tests, 8 * pixels, "{path:?}: eight layers over every pixel");
+        let d = &m.rops.depth_cache;
+        assert!(d.hits + d.misses > 0);
+        assert!(m.depth_cache_hit_rate > 0.9, "{path:?}: {m:?}");
+        // A sector holds 8 pixels: without a cache every test would read one.
+        let port_sectors = tests / 8;
+        let depth_sectors = m.rops.depth.sectors_read + m.rops.depth.sectors_written;
+        assert!(
+            depth_sectors * 20 < port_sectors,
+            "{path:?}: {depth_sectors} of {port_sectors}"
+        );
+    }
+}
