@@ -13,6 +13,7 @@
 pub mod built;
 pub mod counted;
 pub mod design_point;
+pub mod memory_kind;
 pub mod model;
 pub mod onchip;
 pub mod tech;

@@ -1,15 +1,19 @@
 //! The technology file (`sim/tech/*.json`, `--tech FILE`): energy per operation \[pJ\] and
 //! area per functional unit \[µm²\] for the f32, f64 and fixed-point datapaths (and the
 //! discoid blend units' f16 and 8-bit fixed-point units); on-chip SRAM per bit, per access
-//! and its leakage per MB; the DRAM's kind and energy per byte; logic leakage per mm².
+//! and its leakage per MB; the DRAM's kind and energy per byte; the memory kinds the file
+//! knows, each priced per bit read or written and per row activation ([`MemoryKind`]);
+//! logic leakage per mm².
 //! Every figure is required (no defaults: a cost nobody wrote down is not a cost), finite
 //! and above 0 (the two leakages: 0 or above); each group carries a `note`
 //! citing its source, and the file a `source` (DESIGN.md §12).
 
+use super::memory_kind::MemoryKind;
 use crate::datapath::{Datapath, Op};
 use crate::error::{read_text_file, Error, Result};
 use crate::json::parse_strict;
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 use std::path::Path;
 
 /// The embedded default, `sim/tech/45nm.json`.
@@ -145,8 +149,11 @@ pub struct Tech {
     pub int8: Int8Units,
     /// On-chip buffers (the FIFOs).
     pub sram: Sram,
-    /// Frame-buffer memory.
+    /// Frame-buffer memory, priced per byte (`dram.kind` names its row of `memory_kinds`).
     pub dram: Dram,
+    /// Every memory kind the file knows, by name (`gddr6`), priced per bit and per row
+    /// activation.
+    pub memory_kinds: BTreeMap<String, MemoryKind>,
     /// Static power of the datapaths (the SRAM's is in `sram`).
     pub logic_leakage: LogicLeakage,
 }
@@ -222,6 +229,7 @@ impl Tech {
         )?;
         positive("sram.area_um2_per_bit", self.sram.area_um2_per_bit)?;
         positive("dram.pj_per_byte", self.dram.pj_per_byte)?;
+        self.validate_memory_kinds(file)?;
         for (field, leak) in [
             ("sram.leakage_mw_per_mb", self.sram.leakage_mw_per_mb),
             ("logic_leakage.mw_per_mm2", self.logic_leakage.mw_per_mm2),
@@ -264,6 +272,61 @@ impl Tech {
 }
 
 impl Tech {
+    /// The memory kind `name`, for the value of `field` in `file` (`dram.kind` here, an
+    /// architecture's field for the caller): [`Error::Invalid`] naming `field` and listing
+    /// the kinds this file has when it has no such kind.
+    pub fn memory_kind(&self, name: &str, file: &str, field: &str) -> Result<&MemoryKind> {
+        self.memory_kinds.get(name).ok_or_else(|| {
+            let known: Vec<&str> = self.memory_kinds.keys().map(String::as_str).collect();
+            Error::invalid(
+                file,
+                field,
+                format!("{name:?}"),
+                format!(
+                    "technology file {:?} has no such memory kind; it has: {}",
+                    self.name,
+                    known.join(", ")
+                ),
+            )
+        })
+    }
+
+    /// At least one kind; each name lowercase letters, digits and `_`; each figure finite
+    /// and above 0, refused naming `memory_kinds.<name>.<figure>`; `dram.kind` one of them.
+    fn validate_memory_kinds(&self, file: &str) -> Result<()> {
+        if self.memory_kinds.is_empty() {
+            return Err(Error::invalid(
+                file,
+                "memory_kinds",
+                "{}",
+                "must list at least one memory kind",
+            ));
+        }
+        for (name, kind) in &self.memory_kinds {
+            let plain = |c: char| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_';
+            if name.is_empty() || !name.chars().all(plain) {
+                return Err(Error::invalid(
+                    file,
+                    "memory_kinds",
+                    format!("{name:?}"),
+                    "a kind's name must be lowercase letters, digits and '_' (gddr6)",
+                ));
+            }
+            for (figure, x) in kind.figures() {
+                if !(x.is_finite() && x > 0.0) {
+                    return Err(Error::invalid(
+                        file,
+                        format!("memory_kinds.{name}.{figure}"),
+                        x,
+                        "must be a finite number above 0",
+                    ));
+                }
+            }
+        }
+        self.memory_kind(self.dram.kind.name(), file, "dram.kind")
+            .map(|_| ())
+    }
+
     /// Energy \[pJ\] and area \[µm²\] of one operation of class `op` on the half-precision
     /// units (the integer classes on the 32-bit fixed-point units, as [`Tech::op`]).
     pub fn f16_op(&self, op: Op) -> (f64, f64) {
@@ -434,6 +497,149 @@ mod tests {
         v["dram"]["kind"] = "hbm2".into();
         let t = Tech::from_json(&v.to_string(), "t.json").unwrap();
         assert_eq!((t.dram.kind, t.dram.kind.name()), (DramKind::Hbm2, "hbm2"));
+    }
+
+    /// Every shipped technology file, parsed and validated, by file name.
+    fn shipped() -> Vec<(String, Tech)> {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("sim/tech");
+        let mut files: Vec<_> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .filter(|p| p.extension().is_some_and(|x| x == "json"))
+            .collect();
+        files.sort();
+        files
+            .iter()
+            .map(|p| (p.display().to_string(), Tech::load(p).unwrap()))
+            .collect()
+    }
+
+    /// Every shipped file prices DDR4, GDDR6, LPDDR5 and HBM2E (and HBM2, 7nm.json's
+    /// `dram.kind`) alike: DRAM is off-chip, so the logic node does not change it.
+    #[test]
+    fn every_shipped_file_lists_the_memory_kinds_alike() {
+        let files = shipped();
+        assert!(
+            files.len() >= 2,
+            "{:?}",
+            files.iter().map(|f| &f.0).collect::<Vec<_>>()
+        );
+        let first = &files[0].1.memory_kinds;
+        for (file, t) in &files {
+            for kind in ["ddr4", "gddr6", "lpddr5", "hbm2e", "hbm2"] {
+                assert!(t.memory_kind(kind, file, "test").is_ok(), "{file}: {kind}");
+            }
+            assert_eq!(&t.memory_kinds, first, "{file}");
+        }
+        // The anchors: GDDR6 about 7.5 pJ/bit, HBM2E about 6.
+        let k = &files[0].1.memory_kinds;
+        assert_eq!(k["gddr6"].pj_per_bit_read, 7.5);
+        assert_eq!(k["hbm2e"].pj_per_bit_read, 6.0);
+    }
+
+    /// The per-byte figure `dram` keeps for today's port model is the per-bit figure of the
+    /// kind `dram.kind` names, so the two prices agree on a frame without row activations.
+    #[test]
+    fn the_per_byte_figure_is_its_kinds_per_bit_figure() {
+        for (file, t) in shipped() {
+            let k = t
+                .memory_kind(t.dram.kind.name(), &file, "dram.kind")
+                .unwrap();
+            assert_eq!(k.pj_per_bit_read * 8.0, t.dram.pj_per_byte, "{file}");
+            assert_eq!(k.pj_per_bit_written * 8.0, t.dram.pj_per_byte, "{file}");
+        }
+    }
+
+    /// The activation energies are the controller presets' (DRAMsim3's IDD formula,
+    /// `DramEnergy::from_idd`), and HBM2's is that formula by hand on DRAMsim3's
+    /// HBM2_8Gb_x128.ini: 1.2 V x (65 x 48 - 55 x 34 - 40 x 14) mA ns = 828 pJ.
+    #[test]
+    fn activation_energies_are_the_controller_presets() {
+        use crate::memory::dram::{ddr4_2400_x8, gddr6_16g_x16, lpddr5_6400_x16};
+        let t = Tech::default_45nm();
+        for (kind, preset) in [
+            ("ddr4", ddr4_2400_x8()),
+            ("gddr6", gddr6_16g_x16()),
+            ("lpddr5", lpddr5_6400_x16()),
+        ] {
+            let file = t.memory_kinds[kind].pj_per_activation;
+            let derived = preset.energy.activation_pj;
+            assert!((file - derived).abs() < 0.05, "{kind}: {file} vs {derived}");
+        }
+        let hbm2 = 1.2 * (65.0 * 48.0 - 55.0 * 34.0 - 40.0 * 14.0);
+        assert_eq!(t.memory_kinds["hbm2"].pj_per_activation, hbm2);
+    }
+
+    #[test]
+    fn an_unknown_memory_kind_is_refused_naming_the_field_and_the_known_kinds() {
+        let t = Tech::default_45nm();
+        let e = t
+            .memory_kind("gddr7", "arch.json", "memory.kind")
+            .unwrap_err();
+        assert!(
+            matches!(&e, Error::Invalid { file, field, value, reason }
+            if file == "arch.json" && field == "memory.kind" && value == "\"gddr7\""
+                && reason.ends_with("it has: ddr4, gddr6, hbm2, hbm2e, lpddr5")),
+            "{e}"
+        );
+        assert_eq!(e.exit_code(), 2);
+        // dram.kind names a row of the table: a file without that row is refused by it.
+        let e = refused(|v| {
+            v["memory_kinds"].as_object_mut().unwrap().remove("ddr4");
+        });
+        assert!(
+            matches!(&e, Error::Invalid { field, reason, .. }
+            if field == "dram.kind" && reason.ends_with("it has: gddr6, hbm2, hbm2e, lpddr5")),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn a_zero_negative_or_missing_memory_figure_is_refused_naming_it() {
+        for (figure, x) in [
+            ("pj_per_bit_read", 0.0),
+            ("pj_per_bit_written", -7.5),
+            ("pj_per_activation", 0.0),
+        ] {
+            let e = refused(|v| v["memory_kinds"]["gddr6"][figure] = x.into());
+            let want = format!("memory_kinds.gddr6.{figure}");
+            assert!(
+                matches!(&e, Error::Invalid { field, .. } if *field == want),
+                "{e}"
+            );
+        }
+        let e = refused(|v| {
+            v["memory_kinds"]["hbm2e"]
+                .as_object_mut()
+                .unwrap()
+                .remove("pj_per_activation");
+        });
+        assert!(
+            matches!(&e, Error::Parse { field, message, .. }
+            if field == "memory_kinds.hbm2e" && message.contains("pj_per_activation")),
+            "{e}"
+        );
+        let e = refused(|v| {
+            v.as_object_mut().unwrap().remove("memory_kinds");
+        });
+        assert!(
+            e.to_string().contains("missing field `memory_kinds`"),
+            "{e}"
+        );
+        let e = refused(|v| v["memory_kinds"] = serde_json::json!({}));
+        assert!(
+            matches!(&e, Error::Invalid { field, .. } if field == "memory_kinds"),
+            "{e}"
+        );
+        let e = refused(|v| {
+            let k = v["memory_kinds"]["gddr6"].clone();
+            v["memory_kinds"]["GDDR 6"] = k;
+        });
+        assert!(
+            matches!(&e, Error::Invalid { field, value, .. }
+            if field == "memory_kinds" && value == "\"GDDR 6\""),
+            "{e}"
+        );
     }
 
     /// A file written before the logic's leakage was named as such: its `leakage` group is
