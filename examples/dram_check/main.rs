@@ -9,18 +9,19 @@
 //! ```
 //!
 //! `gen` writes the traces (`OUT_DIR/traces/`: `stream`, `rop_writeback`, `mixed` and
-//! `stream_200k`, see `gen.rs`); `run` runs one trace on one DRAMsim3 configuration and
+//! `stream_200k`, made by `lembo_sim::memory::dram::traces`, which the in-house controller's
+//! comparison, `tests/integration/dram_check.rs`, replays too); `run` runs one trace on one DRAMsim3 configuration and
 //! prints its summary; `all` does both for the three traces on DDR4-2400 x8 and GDDR6 and the
 //! 200 000-read stream on DDR4, writing `OUT_DIR/results/<trace>.<config>.json`,
 //! `OUT_DIR/summary.json` and a table on stdout. The configurations are DRAMsim3's own
 //! (`examples/dram_check/configs/`). The `dramsim3` feature builds DRAMsim3 with cmake.
 
-mod gen;
 mod sim;
 mod stats;
-mod trace;
 
 use clap::{Parser, Subcommand};
+use lembo_sim::memory::dram::traces;
+use lembo_sim::memory::trace::{self, Request};
 use serde::Serialize;
 use stats::{EnergyPj, Epoch};
 use std::path::{Path, PathBuf};
@@ -94,12 +95,13 @@ fn summarise(
     config: &Path,
     trace_path: &Path,
     work: &Path,
-    payload: Option<fn(&trace::Request) -> u64>,
+    payload: Option<fn(&Request) -> u64>,
 ) -> Result<Summary, String> {
     let ini = std::fs::read_to_string(config).map_err(|e| format!("{}: {e}", config.display()))?;
     let text = std::fs::read_to_string(trace_path)
         .map_err(|e| format!("{}: {e}", trace_path.display()))?;
-    let requests = trace::parse(&text)?;
+    let requests =
+        trace::parse(&trace_path.display().to_string(), &text).map_err(|e| e.to_string())?;
     let checked = sim::check(&ini, work, &requests)?;
     let (run, epochs) = (checked.run, checked.epochs);
     let [during, after]: [Epoch; 2] = epochs.try_into().map_err(|_| "two epochs expected")?;
@@ -153,23 +155,13 @@ fn summarise(
     })
 }
 
-/// The traces `gen` writes: name and requests.
-fn traces() -> Vec<(&'static str, Vec<trace::Request>)> {
-    vec![
-        ("stream", gen::stream(32_768, 1, 0)),
-        ("rop_writeback", gen::rop_writeback(1, 0)),
-        ("mixed", gen::mixed(32_768)),
-        ("stream_200k", gen::stream(200_000, 1, 0)),
-    ]
-}
-
 fn write_traces(out_dir: &Path) -> Result<Vec<(String, PathBuf)>, String> {
     let dir = out_dir.join("traces");
     std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     let mut written = Vec::new();
-    for (name, requests) in traces() {
+    for (name, requests) in traces::all() {
         let path = dir.join(format!("{name}.trace"));
-        std::fs::write(&path, trace::format(&requests))
+        std::fs::write(&path, trace::write(&requests))
             .map_err(|e| format!("{}: {e}", path.display()))?;
         written.push((name.to_string(), path));
     }
@@ -202,7 +194,7 @@ fn all(out_dir: &Path) -> Result<(), String> {
                 continue;
             }
             let work = out_dir.join("work");
-            let summary = summarise(&config, path, &work, Some(gen::payload_bytes))?;
+            let summary = summarise(&config, path, &work, Some(traces::payload_bytes))?;
             let file = results.join(format!("{}.{}.json", summary.trace, summary.config));
             write_json(&file, &summary)?;
             eprintln!(

@@ -11,8 +11,8 @@
 //! accepted; writes still buffered then show in the epoch after it (`stats.rs`).
 
 use crate::stats::{self, Epoch};
-use crate::trace::Request;
 use dramsim3::MemorySystem;
+use lembo_sim::memory::trace::Request;
 use std::collections::{HashMap, VecDeque};
 use std::path::Path;
 use std::time::Instant;
@@ -87,7 +87,7 @@ fn drive(
             run.read_latency_from_arrival_sum += clk - arrival;
         });
         if let Some(r) = requests.get(next) {
-            if r.arrival_cycle <= clk && sys.can_add(r.addr, r.write) {
+            if r.arrival <= clk && sys.can_add(r.addr, r.write) {
                 if !sys.add(r.addr, r.write) {
                     return Err(format!(
                         "DRAMsim3 refused 0x{:x} after accepting it",
@@ -98,7 +98,7 @@ fn drive(
                     in_flight
                         .entry(r.addr)
                         .or_default()
-                        .push_back((clk + 1, r.arrival_cycle));
+                        .push_back((clk + 1, r.arrival));
                 }
                 next += 1;
             }
@@ -179,7 +179,7 @@ mod tests {
             .map(|i| Request {
                 addr: i * 64,
                 write: false,
-                arrival_cycle: 0,
+                arrival: 0,
             })
             .collect();
         let dir = tempfile::tempdir().unwrap();

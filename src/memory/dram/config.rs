@@ -47,6 +47,14 @@ pub struct DramConfig {
     pub write_high: u32,
     /// The write queue's occupancy at which a drain stops (below `write_high`).
     pub write_low: u32,
+    /// The requests of one bank the scheduler chooses among: that bank's oldest this many in
+    /// the queue served (DRAMsim3's per-bank command queue, `cmd_queue_size`).
+    pub bank_window: u32,
+    /// Column commands to an open row after which an older request to another row of the
+    /// same bank goes before further row hits (DRAMsim3's cap of 4 in
+    /// `CommandQueue::ArbitratePrecharge`, `src/command_queue.cc`; FR-FCFS with a cap keeps
+    /// a stream of hits from starving a conflict).
+    pub row_hit_cap: u32,
     /// Energy per event.
     pub energy: DramEnergy,
 }
@@ -77,6 +85,8 @@ impl DramConfig {
             ("burst_length", self.burst_length),
             ("queue_depth", self.queue_depth),
             ("write_high", self.write_high),
+            ("bank_window", self.bank_window),
+            ("row_hit_cap", self.row_hit_cap),
         ];
         for (field, v) in counts.into_iter().chain(self.timings.named()) {
             if v == 0 {

@@ -8,25 +8,27 @@
 //! atoms go to consecutive channels as a GPU spreads an address range, then the bank
 //! group, so one channel's consecutive atoms alternate groups at tCCD_S, then the column.
 //!
-//! Measured (`cargo test --release --lib memory::dram::tests::measure -- --nocapture`,
-//! 200 000 requests of 64 bytes each, every request's atoms arriving at cycle 0 and admitted
-//! in order; sequential: consecutive addresses; random: uniform 64-byte-aligned addresses
-//! over 4 GiB, SplitMix64 seed 51):
+//! Measured (`cargo test --lib memory::dram::tests::measure -- --nocapture`, 20 000
+//! requests of 64 bytes each (the test's size with debug assertions on), every request's
+//! atoms arriving at cycle 0 and admitted in order; sequential: consecutive addresses;
+//! random: uniform 64-byte-aligned addresses over 4 GiB, SplitMix64 seed 51):
 //!
-//! | preset | stream | cycles | bytes/cycle | of peak | row hits | pJ/B | host ms |
-//! |---|---|---:|---:|---:|---:|---:|---:|
-//! | DDR4-2400 x8 | sequential | 1 243 241 | 10.30 | 64 % | 99.2 % | 113.1 | 53 |
-//! | DDR4-2400 x8 | random | 942 354 | 13.58 | 85 % | 0.0 % | 150.7 | 51 |
-//! | GDDR6 16 Gb/s x16 | sequential | 123 764 | 103.42 | 81 % | 99.2 % | 11.3 | 106 |
-//! | GDDR6 16 Gb/s x16 | random | 623 683 | 20.52 | 16 % | 0.0 % | 46.5 | 109 |
-//! | LPDDR5-6400 x16 | sequential | 259 244 | 49.37 | 77 % | 98.4 % | 22.2 | 116 |
-//! | LPDDR5-6400 x16 | random | 427 887 | 29.91 | 47 % | 0.0 % | 98.6 | 117 |
+//! | preset | stream | cycles | bytes/cycle | of peak | row hits | pJ/B |
+//! |---|---|---:|---:|---:|---:|---:|
+//! | DDR4-2400 x8 | sequential | 103 637 | 12.35 | 77 % | 99.2 % | 101.5 |
+//! | DDR4-2400 x8 | random | 94 574 | 13.53 | 85 % | 0.0 % | 150.9 |
+//! | GDDR6 16 Gb/s x16 | sequential | 10 064 | 127.19 | 99 % | 99.2 % | 10.7 |
+//! | GDDR6 16 Gb/s x16 | random | 63 706 | 20.09 | 16 % | 0.0 % | 46.9 |
+//! | LPDDR5-6400 x16 | sequential | 20 037 | 63.88 | 100 % | 98.4 % | 21.1 |
+//! | LPDDR5-6400 x16 | random | 43 124 | 29.68 | 46 % | 0.0 % | 98.7 |
 //!
 //! Cycles are each preset's command clock (0.833, 0.5 and 1.25 ns); pJ/B includes
-//! background. Host: one core of the 2-core development VM, rustc 1.95, `--release`, with
-//! two other builds running. DDR4's sequential stream stays in one bank group under
-//! `rochrababgco`, so tCCD_L = 6 cycles a 4-cycle burst bounds it at 67 %; issue 51 quotes
-//! DRAMsim3 at 12.4 bytes a cycle on 200 000 64-byte reads on the same file.
+//! background. DDR4's sequential stream stays in one bank group for a row (128 atoms)
+//! under `rochrababgco`, at tCCD_L = 6 cycles a 4-cycle burst, and alternates groups at
+//! tCCD_S only while the next row, opened ahead, overlaps it (`channel.rs`): 77 % of peak;
+//! DRAMsim3 on the same file moves 12.42 bytes a cycle on 200 000 such reads (issue 51;
+//! `traces/dram/dramsim3.json`). The controller's agreement with DRAMsim3 on the check's
+//! traces is measured in `dramsim3_check.rs` and RESULTS.md.
 
 use super::config::DramConfig;
 use super::energy::{DramEnergy, IddCurrents};
@@ -35,6 +37,10 @@ use super::timings::DramTimings;
 
 /// DRAMsim3's queue depth (`trans_queue_size` in every configuration file named here).
 const QUEUE_DEPTH: u32 = 32;
+/// DRAMsim3's per-bank command queue (`cmd_queue_size` in every file named here).
+const BANK_WINDOW: u32 = 8;
+/// DRAMsim3's row-hit cap (`CommandQueue::ArbitratePrecharge`, `src/command_queue.cc`).
+const ROW_HIT_CAP: u32 = 4;
 
 /// The x16 presets' mapping, `rorabacobgch`: the channel lowest, so consecutive atoms go
 /// to consecutive channels (a GPU spreads an address range over every channel), then the
@@ -117,6 +123,8 @@ pub fn ddr4_2400_x8() -> DramConfig {
         queue_depth: QUEUE_DEPTH,
         write_high: QUEUE_DEPTH,
         write_low: 0,
+        bank_window: BANK_WINDOW,
+        row_hit_cap: ROW_HIT_CAP,
         energy: DramEnergy::from_idd(&idd, &timings),
     }
 }
@@ -186,6 +194,8 @@ pub fn gddr6_16g_x16() -> DramConfig {
         queue_depth: QUEUE_DEPTH,
         write_high: QUEUE_DEPTH,
         write_low: 0,
+        bank_window: BANK_WINDOW,
+        row_hit_cap: ROW_HIT_CAP,
         energy: DramEnergy::from_idd(&idd, &timings),
     }
 }
@@ -251,6 +261,73 @@ pub fn lpddr5_6400_x16() -> DramConfig {
         queue_depth: QUEUE_DEPTH,
         write_high: QUEUE_DEPTH,
         write_low: 0,
+        bank_window: BANK_WINDOW,
+        row_hit_cap: ROW_HIT_CAP,
+        energy: DramEnergy::from_idd(&idd, &timings),
+    }
+}
+
+/// GDDR6 as DRAMsim3's `configs/GDDR6_8Gb_x16.ini` describes it, every figure the file's:
+/// the memory the DRAM check runs on DRAMsim3 (`examples/dram_check`), so the in-house
+/// controller is compared with it on the same system. Unlike [`gddr6_16g_x16`] (eight x16
+/// channels, 32-byte atoms): one 128-bit channel of eight x16 devices, BL16, so one column
+/// command moves 256 B, in DRAMsim3's `burst_cycle = BL/16 = 1` cycle at tCK 0.66 ns;
+/// `bankgroup_enable = false`, so 16 banks in one group and DRAMsim3 takes the `_S`
+/// timings for both (`Timing::Timing`, `src/timing.cc`): tCCD = tCCD_S = 3, tRRD 9,
+/// tWTR 7; 16 384 rows of 2 048 columns (`columns x BL`, `Config::InitDRAMParams`) = 128
+/// atoms; CL 24, CWL 16, tRCDRD 24, tRCDWR 20, tRP 24, tRAS 54, tFAW 32, tWR 16, tRTP 3,
+/// tRTRS 1; tRTW = CL + burst - CWL + tRTRS = 10 (DRAMsim3's `read_to_write`); mapping
+/// `rochrababgco`. Energy from the file's `[power]` section with DRAMsim3's eight devices
+/// (bus width over device width).
+pub fn gddr6_dramsim3_x128() -> DramConfig {
+    let (tcl, tcwl, tburst, trtrs) = (24, 16, 1, 1);
+    let timings = DramTimings {
+        tck_ps: 660,
+        trcd_rd: 24,
+        trcd_wr: 20,
+        trp: 24,
+        tcl,
+        tcwl,
+        tras: 54,
+        tburst,
+        twtr_s: 7,
+        twtr_l: 7,
+        trtw: tcl + tburst - tcwl + trtrs,
+        trtrs,
+        tccd_s: 3,
+        tccd_l: 3,
+        trrd_s: 9,
+        trrd_l: 9,
+        tfaw: 32,
+        trtp: 3,
+        twr: 16,
+    };
+    let idd = IddCurrents {
+        vdd: 1.35,
+        idd0: 71.0,
+        idd2n: 60.0,
+        idd3n: 61.0,
+        idd4r: 248.0,
+        idd4w: 231.0,
+        devices: 8,
+    };
+    DramConfig {
+        name: "GDDR6 x128 (DRAMsim3's file)".to_string(),
+        channels: 1,
+        ranks: 1,
+        bank_groups: 1,
+        banks_per_group: 16,
+        rows: 16384,
+        atoms_per_row: 128,
+        bus_bits: 128,
+        burst_length: 16,
+        mapping: AddressMapping::ROCHRABABGCO,
+        timings,
+        queue_depth: QUEUE_DEPTH,
+        write_high: QUEUE_DEPTH,
+        write_low: 0,
+        bank_window: BANK_WINDOW,
+        row_hit_cap: ROW_HIT_CAP,
         energy: DramEnergy::from_idd(&idd, &timings),
     }
 }

@@ -46,6 +46,8 @@ fn tiny() -> DramConfig {
         queue_depth: 8,
         write_high: 4,
         write_low: 1,
+        bank_window: 8,
+        row_hit_cap: u32::MAX,
         energy: DramEnergy::per_bit(1.0, 100.0, 64),
     }
 }
