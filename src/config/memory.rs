@@ -105,6 +105,11 @@ section! {
         /// of two. Default 1: one x16 GDDR6 channel moves 32 GB/s, 64 bytes a cycle at
         /// 500 MHz, the `framebuffer` port's default rate.
         pub channels: u32 = 1 => COUNT,
+        /// Permutation-based page interleaving: the DRAM's bank group and bank XORed with
+        /// the row's low bits, as GPU memory controllers hash addresses (Zhang et al.,
+        /// MICRO 2000; Liu et al., ISCA 2018), so a surface's tile rows and the colour and
+        /// depth surfaces spread over the banks. Default true.
+        pub bank_xor: bool = true => SWITCH,
         /// Each ROP's colour cache \[bytes\]. Default 16384 (ATTILA).
         pub colour_cache_bytes: u32 = 16384 => CACHE_BYTES,
         /// Each ROP's depth cache \[bytes\]. Default 16384 (ATTILA).
@@ -185,6 +190,7 @@ impl MemoryConfig {
             DramPreset::Lpddr5 => lpddr5_6400_x16(),
         };
         cfg.channels = self.channels;
+        cfg.bank_xor = self.bank_xor;
         cfg
     }
 

@@ -55,6 +55,14 @@ pub struct DramConfig {
     /// `CommandQueue::ArbitratePrecharge`, `src/command_queue.cc`; FR-FCFS with a cap keeps
     /// a stream of hits from starving a conflict).
     pub row_hit_cap: u32,
+    /// Permutation-based page interleaving: the bank group and bank are XORed with the low
+    /// bits of the row, so rows that share a bank under the plain mapping (two surfaces a
+    /// power of two apart, the same column band of consecutive tile rows) spread over the
+    /// banks (Zhang, Zhu and Zhang, "A Permutation-based Page Interleaving Scheme to Reduce
+    /// Row-buffer Conflicts and Exploit Data Locality", MICRO 2000; GPUs hash their memory
+    /// addresses alike, Liu et al., "Get Out of the Valley: Power-Efficient Address
+    /// Mapping for GPUs", ISCA 2018). Off in the presets, as in DRAMsim3's files.
+    pub bank_xor: bool,
     /// Energy per event.
     pub energy: DramEnergy,
 }

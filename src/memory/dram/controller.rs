@@ -61,7 +61,8 @@ impl Dram {
         cfg.validate()?;
         Ok(Dram {
             cfg: cfg.clone(),
-            decoder: Decoder::new(cfg.mapping, cfg.atom_bytes(), cfg.sizes()),
+            decoder: Decoder::new(cfg.mapping, cfg.atom_bytes(), cfg.sizes())
+                .with_bank_xor(cfg.bank_xor),
             channels: (0..cfg.channels).map(|_| Channel::new(cfg)).collect(),
             pending: VecDeque::new(),
             next_ticket: 0,

@@ -120,6 +120,8 @@ pub(crate) struct Decoder {
     offset_bits: u32,
     /// log2 of channels, ranks, bank groups, banks, rows, columns.
     bits: [u32; 6],
+    /// Bank group and bank XORed with the row's low bits ([`super::DramConfig::bank_xor`]).
+    bank_xor: bool,
 }
 
 impl Decoder {
@@ -130,7 +132,14 @@ impl Decoder {
             mapping,
             offset_bits: atom_bytes.trailing_zeros(),
             bits: sizes.map(|s| s.trailing_zeros()),
+            bank_xor: false,
         }
+    }
+
+    /// The same decode with the bank group and bank XORed with the row's low bits.
+    pub(crate) fn with_bank_xor(mut self, on: bool) -> Decoder {
+        self.bank_xor = on;
+        self
     }
 
     /// The atom holding byte `addr`. Bits above the mapped ones wrap (as in DRAMsim3).
@@ -142,6 +151,12 @@ impl Decoder {
             let mask = (1u64 << self.bits[i]) - 1;
             v[i] = (rest & mask) as u32;
             rest >>= self.bits[i];
+        }
+        if self.bank_xor {
+            // The row's lowest bits permute the groups, the next ones the banks.
+            let (g, b) = (self.bits[2], self.bits[3]);
+            v[2] ^= v[4] & ((1 << g) - 1);
+            v[3] ^= (v[4] >> g) & ((1 << b) - 1);
         }
         Location {
             channel: v[0],
@@ -157,6 +172,32 @@ impl Decoder {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// With the XOR, rows that shared a bank spread over every group and bank, each row
+    /// keeping its own (a permutation: no two rows of one bank collide that did not).
+    #[test]
+    fn bank_xor_spreads_one_banks_rows_over_every_bank() {
+        // 32-byte atoms, one channel and rank, 2 groups of 8 banks, 128 columns:
+        // bits 5..12 column, 12 group, 13..16 bank, 16.. row (rorabacobgch-like order).
+        let sizes = [1, 1, 2, 8, 1 << 14, 128];
+        let plain = Decoder::new(AddressMapping::ROCHRABABGCO, 32, sizes);
+        let hashed = plain.with_bank_xor(true);
+        let stride = 1u64 << 16; // one row further, same group and bank before hashing
+        let mut seen = std::collections::HashSet::new();
+        for r in 0..16 {
+            let p = plain.decode(r * stride);
+            assert_eq!((p.bank_group, p.bank, p.row), (0, 0, r as u32));
+            let h = hashed.decode(r * stride);
+            assert_eq!(h.row, r as u32);
+            assert!(seen.insert((h.bank_group, h.bank)), "row {r} shares a bank");
+        }
+        // Within one row the mapping still permutes banks one to one.
+        let banks: std::collections::HashSet<_> = (0..16u64)
+            .map(|b| hashed.decode(5 * stride + (b << 12)))
+            .map(|l| (l.bank_group, l.bank))
+            .collect();
+        assert_eq!(banks.len(), 16);
+    }
 
     #[test]
     fn rochrababgco_decodes_as_dramsim3_lays_it_out() {

@@ -125,6 +125,7 @@ pub fn ddr4_2400_x8() -> DramConfig {
         write_low: 0,
         bank_window: BANK_WINDOW,
         row_hit_cap: ROW_HIT_CAP,
+        bank_xor: false,
         energy: DramEnergy::from_idd(&idd, &timings),
     }
 }
@@ -196,6 +197,7 @@ pub fn gddr6_16g_x16() -> DramConfig {
         write_low: 0,
         bank_window: BANK_WINDOW,
         row_hit_cap: ROW_HIT_CAP,
+        bank_xor: false,
         energy: DramEnergy::from_idd(&idd, &timings),
     }
 }
@@ -263,6 +265,7 @@ pub fn lpddr5_6400_x16() -> DramConfig {
         write_low: 0,
         bank_window: BANK_WINDOW,
         row_hit_cap: ROW_HIT_CAP,
+        bank_xor: false,
         energy: DramEnergy::from_idd(&idd, &timings),
     }
 }
@@ -328,6 +331,7 @@ pub fn gddr6_dramsim3_x128() -> DramConfig {
         write_low: 0,
         bank_window: BANK_WINDOW,
         row_hit_cap: ROW_HIT_CAP,
+        bank_xor: false,
         energy: DramEnergy::from_idd(&idd, &timings),
     }
 }

@@ -49,6 +49,7 @@ fn tiny() -> DramConfig {
         bank_window: 8,
         row_hit_cap: u32::MAX,
         energy: DramEnergy::per_bit(1.0, 100.0, 64),
+        bank_xor: false,
     }
 }
 
