@@ -119,6 +119,9 @@ pub struct TimedFrame {
     pub recoveries: Recoveries,
     /// The caches, tile tables and DRAM, with the DRAM memory model; None with the port.
     pub memory: Option<rop_memory::MemoryReport>,
+    /// The DRAM controller's requests in submission order, with the DRAM model when
+    /// [`SimOptions::dram_requests`] asked for them.
+    pub dram_requests: Option<Vec<crate::memory::trace::Request>>,
 }
 
 /// Renders `scene` on the timed pipeline of `arch`: its lembos on the lembo path, or a
@@ -204,6 +207,7 @@ fn empty_frame(scene: &Scene, view: &View, arch: &ArchConfig) -> TimedFrame {
         discoid: None,
         fetch: None,
         memory: None,
+        dram_requests: None,
         recoveries: Recoveries::default(),
     }
 }
@@ -245,6 +249,7 @@ fn run_on<R: Real>(
         tiles: RopTiles::new(vp.width, vp.height, arch.rop.tile_px, arch.rop.count),
         discoid,
         frame: SharedFrame::new(&mut fb),
+        dram_requests: options.dram_requests,
     };
     let (mut results, recoveries) = execute(&plan, options, &run, trace)?;
     results.sort_by_key(|(u, _)| *u);
@@ -394,13 +399,16 @@ fn finish(
     let (total, direct) = shared_ports(&units, &results, last);
     let mut counts = Counts::default();
     let mut fetch = None;
-    let (mut rops, mut dram) = (None::<rop_memory::RopMemoryStats>, None);
-    for (_, f) in &results {
+    let (mut rops, mut dram, mut dram_requests) = (None::<rop_memory::RopMemoryStats>, None, None);
+    for (_, f) in &mut results {
         counts += f.counts;
-        match &f.own {
+        match &mut f.own {
             Some(UnitReport::Fetch(report)) => fetch = fetch.or(Some(*report)),
             Some(UnitReport::RopMemory(m)) => rops.get_or_insert_with(Default::default).add(m),
-            Some(UnitReport::Dram(d)) => dram = Some(*d),
+            Some(UnitReport::Dram(d, requests)) => {
+                dram = Some(*d);
+                dram_requests = requests.take();
+            }
             _ => {}
         }
     }
@@ -439,6 +447,7 @@ fn finish(
         fetch,
         recoveries: Recoveries::default(),
         memory,
+        dram_requests,
     })
 }
 

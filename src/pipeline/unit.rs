@@ -51,8 +51,12 @@ pub enum UnitReport {
     Kept(Vec<KeptFragment>, BlendReport),
     /// A ROP's caches and tile tables, with the DRAM memory model.
     RopMemory(crate::pipeline::rop_memory::RopMemoryStats),
-    /// The memory controller's DRAM, with the DRAM memory model.
-    Dram(crate::memory::dram::DramStats),
+    /// The memory controller's DRAM, with the DRAM memory model, and its requests when
+    /// they were asked for.
+    Dram(
+        crate::memory::dram::DramStats,
+        Option<Vec<crate::memory::trace::Request>>,
+    ),
 }
 
 impl Finished {
@@ -242,6 +246,8 @@ pub struct RunInputs<'a, R> {
     pub discoid: Option<DiscoidPass<'a, R>>,
     /// The frame buffer the ROPs write in place.
     pub frame: SharedFrame<'a>,
+    /// The DRAM controller keeps its requests ([`crate::pipeline::SimOptions::dram_requests`]).
+    pub dram_requests: bool,
 }
 
 /// A box of Figure 5 as the builder sees it: one file of [`super::units`] each.

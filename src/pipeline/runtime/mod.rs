@@ -43,6 +43,9 @@ pub struct SimOptions {
     pub trace: bool,
     /// Most timeline events kept over all units; beyond it events are coarsened.
     pub trace_event_cap: usize,
+    /// Keep the DRAM controller's requests (`TimedFrame::dram_requests`), in DRAMsim3's
+    /// trace form, to run another DRAM simulator on the same frame.
+    pub dram_requests: bool,
 }
 
 impl Default for SimOptions {
@@ -55,6 +58,7 @@ impl Default for SimOptions {
             perturb: None,
             trace: false,
             trace_event_cap: 200_000,
+            dram_requests: false,
         }
     }
 }

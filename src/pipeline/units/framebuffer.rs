@@ -45,7 +45,8 @@ impl<R: Real> Unit<R> for FrameBufferPort {
         if run.arch.memory.model == MemoryModel::Dram {
             let clock = DramClock::new(run.arch.clock_mhz, &run.arch.memory.dram_config());
             let sector = u64::from(run.arch.memory.sector_bytes);
-            return Box::pin(self::run_dram(ctx, run.arch.memory.dram_config(), clock, sector));
+            let record = run.dram_requests;
+            return Box::pin(self::run_dram(ctx, run.arch.memory.dram_config(), clock, sector, record));
         }
         let resolve =
             crate::rop::FrameBuffer::resolve_bytes(vp.width, vp.height / samples.get(), samples);
@@ -92,7 +93,9 @@ pub async fn run_dram(
     cfg: DramConfig,
     clock: DramClock,
     sector_bytes: u64,
+    record: bool,
 ) -> Finished {
+    let mut requests = record.then(Vec::new);
     let mut dram = Dram::new(&cfg).expect("the memory fields were checked when the run was built");
     let atom = u64::from(cfg.atom_bytes());
     while let Some(t) = ctx.next_input().await {
@@ -104,11 +107,13 @@ pub async fn run_dram(
             for s in (0..64).filter(|s| tr.sectors >> s & 1 == 1) {
                 let a = (tr.addr + s * sector_bytes) / atom;
                 if a != last {
-                    dram.submit(Request {
+                    let req = Request {
                         addr: a * atom,
                         write: tr.write,
                         arrival: at,
-                    });
+                    };
+                    requests.as_mut().map(|r| r.push(req));
+                    dram.submit(req);
                     last = a;
                     submitted = true;
                 }
@@ -123,7 +128,7 @@ pub async fn run_dram(
     let last = dram.finish();
     let (now, _) = ctx.clock();
     ctx.work(clock.to_core(last).saturating_sub(now.0));
-    Finished::new(ctx, Counts::default()).with(UnitReport::Dram(dram.stats()))
+    Finished::new(ctx, Counts::default()).with(UnitReport::Dram(dram.stats(), requests))
 }
 
 /// The memory port's body: every access through the port at its byte rate, then the
