@@ -89,6 +89,8 @@ impl Dram {
             ticket: ticket.0,
             arrival: req.arrival,
             ready: req.arrival.max(self.horizon),
+            admitted: 0,
+            moved: false,
             write: req.write,
             loc: self.decoder.decode(req.addr),
         });
@@ -158,8 +160,7 @@ impl Dram {
         let mut best: Option<(u64, Event)> = None;
         if let Some(head) = self.pending.front() {
             let ch = &self.channels[head.loc.channel as usize];
-            let q = if head.write { &ch.writes } else { &ch.reads };
-            if q.len() < self.cfg.queue_depth as usize {
+            if ch.accepts(&self.cfg, head.write) {
                 best = Some((head.ready.max(self.now), Event::Admit));
             }
         }
@@ -179,18 +180,15 @@ impl Dram {
         self.now = t;
         match event {
             Event::Admit => {
-                let Some(req) = self.pending.pop_front() else {
+                let Some(mut req) = self.pending.pop_front() else {
                     return false;
                 };
+                req.admitted = t;
                 let ch = &mut self.channels[req.loc.channel as usize];
                 if ch.is_idle() {
                     ch.clock = ch.clock.max(t);
                 }
-                if req.write {
-                    ch.writes.push(req);
-                } else {
-                    ch.reads.push(req);
-                }
+                ch.push(req);
             }
             Event::Decide(i) => {
                 let s = self.channels[i].decide(&self.cfg);

@@ -6,10 +6,11 @@
 //!
 //! `config.rs` (what a memory is, validated), `timings.rs`, `mapping.rs` (address bits to channel, rank,
 //! bank, row, column), `energy.rs` (pJ per event), `channel.rs` (one channel's queues,
-//! choice and timing), `controller.rs` (admission, events, completions), `stats.rs`,
+//! choice and timing), `acts.rs` (a rank's ACTs: tRRD and tFAW), `controller.rs` (admission, events, completions), `stats.rs`,
 //! `presets.rs` (DDR4-2400, GDDR6, LPDDR5, cited), `traces.rs` (the traces it is checked
 //! against DRAMsim3 with; `testkit` feature only).
 
+mod acts;
 mod channel;
 mod config;
 mod controller;

@@ -15,17 +15,17 @@
 //!
 //! | preset | stream | cycles | bytes/cycle | of peak | row hits | pJ/B |
 //! |---|---|---:|---:|---:|---:|---:|
-//! | DDR4-2400 x8 | sequential | 103 637 | 12.35 | 77 % | 99.2 % | 101.5 |
-//! | DDR4-2400 x8 | random | 94 574 | 13.53 | 85 % | 0.0 % | 150.9 |
+//! | DDR4-2400 x8 | sequential | 99 401 | 12.88 | 80 % | 99.2 % | 99.3 |
+//! | DDR4-2400 x8 | random | 81 410 | 15.72 | 98 % | 0.1 % | 143.8 |
 //! | GDDR6 16 Gb/s x16 | sequential | 10 064 | 127.19 | 99 % | 99.2 % | 10.7 |
-//! | GDDR6 16 Gb/s x16 | random | 63 706 | 20.09 | 16 % | 0.0 % | 46.9 |
+//! | GDDR6 16 Gb/s x16 | random | 60 978 | 20.99 | 16 % | 0.1 % | 46.2 |
 //! | LPDDR5-6400 x16 | sequential | 20 037 | 63.88 | 100 % | 98.4 % | 21.1 |
-//! | LPDDR5-6400 x16 | random | 43 124 | 29.68 | 46 % | 0.0 % | 98.7 |
+//! | LPDDR5-6400 x16 | random | 40 445 | 31.65 | 49 % | 0.0 % | 98.2 |
 //!
 //! Cycles are each preset's command clock (0.833, 0.5 and 1.25 ns); pJ/B includes
 //! background. DDR4's sequential stream stays in one bank group for a row (128 atoms)
 //! under `rochrababgco`, at tCCD_L = 6 cycles a 4-cycle burst, and alternates groups at
-//! tCCD_S only while the next row, opened ahead, overlaps it (`channel.rs`): 77 % of peak;
+//! tCCD_S only while the next row, opened ahead, overlaps it (`channel.rs`): 80 % of peak;
 //! DRAMsim3 on the same file moves 12.42 bytes a cycle on 200 000 such reads (issue 51;
 //! `traces/dram/dramsim3.json`). The controller's agreement with DRAMsim3 on the check's
 //! traces is measured in `dramsim3_check.rs` and RESULTS.md.
