@@ -5,6 +5,7 @@
 //! ```text
 //! cargo run --release --example dram_check --features dramsim3 -- all OUT_DIR
 //! cargo run --release --example dram_check --features dramsim3 -- gen OUT_DIR
+//! cargo run --release --example dram_check --features dramsim3 -- frames OUT_DIR
 //! cargo run --release --example dram_check --features dramsim3 -- run CONFIG.ini TRACE [--out JSON]
 //! ```
 //!
@@ -13,9 +14,11 @@
 //! comparison, `tests/integration/dram_check.rs`, replays too); `run` runs one trace on one DRAMsim3 configuration and
 //! prints its summary; `all` does both for the three traces on DDR4-2400 x8 and GDDR6 and the
 //! 200 000-read stream on DDR4, writing `OUT_DIR/results/<trace>.<config>.json`,
-//! `OUT_DIR/summary.json` and a table on stdout. The configurations are DRAMsim3's own
+//! `OUT_DIR/summary.json` and a table on stdout; `frames` renders the frame traces
+//! ([`frames`]) and writes `OUT_DIR/frame_runs.json`, the record's `frame_runs`. The configurations are DRAMsim3's own
 //! (`examples/dram_check/configs/`). The `dramsim3` feature builds DRAMsim3 with cmake.
 
+mod frames;
 mod sim;
 mod stats;
 
@@ -51,6 +54,26 @@ enum Command {
     },
     /// Writes the traces, runs each on both memory kinds and writes the summaries.
     All { out_dir: PathBuf },
+    /// Renders the frame traces through the timed pipeline (OUT_DIR/frames/), runs each on
+    /// both memory kinds and writes OUT_DIR/frame_runs.json, the record's `frame_runs`.
+    Frames { out_dir: PathBuf },
+}
+
+/// One frame trace on one memory kind as `traces/dram/dramsim3.json` records it.
+#[derive(Serialize)]
+struct FrameRecord {
+    trace: String,
+    config: String,
+    requests: u64,
+    reads: u64,
+    writes: u64,
+    /// FNV-1a over the trace's text ([`frames::checksum`]).
+    checksum: String,
+    dram_cycles: u64,
+    activations: u64,
+    row_hit_rate: f64,
+    refreshes: u64,
+    energy_pj: EnergyPj,
 }
 
 /// One trace on one memory kind: what the check records.
@@ -209,6 +232,37 @@ fn all(out_dir: &Path) -> Result<(), String> {
     Ok(())
 }
 
+fn frame_runs(out_dir: &Path) -> Result<(), String> {
+    let dir = out_dir.join("frames");
+    std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let mut records = Vec::new();
+    for name in frames::FRAMES {
+        let requests = frames::frame(name)?;
+        let checksum = frames::checksum(&requests);
+        let path = dir.join(format!("{name}.trace"));
+        std::fs::write(&path, trace::write(&requests))
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+        for config in configs() {
+            let s = summarise(&config, &path, &out_dir.join("work"), None)?;
+            eprintln!("{} on {}: {} cycles", s.trace, s.config, s.dram_cycles);
+            records.push(FrameRecord {
+                trace: s.trace,
+                config: s.config,
+                requests: s.requests,
+                reads: s.reads,
+                writes: s.writes,
+                checksum: checksum.clone(),
+                dram_cycles: s.dram_cycles,
+                activations: s.activations,
+                row_hit_rate: s.row_hit_rate,
+                refreshes: s.dramsim3.num_ref_cmds + s.dramsim3.num_refb_cmds,
+                energy_pj: s.energy_pj,
+            });
+        }
+    }
+    write_json(&out_dir.join("frame_runs.json"), &records)
+}
+
 fn print_table(summaries: &[Summary]) {
     println!(
         "| trace | memory | requests (R/W) | DRAM cycles | burst B/cycle | payload B/cycle \
@@ -240,6 +294,7 @@ fn main() -> ExitCode {
     let result = match Cli::parse().command {
         Command::Gen { out_dir } => write_traces(&out_dir).map(|_| ()),
         Command::All { out_dir } => all(&out_dir),
+        Command::Frames { out_dir } => frame_runs(&out_dir),
         Command::Run {
             config,
             trace,

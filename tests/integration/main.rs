@@ -17,6 +17,7 @@ mod datapath;
 mod design_point;
 mod discoid;
 mod docs;
+mod dram_check;
 mod extreme_method;
 mod extremes;
 mod fuzz;
