@@ -171,3 +171,37 @@ fn the_depth_cache_absorbs_an_overdraw_scenes_repeated_tests() {
         );
     }
 }
+
+/// The DRAM model prices the frame buffer per atom and activation by the technology file's
+/// memory kind, and each ROP's caches as SRAM; the port model keeps its bytes at the DRAM's
+/// figure and no cache.
+#[test]
+fn the_dram_model_prices_atoms_activations_and_the_rop_caches() {
+    let s = scenes::trace("sphere24.json", Some(128));
+    let port = render(&s, PrimitivePath::Lembo, 1, &ArchConfig::default());
+    let run = render(&s, PrimitivePath::Lembo, 1, &dram(ArchConfig::default()));
+    let (pc, dc) = (port.report.cost.unwrap(), run.report.cost.unwrap());
+    assert!(pc.framebuffer_dram.is_none());
+    let m = run.report.memory_system.as_ref().unwrap();
+    let d = dc.framebuffer_dram.expect("priced by atoms");
+    // gddr6 in the embedded technology file: 7.5 pJ a bit read or written.
+    let bits = 8.0 * f64::from(m.atom_bytes);
+    assert!((d.read_pj - m.atoms_read as f64 * bits * 7.5).abs() < 1e-6 * d.read_pj.max(1.0));
+    assert!((d.write_pj - m.atoms_written as f64 * bits * 7.5).abs() < 1e-6 * d.write_pj);
+    assert!(d.activation_pj > 0.0);
+    let geometry = dc.geometry_bytes as f64 * dc.tech.dram_pj_per_byte;
+    assert!((dc.dram_energy_pj() - d.total_pj - geometry).abs() < 1e-6 * d.total_pj);
+    for u in &dc.units {
+        let rop = u.name.starts_with("Rop");
+        assert_eq!(u.cache_area_mm2 > 0.0, rop, "{}", u.name);
+    }
+    assert!(pc.units.iter().all(|u| u.cache_area_mm2 == 0.0));
+    // Two 16 KB arrays a ROP at 0.69 µm² a bit, the embedded file's.
+    let rop = dc.units.iter().find(|u| u.name == "Rop[0]").unwrap();
+    let want = 2.0 * 16384.0 * 8.0 * 0.69e-6;
+    assert!(
+        (rop.cache_area_mm2 - want).abs() < 1e-9,
+        "{}",
+        rop.cache_area_mm2
+    );
+}
