@@ -112,7 +112,9 @@ pub async fn run_dram(
                         write: tr.write,
                         arrival: at,
                     };
-                    requests.as_mut().map(|r| r.push(req));
+                    if let Some(r) = requests.as_mut() {
+                        r.push(req);
+                    }
                     dram.submit(req);
                     last = a;
                     submitted = true;
