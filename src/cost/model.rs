@@ -472,7 +472,7 @@ impl Frame<'_> {
     /// arrays, its `share` of every ROP's sector traffic, and their leakage.
     fn rop_caches(&self, u: &UnitCycles, share: f64) -> SramCost {
         match &self.work.memory {
-            Some(m) if u.kind == UnitKind::Rop => price_sram(
+            Some(m) if u.kind.frame_caches() => price_sram(
                 &self.tech.sram,
                 m.cache_bits_per_rop,
                 m.cache_bits_moved * share,
