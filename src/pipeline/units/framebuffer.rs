@@ -15,10 +15,10 @@
 //! [`PortClock`]).
 
 use crate::config::{FrameBufferConfig, MemoryModel, Ratio};
-use crate::memory::dram::{Dram, DramConfig};
-use crate::memory::trace::Request;
 use crate::datapath::Real;
 use crate::graph::UnitKind;
+use crate::memory::dram::{Dram, DramConfig};
+use crate::memory::trace::Request;
 use crate::pipeline::items::FrameTraffic;
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::{Ctx, Cycle};
@@ -46,7 +46,13 @@ impl<R: Real> Unit<R> for FrameBufferPort {
             let clock = DramClock::new(run.arch.clock_mhz, &run.arch.memory.dram_config());
             let sector = u64::from(run.arch.memory.sector_bytes);
             let record = run.dram_requests;
-            return Box::pin(self::run_dram(ctx, run.arch.memory.dram_config(), clock, sector, record));
+            return Box::pin(self::run_dram(
+                ctx,
+                run.arch.memory.dram_config(),
+                clock,
+                sector,
+                record,
+            ));
         }
         let resolve =
             crate::rop::FrameBuffer::resolve_bytes(vp.width, vp.height / samples.get(), samples);

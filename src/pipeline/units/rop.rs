@@ -52,8 +52,13 @@ impl<R: Real> Unit<R> for Rop {
         let vp = run.view.viewport;
         // The builder checked the memory fields (`memory::check` and the ROP tiles).
         let caches = (run.arch.memory.model == MemoryModel::Dram).then(|| {
-            RopMemory::new(&run.arch.memory, vp.width, vp.height, run.view.samples.get())
-                .expect("the memory fields were checked when the run was built")
+            RopMemory::new(
+                &run.arch.memory,
+                vp.width,
+                vp.height,
+                run.view.samples.get(),
+            )
+            .expect("the memory fields were checked when the run was built")
         });
         Box::pin(self::run(
             ctx,
@@ -210,7 +215,10 @@ pub async fn run<R: Real>(
         for chunk in c.finish(&pixels).chunks(FrameTraffic::CAP) {
             let mut out = FrameTraffic::default();
             chunk.iter().for_each(|&t| out.push(t));
-            let sectors: u64 = chunk.iter().map(|t| u64::from(t.sectors.count_ones())).sum();
+            let sectors: u64 = chunk
+                .iter()
+                .map(|t| u64::from(t.sectors.count_ones()))
+                .sum();
             ctx.emit(sectors.div_ceil(c.per_cycle()).max(1), out).await;
         }
         memory = Some(c.stats(&pixels));
