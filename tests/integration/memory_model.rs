@@ -41,15 +41,23 @@ fn memory(run: &PathRun) -> &MemoryReport {
 
 /// The caches hold tags only and the controller moves no pixel: every image, depth and
 /// winner is the port model's, on both paths, with one sample and with four (whose resolve
-/// goes through the caches' surfaces too).
+/// goes through the caches' surfaces too), and with ROP tiles of 16 pixels, whose spans
+/// cross two memory tiles.
 #[test]
 fn the_dram_model_draws_what_the_port_model_draws() {
-    for (name, side, samples) in [("bunny.json", 256, 1), ("sphere24.json", 128, 4)] {
+    let mut wide_tiles = ArchConfig::default();
+    wide_tiles.rop.tile_px = 16;
+    let runs = [
+        ("bunny.json", 256, 1, ArchConfig::default()),
+        ("sphere24.json", 128, 4, ArchConfig::default()),
+        ("bunny.json", 256, 1, wide_tiles),
+    ];
+    for (name, side, samples, a) in runs {
         let s = scenes::trace(name, Some(side));
         for path in [PrimitivePath::Lembo, PrimitivePath::Triangle] {
-            let port = render(&s, path, samples, &ArchConfig::default());
-            let with_dram = render(&s, path, samples, &dram(ArchConfig::default()));
-            let what = format!("{name} {path:?} {samples} samples");
+            let port = render(&s, path, samples, &a);
+            let with_dram = render(&s, path, samples, &dram(a.clone()));
+            let what = format!("{name} {path:?} {samples} samples, tile {}", a.rop.tile_px);
             assert!(port.report.memory_system.is_none(), "{what}");
             assert!(
                 with_dram.framebuffer.color == port.framebuffer.color,

@@ -1,18 +1,22 @@
-//! The frame-buffer memory port (DESIGN.md §3): the ROPs' depth reads and colour and depth
-//! writes share one port of `framebuffer.bytes_per_cycle`. The frame ends when the last
-//! write has gone through it.
+//! The frame-buffer memory (DESIGN.md §3): the ROPs' traffic, merged by (arrival, port),
+//! through one of two models (`memory.model`).
 //!
-//! Input: [`MemAccess`]es from every ROP, merged by (arrival, port). Output: none. Cost: the
-//! port moves data in slots of `framebuffer.access_cycles` cycles, each carrying
-//! `bytes_per_cycle` * `access_cycles` bytes, and an access of b bytes occupies whole
-//! slots, `access_cycles` * ceil(b / (`bytes_per_cycle` * `access_cycles`)) cycles, at
-//! least one slot: with the default slot of one cycle, ceil(b / bytes_per_cycle) cycles, at
-//! least one. A slot may be a fraction of a cycle ([`PortClock`] keeps the port's time
-//! exactly and charges whole cycles as it crosses them). With more than one sample per
+//! **The port** (`port`, the default): the ROPs' depth reads and colour and depth writes
+//! share one port of `framebuffer.bytes_per_cycle`. Input: [`FrameTraffic`]s, each the bytes
+//! of one span or piece. Cost: the port moves data in slots of `framebuffer.access_cycles`
+//! cycles, each carrying `bytes_per_cycle` * `access_cycles` bytes, and an access of b bytes
+//! occupies whole slots, `access_cycles` * ceil(b / (`bytes_per_cycle` * `access_cycles`))
+//! cycles, at least one slot: with the default slot of one cycle, ceil(b / bytes_per_cycle)
+//! cycles, at least one. A slot may be a fraction of a cycle ([`PortClock`] keeps the port's
+//! time exactly and charges whole cycles as it crosses them). With more than one sample per
 //! pixel, the resolve after the last access: every sample's colour read and every pixel's
-//! written, at the same rate. Not modelled: DRAM pages, refresh, compression, caches, and
-//! the geometry fetch's share of the port (`fetch.rs`, which prices its reads with its own
-//! [`PortClock`]).
+//! written, at the same rate. The geometry fetch's share of the port is a bound
+//! (`fetch.rs`, which prices its reads with its own [`PortClock`]).
+//!
+//! **The DRAM controller** (`dram`, [`run_dram`]): the items carry the ROP caches' fills and
+//! write-backs ([`crate::pipeline::rop_memory`]), each atom they touch one request to the
+//! controller of [`crate::memory::dram`]. The frame ends when the last write has gone
+//! through it.
 
 use crate::config::{FrameBufferConfig, MemoryModel, Ratio};
 use crate::datapath::Real;
