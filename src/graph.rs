@@ -82,6 +82,9 @@ struct KindInfo {
     inside: Option<UnitKind>,
     /// The DRAM traffic whose bytes are priced on this kind, if any.
     dram: Option<Traffic>,
+    /// Whether each of its units holds the frame buffer's colour and depth caches under the
+    /// DRAM memory model (`memory.model = "dram"`).
+    frame_caches: bool,
     /// The architecture fields that set how fast it works.
     rates: &'static [Rate],
     /// What else its design-point key names, if anything ([`Variant`]).
@@ -150,6 +153,7 @@ impl UnitKind {
             FrameBuffer => Some(Traffic::Frame),
             _ => None,
         };
+        let frame_caches = matches!(self, Rop);
         use Rate::{CyclesPerItem as Cycles, ItemsPerCycle as Items};
         let rates: &'static [Rate] = match self {
             GeometryFetch | FrameBuffer => &[],
@@ -191,6 +195,7 @@ impl UnitKind {
             replicated,
             inside,
             dram,
+            frame_caches,
             rates,
             variant,
         }
@@ -228,6 +233,12 @@ impl UnitKind {
     /// port, the primitives' on the geometry fetch that reads them); None for most.
     pub fn dram(self) -> Option<Traffic> {
         self.info().dram
+    }
+
+    /// Whether each unit of this kind holds the frame buffer's colour and depth caches
+    /// under the DRAM memory model (the ROPs: priced as SRAM on them).
+    pub fn frame_caches(self) -> bool {
+        self.info().frame_caches
     }
 }
 

@@ -33,6 +33,7 @@
 
 use super::counted::OpTable;
 use super::design_point::{self, DesignPointFile, Sizing};
+use super::memory_kind::DramEnergySplit;
 use super::tech::{DramKind, Sram, Tech};
 use crate::config::ArchConfig;
 use crate::datapath::{Datapath, Op, OPS};
@@ -71,6 +72,11 @@ pub struct CostReport {
     pub geometry_bytes: u64,
     /// The blend units, for a discoid frame; null otherwise.
     pub blend: Option<BlendCost>,
+    /// With the DRAM memory model, the frame buffer's DRAM energy by atoms read, atoms
+    /// written and activations, which replaces `framebuffer_bytes` at `dram_pj_per_byte`
+    /// \[pJ\]; left out with the port.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub framebuffer_dram: Option<DramEnergySplit>,
     /// Each instance, in dataflow order.
     pub units: Vec<UnitCost>,
     /// The operations each kind performed, counted by the code that does them; for the
@@ -90,8 +96,17 @@ impl CostReport {
     /// figure \[pJ\]. Computed from the report's own fields, so a reader of report.json
     /// gets the same figure.
     pub fn dram_energy_pj(&self) -> f64 {
-        (self.framebuffer_bytes + self.accumulation_bytes + self.geometry_bytes) as f64
-            * self.tech.dram_pj_per_byte
+        match &self.framebuffer_dram {
+            Some(d) => {
+                d.total_pj
+                    + (self.accumulation_bytes + self.geometry_bytes) as f64
+                        * self.tech.dram_pj_per_byte
+            }
+            None => {
+                (self.framebuffer_bytes + self.accumulation_bytes + self.geometry_bytes) as f64
+                    * self.tech.dram_pj_per_byte
+            }
+        }
     }
 
     /// The part of [`Self::energy_pj`] spent on chip: the operations, the FIFOs' accesses and
@@ -129,6 +144,13 @@ pub struct UnitCost {
     pub fifo_energy_pj: f64,
     /// The part of the energy its input FIFOs leak over the frame \[pJ\].
     pub fifo_leakage_pj: f64,
+    /// With the DRAM memory model, a ROP's colour and depth caches' part of the area
+    /// \[mm²\]; left out when 0.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub cache_area_mm2: f64,
+    /// Their accesses and leakage this frame \[pJ\]; left out when 0.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub cache_energy_pj: f64,
     /// Functional units of each class its datapath has: the architecture's, sized for
     /// its configured rate at the design point (DESIGN.md §12), whatever the frame \[units\].
     pub functional_units: OpCounts,
@@ -234,6 +256,21 @@ pub struct Work<'a> {
     pub vertices_reused: u64,
     /// The blend units' work, for a discoid frame.
     pub blend: Option<BlendWork<'a>>,
+    /// With the DRAM memory model: the frame buffer's DRAM energy, priced per atom and
+    /// activation, and the ROP caches; None with the port (its bytes at the DRAM's figure).
+    pub memory: Option<MemoryWork>,
+}
+
+/// What the DRAM memory model's frame buffer did, for its cost.
+#[derive(Clone, Copy, Debug)]
+pub struct MemoryWork {
+    /// The frame buffer's DRAM energy: atoms read and written and row activations, priced
+    /// by the technology file's memory kind ([`super::memory_kind::MemoryKind::energy_pj`]).
+    pub dram: DramEnergySplit,
+    /// Bits of SRAM in each ROP's colour and depth caches.
+    pub cache_bits_per_rop: f64,
+    /// Bits every ROP's caches read or wrote: sectors touched, filled and written back.
+    pub cache_bits_moved: f64,
 }
 
 /// What a discoid frame's blend units did.
@@ -364,6 +401,7 @@ pub fn cost_at(
         accumulation_bytes: work.accumulation_bytes,
         geometry_bytes: work.geometry_bytes,
         blend,
+        framebuffer_dram: work.memory.map(|m| m.dram),
         units: out,
         ops: kinds
             .into_iter()
@@ -374,6 +412,11 @@ pub fn cost_at(
             .collect(),
         per_busy_cycle,
     }
+}
+
+/// Whether a figure is 0 (left out of report.json).
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
 }
 
 /// What pricing one frame's units needs, worked out once for all of them.
@@ -413,6 +456,32 @@ impl Frame<'_> {
         }
     }
 
+    /// The DRAM energy priced on `kind`: its bytes at the DRAM's figure, or with the DRAM
+    /// memory model the frame buffer's atoms and activations \[pJ\].
+    fn dram_energy(&self, kind: UnitKind) -> f64 {
+        let w = self.work;
+        match (kind.dram(), &w.memory) {
+            (Some(Traffic::Frame), Some(m)) => {
+                m.dram.total_pj + w.accumulation_bytes as f64 * self.tech.dram.pj_per_byte
+            }
+            _ => self.dram_bytes(kind) as f64 * self.tech.dram.pj_per_byte,
+        }
+    }
+
+    /// A ROP's colour and depth caches with the DRAM memory model (none otherwise): its
+    /// arrays, its `share` of every ROP's sector traffic, and their leakage.
+    fn rop_caches(&self, u: &UnitCycles, share: f64) -> SramCost {
+        match &self.work.memory {
+            Some(m) if u.kind.frame_caches() => price_sram(
+                &self.tech.sram,
+                m.cache_bits_per_rop,
+                m.cache_bits_moved * share,
+                self.frame_us,
+            ),
+            _ => SramCost::default(),
+        }
+    }
+
     /// Unit `u`'s cost and its datapath's leakage \[pJ\], its kind's operations per busy
     /// cycle recorded in `per_busy_cycle`.
     fn unit(&self, u: &UnitCycles, per_busy_cycle: &mut BTreeMap<String, f64>) -> (UnitCost, f64) {
@@ -440,14 +509,22 @@ impl Frame<'_> {
             Datapath::F64 => 64.0,
         };
         let fifo = input_fifos(tech, self.arch, u, &self.kinds, word_bits, self.frame_us);
-        energy_pj += self.dram_bytes(u.kind) as f64 * tech.dram.pj_per_byte;
+        energy_pj += self.dram_energy(u.kind);
+        let cache = self.rop_caches(u, share);
         let cost = UnitCost {
             name: u.name.clone(),
-            area_mm2: (area_um2 + fifo.area_um2) * 1e-6,
-            energy_pj: energy_pj + logic_leak_pj + fifo.access_pj + fifo.leakage_pj,
+            area_mm2: (area_um2 + fifo.area_um2 + cache.area_um2) * 1e-6,
+            energy_pj: energy_pj
+                + logic_leak_pj
+                + fifo.access_pj
+                + fifo.leakage_pj
+                + cache.access_pj
+                + cache.leakage_pj,
             fifo_area_mm2: fifo.area_um2 * 1e-6,
             fifo_energy_pj: fifo.access_pj,
             fifo_leakage_pj: fifo.leakage_pj,
+            cache_area_mm2: cache.area_um2 * 1e-6,
+            cache_energy_pj: cache.access_pj + cache.leakage_pj,
             functional_units: OpCounts::from_array(fus),
         };
         (cost, logic_leak_pj)
@@ -606,6 +683,7 @@ mod tests {
             geometry_bytes: 0,
             vertices_reused: 0,
             blend: None,
+            memory: None,
         };
         // A design point of two multipliers in the ROP: 400 over 200 busy cycles, as this
         // frame did.

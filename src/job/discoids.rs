@@ -238,6 +238,7 @@ fn discoid_cost(
             mode: job.blend,
             units: &timed.blend_units,
         }),
+        memory: None,
     };
     Ok(cost::model::cost(&job.tech()?, arch, job.datapath, &work))
 }

@@ -9,11 +9,14 @@ use super::route::{sim_options, Model, PathRun, Route};
 use super::sections::{host, scene_info, settings};
 use super::validate::{PrimitivePath, RenderJob};
 use crate::camera::View;
-use crate::config::{ArchConfig, FetchConfig};
+use crate::config::{ArchConfig, FetchConfig, MemoryModel};
+use crate::cost::memory_kind::MemoryKind;
+use crate::cost::model::MemoryWork;
 use crate::cost::{self, model::CostReport};
 use crate::error::{Error, Result};
 use crate::frame;
 use crate::graph::TessSource;
+use crate::pipeline::rop_memory::MemoryReport;
 use crate::pipeline::{self, CycleReport, FetchReport, Source};
 use crate::raster;
 use crate::raster::triangle::TriangleSource;
@@ -34,6 +37,9 @@ pub fn run_path(
     reference: Option<(&ReferenceImage, f64)>,
 ) -> Result<PathRun> {
     let route = Route::new(job, scene)?;
+    if let Model::Timed(arch) = model {
+        memory_kind_of(job, arch)?;
+    }
     if let Route::Discoids = route {
         culling::check_discoids(job, scene, model)?;
         return run_discoids(job, scene, view, model, reference);
@@ -70,6 +76,7 @@ pub fn run_path(
             &counts,
             &framebuffer,
             fetch,
+            memory_system.as_ref(),
         )?),
         _ => None,
     };
@@ -205,6 +212,7 @@ fn cost_of(
     counts: &raster::Counts,
     timed: &FrameBuffer,
     fetch: Option<FetchReport>,
+    memory: Option<&MemoryReport>,
 ) -> Result<CostReport> {
     crate::progress::stage("pricing (counting run)");
     let grid = view.grid(job.samples);
@@ -240,8 +248,40 @@ fn cost_of(
         geometry_bytes: fetch.map_or(0, |f| f.bytes),
         vertices_reused,
         blend: None,
+        memory: memory.map(|m| memory_work(job, arch, m)).transpose()?,
     };
     Ok(cost::model::cost(&job.tech()?, arch, job.datapath, &work))
+}
+
+/// The technology file's memory kind of the DRAM model's `memory.dram`; a kind the file
+/// lacks is refused naming the field, before any work. None with the port model.
+fn memory_kind_of(job: &RenderJob, arch: &ArchConfig) -> Result<Option<MemoryKind>> {
+    if arch.memory.model != MemoryModel::Dram {
+        return Ok(None);
+    }
+    let tech = job.tech()?;
+    let kind = tech.memory_kind(arch.memory.dram.name(), "architecture", "memory.dram")?;
+    Ok(Some(kind.clone()))
+}
+
+/// The DRAM memory model's frame buffer for its cost: `m`'s atoms and activations priced
+/// by the memory kind, and the ROP caches' SRAM and sector traffic.
+fn memory_work(job: &RenderJob, arch: &ArchConfig, m: &MemoryReport) -> Result<MemoryWork> {
+    let kind = memory_kind_of(job, arch)?.ok_or_else(|| {
+        Error::Internal("a memory report from a run without the DRAM model".into())
+    })?;
+    let sector_bits = 8.0 * f64::from(arch.memory.sector_bytes);
+    let c = [&m.rops.colour_cache, &m.rops.depth_cache];
+    let sectors: u64 = c
+        .iter()
+        .map(|c| c.hits + c.misses + c.fills + c.write_backs)
+        .sum();
+    let cache_bytes = arch.memory.colour_cache_bytes + arch.memory.depth_cache_bytes;
+    Ok(MemoryWork {
+        dram: kind.energy_pj(m.atoms_read, m.atoms_written, m.atom_bytes, m.activations),
+        cache_bits_per_rop: 8.0 * f64::from(cache_bytes),
+        cache_bits_moved: sectors as f64 * sector_bits,
+    })
 }
 
 /// A surface path's image with what each model contributed (one per run, so the variants'

@@ -2,7 +2,7 @@
 //! memory system"): its colour and depth caches over the surfaces' tile tables. Each span
 //! or piece the ROP tests is charged by the sectors it touches; hits cost the caches' port
 //! rate, misses become fills and evictions become write-backs, which the ROP sends to the
-//! memory controller ([`FrameTraffic`]). The caches hold tags and sector states only: the
+//! memory controller ([`FrameTraffic`](crate::pipeline::items::FrameTraffic)). The caches hold tags and sector states only: the
 //! pixels stay in the frame buffer, so nothing here changes a pixel.
 //!
 //! Surfaces: colour (RGBA8) at address 0, depth (D24S8) after it, and with multisampling
@@ -17,7 +17,7 @@ use crate::memory::compress::{depth24, TileValues};
 use crate::memory::tiles::{
     Surface, SurfaceLayout, TableStats, TileTable, TileTouch, Transfer, TILE_PX,
 };
-use crate::pipeline::items::{FrameTraffic, LineTransfer};
+use crate::pipeline::items::LineTransfer;
 use crate::pipeline::tiles::RopPixels;
 use serde::Serialize;
 
@@ -79,6 +79,8 @@ pub struct RopMemory {
     /// Where the resolved colour starts, with multisampling.
     resolve_base: Option<u64>,
     samples: u32,
+    /// The tiles of the span being charged (kept to reuse its allocation).
+    touched: Vec<TileTouch>,
 }
 
 impl RopMemory {
@@ -106,6 +108,7 @@ impl RopMemory {
             per_cycle: u64::from(cfg.cache_sectors_per_cycle),
             resolve_base: (samples > 1).then_some(2 * size),
             samples,
+            touched: Vec::new(),
         })
     }
 
@@ -114,46 +117,68 @@ impl RopMemory {
         self.per_cycle
     }
 
-    /// The pixels `rows` (row, x0, x1: one tile's) of one span or piece touch.
-    fn touch(&self, rows: &[(u32, u32, u32)]) -> Option<TileTouch> {
+    /// The memory tiles the pixels `rows` (row, x0, x1) of one span or piece touch, in
+    /// column order (a ROP tile of 8m pixels holds m memory tiles a row), into `tiles`.
+    fn touches(&self, rows: &[(u32, u32, u32)], tiles: &mut Vec<TileTouch>) {
+        tiles.clear();
         let layout = self.depth.table.layout();
-        let &(y, x, _) = rows.iter().find(|r| r.1 < r.2)?;
-        let tile = layout.tile_of(x, y);
-        let (bx, by) = (x / TILE_PX * TILE_PX, y / TILE_PX * TILE_PX);
-        let mut pixels = 0u64;
         for &(y, x0, x1) in rows.iter().filter(|r| r.1 < r.2) {
-            debug_assert_eq!(layout.tile_of(x0, y), tile, "a span lies in one tile");
-            let row = ((1u64 << (x1 - x0)) - 1) << (x0 - bx);
-            pixels |= row << (8 * (y - by));
+            let mut x = x0;
+            while x < x1 {
+                let bx = x / TILE_PX * TILE_PX;
+                let end = x1.min(bx + TILE_PX);
+                let bits = ((1u64 << (end - x)) - 1) << (x - bx) << (8 * (y % TILE_PX));
+                let tile = layout.tile_of(x, y);
+                match tiles.iter_mut().find(|t| t.tile == tile) {
+                    Some(t) => t.pixels |= bits,
+                    None => tiles.push(TileTouch {
+                        tile,
+                        pixels: bits,
+                        sectors: 0,
+                        full: 0,
+                    }),
+                }
+                x = end;
+            }
         }
-        Some(layout.touch(tile, pixels))
+        for t in tiles.iter_mut() {
+            *t = layout.touch(t.tile, t.pixels);
+        }
     }
 
     /// One span or piece: rows `rows` tested, `nearest` its nearest fragment depth,
-    /// `passed` whether any fragment passed (then depth and colour are written). Its
-    /// transfers go to `out`; returns the cache ports' cycles and whether hierarchical Z
-    /// rejected it (no depth read, no write).
+    /// `passed` whether any fragment passed (then depth and colour are written in every
+    /// tile it touches that hierarchical Z keeps). Its transfers are added to `out`;
+    /// returns the cache ports' cycles and whether hierarchical Z rejected it whole (no
+    /// depth read, no write).
     pub fn access(
         &mut self,
         rows: &[(u32, u32, u32)],
         nearest: f32,
         passed: bool,
         pixels: &RopPixels,
-        out: &mut FrameTraffic,
+        out: &mut Vec<LineTransfer>,
     ) -> (u64, bool) {
-        let Some(touch) = self.touch(rows) else {
-            return (0, false);
-        };
-        if self.depth.table.hz_rejects(touch.tile, nearest) {
-            debug_assert!(!passed, "hierarchical Z rejected a span that passed");
-            return (0, true);
+        let mut tiles = std::mem::take(&mut self.touched);
+        self.touches(rows, &mut tiles);
+        let (mut depth, mut colour, mut kept) = (0, 0, 0);
+        for touch in &tiles {
+            if self.depth.table.hz_rejects(touch.tile, nearest) {
+                continue;
+            }
+            kept += 1;
+            depth += access(&mut self.depth, touch, true, passed, pixels, out);
+            if passed {
+                colour += access(&mut self.colour, touch, false, true, pixels, out);
+            }
         }
-        let depth = access(&mut self.depth, &touch, true, passed, pixels, out);
-        let colour = match passed {
-            true => access(&mut self.colour, &touch, false, true, pixels, out),
-            false => 0,
-        };
-        (depth.max(colour).div_ceil(self.per_cycle), false)
+        let rejected = kept == 0 && !tiles.is_empty();
+        debug_assert!(
+            !(rejected && passed),
+            "hierarchical Z rejected a span that passed"
+        );
+        self.touched = tiles;
+        (depth.max(colour).div_ceil(self.per_cycle), rejected)
     }
 
     /// The end of the frame: every dirty line written back, then with multisampling this
@@ -230,7 +255,7 @@ fn access(
     read: bool,
     write: bool,
     pixels: &RopPixels,
-    out: &mut FrameTraffic,
+    out: &mut Vec<LineTransfer>,
 ) -> u64 {
     let surface = s.table.surface();
     let layout = *s.table.layout();

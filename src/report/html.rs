@@ -9,6 +9,9 @@
 
 use super::{Host, Memory, Report};
 use crate::cost::model::CostReport;
+use crate::memory::cache::CacheStats;
+use crate::memory::tiles::TableStats;
+use crate::pipeline::rop_memory::MemoryReport;
 use crate::pipeline::{Cycle, CycleReport};
 use crate::reference::metrics::Accuracy;
 use std::fmt::Write as _;
@@ -252,11 +255,54 @@ fn cycles_section(r: &Report) -> (&'static str, String) {
                 .as_ref()
                 .map(|f| para(&super::text::fetch_line(f)))
                 .unwrap_or_default();
-            para(&head) + &fetch + &unit_bars(c)
+            let memory = r
+                .memory_system
+                .as_ref()
+                .map(memory_table)
+                .unwrap_or_default();
+            para(&head) + &fetch + &memory + &unit_bars(c)
         }
         None => para("n/a: functional mode (no timing model ran)"),
     };
     ("Cycles", content)
+}
+
+/// Where the DRAM model's bytes went: each surface's sectors through the ROP caches, and
+/// the DRAM's atoms.
+fn memory_table(m: &MemoryReport) -> String {
+    let r = &m.rops;
+    let row = |name: &str, c: &CacheStats, t: &TableStats, ratio: f64| {
+        vec![
+            name.to_string(),
+            (c.hits + c.misses).to_string(),
+            format!("{:.1} %", 100.0 * c.hit_rate()),
+            t.sectors_read.to_string(),
+            t.sectors_cleared_not_read.to_string(),
+            t.sectors_written.to_string(),
+            format!("{ratio:.2}:1"),
+        ]
+    };
+    para(&super::text::memory_line(m))
+        + &table(
+            &[
+                "surface",
+                "sectors touched",
+                "cache hits",
+                "sectors read (fills)",
+                "fills found cleared",
+                "sectors written back",
+                "compression",
+            ],
+            &[
+                row(
+                    "colour",
+                    &r.colour_cache,
+                    &r.colour,
+                    m.colour_compression_ratio,
+                ),
+                row("depth", &r.depth_cache, &r.depth, m.depth_compression_ratio),
+            ],
+        )
 }
 
 /// The unit's area and the frame's energy, unit by unit: heading and content.
@@ -293,7 +339,16 @@ fn cost_section(c: &CostReport) -> (&'static str, String) {
             vec![
                 "DRAM".to_string(),
                 format!("{:.3}", c.dram_energy_pj() * 1e-6),
-                format!(
+                match &c.framebuffer_dram {
+                    Some(d) => format!(
+                        "frame buffer by atoms and activations ({:.3} µJ read, {:.3} written, {:.3} activations), geometry fetched {} bytes at {} pJ/B",
+                        d.read_pj * 1e-6,
+                        d.write_pj * 1e-6,
+                        d.activation_pj * 1e-6,
+                        c.geometry_bytes,
+                        c.tech.dram_pj_per_byte
+                    ),
+                    None => format!(
                     "{} bytes through the memory port (frame buffer {}, accumulation {}, geometry fetched {}) at {} pJ/B",
                     c.framebuffer_bytes + c.accumulation_bytes + c.geometry_bytes,
                     c.framebuffer_bytes,
@@ -301,6 +356,7 @@ fn cost_section(c: &CostReport) -> (&'static str, String) {
                     c.geometry_bytes,
                     c.tech.dram_pj_per_byte
                 ),
+                },
             ],
             vec![
                 "total".to_string(),

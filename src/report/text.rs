@@ -5,6 +5,7 @@
 use super::Report;
 use crate::cost::model::{BlendCost, CostReport, OpCounts};
 use crate::datapath::OPS;
+use crate::pipeline::rop_memory::MemoryReport;
 use crate::pipeline::{Cycle, FetchReport};
 use std::fmt::Write as _;
 
@@ -150,6 +151,9 @@ impl Report {
         }
         if let Some(f) = &self.fetch {
             let _ = writeln!(t, "{}", fetch_line(f));
+        }
+        if let Some(m) = &self.memory_system {
+            let _ = writeln!(t, "{}", memory_line(m));
         }
         let _ = writeln!(
             t,
@@ -499,6 +503,34 @@ pub fn fetch_line(f: &FetchReport) -> String {
     format!(
         "geometry fetch ({}): {} primitives, {} bytes read through the memory port{cache}",
         f.source, f.primitives, f.bytes
+    )
+}
+
+/// The DRAM memory model's frame in two sentences: where the bytes went.
+pub fn memory_line(m: &MemoryReport) -> String {
+    let r = &m.rops;
+    format!(
+        "memory system ({}, {} channel{}): ROP caches hit {:.1} % (colour) and {:.1} % (depth); \
+         write-backs compressed {:.2}:1 (colour) and {:.2}:1 (depth); {} tiles still cleared; \
+         hierarchical Z rejected {} of {} spans or pieces\n\
+         DRAM: {} atoms of {} bytes read, {} written, {} row activations, {:.1} % row hits, \
+         mean read latency {:.0} DRAM cycles",
+        m.dram,
+        m.channels,
+        if m.channels == 1 { "" } else { "s" },
+        100.0 * m.colour_cache_hit_rate,
+        100.0 * m.depth_cache_hit_rate,
+        m.colour_compression_ratio,
+        m.depth_compression_ratio,
+        r.cleared_tiles,
+        r.depth.hz_rejects,
+        r.depth.hz_tests,
+        m.atoms_read,
+        m.atom_bytes,
+        m.atoms_written,
+        m.activations,
+        100.0 * m.row_hit_rate,
+        m.read_latency_mean,
     )
 }
 

@@ -418,4 +418,32 @@ mod tests {
             "1,\"s, \"\"quoted\"\"\",,2,,,,,,,40.0,2,8,,3,,,,0.25"
         );
     }
+
+    /// The DRAM model's columns appear when a run used it, empty for the port's runs.
+    #[test]
+    fn csv_gives_the_memory_columns_when_a_run_used_the_dram_model() {
+        let run = |i: u32, memory: serde_json::Value| {
+            serde_json::json!({"index": i, "scene": "s", "params": {},
+                "report": {"cycles": null, "primitives": {"count": 1, "bytes": 1},
+                    "counts": {"fragments": 1}, "host": {"wall_seconds": 0.1},
+                    "memory_system": memory}})
+        };
+        let port = vec![run(0, serde_json::Value::Null)];
+        let text = String::from_utf8(csv_bytes(&port).unwrap()).unwrap();
+        assert!(!text.contains("mem."), "{text}");
+        let dram = serde_json::json!({"atoms_read": 7, "atoms_written": 9, "activations": 3,
+            "row_hit_rate": 0.5, "colour_cache_hit_rate": 0.25, "depth_cache_hit_rate": 0.75,
+            "colour_compression_ratio": 2.0, "depth_compression_ratio": 4.0,
+            "rops": {"cleared_tiles": 11}});
+        let both = vec![run(0, serde_json::Value::Null), run(1, dram)];
+        let text = String::from_utf8(csv_bytes(&both).unwrap()).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        assert!(lines[0].ends_with(",wall_seconds,mem.atoms_read,mem.atoms_written,mem.activations,mem.row_hit_rate,mem.colour_cache_hit_rate,mem.depth_cache_hit_rate,mem.colour_compression_ratio,mem.depth_compression_ratio,mem.cleared_tiles"), "{}", lines[0]);
+        assert!(lines[1].ends_with(",0.1,,,,,,,,,"), "{}", lines[1]);
+        assert!(
+            lines[2].ends_with(",0.1,7,9,3,0.5,0.25,0.75,2.0,4.0,11"),
+            "{}",
+            lines[2]
+        );
+    }
 }

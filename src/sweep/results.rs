@@ -479,6 +479,20 @@ pub(super) fn cell(v: Option<&Value>) -> String {
     }
 }
 
+/// The `memory_system` fields `results.csv` gives as `mem.<field>` when a run used the
+/// DRAM memory model.
+const MEMORY_COLUMNS: [&str; 9] = [
+    "atoms_read",
+    "atoms_written",
+    "activations",
+    "row_hit_rate",
+    "colour_cache_hit_rate",
+    "depth_cache_hit_rate",
+    "colour_compression_ratio",
+    "depth_compression_ratio",
+    "cleared_tiles",
+];
+
 /// `results.csv`: one row per record, columns as `sim/sweeps/README.md` lists them.
 pub fn csv_bytes(records: &[Value]) -> Result<Vec<u8>> {
     let mut params = BTreeSet::new();
@@ -520,6 +534,14 @@ pub fn csv_bytes(records: &[Value]) -> Result<Vec<u8>> {
         .map(String::from),
     );
 
+    // The DRAM memory model's columns, when any run used it.
+    let memory = records
+        .iter()
+        .any(|r| r["report"]["memory_system"].is_object());
+    if memory {
+        header.extend(MEMORY_COLUMNS.iter().map(|c| format!("mem.{c}")));
+    }
+
     let mut w = csv::Writer::from_writer(Vec::new());
     let csv_err = |e: csv::Error| Error::Internal(format!("results.csv: {e}"));
     w.write_record(&header).map_err(csv_err)?;
@@ -559,6 +581,13 @@ pub fn csv_bytes(records: &[Value]) -> Result<Vec<u8>> {
         row.push(cell(report["blend"].get("error_mean")));
         row.push(cell(report["blend"].get("error_max")));
         row.push(cell(report["host"].get("wall_seconds")));
+        if memory {
+            let m = &report["memory_system"];
+            row.extend(MEMORY_COLUMNS.iter().map(|c| match *c {
+                "cleared_tiles" => cell(m["rops"].get("cleared_tiles")),
+                c => cell(m.get(c)),
+            }));
+        }
         w.write_record(&row).map_err(csv_err)?;
     }
     w.into_inner()

@@ -41,15 +41,23 @@ fn memory(run: &PathRun) -> &MemoryReport {
 
 /// The caches hold tags only and the controller moves no pixel: every image, depth and
 /// winner is the port model's, on both paths, with one sample and with four (whose resolve
-/// goes through the caches' surfaces too).
+/// goes through the caches' surfaces too), and with ROP tiles of 16 pixels, whose spans
+/// cross two memory tiles.
 #[test]
 fn the_dram_model_draws_what_the_port_model_draws() {
-    for (name, side, samples) in [("bunny.json", 256, 1), ("sphere24.json", 128, 4)] {
+    let mut wide_tiles = ArchConfig::default();
+    wide_tiles.rop.tile_px = 16;
+    let runs = [
+        ("bunny.json", 256, 1, ArchConfig::default()),
+        ("sphere24.json", 128, 4, ArchConfig::default()),
+        ("bunny.json", 256, 1, wide_tiles),
+    ];
+    for (name, side, samples, a) in runs {
         let s = scenes::trace(name, Some(side));
         for path in [PrimitivePath::Lembo, PrimitivePath::Triangle] {
-            let port = render(&s, path, samples, &ArchConfig::default());
-            let with_dram = render(&s, path, samples, &dram(ArchConfig::default()));
-            let what = format!("{name} {path:?} {samples} samples");
+            let port = render(&s, path, samples, &a);
+            let with_dram = render(&s, path, samples, &dram(a.clone()));
+            let what = format!("{name} {path:?} {samples} samples, tile {}", a.rop.tile_px);
             assert!(port.report.memory_system.is_none(), "{what}");
             assert!(
                 with_dram.framebuffer.color == port.framebuffer.color,
@@ -170,4 +178,38 @@ fn the_depth_cache_absorbs_an_overdraw_scenes_repeated_tests() {
             "{path:?}: {depth_sectors} of {port_sectors}"
         );
     }
+}
+
+/// The DRAM model prices the frame buffer per atom and activation by the technology file's
+/// memory kind, and each ROP's caches as SRAM; the port model keeps its bytes at the DRAM's
+/// figure and no cache.
+#[test]
+fn the_dram_model_prices_atoms_activations_and_the_rop_caches() {
+    let s = scenes::trace("sphere24.json", Some(128));
+    let port = render(&s, PrimitivePath::Lembo, 1, &ArchConfig::default());
+    let run = render(&s, PrimitivePath::Lembo, 1, &dram(ArchConfig::default()));
+    let (pc, dc) = (port.report.cost.unwrap(), run.report.cost.unwrap());
+    assert!(pc.framebuffer_dram.is_none());
+    let m = run.report.memory_system.as_ref().unwrap();
+    let d = dc.framebuffer_dram.expect("priced by atoms");
+    // gddr6 in the embedded technology file: 7.5 pJ a bit read or written.
+    let bits = 8.0 * f64::from(m.atom_bytes);
+    assert!((d.read_pj - m.atoms_read as f64 * bits * 7.5).abs() < 1e-6 * d.read_pj.max(1.0));
+    assert!((d.write_pj - m.atoms_written as f64 * bits * 7.5).abs() < 1e-6 * d.write_pj);
+    assert!(d.activation_pj > 0.0);
+    let geometry = dc.geometry_bytes as f64 * dc.tech.dram_pj_per_byte;
+    assert!((dc.dram_energy_pj() - d.total_pj - geometry).abs() < 1e-6 * d.total_pj);
+    for u in &dc.units {
+        let rop = u.name.starts_with("Rop");
+        assert_eq!(u.cache_area_mm2 > 0.0, rop, "{}", u.name);
+    }
+    assert!(pc.units.iter().all(|u| u.cache_area_mm2 == 0.0));
+    // Two 16 KB arrays a ROP at 0.69 µm² a bit, the embedded file's.
+    let rop = dc.units.iter().find(|u| u.name == "Rop[0]").unwrap();
+    let want = 2.0 * 16384.0 * 8.0 * 0.69e-6;
+    assert!(
+        (rop.cache_area_mm2 - want).abs() < 1e-9,
+        "{}",
+        rop.cache_area_mm2
+    );
 }

@@ -1,24 +1,28 @@
-//! The frame-buffer memory port (DESIGN.md §3): the ROPs' depth reads and colour and depth
-//! writes share one port of `framebuffer.bytes_per_cycle`. The frame ends when the last
-//! write has gone through it.
+//! The frame-buffer memory (DESIGN.md §3): the ROPs' traffic, merged by (arrival, port),
+//! through one of two models (`memory.model`).
 //!
-//! Input: [`MemAccess`]es from every ROP, merged by (arrival, port). Output: none. Cost: the
-//! port moves data in slots of `framebuffer.access_cycles` cycles, each carrying
-//! `bytes_per_cycle` * `access_cycles` bytes, and an access of b bytes occupies whole
-//! slots, `access_cycles` * ceil(b / (`bytes_per_cycle` * `access_cycles`)) cycles, at
-//! least one slot: with the default slot of one cycle, ceil(b / bytes_per_cycle) cycles, at
-//! least one. A slot may be a fraction of a cycle ([`PortClock`] keeps the port's time
-//! exactly and charges whole cycles as it crosses them). With more than one sample per
+//! **The port** (`port`, the default): the ROPs' depth reads and colour and depth writes
+//! share one port of `framebuffer.bytes_per_cycle`. Input: [`FrameTraffic`]s, each the bytes
+//! of one span or piece. Cost: the port moves data in slots of `framebuffer.access_cycles`
+//! cycles, each carrying `bytes_per_cycle` * `access_cycles` bytes, and an access of b bytes
+//! occupies whole slots, `access_cycles` * ceil(b / (`bytes_per_cycle` * `access_cycles`))
+//! cycles, at least one slot: with the default slot of one cycle, ceil(b / bytes_per_cycle)
+//! cycles, at least one. A slot may be a fraction of a cycle ([`PortClock`] keeps the port's
+//! time exactly and charges whole cycles as it crosses them). With more than one sample per
 //! pixel, the resolve after the last access: every sample's colour read and every pixel's
-//! written, at the same rate. Not modelled: DRAM pages, refresh, compression, caches, and
-//! the geometry fetch's share of the port (`fetch.rs`, which prices its reads with its own
-//! [`PortClock`]).
+//! written, at the same rate. The geometry fetch's share of the port is a bound
+//! (`fetch.rs`, which prices its reads with its own [`PortClock`]).
+//!
+//! **The DRAM controller** (`dram`, [`run_dram`]): the items carry the ROP caches' fills and
+//! write-backs ([`crate::pipeline::rop_memory`]), each atom they touch one request to the
+//! controller of [`crate::memory::dram`]. The frame ends when the last write has gone
+//! through it.
 
 use crate::config::{FrameBufferConfig, MemoryModel, Ratio};
-use crate::memory::dram::{Dram, DramConfig};
-use crate::memory::trace::Request;
 use crate::datapath::Real;
 use crate::graph::UnitKind;
+use crate::memory::dram::{Dram, DramConfig};
+use crate::memory::trace::Request;
 use crate::pipeline::items::FrameTraffic;
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::{Ctx, Cycle};
@@ -46,7 +50,13 @@ impl<R: Real> Unit<R> for FrameBufferPort {
             let clock = DramClock::new(run.arch.clock_mhz, &run.arch.memory.dram_config());
             let sector = u64::from(run.arch.memory.sector_bytes);
             let record = run.dram_requests;
-            return Box::pin(self::run_dram(ctx, run.arch.memory.dram_config(), clock, sector, record));
+            return Box::pin(self::run_dram(
+                ctx,
+                run.arch.memory.dram_config(),
+                clock,
+                sector,
+                record,
+            ));
         }
         let resolve =
             crate::rop::FrameBuffer::resolve_bytes(vp.width, vp.height / samples.get(), samples);
@@ -112,7 +122,9 @@ pub async fn run_dram(
                         write: tr.write,
                         arrival: at,
                     };
-                    requests.as_mut().map(|r| r.push(req));
+                    if let Some(r) = requests.as_mut() {
+                        r.push(req);
+                    }
                     dram.submit(req);
                     last = a;
                     submitted = true;

@@ -5,7 +5,7 @@
 //! [`FragmentSpan`]s, or [`TrianglePiece`]s in the triangle path. For each fragment: its
 //! depth (from the lembo's depth quadratic, or the triangle's plane), the depth test on
 //! (z, id) (the winner does not depend on arrival order), and for a fragment that passes,
-//! Phong shading (Piranda et al. 2006 equation 6) and the write. Output: one [`MemAccess`] per
+//! Phong shading (Piranda et al. 2006 equation 6) and the write. Output: one [`FrameTraffic`] per
 //! item to the frame-buffer memory port: depth reads for every fragment tested, colour and depth
 //! writes for every fragment that passed.
 //!
@@ -13,8 +13,12 @@
 //! in the one frame buffer ([`SharedFrame`](crate::pipeline::tiles::SharedFrame)); the ROPs never share a pixel.
 //!
 //! Cost: ceil(n / `rop.fragments_per_cycle`) per span of n fragments, ready
-//! `latency_cycles` later. Not modelled: caches; the frame-buffer port's bandwidth is the
-//! memory model.
+//! `latency_cycles` later. With the DRAM memory model (`memory.model = "dram"`) the ROP
+//! also has its colour and depth caches ([`RopMemory`]): a span costs at least the sectors
+//! it touches in either over `memory.cache_sectors_per_cycle`, one cycle when hierarchical
+//! Z rejects it, and its output carries the caches' fills and write-backs; once the end of
+//! its inputs reaches it, it writes its caches back (and resolves its tiles when
+//! multisampled).
 
 use crate::camera::{Samples, View};
 use crate::config::{FrameBufferConfig, MemoryModel, RopConfig};
@@ -52,8 +56,13 @@ impl<R: Real> Unit<R> for Rop {
         let vp = run.view.viewport;
         // The builder checked the memory fields (`memory::check` and the ROP tiles).
         let caches = (run.arch.memory.model == MemoryModel::Dram).then(|| {
-            RopMemory::new(&run.arch.memory, vp.width, vp.height, run.view.samples.get())
-                .expect("the memory fields were checked when the run was built")
+            RopMemory::new(
+                &run.arch.memory,
+                vp.width,
+                vp.height,
+                run.view.samples.get(),
+            )
+            .expect("the memory fields were checked when the run was built")
         });
         Box::pin(self::run(
             ctx,
@@ -156,6 +165,8 @@ pub async fn run<R: Real>(
     // (`rop::Batch`): colours are written in arrival order, and a pixel is only ever this
     // ROP's, so the frame is the functional one.
     let mut batch = Batch::<R>::new();
+    // The cache transfers of the item being charged.
+    let mut transfers = Vec::new();
     while let Some(item) = ctx.next_input().await {
         let mut passed = 0u64;
         let mut nearest = f32::INFINITY;
@@ -190,15 +201,30 @@ pub async fn run<R: Real>(
             nearest = f32::NEG_INFINITY;
         }
         let (bytes, extra) = traffic(fbc, discoid, n, passed);
-        let mut out = FrameTraffic::bytes(bytes);
         let mut cycles = cfg.fragments_per_cycle.ceil_div(n) + extra;
-        if let Some(c) = caches.as_mut() {
-            let rows = &rows[..];
-            let (ports, rejected) = c.access(rows, nearest, passed > 0, &pixels, &mut out);
-            // Hierarchical Z discards a rejected span in its one test.
-            cycles = if rejected { 1 } else { cycles.max(ports) };
-        }
+        let Some(c) = caches.as_mut() else {
+            ctx.emit(cycles, FrameTraffic::bytes(bytes)).await;
+            continue;
+        };
+        transfers.clear();
+        let (ports, rejected) = c.access(&rows, nearest, passed > 0, &pixels, &mut transfers);
+        // Hierarchical Z discards a rejected span in its one test.
+        cycles = if rejected { 1 } else { cycles.max(ports) };
+        // A span over several memory tiles may make more transfers than an item carries:
+        // the rest follow in items of their own, a cycle each.
+        let mut chunks = transfers.chunks(FrameTraffic::CAP);
+        let mut out = FrameTraffic::bytes(bytes);
+        chunks
+            .next()
+            .into_iter()
+            .flatten()
+            .for_each(|&t| out.push(t));
         ctx.emit(cycles, out).await;
+        for chunk in chunks {
+            let mut out = FrameTraffic::default();
+            chunk.iter().for_each(|&t| out.push(t));
+            ctx.emit(1, out).await;
+        }
     }
     batch.flush(&shader, into(&mut pixels));
     let mut memory = None;
@@ -210,7 +236,10 @@ pub async fn run<R: Real>(
         for chunk in c.finish(&pixels).chunks(FrameTraffic::CAP) {
             let mut out = FrameTraffic::default();
             chunk.iter().for_each(|&t| out.push(t));
-            let sectors: u64 = chunk.iter().map(|t| u64::from(t.sectors.count_ones())).sum();
+            let sectors: u64 = chunk
+                .iter()
+                .map(|t| u64::from(t.sectors.count_ones()))
+                .sum();
             ctx.emit(sectors.div_ceil(c.per_cycle()).max(1), out).await;
         }
         memory = Some(c.stats(&pixels));
