@@ -213,3 +213,33 @@ fn the_dram_model_prices_atoms_activations_and_the_rop_caches() {
         rop.cache_area_mm2
     );
 }
+
+/// A memory-bound frame's cycles follow its bytes: the bunny with units at 4 GHz against
+/// the DRAM (so the DRAM bounds the frame), with the DRAM's bytes per cycle halved twice
+/// (4, 2, then 1 channel), takes at least 1.6x the cycles each time. No per-message floor
+/// stands in the way: the items are the same at every width.
+#[test]
+fn a_memory_bound_frame_follows_the_drams_bytes_per_cycle() {
+    let s = scenes::trace("bunny.json", None);
+    let mut a = dram(ArchConfig::default());
+    a.clock_mhz = 4000.0;
+    let mut last: Option<u64> = None;
+    for channels in [4, 2, 1] {
+        a.memory.channels = channels;
+        let run = render(&s, PrimitivePath::Lembo, 1, &a);
+        let cycles = run.report.cycles.as_ref().unwrap();
+        assert_eq!(
+            cycles.bottleneck.as_deref(),
+            Some("FrameBuffer"),
+            "{channels} channels"
+        );
+        if let Some(before) = last {
+            let ratio = cycles.total.0 as f64 / before as f64;
+            assert!(
+                ratio >= 1.6,
+                "{channels} channels: {ratio:.2}x the cycles of twice the width"
+            );
+        }
+        last = Some(cycles.total.0);
+    }
+}

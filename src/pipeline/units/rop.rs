@@ -28,7 +28,7 @@ use crate::frame::discoid::{
     accumulation_keeps, depth_pass_wins, evaluate, DiscoidFragment, KeptFragment, Pass,
 };
 use crate::graph::UnitKind;
-use crate::pipeline::items::{FragmentSpan, FrameTraffic, RopItem, TrianglePiece};
+use crate::pipeline::items::{FragmentSpan, FrameTraffic, LineTransfer, RopItem, TrianglePiece};
 use crate::pipeline::rop_memory::RopMemory;
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::Ctx;
@@ -210,38 +210,12 @@ pub async fn run<R: Real>(
         let (ports, rejected) = c.access(&rows, nearest, passed > 0, &pixels, &mut transfers);
         // Hierarchical Z discards a rejected span in its one test.
         cycles = if rejected { 1 } else { cycles.max(ports) };
-        // A span over several memory tiles may make more transfers than an item carries:
-        // the rest follow in items of their own, a cycle each.
-        let mut chunks = transfers.chunks(FrameTraffic::CAP);
-        let mut out = FrameTraffic::bytes(bytes);
-        chunks
-            .next()
-            .into_iter()
-            .flatten()
-            .for_each(|&t| out.push(t));
-        ctx.emit(cycles, out).await;
-        for chunk in chunks {
-            let mut out = FrameTraffic::default();
-            chunk.iter().for_each(|&t| out.push(t));
-            ctx.emit(1, out).await;
-        }
+        send(&mut ctx, cycles, bytes, &transfers).await;
     }
     batch.flush(&shader, into(&mut pixels));
     let mut memory = None;
     if let Some(c) = caches.as_mut() {
-        // The end of the frame reaches the ROP with the end of its inputs.
-        ctx.wait_for_end_of_inputs();
-        // The caches' write-backs and this ROP's share of the resolve, a burst of
-        // transfers an item, at the caches' port rate.
-        for chunk in c.finish(&pixels).chunks(FrameTraffic::CAP) {
-            let mut out = FrameTraffic::default();
-            chunk.iter().for_each(|&t| out.push(t));
-            let sectors: u64 = chunk
-                .iter()
-                .map(|t| u64::from(t.sectors.count_ones()))
-                .sum();
-            ctx.emit(sectors.div_ceil(c.per_cycle()).max(1), out).await;
-        }
+        write_back(&mut ctx, c, &pixels).await;
         memory = Some(c.stats(&pixels));
     }
     let finished = Finished::new(ctx, counts);
@@ -255,6 +229,50 @@ pub async fn run<R: Real>(
             ..
         }) => finished.with(UnitReport::Kept(kept.0, kept.1)),
         _ => finished,
+    }
+}
+
+/// Sends one item's traffic: `bytes` for the port and the caches' `transfers`, in
+/// `cycles`. A span over several memory tiles may make more transfers than an item carries:
+/// the rest follow in items of their own, a cycle each.
+async fn send<R: Real>(
+    ctx: &mut Ctx<RopItem<R>, FrameTraffic>,
+    cycles: u64,
+    bytes: u64,
+    transfers: &[LineTransfer],
+) {
+    let mut chunks = transfers.chunks(FrameTraffic::CAP);
+    let mut out = FrameTraffic::bytes(bytes);
+    chunks
+        .next()
+        .into_iter()
+        .flatten()
+        .for_each(|&t| out.push(t));
+    ctx.emit(cycles, out).await;
+    for chunk in chunks {
+        let mut out = FrameTraffic::default();
+        chunk.iter().for_each(|&t| out.push(t));
+        ctx.emit(1, out).await;
+    }
+}
+
+/// The end of the frame, once it reaches the ROP with the end of its inputs: the caches'
+/// write-backs and this ROP's share of the resolve, a burst of transfers an item, at the
+/// caches' port rate.
+async fn write_back<R: Real>(
+    ctx: &mut Ctx<RopItem<R>, FrameTraffic>,
+    c: &mut RopMemory,
+    pixels: &RopPixels<'_, '_>,
+) {
+    ctx.wait_for_end_of_inputs();
+    for chunk in c.finish(pixels).chunks(FrameTraffic::CAP) {
+        let mut out = FrameTraffic::default();
+        chunk.iter().for_each(|&t| out.push(t));
+        let sectors: u64 = chunk
+            .iter()
+            .map(|t| u64::from(t.sectors.count_ones()))
+            .sum();
+        ctx.emit(sectors.div_ceil(c.per_cycle()).max(1), out).await;
     }
 }
 
