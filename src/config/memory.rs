@@ -4,7 +4,7 @@
 //! line, a line not a multiple of the sector) are [`MemoryConfig::check`]'s.
 
 use super::declare::section;
-use super::rules::{Checked, OneOf, Whole, COUNT};
+use super::rules::{OneOf, Whole, COUNT};
 use crate::error::{Error, Result};
 use crate::memory::cache::CacheConfig;
 use crate::memory::dram::{ddr4_2400_x8, gddr6_16g_x16, lpddr5_6400_x16, DramConfig};
@@ -58,19 +58,6 @@ impl DramPreset {
         }
     }
 }
-
-/// Names serde checks as the file is parsed: nothing left to refuse.
-macro_rules! named {
-    ($($ty:ty),*) => {$(
-        impl Checked for $ty {
-            type Rule = OneOf;
-            fn refusal(&self, _: &OneOf) -> Option<(String, String)> {
-                None
-            }
-        }
-    )*};
-}
-named!(bool, MemoryModel, DramPreset, PixelOrder);
 
 /// A cache size's rule: one line (at least a sector) up to 16 MiB; the check that it holds
 /// whole sets of whole lines is [`MemoryConfig::check`]'s.

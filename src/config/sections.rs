@@ -5,7 +5,7 @@
 
 use super::declare::{architecture, section};
 use super::links::LinksConfig;
-use super::memory::MemoryConfig;
+use super::memory::{DramPreset, MemoryConfig, MemoryModel};
 use super::ratio::Ratio;
 use super::rules::{
     Chars, Checked, OneOf, Positive, Steps, Whole, BATCH, BYTES, COUNT, CYCLES, CYCLES_OR_NONE,
@@ -13,6 +13,7 @@ use super::rules::{
     MAX_TILE_PX, MAX_VERTEX_CACHE,
 };
 use crate::graph::TessSource;
+use crate::memory::tiles::PixelOrder;
 use serde::{Deserialize, Serialize};
 
 /// The names of [`CullBackfaces`] (a unit test holds them equal to serde's).
@@ -466,7 +467,7 @@ impl FrameBufferConfig {
     }
 }
 
-/// Enums whose names serde checks as the file is parsed.
+/// Enums and switches whose names serde checks as the file is parsed.
 macro_rules! choices {
     ($($ty:ty),*) => {$(
         impl Checked for $ty {
@@ -477,7 +478,15 @@ macro_rules! choices {
         }
     )*};
 }
-choices!(CullBackfaces, Reciprocal, TessSource);
+choices!(
+    CullBackfaces,
+    Reciprocal,
+    TessSource,
+    bool,
+    MemoryModel,
+    DramPreset,
+    PixelOrder
+);
 
 architecture! {
     /// The whole architecture: units in dataflow order, then the links between them.

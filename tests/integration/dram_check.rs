@@ -8,7 +8,7 @@
 #[path = "../../examples/dram_check/frames.rs"]
 mod frames;
 
-use lembo_sim::memory::dram::{ddr4_2400_x8, gddr6_dramsim3_x128, replay, DramConfig};
+use lembo_sim::memory::dram::{for_dramsim3_file, replay, DramConfig};
 use serde::Deserialize;
 
 #[derive(Deserialize)]
@@ -36,11 +36,7 @@ struct Energy {
 
 /// The in-house configuration of DRAMsim3's file `name`.
 fn config(name: &str) -> DramConfig {
-    match name {
-        "DDR4_8Gb_x8_2400" => ddr4_2400_x8(),
-        "GDDR6_8Gb_x16" => gddr6_dramsim3_x128(),
-        other => panic!("no configuration for {other}"),
-    }
+    for_dramsim3_file(name).unwrap_or_else(|| panic!("no configuration for {name}"))
 }
 
 /// Relative difference of `ours` from `theirs`.

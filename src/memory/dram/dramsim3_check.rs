@@ -45,11 +45,7 @@ fn recorded() -> Recorded {
 
 /// The in-house configuration of DRAMsim3's file `name`.
 fn config(name: &str) -> DramConfig {
-    match name {
-        "DDR4_8Gb_x8_2400" => ddr4_2400_x8(),
-        "GDDR6_8Gb_x16" => gddr6_dramsim3_x128(),
-        other => panic!("no configuration for {other}"),
-    }
+    for_dramsim3_file(name).unwrap_or_else(|| panic!("no configuration for {name}"))
 }
 
 /// Relative difference of `ours` from `theirs`.

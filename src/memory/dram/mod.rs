@@ -30,6 +30,8 @@ pub use config::DramConfig;
 pub use controller::{replay, Completion, Dram, Ticket};
 pub use energy::{DramEnergy, IddCurrents};
 pub use mapping::{AddressMapping, Location, MapField};
-pub use presets::{ddr4_2400_x8, gddr6_16g_x16, gddr6_dramsim3_x128, lpddr5_6400_x16};
+pub use presets::{
+    ddr4_2400_x8, for_dramsim3_file, gddr6_16g_x16, gddr6_dramsim3_x128, lpddr5_6400_x16,
+};
 pub use stats::{DramEnergyStats, DramStats};
 pub use timings::DramTimings;

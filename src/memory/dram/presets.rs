@@ -335,3 +335,14 @@ pub fn gddr6_dramsim3_x128() -> DramConfig {
         energy: DramEnergy::from_idd(&idd, &timings),
     }
 }
+
+/// The preset that models DRAMsim3's configuration file `name` (its stem, as
+/// `traces/dram/dramsim3.json` records it), for runs compared against DRAMsim3; None for a
+/// file no preset models.
+pub fn for_dramsim3_file(name: &str) -> Option<DramConfig> {
+    match name {
+        "DDR4_8Gb_x8_2400" => Some(ddr4_2400_x8()),
+        "GDDR6_8Gb_x16" => Some(gddr6_dramsim3_x128()),
+        _ => None,
+    }
+}
