@@ -273,7 +273,8 @@ impl SharedPort {
 }
 
 /// Every shared unit: the one memory port, which the ROPs reach by their link and the
-/// geometry fetch reads through directly.
+/// geometry fetch reads through directly: as a bound on the message port, and by its link
+/// `fetch_to_framebuffer` when the port is the DRAM controller ([`Boundary::dram_only`]).
 pub const SHARED: &[SharedPort] = &[SharedPort {
     port: UnitKind::FrameBuffer,
     direct: &[UnitKind::GeometryFetch],
@@ -486,6 +487,10 @@ pub struct Boundary {
     /// both sources but it belongs to one (the fetch feeds the triangle setup engines
     /// directly only from a mesh in memory); None: every graph with both kinds.
     pub only: Option<TessSource>,
+    /// Wired only when the frame buffer is the DRAM controller (`memory.model = "dram"`):
+    /// the geometry fetch's reads to it, which the message port takes as a bound instead
+    /// ([`SHARED`]).
+    pub dram_only: bool,
 }
 
 impl Boundary {
@@ -494,11 +499,22 @@ impl Boundary {
         self.path.is_none_or(|p| p == path) && self.only.is_none_or(|only| only == source)
     }
 
-    /// Whether a graph of `kinds`, its triangles from `source`, wires this boundary.
-    pub fn wired_in(&self, kinds: &[UnitKind], source: TessSource) -> bool {
+    /// Whether it leads to a shared unit from one of its direct clients ([`SHARED`]): a
+    /// second boundary out of the client, which sends on it beside the one its path takes
+    /// (the geometry fetch's reads to the DRAM controller).
+    pub fn to_shared(&self) -> bool {
+        SHARED
+            .iter()
+            .any(|s| s.port == self.to && s.direct.contains(&self.from))
+    }
+
+    /// Whether a graph of `kinds`, its triangles from `source`, wires this boundary; `dram`
+    /// when its frame buffer is the DRAM controller.
+    pub fn wired_in(&self, kinds: &[UnitKind], source: TessSource, dram: bool) -> bool {
         kinds.contains(&self.from)
             && kinds.contains(&self.to)
             && self.only.is_none_or(|only| only == source)
+            && (dram || !self.dram_only)
     }
 }
 
@@ -507,7 +523,7 @@ impl Boundary {
 /// link is named and given its defaults and its [`Dispatch`]: round-robin by item unless
 /// the boundary says otherwise (batches out of the geometry fetch and the domain
 /// evaluators, by screen tile into the ROPs).
-pub const BOUNDARIES: [Boundary; 14] = {
+pub const BOUNDARIES: [Boundary; 15] = {
     use UnitKind::*;
     const fn b(
         key: &'static str,
@@ -524,6 +540,7 @@ pub const BOUNDARIES: [Boundary; 14] = {
             dispatch: Dispatch::RoundRobin,
             path: None,
             only: None,
+            dram_only: false,
         }
     }
     const fn tiled(b: Boundary) -> Boundary {
@@ -629,6 +646,14 @@ pub const BOUNDARIES: [Boundary; 14] = {
             32,
             1,
         )),
+        // Depth 16, latency 4: the geometry fetch's read requests to the DRAM controller
+        // (`memory.model = "dram"`), beside the ROPs' (as rop_to_framebuffer). The run
+        // lengthens the latency to what lets the controller order them against the ROPs'
+        // traffic (`pipeline::builder::fetch_request_latency`, DESIGN.md §11).
+        Boundary {
+            dram_only: true,
+            ..b("fetch_to_framebuffer", GeometryFetch, FrameBuffer, 16, 4)
+        },
     ]
 };
 
@@ -718,6 +743,9 @@ pub struct Graph<'g> {
     pub boundaries: &'g [Boundary],
     /// Where its triangles come from, for the boundaries of one source ([`Boundary::only`]).
     pub source: TessSource,
+    /// Its frame buffer is the DRAM controller, which the geometry fetch reads through
+    /// ([`Boundary::dram_only`]).
+    pub dram: bool,
 }
 
 impl Graph<'static> {
@@ -729,7 +757,13 @@ impl Graph<'static> {
             kinds: path.kinds(source),
             boundaries: &BOUNDARIES,
             source,
+            dram: false,
         }
+    }
+
+    /// The same graph with its frame buffer the DRAM controller when `dram`.
+    pub fn with_dram(self, dram: bool) -> Self {
+        Graph { dram, ..self }
     }
 }
 
@@ -739,7 +773,7 @@ impl Graph<'_> {
     pub fn wired(&self) -> impl Iterator<Item = &Boundary> + '_ {
         self.boundaries
             .iter()
-            .filter(|b| b.wired_in(self.kinds, self.source))
+            .filter(|b| b.wired_in(self.kinds, self.source, self.dram))
     }
 
     /// [`Self::wired`] in dataflow order: by producer, then consumer.
@@ -804,10 +838,13 @@ pub fn diagram(path: PrimitivePath, source: TessSource) -> String {
             .clients(graph.kinds)
             .iter()
             .map(|c| {
-                let how = if shared.direct.contains(c) {
-                    "direct"
-                } else {
-                    "by link"
+                let dram_link = BOUNDARIES
+                    .iter()
+                    .find(|b| b.dram_only && b.from == *c && b.to == shared.port);
+                let how = match (shared.direct.contains(c), dram_link) {
+                    (true, Some(b)) => format!("direct; by link {} under the DRAM model", b.key),
+                    (true, None) => "direct".to_string(),
+                    (false, _) => "by link".to_string(),
                 };
                 format!("{} ({how})", c.name())
             })

@@ -171,7 +171,13 @@ impl ArchConfig {
         let kinds: Vec<UnitKind> = units.iter().map(|u| u.kind).collect();
         self.links
             .boundaries()
-            .filter(|(b, _)| b.wired_in(&kinds, self.tessellation.source))
+            .filter(|(b, _)| {
+                b.wired_in(
+                    &kinds,
+                    self.tessellation.source,
+                    self.memory.model == MemoryModel::Dram,
+                )
+            })
             .map(|(b, link)| count(b.from) * count(b.to) * link.fifo_depth as u64)
             .sum()
     }

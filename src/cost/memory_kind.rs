@@ -29,6 +29,8 @@ pub struct MemoryKind {
 /// A frame's DRAM energy by what spent it \[pJ\].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct DramEnergySplit {
+    /// The memory kind priced (`gddr6`).
+    pub kind: &'static str,
     /// Atoms read \[pJ\].
     pub read_pj: f64,
     /// Atoms written \[pJ\].
@@ -55,6 +57,7 @@ impl MemoryKind {
         let write_pj = atoms_written as f64 * atom_bits * self.pj_per_bit_written;
         let activation_pj = activations as f64 * self.pj_per_activation;
         DramEnergySplit {
+            kind: "",
             read_pj,
             write_pj,
             activation_pj,

@@ -93,15 +93,13 @@ pub struct CostReport {
 impl CostReport {
     /// The part of [`Self::energy_pj`] spent in DRAM: every byte through the memory port
     /// (`framebuffer_bytes`, `accumulation_bytes` and `geometry_bytes`) at the DRAM's
-    /// figure \[pJ\]. Computed from the report's own fields, so a reader of report.json
+    /// figure, or with the DRAM memory model the controller's atoms and activations (the
+    /// geometry fetch's reads among them) \[pJ\]. Computed from the report's own fields, so a reader of report.json
     /// gets the same figure.
     pub fn dram_energy_pj(&self) -> f64 {
         match &self.framebuffer_dram {
-            Some(d) => {
-                d.total_pj
-                    + (self.accumulation_bytes + self.geometry_bytes) as f64
-                        * self.tech.dram_pj_per_byte
-            }
+            // The controller's atoms include the geometry fetch's reads.
+            Some(d) => d.total_pj + self.accumulation_bytes as f64 * self.tech.dram_pj_per_byte,
             None => {
                 (self.framebuffer_bytes + self.accumulation_bytes + self.geometry_bytes) as f64
                     * self.tech.dram_pj_per_byte
@@ -457,13 +455,16 @@ impl Frame<'_> {
     }
 
     /// The DRAM energy priced on `kind`: its bytes at the DRAM's figure, or with the DRAM
-    /// memory model the frame buffer's atoms and activations \[pJ\].
+    /// memory model the controller's atoms and activations, the geometry fetch's reads
+    /// among them, all on the frame buffer \[pJ\].
     fn dram_energy(&self, kind: UnitKind) -> f64 {
         let w = self.work;
         match (kind.dram(), &w.memory) {
             (Some(Traffic::Frame), Some(m)) => {
                 m.dram.total_pj + w.accumulation_bytes as f64 * self.tech.dram.pj_per_byte
             }
+            // Read through the controller, priced there.
+            (Some(Traffic::Geometry), Some(_)) => 0.0,
             _ => self.dram_bytes(kind) as f64 * self.tech.dram.pj_per_byte,
         }
     }
@@ -565,10 +566,14 @@ fn input_fifos(
     frame_us: f64,
 ) -> SramCost {
     let mut fifo = SramCost::default();
-    let wired = arch
-        .links
-        .boundaries()
-        .filter(|(b, _)| b.to == u.kind && b.wired_in(kinds, arch.tessellation.source));
+    let wired = arch.links.boundaries().filter(|(b, _)| {
+        b.to == u.kind
+            && b.wired_in(
+                kinds,
+                arch.tessellation.source,
+                arch.memory.model == crate::config::MemoryModel::Dram,
+            )
+    });
     for (b, link) in wired {
         let producers = kinds.iter().filter(|&&k| k == b.from).count() as u64;
         let bits = pipeline::out_words(b.from) as f64 * word_bits;

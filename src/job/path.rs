@@ -10,6 +10,7 @@ use super::sections::{host, scene_info, settings};
 use super::validate::{PrimitivePath, RenderJob};
 use crate::camera::View;
 use crate::config::{ArchConfig, FetchConfig, MemoryModel};
+use crate::cost::memory_kind::DramEnergySplit;
 use crate::cost::memory_kind::MemoryKind;
 use crate::cost::model::MemoryWork;
 use crate::cost::{self, model::CostReport};
@@ -278,7 +279,10 @@ fn memory_work(job: &RenderJob, arch: &ArchConfig, m: &MemoryReport) -> Result<M
         .sum();
     let cache_bytes = arch.memory.colour_cache_bytes + arch.memory.depth_cache_bytes;
     Ok(MemoryWork {
-        dram: kind.energy_pj(m.atoms_read, m.atoms_written, m.atom_bytes, m.activations),
+        dram: DramEnergySplit {
+            kind: arch.memory.dram.name(),
+            ..kind.energy_pj(m.atoms_read, m.atoms_written, m.atom_bytes, m.activations)
+        },
         cache_bits_per_rop: 8.0 * f64::from(cache_bytes),
         cache_bits_moved: sectors as f64 * sector_bits,
     })

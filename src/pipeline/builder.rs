@@ -65,7 +65,7 @@ fn check_with<R: Real>(
             // A boundary of another path.
             continue;
         };
-        if !b.wired_in(kinds, graph.source) {
+        if !b.wired_in(kinds, graph.source, graph.dram) {
             // A boundary of the other triangle source.
             continue;
         }
@@ -134,9 +134,9 @@ pub struct Netlist {
     /// Each boundary's crossbar (a `Crossbar<T>` of its item type) and the index of its
     /// producer's kind, for the boundaries with links.
     crossbars: Vec<Option<(usize, Box<dyn Any + Send + Sync>)>>,
-    /// Each boundary's dispatch rule, whether the graph's path takes it, and the batch its
-    /// consumers take under a rule of batches.
-    rules: Vec<(Dispatch, bool, Option<u32>)>,
+    /// Each boundary's dispatch rule, whether the graph's path takes it, the batch its
+    /// consumers take under a rule of batches, and whether it leads to a shared unit.
+    rules: Vec<(Dispatch, bool, Option<u32>, bool)>,
 }
 
 impl Netlist {
@@ -173,10 +173,15 @@ impl Netlist {
                     .links
                     .by_key(b.key)
                     .ok_or(GraphError::NoLink { boundary: b.key })?;
-                let spec = LinkSpec {
+                let mut spec = LinkSpec {
                     fifo_depth: link.fifo_depth,
                     latency_cycles: link.latency_cycles,
                 };
+                if b.to_shared() {
+                    spec.latency_cycles =
+                        spec.latency_cycles
+                            .max(fetch_request_latency(&ports.kinds, b.to, arch));
+                }
                 let xb = bodies[ports.body[p]].crossbar(&units, b.to, &thread, spec, port_base);
                 port_base += units.iter().filter(|u| u.kind == b.to).count();
                 crossbars[bi] = Some((p, xb));
@@ -192,7 +197,12 @@ impl Netlist {
                     Dispatch::Batches => at(b.to).and_then(|k| bodies[ports.body[k]].batch(arch)),
                     _ => None,
                 };
-                (b.dispatch, b.taken_by(graph.path, graph.source), batch)
+                (
+                    b.dispatch,
+                    b.taken_by(graph.path, graph.source),
+                    batch,
+                    b.to_shared(),
+                )
             })
             .collect();
         Ok(Netlist {
@@ -251,6 +261,7 @@ impl Netlist {
                             dispatch: self.rules[*b].0,
                             taken: self.rules[*b].1,
                             batch: self.rules[*b].2,
+                            shared: self.rules[*b].3,
                         })
                         .collect(),
                     run,
@@ -263,6 +274,24 @@ impl Netlist {
         }
         futures
     }
+}
+
+/// The latency the links from a shared unit's direct clients to it need at least, so that it
+/// can order their items against those of its other inputs: one more than the cycles the
+/// executor may date a unit's pops before the credit that let it go on, summed over every
+/// other kind of the graph (`latency - 1` each, [`super::runtime::core::recover`]).
+///
+/// A geometry fetch's read reaches the DRAM controller after it, while the ROPs' traffic
+/// that the fetch's batches lead to comes round the loop of credits (controller, ROP, ...,
+/// setup, fetch) whose frozen pipelines each date their next pop up to `latency - 1` before
+/// the credit; shorter, the controller could not prove that a read it has not yet received
+/// comes after a ROP item it holds, and the run would stop on that loop.
+pub fn fetch_request_latency(kinds: &[UnitKind], shared: UnitKind, arch: &ArchConfig) -> u64 {
+    1 + kinds
+        .iter()
+        .filter(|&&k| k != shared)
+        .map(|&k| arch.unit(k).1.saturating_sub(1))
+        .sum::<u64>()
 }
 
 /// The datapath words one item of `kind`'s output takes in a FIFO ([`super::unit::Unit::OUT_WORDS`];
@@ -289,6 +318,7 @@ mod tests {
             dispatch: Dispatch::RoundRobin,
             path: None,
             only: None,
+            dram_only: false,
         }
     }
 
@@ -341,6 +371,7 @@ mod tests {
             kinds,
             boundaries,
             source: TessSource::Memory,
+            dram: false,
         })
     }
 
@@ -474,6 +505,7 @@ mod tests {
             kinds: PrimitivePath::Lembo.kinds(TessSource::Memory),
             boundaries: &renamed,
             source: TessSource::Memory,
+            dram: false,
         };
         let e = Netlist::new::<f32>(&graph, &ArchConfig::default(), &SimOptions::default())
             .err()
@@ -554,7 +586,7 @@ mod tests {
         let kinds = PrimitivePath::Lembo.kinds(TessSource::Memory);
         let taken: Vec<&str> = BOUNDARIES
             .iter()
-            .filter(|b| b.wired_in(kinds, TessSource::Memory))
+            .filter(|b| b.wired_in(kinds, TessSource::Memory, false))
             .map(|b| b.key)
             .collect();
         assert_eq!(linked, taken);

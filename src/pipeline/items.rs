@@ -150,9 +150,12 @@ pub struct Patch {
     pub lembo: u32,
 }
 
-/// One memory transaction: a ROP's frame-buffer traffic for one span (to the frame-buffer
-/// port), or a geometry fetch's batch of primitives (to the setup engine it is dealt to).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// One memory transaction: a geometry fetch's batch of primitives (to the setup engine it
+/// is dealt to and, with the DRAM model, as a read to the memory controller), or a ROP's
+/// frame-buffer traffic for one item (to the memory controller): the bytes the port model
+/// moves (`memory.model = "port"`), and with the DRAM model the transfers between its caches
+/// and DRAM ([`crate::pipeline::rop_memory`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct MemAccess {
     /// Bytes moved: a ROP's depth reads and colour and depth writes, or the primitives'
     /// bytes read \[bytes\].
@@ -161,40 +164,40 @@ pub struct MemAccess {
     pub first: u32,
     /// Primitives read, from `first` on; 0 for a ROP's traffic.
     pub count: u32,
-}
-
-impl MemAccess {
-    /// A ROP's frame-buffer traffic of `bytes`.
-    pub fn frame(bytes: u64) -> Self {
-        MemAccess {
-            bytes,
-            first: 0,
-            count: 0,
-        }
-    }
-}
-
-/// A ROP's frame-buffer traffic for one item: the bytes the port model moves
-/// (`memory.model = "port"`), and with the DRAM model the transfers between its caches and
-/// DRAM ([`crate::pipeline::rop_memory`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct FrameTraffic {
-    /// Bytes moved through the port \[bytes\].
-    pub bytes: u64,
-    transfers: [LineTransfer; FrameTraffic::CAP],
+    /// A batch's first byte in the primitives as stored (the bytes read before it); 0 for a
+    /// ROP's traffic.
+    pub offset: u64,
+    transfers: [LineTransfer; MemAccess::CAP],
     len: u8,
 }
 
-impl FrameTraffic {
+impl MemAccess {
     /// The transfers one item can carry: a fill and a write-back in each of two caches.
     pub const CAP: usize = 4;
 
-    /// Traffic of `bytes` through the port, no transfer.
-    pub fn bytes(bytes: u64) -> Self {
-        FrameTraffic {
+    /// A ROP's traffic of `bytes` through the port, no transfer.
+    pub fn frame(bytes: u64) -> Self {
+        MemAccess {
             bytes,
-            ..FrameTraffic::default()
+            ..MemAccess::default()
         }
+    }
+
+    /// A batch of `count` primitives from `first` on, `bytes` read from `offset` on in the
+    /// primitives as stored (0 and 0 for one made on chip).
+    pub fn batch(first: u32, count: u32, bytes: u64, offset: u64) -> Self {
+        MemAccess {
+            bytes,
+            first,
+            count,
+            offset,
+            ..MemAccess::default()
+        }
+    }
+
+    /// Whether it is a geometry fetch's batch (else a ROP's traffic).
+    pub fn is_geometry(&self) -> bool {
+        self.count > 0
     }
 
     /// Adds a transfer.
@@ -260,7 +263,6 @@ impl Item for MemAccess {
     }
 }
 
-impl Item for FrameTraffic {}
 impl Item for Patch {}
 impl<R: Real> Item for LemboReady<R> {}
 impl<R: Real> Item for ScanlineRange<R> {}

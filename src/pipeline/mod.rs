@@ -36,7 +36,7 @@ pub use runtime::{Cycle, SimOptions};
 pub use unit::{DiscoidPass, FetchReport, Source, VertexCacheCounts};
 
 use crate::camera::View;
-use crate::config::ArchConfig;
+use crate::config::{ArchConfig, MemoryModel};
 use crate::datapath::{Datapath, Real};
 use crate::discoid::report::BlendReport;
 use crate::error::{Error, Result};
@@ -179,7 +179,7 @@ fn run_in<R: Real>(
         Some(_) => TessSource::Memory,
         None => arch.tessellation.source,
     };
-    let graph = Graph::of(path, tess);
+    let graph = Graph::of(path, tess).with_dram(arch.memory.model == MemoryModel::Dram);
     run_on::<R>(&graph, scene, view, tol, arch, source, discoid, options)
 }
 
@@ -396,7 +396,12 @@ fn finish(
         .map(|(_, f)| f.stats.end)
         .max()
         .unwrap_or(Cycle::ZERO);
-    let (total, direct) = shared_ports(&units, &results, last);
+    let (total, direct) = shared_ports(
+        &units,
+        &results,
+        last,
+        arch.memory.model == MemoryModel::Dram,
+    );
     let mut counts = Counts::default();
     let mut fetch = None;
     let (mut rops, mut dram, mut dram_requests) = (None::<rop_memory::RopMemoryStats>, None, None);
@@ -405,15 +410,15 @@ fn finish(
         match &mut f.own {
             Some(UnitReport::Fetch(report)) => fetch = fetch.or(Some(*report)),
             Some(UnitReport::RopMemory(m)) => rops.get_or_insert_with(Default::default).add(m),
-            Some(UnitReport::Dram(d, requests)) => {
-                dram = Some(*d);
+            Some(UnitReport::Dram(d, c, requests)) => {
+                dram = Some((*d, *c));
                 dram_requests = requests.take();
             }
             _ => {}
         }
     }
-    let memory = dram.map(|d| {
-        rop_memory::MemoryReport::new(&arch.memory.dram_config(), rops.unwrap_or_default(), &d)
+    let memory = dram.map(|(d, c)| {
+        rop_memory::MemoryReport::new(&arch.memory.dram_config(), rops.unwrap_or_default(), &d, &c)
     });
     counts.pixels_covered = fb.covered() as u64;
     let unit_cycles = unit_cycles(&units, &results, &direct, total);
@@ -473,11 +478,17 @@ fn first_error(results: &mut [(usize, Finished)]) -> Option<Error> {
 /// The shared units of the graph ([`graph::SHARED`]): the frame's total, at least `last`
 /// and at least each shared port's busy cycles with its direct clients' (whose busy cycles
 /// are its accesses too), and the direct clients' busy cycles each port unit is charged.
+/// With the DRAM controller (`dram`) the clients' reads go through it in time
+/// ([`Boundary::dram_only`](graph::Boundary::dram_only)), so the frame is `last`.
 fn shared_ports(
     units: &[UnitInstance],
     results: &[(usize, Finished)],
     last: Cycle,
+    dram: bool,
 ) -> (Cycle, Vec<(UnitKind, u64)>) {
+    if dram {
+        return (last, Vec::new());
+    }
     let of_kind = |kind: UnitKind| {
         results
             .iter()
@@ -593,6 +604,7 @@ mod tests {
             kinds: &both,
             boundaries: &BOUNDARIES,
             source: TessSource::Memory,
+            dram: false,
         };
         for threads in [1, 3] {
             let options = SimOptions {

@@ -2,7 +2,7 @@
 //! memory system"): its colour and depth caches over the surfaces' tile tables. Each span
 //! or piece the ROP tests is charged by the sectors it touches; hits cost the caches' port
 //! rate, misses become fills and evictions become write-backs, which the ROP sends to the
-//! memory controller ([`FrameTraffic`](crate::pipeline::items::FrameTraffic)). The caches hold tags and sector states only: the
+//! memory controller ([`MemAccess`](crate::pipeline::items::MemAccess)). The caches hold tags and sector states only: the
 //! pixels stay in the frame buffer, so nothing here changes a pixel.
 //!
 //! Surfaces: colour (RGBA8) at address 0, depth (D24S8) after it, and with multisampling
@@ -83,6 +83,11 @@ pub struct RopMemory {
     touched: Vec<TileTouch>,
 }
 
+/// The bytes one surface of `layout` takes in memory.
+fn surface_bytes(layout: &SurfaceLayout) -> u64 {
+    layout.tiles() as u64 * layout.tile_bytes() as u64
+}
+
 impl RopMemory {
     /// The caches of `cfg` over surfaces of `width` x `rows` sample rows (`samples` a
     /// pixel), every tile cleared.
@@ -94,7 +99,7 @@ impl RopMemory {
             cfg.sector_bytes,
             cfg.pixel_order,
         )?;
-        let size = layout.tiles() as u64 * layout.tile_bytes() as u64;
+        let size = surface_bytes(&layout);
         let surface = |kind, cache: crate::memory::cache::CacheConfig, base| -> Result<Cached> {
             Ok(Cached {
                 table: TileTable::new(layout, kind, cfg.features(), &cache, "memory")?,
@@ -110,6 +115,19 @@ impl RopMemory {
             samples,
             touched: Vec::new(),
         })
+    }
+
+    /// Where the primitives the geometry fetch reads start in memory, after the surfaces of
+    /// `new(cfg, width, rows, _)` (colour, depth, and the resolved colour's room).
+    pub fn geometry_base(cfg: &MemoryConfig, width: u32, rows: u32) -> Result<u64> {
+        let layout = SurfaceLayout::new(
+            width,
+            rows,
+            BYTES_PER_PIXEL,
+            cfg.sector_bytes,
+            cfg.pixel_order,
+        )?;
+        Ok(3 * surface_bytes(&layout))
     }
 
     /// Sectors each cache moves a cycle.
@@ -342,6 +360,18 @@ fn low_bits(n: u32) -> u64 {
     }
 }
 
+/// What the DRAM controller measured of its clients, beside the DRAM's own totals.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ClientStats {
+    /// Atoms the geometry fetch read.
+    pub geometry_atoms: u64,
+    /// Atoms the ROPs read (cache fills, the resolve's reads).
+    pub rop_reads: u64,
+    /// Mean latency of the ROPs' reads, from the item's arrival at the controller to the
+    /// atom's last data \[DRAM cycles\].
+    pub rop_read_latency_mean: f64,
+}
+
 /// What the DRAM memory model measured over a frame: `memory_system` in report.json.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct MemoryReport {
@@ -351,8 +381,10 @@ pub struct MemoryReport {
     pub channels: u32,
     /// Bytes one DRAM atom moves \[bytes\].
     pub atom_bytes: u32,
-    /// Atoms read (cache fills, the resolve's reads).
+    /// Atoms read (cache fills, the resolve's reads, the geometry fetch's reads).
     pub atoms_read: u64,
+    /// Of them, the geometry fetch's.
+    pub geometry_atoms_read: u64,
     /// Atoms written (write-backs, the resolve's writes).
     pub atoms_written: u64,
     /// Row activations.
@@ -361,6 +393,9 @@ pub struct MemoryReport {
     pub row_hit_rate: f64,
     /// Mean read latency from arrival \[DRAM cycles\].
     pub read_latency_mean: f64,
+    /// Mean latency of the ROPs' reads alone, from their item's arrival \[DRAM cycles\]:
+    /// what the geometry fetch's reads queued among them add to.
+    pub rop_read_latency_mean: f64,
     /// The cycle the last request completed \[DRAM cycles\].
     pub dram_cycles: u64,
     /// The DRAM's energy by the preset's current figures \[pJ\]: reads, writes,
@@ -379,11 +414,13 @@ pub struct MemoryReport {
 }
 
 impl MemoryReport {
-    /// The report of a frame whose ROPs counted `rops` (summed) over `dram`.
+    /// The report of a frame whose ROPs counted `rops` (summed) over `dram`, its clients'
+    /// share `clients`.
     pub fn new(
         cfg: &crate::memory::dram::DramConfig,
         rops: RopMemoryStats,
         dram: &crate::memory::dram::DramStats,
+        clients: &ClientStats,
     ) -> Self {
         let e = &dram.energy;
         MemoryReport {
@@ -391,10 +428,12 @@ impl MemoryReport {
             channels: cfg.channels,
             atom_bytes: cfg.atom_bytes(),
             atoms_read: dram.atoms_read,
+            geometry_atoms_read: clients.geometry_atoms,
             atoms_written: dram.atoms_written,
             activations: dram.activations,
             row_hit_rate: dram.row_hit_rate(),
             read_latency_mean: dram.read_latency_mean,
+            rop_read_latency_mean: clients.rop_read_latency_mean,
             dram_cycles: dram.last_done,
             energy_pj: [e.read_pj, e.write_pj, e.activation_pj, e.background_pj],
             colour_cache_hit_rate: rops.colour_cache.hit_rate(),

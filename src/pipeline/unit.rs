@@ -55,6 +55,7 @@ pub enum UnitReport {
     /// they were asked for.
     Dram(
         crate::memory::dram::DramStats,
+        crate::pipeline::rop_memory::ClientStats,
         Option<Vec<crate::memory::trace::Request>>,
     ),
 }
@@ -331,6 +332,10 @@ pub struct OutputBoundary<'w> {
     pub taken: bool,
     /// Its consumers' batch, under a rule of batches ([`Unit::batch`]).
     pub batch: Option<u32>,
+    /// It leads to a shared unit the producer is a direct client of
+    /// ([`crate::graph::Boundary::to_shared`]): sent on by [`Ctx::emit_shared`], beside the
+    /// boundary the path takes.
+    pub shared: bool,
 }
 
 /// The runtime's dispatcher of `out`'s rule over the output ports `ports` (a ROP per port
@@ -449,6 +454,7 @@ impl<R: Real, U: Unit<R>> Elaborate<R> for ErasedUnit<U> {
             .collect();
         let mut tx = Vec::new();
         let mut dispatch = None;
+        let mut shared = None;
         for out in outputs {
             let links = out
                 .wired
@@ -457,7 +463,9 @@ impl<R: Real, U: Unit<R>> Elaborate<R> for ErasedUnit<U> {
                 .take_tx(index);
             let ports = tx.len()..tx.len() + links.len();
             tx.extend(links);
-            if out.taken && dispatch.is_none() {
+            if out.shared {
+                shared = Some(ports.start);
+            } else if out.taken && dispatch.is_none() {
                 dispatch = Some(dispatcher(&out, ports, &run.tiles));
             }
         }
@@ -467,6 +475,10 @@ impl<R: Real, U: Unit<R>> Elaborate<R> for ErasedUnit<U> {
         if link_type::<U::In>().is_none() {
             dispatch = dispatch.with_progress(<U::Out as Item>::primitives);
         }
-        U::spawn(host.ctx(g, rx, tx, dispatch, trace), run, index)
+        U::spawn(
+            host.ctx(g, rx, tx, dispatch, trace).with_shared(shared),
+            run,
+            index,
+        )
     }
 }

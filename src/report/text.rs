@@ -419,7 +419,8 @@ impl Report {
                 t,
                 "cost ({}, {} DRAM): {:.3} mm2, {:.1} uJ a frame{}",
                 c.tech.name,
-                c.tech.dram_kind.name(),
+                c.framebuffer_dram
+                    .map_or(c.tech.dram_kind.name(), |d| d.kind),
                 c.area_mm2,
                 c.energy_pj * 1e-6,
                 c.power_mw
@@ -513,8 +514,9 @@ pub fn memory_line(m: &MemoryReport) -> String {
         "memory system ({}, {} channel{}): ROP caches hit {:.1} % (colour) and {:.1} % (depth); \
          write-backs compressed {:.2}:1 (colour) and {:.2}:1 (depth); {} tiles still cleared; \
          hierarchical Z rejected {} of {} spans or pieces\n\
-         DRAM: {} atoms of {} bytes read, {} written, {} row activations, {:.1} % row hits, \
-         mean read latency {:.0} DRAM cycles",
+         DRAM: {} atoms of {} bytes read ({} by the geometry fetch), {} written, {} row \
+         activations, {:.1} % row hits, mean read latency {:.0} DRAM cycles ({:.0} for the \
+         ROPs' reads)",
         m.dram,
         m.channels,
         if m.channels == 1 { "" } else { "s" },
@@ -527,10 +529,12 @@ pub fn memory_line(m: &MemoryReport) -> String {
         r.depth.hz_tests,
         m.atoms_read,
         m.atom_bytes,
+        m.geometry_atoms_read,
         m.atoms_written,
         m.activations,
         100.0 * m.row_hit_rate,
         m.read_latency_mean,
+        m.rop_read_latency_mean,
     )
 }
 

@@ -431,17 +431,18 @@ mod tests {
         let port = vec![run(0, serde_json::Value::Null)];
         let text = String::from_utf8(csv_bytes(&port).unwrap()).unwrap();
         assert!(!text.contains("mem."), "{text}");
-        let dram = serde_json::json!({"atoms_read": 7, "atoms_written": 9, "activations": 3,
-            "row_hit_rate": 0.5, "colour_cache_hit_rate": 0.25, "depth_cache_hit_rate": 0.75,
+        let dram = serde_json::json!({"atoms_read": 7, "geometry_atoms_read": 2,
+            "atoms_written": 9, "activations": 3, "row_hit_rate": 0.5,
+            "rop_read_latency_mean": 40.5, "colour_cache_hit_rate": 0.25, "depth_cache_hit_rate": 0.75,
             "colour_compression_ratio": 2.0, "depth_compression_ratio": 4.0,
             "rops": {"cleared_tiles": 11}});
         let both = vec![run(0, serde_json::Value::Null), run(1, dram)];
         let text = String::from_utf8(csv_bytes(&both).unwrap()).unwrap();
         let lines: Vec<&str> = text.lines().collect();
-        assert!(lines[0].ends_with(",wall_seconds,mem.atoms_read,mem.atoms_written,mem.activations,mem.row_hit_rate,mem.colour_cache_hit_rate,mem.depth_cache_hit_rate,mem.colour_compression_ratio,mem.depth_compression_ratio,mem.cleared_tiles"), "{}", lines[0]);
-        assert!(lines[1].ends_with(",0.1,,,,,,,,,"), "{}", lines[1]);
+        assert!(lines[0].ends_with(",wall_seconds,mem.atoms_read,mem.geometry_atoms_read,mem.atoms_written,mem.activations,mem.row_hit_rate,mem.rop_read_latency_mean,mem.colour_cache_hit_rate,mem.depth_cache_hit_rate,mem.colour_compression_ratio,mem.depth_compression_ratio,mem.cleared_tiles"), "{}", lines[0]);
+        assert!(lines[1].ends_with(",0.1,,,,,,,,,,,"), "{}", lines[1]);
         assert!(
-            lines[2].ends_with(",0.1,7,9,3,0.5,0.25,0.75,2.0,4.0,11"),
+            lines[2].ends_with(",0.1,7,2,9,3,0.5,40.5,0.25,0.75,2.0,4.0,11"),
             "{}",
             lines[2]
         );

@@ -481,11 +481,13 @@ pub(super) fn cell(v: Option<&Value>) -> String {
 
 /// The `memory_system` fields `results.csv` gives as `mem.<field>` when a run used the
 /// DRAM memory model.
-const MEMORY_COLUMNS: [&str; 9] = [
+const MEMORY_COLUMNS: [&str; 11] = [
     "atoms_read",
+    "geometry_atoms_read",
     "atoms_written",
     "activations",
     "row_hit_rate",
+    "rop_read_latency_mean",
     "colour_cache_hit_rate",
     "depth_cache_hit_rate",
     "colour_compression_ratio",

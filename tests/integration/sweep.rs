@@ -508,6 +508,7 @@ fn every_committed_spec_is_valid() {
             "equal_area",
             "fair",
             "fair_ci",
+            "fair_dram",
             "perspective",
             "precision",
             "smoke",
@@ -788,7 +789,7 @@ fn table_cases(csv: &str) -> BTreeMap<String, String> {
 }
 
 /// The committed results checked only with LEMBO_FULL_CHECKS=1.
-const FULL_ONLY: [&str; 2] = ["fair", "bandwidth"];
+const FULL_ONLY: [&str; 3] = ["fair", "fair_dram", "bandwidth"];
 
 /// The committed sweep results README and RESULTS quote (`sim/sweeps/results/NAME/`, from
 /// `sim/sweeps/NAME.json`) are what the code computes now: each spec is swept again and its

@@ -30,6 +30,8 @@ pub struct Completion {
     pub done: u64,
     /// Which request.
     pub ticket: Ticket,
+    /// When it arrived \[cycles\].
+    pub arrival: u64,
 }
 
 /// A memory system: one controller per channel.
@@ -196,6 +198,7 @@ impl Dram {
                 self.done.push(Reverse(Completion {
                     done: s.done,
                     ticket: Ticket(s.req.ticket),
+                    arrival: s.req.arrival,
                 }));
             }
         }

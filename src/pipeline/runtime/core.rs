@@ -48,6 +48,10 @@ pub trait InputView {
     /// [`Cycle::NEVER`] once the link ended empty, else the producer's bound plus the
     /// link's latency.
     fn next_arrival(&self, core: &Core) -> Cycle;
+    /// The earliest cycle the link's end can reach the consumer: when it ended plus the
+    /// latency, else the producer's clock (a unit ends its links at its clock when it
+    /// finishes, and its clock only grows) plus the latency.
+    fn end_bound(&self, core: &Core) -> Cycle;
     /// The producing unit's name (deadlock reports).
     fn producer_name(&self) -> &str;
     /// The link's state, for a recovery ([`recover`]).
@@ -67,6 +71,8 @@ pub struct InputSnap {
     pub ended: bool,
     /// The last item's push time (items come in push order).
     pub last_push: Cycle,
+    /// When the producer ended it, if it did.
+    pub end_at: Option<Cycle>,
 }
 
 /// What a recovery needs of one unit.
@@ -84,6 +90,8 @@ pub struct UnitSnap {
     pub inputs: Vec<InputSnap>,
     /// When it waits for a credit: the consumer (global index) of that output.
     pub credit_from: Option<usize>,
+    /// It pushes once its inputs have ended ([`Slot::pushes_at_end`]).
+    pub pushes_at_end: bool,
 }
 
 /// One unit as its host thread sees it.
@@ -109,6 +117,10 @@ pub struct Slot {
     pub consumers: RefCell<Vec<(usize, String)>>,
     /// (step, bound) of the last bound computed.
     memo: Cell<(u64, Cycle)>,
+    /// It may push once the end of its inputs reaches it (a ROP writing back its caches,
+    /// [`super::Ctx::pushes_at_end`]): its bound then also follows its inputs' ends, which
+    /// can come before any item they would carry.
+    pub pushes_at_end: Cell<bool>,
 }
 
 /// The units of one host thread and its ready queue.
@@ -143,6 +155,7 @@ impl Core {
                     inputs: RefCell::new(Vec::new()),
                     consumers: RefCell::new(Vec::new()),
                     memo: Cell::new((u64::MAX, Cycle::ZERO)),
+                    pushes_at_end: Cell::new(false),
                 })
                 .collect(),
             ready: RefCell::new(BinaryHeap::new()),
@@ -244,6 +257,18 @@ impl Core {
                     .unwrap_or(Cycle::NEVER);
                 // Every input ended: the unit runs next and may still push (a ROP writes
                 // its caches back once its inputs end), so it is bounded as a runnable one.
+                // A unit that pushes at the end of its inputs may do so before their next
+                // items: once the last end reaches it.
+                let a = match s.pushes_at_end.get() {
+                    true => a.min(
+                        inputs
+                            .iter()
+                            .map(|i| i.end_bound(self))
+                            .max()
+                            .unwrap_or(now),
+                    ),
+                    false => a,
+                };
                 match a {
                     Cycle::NEVER => now + s.latency,
                     a => a.max(now) + s.latency,
@@ -288,6 +313,7 @@ impl Core {
                         }
                         _ => None,
                     },
+                    pushes_at_end: s.pushes_at_end.get(),
                 }
             })
             .collect()
@@ -399,7 +425,7 @@ pub fn recover(snaps: &[UnitSnap]) -> Vec<(usize, Cycle)> {
                 Wait::Input { .. } if never(a) => (s.now, s.now + s.latency),
                 Wait::Input { .. } => {
                     let ei = s.now.max(a);
-                    (ei, ei + s.latency)
+                    (ei, (ei + s.latency).min(at_end(s, snaps, &at)))
                 }
                 Wait::Credit { .. } => {
                     let c = s
@@ -436,6 +462,29 @@ pub fn recover(snaps: &[UnitSnap]) -> Vec<(usize, Cycle)> {
         }
     }
     safe_to_go(snaps, &|input: &InputSnap| bound(input, &x))
+}
+
+/// When a unit that pushes at the end of its inputs (`s`) can push at that end, at the
+/// earliest: once the last end reaches it (each ended link's end, else its producer's
+/// clock, plus the latency), plus its latency; never for another unit. `at[u]` is unit u's
+/// position in `snaps`.
+fn at_end(s: &UnitSnap, snaps: &[UnitSnap], at: &[usize]) -> Cycle {
+    if !s.pushes_at_end {
+        return Cycle::NEVER;
+    }
+    let end = s
+        .inputs
+        .iter()
+        .map(|inp| {
+            let clock = match at.get(inp.producer).copied() {
+                Some(p) if p != usize::MAX => snaps[p].now,
+                _ => Cycle::ZERO,
+            };
+            inp.end_at.unwrap_or(clock) + inp.latency
+        })
+        .max()
+        .unwrap_or(s.now);
+    end.max(s.now) + s.latency
 }
 
 /// The held items that may go ahead, given each input's bound: an item every other input's

@@ -80,6 +80,9 @@ pub struct Ctx<I, O> {
     outputs: Vec<Tx<O>>,
     /// Which output port each item leaves by.
     dispatch: Dispatcher<O>,
+    /// The port of its link to a shared unit it is a client of, if any
+    /// ([`Self::emit_shared`]).
+    shared: Option<usize>,
     /// Cycles from an op's last cycle to its output being ready.
     latency: u64,
     /// Its clock, shown in its slot when it yields ([`Self::publish`]).
@@ -113,6 +116,7 @@ impl<I, O> Ctx<I, O> {
             unit,
             inputs,
             dispatch: Dispatcher::round_robin(0..outputs.len()),
+            shared: None,
             outputs,
             latency,
             now: Cycle::ZERO,
@@ -129,6 +133,18 @@ impl<I, O> Ctx<I, O> {
     pub fn with_dispatch(mut self, dispatch: Dispatcher<O>) -> Self {
         self.dispatch = dispatch;
         self
+    }
+
+    /// Its link to a shared unit it is a client of leaves by output `port`
+    /// ([`crate::graph::SHARED`]).
+    pub fn with_shared(mut self, port: Option<usize>) -> Self {
+        self.shared = port;
+        self
+    }
+
+    /// Whether it has a link to a shared unit ([`Self::emit_shared`]).
+    pub fn has_shared(&self) -> bool {
+        self.shared.is_some()
     }
 
     /// The primitives per batch its consumers take when its boundary deals batches
@@ -181,8 +197,23 @@ impl<I, O> Ctx<I, O> {
     /// future then only waits for a credit not yet given.
     #[inline(always)]
     pub fn emit(&mut self, cycles: u64, item: O) -> Emit<'_, I, O> {
-        debug_assert!(cycles >= 1);
         let port = self.dispatch.port(&item);
+        self.emit_on(port, cycles, item)
+    }
+
+    /// As [`Self::emit`], on its link to the shared unit it is a client of (a geometry
+    /// fetch's read request to the DRAM controller), not by the dispatch rule.
+    ///
+    /// # Panics
+    /// When it has no such link ([`Self::has_shared`]).
+    pub fn emit_shared(&mut self, cycles: u64, item: O) -> Emit<'_, I, O> {
+        let port = self.shared.expect("a link to a shared unit");
+        self.emit_on(port, cycles, item)
+    }
+
+    #[inline(always)]
+    fn emit_on(&mut self, port: usize, cycles: u64, item: O) -> Emit<'_, I, O> {
+        debug_assert!(cycles >= 1);
         let cycles = cycles.max(1);
         let issue = self.now;
         self.work(cycles);
@@ -290,6 +321,14 @@ impl<I, O> Ctx<I, O> {
         }
         self.stats.items_in += 1;
         self.inputs[port].pop(self.now)
+    }
+
+    /// Declares that it will push once the end of its inputs reaches it
+    /// ([`Self::wait_for_end_of_inputs`], then [`Self::emit`]), so that the bounds its
+    /// consumers read follow its inputs' ends too. A unit that pushes after its inputs have
+    /// ended must call it before it first waits for input.
+    pub fn pushes_at_end(&self) {
+        self.core.slots[self.unit as usize].pushes_at_end.set(true);
     }
 
     /// Waits (starved) until the end of its inputs reaches it: for a unit that still has

@@ -325,6 +325,15 @@ impl<T> InputView for LocalLink<T> {
         last_push.max(core.bound(self.ends.producer)) + self.spec.latency_cycles
     }
 
+    fn end_bound(&self, core: &Core) -> Cycle {
+        let f = self.fifo.borrow();
+        let at = match f.ended {
+            true => f.end_at,
+            false => core.slots[self.ends.producer as usize].now.get(),
+        };
+        at + self.spec.latency_cycles
+    }
+
     fn producer_name(&self) -> &str {
         &self.name.producer
     }
@@ -337,6 +346,7 @@ impl<T> InputView for LocalLink<T> {
             head: Some(self.head.get()).filter(|&h| h != Cycle::NEVER),
             ended: f.ended,
             last_push: f.last_push,
+            end_at: f.ended.then_some(f.end_at),
         }
     }
 }
@@ -350,6 +360,8 @@ pub struct RemoteTx<T> {
     data: Sender<Msg<T>>,
     credit_rx: Receiver<Vec<Cycle>>,
     horizon: Arc<AtomicU64>,
+    /// The producer's clock as last published (a bound on when it can end the link).
+    clock: Arc<AtomicU64>,
     /// The consumer's host thread.
     peer: Arc<Signal>,
     credits: RefCell<PopRing>,
@@ -357,6 +369,7 @@ pub struct RemoteTx<T> {
     pushed: Cell<u64>,
     last_push: Cell<Cycle>,
     published: Cell<Cycle>,
+    published_clock: Cell<Cycle>,
     ended: Cell<bool>,
 }
 
@@ -369,6 +382,7 @@ pub struct RemoteRx<T> {
     data: Receiver<Msg<T>>,
     credit_tx: Sender<Vec<Cycle>>,
     horizon: Arc<AtomicU64>,
+    clock: Arc<AtomicU64>,
     /// The producer's host thread.
     peer: Arc<Signal>,
     queue: RefCell<VecDeque<(Cycle, Cycle, T)>>,
@@ -376,6 +390,8 @@ pub struct RemoteRx<T> {
     pending_credits: RefCell<Vec<Cycle>>,
     /// No item will be pushed before this cycle (the last item's push or the horizon).
     bound: Cell<Cycle>,
+    /// The producer's clock as last received: it cannot end the link before.
+    producer_clock: Cell<Cycle>,
     ended: Cell<bool>,
     /// When the producer ended it.
     end_at: Cell<Cycle>,
@@ -395,6 +411,7 @@ pub struct RemoteParts<T> {
     data: (Sender<Msg<T>>, Receiver<Msg<T>>),
     credits: (Sender<Vec<Cycle>>, Receiver<Vec<Cycle>>),
     horizon: Arc<AtomicU64>,
+    clock: Arc<AtomicU64>,
 }
 
 impl<T> RemoteParts<T> {
@@ -405,6 +422,7 @@ impl<T> RemoteParts<T> {
             data: crossbeam_channel::bounded(d + 1),
             credits: crossbeam_channel::bounded(d + 1),
             horizon: Arc::new(AtomicU64::new(0)),
+            clock: Arc::new(AtomicU64::new(0)),
         }
     }
 
@@ -425,12 +443,14 @@ impl<T> RemoteParts<T> {
             data: self.data.0.clone(),
             credit_rx: self.credits.1.clone(),
             horizon: self.horizon.clone(),
+            clock: self.clock.clone(),
             peer,
             credits: RefCell::new(PopRing::new(spec.fifo_depth)),
             batch: RefCell::new(Vec::with_capacity(MAX_BATCH)),
             pushed: Cell::new(0),
             last_push: Cell::new(Cycle::ZERO),
             published: Cell::new(Cycle::ZERO),
+            published_clock: Cell::new(Cycle::ZERO),
             ended: Cell::new(false),
         }
     }
@@ -452,11 +472,13 @@ impl<T> RemoteParts<T> {
             data: self.data.1.clone(),
             credit_tx: self.credits.0.clone(),
             horizon: self.horizon.clone(),
+            clock: self.clock.clone(),
             peer,
             queue: RefCell::new(VecDeque::new()),
             pops: RefCell::new(PopRing::new(spec.fifo_depth)),
             pending_credits: RefCell::new(Vec::new()),
             bound: Cell::new(Cycle::ZERO),
+            producer_clock: Cell::new(Cycle::ZERO),
             ended: Cell::new(false),
             end_at: Cell::new(Cycle::ZERO),
         }
@@ -475,6 +497,14 @@ impl<T> InputView for RemoteRx<T> {
         self.bound.get() + self.spec.latency_cycles
     }
 
+    fn end_bound(&self, _: &Core) -> Cycle {
+        let at = match self.ended.get() {
+            true => self.end_at.get(),
+            false => self.producer_clock.get(),
+        };
+        at + self.spec.latency_cycles
+    }
+
     fn producer_name(&self) -> &str {
         &self.name.producer
     }
@@ -486,6 +516,7 @@ impl<T> InputView for RemoteRx<T> {
             head: self.queue.borrow().front().map(|h| h.0),
             ended: self.ended.get(),
             last_push: self.bound.get(),
+            end_at: self.ended.get().then(|| self.end_at.get()),
         }
     }
 }
@@ -533,6 +564,12 @@ impl<T> RemoteEnd for RemoteTx<T> {
             if bound > self.published.get() {
                 self.published.set(bound);
                 self.horizon.store(bound.0, Release);
+                moved = true;
+            }
+            let clock = self.core.slots[self.ends.producer as usize].now.get();
+            if clock > self.published_clock.get() {
+                self.published_clock.set(clock);
+                self.clock.store(clock.0, Release);
                 moved = true;
             }
         }
@@ -606,6 +643,7 @@ impl<T> RemoteEnd for RemoteRx<T> {
         }
         // The horizon first: it was stored after the items sent before it.
         let horizon = Cycle(self.horizon.load(Acquire));
+        let clock = Cycle(self.clock.load(Acquire));
         let mut changed = false;
         let latency = self.spec.latency_cycles;
         loop {
@@ -629,6 +667,10 @@ impl<T> RemoteEnd for RemoteRx<T> {
         }
         if horizon > self.bound.get() {
             self.bound.set(horizon);
+            changed = true;
+        }
+        if clock > self.producer_clock.get() {
+            self.producer_clock.set(clock);
             changed = true;
         }
         if changed {
@@ -760,10 +802,11 @@ impl<T> Tx<T> {
     pub fn end(&self, at: Cycle) {
         match self {
             Tx::Local(l) => {
-                let mut f = l.fifo.borrow_mut();
-                f.ended = true;
-                f.end_at = at;
-                drop(f);
+                {
+                    let f = &mut *l.fifo.borrow_mut();
+                    f.ended = true;
+                    f.end_at = at;
+                }
                 l.core.wake_if_input(l.ends.consumer);
             }
             Tx::Remote(l) => {

@@ -225,6 +225,78 @@ mod tests {
         }
     }
 
+    /// A unit that pushes once its inputs end (a ROP writing back its caches) can push
+    /// before any item its inputs would bring: A sends M one item and ends at 1; M, of
+    /// latency 20, forwards nothing and ends at 3; W pushes one item when that end reaches
+    /// it (at 4), arriving at the sink at 6; B's item arrives at 11. The sink must take W's
+    /// first in every host order, which it can prove only if W's bound follows its input's
+    /// end ([`Ctx::pushes_at_end`]): bounded by the items alone, W looks idle until M's
+    /// next item could come (after 20 cycles of M's latency), and some order takes B's first.
+    #[test]
+    fn executor_bounds_a_unit_that_pushes_at_the_end_of_its_inputs() {
+        let run = |declared: bool, perturb: Option<u64>| {
+            let names = ["A", "M", "W", "B", "Sink"];
+            let latency = [1, 20, 1, 1, 1];
+            let units = names.iter().zip(latency).map(|(n, l)| (n.to_string(), l));
+            let core = Rc::new(Core::new(units.collect()).perturbed(perturb));
+            let (ta, ra) = local::<char>(&core, 0, 0, 1, 8);
+            let (tm, rm) = local::<char>(&core, 1, 0, 2, 8);
+            let (tw, rw) = local::<char>(&core, 2, 0, 4, 8);
+            let (tb, rb) = local::<char>(&core, 3, 0, 4, 8);
+            let mut a = Ctx::<(), char>::new(core.clone(), 0, Vec::new(), vec![ta], None);
+            let mut m = Ctx::<char, char>::new(core.clone(), 1, vec![ra], vec![tm], None);
+            let mut w = Ctx::<char, char>::new(core.clone(), 2, vec![rm], vec![tw], None);
+            let mut b = Ctx::<(), char>::new(core.clone(), 3, Vec::new(), vec![tb], None);
+            let mut sink = Ctx::<char, ()>::new(core.clone(), 4, vec![rw, rb], Vec::new(), None);
+            let futures: Vec<UnitFuture<'_, Vec<char>>> = vec![
+                Box::pin(async move {
+                    a.emit(1, 'a').await;
+                    a.finish();
+                    Vec::new()
+                }),
+                Box::pin(async move {
+                    while m.next_input().await.is_some() {
+                        m.work(1);
+                    }
+                    m.finish();
+                    Vec::new()
+                }),
+                Box::pin(async move {
+                    if declared {
+                        w.pushes_at_end();
+                    }
+                    while w.next_input().await.is_some() {}
+                    w.wait_for_end_of_inputs();
+                    w.emit(1, 'w').await;
+                    w.finish();
+                    Vec::new()
+                }),
+                Box::pin(async move {
+                    b.work(9);
+                    b.emit(1, 'b').await;
+                    b.finish();
+                    Vec::new()
+                }),
+                Box::pin(async move {
+                    let mut order = Vec::new();
+                    while let Some(item) = sink.next_input().await {
+                        order.push(item);
+                    }
+                    let out_of_order = sink.finish().0.out_of_order;
+                    order.push(if out_of_order > 0 { '!' } else { '.' });
+                    order
+                }),
+            ];
+            thread(core, futures).run(None).unwrap().0[4].1.clone()
+        };
+        let orders = [None, Some(1), Some(2), Some(3), Some(7), Some(99)];
+        for perturb in orders {
+            assert_eq!(run(true, perturb), ['w', 'b', '.'], "perturb {perturb:?}");
+        }
+        // Undeclared, the bound is wrong and some host order shows it.
+        assert!(orders.iter().any(|&p| run(false, p) != ['w', 'b', '.']));
+    }
+
     /// Two units wired into a loop, each waiting for the other's first item: the run stops
     /// at once with a deadlock naming both and what they wait for.
     #[test]

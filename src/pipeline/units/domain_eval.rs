@@ -66,11 +66,7 @@ pub async fn run(
             let end = (done + u64::from(batch)).min(triangles);
             let rate = cfg.cycles_per_vertex;
             let cycles = rate.ceil_mul(points(end)) - rate.ceil_mul(points(done));
-            let access = MemAccess {
-                bytes: 0,
-                first: (base + done) as u32,
-                count: (end - done) as u32,
-            };
+            let access = MemAccess::batch((base + done) as u32, (end - done) as u32, 0, 0);
             ctx.emit(cycles.max(1), access).await;
             done = end;
         }

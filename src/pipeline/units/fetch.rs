@@ -21,9 +21,13 @@
 //! Cost: each batch is one access of the memory port, priced as the frame-buffer port
 //! prices its accesses ([`PortClock`]: whole slots of `framebuffer.access_cycles`, so
 //! ceil(bytes / `framebuffer.bytes_per_cycle`) busy cycles with the default slot), at least
-//! one cycle a batch; the bytes are priced as DRAM on this unit. The port is shared
-//! with the ROPs' frame-buffer traffic: the frame takes at least the port's cycles for
-//! both (DESIGN.md §3, "One memory port"); how their requests interleave is not modelled.
+//! one cycle a batch. With the message port (`memory.model = "port"`) the bytes are priced
+//! as DRAM on this unit, and the port is shared with the ROPs' frame-buffer traffic as a
+//! bound: the frame takes at least the port's cycles for both (DESIGN.md §3, "One memory
+//! port"). With the DRAM controller (`dram`) each batch is first sent to it as a read
+//! ([`Ctx::emit_shared`], a cycle of the batch's, at least two a batch): its atoms queue
+//! there among the ROPs' fills and write-backs, in time, and are priced there; the batch
+//! still reaches its engine the fetch link's latency after it is issued.
 
 use crate::config::{FetchConfig, FrameBufferConfig};
 use crate::datapath::Real;
@@ -103,23 +107,25 @@ pub async fn run(
             }
             None => plan.bytes_of(first, end),
         };
+        let access = MemAccess::batch(first as u32, (end - first) as u32, bytes, report.bytes);
         report.bytes += bytes;
-        let access = MemAccess {
-            bytes,
-            first: first as u32,
-            count: (end - first) as u32,
-        };
         // The fetch always has its next batch ready: it starts where the port's last slot
         // ended, unless a full FIFO froze the fetch since (then at its clock). An emit
-        // takes at least a cycle, and the port's time moves to its end.
+        // takes at least a cycle (two with the read sent to the DRAM controller first), and
+        // the port's time moves to its end.
         let (now, _) = ctx.clock();
         let ready = if now == issued { Cycle::ZERO } else { now };
+        let least = if ctx.has_shared() { 2 } else { 1 };
         let mut cycles = port.access(now, ready, bytes);
-        if cycles == 0 {
-            cycles = 1;
-            port.hold_until(Cycle(now.0 + 1));
+        if cycles < least {
+            cycles = least;
+            port.hold_until(Cycle(now.0 + least));
         }
         issued = Cycle(now.0 + cycles);
+        if ctx.has_shared() {
+            ctx.emit_shared(1, access).await;
+            cycles -= 1;
+        }
         ctx.emit(cycles, access).await;
         first = end;
     }

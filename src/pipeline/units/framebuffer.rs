@@ -2,7 +2,7 @@
 //! through one of two models (`memory.model`).
 //!
 //! **The port** (`port`, the default): the ROPs' depth reads and colour and depth writes
-//! share one port of `framebuffer.bytes_per_cycle`. Input: [`FrameTraffic`]s, each the bytes
+//! share one port of `framebuffer.bytes_per_cycle`. Input: [`MemAccess`]s, each the bytes
 //! of one span or piece. Cost: the port moves data in slots of `framebuffer.access_cycles`
 //! cycles, each carrying `bytes_per_cycle` * `access_cycles` bytes, and an access of b bytes
 //! occupies whole slots, `access_cycles` * ceil(b / (`bytes_per_cycle` * `access_cycles`))
@@ -23,7 +23,8 @@ use crate::datapath::Real;
 use crate::graph::UnitKind;
 use crate::memory::dram::{Dram, DramConfig};
 use crate::memory::trace::Request;
-use crate::pipeline::items::FrameTraffic;
+use crate::pipeline::items::MemAccess;
+use crate::pipeline::rop_memory::{ClientStats, RopMemory};
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::{Ctx, Cycle};
 use crate::pipeline::unit::{Finished, RunInputs, Unit, UnitReport};
@@ -34,7 +35,7 @@ pub struct FrameBufferPort;
 
 impl<R: Real> Unit<R> for FrameBufferPort {
     const KIND: UnitKind = UnitKind::FrameBuffer;
-    type In = FrameTraffic;
+    type In = MemAccess;
     type Out = ();
     // A sink: no output links.
     const OUT_WORDS: u32 = 0;
@@ -50,11 +51,14 @@ impl<R: Real> Unit<R> for FrameBufferPort {
             let clock = DramClock::new(run.arch.clock_mhz, &run.arch.memory.dram_config());
             let sector = u64::from(run.arch.memory.sector_bytes);
             let record = run.dram_requests;
+            let geometry_base = RopMemory::geometry_base(&run.arch.memory, vp.width, vp.height)
+                .expect("the memory fields were checked when the run was built");
             return Box::pin(self::run_dram(
                 ctx,
                 run.arch.memory.dram_config(),
                 clock,
                 sector,
+                geometry_base,
                 record,
             ));
         }
@@ -95,58 +99,120 @@ impl DramClock {
 
 /// The memory controller's body with the DRAM model (`memory.model = "dram"`): each item's
 /// transfers become one request per DRAM atom they touch (a sector smaller than the atom
-/// pays the whole atom), submitted at the item's arrival; the unit takes its next item
-/// once they have entered the controller's queues, so a full queue holds the ROPs back.
-/// The frame ends when the last request has completed.
+/// pays the whole atom), submitted at the item's arrival; a geometry fetch's batch
+/// ([`MemAccess::is_geometry`]) reads the atoms of its bytes from `geometry_base` on. The
+/// unit takes its next item once they have entered the controller's queues, so a full queue
+/// holds the ROPs back, and the fetch's reads queue among the ROPs' traffic in time. The
+/// frame ends when the last request has completed.
 pub async fn run_dram(
-    mut ctx: Ctx<FrameTraffic, ()>,
+    mut ctx: Ctx<MemAccess, ()>,
     cfg: DramConfig,
     clock: DramClock,
     sector_bytes: u64,
+    geometry_base: u64,
     record: bool,
 ) -> Finished {
-    let mut requests = record.then(Vec::new);
     let mut dram = Dram::new(&cfg).expect("the memory fields were checked when the run was built");
     let atom = u64::from(cfg.atom_bytes());
+    let mut clients = Clients {
+        requests: record.then(Vec::new),
+        ..Clients::default()
+    };
     while let Some(t) = ctx.next_input().await {
         let (now, _) = ctx.clock();
         let at = clock.to_dram(now);
-        let mut submitted = false;
+        let before = clients.submitted;
+        if t.is_geometry() {
+            let start = geometry_base + t.offset;
+            for a in start / atom..(start + t.bytes).div_ceil(atom) {
+                clients.submit(&mut dram, a * atom, false, at, false);
+            }
+        }
         for tr in t.transfers() {
             let mut last = u64::MAX;
             for s in (0..64).filter(|s| tr.sectors >> s & 1 == 1) {
                 let a = (tr.addr + s * sector_bytes) / atom;
                 if a != last {
-                    let req = Request {
-                        addr: a * atom,
-                        write: tr.write,
-                        arrival: at,
-                    };
-                    if let Some(r) = requests.as_mut() {
-                        r.push(req);
-                    }
-                    dram.submit(req);
+                    clients.submit(&mut dram, a * atom, tr.write, at, true);
                     last = a;
-                    submitted = true;
                 }
             }
         }
-        if submitted {
+        if clients.submitted > before {
             let admitted = dram.admit_all();
             ctx.work(clock.to_core(admitted).saturating_sub(now.0));
-            dram.complete();
+            clients.collect(&mut dram);
         }
     }
     let last = dram.finish();
+    clients.collect(&mut dram);
     let (now, _) = ctx.clock();
     ctx.work(clock.to_core(last).saturating_sub(now.0));
-    Finished::new(ctx, Counts::default()).with(UnitReport::Dram(dram.stats(), requests))
+    let stats = ClientStats {
+        rop_read_latency_mean: clients.rop_latency as f64 / clients.stats.rop_reads.max(1) as f64,
+        ..clients.stats
+    };
+    Finished::new(ctx, Counts::default()).with(UnitReport::Dram(
+        dram.stats(),
+        stats,
+        clients.requests,
+    ))
+}
+
+/// The controller's clients as it submits their requests: the trace, if kept, and which
+/// requests are the ROPs' reads, whose latencies it sums as they complete.
+#[derive(Default)]
+struct Clients {
+    requests: Option<Vec<Request>>,
+    /// Bit t: request t is a ROP's read.
+    rop_read: Vec<u64>,
+    /// The completed ROP reads' latencies, summed \[DRAM cycles\].
+    rop_latency: u64,
+    /// Requests submitted.
+    submitted: u64,
+    stats: ClientStats,
+}
+
+impl Clients {
+    /// Submits a request for the atom at `addr` arriving `at`, from a ROP if `rop` (else
+    /// from the geometry fetch).
+    fn submit(&mut self, dram: &mut Dram, addr: u64, write: bool, at: u64, rop: bool) {
+        let req = Request {
+            addr,
+            write,
+            arrival: at,
+        };
+        if let Some(r) = self.requests.as_mut() {
+            r.push(req);
+        }
+        let t = dram.submit(req).0;
+        self.submitted += 1;
+        if t / 64 >= self.rop_read.len() as u64 {
+            self.rop_read.push(0);
+        }
+        if !rop {
+            self.stats.geometry_atoms += 1;
+        } else if !write {
+            self.rop_read[(t / 64) as usize] |= 1 << (t % 64);
+            self.stats.rop_reads += 1;
+        }
+    }
+
+    /// Takes the requests `dram` has completed.
+    fn collect(&mut self, dram: &mut Dram) {
+        for c in dram.complete() {
+            let t = c.ticket.0;
+            if self.rop_read[(t / 64) as usize] >> (t % 64) & 1 == 1 {
+                self.rop_latency += c.done - c.arrival;
+            }
+        }
+    }
 }
 
 /// The memory port's body: every access through the port at its byte rate, then the
 /// multisample resolve's `resolve_bytes` (0 with one sample per pixel: no resolve).
 pub async fn run(
-    mut ctx: Ctx<FrameTraffic, ()>,
+    mut ctx: Ctx<MemAccess, ()>,
     cfg: &FrameBufferConfig,
     resolve_bytes: u64,
 ) -> Finished {

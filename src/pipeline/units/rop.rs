@@ -5,7 +5,7 @@
 //! [`FragmentSpan`]s, or [`TrianglePiece`]s in the triangle path. For each fragment: its
 //! depth (from the lembo's depth quadratic, or the triangle's plane), the depth test on
 //! (z, id) (the winner does not depend on arrival order), and for a fragment that passes,
-//! Phong shading (Piranda et al. 2006 equation 6) and the write. Output: one [`FrameTraffic`] per
+//! Phong shading (Piranda et al. 2006 equation 6) and the write. Output: one [`MemAccess`] per
 //! item to the frame-buffer memory port: depth reads for every fragment tested, colour and depth
 //! writes for every fragment that passed.
 //!
@@ -28,7 +28,7 @@ use crate::frame::discoid::{
     accumulation_keeps, depth_pass_wins, evaluate, DiscoidFragment, KeptFragment, Pass,
 };
 use crate::graph::UnitKind;
-use crate::pipeline::items::{FragmentSpan, FrameTraffic, LineTransfer, RopItem, TrianglePiece};
+use crate::pipeline::items::{FragmentSpan, LineTransfer, MemAccess, RopItem, TrianglePiece};
 use crate::pipeline::rop_memory::RopMemory;
 use crate::pipeline::runtime::executor::UnitFuture;
 use crate::pipeline::runtime::Ctx;
@@ -44,12 +44,12 @@ pub struct Rop;
 impl<R: Real> Unit<R> for Rop {
     const KIND: UnitKind = UnitKind::Rop;
     type In = RopItem<R>;
-    type Out = FrameTraffic;
+    type Out = MemAccess;
     // A write request: address and colour with depth.
     const OUT_WORDS: u32 = 3;
 
     fn spawn<'a>(
-        ctx: Ctx<RopItem<R>, FrameTraffic>,
+        ctx: Ctx<RopItem<R>, MemAccess>,
         run: &'a RunInputs<'a, R>,
         index: usize,
     ) -> UnitFuture<'a, Finished> {
@@ -146,10 +146,7 @@ fn discoid_fragment<R: Real>(
 }
 
 /// A ROP's body: depth-tests, shades and writes the fragments it is given into its pixels.
-pub async fn run<R: Real>(
-    mut ctx: Ctx<RopItem<R>, FrameTraffic>,
-    rop: RopContext<'_, R>,
-) -> Finished {
+pub async fn run<R: Real>(mut ctx: Ctx<RopItem<R>, MemAccess>, rop: RopContext<'_, R>) -> Finished {
     let RopContext {
         cfg,
         memory: fbc,
@@ -159,6 +156,10 @@ pub async fn run<R: Real>(
         discoid,
         mut caches,
     } = rop;
+    if caches.is_some() {
+        // Its caches are written back once its inputs end.
+        ctx.pushes_at_end();
+    }
     let mut counts = Counts::default();
     let mut kept = (Vec::new(), BlendReport::default());
     // The fragments that passed, shaded in lanes as the functional ROP shades them
@@ -203,7 +204,7 @@ pub async fn run<R: Real>(
         let (bytes, extra) = traffic(fbc, discoid, n, passed);
         let mut cycles = cfg.fragments_per_cycle.ceil_div(n) + extra;
         let Some(c) = caches.as_mut() else {
-            ctx.emit(cycles, FrameTraffic::bytes(bytes)).await;
+            ctx.emit(cycles, MemAccess::frame(bytes)).await;
             continue;
         };
         transfers.clear();
@@ -236,13 +237,13 @@ pub async fn run<R: Real>(
 /// `cycles`. A span over several memory tiles may make more transfers than an item carries:
 /// the rest follow in items of their own, a cycle each.
 async fn send<R: Real>(
-    ctx: &mut Ctx<RopItem<R>, FrameTraffic>,
+    ctx: &mut Ctx<RopItem<R>, MemAccess>,
     cycles: u64,
     bytes: u64,
     transfers: &[LineTransfer],
 ) {
-    let mut chunks = transfers.chunks(FrameTraffic::CAP);
-    let mut out = FrameTraffic::bytes(bytes);
+    let mut chunks = transfers.chunks(MemAccess::CAP);
+    let mut out = MemAccess::frame(bytes);
     chunks
         .next()
         .into_iter()
@@ -250,7 +251,7 @@ async fn send<R: Real>(
         .for_each(|&t| out.push(t));
     ctx.emit(cycles, out).await;
     for chunk in chunks {
-        let mut out = FrameTraffic::default();
+        let mut out = MemAccess::default();
         chunk.iter().for_each(|&t| out.push(t));
         ctx.emit(1, out).await;
     }
@@ -260,13 +261,13 @@ async fn send<R: Real>(
 /// write-backs and this ROP's share of the resolve, a burst of transfers an item, at the
 /// caches' port rate.
 async fn write_back<R: Real>(
-    ctx: &mut Ctx<RopItem<R>, FrameTraffic>,
+    ctx: &mut Ctx<RopItem<R>, MemAccess>,
     c: &mut RopMemory,
     pixels: &RopPixels<'_, '_>,
 ) {
     ctx.wait_for_end_of_inputs();
-    for chunk in c.finish(pixels).chunks(FrameTraffic::CAP) {
-        let mut out = FrameTraffic::default();
+    for chunk in c.finish(pixels).chunks(MemAccess::CAP) {
+        let mut out = MemAccess::default();
         chunk.iter().for_each(|&t| out.push(t));
         let sectors: u64 = chunk
             .iter()
