@@ -49,8 +49,7 @@ pub trait InputView {
     /// link's latency.
     fn next_arrival(&self, core: &Core) -> Cycle;
     /// The earliest cycle the link's end can reach the consumer: when it ended plus the
-    /// latency, else the producer's clock (a unit ends its links at its clock when it
-    /// finishes, and its clock only grows) plus the latency.
+    /// latency, else the producer's [`Core::end_bound`] plus the latency.
     fn end_bound(&self, core: &Core) -> Cycle;
     /// The producing unit's name (deadlock reports).
     fn producer_name(&self) -> &str;
@@ -117,6 +116,8 @@ pub struct Slot {
     pub consumers: RefCell<Vec<(usize, String)>>,
     /// (step, bound) of the last bound computed.
     memo: Cell<(u64, Cycle)>,
+    /// (step, bound) of the last end bound computed ([`Core::end_bound`]).
+    end_memo: Cell<(u64, Cycle)>,
     /// It may push once the end of its inputs reaches it (a ROP writing back its caches,
     /// [`super::Ctx::pushes_at_end`]): its bound then also follows its inputs' ends, which
     /// can come before any item they would carry.
@@ -155,6 +156,7 @@ impl Core {
                     inputs: RefCell::new(Vec::new()),
                     consumers: RefCell::new(Vec::new()),
                     memo: Cell::new((u64::MAX, Cycle::ZERO)),
+                    end_memo: Cell::new((u64::MAX, Cycle::ZERO)),
                     pushes_at_end: Cell::new(false),
                 })
                 .collect(),
@@ -280,6 +282,34 @@ impl Core {
         b
     }
 
+    /// A lower bound on the cycle unit `u` ends its outputs: a unit ends them at its clock,
+    /// which only grows, or when the last of its inputs' ends reached it, if later
+    /// ([`super::Ctx::finish`]). Memoised per step, as [`Self::bound`].
+    pub fn end_bound(&self, u: u32) -> Cycle {
+        let s = &self.slots[u as usize];
+        let (step, cached) = s.end_memo.get();
+        if step == self.step.get() {
+            return cached;
+        }
+        // Guard against re-entry, as `bound`: the stale value is still a bound.
+        s.end_memo.set((self.step.get(), cached));
+        let now = s.now.get();
+        let b = match s.wait.get() {
+            Wait::Done => now,
+            _ => s
+                .inputs
+                .borrow()
+                .iter()
+                .map(|i| i.end_bound(self))
+                .max()
+                .unwrap_or(now)
+                .max(now),
+        };
+        let b = b.max(cached);
+        s.end_memo.set((self.step.get(), b));
+        b
+    }
+
     /// Whether every unit finished.
     pub fn all_done(&self) -> bool {
         self.slots.iter().all(|s| s.wait.get() == Wait::Done)
@@ -389,6 +419,8 @@ pub fn recover(snaps: &[UnitSnap]) -> Vec<(usize, Cycle)> {
     let never = |c: Cycle| c == Cycle::NEVER;
     let mut e: Vec<Cycle> = snaps.iter().map(|s| s.now).collect();
     let mut x: Vec<Cycle> = snaps.iter().map(|s| s.now + (s.latency - 1)).collect();
+    // A lower bound on when each unit ends its outputs (as `Core::end_bound`).
+    let mut ends: Vec<Cycle> = snaps.iter().map(|s| s.now).collect();
     for (i, s) in snaps.iter().enumerate() {
         if s.wait == Wait::Done {
             e[i] = Cycle::NEVER;
@@ -418,6 +450,11 @@ pub fn recover(snaps: &[UnitSnap]) -> Vec<(usize, Cycle)> {
                 .map(|inp| bound(inp, &x))
                 .min()
                 .unwrap_or(Cycle::NEVER);
+            let end_in = inputs_end(s, &ends, &at);
+            if s.wait != Wait::Done && end_in > ends[i] {
+                ends[i] = end_in;
+                moved = true;
+            }
             let (ei, xi) = match s.wait {
                 Wait::Done => continue,
                 Wait::Runnable => (s.now, s.now + s.latency),
@@ -425,7 +462,7 @@ pub fn recover(snaps: &[UnitSnap]) -> Vec<(usize, Cycle)> {
                 Wait::Input { .. } if never(a) => (s.now, s.now + s.latency),
                 Wait::Input { .. } => {
                     let ei = s.now.max(a);
-                    (ei, (ei + s.latency).min(at_end(s, snaps, &at)))
+                    (ei, (ei + s.latency).min(at_end(s, end_in)))
                 }
                 Wait::Credit { .. } => {
                     let c = s
@@ -464,27 +501,32 @@ pub fn recover(snaps: &[UnitSnap]) -> Vec<(usize, Cycle)> {
     safe_to_go(snaps, &|input: &InputSnap| bound(input, &x))
 }
 
-/// When a unit that pushes at the end of its inputs (`s`) can push at that end, at the
-/// earliest: once the last end reaches it (each ended link's end, else its producer's
-/// clock, plus the latency), plus its latency; never for another unit. `at[u]` is unit u's
-/// position in `snaps`.
-fn at_end(s: &UnitSnap, snaps: &[UnitSnap], at: &[usize]) -> Cycle {
-    if !s.pushes_at_end {
-        return Cycle::NEVER;
-    }
-    let end = s
-        .inputs
+/// When the last of unit `s`'s inputs' ends can reach it, at the earliest: each ended
+/// link's end, else its producer's end bound in `ends`, plus the link's latency (its clock
+/// when it has none). `at[u]` is unit u's position in the snapshot.
+fn inputs_end(s: &UnitSnap, ends: &[Cycle], at: &[usize]) -> Cycle {
+    s.inputs
         .iter()
         .map(|inp| {
-            let clock = match at.get(inp.producer).copied() {
-                Some(p) if p != usize::MAX => snaps[p].now,
+            let producer = match at.get(inp.producer).copied() {
+                Some(p) if p != usize::MAX => ends[p],
                 _ => Cycle::ZERO,
             };
-            inp.end_at.unwrap_or(clock) + inp.latency
+            inp.end_at.unwrap_or(producer) + inp.latency
         })
         .max()
-        .unwrap_or(s.now);
-    end.max(s.now) + s.latency
+        .unwrap_or(s.now)
+        .max(s.now)
+}
+
+/// When a unit that pushes at the end of its inputs (`s`) can push at that end, at the
+/// earliest: once the last end reaches it (`end_in`), plus its latency; never for another
+/// unit.
+fn at_end(s: &UnitSnap, end_in: Cycle) -> Cycle {
+    match s.pushes_at_end {
+        true => end_in + s.latency,
+        false => Cycle::NEVER,
+    }
 }
 
 /// The held items that may go ahead, given each input's bound: an item every other input's

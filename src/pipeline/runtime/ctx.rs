@@ -353,8 +353,17 @@ impl<I, O> Ctx<I, O> {
     pub fn finish(mut self) -> (UnitStats, Option<Recorder>) {
         self.publish();
         self.core.slots[self.unit as usize].wait.set(Wait::Done);
+        // The end leaves after the ends of its inputs reached it (it finishes because they
+        // ended), though its clock, and so its counters, stay at its last op: the dates of
+        // ends then follow their causes, which a unit that pushes at the end of its inputs
+        // relies on (`Core::end_bound`).
+        let end = self
+            .inputs
+            .iter()
+            .filter_map(Rx::end_arrival)
+            .fold(self.now, Cycle::max);
         for tx in &self.outputs {
-            tx.end(self.now);
+            tx.end(end);
         }
         let mut stats = std::mem::take(&mut self.stats);
         stats.end = self.now;

@@ -329,7 +329,7 @@ impl<T> InputView for LocalLink<T> {
         let f = self.fifo.borrow();
         let at = match f.ended {
             true => f.end_at,
-            false => core.slots[self.ends.producer as usize].now.get(),
+            false => core.end_bound(self.ends.producer),
         };
         at + self.spec.latency_cycles
     }
@@ -360,7 +360,7 @@ pub struct RemoteTx<T> {
     data: Sender<Msg<T>>,
     credit_rx: Receiver<Vec<Cycle>>,
     horizon: Arc<AtomicU64>,
-    /// The producer's clock as last published (a bound on when it can end the link).
+    /// The producer's end bound as last published (`Core::end_bound`).
     clock: Arc<AtomicU64>,
     /// The consumer's host thread.
     peer: Arc<Signal>,
@@ -390,7 +390,7 @@ pub struct RemoteRx<T> {
     pending_credits: RefCell<Vec<Cycle>>,
     /// No item will be pushed before this cycle (the last item's push or the horizon).
     bound: Cell<Cycle>,
-    /// The producer's clock as last received: it cannot end the link before.
+    /// The producer's end bound as last received: it cannot end the link before.
     producer_clock: Cell<Cycle>,
     ended: Cell<bool>,
     /// When the producer ended it.
@@ -566,7 +566,7 @@ impl<T> RemoteEnd for RemoteTx<T> {
                 self.horizon.store(bound.0, Release);
                 moved = true;
             }
-            let clock = self.core.slots[self.ends.producer as usize].now.get();
+            let clock = self.core.end_bound(self.ends.producer);
             if clock > self.published_clock.get() {
                 self.published_clock.set(clock);
                 self.clock.store(clock.0, Release);
