@@ -83,6 +83,17 @@ pub struct RopMemory {
     touched: Vec<TileTouch>,
 }
 
+/// The layout of `cfg`'s surfaces of `width` x `rows` sample rows.
+fn layout(cfg: &MemoryConfig, width: u32, rows: u32) -> Result<SurfaceLayout> {
+    SurfaceLayout::new(
+        width,
+        rows,
+        BYTES_PER_PIXEL,
+        cfg.sector_bytes,
+        cfg.pixel_order,
+    )
+}
+
 /// The bytes one surface of `layout` takes in memory.
 fn surface_bytes(layout: &SurfaceLayout) -> u64 {
     layout.tiles() as u64 * layout.tile_bytes() as u64
@@ -92,13 +103,7 @@ impl RopMemory {
     /// The caches of `cfg` over surfaces of `width` x `rows` sample rows (`samples` a
     /// pixel), every tile cleared.
     pub fn new(cfg: &MemoryConfig, width: u32, rows: u32, samples: u32) -> Result<Self> {
-        let layout = SurfaceLayout::new(
-            width,
-            rows,
-            BYTES_PER_PIXEL,
-            cfg.sector_bytes,
-            cfg.pixel_order,
-        )?;
+        let layout = layout(cfg, width, rows)?;
         let size = surface_bytes(&layout);
         let surface = |kind, cache: crate::memory::cache::CacheConfig, base| -> Result<Cached> {
             Ok(Cached {
@@ -120,14 +125,7 @@ impl RopMemory {
     /// Where the primitives the geometry fetch reads start in memory, after the surfaces of
     /// `new(cfg, width, rows, _)` (colour, depth, and the resolved colour's room).
     pub fn geometry_base(cfg: &MemoryConfig, width: u32, rows: u32) -> Result<u64> {
-        let layout = SurfaceLayout::new(
-            width,
-            rows,
-            BYTES_PER_PIXEL,
-            cfg.sector_bytes,
-            cfg.pixel_order,
-        )?;
-        Ok(3 * surface_bytes(&layout))
+        Ok(3 * surface_bytes(&layout(cfg, width, rows)?))
     }
 
     /// Sectors each cache moves a cycle.
