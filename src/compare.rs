@@ -39,8 +39,8 @@ use crate::datapath::Datapath;
 use crate::discoid::blend::BlendMode;
 use crate::error::{Error, Result, COMMAND_LINE};
 use crate::job::{
-    self, check_tess_range, check_triangle_budget, load_arch, render_reference, run_path, Given,
-    Mode, Model, PathRun, PrimitivePath, RenderJob,
+    self, check_tess_range, check_triangle_budget, load_arch, render_reference_with, run_path,
+    Given, Mode, Model, PathRun, PrimitivePath, RenderJob, TraceSettings,
 };
 use crate::output::{check_out_dir, write_set};
 use crate::reference::montage::{montage, Panel};
@@ -111,6 +111,8 @@ pub struct CompareJob {
     /// The path whose knob the search sets (`--match-path`); None when not given: the
     /// triangle path's n.
     pub match_path: Option<MatchPath>,
+    /// How the exact reference is traced (`--reference-tile`, `--reference-threads`).
+    pub trace: TraceSettings,
 }
 
 impl CompareJob {
@@ -148,6 +150,7 @@ impl CompareJob {
     /// The render job of one path at tolerance `k` (validated like `render`'s flags).
     fn render_job(&self, path: PrimitivePath, tess: Option<u32>, k: f64) -> RenderJob {
         RenderJob {
+            trace: self.trace,
             scene: self.scene.clone(),
             out: None,
             k,
@@ -210,12 +213,13 @@ pub fn run_compare(job: &CompareJob) -> Result<CompareOutput> {
     }
     // Every run is measured against the one reference: both paths' accuracy, so every
     // metric `--match` names, is always there.
-    let (reference, reference_wall) = render_reference(
+    let (reference, reference_wall) = render_reference_with(
         &scene,
         &view,
         lembo_job.reference_supersample(),
         job.samples,
-    );
+        job.trace,
+    )?;
     let (lembo, triangle, choice, matched) = run_paths(
         job,
         &lembo_job,
@@ -486,6 +490,7 @@ mod tests {
         match_path: Option<MatchPath>,
     ) -> CompareJob {
         CompareJob {
+            trace: Default::default(),
             scene: None,
             out: None,
             k: crate::tolerance::DEFAULT_K_PX,

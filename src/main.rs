@@ -285,6 +285,27 @@ struct QualityArgs {
         allow_hyphen_values = true
     )]
     flip_ppd: Option<PixelsPerDegree>,
+    /// Side of the square screen tiles the exact reference bins lembos into, in pixels,
+    /// from 4 to 1024: its memory and time, never its result (every image and metric is
+    /// the same bit for bit at any tile side) [default: 16].
+    #[arg(long, value_name = "PX")]
+    reference_tile: Option<u32>,
+    /// Host threads the exact reference and its accuracy metrics run on, from 1 to 256
+    /// [default: the machine's cores].
+    #[arg(long, value_name = "N")]
+    reference_threads: Option<u32>,
+}
+
+impl QualityArgs {
+    /// How the exact reference is traced.
+    fn trace(&self) -> job::TraceSettings {
+        job::TraceSettings {
+            tile: self
+                .reference_tile
+                .unwrap_or(job::TraceSettings::default().tile),
+            threads: self.reference_threads,
+        }
+    }
 }
 
 #[derive(Args)]
@@ -520,6 +541,8 @@ fn default_render() -> RenderArgs {
             samples: Samples::ONE,
             supersample: None,
             flip_ppd: None,
+            reference_tile: None,
+            reference_threads: None,
         },
         mode: Mode::Timed,
         arch: None,
@@ -734,6 +757,7 @@ fn with_progress<T>(work: impl FnOnce() -> T) -> T {
 
 fn compare(args: CompareArgs) -> ExitCode {
     let job = CompareJob {
+        trace: args.quality.trace(),
         scene: args.scene,
         out: args.out,
         k: args.k,
@@ -780,6 +804,7 @@ fn render(args: RenderArgs) -> ExitCode {
         supersample: args.quality.supersample.is_some(),
     };
     let job = RenderJob {
+        trace: args.quality.trace(),
         scene: args.scene,
         out: args.out,
         k: args.k.unwrap_or(DEFAULT_K_PX),

@@ -270,8 +270,8 @@ fn measure_discoids(
         ));
     }
     let surface = reference_scene(scene)?;
-    let held: Vec<crate::lembo::Lembo> = surface.lembos().map(|(l, _)| l).collect();
-    let tracer = oracle::Tracer::new(&held, view);
+    let lembos = oracle::SceneLembos::new(surface.as_ref());
+    let tracer = oracle::Tracer::new(&lembos, view, job.trace.tile);
     let flip = flip_frame(&with_normals, reference, job.flip_ppd);
     let accuracy = metrics::measure(&with_normals, reference, &tracer, 0, None, None, &flip);
     let metrics_wall = t1.elapsed().as_secs_f64();

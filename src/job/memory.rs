@@ -32,10 +32,14 @@ const BYTES_FIXED: f64 = 96.0 * 1024.0 * 1024.0;
 /// sorted cells, the edges' sides).
 const BYTES_PER_LEMBO: f64 = 80.0;
 
-/// Bytes per lembo of the exact reference, which traces every lembo and so holds them all,
-/// made, with their footprints and tile bins (measured as [`BYTES_PER_LEMBO`]: 1 550 a
-/// lembo in all).
-const BYTES_PER_LEMBO_REFERENCE: f64 = 1600.0;
+/// Bytes per lembo of a run measured against the exact reference, besides
+/// [`BYTES_PER_LEMBO`]: the reference keeps each lembo's id in the tiles it meets and makes
+/// a span of tiles' lembos at a time (`reference::oracle`), the probe and the see-through
+/// check keep 32 bytes for each edge of each lembo while they match edges. Measured as
+/// [`BYTES_PER_LEMBO`] with `--reference` (terrain500 to terrain1000 at 256x256,
+/// 2026-11-28: 223 bytes a lembo in all, against 100 without), rounded up. Held whole, the
+/// reference took 1 550 bytes a lembo.
+const BYTES_PER_LEMBO_REFERENCE: f64 = 160.0;
 
 /// Bytes per lembo of the triangle path: the indexed mesh's vertex numbering that the
 /// geometry fetch's vertex caches read (keys of every distinct corner and edge; measured as
@@ -129,7 +133,7 @@ pub fn check_memory(job: &RenderJob, scene: &Scene, extra_per_pixel: f64) -> Res
     if primitives > pixels {
         let lembos = scene.lembo_count();
         let advice = if job.reference {
-            "render a scene of fewer lembos, or without --reference (which holds every lembo)"
+            "render a scene of fewer lembos, or without --reference (which adds about 160 bytes a lembo)"
         } else {
             "render a scene of fewer lembos"
         };

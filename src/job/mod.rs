@@ -26,7 +26,7 @@ pub use memory::{check_available, check_memory, memory_estimate};
 pub use path::run_path;
 pub use reference::{
     check_reference_scene, measure_frame, measure_frame_and_flip, reference_scene,
-    render_reference, see_through_px, ErrorMaps,
+    render_reference, render_reference_with, see_through_px, ErrorMaps,
 };
 pub use render::{load_arch, load_scene, run_render, RenderOutput};
 pub use route::{
@@ -34,6 +34,6 @@ pub use route::{
 };
 pub use validate::{
     check_count, check_tess_range, check_threshold, machine_threads, Given, Mode, PrimitivePath,
-    RenderJob, TechSource, AA_SUPERSAMPLE, MAX_HOST_THREADS, MAX_SUPERSAMPLE, MAX_TESS,
-    MAX_THREADS,
+    RenderJob, TechSource, TraceSettings, AA_SUPERSAMPLE, MAX_HOST_THREADS, MAX_SUPERSAMPLE,
+    MAX_TESS, MAX_THREADS,
 };

@@ -50,7 +50,7 @@ pub fn run_path(
     let (cull, culling) = culling::resolve(scene, view, model, &route);
     let view = &view.with_culling(cull);
     let (drawn, wall) = draw(job, scene, view, model, &route, reference.is_some())?;
-    let measured = measure_drawn(job, scene, view, &route, &drawn, reference);
+    let measured = measure_drawn(job, scene, view, &route, &drawn, reference)?;
     let counts = drawn.counts();
     // The primitives' sizes: the architecture's, or its defaults for a functional frame.
     let sizes = model.arch().map(|a| a.fetch.clone()).unwrap_or_default();
@@ -133,17 +133,17 @@ fn measure_drawn(
     route: &Route,
     drawn: &Drawn,
     reference: Option<(&ReferenceImage, f64)>,
-) -> Option<Measured> {
-    match (reference, drawn.probed()) {
+) -> Result<Option<Measured>> {
+    Ok(match (reference, drawn.probed()) {
         (Some(reference), Some(frame)) => {
             let ids_per_lembo = match route {
                 Route::Triangles(t) => t.triangles_per_lembo(),
                 _ => 1,
             };
-            Some(measure(job, scene, view, ids_per_lembo, frame, reference))
+            Some(measure(job, scene, view, ids_per_lembo, frame, reference)?)
         }
         _ => None,
-    }
+    })
 }
 
 /// The host section of a lembo or triangle route's report: a functional frame also

@@ -1,14 +1,13 @@
 //! The exact reference a run is measured against (for a discoid scene, the surface its
 //! discoids stand for) and a frame's accuracy against it.
 
-use super::validate::{PrimitivePath, RenderJob};
+use super::validate::{PrimitivePath, RenderJob, TraceSettings};
 use crate::camera::{Samples, View};
 use crate::error::{Error, Result, COMMAND_LINE};
 use crate::frame;
 use crate::lembo::tessellate::Tessellation;
-use crate::lembo::Lembo;
 use crate::reference::flip::{flip_frame, FlipMap, PixelsPerDegree};
-use crate::reference::oracle::ReferenceImage;
+use crate::reference::oracle::{ReferenceImage, SceneLembos};
 use crate::reference::{heatmap, metrics, oracle, see_through, Accuracy};
 use crate::rop::FrameBuffer;
 use crate::scene::Scene;
@@ -55,28 +54,54 @@ pub fn render_reference(
 ) -> (ReferenceImage, f64) {
     crate::progress::stage("exact reference");
     let t = Instant::now();
-    // The reference traces every lembo: it holds them all, made (DESIGN.md §3, "Streamed
-    // primitives").
-    let held: Vec<(Lembo, [f64; 3])> = scene.lembos().collect();
-    let lembos: Vec<(&Lembo, [f64; 3])> = held.iter().map(|(l, c)| (l, *c)).collect();
+    let reference = trace(scene, view, supersample, samples, oracle::DEFAULT_TILE);
+    (reference, t.elapsed().as_secs_f64())
+}
+
+/// [`render_reference`] traced as `settings` say (tile side, threads): the same image.
+pub fn render_reference_with(
+    scene: &Scene,
+    view: &View,
+    supersample: u32,
+    samples: Samples,
+    settings: TraceSettings,
+) -> Result<(ReferenceImage, f64)> {
+    crate::progress::stage("exact reference");
+    let t = Instant::now();
+    let reference = settings.install(|| trace(scene, view, supersample, samples, settings.tile))?;
+    Ok((reference, t.elapsed().as_secs_f64()))
+}
+
+/// The reference [`render_reference`] describes, binned in tiles of `tile` pixels.
+fn trace(
+    scene: &Scene,
+    view: &View,
+    supersample: u32,
+    samples: Samples,
+    tile: u32,
+) -> ReferenceImage {
+    // The lembos are made by id as the tiles ask for them: nothing holds them all
+    // (DESIGN.md §3, "Streamed primitives").
+    let lembos = SceneLembos::new(scene);
     let input = oracle::ReferenceInput {
         lembos: &lembos,
         view,
         light: &scene.light,
         background: scene.background,
         supersample,
+        tile,
     };
-    let mut reference = oracle::render_reference(&input);
-    if samples != Samples::ONE {
-        let offset = samples.first_row_offset();
-        let at_sample = oracle::render_reference(&oracle::ReferenceInput {
-            view: &view.translated(offset),
-            supersample: 1,
-            ..input
-        });
-        reference = reference.for_samples(at_sample, offset);
+    let reference = oracle::render_reference(&input);
+    if samples == Samples::ONE {
+        return reference;
     }
-    (reference, t.elapsed().as_secs_f64())
+    let offset = samples.first_row_offset();
+    let at_sample = oracle::render_reference(&oracle::ReferenceInput {
+        view: &view.translated(offset),
+        supersample: 1,
+        ..input
+    });
+    reference.for_samples(at_sample, offset)
 }
 
 /// The view a reference's hits were traced in: `view`, or moved to where a multisampled
@@ -116,21 +141,23 @@ pub(super) fn measure(
     ids_per_lembo: u64,
     frame: &frame::Frame,
     (reference, wall): (&ReferenceImage, f64),
-) -> Measured {
+) -> Result<Measured> {
     crate::progress::stage("accuracy metrics");
     let t1 = Instant::now();
-    let (accuracy, flip) = measure_frame_and_flip(
-        scene,
-        view,
-        frame,
-        reference,
-        job.path,
-        ids_per_lembo,
-        job.flip_ppd,
-        job.samples,
-    );
+    let (accuracy, flip) = job.trace.install(|| {
+        measure_frame_and_flip(
+            scene,
+            view,
+            frame,
+            reference,
+            job.path,
+            ids_per_lembo,
+            job.flip_ppd,
+            job.samples,
+        )
+    })?;
     let metrics_wall = t1.elapsed().as_secs_f64();
-    Measured {
+    Ok(Measured {
         accuracy,
         maps: ErrorMaps {
             colour: heatmap::error_heatmap(&frame.framebuffer, reference),
@@ -138,7 +165,7 @@ pub(super) fn measure(
         },
         reference_wall: wall + t1.elapsed().as_secs_f64(),
         metrics_wall,
-    }
+    })
 }
 
 /// The accuracy of `frame` (rendered with `analyse`, one sample a pixel) of `scene` against
@@ -187,9 +214,17 @@ pub fn measure_frame_and_flip(
     // Multisampled, the frame keeps each pixel's first sample row's geometry, and the
     // reference's hits are traced there: so are the outline and the see-through rays.
     let view = &hits_view(view, reference);
-    let held: Vec<Lembo> = scene.lembos().map(|(l, _)| l).collect();
-    let tracer = oracle::Tracer::new(&held, view);
-    let flip = flip_frame(&frame.framebuffer, reference, ppd);
+    let lembos = SceneLembos::new(scene);
+    // FLIP runs on one thread (the reference implementation), beside the rest.
+    let (flip, (tracer, see_through)) = rayon::join(
+        || flip_frame(&frame.framebuffer, reference, ppd),
+        || {
+            (
+                oracle::Tracer::new(&lembos, view, oracle::DEFAULT_TILE),
+                see_through_px(scene, view, &frame.framebuffer, ids_per_lembo),
+            )
+        },
+    );
     let accuracy = metrics::measure(
         &frame.framebuffer,
         reference,
@@ -200,7 +235,7 @@ pub fn measure_frame_and_flip(
             PrimitivePath::Lembo => Some(probe.max_scanline_deviation_px / samples.get() as f64),
             PrimitivePath::Triangle => None,
         },
-        see_through_px(scene, view, &frame.framebuffer, ids_per_lembo),
+        see_through,
         &flip,
     );
     (accuracy, flip)
@@ -218,12 +253,7 @@ pub fn see_through_px(
     if scene.objects.iter().all(|o| !o.from_mesh) {
         return None;
     }
-    let held: Vec<(Lembo, bool)> = scene
-        .objects
-        .iter()
-        .flat_map(|o| o.lembos.iter().map(move |l| (l, o.from_mesh)))
-        .collect();
-    let lembos: Vec<(&Lembo, bool)> = held.iter().map(|(l, m)| (l, *m)).collect();
+    let lembos = SceneLembos::new(scene);
     // On the triangle path (n² ids a lembo), the tessellation whose triangles were drawn.
     let level = ids_per_lembo.isqrt() as u32;
     let triangles = (ids_per_lembo > 1).then(|| Tessellation::new(scene.lembo_sets(), level));

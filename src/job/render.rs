@@ -3,7 +3,7 @@
 
 use super::memory::check_memory;
 use super::path::run_path;
-use super::reference::{reference_scene, render_reference};
+use super::reference::{reference_scene, render_reference_with};
 use super::route::{check_samples, check_triangle_budget, Model};
 use super::validate::{Mode, PrimitivePath, RenderJob};
 use crate::camera::View;
@@ -95,12 +95,13 @@ pub fn run_render(job: &RenderJob) -> Result<RenderOutput> {
         check_triangle_budget(&scene, job.tess.unwrap_or(1))?;
     }
     let reference = match job.reference {
-        true => Some(render_reference(
+        true => Some(render_reference_with(
             reference_scene(&scene)?.as_ref(),
             &view,
             job.reference_supersample(),
             job.samples,
-        )),
+            job.trace,
+        )?),
         false => None,
     };
     let run = run_path(

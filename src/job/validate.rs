@@ -122,6 +122,9 @@ pub struct RenderJob {
     /// Run even when the memory estimate exceeds the memory available
     /// (`--no-memory-check`).
     pub no_memory_check: bool,
+    /// How the exact reference is traced (`--reference-tile`, `--reference-threads`): its
+    /// memory and time, never its result.
+    pub trace: TraceSettings,
 }
 
 /// Which of `render`'s defaulted settings were given on the command line (`tess` and
@@ -195,6 +198,33 @@ impl RenderJob {
         }
     }
 
+    /// The flags of the reference: in range, and refused without `--reference`.
+    fn check_reference_flags(&self) -> Result<()> {
+        if self.given.flip_ppd && !self.reference {
+            return Err(Error::invalid(
+                COMMAND_LINE,
+                "--flip-ppd",
+                self.flip_ppd.get(),
+                "only meaningful with --reference (FLIP compares the render with it)",
+            ));
+        }
+        self.trace.check()?;
+        if self.trace != TraceSettings::default() && !self.reference {
+            let flag = if self.trace.tile != TraceSettings::default().tile {
+                ("--reference-tile", self.trace.tile)
+            } else {
+                ("--reference-threads", self.trace.threads.unwrap_or(0))
+            };
+            return Err(Error::invalid(
+                COMMAND_LINE,
+                flag.0,
+                flag.1,
+                "only meaningful with --reference (it says how the reference is traced)",
+            ));
+        }
+        Ok(())
+    }
+
     /// Checks every flag; errors name the flag and the value.
     pub fn validate(&self) -> Result<()> {
         if let PerspectiveTol::Px(px) = self.perspective_tol {
@@ -254,14 +284,7 @@ impl RenderJob {
                 ));
             }
         }
-        if self.given.flip_ppd && !self.reference {
-            return Err(Error::invalid(
-                COMMAND_LINE,
-                "--flip-ppd",
-                self.flip_ppd.get(),
-                "only meaningful with --reference (FLIP compares the render with it)",
-            ));
-        }
+        self.check_reference_flags()?;
         if let Some(t) = self.threshold {
             check_threshold(t)
                 .map_err(|why| Error::invalid(COMMAND_LINE, "--threshold", t, why))?;
@@ -363,6 +386,65 @@ pub fn check_tess_range(n: u32) -> Result<()> {
     }
 }
 
+/// How the exact reference is traced: never what it traces (every image and metric is the
+/// same bit for bit at any setting), only its memory and time.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TraceSettings {
+    /// Side of the square screen tiles the lembos are binned into \[pixels\], in
+    /// [`crate::reference::oracle::TILE_RANGE`] (`--reference-tile`).
+    pub tile: u32,
+    /// Host threads the reference and the metrics run on (`--reference-threads`); None:
+    /// the pool the caller runs in (the machine's cores, or a sweep's `--jobs`).
+    pub threads: Option<u32>,
+}
+
+impl Default for TraceSettings {
+    fn default() -> Self {
+        TraceSettings {
+            tile: crate::reference::oracle::DEFAULT_TILE,
+            threads: None,
+        }
+    }
+}
+
+impl TraceSettings {
+    /// Refuses a tile side outside [`crate::reference::oracle::TILE_RANGE`] or a thread count outside 1 to
+    /// [`MAX_THREADS`], naming the flag.
+    pub fn check(&self) -> Result<()> {
+        if !crate::reference::oracle::TILE_RANGE.contains(&self.tile) {
+            return Err(Error::invalid(
+                COMMAND_LINE,
+                "--reference-tile",
+                self.tile,
+                format!(
+                    "must be from {} to {} pixels (the side of the screen tiles the reference bins lembos into)",
+                    crate::reference::oracle::TILE_RANGE.start(),
+                    crate::reference::oracle::TILE_RANGE.end()
+                ),
+            ));
+        }
+        if let Some(n) = self.threads {
+            check_count("--reference-threads", n, MAX_THREADS, "host threads")?;
+        }
+        Ok(())
+    }
+
+    /// Runs `f` on [`TraceSettings::threads`] threads, or on the caller's pool.
+    pub fn install<T: Send>(&self, f: impl FnOnce() -> T + Send) -> Result<T> {
+        match self.threads {
+            None => Ok(f()),
+            Some(n) => Ok(rayon::ThreadPoolBuilder::new()
+                .num_threads(n as usize)
+                .thread_name(|i| format!("reference-{i}"))
+                .build()
+                .map_err(|e| {
+                    Error::Internal(format!("cannot start the reference's {n} threads: {e}"))
+                })?
+                .install(f)),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -371,6 +453,7 @@ mod tests {
     /// `render` with no flag given.
     fn job() -> RenderJob {
         RenderJob {
+            trace: Default::default(),
             scene: None,
             out: None,
             k: DEFAULT_K_PX,
@@ -417,6 +500,7 @@ mod tests {
         let why = check_k(100.0).unwrap_err();
         assert_eq!(refused(e), ("--k".into(), "100".into(), why));
         let e = RenderJob {
+            trace: Default::default(),
             threshold: Some(-0.5),
             ..job()
         }
@@ -429,6 +513,7 @@ mod tests {
     #[test]
     fn flip_ppd_is_refused_without_a_reference() {
         let with = |reference| RenderJob {
+            trace: Default::default(),
             reference,
             flip_ppd: PixelsPerDegree::new(30.0).unwrap(),
             given: Given {

@@ -533,7 +533,7 @@ mod tests {
     fn measure_against_the_exact_reference_of_a_square_shifted_by_0_4_px() {
         use crate::camera::{Camera, Projection, View, Viewport};
         use crate::lembo::construct::lembo_from_triangle;
-        use crate::reference::oracle::{render_reference, ReferenceInput, Tracer};
+        use crate::reference::oracle::{render_reference, ReferenceInput, Tracer, DEFAULT_TILE};
         use crate::scene::Light;
         // Orthographic, world (X, Y) on screen (X + 32, 32 - Y): the square of two flat
         // lembos covers screen x in [10.2, 50.2], y in [10.25, 50.25].
@@ -572,6 +572,7 @@ mod tests {
             light: &Light::default(),
             background: [0.0; 3],
             supersample: 1,
+            tile: DEFAULT_TILE,
         });
         // The render: the square 0.4 px to the right, x in [10.6, 50.6].
         let mut fb = FrameBuffer::new(64, 64, [0; 3], true);
@@ -584,7 +585,7 @@ mod tests {
                 }
             }
         }
-        let tracer = Tracer::new(lembos.iter(), &view);
+        let tracer = Tracer::of(lembos.iter(), &view);
         let flip = flip_frame(&fb, &reference, PixelsPerDegree::default());
         let a = measure(&fb, &reference, &tracer, 0, None, None, &flip);
         // Column x = 10.5 is the reference's and not the render's, x = 50.5 the reverse:

@@ -43,13 +43,14 @@
 //! and `lembo * n² + k` on the triangle path at tessellation level n: `ids_per_lembo`
 //! maps it back.
 
-use super::oracle::intersect_ray;
+use super::oracle::{intersect_ray, LemboSource};
 use crate::camera::View;
+use crate::lembo::set::LastParent;
 use crate::lembo::tessellate::Tessellation;
 use crate::lembo::Lembo;
 use crate::rop::framebuffer::{FrameBuffer, NO_PRIMITIVE};
 use glam::{DVec2, DVec3};
-use std::collections::BTreeMap;
+use rayon::prelude::*;
 
 /// Pixels this close to the flat mesh's outline, beyond the lembos' own deviation from
 /// their triangles, are not checked \[pixels\] (see `near_outline`).
@@ -83,27 +84,30 @@ struct FlatMesh {
     depth: Vec<f64>,
 }
 
-/// Rasterizes the corner triangles of the lembos marked `true` at pixel centres.
-fn flat_mesh(lembos: &[(&Lembo, bool)], view: &View) -> FlatMesh {
-    let (w, h) = (view.viewport.width as usize, view.viewport.height as usize);
-    let mut flat = FlatMesh {
-        owner: vec![NO_PRIMITIVE; w * h],
-        depth: vec![f64::INFINITY; w * h],
-    };
-    for (id, (l, from_mesh)) in lembos.iter().enumerate() {
-        if !from_mesh {
-            continue;
+impl FlatMesh {
+    /// No triangle anywhere on a `view`'s pixels.
+    fn new(view: &View) -> Self {
+        let (w, h) = (view.viewport.width as usize, view.viewport.height as usize);
+        FlatMesh {
+            owner: vec![NO_PRIMITIVE; w * h],
+            depth: vec![f64::INFINITY; w * h],
         }
-        let s = [0, 1, 2].map(|c| view.project(l.points[c]));
+    }
+
+    /// Rasterizes the mesh triangle `corners` of lembo `id` at pixel centres, keeping the
+    /// nearest (ties to the smaller id, so the order triangles come in does not matter).
+    fn draw(&mut self, id: u32, corners: &[DVec3; 3], view: &View) {
+        let (w, h) = (view.viewport.width as usize, view.viewport.height as usize);
+        let s = corners.map(|c| view.project(c));
         if s.iter()
             .any(|p| p.w.is_nan() || p.w <= 0.0 || !p.x.is_finite() || !p.y.is_finite())
         {
-            continue;
+            return;
         }
         let xy = s.map(|p| DVec2::new(p.x, p.y));
         let area = (xy[1] - xy[0]).perp_dot(xy[2] - xy[0]);
         if area == 0.0 || !area.is_finite() {
-            continue;
+            return;
         }
         let lo = xy[0].min(xy[1]).min(xy[2]);
         let hi = xy[0].max(xy[1]).max(xy[2]);
@@ -112,7 +116,7 @@ fn flat_mesh(lembos: &[(&Lembo, bool)], view: &View) -> FlatMesh {
         let (i0, i1) = (first(lo.x), last(hi.x, w));
         let (j0, j1) = (first(lo.y), last(hi.y, h));
         if i0 > i1 || j0 > j1 {
-            continue;
+            return;
         }
         for j in j0 as usize..=j1 as usize {
             for i in i0 as usize..=i1 as usize {
@@ -128,16 +132,14 @@ fn flat_mesh(lembos: &[(&Lembo, bool)], view: &View) -> FlatMesh {
                 }
                 let z = b[0] * s[0].depth + b[1] * s[1].depth + b[2] * s[2].depth;
                 let k = j * w + i;
-                let nearer =
-                    z < flat.depth[k] || (z == flat.depth[k] && (id as u32) < flat.owner[k]);
+                let nearer = z < self.depth[k] || (z == self.depth[k] && id < self.owner[k]);
                 if (0.0..=1.0).contains(&z) && nearer {
-                    flat.depth[k] = z;
-                    flat.owner[k] = id as u32;
+                    self.depth[k] = z;
+                    self.owner[k] = id;
                 }
             }
         }
     }
-    flat
 }
 
 /// Whether the mesh triangle of `l` faces the eye of `view`.
@@ -174,6 +176,49 @@ fn screen_deviation(l: &Lembo, view: &View) -> f64 {
         * (4.0 / 3.0)
 }
 
+/// One use of a mesh edge by a triangle: the edge's corner positions hashed
+/// ([`edge_key`]), how far the triangle's lembo strays from its triangle \[pixels\], the
+/// lembo, which edge (0: AB, 1: BC, 2: CA), and whether the triangle faces the eye.
+#[derive(Clone, Copy)]
+struct EdgeUse {
+    key: u128,
+    deviation: f64,
+    id: u32,
+    edge: u8,
+    front: bool,
+}
+
+/// The corners of the three edges of a mesh triangle, by edge index.
+const EDGES: [(usize, usize); 3] = [(0, 1), (1, 2), (2, 0)];
+
+/// An edge's corner positions, bit for bit, in a canonical order (the smaller bits first).
+fn edge_corners(l: &Lembo, edge: usize) -> [[u64; 3]; 2] {
+    let bits = |p: DVec3| p.to_array().map(f64::to_bits);
+    let (a, b) = EDGES[edge];
+    let (p, q) = (bits(l.points[a]), bits(l.points[b]));
+    if p <= q {
+        [p, q]
+    } else {
+        [q, p]
+    }
+}
+
+/// A 128-bit hash of an edge's corner positions' bits: two SipHash-1-3 digests
+/// (`DefaultHasher`, fixed keys, so the same in every run) under two prefixes. Edges are
+/// matched by it, 32 bytes a use instead of a map of the 48-byte keys; two different edges
+/// would be taken for one only if their hashes collided, with a probability below 2^-88
+/// for a mesh of 2^20 triangles.
+fn edge_key(corners: &[[u64; 3]; 2]) -> u128 {
+    use std::hash::{Hash, Hasher};
+    let half = |prefix: u64| {
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        prefix.hash(&mut h);
+        corners.hash(&mut h);
+        h.finish()
+    };
+    (u128::from(half(0)) << 64) | u128::from(half(1))
+}
+
 /// Pixels near the flat mesh's outline: the projection of every edge used by a
 /// front-facing triangle but not continued facing the eye (an edge between a front- and a
 /// back-facing triangle, or of one triangle alone). There the smooth surface's outline
@@ -181,47 +226,27 @@ fn screen_deviation(l: &Lembo, view: &View) -> f64 {
 /// stray from their triangles; a pixel is near when its centre is within
 /// [`OUTLINE_MARGIN_PX`] plus that deviation of the edge. Edges are matched by their corner
 /// positions, bit for bit, so split normals do not cut the mesh apart.
-fn near_outline(lembos: &[(&Lembo, bool)], front: &[bool], view: &View) -> Vec<bool> {
+fn near_outline(mut uses: Vec<EdgeUse>, lembos: &dyn LemboSource, view: &View) -> Vec<bool> {
     let (w, h) = (view.viewport.width as usize, view.viewport.height as usize);
-    let bits = |p: DVec3| p.to_array().map(f64::to_bits);
-    /// The triangles using an edge: how many face the eye, how many not, and how far the
-    /// farthest-straying one strays \[pixels\].
-    #[derive(Default)]
-    struct Uses {
-        front: u32,
-        back: u32,
-        deviation: f64,
-    }
-    // A BTreeMap keeps the order, and so the result, independent of hashing.
-    let mut edges: BTreeMap<[[u64; 3]; 2], Uses> = BTreeMap::new();
-    for (id, (l, from_mesh)) in lembos.iter().enumerate() {
-        if !from_mesh {
-            continue;
-        }
-        let deviation = screen_deviation(l, view);
-        for (a, b) in [(0, 1), (1, 2), (2, 0)] {
-            let (p, q) = (bits(l.points[a]), bits(l.points[b]));
-            let e = edges
-                .entry(if p <= q { [p, q] } else { [q, p] })
-                .or_default();
-            if front[id] {
-                e.front += 1;
-            } else {
-                e.back += 1;
-            }
-            e.deviation = e.deviation.max(deviation);
-        }
-    }
     let mut near = vec![false; w * h];
-    for (key, uses) in edges {
+    uses.par_sort_unstable_by_key(|u| u.key);
+    let mut last = LastParent::default();
+    for edge in uses.chunk_by(|a, b| a.key == b.key) {
+        let front = edge.iter().filter(|u| u.front).count();
+        let back = edge.len() - front;
         // Inside the front-facing surface: two front-facing triangles and no back-facing one.
-        if uses.front == 0 || (uses.front >= 2 && uses.back == 0) {
+        if front == 0 || (front >= 2 && back == 0) {
             continue;
         }
-        let margin = OUTLINE_MARGIN_PX + uses.deviation;
+        let deviation = edge.iter().map(|u| u.deviation).fold(0.0, f64::max);
+        let margin = OUTLINE_MARGIN_PX + deviation;
         if !margin.is_finite() {
             continue;
         }
+        // The edge's corners, from its first use's lembo made again (an outline edge is
+        // rare; the pass kept only the hash).
+        let (l, _) = lembos.lembo(edge[0].id as usize, &mut last);
+        let key = edge_corners(&l, edge[0].edge as usize);
         let [p, q] = key.map(|c| view.project(DVec3::from_array(c.map(f64::from_bits))));
         if p.w.is_nan() || q.w.is_nan() || p.w <= 0.0 || q.w <= 0.0 {
             continue;
@@ -310,8 +335,9 @@ fn border_point_nearest(lembo: &Lembo, origin: DVec3, dir: DVec3) -> (f64, f64) 
 }
 
 /// The see-through pixels of `render` (see the module documentation). `lembos` are the
-/// scene's lembos in id order, marked `true` where built from a mesh triangle; the render's
-/// winner id divided by `ids_per_lembo` is a lembo id. A render of the triangle path passes
+/// scene's lembos by id, made as they are needed (one pass in id order, then the winners
+/// and mesh triangles of the pixels checked); the render's winner id divided by
+/// `ids_per_lembo` is a lembo id. A render of the triangle path passes
 /// its `triangles`, whose winner's own plane is then the surface a back face must turn
 /// away (the lembo's surface lies elsewhere than its flat triangles).
 ///
@@ -319,7 +345,7 @@ fn border_point_nearest(lembo: &Lembo, origin: DVec3, dir: DVec3) -> (f64, f64) 
 /// If the render kept no normal buffer, or differs in size from the viewport: bugs of the
 /// caller.
 pub fn see_through(
-    lembos: &[(&Lembo, bool)],
+    lembos: &dyn LemboSource,
     view: &View,
     render: &FrameBuffer,
     ids_per_lembo: u64,
@@ -334,51 +360,164 @@ pub fn see_through(
         .normal
         .as_ref()
         .expect("see-through needs the render's normal buffer (keep_normals)");
-    let flat = flat_mesh(lembos, view);
-    let front: Vec<bool> = lembos
-        .iter()
-        .map(|(l, from_mesh)| *from_mesh && faces_eye(l, view))
-        .collect();
+    let (flat, front, uses) = mesh_pass(lembos, view);
+    let near = near_outline(uses, lembos, view);
     let w = render.width as usize;
-    let near = near_outline(lembos, &front, view);
-    let mut out = SeeThrough::default();
-    for (k, &t) in flat.owner.iter().enumerate() {
+    let pixel = |k: usize, made: &mut (Made, Made), out: &mut SeeThrough| {
+        let t = flat.owner[k];
         if t == NO_PRIMITIVE || !front[t as usize] || near[k] {
-            continue;
+            return;
         }
         out.front_facing += 1;
         let winner = render.primitive[k];
         if winner == NO_PRIMITIVE {
             out.background += 1;
-            continue;
+            return;
         }
         let (x, y) = ((k % w) as f64 + 0.5, (k / w) as f64 + 0.5);
         let (origin, dir) = view.ray(x, y);
         let n = DVec3::from_array(normals[k].map(f64::from));
-        let shown = lembos
-            .get((winner as u64 / ids_per_lembo.max(1)) as usize)
-            .map(|&(l, _)| l);
-        // The surface drawn there: the winning triangle of a tessellation, else its lembo.
-        let surface_to_eye = match triangles {
-            Some(t) if u64::from(winner) < t.len() => {
-                let tri = t.triangle(u64::from(winner));
-                oriented_normal(tri.positions, tri.normals).dot(-dir) > 0.0
+        let shown = winner as u64 / ids_per_lembo.max(1);
+        if n.dot(-dir) < 0.0 {
+            // The surface drawn there: the winning triangle of a tessellation, else its
+            // lembo.
+            let surface_to_eye = match triangles {
+                Some(t) if u64::from(winner) < t.len() => {
+                    let tri = t.triangle(u64::from(winner));
+                    oriented_normal(tri.positions, tri.normals).dot(-dir) > 0.0
+                }
+                _ => made
+                    .0
+                    .get(shown)
+                    .is_some_and(|l| surface_faces(l, origin, dir)),
+            };
+            if !surface_to_eye {
+                out.back_face += 1;
+                return;
             }
-            _ => shown.is_some_and(|l| surface_faces(l, origin, dir)),
-        };
-        if n.dot(-dir) < 0.0 && !surface_to_eye {
-            out.back_face += 1;
-            continue;
         }
-        let Some(shown) = shown else {
-            continue;
+        if render.depth[k] as f64 <= flat.depth[k] {
+            return;
+        }
+        let Some(shown) = made.0.get(shown) else {
+            return;
         };
-        let triangle = lembos[t as usize].0;
-        if !share_a_corner(shown, triangle) && render.depth[k] as f64 > flat.depth[k] {
+        let triangle = made
+            .1
+            .get(u64::from(t))
+            .expect("a flat triangle's lembo exists");
+        if !share_a_corner(shown, triangle) {
             out.foreign_behind += 1;
         }
+    };
+    // Rows in parallel, each with the lembos it last made; the counts are sums.
+    let rows: Vec<SeeThrough> = (0..render.height as usize)
+        .into_par_iter()
+        .map(|j| {
+            let mut made = (Made::new(lembos), Made::new(lembos));
+            let mut out = SeeThrough::default();
+            for k in j * w..(j + 1) * w {
+                pixel(k, &mut made, &mut out);
+            }
+            out
+        })
+        .collect();
+    rows.into_iter()
+        .fold(SeeThrough::default(), |a, b| SeeThrough {
+            background: a.background + b.background,
+            back_face: a.back_face + b.back_face,
+            foreign_behind: a.foreign_behind + b.foreign_behind,
+            front_facing: a.front_facing + b.front_facing,
+        })
+}
+
+/// A lembo's id and the corners of its mesh triangle.
+type MeshTriangle = (u32, [DVec3; 3]);
+
+/// Lembos a task of [`mesh_pass`] makes.
+const PASS_CHUNK: usize = 4096;
+
+/// One pass over the lembos of a mesh, in windows of chunks made in parallel: the flat
+/// mesh, which triangles face the eye, and the edges' uses. What a window makes is kept
+/// only until its triangles are drawn.
+fn mesh_pass(lembos: &dyn LemboSource, view: &View) -> (FlatMesh, Vec<bool>, Vec<EdgeUse>) {
+    let n = lembos.len();
+    let meshed = (0..n).filter(|&id| lembos.is_from_mesh(id)).count();
+    let mut flat = FlatMesh::new(view);
+    let mut front = vec![false; n];
+    let mut uses = Vec::with_capacity(3 * meshed);
+    let window = PASS_CHUNK * 2 * rayon::current_num_threads();
+    for start in (0..n).step_by(window) {
+        let end = (start + window).min(n);
+        let parts: Vec<(Vec<MeshTriangle>, Vec<EdgeUse>)> = (start..end)
+            .step_by(PASS_CHUNK)
+            .collect::<Vec<_>>()
+            .into_par_iter()
+            .map(|from| {
+                let mut last = LastParent::default();
+                let mut corners = Vec::new();
+                let mut uses = Vec::new();
+                for id in from..(from + PASS_CHUNK).min(end) {
+                    if !lembos.is_from_mesh(id) {
+                        continue;
+                    }
+                    let (l, _) = lembos.lembo(id, &mut last);
+                    let faces = faces_eye(&l, view);
+                    let deviation = screen_deviation(&l, view);
+                    for edge in 0..3 {
+                        uses.push(EdgeUse {
+                            key: edge_key(&edge_corners(&l, edge)),
+                            deviation,
+                            id: id as u32,
+                            edge: edge as u8,
+                            front: faces,
+                        });
+                    }
+                    corners.push((id as u32, [l.points[0], l.points[1], l.points[2]]));
+                }
+                (corners, uses)
+            })
+            .collect();
+        for (corners, part) in parts {
+            for (id, c) in corners {
+                flat.draw(id, &c, view);
+            }
+            for u in &part {
+                front[u.id as usize] = u.front;
+            }
+            uses.extend(part);
+        }
     }
-    out
+    (flat, front, uses)
+}
+
+/// The last lembo made by id, kept while consecutive pixels ask for it again.
+struct Made<'a> {
+    lembos: &'a dyn LemboSource,
+    kept: Option<(u64, Lembo)>,
+    last: LastParent,
+}
+
+impl<'a> Made<'a> {
+    fn new(lembos: &'a dyn LemboSource) -> Self {
+        Made {
+            lembos,
+            kept: None,
+            last: LastParent::default(),
+        }
+    }
+
+    /// Lembo `id`, or None beyond the last.
+    fn get(&mut self, id: u64) -> Option<&Lembo> {
+        if id >= self.lembos.len() as u64 {
+            return None;
+        }
+        if self.kept.as_ref().is_none_or(|(k, _)| *k != id) {
+            let (l, _) = self.lembos.lembo(id as usize, &mut self.last);
+            self.kept = Some((id, l));
+        }
+        self.kept.as_ref().map(|(_, l)| l)
+    }
 }
 
 #[cfg(test)]

@@ -603,6 +603,7 @@ pub(super) fn render_job(
     host_threads: u32,
 ) -> RenderJob {
     let mut job = RenderJob {
+        trace: Default::default(),
         scene: None,
         out: None,
         k: DEFAULT_K_PX,

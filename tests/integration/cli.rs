@@ -1427,9 +1427,10 @@ fn a_run_larger_than_memory_is_refused_before_it_starts() {
     }
 }
 
-/// A scene whose lembos weigh more than its pixels is refused naming the scene: the exact
-/// reference holds every lembo (about 1.6 kB each), so terrain320's 204 800 lembos with a
-/// reference need about 0.4 GiB at 64x64, and without it far less; nothing is written.
+/// A scene whose lembos weigh more than its pixels is refused naming the scene: a run
+/// measured against the exact reference is estimated at about 160 bytes a lembo more, so
+/// terrain320's 204 800 lembos with a reference need about 33 MB more at 64x64 than
+/// without (about 150 MB in all); nothing is written.
 #[test]
 fn a_scene_too_large_for_memory_is_refused_by_its_lembos() {
     let terrain = manifest().join("traces/terrain320.json");
@@ -1441,7 +1442,7 @@ fn a_scene_too_large_for_memory_is_refused_by_its_lembos() {
         }
         a
     };
-    let small = [("LEMBO_MEMORY_AVAILABLE", "300000000")];
+    let small = [("LEMBO_MEMORY_AVAILABLE", "140000000")];
     for needle in [
         "field `SCENE` =",
         "204800 lembos at 64x64 px",
@@ -1613,5 +1614,105 @@ fn set_overrides_architecture_fields_on_the_command_line() {
         (&["compare", "--set", "rop.count=0"][..], "rop.count"),
     ] {
         assert_refused(args, needle);
+    }
+}
+
+/// The reference's tile side and threads are refused out of range or without
+/// `--reference`, by name; within range they change no pixel and no metric (the reference
+/// traces the same lembos in the same order at any tile side and thread count).
+#[test]
+fn reference_tile_and_threads_change_nothing_measured() {
+    for (flag, bad) in [
+        ("--reference-tile", "3"),
+        ("--reference-tile", "1025"),
+        ("--reference-threads", "0"),
+        ("--reference-threads", "257"),
+    ] {
+        assert_refused(
+            &["render", "--reference", flag, bad],
+            &format!("field `{flag}` = {bad}"),
+        );
+        assert_refused(&["compare", flag, bad], &format!("field `{flag}` = {bad}"));
+    }
+    assert_refused(
+        &["render", "--reference-tile", "8"],
+        "only meaningful with --reference",
+    );
+    assert_refused(
+        &["render", "--reference-threads", "1"],
+        "only meaningful with --reference",
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let s = scene_file(dir.path(), "s.json", GOOD);
+    let mut seen = Vec::new();
+    for (tile, threads) in [("16", "2"), ("4", "1"), ("7", "3"), ("1024", "2")] {
+        let args = [
+            "--mode",
+            "functional",
+            "--reference",
+            "--reference-tile",
+            tile,
+            "--reference-threads",
+            threads,
+        ];
+        let (r, _) = render_into(dir.path(), &s, &format!("t{tile}"), &args);
+        let reference = std::fs::read(dir.path().join(format!("t{tile}/reference.png"))).unwrap();
+        seen.push((reference, r["accuracy"].clone()));
+    }
+    assert!(seen[0].1["psnr_db"].as_f64().unwrap() > 20.0);
+    assert!(seen.windows(2).all(|w| w[0] == w[1]));
+}
+
+/// The memory guard's estimate of a run measured against the exact reference holds the
+/// run's measured peak, on both paths, and is not so far above it that it would refuse
+/// scenes the reference handles (at most 3x: the estimate's fixed 96 MB dominates here).
+#[test]
+fn the_memory_estimate_of_a_measured_run_holds_its_peak() {
+    use lembo_sim::datapath::Datapath;
+    use lembo_sim::job::{load_scene, memory_estimate, PrimitivePath, RenderJob};
+    let dir = tempfile::tempdir().unwrap();
+    let terrain = manifest().join("traces/terrain320.json");
+    for (path, tess) in [
+        (PrimitivePath::Lembo, None),
+        (PrimitivePath::Triangle, Some(2)),
+    ] {
+        let job = RenderJob {
+            scene: Some(terrain.clone()),
+            reference: true,
+            viewport: Some((256, 256)),
+            path,
+            tess,
+            ..crate::support::render_job(0.5, Datapath::F32)
+        };
+        let estimate = memory_estimate(&job, &load_scene(&job).unwrap(), 0.0);
+        let mut args = vec![
+            "render",
+            terrain.to_str().unwrap(),
+            "--viewport",
+            "256x256",
+            "--mode",
+            "functional",
+            "--reference",
+            "--out",
+            "o",
+        ];
+        if tess.is_some() {
+            args.extend(["--path", "triangle", "--tess", "2"]);
+        }
+        let report = report_of_run(&args, dir.path());
+        let peak = report["host"]["peak_rss_bytes"].as_f64().unwrap();
+        eprintln!(
+            "{path:?}: peak {:.0} MB, estimate {:.0} MB",
+            peak / 1e6,
+            estimate / 1e6
+        );
+        assert!(
+            peak <= estimate,
+            "{path:?}: peak {peak} above the estimate {estimate}"
+        );
+        assert!(
+            estimate <= 3.0 * peak,
+            "{path:?}: estimate {estimate} over 3x the peak {peak}"
+        );
     }
 }

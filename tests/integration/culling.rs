@@ -16,6 +16,7 @@ use lembo_sim::scene::Scene;
 /// A timed run of `scene` on `path` (the triangle path at n = 2) on `arch`.
 fn timed(scene: &Scene, path: PrimitivePath, arch: &ArchConfig) -> PathRun {
     let job = RenderJob {
+        trace: Default::default(),
         mode: Mode::Timed,
         path,
         tess: (path == PrimitivePath::Triangle).then_some(2),
@@ -33,6 +34,7 @@ fn closer_with_culling(scene: &Scene, path: PrimitivePath, what: &str) {
     let (reference, wall) = render_reference(scene, &view, 1, Samples::ONE);
     let accuracy = |arch: &ArchConfig| {
         let job = RenderJob {
+            trace: Default::default(),
             mode: Mode::Timed,
             path,
             tess: (path == PrimitivePath::Triangle).then_some(2),

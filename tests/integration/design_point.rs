@@ -106,6 +106,7 @@ impl Case {
         std::fs::write(&arch_file, serde_json::to_string(&a).unwrap()).unwrap();
         let root = Path::new(env!("CARGO_MANIFEST_DIR"));
         let job = RenderJob {
+            trace: Default::default(),
             scene: Some(root.join(format!("traces/{}.json", self.scene))),
             out: Some(dir.join("out")),
             k: self.k,

@@ -21,7 +21,9 @@ use lembo_sim::raster::probe::shared_edges;
 use lembo_sim::raster::setup::{setup, ScreenLembo};
 use lembo_sim::raster::{minmax, render_lembos, Counts, DEFAULT_SEGMENT_CAP};
 use lembo_sim::reference::metrics::Accuracy;
-use lembo_sim::reference::oracle::{render_reference, ReferenceImage, ReferenceInput};
+use lembo_sim::reference::oracle::{
+    render_reference, ReferenceImage, ReferenceInput, DEFAULT_TILE,
+};
 use lembo_sim::rop::framebuffer::NO_PRIMITIVE;
 use lembo_sim::scene::Scene;
 use proptest::prelude::*;
@@ -78,6 +80,7 @@ fn reference(scene: &Scene, view: &View) -> ReferenceImage {
         light: &scene.light,
         background: scene.background,
         supersample: 1,
+        tile: DEFAULT_TILE,
     })
 }
 

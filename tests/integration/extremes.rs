@@ -37,6 +37,7 @@ fn expectations() -> serde_json::Map<String, Value> {
 
 fn job(path: PrimitivePath, datapath: Datapath, k: f64, mode: Mode) -> RenderJob {
     RenderJob {
+        trace: Default::default(),
         mode,
         path,
         tess: (path == PrimitivePath::Triangle).then_some(TESS),

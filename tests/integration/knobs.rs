@@ -129,6 +129,7 @@ fn knob_lembo_bytes_halved_and_doubled() {
     let s = sphere();
     let n = s.lembos().count() as u64;
     let job = RenderJob {
+        trace: Default::default(),
         mode: Mode::Timed,
         path: PrimitivePath::Lembo,
         ..render_job(0.5, Datapath::F32)

@@ -23,6 +23,7 @@ fn dram(mut a: ArchConfig) -> ArchConfig {
 /// A timed render of `scene` on `path` (the triangle path at n = 4) with `samples` a pixel.
 fn render(scene: &Scene, path: PrimitivePath, samples: u32, a: &ArchConfig) -> PathRun {
     let job = RenderJob {
+        trace: Default::default(),
         path,
         tess: (path == PrimitivePath::Triangle).then_some(4),
         samples: Samples::new(samples).unwrap(),

@@ -22,6 +22,7 @@ const SIDE: u32 = 128;
 /// surface at this size, so that the silhouette's stair-steps are the larger error).
 fn job(path: PrimitivePath, samples: u32, mode: Mode) -> RenderJob {
     RenderJob {
+        trace: Default::default(),
         path,
         tess: (path == PrimitivePath::Triangle).then_some(16),
         samples: Samples::new(samples).unwrap(),
@@ -138,6 +139,7 @@ fn multisample_cycles_scanlines_bytes_and_energy_grow_with_the_samples_on_both_p
             .iter()
             .map(|&n| {
                 let job = RenderJob {
+                    trace: Default::default(),
                     reference: false,
                     ..job(path, n, Mode::Timed)
                 };
@@ -212,6 +214,7 @@ fn multisample_triangles_are_shaded_once_per_pixel_and_lembo_fragments_per_sampl
     // shaded, or four times the fragments.
     let rop_muls = |path, n| {
         let job = RenderJob {
+            trace: Default::default(),
             reference: false,
             // Large triangles: few pixels where several meet.
             tess: (path == PrimitivePath::Triangle).then_some(1),
@@ -242,6 +245,7 @@ fn multisample_the_timed_image_equals_the_functional_one_on_any_host_split() {
     for path in [PrimitivePath::Lembo, PrimitivePath::Triangle] {
         for n in [2, 8] {
             let job = RenderJob {
+                trace: Default::default(),
                 host_threads: 2,
                 ..job(path, n, Mode::Timed)
             };

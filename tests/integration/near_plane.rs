@@ -22,7 +22,7 @@ use lembo_sim::raster::triangle::{
 use lembo_sim::raster::Counts;
 use lembo_sim::reference::flip::flip_frame;
 use lembo_sim::reference::metrics::{measure, Accuracy};
-use lembo_sim::reference::oracle::{self, ReferenceInput};
+use lembo_sim::reference::oracle::{self, ReferenceInput, DEFAULT_TILE};
 use lembo_sim::scene::Scene;
 
 use crate::support::{arch, fans, scenes};
@@ -113,9 +113,10 @@ fn against_facets(s: &Scene, n: u32, datapath: Datapath) -> Accuracy {
         light: &s.light,
         background: s.background,
         supersample: 1,
+        tile: DEFAULT_TILE,
     });
     let f = functional(s, n, datapath);
-    let tracer = oracle::Tracer::new(facets.iter().map(|(l, _)| l), &view);
+    let tracer = oracle::Tracer::of(facets.iter().map(|(l, _)| l), &view);
     let a = measure(
         &f.framebuffer,
         &reference,

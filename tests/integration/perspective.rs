@@ -14,6 +14,7 @@ use crate::support::{render_job, Hits};
 
 fn job(k: f64, perspective_tol: PerspectiveTol, datapath: Datapath) -> RenderJob {
     RenderJob {
+        trace: Default::default(),
         perspective_tol,
         reference: true,
         ..render_job(k, datapath)

@@ -153,6 +153,7 @@ fn a_hard_edged_cylinder_leaked_along_its_rim_and_is_closed_now() {
 fn render_reports_see_through_in_both_reports() {
     let dir = tempfile::tempdir().unwrap();
     let job = RenderJob {
+        trace: Default::default(),
         scene: Some(cylinder_scene(dir.path(), 256)),
         out: Some(dir.path().join("out")),
         reference: true,

@@ -27,15 +27,19 @@
 //! through a shared edge hits both neighbours; roots closer than [`SAME_ROOT_UV`] in uv
 //! are one root.
 //!
-//! The image: per lembo, the Bézier control net is projected once; a lembo whose net has
-//! a point at or behind the eye (`w <= 0`) is tested at every sample, otherwise only at the
-//! samples inside the net's screen box, found through 16 x 16 pixel tiles whose lists are
-//! sorted nearest first, so that an early hit bounds the range of `t` searched in the rest.
-//! The nearest hit with `t > 0` and depth in [0, 1] wins, ties going to the smaller lembo
-//! index as in the rasterizer's depth test, and is shaded with the exact unit normal of the
-//! normal function.
-//! Rows are rendered in parallel; every sample is computed by the same sequential code, so
-//! the image does not depend on the thread count.
+//! The image: per lembo, the Bézier control net is projected; a lembo whose net has a
+//! point at or behind the eye (`w <= 0`) is tested at every sample, otherwise only at the
+//! samples inside the net's screen box, found through square screen tiles (16 x 16 pixels
+//! by default) whose lists are sorted nearest first, so that an early hit bounds the range
+//! of `t` searched in the rest. The nearest hit with `t > 0` and depth in [0, 1] wins, ties
+//! going to the smaller lembo index as in the rasterizer's depth test, and is shaded with
+//! the exact unit normal of the normal function.
+//!
+//! Nothing holds every lembo (`tracer.rs`): binning keeps only ids, and each row of tiles
+//! makes its own lembos again while it is traced. Rows of tiles and their pixel rows are
+//! rendered in parallel; every sample is computed by the same sequential code over the
+//! same lembos in the same order, so the image does not depend on the thread count or the
+//! tile size.
 //!
 //! The same machinery answers at any screen position ([`Tracer`]), which the accuracy
 //! metrics use between pixel centres. [`Tracer::covers`] asks only whether a ray hits: it
@@ -53,11 +57,13 @@ use rayon::prelude::*;
 use roots::{Patch, Scratch};
 
 mod roots;
+mod source;
 mod tracer;
 
 pub use roots::{DOMAIN_TOLERANCE, SAME_ROOT_UV};
-use tracer::TILE;
-pub use tracer::{ReferenceHit, TraceScratch, Tracer};
+pub use source::{LemboSource, SceneLembos};
+use tracer::Band;
+pub use tracer::{ReferenceHit, TraceScratch, Tracer, DEFAULT_TILE, TILE_RANGE};
 
 /// The reference image, row 0 at the top.
 #[derive(Clone, Debug, PartialEq)]
@@ -138,10 +144,11 @@ fn rgb_image(width: u32, height: u32, color: &[[u8; 3]]) -> image::RgbImage {
 }
 
 /// What the reference renders.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy)]
 pub struct ReferenceInput<'a> {
-    /// Each lembo with its linear RGB colour in [0, 1]; the index is the lembo id.
-    pub lembos: &'a [(&'a Lembo, [f64; 3])],
+    /// The lembos, made by id (the id is the lembo's), with their linear RGB colours in
+    /// [0, 1].
+    pub lembos: &'a dyn LemboSource,
     /// The camera and viewport.
     pub view: &'a View,
     /// The light and material terms.
@@ -150,6 +157,9 @@ pub struct ReferenceInput<'a> {
     pub background: [f64; 3],
     /// Sub-samples per pixel side (1 = the pixel centre only; 0 is taken as 1).
     pub supersample: u32,
+    /// Side of the square screen tiles the lembos are binned into \[pixels\], in
+    /// [`TILE_RANGE`] ([`DEFAULT_TILE`]): memory and time, never the image.
+    pub tile: u32,
 }
 
 /// All intersections of the line `origin + t dir` with the lembo inside its domain, as
@@ -162,7 +172,7 @@ pub fn intersect_ray(lembo: &Lembo, origin: DVec3, dir: DVec3) -> Vec<(f64, f64,
     if !(len > 0.0 && len.is_finite()) {
         return Vec::new();
     }
-    let patch = Patch::new(lembo);
+    let patch = Patch::new(std::borrow::Cow::Borrowed(lembo));
     let mut scratch = Scratch::default();
     let mut roots = Vec::new();
     patch.roots(
@@ -184,39 +194,67 @@ pub fn intersect_ray(lembo: &Lembo, origin: DVec3, dir: DVec3) -> Vec<(f64, f64,
 
 /// Renders the reference image: the centre sample of every pixel and, when
 /// `supersample > 1`, an s x s grid of sub-samples at ((a + 0.5) / s, (b + 0.5) / s) within
-/// the pixel.
+/// the pixel. The rows of tiles are traced a few at a time, each with only its own lembos
+/// made (`tracer.rs`), their pixel rows in parallel.
 pub fn render_reference(input: &ReferenceInput) -> ReferenceImage {
     let (width, height) = (input.view.viewport.width, input.view.viewport.height);
     let s = input.supersample.max(1);
     let scene = Scene::new(input);
-    let rows: Vec<Row> = (0..height)
-        .into_par_iter()
-        .map(|j| scene.render_row(j, s))
-        .collect();
-
+    let tile = scene.tracer.tile();
+    let spans = scene.tracer.spans();
+    // As few spans at a time as keep every thread busy: their lembos are what the
+    // reference holds made.
+    let group = rayon::current_num_threads().max(1);
+    let mut pieces: Vec<Vec<Row>> = Vec::with_capacity(spans.len());
+    for first in (0..spans.len()).step_by(group) {
+        let last = (first + group).min(spans.len());
+        pieces.par_extend((first..last).into_par_iter().map(|k| {
+            let band = scene.tracer.band(k);
+            let span = &spans[k];
+            let columns = span.tiles.start * tile..(span.tiles.end * tile).min(width);
+            (span.row * tile..((span.row + 1) * tile).min(height))
+                .into_par_iter()
+                .map(|j| scene.render_row(&band, j, columns.clone(), s))
+                .collect::<Vec<Row>>()
+        }));
+    }
     let n = width as usize * height as usize;
-    let mut image = ReferenceImage {
-        width,
-        height,
-        supersample: s,
+    let mut image = Row {
         hits: Vec::with_capacity(n),
-        hits_offset_px: [0.0; 2],
         color: Vec::with_capacity(n),
         color_supersampled: (s > 1).then(|| Vec::with_capacity(n)),
         coverage: (s > 1).then(|| Vec::with_capacity(n)),
     };
-    for row in rows {
-        image.hits.extend(row.hits);
-        image.color.extend(row.color);
-        if let (Some(all), Some(part)) = (image.color_supersampled.as_mut(), row.color_supersampled)
-        {
-            all.extend(part);
+    // Each pixel row from its spans' pieces, left to right, each piece freed once copied.
+    let mut pieces = pieces.into_iter().map(Vec::into_iter).collect::<Vec<_>>();
+    let mut row_spans = 0..0;
+    for j in 0..height {
+        if j % tile == 0 {
+            let first = row_spans.end;
+            let count = spans[first..]
+                .iter()
+                .take_while(|s| s.row == j / tile)
+                .count();
+            row_spans = first..first + count;
         }
-        if let (Some(all), Some(part)) = (image.coverage.as_mut(), row.coverage) {
-            all.extend(part);
+        for k in row_spans.clone() {
+            image.append(
+                pieces[k]
+                    .next()
+                    .expect("a span traced each of its pixel rows"),
+            );
         }
     }
-    image
+    ReferenceImage {
+        width,
+        height,
+        supersample: s,
+        hits: image.hits,
+        hits_offset_px: [0.0; 2],
+        color: image.color,
+        color_supersampled: image.color_supersampled,
+        coverage: image.coverage,
+    }
 }
 
 /// The prepared scene: the tracer, the colours and the shader.
@@ -227,7 +265,8 @@ struct Scene<'a> {
     background: [f64; 3],
 }
 
-/// One rendered row.
+/// One rendered row, or the part of it in a span's columns.
+#[derive(Default)]
 struct Row {
     hits: Vec<Option<ReferenceHit>>,
     color: Vec<[u8; 3]>,
@@ -235,34 +274,49 @@ struct Row {
     coverage: Option<Vec<f32>>,
 }
 
+impl Row {
+    /// `part` added at the right.
+    fn append(&mut self, part: Row) {
+        self.hits.extend(part.hits);
+        self.color.extend(part.color);
+        if let Some(part) = part.color_supersampled {
+            self.color_supersampled
+                .get_or_insert_with(Vec::new)
+                .extend(part);
+        }
+        if let Some(part) = part.coverage {
+            self.coverage.get_or_insert_with(Vec::new).extend(part);
+        }
+    }
+}
+
 impl<'a> Scene<'a> {
     fn new(input: &'a ReferenceInput<'a>) -> Self {
         Scene {
             input,
-            tracer: Tracer::new(input.lembos.iter().map(|(l, _)| *l), input.view),
+            tracer: Tracer::new(input.lembos, input.view, input.tile),
             shader: Shader::new(input.light),
             background: input.background,
         }
     }
 
-    /// Linear RGB of a sample.
-    fn shade(&self, hit: &Option<ReferenceHit>) -> [f64; 3] {
+    /// Linear RGB of a sample, hit on a lembo of `band`.
+    fn shade(&self, band: &Band, hit: &Option<ReferenceHit>) -> [f64; 3] {
         match hit {
             None => self.background,
             Some(h) => {
-                let p = self.tracer.patches[h.lembo as usize]
-                    .lembo
-                    .position_at(h.u, h.v);
-                let to_eye = self.input.view.to_eye(p);
-                let color = self.input.lembos[h.lembo as usize].1;
+                let (lembo, color) = band.lembo(h.lembo).expect("a band's hits are its lembos'");
+                let to_eye = self.input.view.to_eye(lembo.position_at(h.u, h.v));
                 self.shader
                     .shade(h.normal.to_array(), to_eye.to_array(), color)
             }
         }
     }
 
-    fn render_row(&self, j: u32, s: u32) -> Row {
-        let width = self.input.view.viewport.width;
+    /// Pixel row `j` in `columns`, which lie in the span of `band`.
+    fn render_row(&self, band: &Band, j: u32, columns: std::ops::Range<u32>, s: u32) -> Row {
+        let width = columns.len() as u32;
+        let view = self.input.view;
         let mut scratch = Scratch::default();
         let mut roots = Vec::new();
         let mut row = Row {
@@ -272,9 +326,9 @@ impl<'a> Scene<'a> {
             coverage: (s > 1).then(|| Vec::with_capacity(width as usize)),
         };
         let quantise = |c: [f64; 3]| c.map(to_u8);
-        let ty = j / TILE;
-        for i in 0..width {
-            let bin = &self.tracer.bins[(ty * self.tracer.tiles_x + i / TILE) as usize];
+        let tile = self.tracer.tile();
+        for i in columns {
+            let tx = i / tile;
             let (x, y) = (i as f64, j as f64);
             // For odd s the middle sub-sample is the pixel centre, (k + 0.5) / (2k + 1) = 0.5
             // exactly, so it is traced once.
@@ -282,10 +336,7 @@ impl<'a> Scene<'a> {
             let centre = if centre_in_grid {
                 None
             } else {
-                Some(
-                    self.tracer
-                        .trace(x + 0.5, y + 0.5, bin, &mut scratch, &mut roots),
-                )
+                Some(band.trace(view, x + 0.5, y + 0.5, tx, &mut scratch, &mut roots))
             };
             let mut centre_hit = centre.flatten();
             if s > 1 {
@@ -295,12 +346,12 @@ impl<'a> Scene<'a> {
                     for a in 0..s {
                         let sx = x + (a as f64 + 0.5) / s as f64;
                         let sy = y + (b as f64 + 0.5) / s as f64;
-                        let hit = self.tracer.trace(sx, sy, bin, &mut scratch, &mut roots);
+                        let hit = band.trace(view, sx, sy, tx, &mut scratch, &mut roots);
                         if centre_in_grid && a == s / 2 && b == s / 2 {
                             centre_hit = hit;
                         }
                         covered += hit.is_some() as u32;
-                        let c = self.shade(&hit);
+                        let c = self.shade(band, &hit);
                         for k in 0..3 {
                             sum[k] += c[k];
                         }
@@ -316,7 +367,7 @@ impl<'a> Scene<'a> {
                     .expect("s > 1")
                     .push(covered as f32 / n as f32);
             }
-            row.color.push(quantise(self.shade(&centre_hit)));
+            row.color.push(quantise(self.shade(band, &centre_hit)));
             row.hits.push(centre_hit);
         }
         row

@@ -5,6 +5,7 @@
 
 use crate::lembo::{bezier_controls, Lembo, Quadratic, Quadratic3};
 use glam::{DVec2, DVec3};
+use std::borrow::Cow;
 
 /// Roots this far outside the domain [uv units] still count, clamped onto it.
 pub const DOMAIN_TOLERANCE: f64 = 1e-9;
@@ -51,9 +52,10 @@ pub(super) struct Scratch {
     roots: Vec<Root>,
 }
 
-/// A lembo prepared for ray tests: its Bézier control net and size.
+/// A lembo prepared for ray tests: its Bézier control net and size. It borrows the lembo,
+/// or owns it where the lembo was made for a tile (`tracer.rs`).
 pub(super) struct Patch<'a> {
-    pub(super) lembo: &'a Lembo,
+    pub(super) lembo: Cow<'a, Lembo>,
     pub(super) controls: [DVec3; 6],
     /// Largest distance of a control point from the first one [world units].
     extent: f64,
@@ -69,7 +71,7 @@ struct RayFrame {
 }
 
 impl<'a> Patch<'a> {
-    pub(super) fn new(lembo: &'a Lembo) -> Self {
+    pub(super) fn new(lembo: Cow<'a, Lembo>) -> Self {
         let controls = lembo.bezier_control_points();
         let extent = controls
             .iter()

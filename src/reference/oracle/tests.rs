@@ -203,6 +203,7 @@ fn render_sphere(view: &View, supersample: u32) -> ReferenceImage {
         light: &Light::default(),
         background: [0.0, 0.0, 0.1],
         supersample,
+        tile: DEFAULT_TILE,
     })
 }
 
@@ -301,7 +302,7 @@ fn tracer_answers_at_pixel_centres_as_the_image_and_between_them_as_the_image_wo
     let view = sphere_view(48);
     let image = render_sphere(&view, 1);
     let lembos = builtin_lembos("sphere24").unwrap();
-    let tracer = Tracer::new(lembos.iter(), &view);
+    let tracer = Tracer::of(lembos.iter(), &view);
     let mut scratch = TraceScratch::default();
     for j in 0..48 {
         for i in 0..48 {
@@ -365,4 +366,58 @@ fn render_reference_supersampling_gives_fractional_coverage_on_the_silhouette() 
     assert_eq!(coverage[0], 0.0);
     assert!(coverage.iter().any(|&c| c > 0.0 && c < 1.0));
     assert!(three.color_supersampled.is_some());
+}
+
+/// Any tile side gives the same image bit for bit, on a scene dense enough that rows of
+/// tiles split into several spans (a span's tiles list at most 4 096 lembos), and the
+/// tracer answers between pixel centres as at the default tile.
+#[test]
+fn render_reference_is_the_same_at_any_tile_side() {
+    let lembos = crate::scene::Scene::from_json(
+        r#"{"name": "t", "viewport": {"width": 96, "height": 64},
+            "camera": {"eye": [0, 5.5, 8.5], "target": [0, 0, -0.5], "up": [0, 1, 0],
+                       "projection": {"kind": "perspective", "fovy_deg": 45, "near": 0.1, "far": 100}},
+            "objects": [{"builtin": "terrain96"}]}"#,
+        "tests.rs",
+        std::path::Path::new("."),
+    )
+    .unwrap();
+    let held: Vec<Lembo> = lembos.lembos().map(|(l, _)| l).collect();
+    let with_colors: Vec<(&Lembo, [f64; 3])> = held.iter().map(|l| (l, [0.5; 3])).collect();
+    let view = View::new(&lembos.camera, lembos.viewport);
+    let render = |tile: u32| {
+        render_reference(&ReferenceInput {
+            lembos: &with_colors,
+            view: &view,
+            light: &Light::default(),
+            background: [0.0; 3],
+            supersample: 2,
+            tile,
+        })
+    };
+    let tracer = Tracer::new(&with_colors, &view, 4);
+    let default = Tracer::new(&with_colors, &view, DEFAULT_TILE);
+    let rows = default.spans().last().unwrap().row as usize + 1;
+    assert!(
+        default.spans().len() > rows,
+        "no row of tiles split into spans"
+    );
+    let base = render(DEFAULT_TILE);
+    assert!(base.hits.iter().filter(|h| h.is_some()).count() > 1000);
+    for tile in [4, 5, 64, 1024] {
+        assert_eq!(render(tile), base, "tile {tile}");
+    }
+    let mut scratch = TraceScratch::default();
+    for k in 0..400 {
+        let (x, y) = ((k * 37 % 960) as f64 / 10.0, (k * 53 % 640) as f64 / 10.0);
+        assert_eq!(
+            tracer.hit(x, y, &mut scratch),
+            default.hit(x, y, &mut scratch),
+            "({x}, {y})"
+        );
+        assert_eq!(
+            tracer.covers(x, y, &mut scratch),
+            default.covers(x, y, &mut scratch)
+        );
+    }
 }

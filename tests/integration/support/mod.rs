@@ -34,6 +34,7 @@ pub fn arch(name: &str) -> ArchConfig {
 /// varies over this with `..render_job(k, datapath)`.
 pub fn render_job(k: f64, datapath: Datapath) -> RenderJob {
     RenderJob {
+        trace: Default::default(),
         scene: None,
         out: None,
         k,
