@@ -113,7 +113,7 @@ impl<'a, S> Probe<'a, S> {
 /// scanline between them (the gap or overlap between them is see-through's to measure, not
 /// a pixel-rule fault).
 ///
-/// The nine coordinates' bits are matched through a 128-bit hash of them ([`curve_key`]),
+/// The nine coordinates' bits are matched through a 128-bit hash of them (`curve_key`),
 /// sorted: 32 bytes an edge's use instead of a map of the 72-byte keys (about 300 bytes a
 /// lembo at its peak), so that a measured run's memory stays bounded per lembo. Two
 /// different curves would be taken for one only if their hashes collided, with a

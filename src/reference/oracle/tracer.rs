@@ -1,15 +1,15 @@
 //! The lembos prepared for ray queries at any screen position ([`Tracer`]), in bounded
 //! memory: each lembo's screen footprint (its projected Bézier net's box, or everywhere
 //! when part of the net is at or behind the eye) binned per square screen tile, and the
-//! lembos of one row of tiles (a [`Band`]) made, prepared and sorted nearest first only
-//! while that row is traced.
+//! lembos of a few consecutive tiles of one row (a [`Span`], whose lembos made are a
+//! [`Band`]) made, prepared and sorted nearest first only while those tiles are traced.
 //!
 //! Binning makes every lembo once and keeps only its id in each tile its footprint meets
 //! (4 bytes a tile) and, while binning, its tile range; a band makes again the lembos its
 //! tiles list. A sample sees the lembos of its tile whose footprint holds it, nearest first
 //! by the footprint's nearest depth and then by id: the same lembos in the same order
-//! whatever the tile size, so every result is the same bit for bit at any tile size, band
-//! order or thread count.
+//! whatever the tile size, so every result is the same bit for bit at any tile size, span
+//! or thread count.
 
 use super::roots::{Patch, Root, Scratch};
 use super::source::LemboSource;
@@ -111,10 +111,10 @@ enum Reach {
 /// Lembos made, per binning task, before the next task's.
 const BINNING_CHUNK: usize = 1 << 14;
 
-/// The lembos prepared for ray queries at any screen position, made a row of tiles at a
-/// time (the module documentation). The reference image traces the rows once each
-/// ([`Tracer::band`]); the accuracy metrics ask about any point ([`Tracer::covers`]), the
-/// rows they reach kept in a small cache, most recently used first.
+/// The lembos prepared for ray queries at any screen position, made a span of tiles at a
+/// time (the module documentation). The reference image traces each span once
+/// (`Tracer::band`); the accuracy metrics ask about any point ([`Tracer::covers`]), the
+/// spans they reach kept in a small cache, most recently used last.
 pub struct Tracer<'a> {
     view: &'a View,
     lembos: Lembos<'a>,
