@@ -202,13 +202,11 @@ pub fn render_reference(input: &ReferenceInput) -> ReferenceImage {
     let scene = Scene::new(input);
     let tile = scene.tracer.tile();
     let spans = scene.tracer.spans();
-    // As few spans at a time as keep every thread busy: their lembos are what the
-    // reference holds made.
-    let group = rayon::current_num_threads().max(1);
-    let mut pieces: Vec<Vec<Row>> = Vec::with_capacity(spans.len());
-    for first in (0..spans.len()).step_by(group) {
-        let last = (first + group).min(spans.len());
-        pieces.par_extend((first..last).into_par_iter().map(|k| {
+    // Spans in parallel, each span's pixel rows too: a thread waiting for its rows takes
+    // another span, so about two spans a thread are held made at once.
+    let pieces: Vec<Vec<Row>> = (0..spans.len())
+        .into_par_iter()
+        .map(|k| {
             let band = scene.tracer.band(k);
             let span = &spans[k];
             let columns = span.tiles.start * tile..(span.tiles.end * tile).min(width);
@@ -216,8 +214,8 @@ pub fn render_reference(input: &ReferenceInput) -> ReferenceImage {
                 .into_par_iter()
                 .map(|j| scene.render_row(&band, j, columns.clone(), s))
                 .collect::<Vec<Row>>()
-        }));
-    }
+        })
+        .collect();
     let n = width as usize * height as usize;
     let mut image = Row {
         hits: Vec::with_capacity(n),
