@@ -225,7 +225,8 @@ fn edge_key(corners: &[[u64; 3]; 2]) -> u128 {
 /// legitimately differs from the flat mesh's, by up to how far the lembos using the edge
 /// stray from their triangles; a pixel is near when its centre is within
 /// [`OUTLINE_MARGIN_PX`] plus that deviation of the edge. Edges are matched by their corner
-/// positions, bit for bit, so split normals do not cut the mesh apart.
+/// positions, bit for bit (through [`edge_key`]), so split normals do not cut the mesh
+/// apart; `uses` are every mesh triangle's three edges, sorted here.
 fn near_outline(mut uses: Vec<EdgeUse>, lembos: &dyn LemboSource, view: &View) -> Vec<bool> {
     let (w, h) = (view.viewport.width as usize, view.viewport.height as usize);
     let mut near = vec![false; w * h];

@@ -509,6 +509,7 @@ fn every_committed_spec_is_valid() {
             "fair",
             "fair_ci",
             "fair_dram",
+            "fair_large",
             "perspective",
             "precision",
             "smoke",
