@@ -194,8 +194,8 @@ pub fn intersect_ray(lembo: &Lembo, origin: DVec3, dir: DVec3) -> Vec<(f64, f64,
 
 /// Renders the reference image: the centre sample of every pixel and, when
 /// `supersample > 1`, an s x s grid of sub-samples at ((a + 0.5) / s, (b + 0.5) / s) within
-/// the pixel. The rows of tiles are traced a few at a time, each with only its own lembos
-/// made (`tracer.rs`), their pixel rows in parallel.
+/// the pixel. The spans of tiles are traced in parallel, each with only its own lembos
+/// made (`tracer.rs`), their pixel rows in parallel too.
 pub fn render_reference(input: &ReferenceInput) -> ReferenceImage {
     let (width, height) = (input.view.viewport.width, input.view.viewport.height);
     let s = input.supersample.max(1);
