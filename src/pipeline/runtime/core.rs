@@ -239,46 +239,53 @@ impl Core {
     /// doc); [`Cycle::NEVER`] once it finished.
     pub fn bound(&self, u: u32) -> Cycle {
         let s = &self.slots[u as usize];
-        let (step, cached) = s.memo.get();
+        self.memoised(&s.memo, || {
+            let now = s.now.get();
+            match s.wait.get() {
+                Wait::Runnable => now + s.latency,
+                Wait::Credit { .. } => now + (s.latency - 1),
+                Wait::Done => Cycle::NEVER,
+                Wait::Input { .. } => {
+                    let inputs = s.inputs.borrow();
+                    let a = inputs
+                        .iter()
+                        .map(|i| i.next_arrival(self))
+                        .min()
+                        .unwrap_or(Cycle::NEVER);
+                    // Every input ended: the unit runs next and may still push (a ROP writes
+                    // its caches back once its inputs end), so it is bounded as a runnable one.
+                    // A unit that pushes at the end of its inputs may do so before their next
+                    // items: once the last end reaches it.
+                    let a = match s.pushes_at_end.get() {
+                        true => a.min(
+                            inputs
+                                .iter()
+                                .map(|i| i.end_bound(self))
+                                .max()
+                                .unwrap_or(now),
+                        ),
+                        false => a,
+                    };
+                    match a {
+                        Cycle::NEVER => now + s.latency,
+                        a => a.max(now) + s.latency,
+                    }
+                }
+            }
+        })
+    }
+
+    /// `compute`'s bound memoised per step in `memo`, never below the one memoised
+    /// before. While it computes, a re-entry (a mis-wired loop) reads the stale value,
+    /// which is still a bound.
+    fn memoised(&self, memo: &Cell<(u64, Cycle)>, compute: impl FnOnce() -> Cycle) -> Cycle {
+        let (step, cached) = memo.get();
         if step == self.step.get() {
             return cached;
         }
-        // Guard against re-entry (a mis-wired loop): the stale value is still a bound.
-        s.memo.set((self.step.get(), cached));
-        let now = s.now.get();
-        let b = match s.wait.get() {
-            Wait::Runnable => now + s.latency,
-            Wait::Credit { .. } => now + (s.latency - 1),
-            Wait::Done => Cycle::NEVER,
-            Wait::Input { .. } => {
-                let inputs = s.inputs.borrow();
-                let a = inputs
-                    .iter()
-                    .map(|i| i.next_arrival(self))
-                    .min()
-                    .unwrap_or(Cycle::NEVER);
-                // Every input ended: the unit runs next and may still push (a ROP writes
-                // its caches back once its inputs end), so it is bounded as a runnable one.
-                // A unit that pushes at the end of its inputs may do so before their next
-                // items: once the last end reaches it.
-                let a = match s.pushes_at_end.get() {
-                    true => a.min(
-                        inputs
-                            .iter()
-                            .map(|i| i.end_bound(self))
-                            .max()
-                            .unwrap_or(now),
-                    ),
-                    false => a,
-                };
-                match a {
-                    Cycle::NEVER => now + s.latency,
-                    a => a.max(now) + s.latency,
-                }
-            }
-        };
-        let b = b.max(cached);
-        s.memo.set((self.step.get(), b));
+        memo.set((self.step.get(), cached));
+        let b = compute().max(cached);
+        memo.set((self.step.get(), b));
         b
     }
 
@@ -287,27 +294,20 @@ impl Core {
     /// ([`super::Ctx::finish`]). Memoised per step, as [`Self::bound`].
     pub fn end_bound(&self, u: u32) -> Cycle {
         let s = &self.slots[u as usize];
-        let (step, cached) = s.end_memo.get();
-        if step == self.step.get() {
-            return cached;
-        }
-        // Guard against re-entry, as `bound`: the stale value is still a bound.
-        s.end_memo.set((self.step.get(), cached));
-        let now = s.now.get();
-        let b = match s.wait.get() {
-            Wait::Done => now,
-            _ => s
-                .inputs
-                .borrow()
-                .iter()
-                .map(|i| i.end_bound(self))
-                .max()
-                .unwrap_or(now)
-                .max(now),
-        };
-        let b = b.max(cached);
-        s.end_memo.set((self.step.get(), b));
-        b
+        self.memoised(&s.end_memo, || {
+            let now = s.now.get();
+            match s.wait.get() {
+                Wait::Done => now,
+                _ => s
+                    .inputs
+                    .borrow()
+                    .iter()
+                    .map(|i| i.end_bound(self))
+                    .max()
+                    .unwrap_or(now)
+                    .max(now),
+            }
+        })
     }
 
     /// Whether every unit finished.
