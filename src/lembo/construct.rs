@@ -48,6 +48,22 @@ pub fn canonical_order(p: DVec3, q: DVec3) -> Ordering {
         .then(p.z.total_cmp(&q.z))
 }
 
+/// A 128-bit hash of a key made of coordinates' bits (an edge's corners, a curve's three
+/// points), the same in every run: two SipHash-1-3 digests (`DefaultHasher`, fixed keys)
+/// under two prefixes. Lembos' edges are matched by it, sorted, 32 bytes an edge's use
+/// instead of a map of the whole keys; two different keys would be taken for one only if
+/// their hashes collided, with a probability below 2^-88 among the edges of 2^20 lembos.
+pub fn bits_key(key: &impl std::hash::Hash) -> u128 {
+    use std::hash::Hasher;
+    let half = |prefix: u64| {
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        std::hash::Hash::hash(&prefix, &mut h);
+        key.hash(&mut h);
+        h.finish()
+    };
+    (u128::from(half(0)) << 64) | u128::from(half(1))
+}
+
 fn edge_midpoint_ordered(p1: DVec3, n1: DVec3, p2: DVec3, n2: DVec3) -> (DVec3, DVec3) {
     let n1 = n1.normalize_or_zero();
     let n2 = n2.normalize_or_zero();

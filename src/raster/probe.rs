@@ -23,7 +23,7 @@ use super::screen::ScreenLembo;
 use super::subsegmenter::Subsegment;
 use crate::camera::Viewport;
 use crate::datapath::Real;
-use crate::lembo::construct::canonical_order;
+use crate::lembo::construct::{bits_key, canonical_order};
 use crate::scene::Scene;
 use std::collections::HashMap;
 
@@ -113,11 +113,9 @@ impl<'a, S> Probe<'a, S> {
 /// scanline between them (the gap or overlap between them is see-through's to measure, not
 /// a pixel-rule fault).
 ///
-/// The nine coordinates' bits are matched through a 128-bit hash of them (`curve_key`),
+/// The nine coordinates' bits are matched through a 128-bit hash of them ([`bits_key`]),
 /// sorted: 32 bytes an edge's use instead of a map of the 72-byte keys (about 300 bytes a
-/// lembo at its peak), so that a measured run's memory stays bounded per lembo. Two
-/// different curves would be taken for one only if their hashes collided, with a
-/// probability below 2^-88 for a scene of 2^20 lembos.
+/// lembo at its peak), so that a measured run's memory stays bounded per lembo.
 pub fn shared_edges(scene: &Scene) -> HashMap<(u32, u32), (u8, u8)> {
     let mut uses: Vec<(u128, u32, u8)> = Vec::with_capacity(3 * scene.lembo_count());
     for (id, (l, _)) in scene.lembos().enumerate() {
@@ -128,7 +126,7 @@ pub fn shared_edges(scene: &Scene) -> HashMap<(u32, u32), (u8, u8)> {
             }
             let mid = l.points[m];
             let key = [p.x, p.y, p.z, q.x, q.y, q.z, mid.x, mid.y, mid.z].map(f64::to_bits);
-            uses.push((curve_key(&key), id as u32, edge as u8));
+            uses.push((bits_key(&key), id as u32, edge as u8));
         }
     }
     uses.sort_unstable();
@@ -144,19 +142,6 @@ pub fn shared_edges(scene: &Scene) -> HashMap<(u32, u32), (u8, u8)> {
         }
     }
     pairs
-}
-
-/// A 128-bit hash of an edge curve's nine coordinates' bits: two SipHash-1-3 digests
-/// (`DefaultHasher`, fixed keys, so the same in every run) of the key under two prefixes.
-fn curve_key(key: &[u64; 9]) -> u128 {
-    use std::hash::{Hash, Hasher};
-    let half = |prefix: u64| {
-        let mut h = std::collections::hash_map::DefaultHasher::new();
-        prefix.hash(&mut h);
-        key.hash(&mut h);
-        h.finish()
-    };
-    (u128::from(half(0)) << 64) | u128::from(half(1))
 }
 
 impl<R: Real, S: FragmentSink<R>> FragmentSink<R> for Probe<'_, S> {

@@ -45,6 +45,7 @@
 
 use super::oracle::{intersect_ray, LemboSource};
 use crate::camera::View;
+use crate::lembo::construct::bits_key;
 use crate::lembo::set::LastParent;
 use crate::lembo::tessellate::Tessellation;
 use crate::lembo::Lembo;
@@ -177,7 +178,7 @@ fn screen_deviation(l: &Lembo, view: &View) -> f64 {
 }
 
 /// One use of a mesh edge by a triangle: the edge's corner positions hashed
-/// ([`edge_key`]), how far the triangle's lembo strays from its triangle \[pixels\], the
+/// ([`bits_key`]), how far the triangle's lembo strays from its triangle \[pixels\], the
 /// lembo, which edge (0: AB, 1: BC, 2: CA), and whether the triangle faces the eye.
 #[derive(Clone, Copy)]
 struct EdgeUse {
@@ -203,29 +204,13 @@ fn edge_corners(l: &Lembo, edge: usize) -> [[u64; 3]; 2] {
     }
 }
 
-/// A 128-bit hash of an edge's corner positions' bits: two SipHash-1-3 digests
-/// (`DefaultHasher`, fixed keys, so the same in every run) under two prefixes. Edges are
-/// matched by it, 32 bytes a use instead of a map of the 48-byte keys; two different edges
-/// would be taken for one only if their hashes collided, with a probability below 2^-88
-/// for a mesh of 2^20 triangles.
-fn edge_key(corners: &[[u64; 3]; 2]) -> u128 {
-    use std::hash::{Hash, Hasher};
-    let half = |prefix: u64| {
-        let mut h = std::collections::hash_map::DefaultHasher::new();
-        prefix.hash(&mut h);
-        corners.hash(&mut h);
-        h.finish()
-    };
-    (u128::from(half(0)) << 64) | u128::from(half(1))
-}
-
 /// Pixels near the flat mesh's outline: the projection of every edge used by a
 /// front-facing triangle but not continued facing the eye (an edge between a front- and a
 /// back-facing triangle, or of one triangle alone). There the smooth surface's outline
 /// legitimately differs from the flat mesh's, by up to how far the lembos using the edge
 /// stray from their triangles; a pixel is near when its centre is within
 /// [`OUTLINE_MARGIN_PX`] plus that deviation of the edge. Edges are matched by their corner
-/// positions, bit for bit (through [`edge_key`]), so split normals do not cut the mesh
+/// positions, bit for bit (through [`bits_key`]), so split normals do not cut the mesh
 /// apart; `uses` are every mesh triangle's three edges, sorted here.
 fn near_outline(mut uses: Vec<EdgeUse>, lembos: &dyn LemboSource, view: &View) -> Vec<bool> {
     let (w, h) = (view.viewport.width as usize, view.viewport.height as usize);
@@ -467,7 +452,7 @@ fn mesh_pass(lembos: &dyn LemboSource, view: &View) -> (FlatMesh, Vec<bool>, Vec
                     let deviation = screen_deviation(&l, view);
                     for edge in 0..3 {
                         uses.push(EdgeUse {
-                            key: edge_key(&edge_corners(&l, edge)),
+                            key: bits_key(&edge_corners(&l, edge)),
                             deviation,
                             id: id as u32,
                             edge: edge as u8,
