@@ -212,7 +212,7 @@ impl Scene {
         id: usize,
         last: &mut LastParent,
     ) -> (Lembo, [f64; 3]) {
-        let o = index.0.partition_point(|&start| start <= id) - 1;
+        let o = index.object(id);
         let object = &self.objects[o];
         (
             object.lembos.get_near(id - index.0[o], o, last),
@@ -230,6 +230,13 @@ impl Scene {
 /// Where each object's lembos start in a scene's lembo order ([`Scene::lembo_index`]).
 #[derive(Clone, Debug)]
 pub struct LemboIndex(Vec<usize>);
+
+impl LemboIndex {
+    /// The object lembo `id` (in scene order) belongs to.
+    pub fn object(&self, id: usize) -> usize {
+        self.0.partition_point(|&start| start <= id) - 1
+    }
+}
 
 impl SceneObject {
     /// The world-space triangle mesh of an object given as a mesh or a builtin (after its

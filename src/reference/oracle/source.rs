@@ -60,27 +60,14 @@ impl LemboSource for Vec<(&Lembo, bool)> {
 pub struct SceneLembos<'a> {
     scene: &'a Scene,
     index: LemboIndex,
-    /// Where each object's lembos start, for [`LemboSource::is_from_mesh`].
-    starts: Vec<usize>,
 }
 
 impl<'a> SceneLembos<'a> {
     /// The lembos of `scene`.
     pub fn new(scene: &'a Scene) -> Self {
-        let mut at = 0;
-        let starts = scene
-            .objects
-            .iter()
-            .map(|o| {
-                let start = at;
-                at += o.lembos.len();
-                start
-            })
-            .collect();
         SceneLembos {
             scene,
             index: scene.lembo_index(),
-            starts,
         }
     }
 }
@@ -95,7 +82,6 @@ impl LemboSource for SceneLembos<'_> {
     }
 
     fn is_from_mesh(&self, id: usize) -> bool {
-        let o = self.starts.partition_point(|&start| start <= id) - 1;
-        self.scene.objects[o].from_mesh
+        self.scene.objects[self.index.object(id)].from_mesh
     }
 }
