@@ -273,7 +273,15 @@ fn measure_discoids(
     let lembos = oracle::SceneLembos::new(surface.as_ref());
     let tracer = oracle::Tracer::new(&lembos, view, job.trace.tile);
     let flip = flip_frame(&with_normals, reference, job.flip_ppd);
-    let accuracy = metrics::measure(&with_normals, reference, &tracer, 0, None, None, &flip);
+    let accuracy = metrics::measure(
+        &with_normals,
+        reference,
+        &tracer,
+        0,
+        None,
+        Default::default(),
+        &flip,
+    );
     let metrics_wall = t1.elapsed().as_secs_f64();
     Ok(Measured {
         accuracy,

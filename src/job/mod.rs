@@ -26,7 +26,7 @@ pub use memory::{check_available, check_memory, memory_estimate};
 pub use path::run_path;
 pub use reference::{
     check_reference_scene, measure_frame, measure_frame_and_flip, reference_scene,
-    render_reference, render_reference_with, see_through_px, ErrorMaps,
+    render_reference, render_reference_with, see_through_px, visibility, ErrorMaps,
 };
 pub use render::{load_arch, load_scene, run_render, RenderOutput};
 pub use route::{

@@ -7,8 +7,10 @@ use crate::error::{Error, Result, COMMAND_LINE};
 use crate::frame;
 use crate::lembo::tessellate::Tessellation;
 use crate::reference::flip::{flip_frame, FlipMap, PixelsPerDegree};
+use crate::reference::leak::{self, Approximation};
+use crate::reference::metrics::Visibility;
 use crate::reference::oracle::{ReferenceImage, SceneLembos};
-use crate::reference::{heatmap, metrics, oracle, see_through, Accuracy};
+use crate::reference::{heatmap, metrics, oracle, see_through, Accuracy, Drawn};
 use crate::rop::FrameBuffer;
 use crate::scene::Scene;
 use std::time::Instant;
@@ -171,7 +173,7 @@ pub(super) fn measure(
 /// The accuracy of `frame` (rendered with `analyse`, one sample a pixel) of `scene` against
 /// its `reference`:
 /// the metrics, with the reference traced anew where the sub-pixel silhouette asks, the
-/// fragment probe's counts and the see-through count. `ids_per_lembo` maps the frame's
+/// fragment probe's counts and the visibility counts ([`visibility`]). `ids_per_lembo` maps the frame's
 /// winner ids to lembo ids: 1 on the lembo path, n² on the triangle path at level n; FLIP
 /// is computed for the observer `ppd`.
 pub fn measure_frame(
@@ -215,14 +217,26 @@ pub fn measure_frame_and_flip(
     // reference's hits are traced there: so are the outline and the see-through rays.
     let view = &hits_view(view, reference);
     let lembos = SceneLembos::new(scene);
+    // Measured in sample rows, 1/samples of a pixel apart.
+    let deviation_px = probe.max_scanline_deviation_px / samples.get() as f64;
+    let level = match path {
+        PrimitivePath::Lembo => None,
+        PrimitivePath::Triangle => Some(ids_per_lembo.isqrt() as u32),
+    };
     // FLIP runs on one thread (the reference implementation), beside the rest.
-    let (flip, (tracer, see_through)) = rayon::join(
+    let (flip, (tracer, visibility)) = rayon::join(
         || flip_frame(&frame.framebuffer, reference, ppd),
         || {
-            (
-                oracle::Tracer::new(&lembos, view, oracle::DEFAULT_TILE),
-                see_through_px(scene, view, &frame.framebuffer, ids_per_lembo),
-            )
+            let tracer = oracle::Tracer::new(&lembos, view, oracle::DEFAULT_TILE);
+            let visibility = visibility(
+                scene,
+                &tracer,
+                &frame.framebuffer,
+                reference,
+                level,
+                deviation_px,
+            );
+            (tracer, visibility)
         },
     );
     let accuracy = metrics::measure(
@@ -231,11 +245,10 @@ pub fn measure_frame_and_flip(
         &tracer,
         probe.double_hit_pixels,
         match path {
-            // Measured in sample rows, 1/samples of a pixel apart.
-            PrimitivePath::Lembo => Some(probe.max_scanline_deviation_px / samples.get() as f64),
+            PrimitivePath::Lembo => Some(deviation_px),
             PrimitivePath::Triangle => None,
         },
-        see_through,
+        visibility,
         &flip,
     );
     (accuracy, flip)
@@ -243,19 +256,61 @@ pub fn measure_frame_and_flip(
 
 /// The see-through pixels of a render of `scene` (`reference::see_through`): the lembos
 /// of objects built from a triangle mesh (`mesh` and `builtin` objects) are checked against
-/// their triangles; None when the scene has no such object.
+/// their triangles; None when the scene has no such object. `level` is the tessellation
+/// level of a render of the triangle path (its winners' ids are `lembo * n² + k`), None
+/// for the lembo path.
 pub fn see_through_px(
     scene: &Scene,
     view: &View,
     render: &FrameBuffer,
-    ids_per_lembo: u64,
+    level: Option<u32>,
 ) -> Option<u64> {
     if scene.objects.iter().all(|o| !o.from_mesh) {
         return None;
     }
     let lembos = SceneLembos::new(scene);
-    // On the triangle path (n² ids a lembo), the tessellation whose triangles were drawn.
-    let level = ids_per_lembo.isqrt() as u32;
-    let triangles = (ids_per_lembo > 1).then(|| Tessellation::new(scene.lembo_sets(), level));
-    Some(see_through::see_through(&lembos, view, render, ids_per_lembo, triangles.as_ref()).total())
+    let triangles = level.map(|n| Tessellation::new(scene.lembo_sets(), n));
+    Some(see_through::see_through(&lembos, view, render, drawn(&triangles)).total())
+}
+
+/// The visibility counts of a render of `scene` against its exact `reference`, which
+/// `tracer` answers between pixel centres (both of the render's view): see-through
+/// (None without a mesh, [`see_through_px`]) and the leaks (`reference::leak`). `level` as
+/// [`see_through_px`] takes it; on the lembo path, `deviation_px` is the largest scanline
+/// deviation the renderer measured \[pixels\] (how far its outlines may stray).
+pub fn visibility(
+    scene: &Scene,
+    tracer: &oracle::Tracer,
+    render: &FrameBuffer,
+    reference: &ReferenceImage,
+    level: Option<u32>,
+    deviation_px: f64,
+) -> Visibility {
+    let see_through = see_through_px(scene, tracer.view(), render, level);
+    let lembos = SceneLembos::new(scene);
+    let triangles = level.map(|n| Tessellation::new(scene.lembo_sets(), n));
+    let approximation = match level {
+        None => Approximation::Lembos { deviation_px },
+        Some(level) => Approximation::Triangles { level },
+    };
+    let leaks = leak::leaks(
+        &lembos,
+        tracer,
+        render,
+        reference,
+        drawn(&triangles),
+        approximation,
+    );
+    Visibility {
+        see_through_px: see_through,
+        leak_px: Some(leaks.total()),
+    }
+}
+
+/// How a render's winners name surfaces: lembos, or the `triangles` of a tessellation.
+fn drawn<'a>(triangles: &'a Option<Tessellation<'a>>) -> Drawn<'a> {
+    Drawn {
+        ids_per_lembo: triangles.as_ref().map_or(1, |t| t.triangles_per_lembo()),
+        triangles: triangles.as_ref(),
+    }
 }

@@ -72,6 +72,12 @@ pub struct Accuracy {
     /// that triangle from a primitive sharing no corner with it: a gap between primitives
     /// one can see through (`see_through.rs`) \[pixels\]; null for scenes without a mesh.
     pub see_through_px: Option<u64>,
+    /// Pixels where the exact reference shows a front face and the render shows the
+    /// background, a back face, or a farther surface of another part of the scene, where
+    /// the reference shows nothing of the kind within a margin (a displaced outline): a
+    /// renderer leak (`leak.rs`) \[pixels\]; null where the surfaces are not lembos
+    /// (discoids).
+    pub leak_px: Option<u64>,
     /// The paper's guarantee: largest |y(u, v) - (j + 0.5)| over all lembo fragments, as
     /// the renderer measured it \[pixels\]; null for the triangle path (no curve to follow).
     pub max_scanline_deviation_px: Option<f64>,
@@ -129,6 +135,10 @@ impl Accuracy {
                     .unwrap_or_else(|| "n/a (no mesh)".into()),
             ),
             (
+                "leak_px",
+                self.leak_px.map(px).unwrap_or_else(|| "n/a".into()),
+            ),
+            (
                 "max_scanline_deviation_px",
                 self.max_scanline_deviation_px
                     .map(|d| format!("{d:.4} px"))
@@ -143,9 +153,20 @@ impl Accuracy {
     }
 }
 
+/// The visibility counts measured beside the image: see-through against the flat mesh
+/// ([`super::see_through`]) and leaks against the exact surface ([`super::leak`]); None
+/// where not measured.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Visibility {
+    /// [`Accuracy::see_through_px`].
+    pub see_through_px: Option<u64>,
+    /// [`Accuracy::leak_px`].
+    pub leak_px: Option<u64>,
+}
+
 /// Measures `render` against `reference`, whose coverage at any screen position `outline`
 /// gives (the reference's [`super::oracle::Tracer`]); the renderer-side counts, the
-/// see-through count and the FLIP map of the two ([`super::flip::flip_frame`]) are passed
+/// visibility counts and the FLIP map of the two ([`super::flip::flip_frame`]) are passed
 /// through.
 ///
 /// # Panics
@@ -157,7 +178,7 @@ pub fn measure(
     outline: &dyn ReferenceCoverage,
     double_hit_pixels: u64,
     max_scanline_deviation_px: Option<f64>,
-    see_through_px: Option<u64>,
+    visibility: Visibility,
     flip: &FlipMap,
 ) -> Accuracy {
     assert_eq!(
@@ -203,7 +224,8 @@ pub fn measure(
         flip_pixels_per_degree: flip.ppd.get(),
         crack_pixels: t.n_crack,
         double_hit_pixels,
-        see_through_px,
+        see_through_px: visibility.see_through_px,
+        leak_px: visibility.leak_px,
         max_scanline_deviation_px,
         supersample: reference.supersample as u64,
         pixels_compared: t.compared,
@@ -435,7 +457,7 @@ mod tests {
             &Disc,
             double_hits,
             deviation,
-            None,
+            Default::default(),
             &flip,
         )
     }
@@ -587,7 +609,7 @@ mod tests {
         }
         let tracer = Tracer::of(lembos.iter(), &view);
         let flip = flip_frame(&fb, &reference, PixelsPerDegree::default());
-        let a = measure(&fb, &reference, &tracer, 0, None, None, &flip);
+        let a = measure(&fb, &reference, &tracer, 0, None, Default::default(), &flip);
         // Column x = 10.5 is the reference's and not the render's, x = 50.5 the reverse:
         // each centre 0.3 px from the reference's outline.
         assert_eq!(
@@ -737,7 +759,15 @@ mod tests {
             }
             let reference = uniform_reference(w, h, covered);
             let flip = flip_frame(&fb, &reference, PixelsPerDegree::default());
-            let a = measure(&fb, &reference, &Uniform(covered), 0, None, None, &flip);
+            let a = measure(
+                &fb,
+                &reference,
+                &Uniform(covered),
+                0,
+                None,
+                Default::default(),
+                &flip,
+            );
             let misplaced = if covered {
                 (a.coverage_false_negative, a.coverage_false_positive)
             } else {

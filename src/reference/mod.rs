@@ -17,11 +17,13 @@
 mod distance;
 pub mod flip;
 pub mod heatmap;
+pub mod leak;
 pub mod metrics;
 pub mod montage;
 pub mod oracle;
 pub mod outline;
 pub mod see_through;
+mod surface;
 
 pub use flip::{FlipMap, PixelsPerDegree};
 pub use heatmap::{error_heatmap, legend_height};
@@ -30,3 +32,4 @@ pub use oracle::{
     intersect_ray, render_reference, ReferenceHit, ReferenceImage, ReferenceInput, Tracer,
 };
 pub use outline::ReferenceCoverage;
+pub use surface::Drawn;

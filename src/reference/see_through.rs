@@ -43,11 +43,11 @@
 //! and `lembo * n² + k` on the triangle path at tessellation level n: `ids_per_lembo`
 //! maps it back.
 
-use super::oracle::{intersect_ray, LemboSource};
+use super::oracle::LemboSource;
+use super::surface::{oriented_normal, screen_deviation, share_a_corner, Drawn, Made, Shown};
 use crate::camera::View;
 use crate::lembo::construct::bits_key;
 use crate::lembo::set::LastParent;
-use crate::lembo::tessellate::Tessellation;
 use crate::lembo::Lembo;
 use crate::rop::framebuffer::{FrameBuffer, NO_PRIMITIVE};
 use glam::{DVec2, DVec3};
@@ -151,32 +151,6 @@ fn faces_eye(l: &Lembo, view: &View) -> bool {
         > 0.0
 }
 
-/// A flat triangle's geometric normal turned to the side of the sum of its vertex normals.
-fn oriented_normal([a, b, c]: [DVec3; 3], normals: [DVec3; 3]) -> DVec3 {
-    let n = (b - a).cross(c - a);
-    if n.dot(normals[0] + normals[1] + normals[2]) < 0.0 {
-        -n
-    } else {
-        n
-    }
-}
-
-/// How far a lembo strays from its flat triangle on screen \[pixels\]: 4/3 of the largest
-/// screen offset of an edge midpoint from its chord's middle. With barycentrics (w, u, v)
-/// the patch is its triangle plus 4 (wu e_AB + wv e_CA + uv e_BC), e the midpoint offsets,
-/// and wu + wv + uv <= 1/3.
-fn screen_deviation(l: &Lembo, view: &View) -> f64 {
-    [(0, 1, 3), (1, 2, 5), (2, 0, 4)]
-        .into_iter()
-        .map(|(a, b, m)| {
-            let chord = view.project(0.5 * (l.points[a] + l.points[b]));
-            let mid = view.project(l.points[m]);
-            DVec2::new(mid.x - chord.x, mid.y - chord.y).length()
-        })
-        .fold(0.0, f64::max)
-        * (4.0 / 3.0)
-}
-
 /// One use of a mesh edge by a triangle: the edge's corner positions hashed
 /// ([`bits_key`]), how far the triangle's lembo strays from its triangle \[pixels\], the
 /// lembo, which edge (0: AB, 1: BC, 2: CA), and whether the triangle faces the eye.
@@ -269,63 +243,11 @@ fn near_outline(mut uses: Vec<EdgeUse>, lembos: &dyn LemboSource, view: &View) -
     near
 }
 
-/// Whether two lembos' corner triangles share a corner position.
-fn share_a_corner(a: &Lembo, b: &Lembo) -> bool {
-    let bits = |p: DVec3| p.to_array().map(f64::to_bits);
-    a.points[..3]
-        .iter()
-        .any(|p| b.points[..3].iter().any(|q| bits(*p) == bits(*q)))
-}
-
-/// Whether the surface of `lembo` nearest along the ray `origin + t dir` (t > 0) faces
-/// the ray's origin: its geometric normal (the position's partial derivatives crossed),
-/// turned to the side of the lembo's normal function there, against the ray. Where the
-/// exact solve misses the lembo (a pixel the render covers along the lembo's border, the
-/// f64 ray just outside its domain), the border point nearest the ray stands for it. False
-/// where the normal is degenerate.
-fn surface_faces(lembo: &Lembo, origin: DVec3, dir: DVec3) -> bool {
-    let (u, v) = match intersect_ray(lembo, origin, dir)
-        .iter()
-        .find(|&&(t, _, _)| t > 0.0)
-    {
-        Some(&(_, u, v)) => (u, v),
-        None => border_point_nearest(lembo, origin, dir),
-    };
-    let (pu, pv) = lembo.position_derivatives(u, v);
-    let geometric = pu.cross(pv);
-    let side = lembo.normal_at(u, v);
-    let outward = if geometric.dot(side) < 0.0 {
-        -geometric
-    } else {
-        geometric
-    };
-    outward.dot(-dir) > 0.0
-}
-
-/// The domain point on the border of `lembo` (its three edges, each at 65 points) whose
-/// surface point is nearest the line `origin + t dir`.
-fn border_point_nearest(lembo: &Lembo, origin: DVec3, dir: DVec3) -> (f64, f64) {
-    const STEPS: u32 = 64;
-    let d = dir.normalize_or_zero();
-    let distance = |(u, v): (f64, f64)| {
-        let p = lembo.position_at(u, v) - origin;
-        (p - d * p.dot(d)).length_squared()
-    };
-    (0..=STEPS)
-        .flat_map(|i| {
-            let s = i as f64 / STEPS as f64;
-            [(s, 0.0), (0.0, s), (s, 1.0 - s)]
-        })
-        .min_by(|&a, &b| distance(a).total_cmp(&distance(b)))
-        .expect("the border has points")
-}
-
 /// The see-through pixels of `render` (see the module documentation). `lembos` are the
 /// scene's lembos by id, made as they are needed (one pass in id order, then the winners
-/// and mesh triangles of the pixels checked); the render's winner id divided by
-/// `ids_per_lembo` is a lembo id. A render of the triangle path passes
-/// its `triangles`, whose winner's own plane is then the surface a back face must turn
-/// away (the lembo's surface lies elsewhere than its flat triangles).
+/// and mesh triangles of the pixels checked); `drawn` says which surface a winner's id
+/// names (on the triangle path the winning triangle's own plane is the surface a back face
+/// must turn away, since the lembo's surface lies elsewhere than its flat triangles).
 ///
 /// # Panics
 /// If the render kept no normal buffer, or differs in size from the viewport: bugs of the
@@ -334,12 +256,12 @@ pub fn see_through(
     lembos: &dyn LemboSource,
     view: &View,
     render: &FrameBuffer,
-    ids_per_lembo: u64,
-    triangles: Option<&Tessellation>,
+    drawn: Drawn,
 ) -> SeeThrough {
+    let (w, h) = (view.viewport.width, view.viewport.height);
     assert_eq!(
         (render.width, render.height),
-        (view.viewport.width, view.viewport.height),
+        (w, h),
         "render and view differ in size"
     );
     let normals = render
@@ -347,63 +269,32 @@ pub fn see_through(
         .as_ref()
         .expect("see-through needs the render's normal buffer (keep_normals)");
     let (flat, front, uses) = mesh_pass(lembos, view);
-    let near = near_outline(uses, lembos, view);
-    let w = render.width as usize;
-    let pixel = |k: usize, made: &mut (Made, Made), out: &mut SeeThrough| {
-        let t = flat.owner[k];
-        if t == NO_PRIMITIVE || !front[t as usize] || near[k] {
-            return;
-        }
-        out.front_facing += 1;
-        let winner = render.primitive[k];
-        if winner == NO_PRIMITIVE {
-            out.background += 1;
-            return;
-        }
-        let (x, y) = ((k % w) as f64 + 0.5, (k / w) as f64 + 0.5);
-        let (origin, dir) = view.ray(x, y);
-        let n = DVec3::from_array(normals[k].map(f64::from));
-        let shown = winner as u64 / ids_per_lembo.max(1);
-        if n.dot(-dir) < 0.0 {
-            // The surface drawn there: the winning triangle of a tessellation, else its
-            // lembo.
-            let surface_to_eye = match triangles {
-                Some(t) if u64::from(winner) < t.len() => {
-                    let tri = t.triangle(u64::from(winner));
-                    oriented_normal(tri.positions, tri.normals).dot(-dir) > 0.0
-                }
-                _ => made
-                    .0
-                    .get(shown)
-                    .is_some_and(|l| surface_faces(l, origin, dir)),
-            };
-            if !surface_to_eye {
-                out.back_face += 1;
-                return;
-            }
-        }
-        if render.depth[k] as f64 <= flat.depth[k] {
-            return;
-        }
-        let Some(shown) = made.0.get(shown) else {
-            return;
-        };
-        let triangle = made
-            .1
-            .get(u64::from(t))
-            .expect("a flat triangle's lembo exists");
-        if !share_a_corner(shown, triangle) {
-            out.foreign_behind += 1;
-        }
+    let judge = Judge {
+        flat,
+        near: near_outline(uses, lembos, view),
+        front,
+        view,
     };
+    let w = w as usize;
     // Rows in parallel, each with the lembos it last made; the counts are sums.
-    let rows: Vec<SeeThrough> = (0..render.height as usize)
+    let rows: Vec<SeeThrough> = (0..h as usize)
         .into_par_iter()
         .map(|j| {
-            let mut made = (Made::new(lembos), Made::new(lembos));
+            let mut made = [Made::new(lembos), Made::new(lembos)];
             let mut out = SeeThrough::default();
             for k in j * w..(j + 1) * w {
-                pixel(k, &mut made, &mut out);
+                if !judge.checked(k) {
+                    continue;
+                }
+                out.front_facing += 1;
+                let shown = Shown::of_render(render, normals, k);
+                let [shown_made, mesh_made] = &mut made;
+                match judge.kind(k, &shown, drawn, shown_made, mesh_made) {
+                    Some(Kind::Background) => out.background += 1,
+                    Some(Kind::BackFace) => out.back_face += 1,
+                    Some(Kind::ForeignBehind) => out.foreign_behind += 1,
+                    None => {}
+                }
             }
             out
         })
@@ -415,6 +306,60 @@ pub fn see_through(
             foreign_behind: a.foreign_behind + b.foreign_behind,
             front_facing: a.front_facing + b.front_facing,
         })
+}
+
+/// What a see-through pixel shows (see the module documentation).
+enum Kind {
+    Background,
+    BackFace,
+    ForeignBehind,
+}
+
+/// The flat mesh and where it is checked, to judge what a pixel shows.
+struct Judge<'a> {
+    flat: FlatMesh,
+    near: Vec<bool>,
+    /// Whether each lembo's mesh triangle faces the eye.
+    front: Vec<bool>,
+    view: &'a View,
+}
+
+impl Judge<'_> {
+    /// Whether pixel `k` is checked: its nearest flat triangle faces the eye, and it is not
+    /// near the flat mesh's outline.
+    fn checked(&self, k: usize) -> bool {
+        let t = self.flat.owner[k];
+        t != NO_PRIMITIVE && self.front[t as usize] && !self.near[k]
+    }
+
+    /// How a checked pixel `k` showing `shown` (its ids named by `drawn`) is see-through,
+    /// if it is; `shown_made` makes the shown lembos, `mesh_made` the mesh triangles'.
+    fn kind(
+        &self,
+        k: usize,
+        shown: &Shown,
+        drawn: Drawn,
+        shown_made: &mut Made,
+        mesh_made: &mut Made,
+    ) -> Option<Kind> {
+        if shown.is_background() {
+            return Some(Kind::Background);
+        }
+        let w = self.view.viewport.width as usize;
+        let (x, y) = ((k % w) as f64 + 0.5, (k / w) as f64 + 0.5);
+        let (origin, dir) = self.view.ray(x, y);
+        if drawn.back_face(shown, origin, dir, shown_made) {
+            return Some(Kind::BackFace);
+        }
+        if shown.depth <= self.flat.depth[k] {
+            return None;
+        }
+        let shown = shown_made.get(drawn.lembo_of(shown.winner))?;
+        let triangle = mesh_made
+            .get(u64::from(self.flat.owner[k]))
+            .expect("a flat triangle's lembo exists");
+        (!share_a_corner(shown, triangle)).then_some(Kind::ForeignBehind)
+    }
 }
 
 /// A lembo's id and the corners of its mesh triangle.
@@ -475,35 +420,6 @@ fn mesh_pass(lembos: &dyn LemboSource, view: &View) -> (FlatMesh, Vec<bool>, Vec
         }
     }
     (flat, front, uses)
-}
-
-/// The last lembo made by id, kept while consecutive pixels ask for it again.
-struct Made<'a> {
-    lembos: &'a dyn LemboSource,
-    kept: Option<(u64, Lembo)>,
-    last: LastParent,
-}
-
-impl<'a> Made<'a> {
-    fn new(lembos: &'a dyn LemboSource) -> Self {
-        Made {
-            lembos,
-            kept: None,
-            last: LastParent::default(),
-        }
-    }
-
-    /// Lembo `id`, or None beyond the last.
-    fn get(&mut self, id: u64) -> Option<&Lembo> {
-        if id >= self.lembos.len() as u64 {
-            return None;
-        }
-        if self.kept.as_ref().is_none_or(|(k, _)| *k != id) {
-            let (l, _) = self.lembos.lembo(id as usize, &mut self.last);
-            self.kept = Some((id, l));
-        }
-        self.kept.as_ref().map(|(_, l)| l)
-    }
 }
 
 #[cfg(test)]
@@ -567,7 +483,7 @@ mod tests {
                 fb.normal.as_mut().unwrap()[k] = [0.0, 0.0, 1.0];
             }
         }
-        assert_eq!(see_through(&marked, &view, &fb, 1, None).total(), 0);
+        assert_eq!(see_through(&marked, &view, &fb, Drawn::EXACT).total(), 0);
         let mut set = |i: u32, j: u32, id: u32, z: f32, n: [f32; 3]| {
             let k = fb.index(i, j);
             fb.depth[k] = z;
@@ -582,7 +498,7 @@ mod tests {
         set(70, 90, 3, depth - 0.05, up); // foreign, in front: hides, not see-through
         set(80, 90, 1, depth + 0.05, up); // the neighbour, behind: a smooth patch's sag
         set(25, 60, NO_PRIMITIVE, 1.0, up); // within 2 px of the outline
-        let s = see_through(&marked, &view, &fb, 1, None);
+        let s = see_through(&marked, &view, &fb, Drawn::EXACT);
         assert_eq!(
             (s.background, s.back_face, s.foreign_behind, s.total()),
             (1, 1, 1, 3),
@@ -592,29 +508,10 @@ mod tests {
         for id in fb.primitive.iter_mut().filter(|p| **p != NO_PRIMITIVE) {
             *id = *id * 4 + 3;
         }
-        assert_eq!(see_through(&marked, &view, &fb, 4, None), s);
-    }
-
-    /// The surface's own facing: its geometric normal on the side of its normal function,
-    /// at the ray's first hit, or at the border point nearest a ray that misses it.
-    #[test]
-    fn surface_faces_asks_the_surface_not_its_shading_normal() {
-        let view = view();
-        let (origin, dir) = view.ray(64.5, 64.5);
-        let up = flat([[-10.0, -10.0], [10.0, -10.0], [0.0, 10.0]], 0.0);
-        assert!(surface_faces(&up, origin, dir));
-        // Normals leaning 80 degrees towards x: the shading normal at the hit still on
-        // the eye's side, the surface too.
-        let tilted = [DVec3::new(0.98, 0.0, 0.17); 3];
-        let leaning = lembo_from_triangle(up.points[..3].try_into().unwrap(), tilted);
-        assert!(surface_faces(&leaning, origin, dir));
-        // Normals past 90 degrees: the lembo says its outside is the other side.
-        let down = lembo_from_triangle(up.points[..3].try_into().unwrap(), [-DVec3::Z; 3]);
-        assert!(!surface_faces(&down, origin, dir));
-        // A ray just outside the triangle: its nearest border point decides.
-        let (o2, d2) = view.ray(64.5 + 11.0, 64.5);
-        assert!(intersect_ray(&up, o2, d2).is_empty());
-        assert!(surface_faces(&up, o2, d2));
-        assert!(!surface_faces(&down, o2, d2));
+        let four = Drawn {
+            ids_per_lembo: 4,
+            triangles: None,
+        };
+        assert_eq!(see_through(&marked, &view, &fb, four), s);
     }
 }

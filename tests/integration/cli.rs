@@ -783,7 +783,7 @@ fn help_explains_the_render_flags() {
 }
 
 /// The accuracy names of `render --reference` (DESIGN.md §6).
-const ACCURACY_NAMES: [&str; 16] = [
+const ACCURACY_NAMES: [&str; 17] = [
     "coverage_false_positive",
     "coverage_false_negative",
     "silhouette_max_px",
@@ -799,6 +799,7 @@ const ACCURACY_NAMES: [&str; 16] = [
     "crack_pixels",
     "double_hit_pixels",
     "see_through_px",
+    "leak_px",
     "max_scanline_deviation_px",
 ];
 

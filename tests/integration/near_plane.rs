@@ -123,7 +123,7 @@ fn against_facets(s: &Scene, n: u32, datapath: Datapath) -> Accuracy {
         &tracer,
         f.probe.unwrap().double_hit_pixels,
         None,
-        None,
+        Default::default(),
         &flip_frame(&f.framebuffer, &reference, Default::default()),
     );
     eprintln!(

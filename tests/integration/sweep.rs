@@ -510,6 +510,7 @@ fn every_committed_spec_is_valid() {
             "fair_ci",
             "fair_dram",
             "fair_large",
+            "leaks",
             "perspective",
             "precision",
             "smoke",

@@ -262,6 +262,11 @@ impl<'a> Tracer<'a> {
     }
 
     /// The spans, row after row, each row's left to right.
+    /// The view the lembos are traced in.
+    pub fn view(&self) -> &'a View {
+        self.view
+    }
+
     pub(super) fn spans(&self) -> &[Span] {
         &self.spans
     }

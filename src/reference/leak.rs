@@ -1,0 +1,485 @@
+//! Leaks: pixels where the render shows less than the exact lembo surface does.
+//!
+//! Where [`super::see_through`] holds the render against the input mesh's flat triangles,
+//! this holds it against the exact reference's own visibility, so it tells a renderer leak
+//! from the curved surface's own departure from the flat mesh (which the reference shows
+//! too). At a pixel where the reference's hit H faces the eye (its lembo's geometric
+//! normal, on the side of its normal function, at the hit, against the ray), the render
+//! *leaks* when it shows there:
+//! - **the background**;
+//! - **a back face**: its stored normal and its drawn surface both turned from the eye
+//!   ([`Drawn`]);
+//! - **a farther surface of another part**: a winner whose lembo is not H's and shares no
+//!   corner with it, at a greater depth than H;
+//!
+//! and the reference shows nothing of the kind within a margin of the pixel: no background,
+//! no back face, no hit on the winner's lembo or a lembo sharing a corner with it. What
+//! the reference shows a few pixels away is an outline the render drew slightly displaced
+//! (the method's tolerance, a tessellation's chords), not a leak. The margin is
+//! [`OUTLINE_MARGIN_PX`] plus how far the render may stray from the exact surface: on the
+//! lembo path twice the measured largest scanline deviation (the walk's y error, standing
+//! for the subsegments' x error, both bounded by the same tolerance k), on the triangle
+//! path H's lembo's deviation from its flat triangle over n² (a quadratic's error from its
+//! chords shrinks with the square of the level), and of the winner's lembo where the
+//! winner is a surface.
+//!
+//! A leak on an unbroken surface is a gap between primitives (a crack that shows the
+//! background, the inside of the mesh, or a part behind it); on every shipped scene, on
+//! both paths, there is none.
+
+use super::oracle::{LemboSource, ReferenceImage, TraceScratch, Tracer};
+use super::see_through::OUTLINE_MARGIN_PX;
+use super::surface::{faces_at, screen_deviation, share_a_corner, Drawn, Made, Shown};
+use crate::camera::View;
+use crate::lembo::set::LastParent;
+use crate::lembo::Lembo;
+use crate::rop::framebuffer::FrameBuffer;
+use glam::DVec3;
+use rayon::prelude::*;
+
+/// How far a render's outlines may stray from the exact surface's, beyond
+/// [`OUTLINE_MARGIN_PX`] (see the module documentation).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Approximation {
+    /// The lembo path: the largest scanline deviation the renderer measured \[pixels\].
+    Lembos {
+        /// `ProbeReport::max_scanline_deviation_px`, in pixels.
+        deviation_px: f64,
+    },
+    /// The triangle path at tessellation level n.
+    Triangles {
+        /// The level n.
+        level: u32,
+    },
+}
+
+/// Leaking pixels by what the render shows there (see the module documentation).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Leaks {
+    /// The background.
+    pub background: u64,
+    /// A back face.
+    pub back_face: u64,
+    /// A farther surface of another part of the scene.
+    pub farther: u64,
+}
+
+impl Leaks {
+    /// Leaking pixels in all.
+    pub fn total(&self) -> u64 {
+        self.background + self.back_face + self.farther
+    }
+}
+
+/// What a leaking pixel shows.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Kind {
+    Background,
+    BackFace,
+    Farther,
+}
+
+/// The leaking pixels of `render` against `reference`, both of `view` (see the module
+/// documentation); `lembos` are the scene's lembos by id, `drawn` names the render's
+/// winners, `approximation` says how far its outlines may stray.
+///
+/// # Panics
+/// If the render kept no normal buffer, or it or the reference differs in size from the
+/// viewport: bugs of the caller.
+/// The leaking pixels of `render` against `reference`, both of `view` (see the module
+/// documentation); `tracer` answers the reference between pixel centres, `lembos` are the
+/// scene's lembos by id, `drawn` names the render's winners, `approximation` says how far
+/// its outlines may stray.
+///
+/// # Panics
+/// If the render kept no normal buffer, or it or the reference differs in size from the
+/// viewport: bugs of the caller.
+pub fn leaks(
+    lembos: &dyn LemboSource,
+    tracer: &Tracer,
+    render: &FrameBuffer,
+    reference: &ReferenceImage,
+    drawn: Drawn,
+    approximation: Approximation,
+) -> Leaks {
+    let view = tracer.view();
+    let (w, h) = (view.viewport.width, view.viewport.height);
+    assert_eq!(
+        (render.width, render.height),
+        (w, h),
+        "render and view differ in size"
+    );
+    assert_eq!(
+        (reference.width, reference.height),
+        (w, h),
+        "reference and view differ in size"
+    );
+    let normals = render
+        .normal
+        .as_ref()
+        .expect("leaks need the render's normal buffer (keep_normals)");
+    let check = Check {
+        lembos,
+        view,
+        tracer,
+        reference,
+        approximation,
+    };
+    let w = w as usize;
+    let rows: Vec<Leaks> = (0..h as usize)
+        .into_par_iter()
+        .map(|j| {
+            let mut made = [Made::new(lembos), Made::new(lembos), Made::new(lembos)];
+            let mut scratch = TraceScratch::default();
+            let mut out = Leaks::default();
+            for k in j * w..(j + 1) * w {
+                let shown = Shown::of_render(render, normals, k);
+                match check.leak(k, &shown, drawn, &mut made, &mut scratch) {
+                    Some(Kind::Background) => out.background += 1,
+                    Some(Kind::BackFace) => out.back_face += 1,
+                    Some(Kind::Farther) => out.farther += 1,
+                    None => {}
+                }
+            }
+            out
+        })
+        .collect();
+    rows.into_iter().fold(Leaks::default(), |a, b| Leaks {
+        background: a.background + b.background,
+        back_face: a.back_face + b.back_face,
+        farther: a.farther + b.farther,
+    })
+}
+
+/// Points a pixel side of the grid the reference is searched on between pixel centres.
+const SUBPIXEL_STEPS: u32 = 8;
+
+/// The reference and what it takes to judge a pixel against it.
+struct Check<'a> {
+    lembos: &'a dyn LemboSource,
+    view: &'a View,
+    tracer: &'a Tracer<'a>,
+    reference: &'a ReferenceImage,
+    approximation: Approximation,
+}
+
+impl Check<'_> {
+    /// Whether pixel `k`, showing `shown`, leaks, and how. `made` makes the reference's
+    /// lembos, the render's, and those the search around the pixel meets.
+    fn leak(
+        &self,
+        k: usize,
+        shown: &Shown,
+        drawn: Drawn,
+        [at, winners, around]: &mut [Made; 3],
+        scratch: &mut TraceScratch,
+    ) -> Option<Kind> {
+        let hit = self.reference.hits[k].as_ref()?;
+        let (origin, dir) = self.ray_at(self.centre(k));
+        // Cheap tests first: most pixels show H's own lembo, or something in front of H.
+        let candidate = shown.is_background()
+            || (shown.depth > hit.depth
+                && (shown.normal.dot(-dir) < 0.0
+                    || drawn.lembo_of(shown.winner) != u64::from(hit.lembo)));
+        if !candidate {
+            return None;
+        }
+        let h = at.get(u64::from(hit.lembo))?;
+        if !faces_at(h, hit.u, hit.v, dir) {
+            return None;
+        }
+        let mut margin = OUTLINE_MARGIN_PX + self.strays(h);
+        let kind = if shown.is_background() {
+            Kind::Background
+        } else if drawn.back_face(shown, origin, dir, winners) {
+            Kind::BackFace
+        } else {
+            let lembo = drawn.lembo_of(shown.winner);
+            if lembo == u64::from(hit.lembo) {
+                return None;
+            }
+            let shown_lembo = winners.get(lembo)?;
+            if share_a_corner(shown_lembo, h) {
+                return None;
+            }
+            margin = margin.max(OUTLINE_MARGIN_PX + self.strays(shown_lembo));
+            Kind::Farther
+        };
+        // A farther surface the reference itself shows nearby is one whose crossing with
+        // H's the render drew slightly displaced, not one seen through a gap.
+        let shown_lembo = (kind == Kind::Farther).then(|| drawn.lembo_of(shown.winner));
+        let (i, j) = (k % self.width(), k / self.width());
+        let unbroken = |steps: u32, scratch: &mut TraceScratch, around: &mut Made| {
+            let mut seen = vec![hit.lembo];
+            for p in self.disc(i, j, margin, steps) {
+                let hit = if steps == 1 {
+                    let q = p[1] as usize * self.width() + p[0] as usize;
+                    self.reference.hits[q]
+                } else {
+                    self.tracer.hit(p[0], p[1], scratch)
+                };
+                let Some(hit) = hit else { return false };
+                if shown_lembo == Some(u64::from(hit.lembo)) {
+                    return false;
+                }
+                let faces = around
+                    .get(u64::from(hit.lembo))
+                    .is_some_and(|l| faces_at(l, hit.u, hit.v, self.ray_at(p).1));
+                if !faces {
+                    return false;
+                }
+                if !seen.contains(&hit.lembo) {
+                    seen.push(hit.lembo);
+                }
+            }
+            self.connected(&seen)
+        };
+        let leaks = unbroken(1, scratch, around) && unbroken(SUBPIXEL_STEPS, scratch, around);
+        leaks.then_some(kind)
+    }
+
+    /// Whether every lembo of `ids` is joined to the first through lembos of `ids` that
+    /// share a corner (bit for bit).
+    fn connected(&self, ids: &[u32]) -> bool {
+        let mut last = LastParent::default();
+        let corners: Vec<_> = ids
+            .iter()
+            .map(|&id| self.lembos.lembo(id as usize, &mut last).0)
+            .collect();
+        let mut joined = vec![false; ids.len()];
+        let mut stack = vec![0];
+        joined[0] = true;
+        while let Some(a) = stack.pop() {
+            for b in 0..ids.len() {
+                if !joined[b] && share_a_corner(&corners[a], &corners[b]) {
+                    joined[b] = true;
+                    stack.push(b);
+                }
+            }
+        }
+        joined.into_iter().all(|j| j)
+    }
+
+    fn width(&self) -> usize {
+        self.view.viewport.width as usize
+    }
+
+    /// Pixel `k`'s centre \[pixels\].
+    fn centre(&self, k: usize) -> [f64; 2] {
+        let w = self.width();
+        [(k % w) as f64 + 0.5, (k / w) as f64 + 0.5]
+    }
+
+    /// The ray through screen position `at` \[pixels\].
+    fn ray_at(&self, at: [f64; 2]) -> (DVec3, DVec3) {
+        self.view.ray(at[0], at[1])
+    }
+
+    /// The points of a grid of `steps` a pixel side, through the pixel centres, within
+    /// `margin` of pixel (i, j)'s centre and on the viewport \[pixels\].
+    fn disc(&self, i: usize, j: usize, margin: f64, steps: u32) -> impl Iterator<Item = [f64; 2]> {
+        let s = f64::from(steps);
+        let r = (margin * s).floor() as i64;
+        let (w, h) = (
+            f64::from(self.view.viewport.width),
+            f64::from(self.view.viewport.height),
+        );
+        let (cx, cy) = (i as f64 + 0.5, j as f64 + 0.5);
+        (-r..=r)
+            .flat_map(move |y| (-r..=r).map(move |x| (x, y)))
+            .filter(move |&(x, y)| ((x * x + y * y) as f64) <= (margin * s).powi(2))
+            .map(move |(x, y)| [cx + x as f64 / s, cy + y as f64 / s])
+            .filter(move |p| p[0] > 0.0 && p[1] > 0.0 && p[0] < w && p[1] < h)
+    }
+
+    /// How far the render may stray from `lembo`'s exact outline \[pixels\].
+    fn strays(&self, lembo: &Lembo) -> f64 {
+        match self.approximation {
+            Approximation::Lembos { deviation_px } => 2.0 * deviation_px,
+            Approximation::Triangles { level } => {
+                screen_deviation(lembo, self.view) / f64::from(level.max(1)).powi(2)
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::{Camera, Projection, Viewport};
+    use crate::lembo::construct::lembo_from_triangle;
+    use crate::rop::framebuffer::NO_PRIMITIVE;
+    use glam::DVec3;
+
+    /// Orthographic 128 x 128 view down -z: world (X, Y) on screen (X + 64, 64 - Y).
+    fn view() -> View {
+        let camera = Camera {
+            eye: [0.0, 0.0, 10.0],
+            target: [0.0; 3],
+            up: [0.0, 1.0, 0.0],
+            projection: Projection::Orthographic {
+                height: 128.0,
+                near: 0.1,
+                far: 100.0,
+            },
+        };
+        View::new(
+            &camera,
+            Viewport {
+                width: 128,
+                height: 128,
+            },
+        )
+    }
+
+    /// A flat triangle at height z whose normals are `n` (+z: facing the eye).
+    fn flat(p: [[f64; 2]; 3], z: f64, n: DVec3) -> Lembo {
+        lembo_from_triangle(p.map(|[x, y]| DVec3::new(x, y, z)), [n; 3])
+    }
+
+    /// The reference of `lembos` at the pixel centres, as `render_reference` traces it.
+    fn reference(tracer: &Tracer) -> ReferenceImage {
+        let mut scratch = TraceScratch::default();
+        let hits = (0..128 * 128)
+            .map(|k| tracer.hit((k % 128) as f64 + 0.5, (k / 128) as f64 + 0.5, &mut scratch))
+            .collect();
+        ReferenceImage {
+            width: 128,
+            height: 128,
+            supersample: 1,
+            hits,
+            hits_offset_px: [0.0; 2],
+            color: vec![[0; 3]; 128 * 128],
+            color_supersampled: None,
+            coverage: None,
+        }
+    }
+
+    #[test]
+    fn leaks_are_gaps_in_an_unbroken_surface_not_displaced_outlines() {
+        let view = view();
+        // A square of two triangles (ids 0 and 1) on screen [24, 104]² facing the eye, a
+        // surface of another part behind it (2), and the inside of a surface behind it (3:
+        // normals turned from the eye).
+        let lembos = [
+            flat([[-40.0, -40.0], [40.0, -40.0], [40.0, 40.0]], 0.0, DVec3::Z),
+            flat([[-40.0, -40.0], [-40.0, 40.0], [40.0, 40.0]], 0.0, DVec3::Z),
+            flat([[-30.0, 0.0], [-10.0, 0.0], [-30.0, 20.0]], -5.0, DVec3::Z),
+            flat([[10.0, 0.0], [30.0, 0.0], [10.0, 20.0]], -5.0, -DVec3::Z),
+        ];
+        let source: Vec<(&Lembo, bool)> = lembos.iter().map(|l| (l, true)).collect();
+        let tracer = Tracer::new(&source, &view, 16);
+        let reference = reference(&tracer);
+        let depth = view.depth_of(DVec3::ZERO) as f32;
+        let behind = view.depth_of(DVec3::new(0.0, 0.0, -5.0)) as f32;
+        // The render: the square, as the reference shows it.
+        let mut fb = FrameBuffer::new(128, 128, [0; 3], true);
+        for j in 24..104 {
+            for i in 24..104 {
+                let k = fb.index(i, j);
+                fb.write(k, depth, u32::from(i + j < 128), [200; 3]);
+                fb.normal.as_mut().unwrap()[k] = [0.0, 0.0, 1.0];
+            }
+        }
+        let leaks_of = |fb: &FrameBuffer, drawn: Drawn| {
+            leaks(
+                &source,
+                &tracer,
+                fb,
+                &reference,
+                drawn,
+                Approximation::Lembos { deviation_px: 0.1 },
+            )
+        };
+        assert_eq!(leaks_of(&fb, Drawn::EXACT), Leaks::default());
+        let mut set = |i: u32, j: u32, id: u32, z: f32, n: [f32; 3]| {
+            let k = fb.index(i, j);
+            fb.depth[k] = z;
+            fb.primitive[k] = id;
+            fb.normal.as_mut().unwrap()[k] = n;
+        };
+        let (up, down) = ([0.0, 0.0, 1.0], [0.0, 0.0, -1.0]);
+        // Leaks: a crack, the inside of 3, part 2 seen through the square.
+        set(60, 60, NO_PRIMITIVE, 1.0, up);
+        set(84, 60, 3, behind, down);
+        set(44, 60, 2, behind, up);
+        // Not leaks: a shading normal turned away on the square itself; the neighbour
+        // triangle a little behind (a patch's sag); 2 in front of the square (it hides);
+        // the background within 2 px of the square's outline.
+        set(70, 80, 0, depth, down);
+        set(80, 70, 1, depth + 0.01, up);
+        set(40, 40, 2, depth - 0.01, up);
+        set(25, 60, NO_PRIMITIVE, 1.0, up);
+        let found = leaks_of(&fb, Drawn::EXACT);
+        assert_eq!(
+            found,
+            Leaks {
+                background: 1,
+                back_face: 1,
+                farther: 1,
+            }
+        );
+        assert_eq!(found.total(), 3);
+        // The same ids on the triangle path at n = 2 (four triangles a lembo).
+        for id in fb.primitive.iter_mut().filter(|p| **p != NO_PRIMITIVE) {
+            *id = *id * 4 + 1;
+        }
+        let two = Drawn {
+            ids_per_lembo: 4,
+            triangles: None,
+        };
+        let triangles = leaks(
+            &source,
+            &tracer,
+            &fb,
+            &reference,
+            two,
+            Approximation::Triangles { level: 2 },
+        );
+        assert_eq!(triangles, found);
+    }
+
+    /// Where the reference shows another part within the margin, the render's outline may
+    /// be displaced onto it: not a leak; beyond the margin it is one.
+    #[test]
+    fn the_margin_grows_with_how_far_the_render_strays() {
+        let view = view();
+        // Two squares side by side, apart (no shared corner), the right one behind.
+        let lembos = [
+            flat([[-40.0, -40.0], [0.0, -40.0], [0.0, 0.0]], 0.0, DVec3::Z),
+            flat([[0.5, -40.0], [40.0, -40.0], [0.5, 0.0]], -5.0, DVec3::Z),
+        ];
+        let source: Vec<(&Lembo, bool)> = lembos.iter().map(|l| (l, true)).collect();
+        let tracer = Tracer::new(&source, &view, 16);
+        let reference = reference(&tracer);
+        let mut fb = FrameBuffer::new(128, 128, [0; 3], true);
+        for (k, hit) in reference.hits.iter().enumerate() {
+            if let Some(h) = hit {
+                fb.write(k, h.depth as f32, h.lembo, [200; 3]);
+                fb.normal.as_mut().unwrap()[k] = [0.0, 0.0, 1.0];
+            }
+        }
+        // The left triangle's right edge, x = 64 on screen, drawn 3 px to the left: the
+        // right triangle shows at x = 61.5, 62.5, 63.5 on row 100.
+        let behind = view.depth_of(DVec3::new(0.0, 0.0, -5.0)) as f32;
+        for i in 61..64 {
+            let k = fb.index(i, 100);
+            fb.depth[k] = behind;
+            fb.primitive[k] = 1;
+        }
+        let at = |deviation_px: f64| {
+            leaks(
+                &source,
+                &tracer,
+                &fb,
+                &reference,
+                Drawn::EXACT,
+                Approximation::Lembos { deviation_px },
+            )
+            .farther
+        };
+        // 2 px: the pixel 2.5 px from the edge leaks; 2 + 2 x 0.5 px: none does.
+        assert_eq!(at(0.0), 1);
+        assert_eq!(at(0.5), 0);
+    }
+}
