@@ -294,7 +294,7 @@ fn an_auto_smoothed_bunny_has_no_false_double_hits() {
 }
 
 /// The shipped creased head (`traces/head_creased.json`: 1 280 faces auto-smoothed at 35
-/// degrees, creases from under a degree to beyond 60, and two eyeballs cutting through the
+/// degrees, creases from under a degree to 95 degrees, and two eyeballs cutting through the
 /// face). See-through counts, on both paths at every tolerance, the places where the exact
 /// lembo surface itself departs from the flat mesh (where the eyes' curved patches and the
 /// face's cross, the flat triangles do not); none of them is a leak against the exact

@@ -3,14 +3,15 @@
 
 An icosphere subdivided three times (642 vertices, 1280 triangles) stretched to a head's
 ellipsoid, with features pushed along each vertex's direction d by Gaussian bumps of the
-angle to a feature's direction: a nose, a brow ridge, eye sockets, cheekbones, ears and a
-chin, some with a pointed profile (exp(-angle / width)) that leaves sharp ridges. Then each
-vertex's radius is scaled by 1 + AMP * (u - 0.5), u from Python's random module seeded
-with SEED. Auto-smoothed at 35 degrees (traces/head_creased.json), its edges meet at
-angles from under a degree to beyond 90: creases of many angles, short and long, corners
-where several meet, creases ending inside smooth regions, and concave folds (eye sockets,
-the sides of the nose) whose curved patches reach in front of their neighbours' flat
-triangles.
+angle to a feature's direction: a nose, a brow ridge, eye sockets, cheekbones, ears, a
+chin, a mouth, nostrils and grooves behind the ears, some with a pointed profile
+(exp(-angle / width)) that leaves sharp ridges. Then each vertex's radius is scaled by
+1 + AMP * (u - 0.5), u from Python's random module seeded with SEED. Two eyeballs
+(icospheres of level 1, 80 triangles each) are separate shells sunk into the sockets, so
+they cut through the face. Auto-smoothed at 35 degrees (traces/head_creased.json), 174 of
+the head's 1 920 edges are creases, at angles up to 95 degrees: creases of many angles,
+short and long, corners where several meet, creases ending inside smooth regions; and
+where the eyes cut the face, the curved patches cross where the flat triangles do not.
 
     python3 traces/meshes/make_head.py 3 7 0.08 > traces/meshes/head.obj
 """
