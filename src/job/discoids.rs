@@ -100,12 +100,15 @@ pub(super) fn run_discoids(
         blend: Some(blend),
         memory_system: None,
         memory,
-        host: host(
-            wall,
-            counts.fragments,
-            cycles.map(|c| (c.total, job.host_threads)),
-            measured.as_ref().map(|m| m.reference_wall),
-            measured.as_ref().map(|m| m.metrics_wall),
+        host: Measured::echo(
+            measured.as_ref(),
+            host(
+                wall,
+                counts.fragments,
+                cycles.map(|c| (c.total, job.host_threads)),
+                measured.as_ref().map(|m| m.reference_wall),
+                measured.as_ref().map(|m| m.metrics_wall),
+            ),
         ),
     };
     Ok(PathRun {
@@ -270,18 +273,21 @@ fn measure_discoids(
         ));
     }
     let surface = reference_scene(scene)?;
-    let lembos = oracle::SceneLembos::new(surface.as_ref());
-    let tracer = oracle::Tracer::new(&lembos, view, job.trace.tile);
-    let flip = flip_frame(&with_normals, reference, job.flip_ppd);
-    let accuracy = metrics::measure(
-        &with_normals,
-        reference,
-        &tracer,
-        0,
-        None,
-        Default::default(),
-        &flip,
-    );
+    let (accuracy, flip, threads) = job.trace.install(|| {
+        let lembos = oracle::SceneLembos::new(surface.as_ref());
+        let tracer = oracle::Tracer::new(&lembos, view, job.trace.tile);
+        let flip = flip_frame(&with_normals, reference, job.flip_ppd);
+        let accuracy = metrics::measure(
+            &with_normals,
+            reference,
+            &tracer,
+            0,
+            None,
+            Default::default(),
+            &flip,
+        );
+        (accuracy, flip, rayon::current_num_threads() as u32)
+    })?;
     let metrics_wall = t1.elapsed().as_secs_f64();
     Ok(Measured {
         accuracy,
@@ -291,5 +297,7 @@ fn measure_discoids(
         },
         reference_wall: wall + metrics_wall,
         metrics_wall,
+        tile: job.trace.tile,
+        threads,
     })
 }

@@ -166,7 +166,7 @@ fn route_host(
         // The functional frame's threads: the analysed frame is drawn on one.
         h.host_threads = Some(if measured.is_some() { 1 } else { job.threads() });
     }
-    h
+    Measured::echo(measured, h)
 }
 
 /// The primitives section of a lembo or triangle route's report, their bytes at `sizes`.

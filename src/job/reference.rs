@@ -132,6 +132,21 @@ pub(super) struct Measured {
     pub(super) reference_wall: f64,
     /// The metrics' wall time \[seconds\].
     pub(super) metrics_wall: f64,
+    /// The reference's tile side \[pixels\] and the threads its metrics ran on.
+    pub(super) tile: u32,
+    pub(super) threads: u32,
+}
+
+impl Measured {
+    /// `host` with this measurement's wall times, tile side and threads.
+    pub(super) fn echo(
+        measured: Option<&Measured>,
+        mut host: crate::report::Host,
+    ) -> crate::report::Host {
+        host.reference_tile_px = measured.map(|m| m.tile);
+        host.reference_threads = measured.map(|m| m.threads);
+        host
+    }
 }
 
 /// Measures `frame` (probed) against `reference` (with the wall time it took);
@@ -146,8 +161,8 @@ pub(super) fn measure(
 ) -> Result<Measured> {
     crate::progress::stage("accuracy metrics");
     let t1 = Instant::now();
-    let (accuracy, flip) = job.trace.install(|| {
-        measure_frame_and_flip(
+    let (accuracy, flip, threads) = job.trace.install(|| {
+        let (accuracy, flip) = measure_frame_and_flip(
             scene,
             view,
             frame,
@@ -156,7 +171,8 @@ pub(super) fn measure(
             ids_per_lembo,
             job.flip_ppd,
             job.samples,
-        )
+        );
+        (accuracy, flip, rayon::current_num_threads() as u32)
     })?;
     let metrics_wall = t1.elapsed().as_secs_f64();
     Ok(Measured {
@@ -167,6 +183,8 @@ pub(super) fn measure(
         },
         reference_wall: wall + t1.elapsed().as_secs_f64(),
         metrics_wall,
+        tile: job.trace.tile,
+        threads,
     })
 }
 

@@ -90,6 +90,8 @@ pub(super) fn host(
         host_threads: timed.map(|(_, n)| n),
         reference_wall_seconds: reference_wall,
         metrics_wall_seconds: metrics_wall,
+        reference_tile_px: None,
+        reference_threads: None,
         peak_rss_bytes: peak_rss_bytes(),
     }
 }

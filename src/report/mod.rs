@@ -249,6 +249,12 @@ pub struct Host {
     /// Of that, the accuracy metrics (the sub-pixel silhouette's reference queries and the
     /// see-through check included) \[s\]; null without `--reference`.
     pub metrics_wall_seconds: Option<f64>,
+    /// Side of the screen tiles the reference binned its lembos into (`--reference-tile`)
+    /// \[pixels\]; null without `--reference`.
+    pub reference_tile_px: Option<u32>,
+    /// Host threads the reference's metrics ran on (`--reference-threads`, else the
+    /// machine's cores or a sweep's `--jobs`); null without `--reference`.
+    pub reference_threads: Option<u32>,
     /// Peak resident set of the simulator process so far (Linux `VmHWM`; null elsewhere).
     /// For `render`, read after the images are encoded, just before the report is written;
     /// a sweep's runs share one process, so theirs is the process's peak \[bytes\].

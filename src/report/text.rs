@@ -263,7 +263,7 @@ impl Report {
         let h = &self.host;
         let _ = writeln!(
             t,
-            "\nhost      render {:.3} s, {:.1} M fragments/s{}{}{}",
+            "\nhost      render {:.3} s, {:.1} M fragments/s{}{}{}{}",
             h.wall_seconds,
             h.fragments_per_second / 1e6,
             h.simulated_cycles_per_second
@@ -279,7 +279,12 @@ impl Report {
                 .unwrap_or_default(),
             h.metrics_wall_seconds
                 .map(|m| format!(" (metrics {m:.3} s)"))
-                .unwrap_or_default()
+                .unwrap_or_default(),
+            match (h.reference_tile_px, h.reference_threads) {
+                (Some(tile), Some(threads)) =>
+                    format!(", {tile} px tiles, {threads} reference threads"),
+                _ => String::new(),
+            }
         );
         if let Some(rss) = h.peak_rss_bytes {
             let _ = writeln!(

@@ -1657,11 +1657,24 @@ fn reference_tile_and_threads_change_nothing_measured() {
             threads,
         ];
         let (r, _) = render_into(dir.path(), &s, &format!("t{tile}"), &args);
+        // The report says what it was measured with.
+        let host = &r["host"];
+        assert_eq!(host["reference_tile_px"].to_string(), tile, "{host}");
+        assert_eq!(host["reference_threads"].to_string(), threads, "{host}");
+        let text = std::fs::read_to_string(dir.path().join(format!("t{tile}/report.txt"))).unwrap();
+        assert!(
+            text.contains(&format!(", {tile} px tiles, {threads} reference threads")),
+            "{text}"
+        );
         let reference = std::fs::read(dir.path().join(format!("t{tile}/reference.png"))).unwrap();
         seen.push((reference, r["accuracy"].clone()));
     }
     assert!(seen[0].1["psnr_db"].as_f64().unwrap() > 20.0);
     assert!(seen.windows(2).all(|w| w[0] == w[1]));
+    // Without the reference, nothing to echo.
+    let (r, _) = render_into(dir.path(), &s, "none", &["--mode", "functional"]);
+    assert!(r["host"]["reference_tile_px"].is_null());
+    assert!(r["host"]["reference_threads"].is_null());
 }
 
 /// The memory guard's estimate of a run measured against the exact reference holds the
