@@ -5,27 +5,31 @@
 //! from the curved surface's own departure from the flat mesh (which the reference shows
 //! too). At a pixel where the reference's hit H faces the eye (its lembo's geometric
 //! normal, on the side of its normal function, at the hit, against the ray), the render
-//! *leaks* when it shows there:
+//! is a *candidate* when it shows there:
 //! - **the background**;
-//! - **a back face**: its stored normal and its drawn surface both turned from the eye
-//!   ([`Drawn`]);
+//! - **a back face** farther than H: its stored normal and its drawn surface both turned
+//!   from the eye ([`Drawn`]);
 //! - **a farther surface of another part**: a winner whose lembo is not H's and shares no
-//!   corner with it, at a greater depth than H;
+//!   corner with it, at a greater depth than H.
 //!
-//! and the reference shows nothing of the kind within a margin of the pixel: no background,
-//! no back face, no hit on the winner's lembo or a lembo sharing a corner with it. What
-//! the reference shows a few pixels away is an outline the render drew slightly displaced
-//! (the method's tolerance, a tessellation's chords), not a leak. The margin is
+//! A candidate *leaks* when the exact surface around it is unbroken: within a margin of
+//! the pixel the reference shows no background, no back face, not the winner's lembo, and
+//! no lembo that is not joined to H's through corner-sharing lembos seen there. It looks
+//! at the pixel centres first, then on a grid of 1/8 px through the reference's [`Tracer`],
+//! so a slit in the exact surface narrower than a pixel is seen. Anything of the kind
+//! nearby means an outline (a silhouette, an occluding edge, a contour, two surfaces
+//! crossing) that the render drew slightly displaced, not a gap. The margin is
 //! [`OUTLINE_MARGIN_PX`] plus how far the render may stray from the exact surface: on the
 //! lembo path twice the measured largest scanline deviation (the walk's y error, standing
 //! for the subsegments' x error, both bounded by the same tolerance k), on the triangle
-//! path H's lembo's deviation from its flat triangle over n² (a quadratic's error from its
-//! chords shrinks with the square of the level), and of the winner's lembo where the
-//! winner is a surface.
+//! path the lembo's deviation from its flat triangle over n² (a quadratic's error from its
+//! chords shrinks with the square of the level), of H's lembo and of a farther winner's.
 //!
-//! A leak on an unbroken surface is a gap between primitives (a crack that shows the
-//! background, the inside of the mesh, or a part behind it); on every shipped scene, on
-//! both paths, there is none.
+//! A leak is so a gap between primitives in an unbroken surface (a crack that shows the
+//! background, the inside of the mesh, or a part behind it). Where lembos are smaller than
+//! the margin, a lembo joining two seen ones can fall between the grid's points; the
+//! surface then reads as broken and a gap there is not counted: the count errs towards 0,
+//! never towards a false leak.
 
 use super::oracle::{LemboSource, ReferenceImage, TraceScratch, Tracer};
 use super::see_through::OUTLINE_MARGIN_PX;
@@ -79,15 +83,8 @@ enum Kind {
     Farther,
 }
 
-/// The leaking pixels of `render` against `reference`, both of `view` (see the module
-/// documentation); `lembos` are the scene's lembos by id, `drawn` names the render's
-/// winners, `approximation` says how far its outlines may stray.
-///
-/// # Panics
-/// If the render kept no normal buffer, or it or the reference differs in size from the
-/// viewport: bugs of the caller.
-/// The leaking pixels of `render` against `reference`, both of `view` (see the module
-/// documentation); `tracer` answers the reference between pixel centres, `lembos` are the
+/// The leaking pixels of `render` against `reference`, both of the tracer's view (see the
+/// module documentation); `tracer` answers the reference between pixel centres, `lembos` are the
 /// scene's lembos by id, `drawn` names the render's winners, `approximation` says how far
 /// its outlines may stray.
 ///
