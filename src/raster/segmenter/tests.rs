@@ -791,3 +791,55 @@ fn curve_at_key_takes_the_stable_root_at_zero_slope_and_none_at_zero_slope_and_v
         "the two forms agree on every key: the test tells nothing"
     );
 }
+
+/// `least_reach` pinned on two lembos worked by hand. y = 20u² + 30v + 10 has gradients
+/// (0, 30), (40, 30) and (0, 30) at the corners: a = (0, 1), a·g >= 30, |g| <= 50, Hessian
+/// (40, 0, 0). y = -15v² + 10uv + 40u + 12 has (40, 0), (40, 10) and (50, -30): a = (1, 0),
+/// a·g >= 40, |g| <= √3400, Hessian (0, 10, -30). The expected reaches are the derivation
+/// in `least_reach`'s documentation (its 10⁻⁴ allowances included) evaluated from those
+/// figures in 50-digit decimal arithmetic, outside this code.
+#[test]
+fn least_reach_is_the_derivations_bound_on_two_lembos_worked_by_hand() {
+    let cases = [
+        (
+            quad(20.0, 0.0, 0.0, 0.0, 30.0, 10.0),
+            [0.0, 1.0],
+            [30.0, 50.0],
+            (40.0, 0.0, 0.0),
+        ),
+        (
+            quad(0.0, -15.0, 10.0, 40.0, 0.0, 12.0),
+            [1.0, 0.0],
+            [40.0, 3400f64.sqrt()],
+            (0.0, 10.0, -30.0),
+        ),
+    ];
+    let want = [
+        [
+            (0.5, 0.056_851_577_270_920_79),
+            (0.1, 0.055_260_399_622_636_70),
+        ],
+        [
+            (0.5, 0.094_310_103_993_291_58),
+            (0.1, 0.066_823_839_761_733_53),
+        ],
+    ];
+    for ((y, a, bounds, hessian), want) in cases.into_iter().zip(want) {
+        let l = screen_lembo::<f64>(x_linear(), y);
+        let crate::raster::screen::Partition::Monotone {
+            a: got_a,
+            grad_bounds,
+        } = l.partition
+        else {
+            panic!("{:?}", l.partition);
+        };
+        assert_eq!((got_a, grad_bounds, l.hessian), (a, bounds, hessian));
+        for (k, reach) in want {
+            let got = least_reach(&l, k).expect("a positive bound");
+            assert!(
+                (got - reach).abs() <= 1e-13 * reach,
+                "k = {k}: {got} against {reach}"
+            );
+        }
+    }
+}
