@@ -138,7 +138,7 @@ pub(super) struct Measured {
 }
 
 impl Measured {
-    /// `host` with this measurement's wall times, tile side and threads.
+    /// `host` with the tile side and threads of this measurement, if any.
     pub(super) fn echo(
         measured: Option<&Measured>,
         mut host: crate::report::Host,
@@ -189,11 +189,11 @@ pub(super) fn measure(
 }
 
 /// The accuracy of `frame` (rendered with `analyse`, one sample a pixel) of `scene` against
-/// its `reference`:
-/// the metrics, with the reference traced anew where the sub-pixel silhouette asks, the
-/// fragment probe's counts and the visibility counts ([`visibility`]). `ids_per_lembo` maps the frame's
-/// winner ids to lembo ids: 1 on the lembo path, n² on the triangle path at level n; FLIP
-/// is computed for the observer `ppd`.
+/// its `reference`: the metrics, with the reference traced anew where the sub-pixel
+/// silhouette asks, the fragment probe's counts and the visibility counts
+/// ([`visibility`]). `ids_per_lembo` maps the frame's winner ids to lembo ids: 1 on the
+/// lembo path, n² on the triangle path at level n; FLIP is computed for the observer
+/// `ppd`.
 pub fn measure_frame(
     scene: &Scene,
     view: &View,

@@ -40,8 +40,8 @@
 //! points towards the eye at its centroid.
 //!
 //! The winner's id is a lembo id on the lembo path (Setup's pieces keep their lembo's id),
-//! and `lembo * n² + k` on the triangle path at tessellation level n: `ids_per_lembo`
-//! maps it back.
+//! and `lembo * n² + k` on the triangle path at tessellation level n: [`Drawn`] maps it
+//! back.
 
 use super::oracle::LemboSource;
 use super::surface::{oriented_normal, screen_deviation, share_a_corner, Drawn, Made, Shown};
