@@ -283,12 +283,9 @@ pub fn see_through_px(
     render: &FrameBuffer,
     level: Option<u32>,
 ) -> Option<u64> {
-    if scene.objects.iter().all(|o| !o.from_mesh) {
-        return None;
-    }
     let lembos = SceneLembos::new(scene);
     let triangles = level.map(|n| Tessellation::new(scene.lembo_sets(), n));
-    Some(see_through::see_through(&lembos, view, render, drawn(&triangles)).total())
+    see_through_of(scene, &lembos, view, render, drawn(&triangles))
 }
 
 /// The visibility counts of a render of `scene` against its exact `reference`, which
@@ -304,25 +301,32 @@ pub fn visibility(
     level: Option<u32>,
     deviation_px: f64,
 ) -> Visibility {
-    let see_through = see_through_px(scene, tracer.view(), render, level);
     let lembos = SceneLembos::new(scene);
     let triangles = level.map(|n| Tessellation::new(scene.lembo_sets(), n));
+    let drawn = drawn(&triangles);
+    let see_through = see_through_of(scene, &lembos, tracer.view(), render, drawn);
     let approximation = match level {
         None => Approximation::Lembos { deviation_px },
         Some(level) => Approximation::Triangles { level },
     };
-    let leaks = leak::leaks(
-        &lembos,
-        tracer,
-        render,
-        reference,
-        drawn(&triangles),
-        approximation,
-    );
+    let leaks = leak::leaks(&lembos, tracer, render, reference, drawn, approximation);
     Visibility {
         see_through_px: see_through,
         leak_px: Some(leaks.total()),
     }
+}
+
+/// The see-through pixels of a render of `scene` whose winners `drawn` names; None when no
+/// object of the scene is built from a triangle mesh.
+fn see_through_of(
+    scene: &Scene,
+    lembos: &SceneLembos,
+    view: &View,
+    render: &FrameBuffer,
+    drawn: Drawn,
+) -> Option<u64> {
+    let meshed = scene.objects.iter().any(|o| o.from_mesh);
+    meshed.then(|| see_through::see_through(lembos, view, render, drawn).total())
 }
 
 /// How a render's winners name surfaces: lembos, or the `triangles` of a tessellation.

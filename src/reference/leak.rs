@@ -172,12 +172,15 @@ impl Check<'_> {
         scratch: &mut TraceScratch,
     ) -> Option<Kind> {
         let hit = self.reference.hits[k].as_ref()?;
+        // Cheap tests first, before the pixel's ray: most pixels show H's own lembo, or
+        // something in front of H.
+        if !shown.is_background() && shown.depth <= hit.depth {
+            return None;
+        }
         let (origin, dir) = self.ray_at(self.centre(k));
-        // Cheap tests first: most pixels show H's own lembo, or something in front of H.
         let candidate = shown.is_background()
-            || (shown.depth > hit.depth
-                && (shown.normal.dot(-dir) < 0.0
-                    || drawn.lembo_of(shown.winner) != u64::from(hit.lembo)));
+            || shown.normal.dot(-dir) < 0.0
+            || drawn.lembo_of(shown.winner) != u64::from(hit.lembo);
         if !candidate {
             return None;
         }
@@ -302,37 +305,9 @@ impl Check<'_> {
 
 #[cfg(test)]
 mod tests {
+    use super::super::surface::fixtures::{flat, view};
     use super::*;
-    use crate::camera::{Camera, Projection, Viewport};
-    use crate::lembo::construct::lembo_from_triangle;
     use crate::rop::framebuffer::NO_PRIMITIVE;
-    use glam::DVec3;
-
-    /// Orthographic 128 x 128 view down -z: world (X, Y) on screen (X + 64, 64 - Y).
-    fn view() -> View {
-        let camera = Camera {
-            eye: [0.0, 0.0, 10.0],
-            target: [0.0; 3],
-            up: [0.0, 1.0, 0.0],
-            projection: Projection::Orthographic {
-                height: 128.0,
-                near: 0.1,
-                far: 100.0,
-            },
-        };
-        View::new(
-            &camera,
-            Viewport {
-                width: 128,
-                height: 128,
-            },
-        )
-    }
-
-    /// A flat triangle at height z whose normals are `n` (+z: facing the eye).
-    fn flat(p: [[f64; 2]; 3], z: f64, n: DVec3) -> Lembo {
-        lembo_from_triangle(p.map(|[x, y]| DVec3::new(x, y, z)), [n; 3])
-    }
 
     /// The reference of `lembos` at the pixel centres, as `render_reference` traces it.
     fn reference(tracer: &Tracer) -> ReferenceImage {

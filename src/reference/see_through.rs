@@ -424,35 +424,9 @@ fn mesh_pass(lembos: &dyn LemboSource, view: &View) -> (FlatMesh, Vec<bool>, Vec
 
 #[cfg(test)]
 mod tests {
+    use super::super::surface::fixtures::{flat, view};
     use super::*;
-    use crate::camera::{Camera, Projection, Viewport};
     use crate::lembo::construct::lembo_from_triangle;
-
-    /// Orthographic 128 x 128 view down -z: world (X, Y) on screen (X + 64, 64 - Y).
-    fn view() -> View {
-        let camera = Camera {
-            eye: [0.0, 0.0, 10.0],
-            target: [0.0; 3],
-            up: [0.0, 1.0, 0.0],
-            projection: Projection::Orthographic {
-                height: 128.0,
-                near: 0.1,
-                far: 100.0,
-            },
-        };
-        View::new(
-            &camera,
-            Viewport {
-                width: 128,
-                height: 128,
-            },
-        )
-    }
-
-    /// A flat triangle at height z facing +z (wound either way: the normals orient it).
-    fn flat(p: [[f64; 2]; 3], z: f64) -> Lembo {
-        lembo_from_triangle(p.map(|[x, y]| DVec3::new(x, y, z)), [DVec3::Z; 3])
-    }
 
     #[test]
     fn see_through_counts_background_back_faces_and_foreign_surfaces_behind() {
@@ -460,10 +434,14 @@ mod tests {
         // A square of two triangles (ids 0 and 1, the second wound the other way) on screen
         // [24, 104]², and two small triangles off it (2 and 3) to stand for other surfaces.
         let lembos = [
-            flat([[-40.0, -40.0], [40.0, -40.0], [40.0, 40.0]], 0.0),
-            flat([[-40.0, -40.0], [-40.0, 40.0], [40.0, 40.0]], 0.0),
-            flat([[-60.0, -60.0], [-55.0, -60.0], [-60.0, -55.0]], -5.0),
-            flat([[60.0, 60.0], [55.0, 60.0], [60.0, 55.0]], 1.0),
+            flat([[-40.0, -40.0], [40.0, -40.0], [40.0, 40.0]], 0.0, DVec3::Z),
+            flat([[-40.0, -40.0], [-40.0, 40.0], [40.0, 40.0]], 0.0, DVec3::Z),
+            flat(
+                [[-60.0, -60.0], [-55.0, -60.0], [-60.0, -55.0]],
+                -5.0,
+                DVec3::Z,
+            ),
+            flat([[60.0, 60.0], [55.0, 60.0], [60.0, 55.0]], 1.0, DVec3::Z),
             // A surface whose front is turned away from the eye (not from the mesh).
             lembo_from_triangle(
                 [[-25.0, -35.0], [0.0, -35.0], [-25.0, -10.0]].map(|[x, y]| DVec3::new(x, y, 0.0)),

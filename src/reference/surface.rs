@@ -207,14 +207,16 @@ impl<'a> Made<'a> {
     }
 }
 
+/// What the tests of this module, [`super::see_through`] and [`super::leak`] draw on.
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::camera::{Camera, Projection, Viewport};
+pub(super) mod fixtures {
+    use crate::camera::{Camera, Projection, View, Viewport};
     use crate::lembo::construct::lembo_from_triangle;
+    use crate::lembo::Lembo;
+    use glam::DVec3;
 
     /// Orthographic 128 x 128 view down -z: world (X, Y) on screen (X + 64, 64 - Y).
-    fn view() -> View {
+    pub fn view() -> View {
         let camera = Camera {
             eye: [0.0, 0.0, 10.0],
             target: [0.0; 3],
@@ -234,9 +236,18 @@ mod tests {
         )
     }
 
-    fn flat(p: [[f64; 2]; 3], z: f64) -> Lembo {
-        lembo_from_triangle(p.map(|[x, y]| DVec3::new(x, y, z)), [DVec3::Z; 3])
+    /// A flat triangle at height z whose normals are `n` (+z faces the eye; wound either
+    /// way, since the normals orient it).
+    pub fn flat(p: [[f64; 2]; 3], z: f64, n: DVec3) -> Lembo {
+        lembo_from_triangle(p.map(|[x, y]| DVec3::new(x, y, z)), [n; 3])
     }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fixtures::{flat, view};
+    use super::*;
+    use crate::lembo::construct::lembo_from_triangle;
 
     /// The surface's own facing: its geometric normal on the side of its normal function,
     /// at the ray's first hit, or at the border point nearest a ray that misses it.
@@ -244,7 +255,7 @@ mod tests {
     fn surface_faces_asks_the_surface_not_its_shading_normal() {
         let view = view();
         let (origin, dir) = view.ray(64.5, 64.5);
-        let up = flat([[-10.0, -10.0], [10.0, -10.0], [0.0, 10.0]], 0.0);
+        let up = flat([[-10.0, -10.0], [10.0, -10.0], [0.0, 10.0]], 0.0, DVec3::Z);
         assert!(surface_faces(&up, origin, dir));
         // Normals leaning 80 degrees towards x: the shading normal at the hit still on
         // the eye's side, the surface too.
@@ -266,7 +277,7 @@ mod tests {
     fn a_back_face_is_a_turned_normal_on_a_turned_surface() {
         let view = view();
         let (origin, dir) = view.ray(64.5, 64.5);
-        let up = flat([[-10.0, -10.0], [10.0, -10.0], [0.0, 10.0]], 0.0);
+        let up = flat([[-10.0, -10.0], [10.0, -10.0], [0.0, 10.0]], 0.0, DVec3::Z);
         let down = lembo_from_triangle(up.points[..3].try_into().unwrap(), [-DVec3::Z; 3]);
         let lembos: Vec<(&Lembo, bool)> = vec![(&up, true), (&down, true)];
         let mut made = Made::new(&lembos);
