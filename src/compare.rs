@@ -174,8 +174,8 @@ impl CompareJob {
             blend: BlendMode::Rgba8,
             threshold: None,
             host_threads: self.host_threads,
-            // Both paths are measured, so their functional frames are the analysed ones,
-            // drawn on one thread.
+            // Both paths are measured, so their functional frames are the analysed ones
+            // (the lembo path's in bands on the machine's cores, the triangle path's on one).
             threads: None,
             given: Given {
                 supersample: self.supersample_given,

@@ -388,8 +388,9 @@ struct RenderArgs {
     #[arg(long, value_name = "N", default_value_t = 1)]
     host_threads: u32,
     /// Host threads a functional frame (--mode functional) is drawn on, in bands of rows.
-    /// The image, depth and every count are identical for every N; the frame measured
-    /// against the reference (--reference) is drawn on one. [default: the machine's cores]
+    /// The image, depth, every count and the fragment probe's measurements are identical
+    /// for every N; the triangle path's frame measured against the reference (--reference)
+    /// is drawn on one. [default: the machine's cores]
     #[arg(long, value_name = "N")]
     threads: Option<u32>,
     /// Run even when the memory estimate for this viewport is above the memory the machine

@@ -26,8 +26,10 @@
 //! segment cap) is the smallest (piece, scanline) any band met, the one the single-threaded
 //! walk meets first. Which thread sets up a task or draws a band changes nothing in it.
 //!
-//! The analysed frame (`--reference`, with the fragment probe) and the counting runs of the
-//! cost model stay single-threaded.
+//! The lembo path's analysed frame (`--reference`) is drawn the same way, each band's
+//! fragments measured before its ROP by a probe over its own rows of one
+//! [`ProbeBoard`] (`render_probed_in_bands`). The triangle path's analysed frame and the
+//! counting runs of the cost model stay single-threaded.
 
 use super::functional::Frame;
 use crate::camera::View;
@@ -35,6 +37,8 @@ use crate::datapath::Real;
 use crate::error::{Error, Result};
 use crate::raster::counts::Counts;
 use crate::raster::driver::{self, Draw, Placed, Stages};
+use crate::raster::lembo_path::LemboPath;
+use crate::raster::probe::ProbeBoard;
 use crate::raster::screen::ScreenLembo;
 use crate::raster::triangle::ScreenTriangle;
 use crate::rop::framebuffer::FrameRows;
@@ -461,14 +465,14 @@ fn gather(mut counts: Counts, drawn: Vec<Band>) -> Result<Counts> {
 fn draw_frame<T: Send + Sync, S: Default>(
     scene: &Scene,
     view: &View,
-    threads: u32,
+    (threads, keep_normals): (u32, bool),
     (tasks, window): (usize, usize),
     set_up: impl Fn(usize) -> SetUp<T> + Sync,
     draw: impl Fn(&Pieces<'_, T>, u32, u32, FrameRows<'_>, &mut S) -> Band + Sync,
 ) -> Result<Frame> {
     let vp = view.viewport;
     let background = scene.background.map(crate::rop::shade::to_u8::<f64>);
-    let mut framebuffer = FrameBuffer::zeroed(vp.width, vp.height);
+    let mut framebuffer = FrameBuffer::zeroed(vp.width, vp.height, keep_normals);
     let window = window.max(1);
     let mut counts = Counts::default();
     // At least one window, so that an empty scene's frame is cleared.
@@ -539,16 +543,11 @@ where
     P: Stages<R> + for<'fb> Draw<R, RopSink<'fb, R>>,
     P::Piece: RowCost,
 {
-    render_in_windows(scene, view, path, threads, WINDOW_PRIMITIVES)
+    plain_in_windows(scene, view, path, threads, WINDOW_PRIMITIVES)
 }
 
-/// Most primitives set up before their bands are drawn: the set-up pieces a frame holds at
-/// once (a set-up lembo takes about 500 bytes with its rows, so some 33 MB), while the
-/// threads meet twice a window, a few hundred milliseconds of work apart.
-pub const WINDOW_PRIMITIVES: usize = 1 << 16;
-
-/// [`render_in_bands`] with windows of about `window` primitives (whole setup tasks).
-fn render_in_windows<R: Real, P>(
+/// [`render_in_bands`] with windows of about `window` primitives.
+fn plain_in_windows<R: Real, P>(
     scene: &Scene,
     view: &View,
     path: &P,
@@ -559,13 +558,74 @@ where
     P: Stages<R> + for<'fb> Draw<R, RopSink<'fb, R>>,
     P::Piece: RowCost,
 {
+    let frame = (threads, window, false);
+    render_in_windows(scene, view, path, frame, |pieces, (lo, hi), rop, c, buffers| {
+        driver::draw(path, pieces.meeting(lo, hi), (lo, hi), rop, c, buffers)
+    })
+}
+
+/// The lembo path's analysed frame on `threads` threads: [`render_in_bands`] with normals
+/// kept and every band's fragments measured by a probe on `board` before its ROP, the same
+/// frame and, in `board`, the same measurements as the single-threaded probe's
+/// ([`ProbeBoard`]).
+pub fn render_probed_in_bands<R: Real>(
+    scene: &Scene,
+    view: &View,
+    path: &LemboPath<'_, R>,
+    threads: u32,
+    board: &ProbeBoard,
+) -> Result<Frame> {
+    probed_in_windows(scene, view, path, (threads, WINDOW_PRIMITIVES), board)
+}
+
+/// [`render_probed_in_bands`] with windows of about `window` primitives.
+fn probed_in_windows<R: Real>(
+    scene: &Scene,
+    view: &View,
+    path: &LemboPath<'_, R>,
+    (threads, window): (u32, usize),
+    board: &ProbeBoard,
+) -> Result<Frame> {
+    let frame = (threads, window, true);
+    render_in_windows(scene, view, path, frame, |pieces, (lo, hi), rop, c, buffers| {
+        let mut probe = board.probe(lo, hi, rop);
+        driver::draw(path, pieces.meeting(lo, hi), (lo, hi), &mut probe, c, buffers)
+    })
+}
+
+/// Most primitives set up before their bands are drawn: the set-up pieces a frame holds at
+/// once (a set-up lembo takes about 500 bytes with its rows, so some 33 MB), while the
+/// threads meet twice a window, a few hundred milliseconds of work apart.
+pub const WINDOW_PRIMITIVES: usize = 1 << 16;
+
+/// [`render_in_bands`] on `threads` threads with windows of about `window` primitives
+/// (whole setup tasks), normals kept if `keep_normals`, each band's pieces in rows
+/// `(lo, hi)` drawn into its ROP by `draw_band`.
+fn render_in_windows<R: Real, P>(
+    scene: &Scene,
+    view: &View,
+    path: &P,
+    (threads, window, keep_normals): (u32, usize, bool),
+    draw_band: impl for<'x, 'fb> Fn(
+            &Pieces<'x, P::Piece>,
+            (u32, u32),
+            &mut RopSink<'fb, R>,
+            &mut Counts,
+            &mut P::Buffers,
+        ) -> std::result::Result<(), ((usize, u32), Error)>
+        + Sync,
+) -> Result<Frame>
+where
+    P: Stages<R>,
+    P::Piece: RowCost,
+{
     let per_task = per_task(path.primitives(), path.fetched_together(), threads);
     crate::progress::add_total(path.primitives() as u64);
     let tasks = path.primitives().div_ceil(per_task);
     draw_frame(
         scene,
         view,
-        threads,
+        (threads, keep_normals),
         (tasks, window.div_ceil(per_task)),
         |task| {
             let set_up = set_up_task(path, per_task, task);
@@ -576,14 +636,7 @@ where
         |pieces, lo, hi, rows, buffers: &mut P::Buffers| {
             let mut rop = RopSink::<R>::band(rows, &scene.light, view, lo);
             let mut c = Counts::default();
-            driver::draw(
-                path,
-                pieces.meeting(lo, hi),
-                (lo, hi),
-                &mut rop,
-                &mut c,
-                buffers,
-            )?;
+            draw_band(pieces, (lo, hi), &mut rop, &mut c, buffers)?;
             Ok((c, rop.finish()))
         },
     )
@@ -614,7 +667,7 @@ mod tests {
             draw_frame(
                 &scene,
                 &view,
-                threads,
+                (threads, false),
                 (37, 37),
                 |task| {
                     lock(&ran).push(task);
@@ -666,16 +719,51 @@ mod tests {
         assert!(lembo_frame.3.fragments > 1000 && triangle_frame.3.fragments > 1000);
         for threads in [1, 2, 3] {
             for window in [1, 50, 1000, 1 << 20] {
-                let frame = render_in_windows::<f32, _>(&scene, &view, &lembos, threads, window);
+                let frame = plain_in_windows::<f32, _>(&scene, &view, &lembos, threads, window);
                 assert!(
                     bits(&frame.unwrap()) == lembo_frame,
                     "lembos {threads} {window}"
                 );
-                let frame = render_in_windows::<f32, _>(&scene, &view, &triangles, threads, window);
+                let frame = plain_in_windows::<f32, _>(&scene, &view, &triangles, threads, window);
                 assert!(
                     bits(&frame.unwrap()) == triangle_frame,
                     "triangles {threads} {window}"
                 );
+            }
+        }
+    }
+
+    #[test]
+    fn probed_bands_draw_and_measure_what_one_thread_does() {
+        // The bunny's analysed frame, its normals and the probe's report, in windows of a
+        // primitive to the whole scene on 1 to 3 threads: the single-threaded probe's, bit
+        // for bit.
+        let (scene, view) = crate::frame::tests::shipped_at("traces/bunny.json", 160, 128);
+        let tol = crate::tolerance::Tolerance::new(0.5);
+        let bits = |f: &Frame| {
+            let fb = &f.framebuffer;
+            let normal: Vec<[u32; 3]> = (fb.normal.as_ref().expect("normals kept").iter())
+                .map(|n| n.map(f32::to_bits))
+                .collect();
+            (fb.color.to_vec(), fb.primitive.to_vec(), normal, f.counts)
+        };
+        let one = crate::frame::render_functional(
+            &scene,
+            &view,
+            tol,
+            crate::datapath::Datapath::F32,
+            true,
+        )
+        .expect("a frame");
+        let report = one.probe.expect("a probe report");
+        assert!(report.fragments > 1000 && report.max_scanline_deviation_px > 0.0);
+        let lembos = LemboPath::<f32>::new(&scene, &view, tol.k, tol.perspective, 1 << 16);
+        for threads in [1, 2, 3] {
+            for window in [1, 50, 1 << 20] {
+                let board = ProbeBoard::new(&scene, view.viewport, threads);
+                let frame = probed_in_windows(&scene, &view, &lembos, (threads, window), &board);
+                assert!(bits(&frame.unwrap()) == bits(&one), "{threads} {window}");
+                assert_eq!(board.report(), report, "{threads} {window}");
             }
         }
     }
@@ -691,7 +779,7 @@ mod tests {
                     draw_frame(
                         &scene,
                         &view,
-                        threads,
+                        (threads, false),
                         (9, 9),
                         |task| {
                             assert_ne!(task, 4, "task 4 fails");

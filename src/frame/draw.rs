@@ -4,7 +4,7 @@
 //! over a fresh frame buffer, or either on several host threads in bands
 //! ([`render_functional_on`], [`super::bands`]), the same frame bit for bit.
 
-use super::bands::render_in_bands;
+use super::bands::{render_in_bands, render_probed_in_bands};
 use super::functional::{frame_with, Frame};
 use crate::camera::View;
 use crate::datapath::{Datapath, Real};
@@ -35,7 +35,9 @@ pub fn render_functional(
 
 /// [`render_functional`] or [`render_functional_triangles`] (with `triangles`) on `threads`
 /// host threads: the same frame, bit for bit, for every count ([`super::bands`]). The analysed
-/// frame is drawn on one thread whatever `threads` says.
+/// frame of the lembo path is drawn in bands too, its probe's report the same for every
+/// count ([`probe::ProbeBoard`]); the triangle path's is drawn on one thread whatever
+/// `threads` says.
 pub fn render_functional_on(
     scene: &Scene,
     view: &View,
@@ -45,6 +47,12 @@ pub fn render_functional_on(
     analyse: bool,
     threads: u32,
 ) -> Result<Frame> {
+    if analyse && triangles.is_none() && threads > 1 {
+        return match datapath {
+            Datapath::F32 => probed_in_bands::<f32>(scene, view, tol, threads),
+            Datapath::F64 => probed_in_bands::<f64>(scene, view, tol, threads),
+        };
+    }
     if analyse || threads <= 1 {
         return match triangles {
             Some(t) => Ok(render_functional_triangles(
@@ -76,6 +84,22 @@ fn in_bands<R: Real>(
             render_in_bands(scene, view, &path, threads)
         }
     }
+}
+
+/// The lembo path's analysed frame drawn in bands on `threads` threads in datapath `R`.
+fn probed_in_bands<R: Real>(
+    scene: &Scene,
+    view: &View,
+    tol: Tolerance,
+    threads: u32,
+) -> Result<Frame> {
+    let path = LemboPath::<R>::new(scene, view, tol.k, tol.perspective, DEFAULT_SEGMENT_CAP);
+    let board = probe::ProbeBoard::new(scene, view.viewport, threads);
+    let frame = render_probed_in_bands(scene, view, &path, threads, &board)?;
+    Ok(Frame {
+        probe: Some(board.report()),
+        ..frame
+    })
 }
 
 /// Renders the triangle path (the scene's lembos tessellated) with the functional model in
@@ -119,11 +143,11 @@ fn triangles_in<R: Real>(
 
 fn render_in<R: Real>(scene: &Scene, view: &View, tol: Tolerance, analyse: bool) -> Result<Frame> {
     frame_with::<R>(scene, view, analyse, |rop, counts| {
-        let cap = DEFAULT_SEGMENT_CAP;
+        let (cap, h) = (DEFAULT_SEGMENT_CAP, view.viewport.height);
         Ok(if analyse {
-            let mut p = probe::Probe::new(scene, view.viewport, rop);
-            render_lembos::<R, _>(scene, view, tol, cap, &mut p, counts)?;
-            Some(p.report())
+            let board = probe::ProbeBoard::new(scene, view.viewport, 1);
+            render_lembos::<R, _>(scene, view, tol, cap, &mut board.probe(0, h, rop), counts)?;
+            Some(board.report())
         } else {
             render_lembos::<R, _>(scene, view, tol, cap, rop, counts)?;
             None

@@ -147,7 +147,7 @@ fn measure_drawn(
 }
 
 /// The host section of a lembo or triangle route's report: a functional frame also
-/// names its threads (one when it was analysed).
+/// names its threads (the triangle path's analysed frame is drawn on one).
 fn route_host(
     job: &RenderJob,
     wall: f64,
@@ -163,8 +163,10 @@ fn route_host(
         measured.map(|m| m.metrics_wall),
     );
     if cycles.is_none() {
-        // The functional frame's threads: the analysed frame is drawn on one.
-        h.host_threads = Some(if measured.is_some() { 1 } else { job.threads() });
+        // The functional frame's threads: the triangle path's analysed frame is drawn on
+        // one (`frame::render_functional_on`).
+        let one = measured.is_some() && job.path == PrimitivePath::Triangle;
+        h.host_threads = Some(if one { 1 } else { job.threads() });
     }
     Measured::echo(measured, h)
 }

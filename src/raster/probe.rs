@@ -26,6 +26,8 @@ use crate::datapath::Real;
 use crate::lembo::construct::{bits_key, canonical_order};
 use crate::scene::Scene;
 use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+use std::sync::{Mutex, MutexGuard};
 
 /// What the probe measured.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -70,37 +72,119 @@ const EMPTY: Slot = Slot {
     ends: [NO_END; 2],
 };
 
-/// A fragment sink that measures each fragment (the scanline deviation, the domain excess,
-/// double hits on shared edges) and forwards it to the sink it wraps.
-pub struct Probe<'a, S> {
-    inner: &'a mut S,
-    width: u32,
+/// What the probe keeps of one row of a frame's pixels.
+struct ProbeRow {
     /// Up to two fragments per pixel (id u32::MAX = empty).
     slots: Vec<[Slot; 2]>,
+    /// Pixels found double-hit.
     double: Vec<bool>,
-    adjacent: HashMap<(u32, u32), (u8, u8)>,
-    report: ProbeReport,
 }
 
-impl<'a, S> Probe<'a, S> {
-    /// A probe over `scene` on viewport `vp`, forwarding every fragment to `inner`.
-    pub fn new(scene: &Scene, vp: Viewport, inner: &'a mut S) -> Self {
+/// What the probes of one frame share: the slots of every pixel, row by row, the pairs of
+/// lembos that share an edge curve, and what the probes measured. A frame drawn in bands
+/// (`frame::bands`) has a probe a band, each holding its own rows' locks while it draws
+/// (the bands' rows are disjoint, so none waits); every pixel still meets its fragments in
+/// drawing order, and the measurements are maxima and sums, so the report is the
+/// single-threaded one whatever the bands.
+pub struct ProbeBoard {
+    rows: Vec<Mutex<ProbeRow>>,
+    adjacent: Adjacent,
+    measured: Mutex<ProbeReport>,
+}
+
+impl ProbeBoard {
+    /// The board of a frame of `scene` on viewport `vp`, its shared edges found on
+    /// `threads` host threads ([`shared_edges`]).
+    pub fn new(scene: &Scene, vp: Viewport, threads: u32) -> Self {
+        let row = || ProbeRow {
+            slots: vec![[EMPTY; 2]; vp.width as usize],
+            double: vec![false; vp.width as usize],
+        };
+        ProbeBoard {
+            rows: (0..vp.height).map(|_| Mutex::new(row())).collect(),
+            adjacent: shared_edges(scene, threads),
+            measured: Mutex::new(ProbeReport::default()),
+        }
+    }
+
+    /// A probe of rows `lo..hi` forwarding every fragment to `inner`; what it measures is
+    /// added to the board's when it is dropped.
+    pub fn probe<'a, S>(&'a self, lo: u32, hi: u32, inner: &'a mut S) -> Probe<'a, S> {
         Probe {
             inner,
-            width: vp.width,
-            slots: vec![[EMPTY; 2]; vp.pixels()],
-            double: vec![false; vp.pixels()],
-            adjacent: shared_edges(scene),
+            board: self,
+            lo,
+            rows: self.rows[lo as usize..hi as usize].iter().map(lock).collect(),
             report: ProbeReport::default(),
         }
     }
 
-    /// What was measured so far.
+    /// What the probes measured (those still alive not included).
     pub fn report(&self) -> ProbeReport {
+        let double_hit_pixels = (self.rows.iter())
+            .map(|r| lock(r).double.iter().filter(|&&d| d).count() as u64)
+            .sum();
         ProbeReport {
-            double_hit_pixels: self.double.iter().filter(|&&d| d).count() as u64,
-            ..self.report
+            double_hit_pixels,
+            ..*lock(&self.measured)
         }
+    }
+}
+
+/// A mutex's value; one poisoned by a panicking band is still read (the panic itself is
+/// what the frame reports).
+fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+/// A fragment sink that measures each fragment of its rows (the scanline deviation, the
+/// domain excess, double hits on shared edges) and forwards it to the sink it wraps
+/// ([`ProbeBoard::probe`]).
+pub struct Probe<'a, S> {
+    inner: &'a mut S,
+    board: &'a ProbeBoard,
+    /// The first of its rows.
+    lo: u32,
+    rows: Vec<MutexGuard<'a, ProbeRow>>,
+    report: ProbeReport,
+}
+
+impl<S> Drop for Probe<'_, S> {
+    fn drop(&mut self) {
+        let mut m = lock(&self.board.measured);
+        m.fragments += self.report.fragments;
+        m.max_scanline_deviation_px = (m.max_scanline_deviation_px)
+            .max(self.report.max_scanline_deviation_px);
+        m.max_domain_excess = m.max_domain_excess.max(self.report.max_domain_excess);
+    }
+}
+
+/// Pairs of lembo ids (smaller first) sharing an edge curve, with the shared edge's index in
+/// each ([`shared_edges`]).
+pub type Adjacent = HashMap<(u32, u32), (u8, u8), BuildHasherDefault<PairHasher>>;
+
+/// A hasher for [`Adjacent`]'s keys, two lembo ids: a multiply and a rotate a word (the
+/// keys are ours, not an attacker's, so SipHash's protection buys nothing and cost a fifth
+/// of the probe's setup).
+#[derive(Default)]
+pub struct PairHasher(u64);
+
+impl Hasher for PairHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        bytes.iter().for_each(|&b| self.write_u64(b.into()));
+    }
+
+    fn write_u32(&mut self, n: u32) {
+        self.write_u64(n.into());
+    }
+
+    fn write_u64(&mut self, n: u64) {
+        self.0 = (self.0.rotate_left(5) ^ n).wrapping_mul(0x517c_c1b7_2722_0a95);
+    }
+
+    fn finish(&self) -> u64 {
+        // The table takes its control bits from the top: bring the low words' mixing up.
+        self.0.rotate_left(26)
     }
 }
 
@@ -115,22 +199,39 @@ impl<'a, S> Probe<'a, S> {
 ///
 /// The nine coordinates' bits are matched through a 128-bit hash of them ([`bits_key`]),
 /// sorted: 32 bytes an edge's use instead of a map of the 72-byte keys (about 300 bytes a
-/// lembo at its peak), so that a measured run's memory stays bounded per lembo.
-pub fn shared_edges(scene: &Scene) -> HashMap<(u32, u32), (u8, u8)> {
-    let mut uses: Vec<(u128, u32, u8)> = Vec::with_capacity(3 * scene.lembo_count());
-    for (id, (l, _)) in scene.lembos().enumerate() {
-        for (edge, (s, e, m)) in [(0, 1, 3), (1, 2, 5), (2, 0, 4)].into_iter().enumerate() {
-            let (mut p, mut q) = (l.points[s], l.points[e]);
-            if canonical_order(p, q).is_gt() {
-                std::mem::swap(&mut p, &mut q);
+/// lembo at its peak), so that a measured run's memory stays bounded per lembo. The edges'
+/// uses are made on `threads` host threads, each a run of lembos.
+pub fn shared_edges(scene: &Scene, threads: u32) -> Adjacent {
+    let count = scene.lembo_count();
+    let per_thread = count.div_ceil(threads.max(1) as usize).max(1);
+    let index = scene.lembo_index();
+    // Three uses a lembo, each thread filling its run's share of one vector in place.
+    let mut uses: Vec<(u128, u32, u8)> = vec![(0, 0, 0); 3 * count];
+    let fill = |first: usize, out: &mut [(u128, u32, u8)]| {
+        let mut last = crate::lembo::set::LastParent::default();
+        for (n, three) in out.chunks_exact_mut(3).enumerate() {
+            let id = first + n;
+            let (l, _) = scene.lembo_near(&index, id, &mut last);
+            for (edge, (s, e, m)) in [(0, 1, 3), (1, 2, 5), (2, 0, 4)].into_iter().enumerate() {
+                let (mut p, mut q) = (l.points[s], l.points[e]);
+                if canonical_order(p, q).is_gt() {
+                    std::mem::swap(&mut p, &mut q);
+                }
+                let mid = l.points[m];
+                let key = [p.x, p.y, p.z, q.x, q.y, q.z, mid.x, mid.y, mid.z].map(f64::to_bits);
+                three[edge] = (bits_key(&key), id as u32, edge as u8);
             }
-            let mid = l.points[m];
-            let key = [p.x, p.y, p.z, q.x, q.y, q.z, mid.x, mid.y, mid.z].map(f64::to_bits);
-            uses.push((bits_key(&key), id as u32, edge as u8));
         }
-    }
+    };
+    std::thread::scope(|s| {
+        for (t, out) in uses.chunks_mut(3 * per_thread).enumerate() {
+            let fill = &fill;
+            s.spawn(move || fill(t * per_thread, out));
+        }
+    });
+    // Every use is distinct (its lembo and edge), so the order is the same for any count.
     uses.sort_unstable();
-    let mut pairs = HashMap::new();
+    let mut pairs = Adjacent::default();
     for curve in uses.chunk_by(|a, b| a.0 == b.0) {
         for (n, &(_, a, ea)) in curve.iter().enumerate() {
             for &(_, b, eb) in &curve[n + 1..] {
@@ -164,7 +265,6 @@ impl<R: Real, S: FragmentSink<R>> FragmentSink<R> for Probe<'_, S> {
             .max((y - (j as f64 + 0.5)).abs());
         r.max_domain_excess = r.max_domain_excess.max((-uf).max(-vf).max(uf + vf - 1.0));
 
-        let idx = j as usize * self.width as usize + i as usize;
         let mut ends = [NO_END; 2];
         // Ends on a piece's edges (a lembo Setup split) are not recorded: a piece's edge
         // indices and crossings are its own, not the lembo's, so they cannot be matched
@@ -179,13 +279,14 @@ impl<R: Real, S: FragmentSink<R>> FragmentSink<R> for Probe<'_, S> {
             }
         }
         let me = Slot { id: l.id, ends };
-        let slots = &mut self.slots[idx];
+        let row = &mut *self.rows[(j - self.lo) as usize];
+        let slots = &mut row.slots[i as usize];
         for o in slots.iter() {
             if o.id == u32::MAX || o.id == me.id {
                 continue;
             }
             let (lo, hi) = if o.id < me.id { (o, &me) } else { (&me, o) };
-            if let Some(&(elo, ehi)) = self.adjacent.get(&(lo.id, hi.id)) {
+            if let Some(&(elo, ehi)) = self.board.adjacent.get(&(lo.id, hi.id)) {
                 // Both end on the same crossing of the shared edge, from opposite sides.
                 let split = lo.ends.iter().filter(|a| a.edge == elo).any(|a| {
                     hi.ends
@@ -194,7 +295,7 @@ impl<R: Real, S: FragmentSink<R>> FragmentSink<R> for Probe<'_, S> {
                         .any(|b| b.crossing == a.crossing && b.right != a.right)
                 });
                 if split {
-                    self.double[idx] = true;
+                    row.double[i as usize] = true;
                 }
             }
         }
@@ -295,11 +396,13 @@ mod tests {
 
         let run = |subs: [(Subsegment<f64>, u32); 2]| {
             let mut sink = Collect::default();
-            let mut probe = Probe::new(&scene, scene.viewport, &mut sink);
+            let board = ProbeBoard::new(&scene, scene.viewport, 1);
+            let mut probe = board.probe(0, scene.viewport.height, &mut sink);
             for (n, (sub, i)) in subs.into_iter().enumerate() {
                 probe.fragment(&ls[n], &sub, i, 38, 0.3, 0.3, 0.5);
             }
-            probe.report().double_hit_pixels
+            drop(probe);
+            board.report().double_hit_pixels
         };
         // Lembo 0 spans from one crossing to the other, lembo 1 from the second crossing
         // leftwards: both left of that crossing (the fold), not a fault.
@@ -343,7 +446,7 @@ mod tests {
                 lembo(p, q, [45.0, 80.0], m),
                 lembo(q, p, [45.0, 10.0], other_mid),
             ]);
-            let adjacent = shared_edges(&scene).contains_key(&(0, 1));
+            let adjacent = shared_edges(&scene, 2).contains_key(&(0, 1));
             let view = View::new(&scene.camera, scene.viewport);
             let ls: Vec<ScreenLembo<f64>> = scene
                 .lembos()
@@ -374,10 +477,13 @@ mod tests {
                 b: inner(50.0),
             };
             let mut sink = Collect::default();
-            let mut probe = Probe::new(&scene, scene.viewport, &mut sink);
+            // Rows 37..39 alone: a band's probe, its rows counted from its first.
+            let board = ProbeBoard::new(&scene, scene.viewport, 1);
+            let mut probe = board.probe(37, 39, &mut sink);
             probe.fragment(&ls[0], &right, 58, 38, 0.3, 0.3, 0.5);
             probe.fragment(&ls[1], &left, 58, 38, 0.3, 0.3, 0.5);
-            (adjacent, probe.report().double_hit_pixels)
+            drop(probe);
+            (adjacent, board.report().double_hit_pixels)
         };
         assert_eq!(run(m), (true, 1));
         assert_eq!(run([45.0, 36.0]), (false, 0));

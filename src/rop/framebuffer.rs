@@ -98,8 +98,8 @@ impl FrameBuffer {
     /// A frame of `width` x `height` whose pixels are all zero (not a cleared frame): for
     /// [`Self::bands_mut`], whose bands each clear their own rows, on their own threads.
     /// A large frame's zeroed planes are mapped lazily ([`Plane::zeroed`]), so nothing is
-    /// touched here.
-    pub fn zeroed(width: u32, height: u32) -> Self {
+    /// touched here. Normals are kept when asked, as in [`Self::new`].
+    pub fn zeroed(width: u32, height: u32, keep_normals: bool) -> Self {
         let n = width as usize * height as usize;
         FrameBuffer {
             width,
@@ -107,7 +107,7 @@ impl FrameBuffer {
             color: Plane::zeroed(n),
             depth: Plane::zeroed(n),
             primitive: Plane::zeroed(n),
-            normal: None,
+            normal: keep_normals.then(|| Plane::zeroed(n)),
         }
     }
 

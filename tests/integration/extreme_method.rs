@@ -278,7 +278,7 @@ fn pair(p: [DVec3; 4], n: [DVec3; 4]) -> Vec<Lembo> {
 /// for bit, on every scanline either covers; returns the number of crossings compared.
 fn shared_crossings_agree<R: Real>(scene: &Scene) -> usize {
     let view = view_of(scene);
-    let (e0, e1) = shared_edges(scene)[&(0, 1)];
+    let (e0, e1) = shared_edges(scene, 1)[&(0, 1)];
     let ls: Vec<ScreenLembo<R>> = scene
         .lembos()
         .enumerate()
