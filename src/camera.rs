@@ -200,7 +200,7 @@ impl std::fmt::Display for Samples {
 }
 
 /// A camera resolved against a viewport: matrices and the viewport transform.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct View {
     /// The image the camera renders into: for a multisampled frame, its sample grid
     /// ([`View::with_samples`]).

@@ -559,9 +559,15 @@ where
     P::Piece: RowCost,
 {
     let frame = (threads, window, false);
-    render_in_windows(scene, view, path, frame, |pieces, (lo, hi), rop, c, buffers| {
-        driver::draw(path, pieces.meeting(lo, hi), (lo, hi), rop, c, buffers)
-    })
+    render_in_windows(
+        scene,
+        view,
+        path,
+        frame,
+        |pieces, (lo, hi), rop, c, buffers| {
+            driver::draw(path, pieces.meeting(lo, hi), (lo, hi), rop, c, buffers)
+        },
+    )
 }
 
 /// The lembo path's analysed frame on `threads` threads: [`render_in_bands`] with normals
@@ -587,10 +593,23 @@ fn probed_in_windows<R: Real>(
     board: &ProbeBoard,
 ) -> Result<Frame> {
     let frame = (threads, window, true);
-    render_in_windows(scene, view, path, frame, |pieces, (lo, hi), rop, c, buffers| {
-        let mut probe = board.probe(lo, hi, rop);
-        driver::draw(path, pieces.meeting(lo, hi), (lo, hi), &mut probe, c, buffers)
-    })
+    render_in_windows(
+        scene,
+        view,
+        path,
+        frame,
+        |pieces, (lo, hi), rop, c, buffers| {
+            let mut probe = board.probe(lo, hi, rop);
+            driver::draw(
+                path,
+                pieces.meeting(lo, hi),
+                (lo, hi),
+                &mut probe,
+                c,
+                buffers,
+            )
+        },
+    )
 }
 
 /// Most primitives set up before their bands are drawn: the set-up pieces a frame holds at

@@ -161,6 +161,7 @@ pub(super) fn measure(
 ) -> Result<Measured> {
     crate::progress::stage("accuracy metrics");
     let t1 = Instant::now();
+    super::memory::return_freed_memory();
     let (accuracy, flip, threads) = job.trace.install(|| {
         let (accuracy, flip) = measure_frame_and_flip(
             scene,
@@ -245,7 +246,11 @@ pub fn measure_frame_and_flip(
     let (flip, (tracer, visibility)) = rayon::join(
         || flip_frame(&frame.framebuffer, reference, ppd),
         || {
-            let tracer = oracle::Tracer::new(&lembos, view, oracle::DEFAULT_TILE);
+            // The reference's own tiles, when it says what they are: no second binning.
+            let tracer = match &reference.bins {
+                Some(bins) => oracle::Tracer::with_bins(&lembos, view, bins.clone()),
+                None => oracle::Tracer::new(&lembos, view, oracle::DEFAULT_TILE),
+            };
             let visibility = visibility(
                 scene,
                 &tracer,

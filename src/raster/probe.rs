@@ -114,7 +114,10 @@ impl ProbeBoard {
             inner,
             board: self,
             lo,
-            rows: self.rows[lo as usize..hi as usize].iter().map(lock).collect(),
+            rows: self.rows[lo as usize..hi as usize]
+                .iter()
+                .map(lock)
+                .collect(),
             report: ProbeReport::default(),
         }
     }
@@ -153,8 +156,8 @@ impl<S> Drop for Probe<'_, S> {
     fn drop(&mut self) {
         let mut m = lock(&self.board.measured);
         m.fragments += self.report.fragments;
-        m.max_scanline_deviation_px = (m.max_scanline_deviation_px)
-            .max(self.report.max_scanline_deviation_px);
+        m.max_scanline_deviation_px =
+            (m.max_scanline_deviation_px).max(self.report.max_scanline_deviation_px);
         m.max_domain_excess = m.max_domain_excess.max(self.report.max_domain_excess);
     }
 }

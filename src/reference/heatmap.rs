@@ -283,6 +283,7 @@ mod tests {
             supersample: 1,
             hits: vec![None; n],
             hits_offset_px: [0.0; 2],
+            bins: None,
             color: vec![[0; 3]; n],
             color_supersampled: None,
             coverage: None,

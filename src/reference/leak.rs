@@ -321,6 +321,7 @@ mod tests {
             supersample: 1,
             hits,
             hits_offset_px: [0.0; 2],
+            bins: None,
             color: vec![[0; 3]; 128 * 128],
             color_supersampled: None,
             coverage: None,

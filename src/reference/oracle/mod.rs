@@ -63,10 +63,11 @@ mod tracer;
 pub use roots::{DOMAIN_TOLERANCE, SAME_ROOT_UV};
 pub use source::{LemboSource, SceneLembos};
 use tracer::Band;
-pub use tracer::{ReferenceHit, TraceScratch, Tracer, DEFAULT_TILE, TILE_RANGE};
+pub use tracer::{Bins, ReferenceHit, TraceScratch, Tracer, DEFAULT_TILE, TILE_RANGE};
 
-/// The reference image, row 0 at the top.
-#[derive(Clone, Debug, PartialEq)]
+/// The reference image, row 0 at the top. Two are equal when their pixels are (the tiles
+/// their hits were traced in are how they were made, not what they are).
+#[derive(Clone, Debug)]
 pub struct ReferenceImage {
     /// Width \[pixels\].
     pub width: u32,
@@ -80,6 +81,9 @@ pub struct ReferenceImage {
     /// multisampled run's reference ([`Self::for_samples`]) the offset of the sample a
     /// resolved frame keeps its depth, winner and normal from.
     pub hits_offset_px: [f64; 2],
+    /// The tiles `hits` were traced in (None for an image made otherwise, as in tests): the
+    /// accuracy metrics' queries between pixel centres use them ([`Tracer::with_bins`]).
+    pub bins: Option<std::sync::Arc<Bins>>,
     /// The colour a render is compared with: the pixel centre shaded (the background where
     /// nothing is hit), or for a multisampled run's reference the area-averaged colour.
     pub color: Vec<[u8; 3]>,
@@ -87,6 +91,18 @@ pub struct ReferenceImage {
     pub color_supersampled: Option<Vec<[u8; 3]>>,
     /// The fraction of the s x s sub-samples that hit a surface, when s > 1.
     pub coverage: Option<Vec<f32>>,
+}
+
+impl PartialEq for ReferenceImage {
+    fn eq(&self, other: &Self) -> bool {
+        (self.width, self.height, self.supersample)
+            == (other.width, other.height, other.supersample)
+            && self.hits == other.hits
+            && self.hits_offset_px == other.hits_offset_px
+            && self.color == other.color
+            && self.color_supersampled == other.color_supersampled
+            && self.coverage == other.coverage
+    }
 }
 
 impl ReferenceImage {
@@ -113,6 +129,7 @@ impl ReferenceImage {
             .expect("a multisampled run's reference is supersampled");
         self.hits = at_sample.hits;
         self.hits_offset_px = offset;
+        self.bins = at_sample.bins;
         self
     }
 
@@ -249,6 +266,7 @@ pub fn render_reference(input: &ReferenceInput) -> ReferenceImage {
         supersample: s,
         hits: image.hits,
         hits_offset_px: [0.0; 2],
+        bins: Some(scene.tracer.bins()),
         color: image.color,
         color_supersampled: image.color_supersampled,
         coverage: image.coverage,

@@ -421,3 +421,48 @@ fn render_reference_is_the_same_at_any_tile_side() {
         );
     }
 }
+
+/// A reference keeps the tiles it traced its hits in, and a tracer of the same lembos and
+/// view takes them as they are (no second binning) and answers as one binned anew; for
+/// another view, or other lembos, it bins anew at the same tile side.
+#[test]
+fn a_reference_lends_its_tiles_to_a_tracer_of_the_same_lembos_and_view() {
+    use crate::reference::surface::fixtures::{flat, view};
+    let view = view();
+    let square = [
+        flat([[-40.0, -40.0], [40.0, -40.0], [40.0, 40.0]], 0.0, DVec3::Z),
+        flat([[-40.0, -40.0], [40.0, 40.0], [-40.0, 40.0]], 1.0, DVec3::Z),
+    ];
+    let lembos: Vec<(&Lembo, [f64; 3])> = square.iter().map(|l| (l, [0.5; 3])).collect();
+    let render = render_reference(&ReferenceInput {
+        lembos: &lembos,
+        view: &view,
+        light: &Light::default(),
+        background: [0.0; 3],
+        supersample: 1,
+        tile: 5,
+    });
+    let bins = render
+        .bins
+        .clone()
+        .expect("a traced reference keeps its tiles");
+    assert_eq!(bins.tile(), 5);
+    let lent = Tracer::with_bins(&lembos, &view, bins.clone());
+    assert!(
+        std::sync::Arc::ptr_eq(&lent.bins(), &bins),
+        "not binned again"
+    );
+    let anew = Tracer::new(&lembos, &view, DEFAULT_TILE);
+    let mut scratch = TraceScratch::default();
+    for k in 0..400 {
+        let (x, y) = ((k * 37 % 1280) as f64 / 10.0, (k * 53 % 1280) as f64 / 10.0);
+        assert_eq!(lent.hit(x, y, &mut scratch), anew.hit(x, y, &mut scratch));
+    }
+    let moved = view.translated([0.25, 0.0]);
+    let other_view = Tracer::with_bins(&lembos, &moved, bins.clone());
+    assert!(!std::sync::Arc::ptr_eq(&other_view.bins(), &bins));
+    assert_eq!(other_view.bins().tile(), 5);
+    let fewer = lembos[..1].to_vec();
+    let other_lembos = Tracer::with_bins(&fewer, &view, bins.clone());
+    assert!(!std::sync::Arc::ptr_eq(&other_lembos.bins(), &bins));
+}

@@ -118,6 +118,20 @@ const BINNING_CHUNK: usize = 1 << 14;
 pub struct Tracer<'a> {
     view: &'a View,
     lembos: Lembos<'a>,
+    bins: Arc<Bins>,
+    /// Bands made for queries at any position, most recently used last.
+    cache: Mutex<Vec<Arc<Band<'static>>>>,
+}
+
+/// Which lembos each screen tile of a view meets, and the spans they are made in: what
+/// binning a source's lembos in a view finds, a few bytes a lembo, kept by the reference
+/// image traced with it ([`super::ReferenceImage::bins`]) so that its accuracy metrics ask
+/// their queries of the same tiles without binning again ([`Tracer::with_bins`]).
+#[derive(Debug)]
+pub struct Bins {
+    /// The view binned in, and the count of the lembos binned: what the bins are of.
+    view: View,
+    lembo_count: usize,
     tile: u32,
     tiles_x: u32,
     tiles_y: u32,
@@ -131,8 +145,13 @@ pub struct Tracer<'a> {
     spans: Vec<Span>,
     /// Where each row's spans start in `spans`, and past the last row, their end.
     row_spans: Vec<usize>,
-    /// Bands made for queries at any position, most recently used last.
-    cache: Mutex<Vec<Arc<Band<'static>>>>,
+}
+
+impl Bins {
+    /// The tile side \[pixels\].
+    pub fn tile(&self) -> u32 {
+        self.tile
+    }
 }
 
 /// Consecutive tiles of one row whose lembos are made, and traced, together.
@@ -210,6 +229,26 @@ impl<'a> Tracer<'a> {
         Self::build(Lembos::Source(source), view, tile)
     }
 
+    /// The lembos of `source` seen by `view`, in the tiles of `bins` when they are that
+    /// source's in that view (binned by a tracer of the same source and view: the same
+    /// tracer, whatever the tile side), else binned anew in tiles of `bins`' side.
+    pub fn with_bins(source: &'a dyn LemboSource, view: &'a View, bins: Arc<Bins>) -> Self {
+        if bins.view == *view && bins.lembo_count == source.len() {
+            return Tracer {
+                view,
+                lembos: Lembos::Source(source),
+                bins,
+                cache: Mutex::new(Vec::new()),
+            };
+        }
+        Self::new(source, view, bins.tile)
+    }
+
+    /// The tiles this tracer's lembos are binned in.
+    pub fn bins(&self) -> Arc<Bins> {
+        self.bins.clone()
+    }
+
     fn build(lembos: Lembos<'a>, view: &'a View, tile: u32) -> Self {
         let tile = tile.clamp(*TILE_RANGE.start(), *TILE_RANGE.end());
         let tiles_x = view.viewport.width.div_ceil(tile);
@@ -246,17 +285,22 @@ impl<'a> Tracer<'a> {
             }
         }
         let (spans, row_spans) = split_rows(&starts, tiles_x, tiles_y);
+        let lembo_count = lembos.source().len();
         Tracer {
             view,
             lembos,
-            tile,
-            tiles_x,
-            tiles_y,
-            everywhere,
-            starts,
-            entries,
-            spans,
-            row_spans,
+            bins: Arc::new(Bins {
+                view: *view,
+                lembo_count,
+                tile,
+                tiles_x,
+                tiles_y,
+                everywhere,
+                starts,
+                entries,
+                spans,
+                row_spans,
+            }),
             cache: Mutex::new(Vec::new()),
         }
     }
@@ -268,23 +312,23 @@ impl<'a> Tracer<'a> {
     }
 
     pub(super) fn spans(&self) -> &[Span] {
-        &self.spans
+        &self.bins.spans
     }
 
     /// The tile side \[pixels\].
     pub(super) fn tile(&self) -> u32 {
-        self.tile
+        self.bins.tile
     }
 
     /// The lembos of span `span`, made and prepared.
     pub(super) fn band(&self, span: usize) -> Band<'static> {
-        let Span { row, tiles } = &self.spans[span];
-        let first = (row * self.tiles_x + tiles.start) as usize;
-        let last = (row * self.tiles_x + tiles.end) as usize;
-        let of_tile = |t: usize| &self.entries[self.starts[t]..self.starts[t + 1]];
-        let mut ids: Vec<u32> = self.entries[self.starts[first]..self.starts[last]]
+        let Span { row, tiles } = &self.bins.spans[span];
+        let first = (row * self.bins.tiles_x + tiles.start) as usize;
+        let last = (row * self.bins.tiles_x + tiles.end) as usize;
+        let of_tile = |t: usize| &self.bins.entries[self.bins.starts[t]..self.bins.starts[t + 1]];
+        let mut ids: Vec<u32> = self.bins.entries[self.bins.starts[first]..self.bins.starts[last]]
             .iter()
-            .chain(&self.everywhere)
+            .chain(&self.bins.everywhere)
             .copied()
             .collect();
         ids.sort_unstable();
@@ -326,7 +370,7 @@ impl<'a> Tracer<'a> {
             .map(|t| {
                 let mut bin: Vec<u32> = of_tile(t)
                     .iter()
-                    .chain(&self.everywhere)
+                    .chain(&self.bins.everywhere)
                     .map(local)
                     .collect();
                 bin.sort_by(|a, b| near(a).total_cmp(&near(b)).then(a.cmp(b)));
@@ -374,14 +418,16 @@ impl<'a> Tracer<'a> {
 
     /// The span holding tile (`tx`, `ty`).
     fn span_at(&self, tx: u32, ty: u32) -> usize {
-        let row = &self.spans[self.row_spans[ty as usize]..self.row_spans[ty as usize + 1]];
-        self.row_spans[ty as usize] + row.partition_point(|s| s.tiles.end <= tx)
+        let row = &self.bins.spans
+            [self.bins.row_spans[ty as usize]..self.bins.row_spans[ty as usize + 1]];
+        self.bins.row_spans[ty as usize] + row.partition_point(|s| s.tiles.end <= tx)
     }
 
     /// The tile (column, row) holding screen position (x, y), clamped into the viewport.
     fn tile_at(&self, x: f64, y: f64) -> (u32, u32) {
-        let tile = |x: f64, n: u32| ((x / self.tile as f64).floor().max(0.0) as u32).min(n - 1);
-        (tile(x, self.tiles_x), tile(y, self.tiles_y))
+        let tile =
+            |x: f64, n: u32| ((x / self.bins.tile as f64).floor().max(0.0) as u32).min(n - 1);
+        (tile(x, self.bins.tiles_x), tile(y, self.bins.tiles_y))
     }
 
     /// The nearest hit at screen position (x, y) [pixels; pixel (i, j)'s centre is
