@@ -133,12 +133,13 @@ impl<'a, 'f> RopPixels<'a, 'f> {
 
     /// The index of pixel (0, j): pixels i0..i1 of row j are `row + i`. Panics unless the
     /// run lies inside one tile of this ROP (the rasterizers cut their output at tile
-    /// borders), which is what makes the unsynchronised writes sound.
+    /// borders) and inside the row (a frame's last column of tiles may reach past its
+    /// width), which is what makes the unsynchronised writes sound.
     #[inline]
     pub fn row(&self, i0: u32, i1: u32, j: u32) -> usize {
         let (owner, tile_end) = self.tiles.owner(i0, j);
         assert!(
-            owner == self.rop && i1 <= tile_end && i0 < i1,
+            owner == self.rop && i1 <= tile_end && i0 < i1 && i1 as usize <= self.width,
             "ROP {} given pixels {i0}..{i1} of row {j}",
             self.rop
         );
@@ -212,5 +213,66 @@ impl<'a, 'f> RopPixels<'a, 'f> {
     pub fn set_color(&mut self, idx: usize, rgb: [u8; 3]) {
         // SAFETY: as for `depth`; `&mut self` keeps one writer per ROP.
         unsafe { *self.frame.color.add(idx) = rgb };
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 20 x 12 frame in 8-pixel tiles over two ROPs: tile (tx, ty) is ROP (tx + ty) mod 2,
+    /// and its last column of tiles (16..24) reaches past the width.
+    fn frame() -> (FrameBuffer, RopTiles) {
+        (
+            FrameBuffer::new(20, 12, [0; 3], false),
+            RopTiles::new(20, 12, 8, 2),
+        )
+    }
+
+    /// Whether ROP `rop` may be given pixels `i0..i1` of row `j`.
+    fn given(rop: usize, i0: u32, i1: u32, j: u32) -> bool {
+        let (mut fb, tiles) = frame();
+        let shared = SharedFrame::new(&mut fb);
+        let pixels = RopPixels::new(&shared, &tiles, rop, 20);
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| pixels.row(i0, i1, j))).is_ok()
+    }
+
+    #[test]
+    fn a_rop_is_given_runs_inside_its_own_tiles_and_the_row_only() {
+        // A whole tile, and one pixel past its end.
+        assert!(given(0, 0, 8, 0));
+        assert!(!given(0, 0, 9, 0));
+        // Another ROP's tile.
+        assert!(given(1, 8, 16, 0) && !given(0, 8, 16, 0));
+        // The last column of tiles ends at the width, not at the tile's end.
+        assert!(given(0, 16, 20, 0) && !given(0, 16, 21, 0));
+        // The frame's last pixel, and an empty run.
+        assert!(given(1, 16, 20, 11));
+        assert!(!given(0, 3, 3, 0));
+    }
+
+    #[test]
+    fn a_rops_reads_and_writes_land_on_the_frames_pixels() {
+        let (mut fb, tiles) = frame();
+        {
+            let shared = SharedFrame::new(&mut fb);
+            let mut pixels = RopPixels::new(&shared, &tiles, 1, 20);
+            // The frame's last pixel, (19, 11).
+            let idx = pixels.row(16, 20, 11) + 19;
+            assert_eq!(idx, 20 * 12 - 1);
+            assert!(pixels.test_depth(idx, 0.5, 7));
+            assert!(!pixels.test_depth(idx, 0.75, 3));
+            pixels.set_color(idx, [1, 2, 3]);
+            assert_eq!((pixels.depth(idx), pixels.primitive(idx)), (0.5, 7));
+            assert_eq!(pixels.color(idx), [1, 2, 3]);
+            // Prefetches at the frame's end and past it are hints, never addresses formed.
+            for idx in [idx, idx + 1, idx + 1000] {
+                pixels.prefetch(idx);
+            }
+        }
+        assert_eq!(fb.depth[20 * 12 - 1], 0.5);
+        assert_eq!(fb.primitive[20 * 12 - 1], 7);
+        assert_eq!(fb.color[20 * 12 - 1], [1, 2, 3]);
+        assert_eq!(fb.depth[20 * 12 - 2], 1.0);
     }
 }

@@ -417,6 +417,20 @@ mod tests {
     }
 
     #[test]
+    fn prefetches_up_to_a_bands_end_and_past_it_form_no_address() {
+        // The guard's edge: the band's last pixel is prefetched, one at or past its end is
+        // not (run under Miri, `cargo +nightly miri test --lib rop::`, a pointer formed
+        // past the end is refused).
+        let mut fb = FrameBuffer::new(5, 4, [0; 3], false);
+        for rows in fb.bands_mut(&[(0, 2), (2, 4)]) {
+            for (i, j) in [(4, 1), (0, 2), (4, 2), (0, 200)] {
+                rows.prefetch(i, j);
+            }
+            assert_eq!(rows.index(4, 1), 9, "the band's last pixel");
+        }
+    }
+
+    #[test]
     fn covered_counts_the_pixels_with_a_winner() {
         for len in [0, 1, 7, 8, 9, 100, 1029] {
             let p: Vec<u32> = (0..len as u32)

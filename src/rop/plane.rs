@@ -193,8 +193,8 @@ mod mapped {
             // SAFETY: `head < HUGE`, so `base + head` and the `bytes` after it lie inside
             // the mapping made above.
             let start = unsafe { base.cast::<u8>().add(head) };
-            // Advice only: without huge pages the mapping is ordinary pages. Miri, which
-            // checks this module's pointers (`.ci/run`), models no such advice.
+            // Advice only: without huge pages the mapping is ordinary pages. Miri (`cargo
+            // +nightly miri test --lib rop::`) models no such advice.
             #[cfg(not(miri))]
             // SAFETY: the range lies inside the mapping made above; advice changes no value.
             unsafe {
