@@ -167,8 +167,8 @@ impl<S> Drop for Probe<'_, S> {
 pub type Adjacent = HashMap<(u32, u32), (u8, u8), BuildHasherDefault<PairHasher>>;
 
 /// A hasher for [`Adjacent`]'s keys, two lembo ids: a multiply and a rotate a word (the
-/// keys are ours, not an attacker's, so SipHash's protection buys nothing and cost a fifth
-/// of the probe's setup).
+/// keys are ours, not an attacker's, so SipHash's protection against chosen keys buys
+/// nothing here).
 #[derive(Default)]
 pub struct PairHasher(u64);
 
