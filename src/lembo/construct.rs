@@ -65,22 +65,8 @@ pub fn bits_key(key: &impl std::hash::Hash) -> u128 {
 }
 
 fn edge_midpoint_ordered(p1: DVec3, n1: DVec3, p2: DVec3, n2: DVec3) -> (DVec3, DVec3) {
-    unit_edge_midpoint_ordered(p1, n1.normalize_or_zero(), p2, n2.normalize_or_zero())
-}
-
-/// [`edge_midpoint`] of end normals already made unit by `normalize_or_zero`: the same
-/// bits, without normalising them again (a mesh's lembos share their corners' unit
-/// normals, [`MeshLembos`]).
-fn unit_edge_midpoint(p1: DVec3, n1: DVec3, p2: DVec3, n2: DVec3) -> (DVec3, DVec3) {
-    if canonical_order(p1, p2) == Ordering::Greater {
-        unit_edge_midpoint_ordered(p2, n2, p1, n1)
-    } else {
-        unit_edge_midpoint_ordered(p1, n1, p2, n2)
-    }
-}
-
-/// [`edge_midpoint_ordered`] of unit end normals `n1`, `n2`.
-fn unit_edge_midpoint_ordered(p1: DVec3, n1: DVec3, p2: DVec3, n2: DVec3) -> (DVec3, DVec3) {
+    let n1 = n1.normalize_or_zero();
+    let n2 = n2.normalize_or_zero();
     let p = p2 - p1;
     let c = n1.dot(n2);
     let t1 = n2 - n1 * c;
@@ -514,12 +500,7 @@ impl TriangleMesh {
             shared.extend(edge.iter().map(|&(_, t, k)| (3 * t as u64 + k as u64, mid)));
         }
         shared.sort_unstable_by_key(|&(key, _)| key);
-        let unit_normals = mesh.normals.iter().map(|n| n.normalize_or_zero()).collect();
-        Ok(MeshLembos {
-            mesh,
-            unit_normals,
-            shared,
-        })
+        Ok(MeshLembos { mesh, shared })
     }
 
     /// Triangle `t`'s own midpoint and mid-normal of its edge `k` (AB, AC, BC: D, E, F).
@@ -544,10 +525,6 @@ impl TriangleMesh {
 pub struct MeshLembos {
     /// The mesh, its positions welded.
     mesh: TriangleMesh,
-    /// Its normals made unit (`normalize_or_zero`), once a vertex rather than at each of
-    /// the lembos and edges that meet it: 24 bytes a vertex that save nine square roots
-    /// and divisions of the twelve a lembo is made with.
-    unit_normals: Vec<DVec3>,
     /// (3 × triangle + edge, the edge's shared midpoint), sorted, for every side of an edge
     /// whose sides compute different midpoints.
     shared: Vec<(u64, DVec3)>,
@@ -575,7 +552,7 @@ impl MeshLembos {
     pub fn get(&self, t: usize) -> Lembo {
         let m = &self.mesh;
         let tri = m.triangles[t];
-        let own = [0, 1, 2].map(|k| self.own_midpoint(tri, k));
+        let own = [0, 1, 2].map(|k| m.own_midpoint(t as u32, k));
         let mid = [0, 1, 2].map(|k| {
             let key = 3 * t as u64 + k as u64;
             match self.shared.binary_search_by_key(&key, |&(key, _)| key) {
@@ -584,21 +561,11 @@ impl MeshLembos {
             }
         });
         let [a, b, c] = tri.map(|i| m.positions[i as usize]);
-        let [na, nb, nc] = tri.map(|i| self.unit_normals[i as usize]);
+        let [na, nb, nc] = tri.map(|i| m.normals[i as usize].normalize_or_zero());
         Lembo::new(
             [a, b, c, mid[0], mid[1], mid[2]],
             [na, nb, nc, own[0].1, own[1].1, own[2].1],
         )
-    }
-
-    /// The own midpoint and mid-normal of edge `k` (AB, AC, BC: D, E, F) of the triangle
-    /// with corners `tri`: [`TriangleMesh::own_midpoint`]'s, bit for bit.
-    fn own_midpoint(&self, tri: [u32; 3], k: u8) -> (DVec3, DVec3) {
-        let (a, b) = EDGES[k as usize];
-        let (pa, pb) = (tri[a] as usize, tri[b] as usize);
-        let m = &self.mesh;
-        let n = &self.unit_normals;
-        unit_edge_midpoint(m.positions[pa], n[pa], m.positions[pb], n[pb])
     }
 
     /// The heap it holds \[bytes\].
@@ -606,7 +573,6 @@ impl MeshLembos {
         let m = &self.mesh;
         std::mem::size_of_val(&m.positions[..])
             + std::mem::size_of_val(&m.normals[..])
-            + std::mem::size_of_val(&self.unit_normals[..])
             + std::mem::size_of_val(&m.triangles[..])
             + std::mem::size_of_val(&self.shared[..])
     }
