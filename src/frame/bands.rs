@@ -570,22 +570,11 @@ where
     )
 }
 
-/// The lembo path's analysed frame on `threads` threads: [`render_in_bands`] with normals
-/// kept and every band's fragments measured by a probe on `board` before its ROP, the same
-/// frame and, in `board`, the same measurements as the single-threaded probe's
-/// ([`ProbeBoard`]).
+/// The lembo path's analysed frame on `threads` threads in windows of about `window`
+/// primitives ([`WINDOW_PRIMITIVES`] but in tests): [`render_in_bands`] with normals kept
+/// and every band's fragments measured by a probe on `board` before its ROP, the same frame
+/// and, in `board`, the same measurements as the single-threaded probe's ([`ProbeBoard`]).
 pub fn render_probed_in_bands<R: Real>(
-    scene: &Scene,
-    view: &View,
-    path: &LemboPath<'_, R>,
-    threads: u32,
-    board: &ProbeBoard,
-) -> Result<Frame> {
-    probed_in_windows(scene, view, path, (threads, WINDOW_PRIMITIVES), board)
-}
-
-/// [`render_probed_in_bands`] with windows of about `window` primitives.
-fn probed_in_windows<R: Real>(
     scene: &Scene,
     view: &View,
     path: &LemboPath<'_, R>,
@@ -780,7 +769,8 @@ mod tests {
         for threads in [1, 2, 3] {
             for window in [1, 50, 1 << 20] {
                 let board = ProbeBoard::new(&scene, view.viewport, threads);
-                let frame = probed_in_windows(&scene, &view, &lembos, (threads, window), &board);
+                let frame =
+                    render_probed_in_bands(&scene, &view, &lembos, (threads, window), &board);
                 assert!(bits(&frame.unwrap()) == bits(&one), "{threads} {window}");
                 assert_eq!(board.report(), report, "{threads} {window}");
             }

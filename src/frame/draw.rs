@@ -4,7 +4,7 @@
 //! over a fresh frame buffer, or either on several host threads in bands
 //! ([`render_functional_on`], [`super::bands`]), the same frame bit for bit.
 
-use super::bands::{render_in_bands, render_probed_in_bands};
+use super::bands::{render_in_bands, render_probed_in_bands, WINDOW_PRIMITIVES};
 use super::functional::{frame_with, Frame};
 use crate::camera::View;
 use crate::datapath::{Datapath, Real};
@@ -95,7 +95,7 @@ fn probed_in_bands<R: Real>(
 ) -> Result<Frame> {
     let path = LemboPath::<R>::new(scene, view, tol.k, tol.perspective, DEFAULT_SEGMENT_CAP);
     let board = probe::ProbeBoard::new(scene, view.viewport, threads);
-    let frame = render_probed_in_bands(scene, view, &path, threads, &board)?;
+    let frame = render_probed_in_bands(scene, view, &path, (threads, WINDOW_PRIMITIVES), &board)?;
     Ok(Frame {
         probe: Some(board.report()),
         ..frame

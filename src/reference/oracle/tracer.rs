@@ -124,7 +124,7 @@ pub struct Tracer<'a> {
 }
 
 /// Which lembos each screen tile of a view meets, and the spans they are made in: what
-/// binning a source's lembos in a view finds, a few bytes a lembo, kept by the reference
+/// binning a source's lembos in a view finds (a lembo id for each tile it meets), kept by the reference
 /// image traced with it ([`super::ReferenceImage::bins`]) so that its accuracy metrics ask
 /// their queries of the same tiles without binning again ([`Tracer::with_bins`]).
 #[derive(Debug)]
