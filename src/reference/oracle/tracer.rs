@@ -190,12 +190,20 @@ pub(super) struct Band<'a> {
     ids: Vec<u32>,
     /// The lembos, by position in `ids`, in chunks of [`BAND_CHUNK`] (made in parallel).
     lembos: Vec<Vec<Prepared<'a>>>,
-    /// Per tile of the span, positions in `ids`, nearest first.
-    bins: Vec<Vec<u32>>,
+    /// Per tile of the span, its lembos nearest first, each with its footprint inline (a
+    /// sample's scan over its tile reads only this list, in order, until a box holds it).
+    bins: Vec<Vec<BinEntry>>,
     /// The span's index in [`Tracer::spans`].
     span: usize,
     /// Its first tile's column.
     first_tile: u32,
+}
+
+/// A lembo of a band's tile: its position in the band's `ids` and its footprint.
+#[derive(Clone, Copy)]
+struct BinEntry {
+    footprint: Footprint,
+    k: u32,
 }
 
 /// A lembo of a band, ready to trace.
@@ -374,7 +382,12 @@ impl<'a> Tracer<'a> {
                     .map(local)
                     .collect();
                 bin.sort_by(|a, b| near(a).total_cmp(&near(b)).then(a.cmp(b)));
-                bin
+                bin.into_iter()
+                    .map(|k| BinEntry {
+                        footprint: at(k).footprint,
+                        k,
+                    })
+                    .collect()
             })
             .collect();
         Band {
@@ -456,12 +469,11 @@ impl<'a> Tracer<'a> {
         let (origin, dir) = view.ray(x, y);
         let (tx, ty) = self.tile_at(x, y);
         let band = self.cached_band(self.span_at(tx, ty));
-        for &k in band.bin(tx) {
-            let lembo = band.at(k);
-            if !lembo.footprint.contains(x, y) {
+        for entry in band.bin(tx) {
+            if !entry.footprint.contains(x, y) {
                 continue;
             }
-            let patch = &lembo.patch;
+            let patch = &band.at(entry.k).patch;
             let mut accept = |r: &Root| {
                 r.t > 0.0 && (0.0..=1.0).contains(&view.depth_of(patch.lembo.position_at(r.u, r.v)))
             };
@@ -558,7 +570,7 @@ impl Band<'_> {
 
     /// The positions of the lembos of the tile in column `tx` (one of the span's), nearest
     /// first.
-    fn bin(&self, tx: u32) -> &[u32] {
+    fn bin(&self, tx: u32) -> &[BinEntry] {
         &self.bins[(tx - self.first_tile) as usize]
     }
 
@@ -583,13 +595,13 @@ impl Band<'_> {
         let (origin, dir) = view.ray(x, y);
         let mut best: Option<ReferenceHit> = None;
         let mut best_t = f64::INFINITY;
-        for &k in self.bin(tx) {
-            let lembo = self.at(k);
-            if !lembo.footprint.contains(x, y) {
+        for entry in self.bin(tx) {
+            if !entry.footprint.contains(x, y) {
                 continue;
             }
+            let k = entry.k;
             let id = self.ids[k as usize];
-            let patch = &lembo.patch;
+            let patch = &self.at(k).patch;
             roots.clear();
             patch.roots(origin, dir, 0.0, best_t, scratch, roots);
             for r in roots.iter() {
