@@ -48,20 +48,29 @@ pub fn canonical_order(p: DVec3, q: DVec3) -> Ordering {
         .then(p.z.total_cmp(&q.z))
 }
 
+/// The most words [`bits_key`] hashes: the nine coordinates of a curve's three points.
+pub const BITS_KEY_WORDS: usize = 9;
+
 /// A 128-bit hash of a key made of coordinates' bits (an edge's corners, a curve's three
-/// points), the same in every run: two SipHash-1-3 digests (`DefaultHasher`, fixed keys)
-/// under two prefixes. Lembos' edges are matched by it, sorted, 32 bytes an edge's use
-/// instead of a map of the whole keys; two different keys would be taken for one only if
-/// their hashes collided, with a probability below 2^-88 among the edges of 2^20 lembos.
-pub fn bits_key(key: &impl std::hash::Hash) -> u128 {
-    use std::hash::Hasher;
-    let half = |prefix: u64| {
-        let mut h = std::collections::hash_map::DefaultHasher::new();
-        std::hash::Hash::hash(&prefix, &mut h);
-        key.hash(&mut h);
-        h.finish()
-    };
-    (u128::from(half(0)) << 64) | u128::from(half(1))
+/// points; at most [`BITS_KEY_WORDS`] words), the same in every run and on every host:
+/// XXH3-128 (seed 0) of the words' little-endian bytes. Lembos' edges are matched by it,
+/// sorted, 32 bytes an edge's use instead of a map of the whole keys; two different keys
+/// would be taken for one only if their hashes collided, which for a hash that behaves as a
+/// random function happens with a probability below 2^-85 among the 3 x 2^20 edge uses of
+/// 2^20 lembos ((3 x 2^20)² / 2^129).
+///
+/// # Panics
+/// If `words` holds more than [`BITS_KEY_WORDS`] (a bug of the caller).
+pub fn bits_key(words: &[u64]) -> u128 {
+    assert!(
+        words.len() <= BITS_KEY_WORDS,
+        "a bits key holds at most {BITS_KEY_WORDS} words"
+    );
+    let mut bytes = [0u8; 8 * BITS_KEY_WORDS];
+    for (b, w) in bytes.chunks_exact_mut(8).zip(words) {
+        b.copy_from_slice(&w.to_le_bytes());
+    }
+    xxhash_rust::xxh3::xxh3_128(&bytes[..8 * words.len()])
 }
 
 fn edge_midpoint_ordered(p1: DVec3, n1: DVec3, p2: DVec3, n2: DVec3) -> (DVec3, DVec3) {
@@ -551,7 +560,6 @@ impl MeshLembos {
     /// agree).
     pub fn get(&self, t: usize) -> Lembo {
         let m = &self.mesh;
-        let tri = m.triangles[t];
         let own = [0, 1, 2].map(|k| m.own_midpoint(t as u32, k));
         let mid = [0, 1, 2].map(|k| {
             let key = 3 * t as u64 + k as u64;
@@ -560,11 +568,21 @@ impl MeshLembos {
                 Err(_) => own[k as usize].0,
             }
         });
-        let [a, b, c] = tri.map(|i| m.positions[i as usize]);
-        let [na, nb, nc] = tri.map(|i| m.normals[i as usize].normalize_or_zero());
+        let ([a, b, c], [na, nb, nc]) = self.corners(t);
         Lembo::new(
             [a, b, c, mid[0], mid[1], mid[2]],
             [na, nb, nc, own[0].1, own[1].1, own[2].1],
+        )
+    }
+
+    /// Lembo `t`'s corners A, B, C and their unit normals, bit for bit those of
+    /// [`MeshLembos::get`], without making its edges: triangle `t` itself.
+    pub fn corners(&self, t: usize) -> ([DVec3; 3], [DVec3; 3]) {
+        let m = &self.mesh;
+        let tri = m.triangles[t];
+        (
+            tri.map(|i| m.positions[i as usize]),
+            tri.map(|i| m.normals[i as usize].normalize_or_zero()),
         )
     }
 

@@ -12,6 +12,10 @@
 use super::construct::{MeshLembos, TriangleMesh};
 use super::lattice::subdivided;
 use super::Lembo;
+use glam::DVec3;
+
+/// A lembo's corners A, B, C and their normals (`points[0..3]`, `normals[0..3]`).
+pub type Corners = ([DVec3; 3], [DVec3; 3]);
 
 /// The parent a subdivided lembo was last made from, with the tag and index it was made
 /// for ([`Lembos::get_near`]).
@@ -89,6 +93,22 @@ impl Lembos {
         subdivided(parent, *s, i & ((1 << shift) - 1))
     }
 
+    /// Lembo `i`'s corners A, B, C and their normals, bit for bit those of the lembo
+    /// [`Lembos::get_near`] makes: a mesh's lembos give their triangle without making the
+    /// lembo's edges; the others are made.
+    pub fn corners_near(&self, i: usize, tag: usize, last: &mut LastParent) -> Corners {
+        match self {
+            Lembos::Mesh(m) => m.corners(i),
+            _ => {
+                let l = self.get_near(i, tag, last);
+                (
+                    [l.points[0], l.points[1], l.points[2]],
+                    [l.normals[0], l.normals[1], l.normals[2]],
+                )
+            }
+        }
+    }
+
     /// The lembos in order, each made as it is reached (a subdivided lembo's parent once for
     /// all its children).
     pub fn iter(&self) -> impl Iterator<Item = Lembo> + '_ {
@@ -162,6 +182,39 @@ mod tests {
                 );
                 let other = sub.get_near(want.len() - 1 - i, 9, &mut last);
                 assert_eq!(other, want[want.len() - 1 - i]);
+            }
+        }
+    }
+
+    /// A lembo's corners and corner normals read without making it are the made lembo's,
+    /// bit for bit: on a mesh whose normals are neither unit nor shared across its creases,
+    /// and on its subdivided lembos (made).
+    #[test]
+    fn corners_read_without_making_are_the_made_lembos_bit_for_bit() {
+        let mut mesh = builtin_mesh("sphere24")
+            .expect("a builtin")
+            .with_crease_angle(20.0)
+            .expect("no triangle collapses");
+        for (k, n) in mesh.normals.iter_mut().enumerate() {
+            *n *= 0.5 + k as f64;
+        }
+        let made = Lembos::Mesh(mesh.into_lembos().expect("lembos"));
+        let sub = Lembos::Subdivided {
+            base: Box::new(made.clone()),
+            s: 1,
+        };
+        let bits = |v: &[DVec3]| {
+            v.iter()
+                .map(|p| p.to_array().map(f64::to_bits))
+                .collect::<Vec<_>>()
+        };
+        for set in [&made, &sub] {
+            let mut last = LastParent::default();
+            for i in 0..set.len() {
+                let l = set.get(i);
+                let (corners, normals) = set.corners_near(i, 0, &mut last);
+                assert_eq!(bits(&corners), bits(&l.points[..3]), "lembo {i}");
+                assert_eq!(bits(&normals), bits(&l.normals[..3]), "lembo {i}");
             }
         }
     }

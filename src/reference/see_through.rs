@@ -44,11 +44,10 @@
 //! back.
 
 use super::oracle::LemboSource;
-use super::surface::{oriented_normal, screen_deviation, share_a_corner, Drawn, Made, Shown};
+use super::surface::{corners_share, oriented_normal, screen_deviation, Drawn, Made, Shown};
 use crate::camera::View;
 use crate::lembo::construct::bits_key;
 use crate::lembo::set::LastParent;
-use crate::lembo::Lembo;
 use crate::rop::framebuffer::{FrameBuffer, NO_PRIMITIVE};
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
@@ -85,6 +84,55 @@ struct FlatMesh {
     depth: Vec<f64>,
 }
 
+/// A mesh triangle projected for [`FlatMesh::draw`]: its lembo's id, its corners' screen
+/// positions and window depths, its signed screen area, and the pixel centres its box
+/// holds (columns `i0..=i1`, rows `j0..=j1`).
+struct ScreenTriangle {
+    id: u32,
+    xy: [DVec2; 3],
+    depth: [f64; 3],
+    area: f64,
+    columns: (usize, usize),
+    rows: (usize, usize),
+}
+
+impl ScreenTriangle {
+    /// Triangle `corners` of lembo `id` seen by `view`; None when no pixel centre can see
+    /// it (a corner at or behind the eye, a zero or non-finite area, a box holding no
+    /// centre).
+    fn new(id: u32, corners: &[DVec3; 3], view: &View) -> Option<Self> {
+        let (w, h) = (view.viewport.width as usize, view.viewport.height as usize);
+        let s = corners.map(|c| view.project(c));
+        if s.iter()
+            .any(|p| p.w.is_nan() || p.w <= 0.0 || !p.x.is_finite() || !p.y.is_finite())
+        {
+            return None;
+        }
+        let xy = s.map(|p| DVec2::new(p.x, p.y));
+        let area = (xy[1] - xy[0]).perp_dot(xy[2] - xy[0]);
+        if area == 0.0 || !area.is_finite() {
+            return None;
+        }
+        let lo = xy[0].min(xy[1]).min(xy[2]);
+        let hi = xy[0].max(xy[1]).max(xy[2]);
+        let first = |v: f64| (v - 0.5).ceil().max(0.0);
+        let last = |v: f64, n: usize| (v - 0.5).floor().min(n as f64 - 1.0);
+        let (i0, i1) = (first(lo.x), last(hi.x, w));
+        let (j0, j1) = (first(lo.y), last(hi.y, h));
+        if i0 > i1 || j0 > j1 {
+            return None;
+        }
+        Some(ScreenTriangle {
+            id,
+            xy,
+            depth: s.map(|p| p.depth),
+            area,
+            columns: (i0 as usize, i1 as usize),
+            rows: (j0 as usize, j1 as usize),
+        })
+    }
+}
+
 impl FlatMesh {
     /// No triangle anywhere on a `view`'s pixels.
     fn new(view: &View) -> Self {
@@ -95,69 +143,70 @@ impl FlatMesh {
         }
     }
 
-    /// Rasterizes the mesh triangle `corners` of lembo `id` at pixel centres, keeping the
-    /// nearest (ties to the smaller id, so the order triangles come in does not matter).
-    fn draw(&mut self, id: u32, corners: &[DVec3; 3], view: &View) {
-        let (w, h) = (view.viewport.width as usize, view.viewport.height as usize);
-        let s = corners.map(|c| view.project(c));
-        if s.iter()
-            .any(|p| p.w.is_nan() || p.w <= 0.0 || !p.x.is_finite() || !p.y.is_finite())
-        {
-            return;
-        }
-        let xy = s.map(|p| DVec2::new(p.x, p.y));
-        let area = (xy[1] - xy[0]).perp_dot(xy[2] - xy[0]);
-        if area == 0.0 || !area.is_finite() {
-            return;
-        }
-        let lo = xy[0].min(xy[1]).min(xy[2]);
-        let hi = xy[0].max(xy[1]).max(xy[2]);
-        let first = |v: f64| (v - 0.5).ceil().max(0.0);
-        let last = |v: f64, n: usize| (v - 0.5).floor().min(n as f64 - 1.0);
-        let (i0, i1) = (first(lo.x), last(hi.x, w));
-        let (j0, j1) = (first(lo.y), last(hi.y, h));
-        if i0 > i1 || j0 > j1 {
-            return;
-        }
-        for j in j0 as usize..=j1 as usize {
-            for i in i0 as usize..=i1 as usize {
-                let c = DVec2::new(i as f64 + 0.5, j as f64 + 0.5);
-                // Barycentrics from the edge functions, positive inside whatever the winding.
-                let b = [
-                    (xy[2] - xy[1]).perp_dot(c - xy[1]) / area,
-                    (xy[0] - xy[2]).perp_dot(c - xy[2]) / area,
-                    (xy[1] - xy[0]).perp_dot(c - xy[0]) / area,
-                ];
-                if b.iter().any(|&x| x < 0.0) {
-                    continue;
-                }
-                let z = b[0] * s[0].depth + b[1] * s[1].depth + b[2] * s[2].depth;
-                let k = j * w + i;
-                let nearer = z < self.depth[k] || (z == self.depth[k] && id < self.owner[k]);
-                if (0.0..=1.0).contains(&z) && nearer {
-                    self.depth[k] = z;
-                    self.owner[k] = id;
-                }
+    /// Rasterizes `triangles` at pixel centres, keeping the nearest at each (ties to the
+    /// smaller id, so neither the order triangles come in nor the bands of rows they are
+    /// drawn in, in parallel, matter).
+    fn draw(&mut self, triangles: &[ScreenTriangle], w: usize) {
+        const BAND_ROWS: usize = 16;
+        let bands = self.owner.len().div_ceil(BAND_ROWS * w);
+        let mut of_band: Vec<Vec<&ScreenTriangle>> = vec![Vec::new(); bands];
+        for t in triangles {
+            for band in &mut of_band[t.rows.0 / BAND_ROWS..=t.rows.1 / BAND_ROWS] {
+                band.push(t);
             }
+        }
+        self.owner
+            .par_chunks_mut(BAND_ROWS * w)
+            .zip(self.depth.par_chunks_mut(BAND_ROWS * w))
+            .zip(of_band)
+            .enumerate()
+            .for_each(|(band, ((owner, depth), triangles))| {
+                let rows = band * BAND_ROWS..band * BAND_ROWS + owner.len() / w;
+                for t in triangles {
+                    for j in t.rows.0.max(rows.start)..=t.rows.1.min(rows.end - 1) {
+                        let row = (j - rows.start) * w;
+                        draw_row(t, j, &mut owner[row..row + w], &mut depth[row..row + w]);
+                    }
+                }
+            });
+    }
+}
+
+/// Row `j` of `t` at its pixel centres into that row's `owner` and `depth`.
+fn draw_row(t: &ScreenTriangle, j: usize, owner: &mut [u32], depth: &mut [f64]) {
+    let (xy, area) = (&t.xy, t.area);
+    for i in t.columns.0..=t.columns.1 {
+        let c = DVec2::new(i as f64 + 0.5, j as f64 + 0.5);
+        // Barycentrics from the edge functions, positive inside whatever the winding.
+        let b = [
+            (xy[2] - xy[1]).perp_dot(c - xy[1]) / area,
+            (xy[0] - xy[2]).perp_dot(c - xy[2]) / area,
+            (xy[1] - xy[0]).perp_dot(c - xy[0]) / area,
+        ];
+        if b.iter().any(|&x| x < 0.0) {
+            continue;
+        }
+        let z = b[0] * t.depth[0] + b[1] * t.depth[1] + b[2] * t.depth[2];
+        let nearer = z < depth[i] || (z == depth[i] && t.id < owner[i]);
+        if (0.0..=1.0).contains(&z) && nearer {
+            depth[i] = z;
+            owner[i] = t.id;
         }
     }
 }
 
-/// Whether the mesh triangle of `l` faces the eye of `view`.
-fn faces_eye(l: &Lembo, view: &View) -> bool {
-    let [a, b, c] = [l.points[0], l.points[1], l.points[2]];
-    oriented_normal([a, b, c], [l.normals[0], l.normals[1], l.normals[2]])
-        .dot(view.to_eye((a + b + c) / 3.0))
-        > 0.0
+/// Whether the mesh triangle of corners `[a, b, c]` with normals `normals` faces the eye
+/// of `view`.
+fn faces_eye([a, b, c]: [DVec3; 3], normals: [DVec3; 3], view: &View) -> bool {
+    oriented_normal([a, b, c], normals).dot(view.to_eye((a + b + c) / 3.0)) > 0.0
 }
 
 /// One use of a mesh edge by a triangle: the edge's corner positions hashed
-/// ([`bits_key`]), how far the triangle's lembo strays from its triangle \[pixels\], the
-/// lembo, which edge (0: AB, 1: BC, 2: CA), and whether the triangle faces the eye.
+/// ([`bits_key`]), the lembo, which edge (0: AB, 1: BC, 2: CA), and whether the triangle
+/// faces the eye.
 #[derive(Clone, Copy)]
 struct EdgeUse {
     key: u128,
-    deviation: f64,
     id: u32,
     edge: u8,
     front: bool,
@@ -166,11 +215,12 @@ struct EdgeUse {
 /// The corners of the three edges of a mesh triangle, by edge index.
 const EDGES: [(usize, usize); 3] = [(0, 1), (1, 2), (2, 0)];
 
-/// An edge's corner positions, bit for bit, in a canonical order (the smaller bits first).
-fn edge_corners(l: &Lembo, edge: usize) -> [[u64; 3]; 2] {
+/// An edge's corner positions, bit for bit, in a canonical order (the smaller bits first);
+/// `corners` are its triangle's.
+fn edge_corners(corners: &[DVec3; 3], edge: usize) -> [[u64; 3]; 2] {
     let bits = |p: DVec3| p.to_array().map(f64::to_bits);
     let (a, b) = EDGES[edge];
-    let (p, q) = (bits(l.points[a]), bits(l.points[b]));
+    let (p, q) = (bits(corners[a]), bits(corners[b]));
     if p <= q {
         [p, q]
     } else {
@@ -198,15 +248,19 @@ fn near_outline(mut uses: Vec<EdgeUse>, lembos: &dyn LemboSource, view: &View) -
         if front == 0 || (front >= 2 && back == 0) {
             continue;
         }
-        let deviation = edge.iter().map(|u| u.deviation).fold(0.0, f64::max);
+        // How far the lembos using the edge stray from their triangles, from the lembos
+        // made again (an outline edge is rare; the pass kept only the hash), and the edge's
+        // corners, from its first use's.
+        let deviation = edge
+            .iter()
+            .map(|u| screen_deviation(&lembos.lembo(u.id as usize, &mut last).0, view))
+            .fold(0.0, f64::max);
         let margin = OUTLINE_MARGIN_PX + deviation;
         if !margin.is_finite() {
             continue;
         }
-        // The edge's corners, from its first use's lembo made again (an outline edge is
-        // rare; the pass kept only the hash).
-        let (l, _) = lembos.lembo(edge[0].id as usize, &mut last);
-        let key = edge_corners(&l, edge[0].edge as usize);
+        let (corners, _) = lembos.corners(edge[0].id as usize, &mut last);
+        let key = edge_corners(&corners, edge[0].edge as usize);
         let [p, q] = key.map(|c| view.project(DVec3::from_array(c.map(f64::from_bits))));
         if p.w.is_nan() || q.w.is_nan() || p.w <= 0.0 || q.w <= 0.0 {
             continue;
@@ -354,23 +408,21 @@ impl Judge<'_> {
         if shown.depth <= self.flat.depth[k] {
             return None;
         }
-        let shown = shown_made.get(drawn.lembo_of(shown.winner))?;
+        let shown = shown_made.corners(drawn.lembo_of(shown.winner))?;
         let triangle = mesh_made
-            .get(u64::from(self.flat.owner[k]))
+            .corners(u64::from(self.flat.owner[k]))
             .expect("a flat triangle's lembo exists");
-        (!share_a_corner(shown, triangle)).then_some(Kind::ForeignBehind)
+        (!corners_share(&shown, &triangle)).then_some(Kind::ForeignBehind)
     }
 }
 
-/// A lembo's id and the corners of its mesh triangle.
-type MeshTriangle = (u32, [DVec3; 3]);
-
-/// Lembos a task of [`mesh_pass`] makes.
+/// Lembos a task of [`mesh_pass`] reads.
 const PASS_CHUNK: usize = 4096;
 
-/// One pass over the lembos of a mesh, in windows of chunks made in parallel: the flat
-/// mesh, which triangles face the eye, and the edges' uses. What a window makes is kept
-/// only until its triangles are drawn.
+/// One pass over the lembos of a mesh, in windows of chunks read in parallel: the flat
+/// mesh, which triangles face the eye, and the edges' uses. It reads only each lembo's
+/// corners ([`LemboSource::corners`]: a mesh's lembos are not made), and keeps a window's
+/// triangles only until they are drawn.
 fn mesh_pass(lembos: &dyn LemboSource, view: &View) -> (FlatMesh, Vec<bool>, Vec<EdgeUse>) {
     let n = lembos.len();
     let meshed = (0..n).filter(|&id| lembos.is_from_mesh(id)).count();
@@ -380,44 +432,42 @@ fn mesh_pass(lembos: &dyn LemboSource, view: &View) -> (FlatMesh, Vec<bool>, Vec
     let window = PASS_CHUNK * 2 * rayon::current_num_threads();
     for start in (0..n).step_by(window) {
         let end = (start + window).min(n);
-        let parts: Vec<(Vec<MeshTriangle>, Vec<EdgeUse>)> = (start..end)
+        let parts: Vec<(Vec<ScreenTriangle>, Vec<EdgeUse>)> = (start..end)
             .step_by(PASS_CHUNK)
             .collect::<Vec<_>>()
             .into_par_iter()
             .map(|from| {
                 let mut last = LastParent::default();
-                let mut corners = Vec::new();
+                let mut triangles = Vec::new();
                 let mut uses = Vec::new();
                 for id in from..(from + PASS_CHUNK).min(end) {
                     if !lembos.is_from_mesh(id) {
                         continue;
                     }
-                    let (l, _) = lembos.lembo(id, &mut last);
-                    let faces = faces_eye(&l, view);
-                    let deviation = screen_deviation(&l, view);
+                    let (corners, normals) = lembos.corners(id, &mut last);
+                    let faces = faces_eye(corners, normals, view);
                     for edge in 0..3 {
                         uses.push(EdgeUse {
-                            key: bits_key(&edge_corners(&l, edge)),
-                            deviation,
+                            key: bits_key(edge_corners(&corners, edge).as_flattened()),
                             id: id as u32,
                             edge: edge as u8,
                             front: faces,
                         });
                     }
-                    corners.push((id as u32, [l.points[0], l.points[1], l.points[2]]));
+                    triangles.extend(ScreenTriangle::new(id as u32, &corners, view));
                 }
-                (corners, uses)
+                (triangles, uses)
             })
             .collect();
-        for (corners, part) in parts {
-            for (id, c) in corners {
-                flat.draw(id, &c, view);
-            }
+        let mut triangles = Vec::new();
+        for (part_triangles, part) in parts {
+            triangles.extend(part_triangles);
             for u in &part {
                 front[u.id as usize] = u.front;
             }
             uses.extend(part);
         }
+        flat.draw(&triangles, view.viewport.width as usize);
     }
     (flat, front, uses)
 }
@@ -427,6 +477,66 @@ mod tests {
     use super::super::surface::fixtures::{flat, view};
     use super::*;
     use crate::lembo::construct::lembo_from_triangle;
+    use crate::lembo::Lembo;
+
+    /// The flat mesh drawn in parallel bands of rows is the one drawn row by row over the
+    /// whole frame, triangle by triangle in the other order: on a viewport whose height is not a whole
+    /// number of bands, with triangles spanning several bands, leaving it, meeting at equal
+    /// depths (the smaller id wins) and nearer ones over farther.
+    #[test]
+    fn the_flat_mesh_drawn_in_bands_is_the_one_drawn_row_by_row() {
+        use crate::camera::{Camera, Projection, Viewport};
+        let camera = Camera {
+            eye: [0.0, 0.0, 10.0],
+            target: [0.0; 3],
+            up: [0.0, 1.0, 0.0],
+            projection: Projection::Orthographic {
+                height: 100.0,
+                near: 0.1,
+                far: 100.0,
+            },
+        };
+        let view = View::new(
+            &camera,
+            Viewport {
+                width: 128,
+                height: 100,
+            },
+        );
+        let mut triangles = Vec::new();
+        let mut seed = 12345u64;
+        let mut next = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((seed >> 11) as f64 / (1u64 << 53) as f64) * 160.0 - 80.0
+        };
+        for id in 0..60u32 {
+            let z = if id % 3 == 0 { 0.0 } else { next() / 40.0 };
+            let corners = [0; 3].map(|_| DVec3::new(next(), next(), z));
+            triangles.extend(ScreenTriangle::new(id, &corners, &view));
+        }
+        assert!(triangles.len() > 50);
+        assert!(triangles.iter().any(|t| t.rows.1 - t.rows.0 > 40));
+        let w = view.viewport.width as usize;
+        let mut at_once = FlatMesh::new(&view);
+        at_once.draw(&triangles, w);
+        // Row by row over the whole frame, last triangle first: no bands.
+        let mut one_by_one = FlatMesh::new(&view);
+        for t in triangles.iter().rev() {
+            for j in t.rows.0..=t.rows.1 {
+                let row = j * w..(j + 1) * w;
+                let FlatMesh { owner, depth } = &mut one_by_one;
+                draw_row(t, j, &mut owner[row.clone()], &mut depth[row]);
+            }
+        }
+        assert_eq!(at_once.owner, one_by_one.owner);
+        assert_eq!(at_once.depth, one_by_one.depth);
+        assert!(at_once.owner[(100 - 1) * w..]
+            .iter()
+            .any(|&o| o != NO_PRIMITIVE));
+        assert!(at_once.owner.iter().filter(|&&o| o != NO_PRIMITIVE).count() > 128 * 100 / 2);
+    }
 
     #[test]
     fn see_through_counts_background_back_faces_and_foreign_surfaces_behind() {

@@ -123,10 +123,14 @@ pub(super) fn screen_deviation(l: &Lembo, view: &View) -> f64 {
 
 /// Whether two lembos' corner triangles share a corner position (bit for bit).
 pub(super) fn share_a_corner(a: &Lembo, b: &Lembo) -> bool {
+    let corners = |l: &Lembo| [l.points[0], l.points[1], l.points[2]];
+    corners_share(&corners(a), &corners(b))
+}
+
+/// Whether two corner triangles share a corner position (bit for bit).
+pub(super) fn corners_share(a: &[DVec3; 3], b: &[DVec3; 3]) -> bool {
     let bits = |p: DVec3| p.to_array().map(f64::to_bits);
-    a.points[..3]
-        .iter()
-        .any(|p| b.points[..3].iter().any(|q| bits(*p) == bits(*q)))
+    a.iter().any(|p| b.iter().any(|q| bits(*p) == bits(*q)))
 }
 
 /// Whether the surface of `lembo` at domain point (u, v) faces a ray of direction `dir`:
@@ -204,6 +208,18 @@ impl<'a> Made<'a> {
             self.kept = Some((id, l));
         }
         self.kept.as_ref().map(|(_, l)| l)
+    }
+
+    /// Lembo `id`'s corners, or None beyond the last: the kept lembo's when it is that one,
+    /// else read from the source without making it ([`LemboSource::corners`]).
+    pub fn corners(&mut self, id: u64) -> Option<[DVec3; 3]> {
+        if id >= self.lembos.len() as u64 {
+            return None;
+        }
+        match &self.kept {
+            Some((k, l)) if *k == id => Some([l.points[0], l.points[1], l.points[2]]),
+            _ => Some(self.lembos.corners(id as usize, &mut self.last).0),
+        }
     }
 }
 

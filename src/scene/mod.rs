@@ -47,7 +47,7 @@ pub mod validate;
 use crate::camera::{Camera, Viewport};
 use crate::discoid::DiscoidSet;
 use crate::lembo::construct::TriangleMesh;
-use crate::lembo::set::{LastParent, Lembos};
+use crate::lembo::set::{Corners, LastParent, Lembos};
 use crate::lembo::Lembo;
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
@@ -218,6 +218,15 @@ impl Scene {
             object.lembos.get_near(id - index.0[o], o, last),
             object.color,
         )
+    }
+
+    /// Lembo `id`'s corners and their normals ([`Lembos::corners_near`]), bit for bit
+    /// those of the lembo [`Scene::lembo_near`] makes.
+    pub fn corners_near(&self, index: &LemboIndex, id: usize, last: &mut LastParent) -> Corners {
+        let o = index.object(id);
+        self.objects[o]
+            .lembos
+            .corners_near(id - index.0[o], o, last)
     }
 
     /// The heap the scene's lembos take \[bytes\]: the lembos held, and the meshes others

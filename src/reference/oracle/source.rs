@@ -1,7 +1,7 @@
 //! Where the reference takes its lembos from: made by id when a tile asks for them, so
 //! that nothing holds every lembo of a scene (DESIGN.md §3, "Streamed primitives").
 
-use crate::lembo::set::LastParent;
+use crate::lembo::set::{Corners, LastParent};
 use crate::lembo::Lembo;
 use crate::scene::{LemboIndex, Scene};
 
@@ -20,6 +20,17 @@ pub trait LemboSource: Sync {
     /// call to call: a caller taking ids in ascending order makes a subdivided lembo's
     /// parent once for all its children.
     fn lembo(&self, id: usize, last: &mut LastParent) -> (Lembo, [f64; 3]);
+
+    /// Lembo `id`'s corners A, B, C and their normals, bit for bit those of
+    /// [`LemboSource::lembo`]'s, for a caller that reads nothing else (a source that can
+    /// give them without making the lembo does).
+    fn corners(&self, id: usize, last: &mut LastParent) -> Corners {
+        let (l, _) = self.lembo(id, last);
+        (
+            [l.points[0], l.points[1], l.points[2]],
+            [l.normals[0], l.normals[1], l.normals[2]],
+        )
+    }
 
     /// Whether lembo `id` stands for a triangle of a mesh (its corners A, B, C are the
     /// triangle's), so that the see-through check holds it against that triangle.
@@ -79,6 +90,10 @@ impl LemboSource for SceneLembos<'_> {
 
     fn lembo(&self, id: usize, last: &mut LastParent) -> (Lembo, [f64; 3]) {
         self.scene.lembo_near(&self.index, id, last)
+    }
+
+    fn corners(&self, id: usize, last: &mut LastParent) -> Corners {
+        self.scene.corners_near(&self.index, id, last)
     }
 
     fn is_from_mesh(&self, id: usize) -> bool {
