@@ -242,7 +242,7 @@ pub fn measure_frame_and_flip(
         PrimitivePath::Lembo => None,
         PrimitivePath::Triangle => Some(ids_per_lembo.isqrt() as u32),
     };
-    // FLIP runs on one thread (the reference implementation), beside the rest.
+    // FLIP runs beside the rest, in bands of rows on the same threads (`flip::flip`).
     let (flip, (tracer, visibility)) = rayon::join(
         || flip_frame(&frame.framebuffer, reference, ppd),
         || {

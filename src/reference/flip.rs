@@ -4,6 +4,12 @@
 //! NVlabs/flip, BSD-3, compiled through the `nv-flip` crate), not a port: the per-pixel
 //! error map in [0, 1] and its mean.
 //!
+//! The reference implementation runs on one thread. The map is computed here in bands of
+//! rows on all of the pool's threads, each band with the rows FLIP's filters reach above
+//! and below it ([`halo_rows`]), and the bands' own rows put together: the same map, bit
+//! for bit (tested), since every filter clamps at the image's border and reaches no
+//! further than its radius.
+//!
 //! The viewing condition is the observer's pixels per degree of visual angle
 //! ([`PixelsPerDegree`]); the reference's default is a 0.7 m wide 3840-pixel monitor seen
 //! from 0.7 m, 67.02 pixels per degree. Both images are read as sRGB, RGB8.
@@ -65,7 +71,9 @@ pub struct FlipMap {
     pub ppd: PixelsPerDegree,
 }
 
-/// FLIP of `test` against `reference` (RGB8 pixels, row by row, `width` x `height`).
+/// FLIP of `test` against `reference` (RGB8 pixels, row by row, `width` x `height`),
+/// computed in bands of rows on the current thread pool ([`flip_in_bands`]): the map, bit
+/// for bit, that the reference implementation computes of the whole image at once.
 ///
 /// # Panics
 /// If either image is not `width` x `height` (a bug of the caller).
@@ -76,19 +84,89 @@ pub fn flip(
     height: u32,
     ppd: PixelsPerDegree,
 ) -> FlipMap {
+    let bands = rayon::current_num_threads() as u32;
+    flip_in_bands(reference, test, width, height, ppd, bands)
+}
+
+/// The rows either side of a band that the map inside it reads (the halo): FLIP's widest
+/// filter radius at `ppd` (the reference implementation's formulas, its spatial filter's
+/// from the largest Gaussian scale, 0.04, and its feature filter's from 3 standard
+/// deviations of 0.5 x 0.082 degrees), plus one row against rounding.
+pub fn halo_rows(ppd: PixelsPerDegree) -> u32 {
+    let ppd = f64::from(ppd.get() as f32);
+    let pi_sq = std::f64::consts::PI * std::f64::consts::PI;
+    let spatial = (3.0 * (0.04 / (2.0 * pi_sq)).sqrt() * ppd).ceil();
+    let feature = (3.0 * 0.5 * 0.082 * ppd).ceil();
+    spatial.max(feature) as u32 + 1
+}
+
+/// [`flip`] in at most `bands` bands of consecutive rows, each computed by the reference
+/// implementation in parallel with its [`halo_rows`] above and below (FLIP's filters clamp
+/// at the image's border, and reach no further than their radius), and the bands' own rows
+/// put together. Fewer bands when the halos would more than half the work: one, the whole
+/// image, for a small one.
+///
+/// # Panics
+/// If either image is not `width` x `height` (a bug of the caller).
+pub fn flip_in_bands(
+    reference: &[[u8; 3]],
+    test: &[[u8; 3]],
+    width: u32,
+    height: u32,
+    ppd: PixelsPerDegree,
+    bands: u32,
+) -> FlipMap {
+    banded(
+        reference,
+        test,
+        (width, height),
+        ppd,
+        (bands, halo_rows(ppd)),
+    )
+}
+
+/// [`flip_in_bands`] with halos of `halo` rows.
+fn banded(
+    reference: &[[u8; 3]],
+    test: &[[u8; 3]],
+    (width, height): (u32, u32),
+    ppd: PixelsPerDegree,
+    (bands, halo): (u32, u32),
+) -> FlipMap {
+    use rayon::prelude::*;
     let n = width as usize * height as usize;
     assert!(
         reference.len() == n && test.len() == n,
         "images differ from {width}x{height}"
     );
-    let image =
-        |px: &[[u8; 3]]| nv_flip::FlipImageRgb8::with_data(width, height, px.as_flattened());
-    let map = nv_flip::flip(image(reference), image(test), ppd.get() as f32);
+    let bands = bands.min(height / (4 * halo).max(1)).max(1);
+    let rows = height.div_ceil(bands);
+    let w = width as usize;
+    let parts: Vec<Vec<f32>> = (0..height.div_ceil(rows))
+        .into_par_iter()
+        .map(|b| {
+            let (first, end) = (b * rows, ((b + 1) * rows).min(height));
+            let (top, bottom) = (first.saturating_sub(halo), (end + halo).min(height));
+            let span = top as usize * w..bottom as usize * w;
+            let image = |px: &[[u8; 3]]| {
+                nv_flip::FlipImageRgb8::with_data(width, bottom - top, px.as_flattened())
+            };
+            let map = nv_flip::flip(
+                image(&reference[span.clone()]),
+                image(&test[span]),
+                ppd.get() as f32,
+            );
+            let own = (first - top) as usize * w..(end - top) as usize * w;
+            map.to_vec()[own].to_vec()
+        })
+        .collect();
+    let values = parts.concat();
+    let map = nv_flip::FlipImageFloat::with_data(width, height, &values);
     let mean = nv_flip::FlipPool::from_image(&map).mean() as f64;
     FlipMap {
         width,
         height,
-        values: map.to_vec(),
+        values,
         mean,
         ppd,
     }
@@ -209,6 +287,68 @@ mod tests {
         let near = flip(&flat, &checker, w, h, PixelsPerDegree::new(10.0).unwrap());
         let far = flip(&flat, &checker, w, h, PixelsPerDegree::new(200.0).unwrap());
         assert!(near.mean > far.mean, "{} {}", near.mean, far.mean);
+    }
+
+    /// The map computed in bands with their halos is the whole image's, bit for bit, and
+    /// so is its mean: at observers whose filters reach 2 to 130 rows, on images whose
+    /// height splits into bands unevenly or is too small for more than one, with
+    /// differences everywhere (noise) and right at the bands' edges.
+    #[test]
+    fn flip_in_bands_is_the_whole_images_flip_bit_for_bit() {
+        let mut seed = 7u64;
+        let mut noise = |n: usize| -> Vec<[u8; 3]> {
+            (0..n)
+                .map(|_| {
+                    seed = seed
+                        .wrapping_mul(6364136223846793005)
+                        .wrapping_add(1442695040888963407);
+                    let b = (seed >> 40).to_le_bytes();
+                    [b[0], b[1], b[2]]
+                })
+                .collect()
+        };
+        for (w, h, ppd) in [
+            (37, 203, 10.0),
+            (64, 301, 67.02),
+            (23, 97, 20.0),
+            (16, 40, 1000.0),
+        ] {
+            let ppd = PixelsPerDegree::new(ppd).unwrap();
+            let reference = noise((w * h) as usize);
+            let mut test = disc(w, h, 9.0, [200, 120, 40]);
+            for (k, t) in test.iter_mut().enumerate() {
+                if k % 7 == 0 {
+                    *t = reference[k];
+                }
+            }
+            let whole = nv_flip::flip(
+                nv_flip::FlipImageRgb8::with_data(w, h, reference.as_flattened()),
+                nv_flip::FlipImageRgb8::with_data(w, h, test.as_flattened()),
+                ppd.get() as f32,
+            );
+            let whole_mean = nv_flip::FlipPool::from_image(&whole).mean() as f64;
+            let whole = whole.to_vec();
+            for bands in [1, 2, 3, 5, 8] {
+                let banded = flip_in_bands(&reference, &test, w, h, ppd, bands);
+                let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert!(
+                    bits(&banded.values) == bits(&whole),
+                    "{w}x{h} at {} ppd in {bands} bands",
+                    ppd.get()
+                );
+                assert_eq!(banded.mean.to_bits(), whole_mean.to_bits());
+            }
+        }
+        // At 67.02 pixels per degree the spatial filter reaches 10 rows: the halo is 11, and
+        // one of 9 changes the map.
+        let (w, h) = (64, 301);
+        let ppd = PixelsPerDegree::new(67.02).unwrap();
+        assert_eq!(halo_rows(ppd), 11);
+        let (reference, test) = (noise((w * h) as usize), noise((w * h) as usize));
+        let right = banded(&reference, &test, (w, h), ppd, (3, 10));
+        let short = banded(&reference, &test, (w, h), ppd, (3, 9));
+        let whole = banded(&reference, &test, (w, h), ppd, (1, 0));
+        assert!(right.values == whole.values && short.values != whole.values);
     }
 
     #[test]
