@@ -73,9 +73,20 @@ pub fn bits_key(words: &[u64]) -> u128 {
     xxhash_rust::xxh3::xxh3_128(&bytes[..8 * words.len()])
 }
 
-fn edge_midpoint_ordered(p1: DVec3, n1: DVec3, p2: DVec3, n2: DVec3) -> (DVec3, DVec3) {
-    let n1 = n1.normalize_or_zero();
-    let n2 = n2.normalize_or_zero();
+/// The point in the middle of the curved edge of [`edge_midpoint`], without its normal: the
+/// same bits as its point.
+pub fn edge_midpoint_position(p1: DVec3, n1: DVec3, p2: DVec3, n2: DVec3) -> DVec3 {
+    let (p1, n1, p2, n2) = if canonical_order(p1, p2) == Ordering::Greater {
+        (p2, n2, p1, n1)
+    } else {
+        (p1, n1, p2, n2)
+    };
+    midpoint_position(p1, n1.normalize_or_zero(), p2, n2.normalize_or_zero())
+}
+
+/// The curved edge's midpoint from `p1` (unit normal `n1`) to `p2` (unit normal `n2`).
+#[inline]
+fn midpoint_position(p1: DVec3, n1: DVec3, p2: DVec3, n2: DVec3) -> DVec3 {
     let p = p2 - p1;
     let c = n1.dot(n2);
     let t1 = n2 - n1 * c;
@@ -91,8 +102,14 @@ fn edge_midpoint_ordered(p1: DVec3, n1: DVec3, p2: DVec3, n2: DVec3) -> (DVec3, 
     };
     let (a1, a2) = (proj(t1), proj(t2));
     // f(t) = (a2 - a1)/2 t² + (P + (a1 - a2)/2) t + P1, so f(1/2) = P1 + P/2 + (a1 - a2)/8.
-    let mid = p1 + 0.5 * p + 0.125 * (a1 - a2);
+    p1 + 0.5 * p + 0.125 * (a1 - a2)
+}
 
+fn edge_midpoint_ordered(p1: DVec3, n1: DVec3, p2: DVec3, n2: DVec3) -> (DVec3, DVec3) {
+    let n1 = n1.normalize_or_zero();
+    let n2 = n2.normalize_or_zero();
+    let mid = midpoint_position(p1, n1, p2, n2);
+    let p = p2 - p1;
     let nsum = n1 + n2;
     let pp = p.dot(p);
     let v = if pp > 0.0 {
@@ -573,6 +590,31 @@ impl MeshLembos {
             [a, b, c, mid[0], mid[1], mid[2]],
             [na, nb, nc, own[0].1, own[1].1, own[2].1],
         )
+    }
+
+    /// Lembo `t`'s six reference points (corners, then the midpoints of AB, AC, BC), bit for
+    /// bit those of [`MeshLembos::get`], without its normals.
+    pub fn points(&self, t: usize) -> [DVec3; 6] {
+        let m = &self.mesh;
+        let tri = m.triangles[t];
+        let mid = [0, 1, 2].map(|k| {
+            let key = 3 * t as u64 + k as u64;
+            match self.shared.binary_search_by_key(&key, |&(key, _)| key) {
+                Ok(at) => self.shared[at].1,
+                Err(_) => {
+                    let (a, b) = EDGES[k as usize];
+                    let (pa, pb) = (tri[a] as usize, tri[b] as usize);
+                    edge_midpoint_position(
+                        m.positions[pa],
+                        m.normals[pa],
+                        m.positions[pb],
+                        m.normals[pb],
+                    )
+                }
+            }
+        });
+        let [a, b, c] = tri.map(|i| m.positions[i as usize]);
+        [a, b, c, mid[0], mid[1], mid[2]]
     }
 
     /// Lembo `t`'s corners A, B, C and their unit normals, bit for bit those of

@@ -109,6 +109,16 @@ impl Lembos {
         }
     }
 
+    /// Lembo `i`'s six reference points, bit for bit those of the lembo
+    /// [`Lembos::get_near`] makes: a mesh's lembos give them without their normals; the
+    /// others are made.
+    pub fn points_near(&self, i: usize, tag: usize, last: &mut LastParent) -> [DVec3; 6] {
+        match self {
+            Lembos::Mesh(m) => m.points(i),
+            _ => self.get_near(i, tag, last).points,
+        }
+    }
+
     /// The lembos in order, each made as it is reached (a subdivided lembo's parent once for
     /// all its children).
     pub fn iter(&self) -> impl Iterator<Item = Lembo> + '_ {
@@ -186,11 +196,11 @@ mod tests {
         }
     }
 
-    /// A lembo's corners and corner normals read without making it are the made lembo's,
-    /// bit for bit: on a mesh whose normals are neither unit nor shared across its creases,
+    /// A lembo's corners and corner normals, and its six points, read without making it are
+    /// the made lembo's, bit for bit: on a mesh whose normals are neither unit nor shared across its creases,
     /// and on its subdivided lembos (made).
     #[test]
-    fn corners_read_without_making_are_the_made_lembos_bit_for_bit() {
+    fn corners_and_points_read_without_making_are_the_made_lembos_bit_for_bit() {
         let mut mesh = builtin_mesh("sphere24")
             .expect("a builtin")
             .with_crease_angle(20.0)
@@ -215,6 +225,7 @@ mod tests {
                 let (corners, normals) = set.corners_near(i, 0, &mut last);
                 assert_eq!(bits(&corners), bits(&l.points[..3]), "lembo {i}");
                 assert_eq!(bits(&normals), bits(&l.normals[..3]), "lembo {i}");
+                assert_eq!(bits(&set.points_near(i, 0, &mut last)), bits(&l.points));
             }
         }
     }

@@ -214,13 +214,13 @@ pub fn shared_edges(scene: &Scene, threads: u32) -> Adjacent {
         let mut last = crate::lembo::set::LastParent::default();
         for (n, three) in out.chunks_exact_mut(3).enumerate() {
             let id = first + n;
-            let (l, _) = scene.lembo_near(&index, id, &mut last);
+            let points = scene.points_near(&index, id, &mut last);
             for (edge, (s, e, m)) in [(0, 1, 3), (1, 2, 5), (2, 0, 4)].into_iter().enumerate() {
-                let (mut p, mut q) = (l.points[s], l.points[e]);
+                let (mut p, mut q) = (points[s], points[e]);
                 if canonical_order(p, q).is_gt() {
                     std::mem::swap(&mut p, &mut q);
                 }
-                let mid = l.points[m];
+                let mid = points[m];
                 let key = [p.x, p.y, p.z, q.x, q.y, q.z, mid.x, mid.y, mid.z].map(f64::to_bits);
                 three[edge] = (bits_key(&key), id as u32, edge as u8);
             }

@@ -229,6 +229,18 @@ impl Scene {
             .corners_near(id - index.0[o], o, last)
     }
 
+    /// Lembo `id`'s six reference points ([`Lembos::points_near`]), bit for bit those of
+    /// the lembo [`Scene::lembo_near`] makes.
+    pub fn points_near(
+        &self,
+        index: &LemboIndex,
+        id: usize,
+        last: &mut LastParent,
+    ) -> [glam::DVec3; 6] {
+        let o = index.object(id);
+        self.objects[o].lembos.points_near(id - index.0[o], o, last)
+    }
+
     /// The heap the scene's lembos take \[bytes\]: the lembos held, and the meshes others
     /// are made from.
     pub fn lembo_bytes(&self) -> usize {

@@ -32,6 +32,12 @@ pub trait LemboSource: Sync {
         )
     }
 
+    /// Lembo `id`'s six reference points, bit for bit those of [`LemboSource::lembo`]'s,
+    /// for a caller that reads nothing else.
+    fn points(&self, id: usize, last: &mut LastParent) -> [glam::DVec3; 6] {
+        self.lembo(id, last).0.points
+    }
+
     /// Whether lembo `id` stands for a triangle of a mesh (its corners A, B, C are the
     /// triangle's), so that the see-through check holds it against that triangle.
     fn is_from_mesh(&self, id: usize) -> bool;
@@ -94,6 +100,10 @@ impl LemboSource for SceneLembos<'_> {
 
     fn corners(&self, id: usize, last: &mut LastParent) -> Corners {
         self.scene.corners_near(&self.index, id, last)
+    }
+
+    fn points(&self, id: usize, last: &mut LastParent) -> [glam::DVec3; 6] {
+        self.scene.points_near(&self.index, id, last)
     }
 
     fn is_from_mesh(&self, id: usize) -> bool {

@@ -15,7 +15,7 @@ use super::roots::{Patch, Root, Scratch};
 use super::source::LemboSource;
 use crate::camera::View;
 use crate::lembo::set::LastParent;
-use crate::lembo::Lembo;
+use crate::lembo::{bezier_controls, Lembo};
 use glam::DVec3;
 use rayon::prelude::*;
 use std::borrow::Cow;
@@ -75,7 +75,12 @@ const SCREEN_SLACK: f64 = 1e-6;
 /// The footprint of a lembo, or `None` when it cannot be visible (outside the viewport or
 /// the depth range).
 fn footprint(patch: &Patch, view: &View) -> Option<Footprint> {
-    let projected = patch.controls.map(|c| view.project(c));
+    footprint_of(&patch.controls, view)
+}
+
+/// The footprint of the lembo whose Bézier control net is `controls` ([`footprint`]).
+fn footprint_of(controls: &[DVec3; 6], view: &View) -> Option<Footprint> {
+    let projected = controls.map(|c| view.project(c));
     if projected.iter().any(|p| p.w <= 0.0 || p.w.is_nan()) {
         return Some(Footprint::Everywhere);
     }
@@ -507,8 +512,8 @@ fn reaches(
             let mut last = LastParent::default();
             (c * BINNING_CHUNK..((c + 1) * BINNING_CHUNK).min(n))
                 .map(|id| {
-                    let (lembo, _) = source.lembo(id, &mut last);
-                    match footprint(&Patch::new(Cow::Owned(lembo)), view) {
+                    let controls = bezier_controls(&source.points(id, &mut last));
+                    match footprint_of(&controls, view) {
                         None => Reach::Nowhere,
                         Some(Footprint::Everywhere) => Reach::Everywhere,
                         Some(Footprint::Box { x0, y0, x1, y1, .. }) => {
