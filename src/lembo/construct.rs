@@ -34,10 +34,16 @@ use std::cmp::Ordering;
 /// The point and normal in the middle of the curved edge from `p1` (normal `n1`) to `p2`
 /// (normal `n2`), computed in a canonical order of the two ends.
 pub fn edge_midpoint(p1: DVec3, n1: DVec3, p2: DVec3, n2: DVec3) -> (DVec3, DVec3) {
+    let (p1, n1, p2, n2) = canonical_ends(p1, n1, p2, n2);
+    edge_midpoint_ordered(p1, n1, p2, n2)
+}
+
+/// An edge's two ends (position and normal) in [`canonical_order`] of their positions.
+fn canonical_ends(p1: DVec3, n1: DVec3, p2: DVec3, n2: DVec3) -> (DVec3, DVec3, DVec3, DVec3) {
     if canonical_order(p1, p2) == Ordering::Greater {
-        edge_midpoint_ordered(p2, n2, p1, n1)
+        (p2, n2, p1, n1)
     } else {
-        edge_midpoint_ordered(p1, n1, p2, n2)
+        (p1, n1, p2, n2)
     }
 }
 
@@ -76,11 +82,7 @@ pub fn bits_key(words: &[u64]) -> u128 {
 /// The point in the middle of the curved edge of [`edge_midpoint`], without its normal: the
 /// same bits as its point.
 pub fn edge_midpoint_position(p1: DVec3, n1: DVec3, p2: DVec3, n2: DVec3) -> DVec3 {
-    let (p1, n1, p2, n2) = if canonical_order(p1, p2) == Ordering::Greater {
-        (p2, n2, p1, n1)
-    } else {
-        (p1, n1, p2, n2)
-    };
+    let (p1, n1, p2, n2) = canonical_ends(p1, n1, p2, n2);
     midpoint_position(p1, n1.normalize_or_zero(), p2, n2.normalize_or_zero())
 }
 
@@ -576,15 +578,8 @@ impl MeshLembos {
     /// own edge mid-normals, and each edge's shared midpoint (its own where the sides
     /// agree).
     pub fn get(&self, t: usize) -> Lembo {
-        let m = &self.mesh;
-        let own = [0, 1, 2].map(|k| m.own_midpoint(t as u32, k));
-        let mid = [0, 1, 2].map(|k| {
-            let key = 3 * t as u64 + k as u64;
-            match self.shared.binary_search_by_key(&key, |&(key, _)| key) {
-                Ok(at) => self.shared[at].1,
-                Err(_) => own[k as usize].0,
-            }
-        });
+        let own = [0, 1, 2].map(|k| self.mesh.own_midpoint(t as u32, k));
+        let mid = [0, 1, 2].map(|k| self.shared_of_edge(t, k).unwrap_or(own[k as usize].0));
         let ([a, b, c], [na, nb, nc]) = self.corners(t);
         Lembo::new(
             [a, b, c, mid[0], mid[1], mid[2]],
@@ -598,23 +593,30 @@ impl MeshLembos {
         let m = &self.mesh;
         let tri = m.triangles[t];
         let mid = [0, 1, 2].map(|k| {
-            let key = 3 * t as u64 + k as u64;
-            match self.shared.binary_search_by_key(&key, |&(key, _)| key) {
-                Ok(at) => self.shared[at].1,
-                Err(_) => {
-                    let (a, b) = EDGES[k as usize];
-                    let (pa, pb) = (tri[a] as usize, tri[b] as usize);
-                    edge_midpoint_position(
-                        m.positions[pa],
-                        m.normals[pa],
-                        m.positions[pb],
-                        m.normals[pb],
-                    )
-                }
-            }
+            self.shared_of_edge(t, k).unwrap_or_else(|| {
+                let (a, b) = EDGES[k as usize];
+                let (pa, pb) = (tri[a] as usize, tri[b] as usize);
+                edge_midpoint_position(
+                    m.positions[pa],
+                    m.normals[pa],
+                    m.positions[pb],
+                    m.normals[pb],
+                )
+            })
         });
         let [a, b, c] = tri.map(|i| m.positions[i as usize]);
         [a, b, c, mid[0], mid[1], mid[2]]
+    }
+
+    /// The shared midpoint of triangle `t`'s edge `k` (AB, AC, BC), when its sides compute
+    /// different ones.
+    fn shared_of_edge(&self, t: usize, k: u8) -> Option<DVec3> {
+        let key = 3 * t as u64 + k as u64;
+        let at = self
+            .shared
+            .binary_search_by_key(&key, |&(key, _)| key)
+            .ok()?;
+        Some(self.shared[at].1)
     }
 
     /// Lembo `t`'s corners A, B, C and their unit normals, bit for bit those of

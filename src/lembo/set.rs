@@ -197,8 +197,8 @@ mod tests {
     }
 
     /// A lembo's corners and corner normals, and its six points, read without making it are
-    /// the made lembo's, bit for bit: on a mesh whose normals are neither unit nor shared across its creases,
-    /// and on its subdivided lembos (made).
+    /// the made lembo's, bit for bit: on a mesh whose normals are neither unit nor shared
+    /// across its creases, and on its subdivided lembos (made).
     #[test]
     fn corners_and_points_read_without_making_are_the_made_lembos_bit_for_bit() {
         let mut mesh = builtin_mesh("sphere24")
