@@ -343,6 +343,8 @@ impl<'a> Scene<'a> {
         };
         let quantise = |c: [f64; 3]| c.map(to_u8);
         let tile = self.tracer.tile();
+        // The lembos of the current tile column whose footprint holds the centres' row.
+        let (mut row_tx, mut row_bin) = (None, Vec::new());
         for i in columns {
             let tx = i / tile;
             let (x, y) = (i as f64, j as f64);
@@ -352,7 +354,12 @@ impl<'a> Scene<'a> {
             let centre = if centre_in_grid {
                 None
             } else {
-                Some(band.trace(view, x + 0.5, y + 0.5, tx, &mut scratch, &mut roots))
+                if row_tx != Some(tx) {
+                    band.row_bin(tx, y + 0.5, &mut row_bin);
+                    row_tx = Some(tx);
+                }
+                let at = (x + 0.5, y + 0.5);
+                Some(band.trace_in_row(view, at, &row_bin, &mut scratch, &mut roots))
             };
             let mut centre_hit = centre.flatten();
             if s > 1 {

@@ -61,9 +61,24 @@ enum Footprint {
 impl Footprint {
     #[inline]
     fn contains(&self, x: f64, y: f64) -> bool {
+        self.holds_x(x) && self.holds_y(y)
+    }
+
+    /// Whether its columns hold x.
+    #[inline]
+    fn holds_x(&self, x: f64) -> bool {
         match *self {
             Footprint::Everywhere => true,
-            Footprint::Box { x0, y0, x1, y1, .. } => x >= x0 && x <= x1 && y >= y0 && y <= y1,
+            Footprint::Box { x0, x1, .. } => x >= x0 && x <= x1,
+        }
+    }
+
+    /// Whether its rows hold y.
+    #[inline]
+    fn holds_y(&self, y: f64) -> bool {
+        match *self {
+            Footprint::Everywhere => true,
+            Footprint::Box { y0, y1, .. } => y >= y0 && y <= y1,
         }
     }
 }
@@ -206,7 +221,7 @@ pub(super) struct Band<'a> {
 
 /// A lembo of a band's tile: its position in the band's `ids` and its footprint.
 #[derive(Clone, Copy)]
-struct BinEntry {
+pub(super) struct BinEntry {
     footprint: Footprint,
     k: u32,
 }
@@ -597,13 +612,46 @@ impl Band<'_> {
         scratch: &mut Scratch,
         roots: &mut Vec<Root>,
     ) -> Option<ReferenceHit> {
+        let seen = self.bin(tx).iter().filter(|e| e.footprint.contains(x, y));
+        self.nearest(view, (x, y), seen, scratch, roots)
+    }
+
+    /// The lembos of the band's tile column `tx` whose footprint holds the screen row y, in
+    /// the tile's order, into `row` (what [`Band::trace_in_row`] scans for every sample of
+    /// that row and column).
+    pub(super) fn row_bin(&self, tx: u32, y: f64, row: &mut Vec<BinEntry>) {
+        row.clear();
+        row.extend(self.bin(tx).iter().filter(|e| e.footprint.holds_y(y)));
+    }
+
+    /// [`Band::trace`] at (x, y), `row` being [`Band::row_bin`] of its tile column at y:
+    /// the same lembos in the same order, so the same hit, with the rows' test made once a
+    /// row instead of once a sample.
+    pub(super) fn trace_in_row(
+        &self,
+        view: &View,
+        (x, y): (f64, f64),
+        row: &[BinEntry],
+        scratch: &mut Scratch,
+        roots: &mut Vec<Root>,
+    ) -> Option<ReferenceHit> {
+        let seen = row.iter().filter(|e| e.footprint.holds_x(x));
+        self.nearest(view, (x, y), seen, scratch, roots)
+    }
+
+    /// The nearest hit at (x, y) among the lembos `seen`, in their order.
+    fn nearest<'e>(
+        &self,
+        view: &View,
+        (x, y): (f64, f64),
+        seen: impl Iterator<Item = &'e BinEntry>,
+        scratch: &mut Scratch,
+        roots: &mut Vec<Root>,
+    ) -> Option<ReferenceHit> {
         let (origin, dir) = view.ray(x, y);
         let mut best: Option<ReferenceHit> = None;
         let mut best_t = f64::INFINITY;
-        for entry in self.bin(tx) {
-            if !entry.footprint.contains(x, y) {
-                continue;
-            }
+        for entry in seen {
             let k = entry.k;
             let id = self.ids[k as usize];
             let patch = &self.at(k).patch;
