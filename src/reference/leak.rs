@@ -31,15 +31,18 @@
 //! surface then reads as broken and a gap there is not counted: the count errs towards 0,
 //! never towards a false leak.
 
-use super::oracle::{LemboSource, ReferenceImage, TraceScratch, Tracer};
+use super::oracle::{LemboSource, ReferenceHit, ReferenceImage, TraceScratch, Tracer};
 use super::see_through::OUTLINE_MARGIN_PX;
 use super::surface::{faces_at, screen_deviation, share_a_corner, Drawn, Made, Shown};
 use crate::camera::View;
 use crate::lembo::set::LastParent;
 use crate::lembo::Lembo;
+use crate::raster::probe::PairHasher;
 use crate::rop::framebuffer::FrameBuffer;
 use glam::DVec3;
 use rayon::prelude::*;
+use std::collections::HashMap;
+use std::hash::BuildHasherDefault;
 
 /// How far a render's outlines may stray from the exact surface's, beyond
 /// [`OUTLINE_MARGIN_PX`] (see the module documentation).
@@ -123,15 +126,21 @@ pub fn leaks(
         approximation,
     };
     let w = w as usize;
+    // Each task keeps the sub-pixel grid points it traced for the rows it takes next.
     let rows: Vec<Leaks> = (0..h as usize)
         .into_par_iter()
-        .map(|j| {
+        .map_init(GridCache::default, |grid, j| {
             let mut made = [Made::new(lembos), Made::new(lembos), Made::new(lembos)];
             let mut scratch = TraceScratch::default();
             let mut out = Leaks::default();
             for k in j * w..(j + 1) * w {
                 let shown = Shown::of_render(render, normals, k);
-                match check.leak(k, &shown, drawn, &mut made, &mut scratch) {
+                let mut search = Search {
+                    made: &mut made,
+                    scratch: &mut scratch,
+                    grid,
+                };
+                match check.leak(k, &shown, drawn, &mut search) {
                     Some(Kind::Background) => out.background += 1,
                     Some(Kind::BackFace) => out.back_face += 1,
                     Some(Kind::Farther) => out.farther += 1,
@@ -151,6 +160,52 @@ pub fn leaks(
 /// Points a pixel side of the grid the reference is searched on between pixel centres.
 const SUBPIXEL_STEPS: u32 = 8;
 
+/// What the reference shows at a point of the sub-pixel grid, as the search around a pixel
+/// asks it: the lembo hit and whether its surface faces the point's ray; None where no
+/// lembo is hit.
+type GridSample = Option<(u32, bool)>;
+
+/// Grid points [`SUBPIXEL_STEPS`] a pixel side a task has traced, by their grid
+/// coordinates (`SUBPIXEL_STEPS` times a pixel's column and row, plus the step): the
+/// searches around neighbouring pixels meet the same points, at the same screen positions
+/// bit for bit, so each is traced once while it is kept. At most [`GRID_CACHE_POINTS`]
+/// points in each of two generations, the older dropped when the newer fills.
+#[derive(Default)]
+struct GridCache {
+    new: GridMap,
+    old: GridMap,
+}
+
+/// Grid points' samples by grid coordinates, hashed by a multiply and a rotate a word.
+type GridMap = HashMap<(i64, i64), GridSample, BuildHasherDefault<PairHasher>>;
+
+/// Grid points a [`GridCache`] generation holds (about 32 bytes each).
+const GRID_CACHE_POINTS: usize = 1 << 17;
+
+impl GridCache {
+    /// The sample at grid point `key`, traced by `trace` unless kept.
+    fn get(&mut self, key: (i64, i64), trace: impl FnOnce() -> GridSample) -> GridSample {
+        if let Some(&sample) = self.new.get(&key).or_else(|| self.old.get(&key)) {
+            return sample;
+        }
+        let sample = trace();
+        if self.new.len() >= GRID_CACHE_POINTS {
+            self.old = std::mem::take(&mut self.new);
+        }
+        self.new.insert(key, sample);
+        sample
+    }
+}
+
+/// What the search around a pixel works with: the lembos made (the reference's at the
+/// pixel, the render's, and those the search meets), the tracer's buffers and the grid
+/// points traced.
+struct Search<'s, 'l> {
+    made: &'s mut [Made<'l>; 3],
+    scratch: &'s mut TraceScratch,
+    grid: &'s mut GridCache,
+}
+
 /// The reference and what it takes to judge a pixel against it.
 struct Check<'a> {
     lembos: &'a dyn LemboSource,
@@ -161,16 +216,9 @@ struct Check<'a> {
 }
 
 impl Check<'_> {
-    /// Whether pixel `k`, showing `shown`, leaks, and how. `made` makes the reference's
-    /// lembos, the render's, and those the search around the pixel meets.
-    fn leak(
-        &self,
-        k: usize,
-        shown: &Shown,
-        drawn: Drawn,
-        [at, winners, around]: &mut [Made; 3],
-        scratch: &mut TraceScratch,
-    ) -> Option<Kind> {
+    /// Whether pixel `k`, showing `shown`, leaks, and how.
+    fn leak(&self, k: usize, shown: &Shown, drawn: Drawn, search: &mut Search) -> Option<Kind> {
+        let [at, winners, around] = &mut *search.made;
         let hit = self.reference.hits[k].as_ref()?;
         // Cheap tests first, before the pixel's ray: most pixels show H's own lembo, or
         // something in front of H.
@@ -209,32 +257,39 @@ impl Check<'_> {
         // H's the render drew slightly displaced, not one seen through a gap.
         let shown_lembo = (kind == Kind::Farther).then(|| drawn.lembo_of(shown.winner));
         let (i, j) = (k % self.width(), k / self.width());
-        let unbroken = |steps: u32, scratch: &mut TraceScratch, around: &mut Made| {
-            let mut seen = vec![hit.lembo];
-            for p in self.disc(i, j, margin, steps) {
-                let hit = if steps == 1 {
-                    let q = p[1] as usize * self.width() + p[0] as usize;
-                    self.reference.hits[q]
-                } else {
-                    self.tracer.hit(p[0], p[1], scratch)
-                };
-                let Some(hit) = hit else { return false };
-                if shown_lembo == Some(u64::from(hit.lembo)) {
-                    return false;
+        let (scratch, grid) = (&mut *search.scratch, &mut *search.grid);
+        let unbroken =
+            |steps: u32, scratch: &mut TraceScratch, around: &mut Made, grid: &mut GridCache| {
+                let mut seen = vec![hit.lembo];
+                for (p, key) in self.disc(i, j, margin, steps) {
+                    let mut sample = |hit: Option<ReferenceHit>| {
+                        hit.map(|hit| {
+                            let faces = around
+                                .get(u64::from(hit.lembo))
+                                .is_some_and(|l| faces_at(l, hit.u, hit.v, self.ray_at(p).1));
+                            (hit.lembo, faces)
+                        })
+                    };
+                    let at_p = if steps == 1 {
+                        let q = p[1] as usize * self.width() + p[0] as usize;
+                        sample(self.reference.hits[q])
+                    } else {
+                        grid.get(key, || sample(self.tracer.hit(p[0], p[1], scratch)))
+                    };
+                    let Some((lembo, faces)) = at_p else {
+                        return false;
+                    };
+                    if shown_lembo == Some(u64::from(lembo)) || !faces {
+                        return false;
+                    }
+                    if !seen.contains(&lembo) {
+                        seen.push(lembo);
+                    }
                 }
-                let faces = around
-                    .get(u64::from(hit.lembo))
-                    .is_some_and(|l| faces_at(l, hit.u, hit.v, self.ray_at(p).1));
-                if !faces {
-                    return false;
-                }
-                if !seen.contains(&hit.lembo) {
-                    seen.push(hit.lembo);
-                }
-            }
-            self.connected(&seen)
-        };
-        let leaks = unbroken(1, scratch, around) && unbroken(SUBPIXEL_STEPS, scratch, around);
+                self.connected(&seen)
+            };
+        let leaks =
+            unbroken(1, scratch, around, grid) && unbroken(SUBPIXEL_STEPS, scratch, around, grid);
         leaks.then_some(kind)
     }
 
@@ -276,8 +331,15 @@ impl Check<'_> {
     }
 
     /// The points of a grid of `steps` a pixel side, through the pixel centres, within
-    /// `margin` of pixel (i, j)'s centre and on the viewport \[pixels\].
-    fn disc(&self, i: usize, j: usize, margin: f64, steps: u32) -> impl Iterator<Item = [f64; 2]> {
+    /// `margin` of pixel (i, j)'s centre and on the viewport \[pixels\], each with its grid
+    /// coordinates (`steps` times the pixel's column and row, plus the step).
+    fn disc(
+        &self,
+        i: usize,
+        j: usize,
+        margin: f64,
+        steps: u32,
+    ) -> impl Iterator<Item = ([f64; 2], (i64, i64))> {
         let s = f64::from(steps);
         let r = (margin * s).floor() as i64;
         let (w, h) = (
@@ -288,8 +350,14 @@ impl Check<'_> {
         (-r..=r)
             .flat_map(move |y| (-r..=r).map(move |x| (x, y)))
             .filter(move |&(x, y)| ((x * x + y * y) as f64) <= (margin * s).powi(2))
-            .map(move |(x, y)| [cx + x as f64 / s, cy + y as f64 / s])
-            .filter(move |p| p[0] > 0.0 && p[1] > 0.0 && p[0] < w && p[1] < h)
+            .map(move |(x, y)| {
+                let key = (
+                    i as i64 * i64::from(steps) + x,
+                    j as i64 * i64::from(steps) + y,
+                );
+                ([cx + x as f64 / s, cy + y as f64 / s], key)
+            })
+            .filter(move |(p, _)| p[0] > 0.0 && p[1] > 0.0 && p[0] < w && p[1] < h)
     }
 
     /// How far the render may stray from `lembo`'s exact outline \[pixels\].
@@ -410,6 +478,58 @@ mod tests {
             Approximation::Triangles { level: 2 },
         );
         assert_eq!(triangles, found);
+    }
+
+    /// A hole many pixels wide in the render is a leak at each of its pixels: the searches
+    /// around neighbouring pixels share their grid points (traced once a task), and a grid
+    /// point is at the same screen position, bit for bit, whichever pixel's search meets it.
+    #[test]
+    fn every_pixel_of_a_wide_hole_leaks_and_neighbours_meet_the_same_grid_points() {
+        let view = view();
+        let lembos = [
+            flat([[-40.0, -40.0], [40.0, -40.0], [40.0, 40.0]], 0.0, DVec3::Z),
+            flat([[-40.0, -40.0], [-40.0, 40.0], [40.0, 40.0]], 0.0, DVec3::Z),
+        ];
+        let source: Vec<(&Lembo, bool)> = lembos.iter().map(|l| (l, true)).collect();
+        let tracer = Tracer::new(&source, &view, 16);
+        let reference = reference(&tracer);
+        let mut fb = FrameBuffer::new(128, 128, [0; 3], true);
+        for (k, hit) in reference.hits.iter().enumerate() {
+            if let Some(h) = hit {
+                fb.write(k, h.depth as f32, h.lembo, [200; 3]);
+                fb.normal.as_mut().unwrap()[k] = [0.0, 0.0, 1.0];
+            }
+        }
+        for j in 50..62 {
+            for i in 58..70 {
+                let k = fb.index(i, j);
+                fb.primitive[k] = NO_PRIMITIVE;
+                fb.depth[k] = 1.0;
+            }
+        }
+        let approximation = Approximation::Lembos { deviation_px: 0.5 };
+        let found = leaks(&source, &tracer, &fb, &reference, Drawn::EXACT, approximation);
+        assert_eq!(found.background, 144, "{found:?}");
+        assert_eq!(found.total(), 144);
+        let check = Check {
+            lembos: &source,
+            view: &view,
+            tracer: &tracer,
+            reference: &reference,
+            approximation,
+        };
+        let (mut at, mut met) = (HashMap::new(), 0);
+        for (i, j) in [(60, 55), (61, 55), (60, 56), (67, 59)] {
+            for (p, key) in check.disc(i, j, 3.0, SUBPIXEL_STEPS) {
+                let bits = p.map(f64::to_bits);
+                assert_eq!(*at.entry(key).or_insert(bits), bits, "{key:?}");
+                met += 1;
+            }
+        }
+        let positions: std::collections::HashSet<_> = at.values().collect();
+        assert_eq!(positions.len(), at.len(), "one grid point, one position");
+        // The three neighbours' discs (about 1 800 points each) share most of their points.
+        assert!(met > 4 * 1700 && at.len() < met * 2 / 3, "{} of {met}", at.len());
     }
 
     /// Where the reference shows another part within the margin, the render's outline may
