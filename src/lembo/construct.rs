@@ -533,10 +533,16 @@ impl TriangleMesh {
 
     /// Triangle `t`'s own midpoint and mid-normal of its edge `k` (AB, AC, BC: D, E, F).
     fn own_midpoint(&self, t: u32, k: u8) -> (DVec3, DVec3) {
+        let (p1, n1, p2, n2) = self.edge_ends(t, k);
+        edge_midpoint(p1, n1, p2, n2)
+    }
+
+    /// The ends (position and normal) of triangle `t`'s edge `k` (AB, AC, BC).
+    fn edge_ends(&self, t: u32, k: u8) -> (DVec3, DVec3, DVec3, DVec3) {
         let tri = self.triangles[t as usize];
         let (a, b) = EDGES[k as usize];
         let (pa, pb) = (tri[a] as usize, tri[b] as usize);
-        edge_midpoint(
+        (
             self.positions[pa],
             self.normals[pa],
             self.positions[pb],
@@ -591,20 +597,13 @@ impl MeshLembos {
     /// bit those of [`MeshLembos::get`], without its normals.
     pub fn points(&self, t: usize) -> [DVec3; 6] {
         let m = &self.mesh;
-        let tri = m.triangles[t];
         let mid = [0, 1, 2].map(|k| {
             self.shared_of_edge(t, k).unwrap_or_else(|| {
-                let (a, b) = EDGES[k as usize];
-                let (pa, pb) = (tri[a] as usize, tri[b] as usize);
-                edge_midpoint_position(
-                    m.positions[pa],
-                    m.normals[pa],
-                    m.positions[pb],
-                    m.normals[pb],
-                )
+                let (p1, n1, p2, n2) = m.edge_ends(t as u32, k);
+                edge_midpoint_position(p1, n1, p2, n2)
             })
         });
-        let [a, b, c] = tri.map(|i| m.positions[i as usize]);
+        let [a, b, c] = m.triangles[t].map(|i| m.positions[i as usize]);
         [a, b, c, mid[0], mid[1], mid[2]]
     }
 

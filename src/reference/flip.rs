@@ -103,8 +103,8 @@ pub fn halo_rows(ppd: PixelsPerDegree) -> u32 {
 /// [`flip`] in at most `bands` bands of consecutive rows, each computed by the reference
 /// implementation in parallel with its [`halo_rows`] above and below (FLIP's filters clamp
 /// at the image's border, and reach no further than their radius), and the bands' own rows
-/// put together. Fewer bands when the halos would more than half the work: one, the whole
-/// image, for a small one.
+/// put together. Fewer bands where a band would be under four halos tall (its halos more
+/// than half its own rows): one, the whole image, for a small one.
 ///
 /// # Panics
 /// If either image is not `width` x `height` (a bug of the caller).

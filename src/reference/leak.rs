@@ -179,7 +179,8 @@ struct GridCache {
 /// Grid points' samples by grid coordinates, hashed by a multiply and a rotate a word.
 type GridMap = HashMap<(i64, i64), GridSample, BuildHasherDefault<PairHasher>>;
 
-/// Grid points a [`GridCache`] generation holds (about 32 bytes each).
+/// Grid points a [`GridCache`] generation holds (24 bytes each, key and sample, plus the
+/// table's own).
 const GRID_CACHE_POINTS: usize = 1 << 17;
 
 impl GridCache {
@@ -396,6 +397,18 @@ mod tests {
         }
     }
 
+    /// A render that shows what `reference` shows, its normals facing the eye.
+    fn render_of(reference: &ReferenceImage) -> FrameBuffer {
+        let mut fb = FrameBuffer::new(128, 128, [0; 3], true);
+        for (k, hit) in reference.hits.iter().enumerate() {
+            if let Some(h) = hit {
+                fb.write(k, h.depth as f32, h.lembo, [200; 3]);
+                fb.normal.as_mut().unwrap()[k] = [0.0, 0.0, 1.0];
+            }
+        }
+        fb
+    }
+
     #[test]
     fn leaks_are_gaps_in_an_unbroken_surface_not_displaced_outlines() {
         let view = view();
@@ -493,13 +506,7 @@ mod tests {
         let source: Vec<(&Lembo, bool)> = lembos.iter().map(|l| (l, true)).collect();
         let tracer = Tracer::new(&source, &view, 16);
         let reference = reference(&tracer);
-        let mut fb = FrameBuffer::new(128, 128, [0; 3], true);
-        for (k, hit) in reference.hits.iter().enumerate() {
-            if let Some(h) = hit {
-                fb.write(k, h.depth as f32, h.lembo, [200; 3]);
-                fb.normal.as_mut().unwrap()[k] = [0.0, 0.0, 1.0];
-            }
-        }
+        let mut fb = render_of(&reference);
         for j in 50..62 {
             for i in 58..70 {
                 let k = fb.index(i, j);
@@ -557,13 +564,7 @@ mod tests {
         let source: Vec<(&Lembo, bool)> = lembos.iter().map(|l| (l, true)).collect();
         let tracer = Tracer::new(&source, &view, 16);
         let reference = reference(&tracer);
-        let mut fb = FrameBuffer::new(128, 128, [0; 3], true);
-        for (k, hit) in reference.hits.iter().enumerate() {
-            if let Some(h) = hit {
-                fb.write(k, h.depth as f32, h.lembo, [200; 3]);
-                fb.normal.as_mut().unwrap()[k] = [0.0, 0.0, 1.0];
-            }
-        }
+        let mut fb = render_of(&reference);
         // The left triangle's right edge, x = 64 on screen, drawn 3 px to the left: the
         // right triangle shows at x = 61.5, 62.5, 63.5 on row 100.
         let behind = view.depth_of(DVec3::new(0.0, 0.0, -5.0)) as f32;

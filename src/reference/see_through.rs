@@ -474,35 +474,18 @@ fn mesh_pass(lembos: &dyn LemboSource, view: &View) -> (FlatMesh, Vec<bool>, Vec
 
 #[cfg(test)]
 mod tests {
-    use super::super::surface::fixtures::{flat, view};
+    use super::super::surface::fixtures::{flat, view, view_sized};
     use super::*;
     use crate::lembo::construct::lembo_from_triangle;
     use crate::lembo::Lembo;
 
     /// The flat mesh drawn in parallel bands of rows is the one drawn row by row over the
-    /// whole frame, triangle by triangle in the other order: on a viewport whose height is not a whole
-    /// number of bands, with triangles spanning several bands, leaving it, meeting at equal
-    /// depths (the smaller id wins) and nearer ones over farther.
+    /// whole frame, triangle by triangle in the other order: on a viewport whose height is
+    /// not a whole number of bands, with triangles spanning several bands, leaving it,
+    /// meeting at equal depths (the smaller id wins) and nearer ones over farther.
     #[test]
     fn the_flat_mesh_drawn_in_bands_is_the_one_drawn_row_by_row() {
-        use crate::camera::{Camera, Projection, Viewport};
-        let camera = Camera {
-            eye: [0.0, 0.0, 10.0],
-            target: [0.0; 3],
-            up: [0.0, 1.0, 0.0],
-            projection: Projection::Orthographic {
-                height: 100.0,
-                near: 0.1,
-                far: 100.0,
-            },
-        };
-        let view = View::new(
-            &camera,
-            Viewport {
-                width: 128,
-                height: 100,
-            },
-        );
+        let view = view_sized(128, 100);
         let mut triangles = Vec::new();
         let mut seed = 12345u64;
         let mut next = || {

@@ -233,23 +233,23 @@ pub(super) mod fixtures {
 
     /// Orthographic 128 x 128 view down -z: world (X, Y) on screen (X + 64, 64 - Y).
     pub fn view() -> View {
+        view_sized(128, 128)
+    }
+
+    /// Orthographic `width` x `height` view down -z, one world unit a pixel: world (X, Y)
+    /// on screen (X + width / 2, height / 2 - Y).
+    pub fn view_sized(width: u32, height: u32) -> View {
         let camera = Camera {
             eye: [0.0, 0.0, 10.0],
             target: [0.0; 3],
             up: [0.0, 1.0, 0.0],
             projection: Projection::Orthographic {
-                height: 128.0,
+                height: f64::from(height),
                 near: 0.1,
                 far: 100.0,
             },
         };
-        View::new(
-            &camera,
-            Viewport {
-                width: 128,
-                height: 128,
-            },
-        )
+        View::new(&camera, Viewport { width, height })
     }
 
     /// A flat triangle at height z whose normals are `n` (+z faces the eye; wound either
