@@ -112,16 +112,23 @@ pub fn run_render(job: &RenderJob) -> Result<RenderOutput> {
         reference.as_ref().map(|(r, w)| (r, *w)),
     )?;
 
-    let mut files: Vec<(&str, Vec<u8>)> =
-        vec![("image.png", png_bytes(&run.framebuffer.to_image()))];
-    if let (Some((reference, _)), Some(maps)) = (&reference, &run.error_maps) {
+    let mut images: Vec<(&str, image::RgbImage)> = vec![("image.png", run.framebuffer.to_image())];
+    if let (Some((reference, _)), Some(maps)) = (&reference, run.error_maps) {
         let shown = reference
             .to_image_supersampled()
             .unwrap_or_else(|| reference.to_image());
-        files.push(("reference.png", png_bytes(&shown)));
-        files.push(("error.png", png_bytes(&maps.colour)));
-        files.push(("flip.png", png_bytes(&maps.flip)));
+        images.push(("reference.png", shown));
+        images.push(("error.png", maps.colour));
+        images.push(("flip.png", maps.flip));
     }
+    // Encoded on the pool's threads, one image each, in the order listed.
+    let mut files: Vec<(&str, Vec<u8>)> = {
+        use rayon::prelude::*;
+        images
+            .par_iter()
+            .map(|(name, image)| (*name, png_bytes(image)))
+            .collect()
+    };
     let mut report = run.report;
     // The images are encoded: what remains to allocate is the report and the writes.
     report.host.peak_rss_bytes = peak_rss_bytes();

@@ -232,9 +232,11 @@ pub fn shared_edges(scene: &Scene, threads: u32) -> Adjacent {
             s.spawn(move || fill(t * per_thread, out));
         }
     });
-    // Every use is distinct (its lembo and edge), so the order is the same for any count.
-    uses.sort_unstable();
-    let mut pairs = Adjacent::default();
+    // Every use is distinct (its lembo and edge), so the order is the same for any count
+    // and any split of the sort.
+    rayon::slice::ParallelSliceMut::par_sort_unstable(&mut uses[..]);
+    // About one pair an interior edge, two uses each: sized once, not grown.
+    let mut pairs = Adjacent::with_capacity_and_hasher(uses.len() / 2, Default::default());
     for curve in uses.chunk_by(|a, b| a.0 == b.0) {
         for (n, &(_, a, ea)) in curve.iter().enumerate() {
             for &(_, b, eb) in &curve[n + 1..] {
