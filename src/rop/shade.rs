@@ -191,13 +191,53 @@ mod tests {
         }
     }
 
+    /// Equation (6) written out in f64 for the unit normal `n` facing the eye along `v`.
+    fn phong(light: &Light, n: [f64; 3], v: [f64; 3], color: [f64; 3]) -> [f64; 3] {
+        let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+        let l = glam::DVec3::from_array(light.direction_to_light)
+            .normalize()
+            .to_array();
+        let nl = dot(n, l);
+        let r = [0, 1, 2].map(|i| 2.0 * nl * n[i] - l[i]);
+        let cos_g = dot(r, v).max(0.0);
+        let spec = if cos_g > 0.0 && nl > 0.0 {
+            light.ks * cos_g.powf(light.shininess)
+        } else {
+            0.0
+        };
+        color.map(|c| c * (light.ka + light.kd * nl.max(0.0)) + spec)
+    }
+
+    /// A normal facing away from the eye is lit as its flip, which faces the eye: both give
+    /// equation (6) of the flipped normal, and a different normal gives another colour (a
+    /// shader that ignored normals would pass the equality alone).
     #[test]
     fn back_facing_normals_are_lit_as_front_facing() {
-        let s = Shader::<f32>::new(&Light::default());
+        let light = Light::default();
+        let s = Shader::<f32>::new(&light);
         let v = [0.0, 0.0, 1.0];
-        assert_eq!(
-            s.shade([0.0, 0.6, 0.8], v, [1.0; 3]),
-            s.shade([0.0, -0.6, -0.8], v, [1.0; 3])
+        let colour = [0.8, 0.5, 0.2];
+        for front in [
+            [0.0, 0.6, 0.8],
+            [0.6, 0.0, 0.8],
+            [0.0, 0.0, 1.0],
+            [-0.48, 0.6, 0.64],
+        ] {
+            let back = front.map(|c: f64| -c);
+            let lit = s.shade(front.map(|c| c as f32), v, colour);
+            assert_eq!(lit, s.shade(back.map(|c| c as f32), v, colour), "{front:?}");
+            let expected = phong(&light, front, [0.0, 0.0, 1.0], colour.map(f64::from));
+            for (got, want) in lit.iter().zip(expected) {
+                assert!(
+                    (*got as f64 - want).abs() < 1e-5,
+                    "{front:?}: {lit:?} {expected:?}"
+                );
+            }
+        }
+        let (a, b) = (
+            s.shade([0.0, 0.6, 0.8], v, colour),
+            s.shade([0.6, 0.0, 0.8], v, colour),
         );
+        assert!((a[0] - b[0]).abs() > 0.01, "{a:?} {b:?}");
     }
 }

@@ -114,6 +114,16 @@ pub fn full_checks() -> bool {
     std::env::var_os("LEMBO_FULL_CHECKS").is_some_and(|v| v == "1")
 }
 
+/// A part of a test that this machine cannot run, said on standard error; under CI (`CI`
+/// set, as `.ci/run` sets it) the test fails instead, since CI's machines can run it.
+pub fn skip_part(what: &str) {
+    assert!(
+        std::env::var_os("CI").is_none(),
+        "{what}: CI's machines can run this part, so it fails here instead of skipping"
+    );
+    eprintln!("skipped {what}");
+}
+
 /// The step of .ci/run that sets `LEMBO_EXPECT_DEBUG_ASSERTIONS=1` runs with debug
 /// assertions on (the `debug_assert!`s of the runtime and the stages are compiled in), as
 /// it says; the release suite, which does not set it, compiles them out.
