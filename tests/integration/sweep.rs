@@ -721,7 +721,7 @@ fn the_readme_cluster_recipes_give_the_unsharded_sweep() {
 /// the check (`LEMBO_SWEEP_STOP_AFTER=0` then stops it before any run). On the machine's own
 /// reading of /proc/meminfo, as many 16384x16384 runs at once (about 50 GiB each) as pass
 /// what it has are refused too; only a machine without /proc/meminfo, or with more than
-/// --jobs' 256 such runs can fill, skips that part, and fails under CI.
+/// about 10 TiB, skips that part, and fails under CI.
 #[test]
 fn runs_at_once_larger_than_memory_are_refused_before_any_run() {
     let scene = manifest().join("traces/sphere24.json");
@@ -765,7 +765,8 @@ fn runs_at_once_larger_than_memory_are_refused_before_any_run() {
     assert_eq!(out.status.code(), Some(3), "{stderr}");
     assert!(stderr.contains("after 0 runs"), "{stderr}");
     // On the machine's own reading of /proc/meminfo: enough 16384x16384 runs at once (about
-    // 50 GiB each) to pass what it has, up to --jobs' limit (12.5 TiB in all).
+    // 50 GiB each, counted as 40) to pass what it has, on machines of up to about 10 TiB
+    // (--jobs takes at most 256).
     match binary::memory_available() {
         Some(bytes) if bytes < 200.0 * 50.0 * (1u64 << 30) as f64 => {
             let jobs_n = (bytes / (40.0 * (1u64 << 30) as f64)).ceil().max(2.0) as usize;
