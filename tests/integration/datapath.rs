@@ -58,7 +58,7 @@ const ORDINARY: [Family; 6] = [
 /// false negative fractions (of the pixels the reference covers) and crack pixels per case
 /// in either datapath, and the pixels whose winning lembo differs between f32 and f64.
 /// The maxima measured on these cases (seed 1, the first 10 a family, at a134801) with a
-/// margin of about a tenth, and none where the measure is 0: the cases are deterministic,
+/// margin of about a tenth, and no margin where the measure is 0: the cases are deterministic,
 /// and both instruction-set builds give the same bits (`isa`).
 struct Bounds {
     family: Family,
