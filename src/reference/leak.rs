@@ -374,7 +374,7 @@ impl Check<'_> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::surface::fixtures::{flat, view};
+    use super::super::surface::fixtures::{flat, square, view};
     use super::*;
     use crate::rop::framebuffer::NO_PRIMITIVE;
 
@@ -415,9 +415,10 @@ mod tests {
         // A square of two triangles (ids 0 and 1) on screen [24, 104]² facing the eye, a
         // surface of another part behind it (2), and the inside of a surface behind it (3:
         // normals turned from the eye).
+        let [a, b] = square();
         let lembos = [
-            flat([[-40.0, -40.0], [40.0, -40.0], [40.0, 40.0]], 0.0, DVec3::Z),
-            flat([[-40.0, -40.0], [-40.0, 40.0], [40.0, 40.0]], 0.0, DVec3::Z),
+            a,
+            b,
             flat([[-30.0, 0.0], [-10.0, 0.0], [-30.0, 20.0]], -5.0, DVec3::Z),
             flat([[10.0, 0.0], [30.0, 0.0], [10.0, 20.0]], -5.0, -DVec3::Z),
         ];
@@ -499,10 +500,7 @@ mod tests {
     #[test]
     fn every_pixel_of_a_wide_hole_leaks_and_neighbours_meet_the_same_grid_points() {
         let view = view();
-        let lembos = [
-            flat([[-40.0, -40.0], [40.0, -40.0], [40.0, 40.0]], 0.0, DVec3::Z),
-            flat([[-40.0, -40.0], [-40.0, 40.0], [40.0, 40.0]], 0.0, DVec3::Z),
-        ];
+        let lembos = square();
         let source: Vec<(&Lembo, bool)> = lembos.iter().map(|l| (l, true)).collect();
         let tracer = Tracer::new(&source, &view, 16);
         let reference = reference(&tracer);

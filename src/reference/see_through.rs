@@ -474,7 +474,7 @@ fn mesh_pass(lembos: &dyn LemboSource, view: &View) -> (FlatMesh, Vec<bool>, Vec
 
 #[cfg(test)]
 mod tests {
-    use super::super::surface::fixtures::{flat, view, view_sized};
+    use super::super::surface::fixtures::{flat, square, view, view_sized};
     use super::*;
     use crate::lembo::construct::lembo_from_triangle;
     use crate::lembo::Lembo;
@@ -526,9 +526,10 @@ mod tests {
         let view = view();
         // A square of two triangles (ids 0 and 1, the second wound the other way) on screen
         // [24, 104]², and two small triangles off it (2 and 3) to stand for other surfaces.
+        let [a, b] = square();
         let lembos = [
-            flat([[-40.0, -40.0], [40.0, -40.0], [40.0, 40.0]], 0.0, DVec3::Z),
-            flat([[-40.0, -40.0], [-40.0, 40.0], [40.0, 40.0]], 0.0, DVec3::Z),
+            a,
+            b,
             flat(
                 [[-60.0, -60.0], [-55.0, -60.0], [-60.0, -55.0]],
                 -5.0,

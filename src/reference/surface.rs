@@ -257,6 +257,15 @@ pub(super) mod fixtures {
     pub fn flat(p: [[f64; 2]; 3], z: f64, n: DVec3) -> Lembo {
         lembo_from_triangle(p.map(|[x, y]| DVec3::new(x, y, z)), [n; 3])
     }
+
+    /// A square of two flat triangles at height 0 facing the eye, sharing its diagonal, on
+    /// screen [24, 104]² of [`view`]; the second is wound the other way.
+    pub fn square() -> [Lembo; 2] {
+        [
+            flat([[-40.0, -40.0], [40.0, -40.0], [40.0, 40.0]], 0.0, DVec3::Z),
+            flat([[-40.0, -40.0], [-40.0, 40.0], [40.0, 40.0]], 0.0, DVec3::Z),
+        ]
+    }
 }
 
 #[cfg(test)]

@@ -51,7 +51,7 @@ HEADER = (
 )
 
 
-def run_outcomes(dirs, first=False):
+def run_outcomes(dirs):
     """name -> (file, summary, commit) from runs' outcomes.json, later runs winning."""
     records = []
     for d in dirs:
@@ -73,9 +73,7 @@ def run_outcomes(dirs, first=False):
             s = o["scenario"]
             if not isinstance(s, dict) or "Mutant" not in s:
                 continue  # the baseline
-            name = s["Mutant"]["name"]
-            if not (first and name in last):
-                last[name] = (s["Mutant"]["file"], o["summary"], commit)
+            last[s["Mutant"]["name"]] = (s["Mutant"]["file"], o["summary"], commit)
     return last
 
 
