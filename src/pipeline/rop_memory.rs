@@ -305,7 +305,8 @@ fn farthest(layout: &SurfaceLayout, tile: u32, pixels: &RopPixels) -> f32 {
     for y in by..y1 {
         let row = pixels.row(bx, x1, y);
         for x in bx..x1 {
-            far = far.max(pixels.depth(row + x as usize));
+            // SAFETY: x is in bx..x1, the run `row` admitted.
+            far = far.max(unsafe { pixels.depth(row + x as usize) });
         }
     }
     far
@@ -337,12 +338,11 @@ fn tile_values(
         let row = pixels.row(bx, x1, y);
         for x in bx..x1 {
             let idx = row + x as usize;
+            // SAFETY: x is in bx..x1, the run `row` admitted.
+            let (depth, [r, g, b]) = unsafe { (pixels.depth(idx), pixels.color(idx)) };
             v[((x - bx) + 8 * (y - by)) as usize] = match surface {
-                Surface::Depth => depth24(pixels.depth(idx)),
-                Surface::Colour => {
-                    let [r, g, b] = pixels.color(idx);
-                    u32::from_le_bytes([r, g, b, 255])
-                }
+                Surface::Depth => depth24(depth),
+                Surface::Colour => u32::from_le_bytes([r, g, b, 255]),
             };
         }
     }

@@ -77,9 +77,10 @@ pub struct SharedFrame<'f> {
 }
 
 // SAFETY: the pointers come from a `&'f mut FrameBuffer` held for 'f, and every access goes
-// through a `RopPixels`, which confines ROP r to the pixels of its own tiles (checked per
-// row); distinct ROPs therefore never access the same element, from any thread. (A
-// prefetch, which any unit may ask for, accesses nothing.)
+// through a `RopPixels`, which confines ROP r to the pixels of its own tiles (its type doc:
+// runs checked per row, accesses promised inside them, one `RopPixels` a ROP); distinct
+// ROPs therefore never access the same element, from any thread. (A prefetch, which any
+// unit may ask for, accesses nothing.)
 unsafe impl Send for SharedFrame<'_> {}
 unsafe impl Sync for SharedFrame<'_> {}
 
@@ -113,6 +114,12 @@ impl<'f> SharedFrame<'f> {
 }
 
 /// ROP `rop`'s access to the pixels of its tiles.
+///
+/// Two guards make its unsynchronised accesses sound, one checked and one promised:
+/// [`Self::row`] admits a run of pixels only inside one of this ROP's tiles (checked, and
+/// tested at the tile's and the row's edges), and every access is to a pixel of a run it
+/// admitted (the `unsafe` accessors' promise); [`Self::new`] promises one `RopPixels` per
+/// ROP. So no two of them reach the same pixel, from any thread.
 pub struct RopPixels<'a, 'f> {
     frame: &'a SharedFrame<'f>,
     tiles: &'a RopTiles,
@@ -122,7 +129,16 @@ pub struct RopPixels<'a, 'f> {
 
 impl<'a, 'f> RopPixels<'a, 'f> {
     /// ROP `rop`'s pixels of `frame`, `width` pixels a row.
-    pub fn new(frame: &'a SharedFrame<'f>, tiles: &'a RopTiles, rop: usize, width: u32) -> Self {
+    ///
+    /// # Safety
+    /// While it lives, no other `RopPixels` of `frame` is for ROP `rop` or uses other
+    /// `tiles`, and `width` is the frame's: the ROPs' pixels are then disjoint.
+    pub unsafe fn new(
+        frame: &'a SharedFrame<'f>,
+        tiles: &'a RopTiles,
+        rop: usize,
+        width: u32,
+    ) -> Self {
         RopPixels {
             frame,
             tiles,
@@ -162,22 +178,31 @@ impl<'a, 'f> RopPixels<'a, 'f> {
     }
 
     /// The depth at pixel index `idx`.
+    ///
+    /// # Safety
+    /// `idx` is a pixel of a run [`Self::row`] admitted (`row + i`, i in i0..i1).
     #[inline(always)]
-    pub fn depth(&self, idx: usize) -> f32 {
-        // SAFETY: idx is in a row `row` checked to be this ROP's (type doc).
+    pub unsafe fn depth(&self, idx: usize) -> f32 {
+        // SAFETY: idx is a pixel `row` admitted: in the frame, and this ROP's alone.
         unsafe { *self.frame.depth.add(idx) }
     }
 
     /// The winning primitive at pixel index `idx`.
+    ///
+    /// # Safety
+    /// As for [`Self::depth`].
     #[inline(always)]
-    pub fn primitive(&self, idx: usize) -> u32 {
+    pub unsafe fn primitive(&self, idx: usize) -> u32 {
         // SAFETY: as for `depth`.
         unsafe { *self.frame.primitive.add(idx) }
     }
 
     /// Writes depth `z` and winner `id` at pixel index `idx`.
+    ///
+    /// # Safety
+    /// As for [`Self::depth`].
     #[inline(always)]
-    pub fn set_depth(&mut self, idx: usize, z: f32, id: u32) {
+    pub unsafe fn set_depth(&mut self, idx: usize, z: f32, id: u32) {
         // SAFETY: as for `depth`; `&mut self` keeps one writer per ROP.
         unsafe {
             *self.frame.depth.add(idx) = z;
@@ -187,13 +212,19 @@ impl<'a, 'f> RopPixels<'a, 'f> {
 
     /// The depth test of fragment (z, id) at pixel index `idx`, and its depth and winner
     /// written when it passes; whether it passed.
+    ///
+    /// # Safety
+    /// As for [`Self::depth`].
     #[inline(always)]
-    pub fn test_depth(&mut self, idx: usize, z: f32, id: u32) -> bool {
-        let pass = depth_test(z, id, self.depth(idx), self.primitive(idx));
-        if pass {
-            self.set_depth(idx, z, id);
+    pub unsafe fn test_depth(&mut self, idx: usize, z: f32, id: u32) -> bool {
+        // SAFETY: the caller's promise, passed on.
+        unsafe {
+            let pass = depth_test(z, id, self.depth(idx), self.primitive(idx));
+            if pass {
+                self.set_depth(idx, z, id);
+            }
+            pass
         }
-        pass
     }
 
     /// Whether pixel (i, j) lies in one of this ROP's tiles.
@@ -202,15 +233,21 @@ impl<'a, 'f> RopPixels<'a, 'f> {
     }
 
     /// The colour at pixel index `idx`.
+    ///
+    /// # Safety
+    /// As for [`Self::depth`].
     #[inline(always)]
-    pub fn color(&self, idx: usize) -> [u8; 3] {
+    pub unsafe fn color(&self, idx: usize) -> [u8; 3] {
         // SAFETY: as for `depth`.
         unsafe { *self.frame.color.add(idx) }
     }
 
     /// Writes colour `rgb` at pixel index `idx`.
+    ///
+    /// # Safety
+    /// As for [`Self::depth`].
     #[inline(always)]
-    pub fn set_color(&mut self, idx: usize, rgb: [u8; 3]) {
+    pub unsafe fn set_color(&mut self, idx: usize, rgb: [u8; 3]) {
         // SAFETY: as for `depth`; `&mut self` keeps one writer per ROP.
         unsafe { *self.frame.color.add(idx) = rgb };
     }
@@ -233,7 +270,8 @@ mod tests {
     fn given(rop: usize, i0: u32, i1: u32, j: u32) -> bool {
         let (mut fb, tiles) = frame();
         let shared = SharedFrame::new(&mut fb);
-        let pixels = RopPixels::new(&shared, &tiles, rop, 20);
+        // SAFETY: the only RopPixels of this frame, over its tiles and width.
+        let pixels = unsafe { RopPixels::new(&shared, &tiles, rop, 20) };
         std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| pixels.row(i0, i1, j))).is_ok()
     }
 
@@ -256,15 +294,19 @@ mod tests {
         let (mut fb, tiles) = frame();
         {
             let shared = SharedFrame::new(&mut fb);
-            let mut pixels = RopPixels::new(&shared, &tiles, 1, 20);
+            // SAFETY: the only RopPixels of this frame, over its tiles and width.
+            let mut pixels = unsafe { RopPixels::new(&shared, &tiles, 1, 20) };
             // The frame's last pixel, (19, 11).
             let idx = pixels.row(16, 20, 11) + 19;
             assert_eq!(idx, 20 * 12 - 1);
-            assert!(pixels.test_depth(idx, 0.5, 7));
-            assert!(!pixels.test_depth(idx, 0.75, 3));
-            pixels.set_color(idx, [1, 2, 3]);
-            assert_eq!((pixels.depth(idx), pixels.primitive(idx)), (0.5, 7));
-            assert_eq!(pixels.color(idx), [1, 2, 3]);
+            // SAFETY: idx is in the run `row` admitted just above.
+            unsafe {
+                assert!(pixels.test_depth(idx, 0.5, 7));
+                assert!(!pixels.test_depth(idx, 0.75, 3));
+                pixels.set_color(idx, [1, 2, 3]);
+                assert_eq!((pixels.depth(idx), pixels.primitive(idx)), (0.5, 7));
+                assert_eq!(pixels.color(idx), [1, 2, 3]);
+            }
             // Prefetches at the frame's end and past it are hints, never addresses formed.
             for idx in [idx, idx + 1, idx + 1000] {
                 pixels.prefetch(idx);

@@ -69,7 +69,11 @@ impl<R: Real> Unit<R> for Rop {
             RopContext {
                 cfg: &run.arch.rop,
                 memory: run.port,
-                pixels: RopPixels::new(&run.frame, &run.tiles, index, run.view.viewport.width),
+                // SAFETY: the builder makes one ROP unit per index, each with the run's
+                // tiles, over a frame of the viewport's width.
+                pixels: unsafe {
+                    RopPixels::new(&run.frame, &run.tiles, index, run.view.viewport.width)
+                },
                 shader: FragmentShader::<R>::new(&run.scene.light, run.view),
                 view: run.view,
                 discoid: run.discoid.as_ref(),
@@ -102,14 +106,19 @@ pub struct RopContext<'a, R> {
 fn into<'b, 'a: 'b, 'f: 'a, R>(
     pixels: &'b mut RopPixels<'a, 'f>,
 ) -> impl FnMut(usize, [u8; 3], [R; 3]) + use<'a, 'b, 'f, R> {
-    move |idx, rgb, _| pixels.set_color(idx, rgb)
+    // SAFETY: a batch holds only pixels whose depth test passed, each in a run `row` admitted
+    // (`lembo_fragments`, `triangle_fragments`).
+    move |idx, rgb, _| unsafe { pixels.set_color(idx, rgb) }
 }
 
 /// A discoid pass's work on one fragment at pixel index `idx`: returns whether it passed
 /// (the depth pass) or was kept (the accumulation pass).
+///
+/// # Safety
+/// `idx` is a pixel of a run `pixels.row` admitted ([`RopPixels::depth`]).
 #[allow(clippy::too_many_arguments)]
 #[inline]
-fn discoid_fragment<R: Real>(
+unsafe fn discoid_fragment<R: Real>(
     dp: &DiscoidPass<R>,
     view: &View,
     shader: &FragmentShader<R>,
@@ -121,9 +130,12 @@ fn discoid_fragment<R: Real>(
     let e = evaluate(dp.table, shader, f);
     match dp.pass {
         Pass::Depth => {
-            let wins = depth_pass_wins(&e, f.id, pixels.depth(idx), pixels.primitive(idx));
+            // SAFETY: the caller's promise, passed on.
+            let (depth, winner) = unsafe { (pixels.depth(idx), pixels.primitive(idx)) };
+            let wins = depth_pass_wins(&e, f.id, depth, winner);
             if wins {
-                pixels.set_depth(idx, e.z, f.id);
+                // SAFETY: as above.
+                unsafe { pixels.set_depth(idx, e.z, f.id) };
             }
             wins
         }
@@ -301,7 +313,8 @@ fn lembo_fragments<R: Real>(
                 let idx = row + i as usize;
                 let z = l.z.eval(u, v).f64() as f32;
                 *nearest = nearest.min(z);
-                if pixels.test_depth(idx, z, l.id) {
+                // SAFETY: i is in span.i0..span.i1, the run `row` admitted.
+                if unsafe { pixels.test_depth(idx, z, l.id) } {
                     *passed += 1;
                     if batch.push(idx, [u, v]) {
                         batch.flush(shader, into(pixels));
@@ -316,10 +329,10 @@ fn lembo_fragments<R: Real>(
             span.walk(|i, u, v| {
                 let idx = row + i as usize;
                 let z = l.z.eval(u, v);
-                let wins = dp
-                    .table
-                    .lembo_fragment(l, u, v, z)
-                    .is_some_and(|f| discoid_fragment(dp, view, shader, pixels, kept, idx, &f));
+                // SAFETY: i is in span.i0..span.i1, the run `row` admitted.
+                let wins = dp.table.lembo_fragment(l, u, v, z).is_some_and(|f| unsafe {
+                    discoid_fragment(dp, view, shader, pixels, kept, idx, &f)
+                });
                 *passed += wins as u64;
             });
             span.len() as u64
@@ -362,7 +375,8 @@ fn triangle_fragments<R: Real>(
                     };
                     let z = z.f64() as f32;
                     *nearest = nearest.min(z);
-                    let pass = pixels.test_depth(idx, z, t.id);
+                    // SAFETY: i is in a..b, the run `row` admitted.
+                    let pass = unsafe { pixels.test_depth(idx, z, t.id) };
                     if pass && batch.push(idx, l) {
                         batch.flush(shader, into(pixels));
                     }
@@ -370,7 +384,8 @@ fn triangle_fragments<R: Real>(
                 }
                 Some(dp) => {
                     let df = dp.table.planar_fragment(t, &t.fragment(i, j));
-                    discoid_fragment(dp, view, shader, pixels, kept, idx, &df)
+                    // SAFETY: i is in a..b, the run `row` admitted.
+                    unsafe { discoid_fragment(dp, view, shader, pixels, kept, idx, &df) }
                 }
             };
             *passed += wins as u64;
