@@ -93,9 +93,9 @@ fn estimate(job: &RenderJob, scene: &Scene, extra_per_pixel: f64) -> (f64, f64) 
 /// threads' arenas, which the accuracy metrics' allocations do not reuse: without this a
 /// measured run's peak resident memory grows by what they held (terrain500 at 1024x1024,
 /// functional with `--reference` on the 2-core VM, 2026-11-29: 392 MB peak without it, 276
-/// MB with it, the median of 5 runs).
+/// MB with it, the median of 5 runs). Nothing under Miri, which runs no foreign function.
 pub(super) fn return_freed_memory() {
-    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    #[cfg(all(target_os = "linux", target_env = "gnu", not(miri)))]
     // SAFETY: malloc_trim only releases free memory the allocator holds; no live
     // allocation is touched, and it is safe to call from any thread at any time.
     unsafe {

@@ -646,4 +646,48 @@ mod tests {
             assert!(extra.iter().all(|u| u.items_in == 0 && u.items_out == 0));
         }
     }
+
+    /// The ROPs write the shared frame in place, unsynchronised (`tiles::RopPixels`): they
+    /// draw the same pixels over one host thread or two, with either memory model. Small
+    /// enough for Miri (`tests/miri/run`), which checks those writes.
+    #[test]
+    fn the_rops_draw_the_same_frame_over_any_threads_and_memory_model() {
+        let mut scene = Scene::default_scene();
+        let size = if cfg!(miri) { 20 } else { 64 };
+        scene.set_viewport(size, size).unwrap();
+        let view = View::new(&scene.camera, scene.viewport);
+        let mut frames = Vec::new();
+        for model in [MemoryModel::Port, MemoryModel::Dram] {
+            for threads in [1, 2] {
+                let mut arch = ArchConfig::default();
+                arch.memory.model = model;
+                let options = SimOptions {
+                    host_threads: threads,
+                    ..SimOptions::default()
+                };
+                let frame = run_timed(
+                    &scene,
+                    &view,
+                    0.5,
+                    Datapath::F32,
+                    &arch,
+                    Source::Lembos,
+                    &options,
+                )
+                .unwrap();
+                frames.push(frame.framebuffer);
+            }
+        }
+        let drawn = frames[0]
+            .primitive
+            .iter()
+            .filter(|&&p| p != crate::rop::framebuffer::NO_PRIMITIVE)
+            .count();
+        assert!(drawn > (size * size / 8) as usize, "{drawn} pixels drawn");
+        for f in &frames[1..] {
+            assert!(f.color == frames[0].color && f.primitive == frames[0].primitive);
+            let bits = |fb: &FrameBuffer| fb.depth.iter().map(|d| d.to_bits()).collect::<Vec<_>>();
+            assert!(bits(f) == bits(&frames[0]));
+        }
+    }
 }

@@ -8,6 +8,15 @@ use crate::raster::setup::tests::{
 use crate::raster::DEFAULT_SEGMENT_CAP;
 use crate::testkit::SplitMix64;
 
+/// `miri` under Miri (which runs about a thousand times slower), else `native`.
+const fn miri_or(miri: usize, native: usize) -> usize {
+    if cfg!(miri) {
+        miri
+    } else {
+        native
+    }
+}
+
 /// Each interval of a scanline with its segments.
 type Walks<R> = Vec<(Interval<R>, Vec<Segment<R>>)>;
 
@@ -70,7 +79,7 @@ fn closed_chain<R: Real>(tol: f64) {
 fn skipped_steps_are_refused<R: Real>() {
     let mut rng = SplitMix64::new(0x9e37_79b9_7f4a_7c15);
     let (mut intervals_seen, mut skipped) = (0u64, 0u64);
-    for n in 0..400 {
+    for n in 0..miri_or(4, 400) {
         let bend = [2.0, 10.0, 40.0, 200.0][n % 4];
         let Some(l) = crate::raster::setup::tests::random_lembo::<R>(&mut rng, bend) else {
             continue;
@@ -120,9 +129,9 @@ fn skipped_steps_are_refused<R: Real>() {
         }
     }
     // Measured: 17 664 of 88 122 (20.0 %) in both datapaths; a bound made weaker than
-    // it is would skip fewer.
+    // it is would skip fewer. (Not a share of Miri's four lembos.)
     assert!(
-        skipped * 100 >= intervals_seen * 19,
+        cfg!(miri) || skipped * 100 >= intervals_seen * 19,
         "{skipped} of {intervals_seen} first steps skipped"
     );
 }
@@ -637,7 +646,7 @@ fn reach_bounds_every_step<R: Real>() {
     // Per (lembo, k) with a bound: d / s and the bound over the least advance found.
     let mut ratios = Vec::new();
     let mut monotone = 0;
-    for n in 0..400 {
+    for n in 0..miri_or(4, 400) {
         let bend = [2.0, 10.0, 40.0, 200.0][n % 4];
         let Some(l) = crate::raster::setup::tests::random_lembo::<R>(&mut rng, bend) else {
             continue;
@@ -714,6 +723,10 @@ fn reach_bounds_every_step<R: Real>() {
     // Measured (both datapaths alike, to 1e-5): a bound on 802 of the 1 134 monotone
     // (lembo, k) pairs; the ratio's median 0.454, its largest 0.986; with d / s ≥ 0.9
     // (θ ≤ 26°) its least 0.174 over 336 pairs. The floors leave about 10 % of margin.
+    // (Not shares of Miri's four lembos.)
+    if cfg!(miri) {
+        return;
+    }
     assert!(
         ratios.len() * 100 >= monotone * 65,
         "{} of {monotone}",
@@ -833,7 +846,15 @@ fn least_reach_is_the_derivations_bound_on_two_lembos_worked_by_hand() {
         else {
             panic!("{:?}", l.partition);
         };
-        assert_eq!((got_a, grad_bounds, l.hessian), (a, bounds, hessian));
+        // Exact; under Miri within a few ulps, since Miri adds an error to `hypot` (which
+        // Rust does not promise correctly rounded) on purpose.
+        let close = |x: f64, y: f64| x == y || cfg!(miri) && (x - y).abs() <= 1e-14 * y.abs();
+        let pairs = got_a.iter().zip(a).chain(grad_bounds.iter().zip(bounds));
+        assert!(
+            pairs.into_iter().all(|(&x, y)| close(x, y)) && l.hessian == hessian,
+            "{:?}",
+            (got_a, grad_bounds, l.hessian)
+        );
         for (k, reach) in want {
             let got = least_reach(&l, k).expect("a positive bound");
             assert!(
