@@ -719,6 +719,11 @@ mod tests {
         c.slots[0].now.set(Cycle(30));
         c.next_step();
         assert_eq!(c.end_bound(0), Cycle(30));
+        let fresh = core(1);
+        fresh.slots[0].inputs.borrow_mut().push(fixed(0, 25, 2));
+        fresh.slots[0].now.set(Cycle(10));
+        fresh.slots[0].wait.set(Wait::Done);
+        assert_eq!(fresh.end_bound(0), Cycle(10), "finished: its clock alone");
     }
 
     #[test]
