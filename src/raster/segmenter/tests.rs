@@ -396,7 +396,7 @@ fn the_curve_point_at_a_key_is_the_upward_crossing_of_the_line() {
     let mut next = move || line_rng.unit();
     let mut lembo_rng = SplitMix64::new(0x1234_5678_9abc_def1);
     let (mut found, mut none) = (0, 0);
-    for n in 0..2000 {
+    for n in 0..miri_or(8, 2000) {
         let bend = [2.0, 40.0, 200.0, 1e-9][n % 4];
         let Some(l) = crate::raster::setup::tests::random_lembo::<f64>(&mut lembo_rng, bend) else {
             continue;
@@ -457,8 +457,9 @@ fn the_curve_point_at_a_key_is_the_upward_crossing_of_the_line() {
             (Some(p), None) => panic!("lembo {n}: missed the crossing at {p:?}"),
         }
     }
+    // (Not shares of Miri's eight lembos.)
     assert!(
-        found > 1170 && none > 55,
+        cfg!(miri) || found > 1170 && none > 55,
         "{found} found, {none} without a crossing"
     );
 }
