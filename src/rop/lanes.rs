@@ -292,10 +292,6 @@ mod tests {
     }
 
     #[test]
-    #[cfg_attr(
-        miri,
-        ignore = "Miri adds deliberate error to the runtime's powi, so no bits can match"
-    )]
     fn powi_in_lanes_is_the_runtime_powi_bit_for_bit() {
         let mut rng = rng(24);
         for n in (-40..=40).chain([127, 255, 1000, 1024, -1024]) {

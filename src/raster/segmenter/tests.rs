@@ -847,15 +847,7 @@ fn least_reach_is_the_derivations_bound_on_two_lembos_worked_by_hand() {
         else {
             panic!("{:?}", l.partition);
         };
-        // Exact; under Miri within a few ulps, since Miri adds an error to `hypot` (which
-        // Rust does not promise correctly rounded) on purpose.
-        let close = |x: f64, y: f64| x == y || cfg!(miri) && (x - y).abs() <= 1e-14 * y.abs();
-        let pairs = got_a.iter().zip(a).chain(grad_bounds.iter().zip(bounds));
-        assert!(
-            pairs.into_iter().all(|(&x, y)| close(x, y)) && l.hessian == hessian,
-            "{:?}",
-            (got_a, grad_bounds, l.hessian)
-        );
+        assert_eq!((got_a, grad_bounds, l.hessian), (a, bounds, hessian));
         for (k, reach) in want {
             let got = least_reach(&l, k).expect("a positive bound");
             assert!(
