@@ -684,10 +684,11 @@ mod tests {
             .filter(|&&p| p != crate::rop::framebuffer::NO_PRIMITIVE)
             .count();
         assert!(drawn > (size * size / 8) as usize, "{drawn} pixels drawn");
+        let bits = |fb: &FrameBuffer| fb.depth.iter().map(|d| d.to_bits()).collect::<Vec<_>>();
+        let first = bits(&frames[0]);
         for f in &frames[1..] {
             assert!(f.color == frames[0].color && f.primitive == frames[0].primitive);
-            let bits = |fb: &FrameBuffer| fb.depth.iter().map(|d| d.to_bits()).collect::<Vec<_>>();
-            assert!(bits(f) == bits(&frames[0]));
+            assert!(bits(f) == first);
         }
     }
 }

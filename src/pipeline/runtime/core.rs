@@ -599,7 +599,7 @@ mod tests {
         assert!(!distinct.contains(&by_clock), "{orders:?}");
     }
 
-    /// Cores of `n` units of latency 1, named U[u].
+    /// A core of `n` units of latency 1, named U[u].
     fn core(n: u32) -> Core {
         Core::new((0..n).map(|u| (format!("U[{u}]"), 1)).collect())
     }
