@@ -598,6 +598,27 @@ mod tests {
     }
 
     #[test]
+    fn zero_area_does_not_depend_on_the_scale_of_either_axis() {
+        // A curved parametrisation of a parabola, x = 0.7 t, y = 0.3 + 0.9 t² with
+        // t = 0.37 u + 0.61 v (zero Jacobian everywhere, up to the rounding of its
+        // inexact coefficients), and the same with y tilted by 10⁻⁶ of its size along u:
+        // a sliver, thin but with area.
+        let point = |(u, v): (f64, f64), tilt: f64| {
+            let t = 0.37 * u + 0.61 * v;
+            (0.7 * t, 0.3 + 0.9 * t * t + tilt * u)
+        };
+        for (tilt, degenerate) in [(0.0, true), (1e-6, false)] {
+            for sx in [1e-4, 1.0, 1e4] {
+                for sy in [1e-4, 1.0, 1e4] {
+                    let p = REFERENCE_UV.map(|uv| point(uv, tilt));
+                    let (x, y) = (p.map(|p| p.0 * sx), p.map(|p| p.1 * sy));
+                    assert_eq!(zero_area(x, y), degenerate, "tilt {tilt}, scales {sx} {sy}");
+                }
+            }
+        }
+    }
+
+    #[test]
     fn partition_is_monotone_when_the_gradient_keeps_a_side() {
         // y = 10u + 3v + 2u²: gradient (10 + 4u, 3), never zero.
         match partition(&quad(2.0, 0.0, 0.0, 10.0, 3.0, 0.0)) {
