@@ -619,6 +619,47 @@ mod tests {
     }
 
     #[test]
+    fn a_hull_touching_the_viewport_or_the_depth_range_is_not_outside() {
+        let view = crate::raster::setup::tests::view();
+        let (w, h) = (view.viewport.width as f64, view.viewport.height as f64);
+        let hull = |lo: [f64; 3], hi: [f64; 3]| (DVec3::from(lo), DVec3::from(hi));
+        assert!(!outside(&view, hull([1.0, 1.0, 0.25], [3.0, 2.0, 0.75])));
+        // Per side of the viewport and of the depth range [0, 1]: a hull whose face lies
+        // on the side from outside (the side's pixels or depths are still in reach), and
+        // the same hull moved 10⁻⁹ further out.
+        let d = 1e-9;
+        for (side, [touching, beyond]) in [
+            (
+                "left",
+                [0.0, -d].map(|x| hull([x - 2.0, 1.0, 0.25], [x, 2.0, 0.75])),
+            ),
+            (
+                "top",
+                [0.0, -d].map(|y| hull([1.0, y - 2.0, 0.25], [3.0, y, 0.75])),
+            ),
+            (
+                "right",
+                [w, w + d].map(|x| hull([x, 1.0, 0.25], [x + 2.0, 2.0, 0.75])),
+            ),
+            (
+                "bottom",
+                [h, h + d].map(|y| hull([1.0, y, 0.25], [3.0, y + 2.0, 0.75])),
+            ),
+            (
+                "near",
+                [0.0, -d].map(|z| hull([1.0, 1.0, z - 0.5], [3.0, 2.0, z])),
+            ),
+            (
+                "far",
+                [1.0, 1.0 + d].map(|z| hull([1.0, 1.0, z], [3.0, 2.0, z + 0.5])),
+            ),
+        ] {
+            assert!(!outside(&view, touching), "touching the {side}");
+            assert!(outside(&view, beyond), "beyond the {side}");
+        }
+    }
+
+    #[test]
     fn partition_is_monotone_when_the_gradient_keeps_a_side() {
         // y = 10u + 3v + 2u²: gradient (10 + 4u, 3), never zero.
         match partition(&quad(2.0, 0.0, 0.0, 10.0, 3.0, 0.0)) {
