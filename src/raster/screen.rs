@@ -660,6 +660,35 @@ mod tests {
     }
 
     #[test]
+    fn a_hull_reaching_the_guard_band_is_within_it() {
+        let view = crate::raster::setup::tests::view();
+        let (w, h) = (view.viewport.width as f64, view.viewport.height as f64);
+        let g = SPLIT_GUARD_VIEWPORTS * w.max(h);
+        let hull = |lo: [f64; 2], hi: [f64; 2]| {
+            (DVec3::new(lo[0], lo[1], 0.5), DVec3::new(hi[0], hi[1], 0.5))
+        };
+        // The whole band, and per side a hull reaching exactly the band's edge (within),
+        // then 10⁻⁶ past it (not within).
+        assert!(within_guard_band(&view, hull([-g, -g], [w + g, h + g])));
+        let d = 1e-6;
+        for (side, [reaching, past]) in [
+            ("left", [-g, -g - d].map(|x| hull([x, 1.0], [3.0, 2.0]))),
+            ("top", [-g, -g - d].map(|y| hull([1.0, y], [3.0, 2.0]))),
+            (
+                "right",
+                [w + g, w + g + d].map(|x| hull([1.0, 1.0], [x, 2.0])),
+            ),
+            (
+                "bottom",
+                [h + g, h + g + d].map(|y| hull([1.0, 1.0], [3.0, y])),
+            ),
+        ] {
+            assert!(within_guard_band(&view, reaching), "reaching the {side}");
+            assert!(!within_guard_band(&view, past), "past the {side}");
+        }
+    }
+
+    #[test]
     fn partition_is_monotone_when_the_gradient_keeps_a_side() {
         // y = 10u + 3v + 2u²: gradient (10 + 4u, 3), never zero.
         match partition(&quad(2.0, 0.0, 0.0, 10.0, 3.0, 0.0)) {
