@@ -355,6 +355,40 @@ pub(crate) mod tests {
     }
 
     #[test]
+    fn lembos_sharing_an_edge_restrict_to_the_same_bits_on_it() {
+        // Six screen points with inexact coordinates, and the same patch with A and B
+        // swapped (points B, A, C, AB, BC, CA): its quadratics differ from the first's in
+        // rounding, and it runs each edge the other way. Split points on an edge must come
+        // out bit for bit alike from both, or the pieces either side of it would leave
+        // gaps or overlaps.
+        let p = [
+            [10.3, 20.7, 0.31],
+            [90.1, 30.9, 0.52],
+            [40.7, 100.3, 0.77],
+            [50.9, 21.3, 0.43],
+            [22.1, 61.7, 0.55],
+            [70.3, 70.1, 0.61],
+        ];
+        let a = Restrict::new(&ScreenPoints::of(&p));
+        let b = Restrict::new(&ScreenPoints::of(&[p[1], p[0], p[2], p[3], p[5], p[4]]));
+        for k in 0..=64 {
+            let t = k as f64 / 64.0;
+            // a's point (u, v) is b's (1 - u - v, v).
+            for (ua, ub) in [
+                ([t, 0.0], [1.0 - t, 0.0]),
+                ([1.0 - t, t], [0.0, t]),
+                ([0.0, 1.0 - t], [t, 1.0 - t]),
+            ] {
+                assert_eq!(
+                    a.at(ua).map(f64::to_bits),
+                    b.at(ub).map(f64::to_bits),
+                    "{ua:?}"
+                );
+            }
+        }
+    }
+
+    #[test]
     fn setup_culls_lembos_of_zero_area_and_keeps_thin_ones() {
         // A curved parametrisation of a parabola: x = 20 + 80 t, y = 30 + 40 t² with
         // t = u + v. Its Jacobian is zero everywhere, so it covers no pixel centre.
