@@ -384,7 +384,17 @@ pub(crate) mod tests {
                     b.at(ub).map(f64::to_bits),
                     "{ua:?}"
                 );
+                // And they are the patch's points: exactly at the six reference points,
+                // within rounding between them.
+                let [u, v] = ua;
+                let patch = [a.x.eval(u, v), a.y.eval(u, v), a.z.eval(u, v)];
+                for (c, (got, want)) in a.at(ua).into_iter().zip(patch).enumerate() {
+                    assert!((got - want).abs() <= 1e-12 * want.abs(), "{ua:?} {c}");
+                }
             }
+        }
+        for (k, (u, v)) in REFERENCE_UV.into_iter().enumerate() {
+            assert_eq!(a.at([u, v]), p[k], "reference point {k}");
         }
     }
 
