@@ -689,6 +689,25 @@ mod tests {
     }
 
     #[test]
+    fn reference_uv_is_the_corners_then_the_edge_middles_in_the_papers_order() {
+        let whole = reference_uv([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]);
+        assert_eq!(whole, REFERENCE_UV.map(|(u, v)| [u, v]));
+        // A piece: corners A, B, C, then the middles of AB, CA and BC.
+        let piece = reference_uv([[0.25, 0.5], [0.5, 0.25], [0.25, 0.25]]);
+        assert_eq!(
+            piece,
+            [
+                [0.25, 0.5],
+                [0.5, 0.25],
+                [0.25, 0.25],
+                [0.375, 0.375],
+                [0.25, 0.375],
+                [0.375, 0.25],
+            ]
+        );
+    }
+
+    #[test]
     fn partition_is_monotone_when_the_gradient_keeps_a_side() {
         // y = 10u + 3v + 2u²: gradient (10 + 4u, 3), never zero.
         match partition(&quad(2.0, 0.0, 0.0, 10.0, 3.0, 0.0)) {
