@@ -857,3 +857,132 @@ fn least_reach_is_the_derivations_bound_on_two_lembos_worked_by_hand() {
         }
     }
 }
+
+/// A lembo whose curve for scanline 40 (y = 40.5) is the parabola n = 1.5 t² - 2⁻⁴⁹ in
+/// coordinates (n, t) of the domain: n the distance coordinate of domain edge `edge` (u,
+/// v, then 1 - u - v), t = the walk coordinate - ½. The curve runs along the edge and
+/// dips 2⁻⁴⁹ (1.8·10⁻¹⁵) outside it at t = 0, as rounding of a curve touching the edge
+/// would: within the 64-ulp tolerance (1.4·10⁻¹⁴) of the walk's and the split's domain
+/// guards. With y = ±24 (n - 1.5 t² + 2⁻⁴⁹) + 40.5, a chord of the curve across Δt has
+/// midpoint error 9 Δt² pixels, exactly k = 0.25 at Δt = ⅙: a walk from t = -½ steps
+/// onto t = 0. Returns the lembo (y and its Hessian set exactly: every coefficient has
+/// few binary digits), the walk key direction and the point of the curve at `t`.
+fn along_edge(edge: usize) -> (ScreenLembo<f64>, V2<f64>, impl Fn(f64) -> ConicPoint<f64>) {
+    let dip = 2f64.powi(-49);
+    // n = nu u + nv v + n0 and t = tu u + tv v + t0.
+    let ((nu, nv, n0), (tu, tv, t0)) = match edge {
+        0 => ((1.0, 0.0, 0.0), (0.0, 1.0, -0.5)),
+        1 => ((0.0, 1.0, 0.0), (1.0, 0.0, -0.5)),
+        _ => ((-1.0, -1.0, 1.0), (1.0, 0.0, -0.5)),
+    };
+    // y increases across the curve towards rot_ccw(tau), as the walk and the split expect.
+    let s = 24.0 * (nv * tu - nu * tv);
+    let y = quad(
+        -1.5 * s * tu * tu,
+        -1.5 * s * tv * tv,
+        -3.0 * s * tu * tv,
+        s * nu - 3.0 * s * tu * t0,
+        s * nv - 3.0 * s * tv * t0,
+        s * n0 - 1.5 * s * t0 * t0 + s * dip + 40.5,
+    );
+    let mut l = screen_lembo::<f64>(x_linear(), y);
+    l.y = y;
+    l.hessian = (2.0 * y.a, y.c, 2.0 * y.b);
+    let tau = [tu, tv];
+    let x = l.x;
+    let at = move |t: f64| {
+        let n = 1.5 * t * t - dip;
+        // Solve n = nu u + nv v + n0, t + ½ = tu u + tv v for (u, v).
+        let w = t - t0;
+        let uv = match edge {
+            0 => [n, w],
+            1 => [w, n],
+            _ => [w, 1.0 - w - n],
+        };
+        ConicPoint {
+            uv,
+            x: x.eval(uv[0], uv[1]),
+            edge: INTERIOR,
+        }
+    };
+    (l, tau, at)
+}
+
+/// The walk's domain guard takes a step that lands within its 64-ulp tolerance outside an
+/// edge (here 2⁻⁴⁹ outside, at t = 0 of `along_edge`), for each edge: the walk from t = -½
+/// to an end at t = 0.3 is four steps of exactly k (onto t = -⅓, -⅙, 0, ⅙) and the
+/// closing chord. A guard without the tolerance refuses the step onto t = 0 and closes the
+/// walk there with split chords (seven), as does one whose tolerance is 64 times too
+/// small.
+#[test]
+fn the_walk_takes_a_step_within_rounding_outside_an_edge() {
+    for edge in 0..3 {
+        let (l, tau, at) = along_edge(edge);
+        let (start, end) = (at(-0.5), at(0.3));
+        let iv = Interval {
+            start,
+            end,
+            tau,
+            end_key: dot(tau, end.uv),
+            straight: false,
+        };
+        let (mut out, mut c) = (Vec::new(), Counts::default());
+        segments(&l, 40, 0.25, &iv, DEFAULT_SEGMENT_CAP, &mut out, &mut c).expect("under the cap");
+        assert_eq!(out.len(), 5, "edge {edge}: {out:?}");
+        assert_eq!(
+            (c.segments_clamped, c.segments_refined),
+            (1, 0),
+            "edge {edge}"
+        );
+        for (i, s) in out[..4].iter().enumerate() {
+            let want = at(i as f64 / 6.0 - 1.0 / 3.0).uv;
+            let off = (s.p1.uv[0] - want[0])
+                .abs()
+                .max((s.p1.uv[1] - want[1]).abs());
+            assert!(
+                off < 1e-15,
+                "edge {edge}, step {i}: {:?} for {want:?}",
+                s.p1.uv
+            );
+        }
+        // The third step's end lies outside the edge, within the tolerance.
+        let q = out[2].p1.uv;
+        let n = [q[0], q[1], 1.0 - q[0] - q[1]][edge];
+        assert!(
+            n < 0.0 && n > -64.0 * f64::EPSILON,
+            "edge {edge}: n = {n:e}"
+        );
+        assert_eq!(out[4].p1, end);
+    }
+}
+
+/// The closing chords' split takes a split point within the 64-ulp tolerance outside an
+/// edge: the chord of `along_edge` from t = -⅓ to ⅓ (midpoint error 4k) splits at the key
+/// halfway, t = 0, 2⁻⁴⁹ outside the edge, and each half once more (at t = ∓⅙, where the
+/// quarters are exactly k): four chords. Refusing the point at t = 0 keeps the chord
+/// whole.
+#[test]
+fn closing_chords_split_at_a_point_within_rounding_outside_an_edge() {
+    for edge in 0..3 {
+        let (l, tau, at) = along_edge(edge);
+        let (start, end) = (at(-1.0 / 3.0), at(1.0 / 3.0));
+        let iv = Interval {
+            start,
+            end,
+            tau,
+            end_key: dot(tau, end.uv),
+            straight: false,
+        };
+        let (mut out, mut c) = (Vec::new(), Counts::default());
+        last_chords(&l, 40.5, 0.25, &iv, start, 0, 1 << 16, &mut out, &mut c)
+            .expect("under the cap");
+        assert_eq!(out.len(), 4, "edge {edge}: {out:?}");
+        assert_eq!(c.segments_refined, 3, "edge {edge}");
+        let q = out[1].p1.uv;
+        let n = [q[0], q[1], 1.0 - q[0] - q[1]][edge];
+        assert!(
+            n < 0.0 && n > -64.0 * f64::EPSILON,
+            "edge {edge}: n = {n:e}"
+        );
+    }
+}
