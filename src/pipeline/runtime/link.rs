@@ -27,7 +27,6 @@ use super::signal::Signal;
 use crossbeam_channel::{Receiver, Sender, TryRecvError};
 use std::cell::{Cell, RefCell};
 use std::collections::VecDeque;
-use std::fmt;
 use std::rc::Rc;
 use std::sync::atomic::{AtomicU64, Ordering::Acquire, Ordering::Release};
 use std::sync::Arc;
@@ -48,12 +47,6 @@ pub struct LinkName {
     pub producer: String,
     /// The consuming unit.
     pub consumer: String,
-}
-
-impl fmt::Display for LinkName {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{} -> {}", self.producer, self.consumer)
-    }
 }
 
 /// Most items per message on a link between host threads (a producer also sends whenever
