@@ -707,6 +707,31 @@ mod tests {
         );
     }
 
+    /// The parabola through three points is each of them at t = 0, ½ and 1, bit for bit,
+    /// and the quadratic through them in between (each coordinate on its own).
+    #[test]
+    fn the_parabola_passes_through_its_three_points_and_is_their_quadratic_between() {
+        let p = [[10.3, -20.7], [90.1, 30.9], [40.7, 100.3]];
+        for (t, want) in [(0.0, p[0]), (0.5, p[1]), (1.0, p[2])] {
+            assert_eq!(parabola(&p, t), want, "t = {t}");
+        }
+        for t in [0.25, 0.75, 0.1, 1.5] {
+            // Newton's form of the same quadratic.
+            let want: [f64; 2] = std::array::from_fn(|c| {
+                let d1 = 2.0 * (p[1][c] - p[0][c]);
+                let d2 = 2.0 * (p[2][c] - 2.0 * p[1][c] + p[0][c]);
+                p[0][c] + t * d1 + t * (t - 0.5) * d2
+            });
+            let got = parabola(&p, t);
+            for c in 0..2 {
+                assert!(
+                    (got[c] - want[c]).abs() <= 1e-12 * want[c].abs(),
+                    "t = {t}: {got:?} {want:?}"
+                );
+            }
+        }
+    }
+
     #[test]
     fn partition_is_monotone_when_the_gradient_keeps_a_side() {
         // y = 10u + 3v + 2u²: gradient (10 + 4u, 3), never zero.
