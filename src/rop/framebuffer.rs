@@ -270,16 +270,24 @@ impl FrameRows<'_> {
         j as usize * self.width as usize + i as usize
     }
 
+    /// The index of pixel (i, j) in these rows' planes, if they hold it (the guard of
+    /// [`FrameRows::prefetch`]'s addresses).
+    #[inline(always)]
+    pub fn held(&self, i: u32, j: u32) -> Option<usize> {
+        let idx = self.index(i, j);
+        (idx < self.depth.len()).then_some(idx)
+    }
+
     /// Asks the cache for the depth and winner of pixel (i, j) (if these rows hold it),
     /// which a depth test will soon read: a drawn primitive's next row of pixels starts a
     /// new 4 KiB row of each plane, where the hardware prefetcher does not follow.
     #[inline(always)]
     pub fn prefetch(&self, i: u32, j: u32) {
-        let idx = self.index(i, j);
         #[cfg(target_arch = "x86_64")]
-        if idx < self.depth.len() {
+        if let Some(idx) = self.held(i, j) {
             use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-            // SAFETY: a prefetch is a hint; it reads nothing and the addresses are in bounds.
+            // SAFETY: a prefetch is a hint; it reads nothing, and `held` puts the addresses
+            // in bounds.
             unsafe {
                 _mm_prefetch::<_MM_HINT_T0>(self.depth.as_ptr().add(idx) as *const i8);
                 _mm_prefetch::<_MM_HINT_T0>(self.primitive.as_ptr().add(idx) as *const i8);
@@ -427,6 +435,11 @@ mod tests {
                 rows.prefetch(i, j);
             }
             assert_eq!(rows.index(4, 1), 9, "the band's last pixel");
+            assert_eq!(rows.held(4, 1), Some(9), "the band's last pixel");
+            assert_eq!(rows.held(0, 0), Some(0), "the band's first pixel");
+            for (i, j) in [(0, 2), (4, 2), (0, 200)] {
+                assert_eq!(rows.held(i, j), None, "({i}, {j}) is past the band");
+            }
         }
     }
 
