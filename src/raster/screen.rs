@@ -746,6 +746,26 @@ mod tests {
         }
     }
 
+    /// The gradient hull counts as clear of the origin only beyond 64 ulp of its scale: the
+    /// bowl (u + δ)² + v², its minimum δ outside the edge u = 0, has corner gradients
+    /// (2δ, 0), (2 + 2δ, 0) and (2δ, 2), a hull 2δ from the origin against a threshold of
+    /// 64 ε (2 + 2δ) ≈ 5.7·10⁻¹⁴. At δ = 2⁻⁴⁷ (2δ ≈ 1.4·10⁻¹⁴, rounding) it is walked from
+    /// its centre; at δ = 2⁻⁴⁰ (2δ ≈ 1.8·10⁻¹²) as monotone.
+    #[test]
+    fn a_gradient_hull_within_rounding_of_the_origin_is_not_monotone() {
+        let bowl = |delta: f64| quad(1.0, 1.0, 0.0, 2.0 * delta, 0.0, delta * delta);
+        match partition(&bowl(2f64.powi(-47))) {
+            Partition::Central { centre, det, .. } => {
+                assert_eq!((centre, det), ([-(2f64.powi(-47)), 0.0], 4.0));
+            }
+            p => panic!("{p:?}"),
+        }
+        match partition(&bowl(2f64.powi(-40))) {
+            Partition::Monotone { a, .. } => assert_eq!(a, [1.0, 0.0]),
+            p => panic!("{p:?}"),
+        }
+    }
+
     #[test]
     fn partition_finds_an_interior_extremum_and_a_saddle() {
         // Minimum of (u - .3)² + (v - .3)² at (.3, .3).
