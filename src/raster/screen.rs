@@ -766,6 +766,32 @@ mod tests {
         }
     }
 
+    /// The partition of a bowl and of a saddle does not depend on their scale: the same
+    /// centre from 10⁻³ to 10³ times the curvature (the threshold on the determinant scales
+    /// with the Hessian's square, as the determinant does).
+    #[test]
+    fn partition_does_not_depend_on_the_scale_of_y() {
+        for scale in [1e-3, 0.1, 1.0, 10.0, 1e3] {
+            for sign in [1.0, -1.0] {
+                let y = quad(
+                    scale,
+                    sign * scale,
+                    0.0,
+                    -0.6 * scale,
+                    -0.6 * sign * scale,
+                    0.0,
+                );
+                match partition(&y) {
+                    Partition::Central { centre, det, .. } => {
+                        assert!((centre[0] - 0.3).abs() < 1e-12 && (centre[1] - 0.3).abs() < 1e-12);
+                        assert_eq!(det.signum(), sign, "scale {scale}");
+                    }
+                    p => panic!("scale {scale}, sign {sign}: {p:?}"),
+                }
+            }
+        }
+    }
+
     #[test]
     fn partition_finds_an_interior_extremum_and_a_saddle() {
         // Minimum of (u - .3)² + (v - .3)² at (.3, .3).
