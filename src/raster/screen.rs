@@ -767,11 +767,11 @@ mod tests {
     }
 
     /// The partition of a bowl and of a saddle does not depend on their scale: the same
-    /// centre from 10⁻³ to 10³ times the curvature (the threshold on the determinant scales
+    /// centre from 10⁻⁸ to 10⁸ times the curvature (the threshold on the determinant scales
     /// with the Hessian's square, as the determinant does).
     #[test]
     fn partition_does_not_depend_on_the_scale_of_y() {
-        for scale in [1e-3, 0.1, 1.0, 10.0, 1e3] {
+        for scale in [1e-8, 1e-3, 0.1, 1.0, 10.0, 1e3, 1e8] {
             for sign in [1.0, -1.0] {
                 let y = quad(
                     scale,
@@ -789,6 +789,19 @@ mod tests {
                     p => panic!("scale {scale}, sign {sign}: {p:?}"),
                 }
             }
+        }
+    }
+
+    /// An isotropic Hessian (a multiple of the identity, zero included) has every direction
+    /// for an eigenvector: `eigen_sym` gives the axes, u first.
+    #[test]
+    fn an_isotropic_hessians_eigenvectors_are_the_axes() {
+        for c in [0.0, 1.0, -2.0] {
+            assert_eq!(
+                eigen_sym(c, 0.0, c),
+                [([1.0, 0.0], c), ([0.0, 1.0], c)],
+                "{c} times the identity"
+            );
         }
     }
 
