@@ -793,7 +793,11 @@ mod tests {
     }
 
     /// An isotropic Hessian (a multiple of the identity, zero included) has every direction
-    /// for an eigenvector: `eigen_sym` gives the axes, u first.
+    /// for an eigenvector: `eigen_sym` gives the axes, u first. One isotropic within
+    /// rounding (p = r, q a few ulps of p) has every direction for an eigenvector within
+    /// rounding, and may compute two nearly parallel vectors: the second is then the first
+    /// turned a quarter, so the pair is never within 60° (|cos| <= ½), and exactly
+    /// orthogonal where turned.
     #[test]
     fn an_isotropic_hessians_eigenvectors_are_the_axes() {
         for c in [0.0, 1.0, -2.0] {
@@ -803,6 +807,19 @@ mod tests {
                 "{c} times the identity"
             );
         }
+        let mut rng = crate::testkit::SplitMix64::new(7);
+        let mut turned = 0;
+        for _ in 0..10_000 {
+            let p = rng.range(-2.0, 2.0);
+            let q = p * rng.range(-4.0, 4.0) * f64::EPSILON;
+            let [(v1, _), (v2, _)] = eigen_sym(p, q, p);
+            for v in [v1, v2] {
+                assert!((dot(v, v) - 1.0).abs() < 1e-12, "{p} {q}: {v:?}");
+            }
+            assert!(dot(v1, v2).abs() <= 0.5, "{p} {q}: {v1:?} {v2:?}");
+            turned += (dot(v1, v2) == 0.0 && v1[0] * v1[1] != 0.0) as u32;
+        }
+        assert!(turned > 100, "{turned} of 10 000 pairs turned off the axes");
     }
 
     #[test]
