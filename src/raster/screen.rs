@@ -749,7 +749,7 @@ mod tests {
     /// The gradient hull counts as clear of the origin only beyond 64 ulp of its scale: the
     /// bowl (u + δ)² + v², its minimum δ outside the edge u = 0, has corner gradients
     /// (2δ, 0), (2 + 2δ, 0) and (2δ, 2), a hull 2δ from the origin against a threshold of
-    /// 64 ε (2 + 2δ) ≈ 5.7·10⁻¹⁴. At δ = 2⁻⁴⁷ (2δ ≈ 1.4·10⁻¹⁴, rounding) it is walked from
+    /// 64 ε (2 + 2δ) ≈ 2.8·10⁻¹⁴. At δ = 2⁻⁴⁷ (2δ ≈ 1.4·10⁻¹⁴, rounding) it is walked from
     /// its centre; at δ = 2⁻⁴⁰ (2δ ≈ 1.8·10⁻¹²) as monotone.
     #[test]
     fn a_gradient_hull_within_rounding_of_the_origin_is_not_monotone() {
