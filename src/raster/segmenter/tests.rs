@@ -908,24 +908,38 @@ fn along_edge(edge: usize) -> (ScreenLembo<f64>, V2<f64>, impl Fn(f64) -> ConicP
     (l, tau, at)
 }
 
+/// The interval of `along_edge`'s curve from `start` to `end`, walked along `tau`.
+fn along(tau: V2<f64>, start: ConicPoint<f64>, end: ConicPoint<f64>) -> Interval<f64> {
+    Interval {
+        start,
+        end,
+        tau,
+        end_key: dot(tau, end.uv),
+        straight: false,
+    }
+}
+
+/// Asserts that `q` lies outside domain edge `edge` of `along_edge`, within the 64-ulp
+/// tolerance.
+fn assert_just_outside(q: V2<f64>, edge: usize) {
+    let n = [q[0], q[1], 1.0 - q[0] - q[1]][edge];
+    assert!(
+        n < 0.0 && n > -64.0 * f64::EPSILON,
+        "edge {edge}: n = {n:e}"
+    );
+}
+
 /// The walk's domain guard takes a step that lands within its 64-ulp tolerance outside an
 /// edge (here 2⁻⁴⁹ outside, at t = 0 of `along_edge`), for each edge: the walk from t = -½
 /// to an end at t = 0.3 is four steps of exactly k (onto t = -⅓, -⅙, 0, ⅙) and the
 /// closing chord. A guard without the tolerance refuses the step onto t = 0 and closes the
-/// walk there with split chords (seven), as does one whose tolerance is 64 times too
-/// small.
+/// walk there with split chords, as does one whose tolerance is 64 times too small.
 #[test]
 fn the_walk_takes_a_step_within_rounding_outside_an_edge() {
     for edge in 0..3 {
         let (l, tau, at) = along_edge(edge);
-        let (start, end) = (at(-0.5), at(0.3));
-        let iv = Interval {
-            start,
-            end,
-            tau,
-            end_key: dot(tau, end.uv),
-            straight: false,
-        };
+        let end = at(0.3);
+        let iv = along(tau, at(-0.5), end);
         let (mut out, mut c) = (Vec::new(), Counts::default());
         segments(&l, 40, 0.25, &iv, DEFAULT_SEGMENT_CAP, &mut out, &mut c).expect("under the cap");
         assert_eq!(out.len(), 5, "edge {edge}: {out:?}");
@@ -946,12 +960,7 @@ fn the_walk_takes_a_step_within_rounding_outside_an_edge() {
             );
         }
         // The third step's end lies outside the edge, within the tolerance.
-        let q = out[2].p1.uv;
-        let n = [q[0], q[1], 1.0 - q[0] - q[1]][edge];
-        assert!(
-            n < 0.0 && n > -64.0 * f64::EPSILON,
-            "edge {edge}: n = {n:e}"
-        );
+        assert_just_outside(out[2].p1.uv, edge);
         assert_eq!(out[4].p1, end);
     }
 }
@@ -965,24 +974,13 @@ fn the_walk_takes_a_step_within_rounding_outside_an_edge() {
 fn closing_chords_split_at_a_point_within_rounding_outside_an_edge() {
     for edge in 0..3 {
         let (l, tau, at) = along_edge(edge);
-        let (start, end) = (at(-1.0 / 3.0), at(1.0 / 3.0));
-        let iv = Interval {
-            start,
-            end,
-            tau,
-            end_key: dot(tau, end.uv),
-            straight: false,
-        };
+        let start = at(-1.0 / 3.0);
+        let iv = along(tau, start, at(1.0 / 3.0));
         let (mut out, mut c) = (Vec::new(), Counts::default());
         last_chords(&l, 40.5, 0.25, &iv, start, 0, 1 << 16, &mut out, &mut c)
             .expect("under the cap");
         assert_eq!(out.len(), 4, "edge {edge}: {out:?}");
         assert_eq!(c.segments_refined, 3, "edge {edge}");
-        let q = out[1].p1.uv;
-        let n = [q[0], q[1], 1.0 - q[0] - q[1]][edge];
-        assert!(
-            n < 0.0 && n > -64.0 * f64::EPSILON,
-            "edge {edge}: n = {n:e}"
-        );
+        assert_just_outside(out[1].p1.uv, edge);
     }
 }
