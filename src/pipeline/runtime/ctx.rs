@@ -427,7 +427,125 @@ impl<I, O> Future for NextInput<'_, I, O> {
 
 #[cfg(test)]
 mod tests {
-    use super::ceil_div;
+    use super::*;
+    use crate::pipeline::runtime::link::{local_link, Ends, LinkName, LinkSpec};
+    use std::task::Waker;
+
+    /// Units 0 and 1 each feed unit 2 by a link of depth 4 and latency 1; unit 2 sends to
+    /// units 3, 4 and 5 by its ports 0, 1 and 2. Returns the core, the producers' ends and
+    /// unit 2's context.
+    fn merge() -> (Rc<Core>, Vec<Tx<u32>>, Ctx<u32, u32>) {
+        let core = Rc::new(Core::new((0..6).map(|u| (format!("U[{u}]"), 1)).collect()));
+        let link = |from: u32, port: u32, to: u32| {
+            local_link::<u32>(
+                &core,
+                LinkSpec {
+                    fifo_depth: 4,
+                    latency_cycles: 1,
+                },
+                LinkName {
+                    producer: format!("U[{from}]"),
+                    consumer: format!("U[{to}]"),
+                },
+                Ends {
+                    producer: from,
+                    port,
+                    consumer: to,
+                    from,
+                },
+                to as usize,
+            )
+        };
+        let (producers, inputs): (Vec<_>, Vec<_>) =
+            [link(0, 0, 2), link(1, 0, 2)].into_iter().unzip();
+        let outputs = (0..3).map(|p| link(2, p, 3 + p).0).collect();
+        let ctx = Ctx::new(core.clone(), 2, inputs, outputs, None);
+        (core, producers, ctx)
+    }
+
+    fn poll_input(ctx: &mut Ctx<u32, u32>) -> Poll<Option<u32>> {
+        Pin::new(&mut ctx.next_input()).poll(&mut Context::from_waker(Waker::noop()))
+    }
+
+    /// What a producer models per consumer reads the boundary's rule through its context:
+    /// its batch, how many consumers, which one is next, whether it has a shared link.
+    #[test]
+    fn a_context_reports_its_dispatch_rule_and_shared_link() {
+        let (core, _, ctx) = merge();
+        let mut ctx = ctx
+            .with_dispatch(Dispatcher::round_robin(0..2).with_batch(Some(16)))
+            .with_shared(Some(2));
+        assert!(ctx.has_shared());
+        assert_eq!((ctx.batch(), ctx.consumers()), (Some(16), 2));
+        let consumers: Vec<_> = (0..3)
+            .map(|n| {
+                let next = ctx.next_consumer();
+                assert_eq!(
+                    Pin::new(&mut ctx.emit(1, n)).poll(&mut Context::from_waker(Waker::noop())),
+                    Poll::Ready(())
+                );
+                next
+            })
+            .collect();
+        assert_eq!(consumers, [Some(0), Some(1), Some(0)]);
+        let ctx = ctx
+            .with_dispatch(Dispatcher::keyed(0..3, |&n: &u32| n as usize % 3))
+            .with_shared(None);
+        assert!(!ctx.has_shared());
+        assert_eq!(
+            (ctx.batch(), ctx.consumers(), ctx.next_consumer()),
+            (None, 3, None)
+        );
+        core.clear();
+    }
+
+    /// The clock is the unit's and the arrival its last pop's; a unit that parks shows its
+    /// clock to the bounds of the others (its slot).
+    #[test]
+    fn the_clock_follows_pops_and_work_and_is_published_on_a_wait() {
+        let (core, producers, mut ctx) = merge();
+        producers[0].push(Cycle(4), 7);
+        producers[0].end(Cycle(4));
+        producers[1].push(Cycle(6), 8);
+        assert_eq!(poll_input(&mut ctx), Poll::Ready(Some(7)));
+        assert_eq!(ctx.clock(), (Cycle(5), Cycle(5)));
+        ctx.work(3);
+        assert_eq!(ctx.clock(), (Cycle(8), Cycle(5)));
+        assert_eq!(poll_input(&mut ctx), Poll::Ready(Some(8)));
+        assert_eq!(ctx.clock(), (Cycle(8), Cycle(7)));
+        assert_eq!(
+            core.slots[2].now.get(),
+            Cycle::ZERO,
+            "not shown while it runs"
+        );
+        ctx.work(9);
+        assert_eq!(poll_input(&mut ctx), Poll::Pending);
+        assert_eq!(core.slots[2].now.get(), Cycle(17));
+        core.clear();
+    }
+
+    /// A recovery's go-ahead lets a parked unit take the item it holds though a bound of
+    /// another input still says something earlier might come; without one it waits.
+    #[test]
+    fn a_go_ahead_takes_the_held_item_over_an_undecided_bound() {
+        let (core, producers, mut ctx) = merge();
+        // Input 0 holds an item arriving at 5; input 1's producer is at cycle 0, so an item
+        // of it could arrive at 2.
+        producers[0].push(Cycle(4), 7);
+        assert_eq!(poll_input(&mut ctx), Poll::Pending);
+        assert_eq!(
+            core.slots[2].wait.get(),
+            Wait::Input {
+                held: Some(Cycle(5))
+            }
+        );
+        assert_eq!(poll_input(&mut ctx), Poll::Pending, "no go-ahead: it waits");
+        core.go_ahead(2, Cycle(5));
+        assert_eq!(poll_input(&mut ctx), Poll::Ready(Some(7)));
+        assert_eq!(ctx.clock(), (Cycle(5), Cycle(5)));
+        assert_eq!(core.slots[2].go.get(), None, "spent by the pop");
+        core.clear();
+    }
 
     #[test]
     fn ceil_div_matches_div_ceil() {
