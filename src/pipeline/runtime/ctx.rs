@@ -463,8 +463,14 @@ mod tests {
         (core, producers, ctx)
     }
 
+    /// One poll of `future`, as the executor's (its waker unused: a unit is woken through
+    /// its slot).
+    fn poll_once<F: Future + Unpin>(mut future: F) -> Poll<F::Output> {
+        Pin::new(&mut future).poll(&mut Context::from_waker(Waker::noop()))
+    }
+
     fn poll_input(ctx: &mut Ctx<u32, u32>) -> Poll<Option<u32>> {
-        Pin::new(&mut ctx.next_input()).poll(&mut Context::from_waker(Waker::noop()))
+        poll_once(ctx.next_input())
     }
 
     /// What a producer models per consumer reads the boundary's rule through its context:
@@ -480,10 +486,7 @@ mod tests {
         let consumers: Vec<_> = (0..3)
             .map(|n| {
                 let next = ctx.next_consumer();
-                assert_eq!(
-                    Pin::new(&mut ctx.emit(1, n)).poll(&mut Context::from_waker(Waker::noop())),
-                    Poll::Ready(())
-                );
+                assert_eq!(poll_once(ctx.emit(1, n)), Poll::Ready(()));
                 next
             })
             .collect();
