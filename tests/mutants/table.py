@@ -19,9 +19,10 @@ Usage: tests/mutants/table.py             the table from tests/mutants/outcomes.
                                           the table of runs not yet recorded (out/), without
                                           touching outcomes.tsv.
        tests/mutants/table.py --names caught|tested [RESULTS_DIR...]
-                                          the mutants the runs caught, or tested at all, one
-                                          name a line (what tests/mutants/run --again and
-                                          --untested skip).
+                                          the mutants caught, or tested at all, by the
+                                          committed outcomes and the runs, one name a line
+                                          (what tests/mutants/run --again and --untested
+                                          skip).
 
 A timeout counts as caught only when it is listed in tests/mutants/hangs.txt (checked by
 hand to hang, not merely slow); the others count as missed.
@@ -211,7 +212,11 @@ def main():
         which, dirs = args[1], runs_default(args[2:])
         hung = hangs()
         done = {"CaughtMutant", "Unviable"}
-        for name, (_, summary, _) in sorted(run_outcomes(dirs).items()):
+        # The committed outcomes, then the runs not yet recorded (out/, which a fresh
+        # checkout lacks), a run's outcome counting over the committed one as --record does.
+        outcomes = committed()
+        outcomes.update(run_outcomes(dirs))
+        for name, (_, summary, _) in sorted(outcomes.items()):
             caught = summary in done or (summary == "Timeout" and name in hung)
             if which == "tested" or caught:
                 print(name)
