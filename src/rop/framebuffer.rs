@@ -496,6 +496,22 @@ mod tests {
         assert_eq!(image.normal.as_ref().unwrap()[0], [0.0; 3]);
         assert_eq!(image.color[1..], [[10; 3]; 3]);
         assert_eq!(image.primitive[1], NO_PRIMITIVE);
+        // Every sample's geometry its index: pixel (i, j) keeps sample (i, 4 j)'s, index
+        // 8 j + i (rows of 2 samples), so 0, 1, 8 and 9.
+        let mut tagged = grid.clone();
+        for (s, n) in tagged.normal.as_mut().unwrap().iter_mut().enumerate() {
+            *n = [s as f32; 3];
+        }
+        for s in 0..16 {
+            (tagged.depth[s], tagged.primitive[s]) = (s as f32, s as u32);
+        }
+        let image = tagged.resolve(four);
+        assert_eq!(image.depth[..], [0.0, 1.0, 8.0, 9.0]);
+        assert_eq!(image.primitive[..], [0, 1, 8, 9]);
+        assert_eq!(
+            image.normal.unwrap()[..],
+            [0.0, 1.0, 8.0, 9.0].map(|s| [s; 3])
+        );
         assert_eq!(grid.clone().resolve(Samples::ONE).color, grid.color);
         assert_eq!(
             (mean_rounded(3, 2), mean_rounded(5, 2), mean_rounded(7, 2)),
@@ -507,6 +523,11 @@ mod tests {
         assert_eq!(
             FrameBuffer::stored_bytes_sampled(2, 2, four),
             FrameBuffer::stored_bytes(2, 8) + 12
+        );
+        assert_eq!(
+            FrameBuffer::stored_bytes_sampled(2, 2, Samples::ONE),
+            FrameBuffer::stored_bytes(2, 2),
+            "one sample per pixel: no resolved image beside the samples"
         );
     }
 }

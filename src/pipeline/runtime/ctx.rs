@@ -550,6 +550,49 @@ mod tests {
         core.clear();
     }
 
+    /// Two items of one input that arrive in the same cycle are taken in merge order, not
+    /// counted out of order (which fails the run), while a pop that breaks the order is
+    /// counted; a unit that works past its inputs' end waits, starved, for the last end to
+    /// reach it.
+    #[test]
+    fn items_of_one_cycle_keep_merge_order_and_the_last_end_is_waited_for() {
+        let (core, producers, mut ctx) = merge();
+        producers[0].push(Cycle(4), 7);
+        producers[0].push(Cycle(4), 9);
+        producers[0].end(Cycle(6));
+        producers[1].end(Cycle(20));
+        assert_eq!(poll_input(&mut ctx), Poll::Ready(Some(7)));
+        assert_eq!(poll_input(&mut ctx), Poll::Ready(Some(9)));
+        assert_eq!(ctx.clock(), (Cycle(5), Cycle(5)));
+        assert_eq!(poll_input(&mut ctx), Poll::Ready(None));
+        assert_eq!((ctx.stats.items_in, ctx.stats.out_of_order), (2, 0));
+        assert_eq!(ctx.stats.starved, 5, "the first item arrives at 5");
+        ctx.wait_for_end_of_inputs();
+        assert_eq!(
+            ctx.clock().0,
+            Cycle(21),
+            "input 1's end at 20, plus the latency"
+        );
+        assert_eq!(ctx.stats.starved, 5 + 16);
+        core.clear();
+
+        // The check itself: an item taken after a later one is counted, each time.
+        let (core, producers, mut ctx) = merge();
+        producers[0].push(Cycle(8), 7);
+        producers[1].push(Cycle(4), 8);
+        producers[1].push(Cycle(4), 9);
+        assert_eq!(ctx.pop(0, Cycle(9)), 7);
+        assert_eq!(ctx.pop(1, Cycle(5)), 8);
+        assert_eq!(ctx.pop(1, Cycle(5)), 9);
+        assert_eq!(ctx.stats.out_of_order, 1, "(5, 1) after (9, 0)");
+        producers[0].push(Cycle(8), 10);
+        assert_eq!(ctx.pop(0, Cycle(9)), 10);
+        producers[1].push(Cycle(4), 11);
+        assert_eq!(ctx.pop(1, Cycle(5)), 11);
+        assert_eq!(ctx.stats.out_of_order, 2, "(5, 1) after (9, 0) again");
+        core.clear();
+    }
+
     #[test]
     fn ceil_div_matches_div_ceil() {
         for d in 1..=70u64 {
