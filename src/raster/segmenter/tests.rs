@@ -858,6 +858,27 @@ fn least_reach_is_the_derivations_bound_on_two_lembos_worked_by_hand() {
     }
 }
 
+/// `least_reach` gives no bound where its derivation does not hold or is not worth it: where
+/// the gradient bounds allow `a·g = 0` (the walk could turn across `a`, and β has no
+/// bound) and where `a·g` may fall under 1 % of `|g|`. A nearly flat Hessian makes the
+/// bound's formula positive for all three, so the guard alone decides (2 % gives one).
+#[test]
+fn least_reach_gives_no_bound_where_the_gradient_may_turn_across_the_walk() {
+    let mut l = screen_lembo::<f64>(x_linear(), quad(20.0, 0.0, 0.0, 0.0, 30.0, 10.0));
+    l.hessian = (2f64.powi(-30), 0.0, 0.0);
+    let bound = |l: &mut ScreenLembo<f64>, least: f64| {
+        l.partition = crate::raster::screen::Partition::Monotone {
+            a: [0.0, 1.0],
+            grad_bounds: [least, 50.0],
+        };
+        least_reach(l, 0.5)
+    };
+    assert_eq!(bound(&mut l, 0.0), None, "a·g may be 0");
+    assert_eq!(bound(&mut l, 0.3), None, "a·g may be 0.6 % of |g|");
+    let reach = bound(&mut l, 1.0).expect("a·g at least 2 % of |g|");
+    assert!(reach > 1.0, "{reach}");
+}
+
 /// A lembo whose curve for scanline 40 (y = 40.5) is the parabola n = 1.5 t² - 2⁻⁴⁹ in
 /// coordinates (n, t) of the domain: n the distance coordinate of domain edge `edge` (u,
 /// v, then 1 - u - v), t = the walk coordinate - ½. The curve runs along the edge and
