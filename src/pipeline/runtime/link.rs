@@ -932,8 +932,13 @@ mod tests {
         // Item 2 needs the pop time of item 0, not yet recorded.
         assert_eq!(tx.credit_needed(), None);
         assert_eq!(rx.head(), Some(Cycle(1)));
+        assert_eq!(tx.try_push(Cycle(2), 2), Err(2), "no credit yet");
         assert_eq!(rx.pop(Cycle(5)), 0);
         assert_eq!(tx.credit_needed(), Some(Cycle(5)));
+        // The push waits for the credit, or not when it is ready later.
+        assert_eq!(tx.try_push(Cycle(2), 2), Ok(Cycle(5)));
+        assert_eq!(rx.pop(Cycle(6)), 1);
+        assert_eq!(tx.try_push(Cycle(9), 3), Ok(Cycle(9)));
         core.clear();
     }
 
