@@ -943,6 +943,20 @@ mod tests {
     }
 
     #[test]
+    fn link_end_bound_is_the_producers_plus_latency_until_the_end_is_pushed() {
+        let (core, tx, rx) = local(2, 3);
+        let Rx::Local(l) = &rx else {
+            panic!("a local link");
+        };
+        // The producer (no inputs, clock 0) can end its outputs at cycle 0 at the earliest.
+        assert_eq!(l.end_bound(&core), Cycle(3));
+        tx.push(Cycle(4), 0);
+        tx.end(Cycle(20));
+        assert_eq!(l.end_bound(&core), Cycle(23));
+        core.clear();
+    }
+
+    #[test]
     fn link_occupancy_counts_items_pushed_and_not_popped() {
         let (core, tx, rx) = local(4, 1);
         // Four pushes at 0..3, pops at 10..13: all four are in the FIFO at cycle 3.
