@@ -950,7 +950,9 @@ mod tests {
         };
         // The producer (no inputs, clock 0) can end its outputs at cycle 0 at the earliest.
         assert_eq!(l.end_bound(&core), Cycle(3));
+        assert_eq!(l.snap().head, None, "nothing queued");
         tx.push(Cycle(4), 0);
+        assert_eq!(l.snap().head, Some(Cycle(7)), "the head arrives at 4 + 3");
         tx.end(Cycle(20));
         assert_eq!(l.end_bound(&core), Cycle(23));
         core.clear();
@@ -1113,6 +1115,8 @@ mod tests {
         );
         assert!(r.rx_half.drain());
         assert_eq!(r.rx.next_arrival(&r.cc), Cycle(21 + 2));
+        // The producer can end its outputs at its clock, 20, at the earliest.
+        assert_eq!(r.rx_half.end_bound(&r.cc), Cycle(20 + 2));
         assert!(!r.rx_half.drain(), "nothing new arrived");
         assert_eq!(r.rx.next_arrival(&r.cc), Cycle(23));
         // An item behind the horizon: the queued item is next, then the bound.
@@ -1126,6 +1130,7 @@ mod tests {
         assert!(r.rx_half.drain());
         assert!(r.rx.finished());
         assert_eq!(r.rx.end_arrival(), Some(Cycle(42)));
+        assert_eq!(r.rx_half.end_bound(&r.cc), Cycle(42));
         assert_eq!(r.rx.next_arrival(&r.cc), Cycle::NEVER);
         r.cp.clear();
         r.cc.clear();
