@@ -1077,6 +1077,9 @@ mod tests {
         }
         // Item 4 needs the pop time of item 0, not yet popped.
         assert_eq!(r.tx.credit_needed(), None);
+        assert!(!r.tx_half.drain(), "the producer waits for no credit");
+        r.tx.wait_credit(&r.cp.slots[0]);
+        assert!(!r.tx_half.drain(), "its credit has not come");
         // Items travel in batches: nothing arrives before the producer's thread flushes.
         assert!(!r.rx_half.drain());
         assert_eq!(r.rx.head(), None);
@@ -1087,6 +1090,7 @@ mod tests {
         // One credit pending, a batch is D/2 = 2: it waits for the consumer's flush.
         assert_eq!(r.tx.credit_needed(), None);
         assert!(r.rx_half.flush(), "a pending credit is sent");
+        assert!(r.tx_half.drain(), "its credit came: the producer wakes");
         assert!(!r.rx_half.flush(), "nothing left to send");
         assert_eq!(r.tx.credit_needed(), Some(Cycle(10)));
         // Two pops fill a batch: sent at once, no flush needed.
