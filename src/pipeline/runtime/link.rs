@@ -1103,6 +1103,26 @@ mod tests {
         r.cc.clear();
     }
 
+    /// Push n's credit is item n - D's pop time at every push, also where the credit was
+    /// taken from the channel at an earlier push (the fast path).
+    #[test]
+    fn remote_link_credit_is_item_n_minus_depth_at_every_push() {
+        let r = remote(2, 1);
+        for n in 0..6 {
+            let want = match n {
+                0 | 1 => Cycle::ZERO,
+                _ => Cycle(10 + n - 2),
+            };
+            assert_eq!(r.tx.credit_needed(), Some(want), "push {n}");
+            r.tx.push(want.max(Cycle(n)), n as u32);
+            r.tx_half.flush();
+            assert!(r.rx_half.drain());
+            assert_eq!(r.rx.pop(Cycle(10 + n)), n as u32);
+        }
+        r.cp.clear();
+        r.cc.clear();
+    }
+
     /// With no item in flight the consumer's bound is the producer's published horizon;
     /// a drain that finds nothing new reports no change (the executor then goes idle).
     #[test]
