@@ -501,6 +501,41 @@ fn segmenter_chords_at_exactly_k_are_not_split() {
     }
 }
 
+/// The closing chords' split threshold is k plus the slack 10⁻³ k + 64 ε (|y_j| + 1), to
+/// within 16 ε: a chord whose midpoint error is 16 ε under it is kept, one 16 ε over it is
+/// split. At y_j = 0.5 the rounding of the error here is under ε / 2, while the slack's
+/// rounding term is 96 ε.
+#[test]
+fn closing_chords_split_past_k_and_the_slack() {
+    let (k, yj) = (2f64.powi(-10), 0.5);
+    let slack = k * 1e-3 + f64::EPSILON * 64.0 * (yj + 1.0);
+    let mut l = screen_lembo::<f64>(x_linear(), y_parabolic());
+    l.hessian = (0.0, 0.0, 0.0);
+    for (off, chords) in [(-16.0, 1), (16.0, 2)] {
+        let error = k + slack + off * f64::EPSILON;
+        // Y = y_j + error + (v - 0.3): the chord's midpoint (0.4, 0.3) is `error` off the
+        // scanline, and the curve point halfway in key is (0.4, 0.3 - error).
+        l.y = quad(0.0, 0.0, 0.0, 0.0, 1.0, yj + error - 0.3);
+        let point = |u: f64, v: f64| ConicPoint {
+            uv: [u, v],
+            x: l.x.eval(u, v),
+            edge: INTERIOR,
+        };
+        let (p, end) = (point(0.2, 0.3), point(0.6, 0.3));
+        let iv = Interval {
+            start: p,
+            end,
+            tau: [1.0, 0.0],
+            end_key: 0.6,
+            straight: false,
+        };
+        let (mut out, mut c) = (Vec::new(), Counts::default());
+        last_chords(&l, yj, k, &iv, p, 0, 64, &mut out, &mut c).expect("under the cap");
+        assert_eq!(out.len(), chords, "midpoint error k + slack {off:+} ε");
+        assert_eq!(c.segments_refined, chords as u64 - 1);
+    }
+}
+
 #[test]
 fn segmenter_midpoint_error_stays_within_k_in_f32() {
     for (y, j) in [(y_parabolic(), 40), (y_bowl(), 45)] {
