@@ -499,11 +499,10 @@ mod tests {
         // Every sample's geometry its index: pixel (i, j) keeps sample (i, 4 j)'s, index
         // 8 j + i (rows of 2 samples), so 0, 1, 8 and 9.
         let mut tagged = grid.clone();
-        for (s, n) in tagged.normal.as_mut().unwrap().iter_mut().enumerate() {
-            *n = [s as f32; 3];
-        }
-        for s in 0..16 {
+        let normals = tagged.normal.as_mut().unwrap();
+        for s in 0..tagged.depth.len() {
             (tagged.depth[s], tagged.primitive[s]) = (s as f32, s as u32);
+            normals[s] = [s as f32; 3];
         }
         let image = tagged.resolve(four);
         assert_eq!(image.depth[..], [0.0, 1.0, 8.0, 9.0]);

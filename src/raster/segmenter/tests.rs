@@ -511,24 +511,18 @@ fn closing_chords_split_past_k_and_the_slack() {
     let slack = k * 1e-3 + f64::EPSILON * 64.0 * (yj + 1.0);
     let mut l = screen_lembo::<f64>(x_linear(), y_parabolic());
     l.hessian = (0.0, 0.0, 0.0);
+    let point = |u: f64, v: f64| ConicPoint {
+        uv: [u, v],
+        x: l.x.eval(u, v),
+        edge: INTERIOR,
+    };
+    let (p, end) = (point(0.2, 0.3), point(0.6, 0.3));
+    let iv = along([1.0, 0.0], p, end);
     for (off, chords) in [(-16.0, 1), (16.0, 2)] {
         let error = k + slack + off * f64::EPSILON;
         // Y = y_j + error + (v - 0.3): the chord's midpoint (0.4, 0.3) is `error` off the
         // scanline, and the curve point halfway in key is (0.4, 0.3 - error).
         l.y = quad(0.0, 0.0, 0.0, 0.0, 1.0, yj + error - 0.3);
-        let point = |u: f64, v: f64| ConicPoint {
-            uv: [u, v],
-            x: l.x.eval(u, v),
-            edge: INTERIOR,
-        };
-        let (p, end) = (point(0.2, 0.3), point(0.6, 0.3));
-        let iv = Interval {
-            start: p,
-            end,
-            tau: [1.0, 0.0],
-            end_key: 0.6,
-            straight: false,
-        };
         let (mut out, mut c) = (Vec::new(), Counts::default());
         last_chords(&l, yj, k, &iv, p, 0, 64, &mut out, &mut c).expect("under the cap");
         assert_eq!(out.len(), chords, "midpoint error k + slack {off:+} ε");
