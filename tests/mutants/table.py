@@ -7,7 +7,9 @@ Usage: tests/mutants/table.py             the table from tests/mutants/outcomes.
                                           the viable mutants), the commits the outcomes were
                                           tested at, and every survivor with its class and
                                           reason from survivors.md. Exits 1 when a survivor
-                                          has no reason, or a reason no class.
+                                          has no reason, or a reason no class, or a reason
+                                          in survivors.md names no survivor (its mutant now
+                                          caught, or no longer generated: a stale reason).
        tests/mutants/table.py --record [RESULTS_DIR...]
                                           merge runs' outcomes (default: every
                                           out/mutants/runs/*, in the order they started, a
@@ -137,8 +139,9 @@ def class_of(why):
     return head if head in CLASSES else None
 
 
-def table(outcomes):
-    """Prints the table and the survivors; returns how many survivors lack a true reason."""
+def table(outcomes, whole=True):
+    """Prints the table and the survivors; returns how many survivors lack a true reason,
+    plus, when `outcomes` is the whole set (not `--runs`), how many reasons are stale."""
     hung = hangs()
     rows = defaultdict(lambda: defaultdict(int))
     missed = []
@@ -190,6 +193,13 @@ def table(outcomes):
         counts = ", ".join(f"{by_class[c]} {c}" for c in CLASSES)
         print(f"\nNot caught ({len(missed)}: {counts}; {wrong} without a classed reason in survivors.md):")
         print("\n".join(lines))
+    if whole:
+        survivors = {name for name, _ in missed}
+        stale = sorted(name for name in why if name not in survivors)
+        if stale:
+            print(f"\nStale reasons in survivors.md ({len(stale)}: the mutant is caught or gone):")
+            print("\n".join(f"- {name}" for name in stale))
+        wrong += len(stale)
     return wrong
 
 
@@ -224,7 +234,7 @@ def main():
     if args[:1] == ["--record"]:
         outcomes = record(runs_default(args[1:]))
     elif args[:1] == ["--runs"]:
-        outcomes = run_outcomes(runs_default(args[1:]))
+        return 1 if table(run_outcomes(runs_default(args[1:])), whole=False) else 0
     elif args:
         sys.exit(__doc__)
     else:
