@@ -649,7 +649,7 @@ mod tests {
 
     /// The ROPs write the shared frame in place, unsynchronised (`tiles::RopPixels`): they
     /// draw the same pixels over one host thread or two, with either memory model. Small
-    /// enough for Miri (`tests/miri/run`), which checks those writes.
+    /// enough for Miri and valgrind (`tests/unsafe/run`), which check those writes.
     #[test]
     fn the_rops_draw_the_same_frame_over_any_threads_and_memory_model() {
         let mut scene = Scene::default_scene();
