@@ -1062,7 +1062,8 @@ mod tests {
             let a = rng.range(-50.0, 50.0);
             let d = rng.range_i64(-8, 8) as f64 * ulp;
             let l = screen_lembo::<R>(x_linear(), quad(a, 0.0, 0.0, -2.0 * a, 30.0, a + 60.5 + d));
-            for (e, c) in l.edges.iter().enumerate() {
+            let roots = roots_per_edge(&l, 60);
+            for (c, roots) in l.edges.iter().zip(&roots) {
                 let (pa, pb) = c.y_power();
                 let above = (c.y[0] >= yj, c.y[2] >= yj);
                 if pa == R::zero() || c.y_vertex((pa, pb)) != R::one() || above.0 != above.1 {
@@ -1071,9 +1072,7 @@ mod tests {
                 at_end += 1;
                 let fm = c.y[0] - yj - c.y_dip((pa, pb));
                 rounded_across += u32::from((fm >= R::zero()) != above.0);
-                let mut roots = Vec::new();
-                edge_crossings(&l, e, yj, |p, entry| roots.push((p, entry)));
-                assert!(roots.is_empty(), "A = {a}, d = {d}, edge {e}: {roots:?}");
+                assert!(roots.is_empty(), "A = {a}, d = {d}: {roots:?}");
             }
         }
         (at_end, rounded_across)
